@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs every Debian package csgtile needs to build, test and run.
+# Idempotent: when everything is present it only checks (a second or two) and exits.
+# Usage: deploy/setup.sh            (as root, or with sudo available)
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build ccache git pkg-config clang clang-format clang-tidy
+  libclang-rt-14-dev
+  # kernel
+  libeigen3-dev libgmp-dev
+  # config
+  libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev
+  # worker and command line
+  libcli11-dev libsqlite3-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev googletest libbenchmark-dev python3
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed$'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "setup: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "setup: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup: done"

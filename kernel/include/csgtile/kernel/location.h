@@ -1,0 +1,68 @@
+#pragma once
+/// \file
+/// Location (paper §2.2): a 3×4 similarity transform Q = [s·R | t] placing a shape.
+
+#include <Eigen/Core>
+
+#include "csgtile/kernel/result.h"
+
+namespace csgtile::kernel {
+
+using Vec3 = Eigen::Vector3d;
+using Vec2 = Eigen::Vector2d;
+using Matrix34 = Eigen::Matrix<double, 3, 4>;
+
+/// A similarity transform p' = s·R·p + t with R a proper rotation and s > 0.
+///
+/// The paper's conditions (1)–(2): the 3×3 part Q2 is non-singular and Q2 / cbrt(det Q2) is
+/// orthogonal. We also require det Q2 > 0 (no mirroring: a mirror would turn solids inside
+/// out). Values are immutable; composition returns a new Location.
+class Location {
+ public:
+  /// The identity.
+  Location();
+
+  /// Checks conditions (1)–(2) with relative tolerance 1e-9 and re-orthonormalises R.
+  /// Errors: InvalidLocation naming the failed condition (singular, not a similarity, mirror,
+  /// non-finite entries).
+  static Result<Location> from_matrix(const Matrix34& q);
+
+  static Location translation(const Vec3& t);
+  /// Rotation by `angle` radians about the axis through `origin` with direction `axis`
+  /// (normalised here; a zero axis gives the identity).
+  static Location rotation(const Vec3& origin, const Vec3& axis, double angle);
+  /// Uniform scale s > 0 about `center`. Precondition: s > 0 and finite.
+  static Location scaling(double s, const Vec3& center = Vec3::Zero());
+
+  /// Q = [s·R | t].
+  Matrix34 matrix() const;
+  const Eigen::Matrix3d& rotation() const { return rotation_; }
+  double scale() const { return scale_; }
+  const Vec3& translation() const { return translation_; }
+  bool is_identity() const;
+
+  /// (*this * other)(p) = this(other(p)): `other` is applied first. This is how locations
+  /// compose down the hierarchy (paper eq. 5): world = parent * child.
+  Location operator*(const Location& other) const;
+  Location inverse() const;
+
+  Vec3 apply_point(const Vec3& p) const { return scale_ * (rotation_ * p) + translation_; }
+  /// Applies s·R (no translation): for derivatives.
+  Vec3 apply_vector(const Vec3& v) const { return scale_ * (rotation_ * v); }
+  /// Applies R only: for unit directions and normals.
+  Vec3 apply_direction(const Vec3& d) const { return rotation_ * d; }
+
+  /// Exact equality of the stored values (used for shape equality levels and hashing).
+  bool operator==(const Location& other) const;
+  bool operator!=(const Location& other) const { return !(*this == other); }
+  /// Hash consistent with operator==.
+  std::size_t hash() const;
+
+ private:
+  Location(const Eigen::Matrix3d& r, double s, const Vec3& t);
+  Eigen::Matrix3d rotation_;
+  double scale_;
+  Vec3 translation_;
+};
+
+}  // namespace csgtile::kernel

@@ -1,0 +1,114 @@
+#include "csgtile/kernel/location.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <string>
+
+namespace csgtile::kernel {
+
+namespace {
+// Relative tolerance of the similarity test (paper condition 2). Placements written with
+// 10 significant digits (scene JSON) must pass; a 1e-6 shear must not.
+constexpr double kSimilarityTolerance = 1e-9;
+
+std::string format_double(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+}  // namespace
+
+Location::Location() : rotation_(Eigen::Matrix3d::Identity()), scale_(1.0), translation_(0, 0, 0) {}
+
+Location::Location(const Eigen::Matrix3d& r, double s, const Vec3& t)
+    : rotation_(r), scale_(s), translation_(t) {}
+
+Result<Location> Location::from_matrix(const Matrix34& q) {
+  if (!q.allFinite()) {
+    return Error{ErrorCode::InvalidLocation, "location matrix has a non-finite entry"};
+  }
+  const Eigen::Matrix3d q2 = q.leftCols<3>();
+  const double d = q2.determinant();
+  const double norm = q2.norm();
+  // Condition (1): non-singular, judged relative to the matrix's own size.
+  if (norm == 0.0 || std::abs(d) <= 1e-12 * norm * norm * norm) {
+    return Error{ErrorCode::InvalidLocation,
+                 "location matrix is singular (det = " + format_double(d) + ")"};
+  }
+  if (d < 0.0) {
+    return Error{ErrorCode::InvalidLocation,
+                 "location matrix mirrors (det = " + format_double(d) +
+                     " < 0); only rotations with a positive uniform scale are allowed"};
+  }
+  // Condition (2): Q3 = Q2 / cbrt(d) is orthogonal.
+  const double s = std::cbrt(d);
+  const Eigen::Matrix3d q3 = q2 / s;
+  const double deviation = (q3.transpose() * q3 - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (deviation > kSimilarityTolerance) {
+    return Error{ErrorCode::InvalidLocation,
+                 "location matrix is not a similarity (rotation x uniform scale): "
+                 "|Q3^T Q3 - I| = " + format_double(deviation)};
+  }
+  // Nearest rotation (polar decomposition) so that composition does not drift.
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(q3, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d r = svd.matrixU() * svd.matrixV().transpose();
+  return Location(r, s, q.col(3));
+}
+
+Location Location::translation(const Vec3& t) {
+  return Location(Eigen::Matrix3d::Identity(), 1.0, t);
+}
+
+Location Location::rotation(const Vec3& origin, const Vec3& axis, double angle) {
+  if (axis.norm() == 0.0) return Location();
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  return Location(r, 1.0, origin - r * origin);
+}
+
+Location Location::scaling(double s, const Vec3& center) {
+  return Location(Eigen::Matrix3d::Identity(), s, center - s * center);
+}
+
+Matrix34 Location::matrix() const {
+  Matrix34 m;
+  m.leftCols<3>() = scale_ * rotation_;
+  m.col(3) = translation_;
+  return m;
+}
+
+bool Location::is_identity() const {
+  return scale_ == 1.0 && translation_.isZero(0.0) && rotation_ == Eigen::Matrix3d::Identity();
+}
+
+Location Location::operator*(const Location& other) const {
+  return Location(rotation_ * other.rotation_, scale_ * other.scale_,
+                  scale_ * (rotation_ * other.translation_) + translation_);
+}
+
+Location Location::inverse() const {
+  const Eigen::Matrix3d rt = rotation_.transpose();
+  return Location(rt, 1.0 / scale_, -(rt * translation_) / scale_);
+}
+
+bool Location::operator==(const Location& other) const {
+  return scale_ == other.scale_ && translation_ == other.translation_ &&
+         rotation_ == other.rotation_;
+}
+
+std::size_t Location::hash() const {
+  if (is_identity()) return 0;
+  std::size_t h = std::hash<double>{}(scale_);
+  auto mix = [&h](double v) {
+    h ^= std::hash<double>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+  };
+  for (int i = 0; i < 3; ++i) {
+    mix(translation_[i]);
+    for (int j = 0; j < 3; ++j) mix(rotation_(i, j));
+  }
+  return h;
+}
+
+}  // namespace csgtile::kernel

@@ -1,0 +1,21 @@
+#include "test_support.h"
+
+#include <fstream>
+#include <sstream>
+
+namespace csgtile::test {
+
+std::filesystem::path source_dir() { return CSGTILE_SOURCE_DIR; }
+std::filesystem::path shared_dir() {
+  return std::filesystem::weakly_canonical(std::filesystem::path(CSGTILE_SHARED_DIR));
+}
+std::filesystem::path csgtile_binary() { return CSGTILE_BINARY; }
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+}  // namespace csgtile::test
