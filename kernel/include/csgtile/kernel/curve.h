@@ -4,6 +4,7 @@
 /// approximates general intersection curves. Curves are immutable and shared through
 /// CurvePtr; a curve is infinite or periodic, an edge restricts it to [t0, t1].
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -39,7 +40,10 @@ class Curve {
   virtual double support(const Vec3& w, double t0, double t1) const = 0;
   /// Exact bounding box of the arc [t0, t1] (from support along ±x, ±y, ±z).
   BoundingBox bounds(double t0, double t1) const;
-  /// The same curve moved by a location; the parametrisation is kept (t ↦ loc(C(t))).
+  /// The same curve moved by a location. Parameters that are angles (circle, ellipse) or
+  /// vertex indices (polyline) are kept: transformed(loc)->point(t) == loc(C(t)). A parameter
+  /// that is a length (LineCurve's arc length) scales with s = loc.scale():
+  /// transformed(loc)->point(s·t) == loc(C(t)).
   virtual CurvePtr transformed(const Location& loc) const = 0;
   /// Length of the arc [t0, t1] (closed form for line and circle, quadrature otherwise,
   /// relative error below 1e-12).
@@ -58,6 +62,7 @@ class LineCurve final : public Curve {
   Vec3 second_derivative(double) const override { return Vec3::Zero(); }
   double closest_parameter(const Vec3& p, double t0, double t1) const override;
   double support(const Vec3& w, double t0, double t1) const override;
+  /// The direction stays unit, so t (arc length) scales: result->point(s·t) == loc(C(t)).
   CurvePtr transformed(const Location& loc) const override;
   double length(double t0, double t1) const override;
 

@@ -3,7 +3,9 @@
 /// Curves in a surface's (u, v) parameter plane ("pcurves"). A face stores one for every
 /// edge use, parametrised like the edge's 3D curve: pcurve(t) is the (u, v) of C(t).
 
+#include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "csgtile/kernel/location.h"

@@ -2,7 +2,10 @@
 /// \file
 /// Location (paper §2.2): a 3×4 similarity transform Q = [s·R | t] placing a shape.
 
+#include <cstddef>
+
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products, rotations (and LU for determinants)
 
 #include "csgtile/kernel/result.h"
 

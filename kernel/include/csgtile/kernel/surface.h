@@ -43,6 +43,11 @@ class Surface {
   virtual Vec2 closest_parameters(const Vec3& p) const = 0;
   /// Exact bounding box of the patch S(box).
   virtual BoundingBox bounds(const ParamBox& box) const = 0;
+  /// The same surface moved by a location. Angle parameters are kept; parameters that are
+  /// lengths scale with s = loc.scale(): plane u and v, cylinder/cone/extrusion v, and
+  /// whatever the basis (extrusion u) or meridian (revolution v) curve scales (a line's t).
+  /// E.g. for a cylinder transformed(loc)->point(u, s·v) == loc(S(u, v)); for a sphere
+  /// ->point(u, v) == loc(S(u, v)). Radii are multiplied by s.
   virtual SurfacePtr transformed(const Location& loc) const = 0;
 };
 
@@ -186,6 +191,9 @@ class RevolutionSurface final : public Surface {
   Vec3 point(double u, double v) const override;
   Vec3 du(double u, double v) const override;
   Vec3 dv(double u, double v) const override;
+  /// Also defined where the meridian meets the axis (the limit along v from the side of
+  /// the meridian's half-plane).
+  Vec3 normal(double u, double v) const override;
   double u_period() const override;
   Vec2 closest_parameters(const Vec3& p) const override;
   BoundingBox bounds(const ParamBox& box) const override;
@@ -194,6 +202,8 @@ class RevolutionSurface final : public Surface {
  private:
   CurvePtr meridian_;
   Vec3 origin_, direction_;
+  /// Unit vector ⊥ direction_ in the meridian's plane, towards the meridian (cached).
+  Vec3 radial_;
 };
 
 }  // namespace csgtile::kernel

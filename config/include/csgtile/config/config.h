@@ -1,0 +1,127 @@
+#pragma once
+/// \file
+/// The csgtile configuration: YAML text → validated plain structs.
+///
+/// The structs below are the single source of defaults; config/schema/csgtile.schema.json
+/// describes every key (and its "default" values are checked against these structs by the
+/// tests). config/examples/csgtile.yaml shows every key with a comment.
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace csgtile::config {
+
+/// `run:` — what to process and where to write it.
+struct RunConfig {
+  std::string name = "csgtile";     ///< [A-Za-z0-9_-]{1,64}
+  std::vector<std::string> inputs;  ///< paths or URLs, each non-empty
+  std::string output = "out";       ///< output directory, non-empty
+  std::uint64_t seed = 1;           ///< 0..2^53
+  int threads = 0;                  ///< 0 = all cores; 0..1024
+  bool operator==(const RunConfig&) const = default;
+};
+
+/// `kernel:` — tolerances in metres.
+struct KernelConfig {
+  double linear_tolerance = 1.0e-7;  ///< (0, 1e-2]
+  double chordal_tolerance = 0.01;   ///< [1e-6, 10]; mesh chordal error
+  bool operator==(const KernelConfig&) const = default;
+};
+
+enum class QueueBackend { Sqlite, Postgres };
+
+/// `queue:` — the job queue.
+struct QueueConfig {
+  QueueBackend backend = QueueBackend::Sqlite;
+  std::string sqlite_path;   ///< empty means <run.output>/queue.sqlite
+  std::string postgres_dsn;  ///< used when backend is Postgres
+  int max_attempts = 5;      ///< 1..100
+  int lease_seconds = 60;    ///< 1..86400
+  bool operator==(const QueueConfig&) const = default;
+};
+
+enum class LogLevel { Trace, Debug, Info, Warn, Error };
+/// Auto is text on a terminal, JSON otherwise.
+enum class LogFormat { Auto, Json, Text };
+
+/// `log:` — logging.
+struct LogConfig {
+  LogLevel level = LogLevel::Info;
+  LogFormat format = LogFormat::Auto;
+  bool operator==(const LogConfig&) const = default;
+};
+
+/// A whole configuration. A default-constructed Config is what an empty file gives.
+struct Config {
+  RunConfig run;
+  KernelConfig kernel;
+  QueueConfig queue;
+  LogConfig log;
+  bool operator==(const Config&) const = default;
+};
+
+/// One problem found in a config: the key path ("queue.max_attempts", "run.inputs[1]"; empty
+/// when about the whole text), the 1-based line (0 when not tied to a line, e.g. an
+/// environment override or an unreadable file), and what is wrong.
+struct Problem {
+  std::string path;
+  int line = 0;
+  std::string message;
+  bool operator==(const Problem&) const = default;
+};
+
+/// Environment as name -> value; `from_process_environment()` reads `environ`.
+///
+/// Overrides: a variable `CSGTILE_<SECTION>__<KEY>` (segments joined by `__`, names
+/// case-insensitive) sets `<section>.<key>`, e.g. `CSGTILE_QUEUE__MAX_ATTEMPTS=3`;
+/// `CSGTILE_RUN__INPUTS` is a comma-separated list. Overrides win over the file and are
+/// validated like it. Any `CSGTILE_` variable containing `__` is an override, and an unknown
+/// section or key is a problem; `CSGTILE_` variables without `__` (e.g. `CSGTILE_LOG_LEVEL`,
+/// or variables read by the tools) are ignored here.
+using Environment = std::map<std::string, std::string>;
+Environment from_process_environment();
+
+/// Outcome of a load: a Config when there is no problem, else every problem found, ordered
+/// by line (problems without a line last).
+struct LoadResult {
+  std::optional<Config> config;
+  std::vector<Problem> problems;
+  std::string source;  ///< the `source` / path given to the load, for format_problem
+  bool ok() const { return config.has_value() && problems.empty(); }
+};
+
+/// Parses YAML text, applies environment overrides, validates against the schema, and
+/// converts to Config. Never throws. `source` names the text in messages (the file path).
+///
+/// An empty text (or only comments) is a valid config with all defaults; a section written
+/// with no value (`queue:`) is an empty section. Unknown and duplicate keys, wrong types,
+/// out-of-range and bad enum values are all reported, not only the first. Thread-safe.
+LoadResult load_string(std::string_view yaml, std::string_view source,
+                       const Environment& env = {});
+/// Reads `path` and calls load_string with the path as source. A file that cannot be read is
+/// one problem ("cannot read file: No such file or directory").
+LoadResult load_file(const std::filesystem::path& path, const Environment& env = {});
+
+/// The JSON Schema (draft-07) text shipped in config/schema, embedded at build time.
+std::string_view schema_json();
+
+/// Config rendered back as canonical JSON (all keys, defaults filled; keys sorted, no
+/// whitespace) — for logs/manifests and for hashing. The same config gives the same bytes,
+/// and loading the output gives the same config back.
+std::string to_json(const Config& config);
+
+/// One-line rendering: "file.yaml:12: queue.max_attmpts: unknown key (did you mean
+/// max_attempts?)". The line is left out when 0, the path when empty.
+std::string format_problem(std::string_view source, const Problem& p);
+
+/// Names as written in the config ("sqlite", "info", "auto").
+std::string_view to_string(QueueBackend backend);
+std::string_view to_string(LogLevel level);
+std::string_view to_string(LogFormat format);
+
+}  // namespace csgtile::config

@@ -1,0 +1,244 @@
+#include "csgtile/geo/scene.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+namespace csgtile::geo {
+
+using kernel::Error;
+using kernel::ErrorCode;
+using kernel::PrimitiveType;
+using kernel::Result;
+using kernel::Vec2;
+using nlohmann::json;
+
+const char* boolean_op_name(BooleanOp op) {
+  switch (op) {
+    case BooleanOp::None: return "";
+    case BooleanOp::Fuse: return "fuse";
+    case BooleanOp::Common: return "common";
+    case BooleanOp::Cut: return "cut";
+  }
+  return "";
+}
+
+namespace {
+
+// Reads the fields of one primitive; every failure names the primitive and the key.
+class PrimitiveReader {
+ public:
+  PrimitiveReader(const json& j, std::size_t index) : j_(j) {
+    where_ = "primitives[" + std::to_string(index) + "]";
+    if (j.is_object() && j.contains("type") && j["type"].is_string()) {
+      where_ += " (" + j["type"].get<std::string>();
+      if (j.contains("id") && j["id"].is_string()) where_ += " \"" + j["id"].get<std::string>() + "\"";
+      where_ += ")";
+    }
+  }
+
+  Error fail(const std::string& key, const std::string& what) const {
+    return Error{ErrorCode::InvalidArgument, where_ + ": key \"" + key + "\" " + what};
+  }
+
+  Result<double> number(const std::string& key, bool allow_zero = false) const {
+    if (!j_.contains(key)) return fail(key, "is missing");
+    const json& v = j_[key];
+    if (!v.is_number()) return fail(key, "must be a number");
+    const double d = v.get<double>();
+    if (!std::isfinite(d) || d < 0 || (d == 0 && !allow_zero)) {
+      return fail(key, allow_zero ? "must be >= 0" : "must be > 0");
+    }
+    return d;
+  }
+
+  Result<std::vector<Vec2>> ring(const json& v, const std::string& key) const {
+    if (!v.is_array()) return fail(key, "must be an array of [x, y] points");
+    std::vector<Vec2> out;
+    for (const json& p : v) {
+      if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number()) {
+        return fail(key, "must be an array of [x, y] points");
+      }
+      out.emplace_back(p[0].get<double>(), p[1].get<double>());
+    }
+    if (out.size() < 3) return fail(key, "needs at least 3 points");
+    return out;
+  }
+
+  Result<kernel::Location> placement() const {
+    if (!j_.contains("placement")) return kernel::Location();
+    const json& m = j_["placement"];
+    kernel::Matrix34 q;
+    if (!m.is_array() || m.size() != 3) return fail("placement", "must be a 3x4 matrix [[...],[...],[...]]");
+    for (int r = 0; r < 3; ++r) {
+      const json& row = m[static_cast<std::size_t>(r)];
+      if (!row.is_array() || row.size() != 4) return fail("placement", "must be a 3x4 matrix");
+      for (int c = 0; c < 4; ++c) {
+        const json& v = row[static_cast<std::size_t>(c)];
+        if (!v.is_number()) return fail("placement", "must hold numbers only");
+        q(r, c) = v.get<double>();
+      }
+    }
+    auto loc = kernel::Location::from_matrix(q);
+    if (!loc.ok()) return fail("placement", "is invalid: " + loc.error().message);
+    return loc;
+  }
+
+  const std::string& where() const { return where_; }
+
+ private:
+  const json& j_;
+  std::string where_;
+};
+
+Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
+  PrimitiveReader r(j, index);
+  if (!j.is_object()) return Error{ErrorCode::InvalidArgument, r.where() + ": must be an object"};
+  if (!j.contains("type") || !j["type"].is_string()) return r.fail("type", "is missing or not a string");
+  ScenePrimitive out;
+  kernel::PrimitiveSpec& s = out.spec;
+  const std::string type = j["type"].get<std::string>();
+  auto take = [&](const char* key, double& field, bool allow_zero = false) -> std::optional<Error> {
+    auto v = r.number(key, allow_zero);
+    if (!v.ok()) return v.error();
+    field = v.value();
+    return std::nullopt;
+  };
+  std::optional<Error> err;
+  if (type == "box") {
+    s.type = PrimitiveType::Box;
+    if (!j.contains("size") || !j["size"].is_array() || j["size"].size() != 3) {
+      return r.fail("size", "must be [dx, dy, dz]");
+    }
+    for (int i = 0; i < 3; ++i) {
+      const json& v = j["size"][static_cast<std::size_t>(i)];
+      if (!v.is_number() || !(v.get<double>() > 0) || !std::isfinite(v.get<double>())) {
+        return r.fail("size", "must hold three numbers > 0");
+      }
+      s.size[i] = v.get<double>();
+    }
+  } else if (type == "cylinder") {
+    s.type = PrimitiveType::Cylinder;
+    if ((err = take("r", s.radius)) || (err = take("h", s.height))) return *err;
+  } else if (type == "cone") {
+    s.type = PrimitiveType::Cone;
+    if ((err = take("r1", s.radius, true)) || (err = take("r2", s.radius2, true)) ||
+        (err = take("h", s.height))) {
+      return *err;
+    }
+    if (s.radius == 0 && s.radius2 == 0) return r.fail("r1", "and r2 cannot both be 0");
+  } else if (type == "sphere") {
+    s.type = PrimitiveType::Sphere;
+    if ((err = take("r", s.radius))) return *err;
+  } else if (type == "torus") {
+    s.type = PrimitiveType::Torus;
+    if ((err = take("R", s.radius)) || (err = take("r", s.radius2))) return *err;
+    if (!(s.radius > s.radius2)) return r.fail("R", "must be greater than r");
+  } else if (type == "extrusion") {
+    s.type = PrimitiveType::Extrusion;
+    if (!j.contains("profile")) return r.fail("profile", "is missing");
+    auto outer = r.ring(j["profile"], "profile");
+    if (!outer.ok()) return outer.error();
+    s.profile = outer.value();
+    if (j.contains("holes")) {
+      if (!j["holes"].is_array()) return r.fail("holes", "must be an array of rings");
+      for (const json& h : j["holes"]) {
+        auto hole = r.ring(h, "holes");
+        if (!hole.ok()) return hole.error();
+        s.holes.push_back(hole.value());
+      }
+    }
+    if ((err = take("h", s.height))) return *err;
+  } else if (type == "revolution") {
+    s.type = PrimitiveType::Revolution;
+    if (!j.contains("profile")) return r.fail("profile", "is missing");
+    auto profile = r.ring(j["profile"], "profile");
+    if (!profile.ok()) return profile.error();
+    s.profile = profile.value();
+    if (j.contains("angle")) {
+      if ((err = take("angle", s.angle))) return *err;
+      if (s.angle > 2 * std::numbers::pi + 1e-12) return r.fail("angle", "must be <= 2*pi");
+    }
+  } else {
+    return r.fail("type", "\"" + type +
+                              "\" is not one of box, cylinder, cone, sphere, torus, extrusion, "
+                              "revolution");
+  }
+  auto placement = r.placement();
+  if (!placement.ok()) return placement.error();
+  s.placement = placement.value();
+  if (j.contains("id")) {
+    if (!j["id"].is_string()) return r.fail("id", "must be a string");
+    out.id = j["id"].get<std::string>();
+  }
+  if (j.contains("quality") && j["quality"].is_object()) {
+    const json& q = j["quality"];
+    FitQuality fq;
+    if (q.contains("inliers") && q["inliers"].is_number_integer()) fq.inliers = q["inliers"].get<long long>();
+    if (q.contains("rms") && q["rms"].is_number()) fq.rms = q["rms"].get<double>();
+    if (q.contains("coverage") && q["coverage"].is_number()) fq.coverage = q["coverage"].get<double>();
+    out.quality = fq;
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<Scene> parse_scene(std::string_view text) {
+  json j = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) return Error{ErrorCode::InvalidArgument, "scene is not valid JSON"};
+  if (!j.is_object()) return Error{ErrorCode::InvalidArgument, "scene must be a JSON object"};
+  Scene scene;
+  if (j.contains("name") && j["name"].is_string()) scene.name = j["name"].get<std::string>();
+  if (j.contains("op")) {
+    if (!j["op"].is_string()) return Error{ErrorCode::InvalidArgument, "key \"op\" must be a string"};
+    const std::string op = j["op"].get<std::string>();
+    if (op == "fuse") scene.op = BooleanOp::Fuse;
+    else if (op == "common") scene.op = BooleanOp::Common;
+    else if (op == "cut") scene.op = BooleanOp::Cut;
+    else return Error{ErrorCode::InvalidArgument, "key \"op\": \"" + op + "\" is not fuse, common or cut"};
+  }
+  if (!j.contains("primitives") || !j["primitives"].is_array()) {
+    return Error{ErrorCode::InvalidArgument, "key \"primitives\" is missing or not an array"};
+  }
+  for (std::size_t i = 0; i < j["primitives"].size(); ++i) {
+    auto p = read_primitive(j["primitives"][i], i);
+    if (!p.ok()) return p.error();
+    scene.primitives.push_back(std::move(p).value());
+  }
+  if (j.contains("expected") && j["expected"].is_object()) {
+    const json& e = j["expected"];
+    SceneExpectation ex;
+    if (e.contains("volume") && e["volume"].is_number()) ex.volume = e["volume"].get<double>();
+    if (e.contains("area") && e["area"].is_number()) ex.area = e["area"].get<double>();
+    if (e.contains("topology") && e["topology"].is_object()) {
+      const json& t = e["topology"];
+      TopologyCounts c;
+      auto get = [&](const char* k, long long& f) {
+        if (t.contains(k) && t[k].is_number_integer()) f = t[k].get<long long>();
+      };
+      get("solids", c.solids);
+      get("shells", c.shells);
+      get("faces", c.faces);
+      get("edges", c.edges);
+      get("vertices", c.vertices);
+      ex.topology = c;
+    }
+    scene.expected = ex;
+  }
+  return scene;
+}
+
+Result<Scene> read_scene(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{ErrorCode::IoError, "cannot read scene file " + path.string()};
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  auto scene = parse_scene(buf.str());
+  if (!scene.ok()) return Error{scene.error().code, path.string() + ": " + scene.error().message};
+  return scene;
+}
+
+}  // namespace csgtile::geo

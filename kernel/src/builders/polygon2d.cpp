@@ -1,0 +1,108 @@
+#include "builders/polygon2d.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace csgtile::kernel::detail {
+
+namespace {
+double cross(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+int sign(double v) { return (v > 0) - (v < 0); }
+bool on_segment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  return std::min(a.x(), b.x()) <= p.x() && p.x() <= std::max(a.x(), b.x()) &&
+         std::min(a.y(), b.y()) <= p.y() && p.y() <= std::max(a.y(), b.y());
+}
+// Closed segments [a,b] and [c,d] share a point. Orientation signs of exact double
+// products: profiles come from user input in metres, so products are far from overflow.
+bool segments_touch(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const int d1 = sign(cross(c, d, a)), d2 = sign(cross(c, d, b));
+  const int d3 = sign(cross(a, b, c)), d4 = sign(cross(a, b, d));
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  if (d1 == 0 && on_segment(a, c, d)) return true;
+  if (d2 == 0 && on_segment(b, c, d)) return true;
+  if (d3 == 0 && on_segment(c, a, b)) return true;
+  if (d4 == 0 && on_segment(d, a, b)) return true;
+  return false;
+}
+}  // namespace
+
+double signed_area2(const std::vector<Vec2>& ring) {
+  double a = 0.0;
+  for (std::size_t i = 0, n = ring.size(); i < n; ++i) {
+    const Vec2& p = ring[i];
+    const Vec2& q = ring[(i + 1) % n];
+    a += p.x() * q.y() - q.x() * p.y();
+  }
+  return a;
+}
+
+std::vector<Vec2> clean_ring(const std::vector<Vec2>& ring, double eps) {
+  std::vector<Vec2> out;
+  for (const Vec2& p : ring) {
+    if (out.empty() || (p - out.back()).norm() > eps) out.push_back(p);
+  }
+  while (out.size() > 1 && (out.front() - out.back()).norm() <= eps) out.pop_back();
+  // Drop middle points of straight runs (repeat until stable: removing one can expose another).
+  bool changed = true;
+  while (changed && out.size() >= 3) {
+    changed = false;
+    for (std::size_t i = 0; i < out.size() && out.size() >= 3; ++i) {
+      const Vec2& a = out[(i + out.size() - 1) % out.size()];
+      const Vec2& b = out[i];
+      const Vec2& c = out[(i + 1) % out.size()];
+      const double scale = (c - a).norm() * std::max((b - a).norm(), (c - b).norm());
+      if (std::abs(cross(a, b, c)) <= 1e-14 * scale && (b - a).dot(c - b) > 0) {
+        out.erase(out.begin() + static_cast<std::ptrdiff_t>(i));
+        changed = true;
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+bool ring_self_intersects(const std::vector<Vec2>& ring) {
+  const std::size_t n = ring.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const bool adjacent = j == i + 1 || (i == 0 && j == n - 1);
+      const Vec2 &a = ring[i], &b = ring[(i + 1) % n], &c = ring[j], &d = ring[(j + 1) % n];
+      if (adjacent) {
+        // Adjacent edges share one vertex; they must not fold back onto each other.
+        const Vec2& shared = (j == i + 1) ? b : a;
+        const Vec2& p = (j == i + 1) ? a : b;
+        const Vec2& q = (j == i + 1) ? d : c;
+        if (cross(shared, p, q) == 0.0 && (p - shared).dot(q - shared) > 0) return true;
+        continue;
+      }
+      if (segments_touch(a, b, c, d)) return true;
+    }
+  }
+  return false;
+}
+
+bool rings_intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      if (segments_touch(a[i], a[(i + 1) % a.size()], b[j], b[(j + 1) % b.size()])) return true;
+    }
+  }
+  return false;
+}
+
+bool point_in_ring(const Vec2& p, const std::vector<Vec2>& ring) {
+  bool inside = false;
+  for (std::size_t i = 0, n = ring.size(), j = n - 1; i < n; j = i++) {
+    const Vec2& a = ring[i];
+    const Vec2& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
+}  // namespace csgtile::kernel::detail

@@ -1,0 +1,69 @@
+# Module boundary check (DESIGN.md §2): kernel <- geo <- worker, config <- worker.
+# Usage: cmake -DROOT=<source dir> -P check_boundaries.cmake
+# Fails (FATAL_ERROR) listing every include a module must not see.
+if(NOT ROOT)
+  message(FATAL_ERROR "pass -DROOT=<source dir>")
+endif()
+
+# Forbidden include prefixes per module directory (regular expressions on the include path).
+set(third_party_worker "pcl/|GeographicLib/|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/")
+set(rules
+  "kernel|${third_party_worker}|openvdb/|tbb/|nlohmann/|csgtile/(geo|config|worker)/"
+  "geo|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/|csgtile/(config|worker)/"
+  "config|pcl/|GeographicLib/|curl/|sqlite3|libpq|openvdb/|csgtile/(kernel|geo|worker)/")
+set(violations "")
+
+function(scan_module module pattern)
+  file(GLOB_RECURSE files "${ROOT}/${module}/*.h" "${ROOT}/${module}/*.hpp" "${ROOT}/${module}/*.cpp")
+  foreach(f IN LISTS files)
+    # kernel/assembly may use OpenVDB and TBB (DESIGN.md §2); nothing else in the kernel may.
+    if(module STREQUAL "kernel" AND f MATCHES "/kernel/assembly/")
+      set(p "${third_party_worker}|csgtile/(geo|config|worker)/")
+    else()
+      set(p "${pattern}")
+    endif()
+    file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
+    foreach(line IN LISTS lines)
+      if(line MATCHES "#[ \t]*include[ \t]*[<\"]([^>\"]+)[>\"]")
+        set(inc "${CMAKE_MATCH_1}")
+        if(inc MATCHES "^(${p})")
+          file(RELATIVE_PATH rel "${ROOT}" "${f}")
+          list(APPEND violations "${rel}: includes <${inc}>, which ${module}/ must not see")
+        endif()
+      endif()
+    endforeach()
+  endforeach()
+  set(violations "${violations}" PARENT_SCOPE)
+endfunction()
+
+foreach(rule IN LISTS rules)
+  string(FIND "${rule}" "|" bar)
+  string(SUBSTRING "${rule}" 0 ${bar} module)
+  math(EXPR start "${bar} + 1")
+  string(SUBSTRING "${rule}" ${start} -1 pattern)
+  if(IS_DIRECTORY "${ROOT}/${module}")
+    scan_module(${module} "${pattern}")
+  endif()
+endforeach()
+
+# Public headers show only the standard library, Eigen and our own headers: third-party
+# types stay out of other modules' interfaces.
+file(GLOB_RECURSE public_headers "${ROOT}/*/include/csgtile/*.h")
+foreach(f IN LISTS public_headers)
+  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
+  foreach(line IN LISTS lines)
+    if(line MATCHES "#[ \t]*include[ \t]*[<\"]([^>\"]+)[>\"]")
+      set(inc "${CMAKE_MATCH_1}")
+      if(NOT inc MATCHES "^(csgtile/|Eigen/)" AND inc MATCHES "/")
+        file(RELATIVE_PATH rel "${ROOT}" "${f}")
+        list(APPEND violations "${rel}: public header includes third-party <${inc}>")
+      endif()
+    endif()
+  endforeach()
+endforeach()
+
+if(violations)
+  list(JOIN violations "\n  " text)
+  message(FATAL_ERROR "module boundary violations:\n  ${text}")
+endif()
+message(STATUS "module boundaries respected")

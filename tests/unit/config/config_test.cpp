@@ -1,0 +1,449 @@
+#include "csgtile/config/config.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "test_support.h"
+
+namespace csgtile::config {
+
+// gtest prints Problems in failure messages (found by argument-dependent lookup, so not in the
+// unnamed namespace).
+void PrintTo(const Problem& p, std::ostream* out) {
+  *out << "{" << p.path << ", " << p.line << ", " << p.message << "}";
+}
+
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using nlohmann::json;
+
+std::filesystem::path example(const char* name) {
+  return test::source_dir() / "config" / "examples" / name;
+}
+
+/// Problems of a text that must not load.
+std::vector<Problem> problems_of(std::string_view yaml, const Environment& env = {}) {
+  const LoadResult result = load_string(yaml, "test.yaml", env);
+  EXPECT_FALSE(result.ok());
+  EXPECT_FALSE(result.config.has_value());
+  return result.problems;
+}
+
+/// Config of a text that must load.
+Config config_of(std::string_view yaml, const Environment& env = {}) {
+  const LoadResult result = load_string(yaml, "test.yaml", env);
+  for (const Problem& p : result.problems) ADD_FAILURE() << format_problem("test.yaml", p);
+  return result.config.value_or(Config{});
+}
+
+// ---- valid files -------------------------------------------------------------------------------
+
+TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
+  const LoadResult result = load_file(example("csgtile.yaml"));
+  ASSERT_TRUE(result.ok()) << (result.problems.empty()
+                                   ? ""
+                                   : format_problem(result.source, result.problems.front()));
+  Config expected;
+  expected.run = {"demo", {"scenes/block_a.json", "scenes/block_b.json"}, "out/demo", 42, 4};
+  expected.kernel = {1.0e-7, 0.005};
+  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120};
+  expected.log = {LogLevel::Debug, LogFormat::Json};
+  EXPECT_EQ(*result.config, expected);
+}
+
+TEST(ConfigLoad, ExampleFileWritesEveryKeyOfTheSchema) {
+  const std::string text = test::read_file(example("csgtile.yaml"));
+  const json schema = json::parse(schema_json());
+  for (const auto& [section, section_schema] : schema["properties"].items()) {
+    EXPECT_THAT(text, HasSubstr("\n" + section + ":\n"));
+    for (const auto& [key, key_schema] : section_schema["properties"].items()) {
+      EXPECT_THAT(text, HasSubstr("\n  " + key + ":")) << section << "." << key;
+    }
+  }
+}
+
+TEST(ConfigLoad, MinimalExampleLoads) {
+  const LoadResult result = load_file(example("minimal.yaml"));
+  ASSERT_TRUE(result.ok());
+  Config expected;
+  expected.run.inputs = {"scene.json"};
+  EXPECT_EQ(*result.config, expected);
+}
+
+TEST(ConfigLoad, EmptyTextIsAllDefaults) { EXPECT_EQ(config_of(""), Config{}); }
+
+TEST(ConfigLoad, OnlyCommentsIsAllDefaults) {
+  EXPECT_EQ(config_of("# nothing here\n\n   # still nothing\n"), Config{});
+}
+
+TEST(ConfigLoad, SectionWithoutValueIsAnEmptySection) {
+  EXPECT_EQ(config_of("queue:\n  # max_attempts: 3\nlog:\n"), Config{});
+}
+
+TEST(ConfigLoad, StringKeysKeepTheScalarTextAsWritten) {
+  const Config config = config_of("run:\n  name: 001\n  output: 1.50\nqueue:\n  sqlite_path: true\n");
+  EXPECT_EQ(config.run.name, "001");
+  EXPECT_EQ(config.run.output, "1.50");
+  EXPECT_EQ(config.queue.sqlite_path, "true");
+}
+
+TEST(ConfigLoad, NumbersInEveryYamlSpelling) {
+  const Config config = config_of(
+      "run:\n  seed: 9007199254740992\nkernel:\n  linear_tolerance: 1e-3\n"
+      "  chordal_tolerance: 2\n");
+  EXPECT_EQ(config.run.seed, 9007199254740992u);
+  EXPECT_EQ(config.kernel.linear_tolerance, 1e-3);
+  EXPECT_EQ(config.kernel.chordal_tolerance, 2.0);
+}
+
+TEST(ConfigLoad, JsonTextIsYamlToo) {
+  EXPECT_EQ(config_of(R"({"queue": {"backend": "postgres"}})").queue.backend,
+            QueueBackend::Postgres);
+}
+
+// ---- one problem of each kind, with its key path and line -----------------------------------
+
+TEST(ConfigProblems, UnknownKeySuggestsTheClosestKey) {
+  EXPECT_THAT(problems_of("queue:\n  max_attmpts: 5\n"),
+              ElementsAre(Problem{"queue.max_attmpts", 2,
+                                  "unknown key (did you mean max_attempts?)"}));
+}
+
+TEST(ConfigProblems, UnknownKeyFarFromAnyListsTheAllowedKeys) {
+  EXPECT_THAT(problems_of("log:\n  colour: red\n"),
+              ElementsAre(Problem{"log.colour", 2, "unknown key; allowed: format, level"}));
+}
+
+TEST(ConfigProblems, UnknownSection) {
+  EXPECT_THAT(problems_of("kernal:\n  linear_tolerance: 1e-6\n"),
+              ElementsAre(Problem{"kernal", 1, "unknown key (did you mean kernel?)"}));
+}
+
+TEST(ConfigProblems, EveryUnknownKeyOfASectionIsReported) {
+  EXPECT_THAT(problems_of("run:\n  nmae: a\n  sead: 2\n"),
+              ElementsAre(Problem{"run.nmae", 2, "unknown key (did you mean name?)"},
+                          Problem{"run.sead", 3, "unknown key (did you mean seed?)"}));
+}
+
+TEST(ConfigProblems, DuplicateKeyNamesBothLines) {
+  EXPECT_THAT(problems_of("queue:\n  max_attempts: 5\n  lease_seconds: 9\n  max_attempts: 6\n"),
+              ElementsAre(Problem{"queue.max_attempts", 4, "duplicate key (first on line 2)"}));
+}
+
+TEST(ConfigProblems, DuplicateSection) {
+  EXPECT_THAT(problems_of("log:\n  level: info\nlog:\n  level: warn\n"),
+              ElementsAre(Problem{"log", 3, "duplicate key (first on line 1)"}));
+}
+
+TEST(ConfigProblems, WrongTypeNamesExpectedAndActual) {
+  EXPECT_THAT(problems_of("queue:\n  max_attempts: five\n"),
+              ElementsAre(Problem{"queue.max_attempts", 2,
+                                  "expected integer, got string \"five\""}));
+}
+
+TEST(ConfigProblems, QuotedNumberIsAString) {
+  EXPECT_THAT(problems_of("queue:\n  max_attempts: \"5\"\n"),
+              ElementsAre(Problem{"queue.max_attempts", 2, "expected integer, got string \"5\""}));
+}
+
+TEST(ConfigProblems, FractionForAnInteger) {
+  EXPECT_THAT(problems_of("run:\n  threads: 1.5\n"),
+              ElementsAre(Problem{"run.threads", 2, "expected integer, got number 1.5"}));
+}
+
+TEST(ConfigProblems, ScalarForASection) {
+  EXPECT_THAT(problems_of("\nqueue: 5\n"),
+              ElementsAre(Problem{"queue", 2, "expected mapping, got integer 5"}));
+}
+
+TEST(ConfigProblems, ScalarForAList) {
+  EXPECT_THAT(problems_of("run:\n  inputs: a.json\n"),
+              ElementsAre(Problem{"run.inputs", 2, "expected list, got string \"a.json\""}));
+}
+
+TEST(ConfigProblems, AboveMaximum) {
+  EXPECT_THAT(problems_of("queue:\n  max_attempts: 500\n"),
+              ElementsAre(Problem{"queue.max_attempts", 2, "must be <= 100 (got 500)"}));
+}
+
+TEST(ConfigProblems, BelowMinimum) {
+  EXPECT_THAT(problems_of("kernel:\n  chordal_tolerance: 1e-9\n"),
+              ElementsAre(Problem{"kernel.chordal_tolerance", 2, "must be >= 1e-06 (got 1e-09)"}));
+}
+
+TEST(ConfigProblems, ExclusiveMinimum) {
+  EXPECT_THAT(problems_of("kernel:\n  linear_tolerance: 0\n"),
+              ElementsAre(Problem{"kernel.linear_tolerance", 2, "must be > 0 (got 0)"}));
+}
+
+TEST(ConfigProblems, SeedAboveTwoToThe53) {
+  EXPECT_THAT(problems_of("run:\n  seed: 9007199254740993\n"),
+              ElementsAre(Problem{"run.seed", 2,
+                                  "must be <= 9007199254740992 (got 9007199254740993)"}));
+}
+
+TEST(ConfigProblems, BadEnumValueSuggestsTheClosestValue) {
+  EXPECT_THAT(problems_of("queue:\n  backend: sqllite\n"),
+              ElementsAre(Problem{"queue.backend", 2,
+                                  "must be one of sqlite, postgres (got string \"sqllite\"; did "
+                                  "you mean sqlite?)"}));
+}
+
+TEST(ConfigProblems, BadEnumValueFarFromAny) {
+  EXPECT_THAT(problems_of("log:\n  level: 3\n"),
+              ElementsAre(Problem{"log.level", 2,
+                                  "must be one of trace, debug, info, warn, error (got string "
+                                  "\"3\")"}));
+}
+
+TEST(ConfigProblems, NameOutsideItsPattern) {
+  EXPECT_THAT(problems_of("run:\n  name: my run\n"),
+              ElementsAre(Problem{"run.name", 2,
+                                  "must match \"^[A-Za-z0-9_-]{1,64}$\" (got string \"my run\")"}));
+}
+
+TEST(ConfigProblems, EmptyStringsAndListItemsByIndex) {
+  EXPECT_THAT(problems_of("run:\n  output: ''\n  inputs:\n    - a.json\n    - ''\n"),
+              ElementsAre(Problem{"run.output", 2, "must not be empty"},
+                          Problem{"run.inputs[1]", 5, "must not be empty"}));
+}
+
+TEST(ConfigProblems, NullValue) {
+  EXPECT_THAT(problems_of("run:\n  seed:\n"),
+              ElementsAre(Problem{"run.seed", 2, "expected integer, got null"}));
+}
+
+TEST(ConfigProblems, TypoDuplicateAndWrongTypeAreAllReported) {
+  const char* yaml =
+      "run:\n"
+      "  name: demo\n"
+      "  thraeds: 4\n"          // line 3: typo
+      "queue:\n"
+      "  max_attempts: 3\n"
+      "  lease_seconds: ten\n"  // line 6: wrong type
+      "  max_attempts: 4\n";    // line 7: duplicate
+  EXPECT_THAT(problems_of(yaml),
+              ElementsAre(Problem{"run.thraeds", 3, "unknown key (did you mean threads?)"},
+                          Problem{"queue.lease_seconds", 6, "expected integer, got string \"ten\""},
+                          Problem{"queue.max_attempts", 7, "duplicate key (first on line 5)"}));
+}
+
+TEST(ConfigProblems, SyntaxErrorHasTheLineOfTheParser) {
+  const std::vector<Problem> problems = problems_of("run:\n  inputs: [a.json, b.json\nlog:\n");
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].path, "");
+  EXPECT_GE(problems[0].line, 2);
+  EXPECT_THAT(problems[0].message, HasSubstr("YAML syntax error"));
+}
+
+TEST(ConfigProblems, BadIndentationIsASyntaxError) {
+  EXPECT_THAT(problems_of("run:\n  name: a\n   seed: 2\n"),
+              ElementsAre(Problem{"", 3, "YAML syntax error: illegal map value"}));
+}
+
+TEST(ConfigProblems, TopLevelMustBeAMapping) {
+  EXPECT_THAT(problems_of("- run\n- log\n"),
+              ElementsAre(Problem{"", 1,
+                                  "the top level must be a mapping of sections (kernel, log, "
+                                  "queue, run), got a list"}));
+  EXPECT_THAT(problems_of("just text\n"), ElementsAre(testing::Field(&Problem::line, 1)));
+}
+
+TEST(ConfigProblems, MoreThanOneDocument) {
+  EXPECT_THAT(problems_of("run:\n  seed: 2\n---\nrun:\n  seed: 3\n"),
+              ElementsAre(testing::Field(&Problem::message,
+                                         "expected one YAML document, found 2")));
+}
+
+TEST(ConfigProblems, MissingFileNamesThePathAndTheReason) {
+  const LoadResult result = load_file("/nonexistent/csgtile.yaml");
+  EXPECT_FALSE(result.ok());
+  ASSERT_THAT(result.problems, ElementsAre(Problem{"", 0,
+                                                   "cannot read file: No such file or directory"}));
+  EXPECT_EQ(format_problem(result.source, result.problems[0]),
+            "/nonexistent/csgtile.yaml: cannot read file: No such file or directory");
+}
+
+TEST(ConfigProblems, DirectoryIsNotAFile) {
+  const LoadResult result = load_file(test::source_dir() / "config");
+  EXPECT_THAT(result.problems,
+              ElementsAre(Problem{"", 0, "cannot read file: Is a directory"}));
+}
+
+TEST(ConfigProblems, HostileTextNeverThrows) {
+  const std::vector<std::string> texts = {
+      "[", "{a: [}", "\t- x", "run: &a [*a]", std::string("run:\n  name: \xff\xfe\n"),
+      std::string(5000, '['), "? [a, b]\n: c\n", "~: 1\n", "run: !!binary aGVsbG8=\n",
+      "run:\n  inputs: {a: 1}\n", std::string("run:\n  name: a\0b\n", 17),
+      "a: &a [*a, *a]\n",
+      // "Billion laughs": each level doubles the values.
+      "a: &a [x, x]\nb: &b [*a, *a]\nc: &c [*b, *b]\nd: &d [*c, *c]\ne: &e [*d, *d]\n"
+      "f: &f [*e, *e]\ng: &g [*f, *f]\nh: &h [*g, *g]\ni: &i [*h, *h]\nj: &j [*i, *i]\n"
+      "k: &k [*j, *j]\nl: &l [*k, *k]\nm: &m [*l, *l]\nn: &n [*m, *m]\no: &o [*n, *n]\n"
+      "p: &p [*o, *o]\nq: &q [*p, *p]\nr: &r [*q, *q]\ns: &s [*r, *r]\nt: &t [*s, *s]\n"};
+  for (const std::string& text : texts) {
+    LoadResult result;
+    EXPECT_NO_THROW(result = load_string(text, "hostile.yaml")) << text.substr(0, 40);
+    EXPECT_FALSE(result.ok()) << text.substr(0, 40);
+    for (const Problem& p : result.problems) EXPECT_FALSE(p.message.empty());
+  }
+}
+
+// ---- environment overrides ---------------------------------------------------------------------
+
+TEST(ConfigEnvironment, OverrideWinsOverTheFile) {
+  const Config config = config_of("queue:\n  max_attempts: 3\n",
+                                  {{"CSGTILE_QUEUE__MAX_ATTEMPTS", "7"}});
+  EXPECT_EQ(config.queue.max_attempts, 7);
+}
+
+TEST(ConfigEnvironment, NamesAreCaseInsensitive) {
+  const Config config = config_of("", {{"CSGTILE_queue__Backend", "postgres"},
+                                       {"CSGTILE_LOG__LEVEL", "warn"}});
+  EXPECT_EQ(config.queue.backend, QueueBackend::Postgres);
+  EXPECT_EQ(config.log.level, LogLevel::Warn);
+}
+
+TEST(ConfigEnvironment, InputsAreACommaSeparatedList) {
+  const Config config = config_of("run:\n  inputs: [old.json]\n",
+                                  {{"CSGTILE_RUN__INPUTS", "a.json, b.json,c.json"}});
+  EXPECT_EQ(config.run.inputs, (std::vector<std::string>{"a.json", "b.json", "c.json"}));
+  EXPECT_TRUE(config_of("run:\n  inputs: [old.json]\n", {{"CSGTILE_RUN__INPUTS", ""}})
+                  .run.inputs.empty());
+}
+
+TEST(ConfigEnvironment, StringValuesAreTakenAsWritten) {
+  const Config config = config_of("", {{"CSGTILE_RUN__NAME", "007"},
+                                       {"CSGTILE_QUEUE__POSTGRES_DSN", "postgres://u@h/db"}});
+  EXPECT_EQ(config.run.name, "007");
+  EXPECT_EQ(config.queue.postgres_dsn, "postgres://u@h/db");
+}
+
+TEST(ConfigEnvironment, BadValueNamesTheVariable) {
+  EXPECT_THAT(problems_of("queue:\n  max_attempts: 3\n", {{"CSGTILE_QUEUE__MAX_ATTEMPTS", "many"}}),
+              ElementsAre(Problem{"queue.max_attempts", 0,
+                                  "expected integer, got string \"many\" (from environment "
+                                  "variable CSGTILE_QUEUE__MAX_ATTEMPTS)"}));
+  EXPECT_THAT(problems_of("", {{"CSGTILE_RUN__INPUTS", "a.json,,b.json"}}),
+              ElementsAre(Problem{"run.inputs[1]", 0,
+                                  "must not be empty (from environment variable "
+                                  "CSGTILE_RUN__INPUTS)"}));
+}
+
+TEST(ConfigEnvironment, UnknownKeyOfAKnownSection) {
+  EXPECT_THAT(problems_of("", {{"CSGTILE_QUEUE__MAX_ATTEMPT", "3"}}),
+              ElementsAre(Problem{"queue.max_attempt", 0,
+                                  "unknown key (did you mean max_attempts?) (from environment "
+                                  "variable CSGTILE_QUEUE__MAX_ATTEMPT)"}));
+}
+
+TEST(ConfigEnvironment, UnknownSectionAndSectionAsAValue) {
+  EXPECT_THAT(problems_of("", {{"CSGTILE_QEUE__BACKEND", "sqlite"}}),
+              ElementsAre(testing::Field(&Problem::path, "qeue")));
+  EXPECT_THAT(problems_of("", {{"CSGTILE_LOG__LEVEL__X", "1"}}),
+              ElementsAre(testing::Field(&Problem::path, "log.level.x")));
+}
+
+TEST(ConfigEnvironment, VariablesWithoutDoubleUnderscoreAreIgnored) {
+  EXPECT_EQ(config_of("", {{"CSGTILE_LOG_LEVEL", "bogus"},
+                           {"CSGTILE_CONFIG", "x.yaml"},
+                           {"OTHER__THING", "1"},
+                           {"HOME", "/root"}}),
+            Config{});
+}
+
+TEST(ConfigEnvironment, FileAndEnvironmentProblemsTogether) {
+  EXPECT_THAT(problems_of("log:\n  level: loud\n", {{"CSGTILE_RUN__THREADS", "-1"}}),
+              ElementsAre(testing::Field(&Problem::line, 2), testing::Field(&Problem::line, 0)));
+}
+
+TEST(ConfigEnvironment, ProcessEnvironmentIsRead) {
+  setenv("CSGTILE_TEST_PROCESS_ENVIRONMENT", "a=b", 1);
+  const Environment env = from_process_environment();
+  ASSERT_TRUE(env.contains("CSGTILE_TEST_PROCESS_ENVIRONMENT"));
+  EXPECT_EQ(env.at("CSGTILE_TEST_PROCESS_ENVIRONMENT"), "a=b");
+  unsetenv("CSGTILE_TEST_PROCESS_ENVIRONMENT");
+}
+
+// ---- schema and canonical JSON -----------------------------------------------------------------
+
+TEST(ConfigSchema, IsDraft07Json) {
+  const json schema = json::parse(schema_json());
+  EXPECT_EQ(schema.at("$schema"), "http://json-schema.org/draft-07/schema#");
+  EXPECT_EQ(std::string(schema_json()), test::read_file(test::source_dir() / "config" /
+                                                         "schema" / "csgtile.schema.json"));
+}
+
+/// Every object closes its keys and every property says what it is for.
+void expect_documented(const json& schema, const std::string& path) {
+  if (schema.value("type", "") == "object") {
+    EXPECT_EQ(schema.value("additionalProperties", true), false) << path;
+  }
+  const json properties = schema.value("properties", json::object());
+  for (const auto& [key, property] : properties.items()) {
+    const std::string property_path = path.empty() ? key : path + "." + key;
+    EXPECT_TRUE(property.contains("description")) << property_path;
+    EXPECT_TRUE(property.contains("type")) << property_path;
+    expect_documented(property, property_path);
+  }
+}
+
+TEST(ConfigSchema, EveryObjectIsClosedAndEveryPropertyDescribed) {
+  expect_documented(json::parse(schema_json()), "");
+}
+
+TEST(ConfigSchema, DefaultsEqualTheStructDefaults) {
+  const json schema = json::parse(schema_json());
+  const json defaults = json::parse(to_json(config_of("")));
+  ASSERT_EQ(defaults, json::parse(to_json(Config{})));
+  // Both directions: every schema key has the struct's default, every struct key is in the
+  // schema.
+  for (const auto& [section, section_schema] : schema.at("properties").items()) {
+    ASSERT_TRUE(defaults.contains(section)) << section;
+    for (const auto& [key, key_schema] : section_schema.at("properties").items()) {
+      ASSERT_TRUE(key_schema.contains("default")) << section << "." << key;
+      EXPECT_EQ(key_schema.at("default"), defaults.at(section).at(key)) << section << "." << key;
+    }
+    EXPECT_EQ(defaults.at(section).size(), section_schema.at("properties").size()) << section;
+  }
+  EXPECT_EQ(defaults.size(), schema.at("properties").size());
+}
+
+TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
+  const LoadResult first = load_file(example("csgtile.yaml"));
+  ASSERT_TRUE(first.ok());
+  const std::string text = to_json(*first.config);
+  EXPECT_EQ(to_json(Config(*first.config)), text);
+
+  const Config reloaded = config_of(text);
+  EXPECT_EQ(reloaded, *first.config);
+  EXPECT_EQ(to_json(reloaded), text);
+}
+
+TEST(ConfigJson, DefaultsAsCanonicalText) {
+  EXPECT_EQ(to_json(Config{}),
+            R"({"kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
+            R"("log":{"format":"auto","level":"info"},)"
+            R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
+            R"("postgres_dsn":"","sqlite_path":""},)"
+            R"("run":{"inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
+}
+
+TEST(ConfigFormat, OneLinePerProblem) {
+  EXPECT_EQ(format_problem("file.yaml",
+                           {"queue.max_attmpts", 12, "unknown key (did you mean max_attempts?)"}),
+            "file.yaml:12: queue.max_attmpts: unknown key (did you mean max_attempts?)");
+  EXPECT_EQ(format_problem("file.yaml", {"queue.max_attempts", 0, "bad"}),
+            "file.yaml: queue.max_attempts: bad");
+  EXPECT_EQ(format_problem("file.yaml", {"", 3, "YAML syntax error: x"}),
+            "file.yaml:3: YAML syntax error: x");
+}
+
+}  // namespace
+}  // namespace csgtile::config

@@ -1,0 +1,36 @@
+#include "csgtile/worker/cli.h"
+
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "csgtile/worker/errors.h"
+
+namespace csgtile::worker {
+
+int run_cli(int argc, char** argv) {
+  CLI::App app{"csgtile: LIDAR tiles to CSG-BRep city models and topology indexes"};
+  app.set_version_flag("--version", std::string("csgtile ") + CSGTILE_VERSION);
+  app.require_subcommand(1);
+  detail::Action action;
+  detail::register_validate_config(app, action);
+  detail::register_config(app, action);
+  detail::register_bool(app, action);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --version: prints and returns 0
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return error_info(ErrorCode::Usage).exit_code;
+  }
+  try {
+    return action ? action() : error_info(ErrorCode::Usage).exit_code;
+  } catch (const std::exception& e) {
+    // Third-party code below us may still throw (allocation failure, say): report, don't crash.
+    std::fprintf(stderr, "csgtile: internal error: %s\n", e.what());
+    return error_info(ErrorCode::Internal).exit_code;
+  }
+}
+
+}  // namespace csgtile::worker

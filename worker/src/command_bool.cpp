@@ -1,0 +1,123 @@
+// `csgtile bool CASE.json [--json]`: builds a scene's primitives and reports the spec's
+// result fields (../shared/spec/scene-format.md).
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/geo/scene.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/worker/errors.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+struct BoolReport {
+  std::string name, op;
+  bool valid = false;
+  double volume = 0, area = 0, seconds = 0;
+  std::array<std::size_t, kernel::kShapeKindCount> counts{};
+  std::string error;
+  std::vector<std::string> issues;
+};
+
+// Runs the scene; the failure code is Ok when the scene was evaluated (valid or not).
+Failure evaluate(const std::string& path, BoolReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  auto scene = geo::read_scene(path);
+  if (!scene.ok()) {
+    return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+            scene.error().message};
+  }
+  report.name = scene->name;
+  report.op = geo::boolean_op_name(scene->op);
+  if (scene->op != geo::BooleanOp::None) {
+    return {ErrorCode::Unsupported,
+            "Boolean operation \"" + report.op + "\" is not available in this build yet"};
+  }
+  std::vector<kernel::Shape> solids;
+  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+    const auto& p = scene->primitives[i];
+    auto solid = kernel::build_primitive(p.spec);
+    if (!solid.ok()) {
+      return {from_kernel(solid.error().code),
+              "primitives[" + std::to_string(i) + "] (" + kernel::primitive_type_name(p.spec.type) +
+                  "): " + solid.error().message};
+    }
+    solids.push_back(std::move(solid).value());
+  }
+  auto compound = kernel::ShapeFactory::compound(std::move(solids));
+  if (!compound.ok()) return {from_kernel(compound.error().code), compound.error().message};
+  const kernel::CheckReport check = kernel::check_shape(compound.value());
+  const kernel::MassProperties mp = kernel::mass_properties(compound.value());
+  report.counts = kernel::count_shapes(compound.value());
+  report.valid = check.valid();
+  for (const auto& issue : check.issues) {
+    report.issues.push_back(std::string(kernel::check_status_name(issue.status)) + ": " + issue.message);
+  }
+  report.volume = mp.volume;
+  report.area = mp.area;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {};
+}
+
+}  // namespace
+
+void register_bool(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand(
+      "bool", "Build a scene's primitives (scene format of shared/spec) and report validity, "
+              "volume, area and topology counts");
+  auto file = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("CASE", *file, "Scene / case JSON file")->required();
+  cmd->add_flag("--json", *json, "Print one JSON object with the spec's result fields");
+  cmd->callback([&action, file, json] {
+    action = [file, json] {
+      BoolReport r;
+      const Failure failure = evaluate(*file, r);
+      auto count = [&](kernel::ShapeKind k) { return r.counts[static_cast<int>(k)]; };
+      if (*json) {
+        nlohmann::ordered_json out;
+        out["name"] = r.name;
+        out["op"] = r.op.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.op);
+        out["valid"] = failure.ok() && r.valid;
+        out["volume"] = r.volume;
+        out["area"] = r.area;
+        out["topology"] = {{"solids", count(kernel::ShapeKind::Solid)},
+                           {"shells", count(kernel::ShapeKind::Shell)},
+                           {"faces", count(kernel::ShapeKind::Face)},
+                           {"edges", count(kernel::ShapeKind::Edge)},
+                           {"vertices", count(kernel::ShapeKind::Vertex)}};
+        out["seconds"] = r.seconds;
+        if (!failure.ok()) {
+          out["error"] = std::string(error_info(failure.code).name) + ": " + failure.message;
+        } else if (!r.valid) {
+          out["error"] = "invalid result: " + (r.issues.empty() ? std::string() : r.issues.front());
+        } else {
+          out["error"] = nullptr;
+        }
+        std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+      } else if (failure.ok()) {
+        std::printf("%s: %s  volume %.12g  area %.12g  solids %zu shells %zu faces %zu edges %zu "
+                    "vertices %zu  (%.4f s)\n",
+                    r.name.c_str(), r.valid ? "valid" : "INVALID", r.volume, r.area,
+                    count(kernel::ShapeKind::Solid), count(kernel::ShapeKind::Shell),
+                    count(kernel::ShapeKind::Face), count(kernel::ShapeKind::Edge),
+                    count(kernel::ShapeKind::Vertex), r.seconds);
+        for (const auto& issue : r.issues) std::printf("  %s\n", issue.c_str());
+      }
+      if (!failure.ok()) {
+        if (!*json) std::fprintf(stderr, "csgtile bool: %s\n", failure.message.c_str());
+        return error_info(failure.code).exit_code;
+      }
+      return r.valid ? 0 : 1;
+    };
+  });
+}
+
+}  // namespace csgtile::worker::detail

@@ -1,0 +1,21 @@
+#pragma once
+// Subcommand registration: each command file adds its CLI11 subcommand and sets `run`.
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace csgtile::worker::detail {
+
+/// Options shared by every subcommand.
+struct GlobalOptions {
+  bool json = false;
+};
+
+/// A registered subcommand's action, returning the exit code.
+using Action = std::function<int()>;
+
+void register_validate_config(CLI::App& app, Action& action);
+void register_config(CLI::App& app, Action& action);
+void register_bool(CLI::App& app, Action& action);
+
+}  // namespace csgtile::worker::detail

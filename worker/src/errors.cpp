@@ -1,0 +1,46 @@
+#include "csgtile/worker/errors.h"
+
+#include <array>
+
+namespace csgtile::worker {
+
+namespace {
+// Exit codes follow sysexits(3) where one fits; 1 is left for "failed checks" of a command
+// that ran fine (e.g. `bool` on an invalid result) — see README "Exit codes".
+constexpr std::array<ErrorInfo, 8> kTable{{
+    {ErrorCode::Ok, "ok", "success", false, 0},
+    {ErrorCode::Usage, "usage", "bad command line", false, 64},
+    {ErrorCode::ConfigInvalid, "config_invalid", "the configuration is invalid", false, 78},
+    {ErrorCode::InputInvalid, "input_invalid", "an input file is malformed", false, 65},
+    {ErrorCode::GeometryInvalid, "geometry_invalid", "geometry cannot be built or is invalid",
+     false, 66},
+    {ErrorCode::Unsupported, "unsupported", "not supported by this build", false, 69},
+    {ErrorCode::Io, "io", "a read or write failed", true, 74},
+    {ErrorCode::Internal, "internal", "internal error (a bug in csgtile)", false, 70},
+}};
+}  // namespace
+
+const ErrorInfo& error_info(ErrorCode code) { return kTable[static_cast<std::size_t>(code)]; }
+
+const ErrorInfo* error_table(std::size_t* count) {
+  *count = kTable.size();
+  return kTable.data();
+}
+
+ErrorCode from_kernel(kernel::ErrorCode code) {
+  switch (code) {
+    case kernel::ErrorCode::InvalidArgument:
+    case kernel::ErrorCode::CorruptData:
+    case kernel::ErrorCode::UnsupportedVersion:
+      return ErrorCode::InputInvalid;
+    case kernel::ErrorCode::InvalidLocation:
+    case kernel::ErrorCode::DegenerateGeometry:
+    case kernel::ErrorCode::InvalidShape:
+      return ErrorCode::GeometryInvalid;
+    case kernel::ErrorCode::IoError: return ErrorCode::Io;
+    case kernel::ErrorCode::Unsupported: return ErrorCode::Unsupported;
+  }
+  return ErrorCode::Internal;
+}
+
+}  // namespace csgtile::worker

@@ -1,0 +1,3 @@
+#include "csgtile/worker/cli.h"
+
+int main(int argc, char** argv) { return csgtile::worker::run_cli(argc, argv); }
