@@ -111,7 +111,7 @@ LoadResult load_file(const std::filesystem::path& path, const Environment& env) 
 
   errno = 0;
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                              &std::fclose);
+                                                             &std::fclose);
   if (!file) return cannot_read(errno != 0 ? errno : EIO);
   std::string text;
   char buffer[1 << 14];

@@ -8,12 +8,11 @@
 /// reports everything wrong at once.
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "csgtile/config/config.h"
 

@@ -60,8 +60,8 @@ std::string suffix(const std::string& variable) {
 /// comma-separated list (items trimmed; an empty value is an empty list).
 void apply_one(const std::string& variable, const std::string& value, Document& document,
                std::vector<Problem>& problems) {
-  const std::vector<std::string> segments = split(
-      std::string_view(variable).substr(kPrefix.size()), kSeparator);
+  const std::vector<std::string> segments =
+      split(std::string_view(variable).substr(kPrefix.size()), kSeparator);
   json::json_pointer pointer;
   std::string path;
   const json* schema = &schema_document();
@@ -81,8 +81,9 @@ void apply_one(const std::string& variable, const std::string& value, Document& 
     schema = &schema->at("properties").at(key);
   }
   if (schema_type(schema) == "object") {
-    problems.push_back({path, 0, "is a section; set its keys one by one (e.g. " + variable +
-                                     "__<KEY>)" + suffix(variable)});
+    problems.push_back({path, 0,
+                        "is a section; set its keys one by one (e.g. " + variable + "__<KEY>)" +
+                            suffix(variable)});
     return;
   }
 
@@ -126,8 +127,7 @@ void apply_one(const std::string& variable, const std::string& value, Document& 
 
 }  // namespace
 
-void apply_environment(const Environment& env, Document& document,
-                       std::vector<Problem>& problems) {
+void apply_environment(const Environment& env, Document& document, std::vector<Problem>& problems) {
   // std::map order: overrides apply in a fixed order whatever the process environment's.
   for (const auto& [variable, value] : env) {
     if (!variable.starts_with(kPrefix)) continue;

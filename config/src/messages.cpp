@@ -91,8 +91,8 @@ std::string display_path(const json& document, const json::json_pointer& pointer
     }
     if (!path.empty()) path += ".";
     path += token;
-    node = (node != nullptr && node->is_object() && node->contains(token)) ? &(*node)[token]
-                                                                            : nullptr;
+    node =
+        (node != nullptr && node->is_object() && node->contains(token)) ? &(*node)[token] : nullptr;
   }
   return path;
 }

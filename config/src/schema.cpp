@@ -42,7 +42,8 @@ std::optional<json> parse_integer(std::string_view text) {
   }
   if (!is_digits(digits)) return std::nullopt;
   std::uint64_t magnitude = 0;
-  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), magnitude);
+  const auto [end, error] =
+      std::from_chars(digits.data(), digits.data() + digits.size(), magnitude);
   if (error != std::errc() || end != digits.data() + digits.size()) return std::nullopt;
   if (negative) {
     constexpr std::uint64_t kMaxNegative = std::uint64_t{1} << 63;

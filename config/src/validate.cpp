@@ -9,13 +9,12 @@
 #include <string>
 #include <string_view>
 #include <utility>
-#include <vector>
-
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
 #include <valijson/schema_parser.hpp>
 #include <valijson/validation_results.hpp>
 #include <valijson/validator.hpp>
+#include <vector>
 
 #include "document.h"
 
@@ -47,9 +46,9 @@ json::json_pointer pointer_of(const std::vector<std::string>& context, const jso
   const json* node = &document;
   for (std::size_t i = 1; i < context.size(); ++i) {
     const std::string& part = context[i];
-    const std::string token =
-        part.size() >= 2 && part.front() == '[' && part.back() == ']' ? part.substr(1, part.size() - 2)
-                                                                      : part;
+    const std::string token = part.size() >= 2 && part.front() == '[' && part.back() == ']'
+                                  ? part.substr(1, part.size() - 2)
+                                  : part;
     if (node != nullptr && node->is_array()) {
       const std::size_t index = std::stoul(token);
       pointer /= index;
@@ -57,7 +56,7 @@ json::json_pointer pointer_of(const std::vector<std::string>& context, const jso
     } else {
       pointer /= token;
       node = (node != nullptr && node->is_object() && node->contains(token)) ? &(*node)[token]
-                                                                              : nullptr;
+                                                                             : nullptr;
     }
   }
   return pointer;
@@ -81,10 +80,12 @@ std::string join_strings(const json& values) {
 bool integer_less(const json& a, const json& b) {
   if (a.is_number_unsigned()) {
     const auto x = a.get<std::uint64_t>();
-    return b.is_number_unsigned() ? x < b.get<std::uint64_t>() : std::cmp_less(x, b.get<std::int64_t>());
+    return b.is_number_unsigned() ? x < b.get<std::uint64_t>()
+                                  : std::cmp_less(x, b.get<std::int64_t>());
   }
   const auto x = a.get<std::int64_t>();
-  return b.is_number_unsigned() ? std::cmp_less(x, b.get<std::uint64_t>()) : x < b.get<std::int64_t>();
+  return b.is_number_unsigned() ? std::cmp_less(x, b.get<std::uint64_t>())
+                                : x < b.get<std::int64_t>();
 }
 
 class ProblemCollector {
@@ -112,12 +113,13 @@ class ProblemCollector {
 
     if (starts("Failed to validate") || starts("Cannot validate")) return;
     // A fraction for an integer key also fails its bounds when large; the type error says it.
-    if (starts("Expected number") && schema_type(schema) == "integer" && !value.is_number_integer()) {
+    if (starts("Expected number") && schema_type(schema) == "integer" &&
+        !value.is_number_integer()) {
       return;
     }
     if (starts("Value type not permitted")) {
-      add(pointer, "expected " + describe_type(schema_type(schema)) + ", got " +
-                       describe_value(value));
+      add(pointer,
+          "expected " + describe_type(schema_type(schema)) + ", got " + describe_value(value));
     } else if (starts("Expected number less than or equal to")) {
       add(pointer, "must be <= " + number_text(schema, "maximum") + " (got " + value.dump() + ")");
     } else if (starts("Expected number less than")) {
@@ -131,13 +133,13 @@ class ProblemCollector {
     } else if (starts("Failed to match against any enum values")) {
       add_enum_error(pointer, value, schema);
     } else if (starts("Failed to match regex")) {
-      add(pointer, "must match " + number_text(schema, "pattern") + " (got " +
-                       describe_value(value) + ")");
+      add(pointer,
+          "must match " + number_text(schema, "pattern") + " (got " + describe_value(value) + ")");
     } else if (starts("String should be no fewer than")) {
       const bool non_empty = schema != nullptr && schema->value("minLength", 0) == 1;
-      add(pointer, non_empty ? std::string("must not be empty")
-                             : "must have at least " + number_text(schema, "minLength") +
-                                   " characters");
+      add(pointer, non_empty
+                       ? std::string("must not be empty")
+                       : "must have at least " + number_text(schema, "minLength") + " characters");
     } else if (starts("Object contains a property that could not be validated")) {
       add_unknown_keys(pointer, value, schema);
     } else {
@@ -174,8 +176,8 @@ class ProblemCollector {
  private:
   void add_enum_error(const json::json_pointer& pointer, const json& value, const json* schema) {
     const json choices = schema != nullptr ? schema->value("enum", json::array()) : json::array();
-    std::string message = "must be one of " + join_strings(choices) + " (got " +
-                          describe_value(value);
+    std::string message =
+        "must be one of " + join_strings(choices) + " (got " + describe_value(value);
     if (value.is_string()) {
       std::vector<std::string> names;
       for (const json& choice : choices) {

@@ -1,9 +1,9 @@
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <yaml-cpp/yaml.h>
 
 #include "document.h"
 
@@ -57,9 +57,9 @@ class Converter {
       }
     }
     if (ancestors_.size() >= kMaxDepth || ++values_ > kMaxValues) {
-      problems_.push_back({path, line_of(node.Mark()),
-                           ancestors_.size() >= kMaxDepth ? "nested too deep"
-                                                          : "too many values (aliases?)"});
+      problems_.push_back(
+          {path, line_of(node.Mark()),
+           ancestors_.size() >= kMaxDepth ? "nested too deep" : "too many values (aliases?)"});
       stopped_ = true;
       return;
     }
@@ -114,9 +114,8 @@ class Converter {
       const std::string child_path = path.empty() ? name : path + "." + name;
       if (out.contains(name)) {
         const int first_line = document_.origins[child.to_string()].line;
-        problems_.push_back(
-            {child_path, key_line, "duplicate key (first on line " + std::to_string(first_line) +
-                                       ")"});
+        problems_.push_back({child_path, key_line,
+                             "duplicate key (first on line " + std::to_string(first_line) + ")"});
         continue;
       }
       document_.origins[child.to_string()] = Origin{key_line, {}};
@@ -136,8 +135,10 @@ class Converter {
 void yaml_to_document(std::string_view yaml, Document& document, std::vector<Problem>& problems) {
   // yaml-cpp stops reading at a NUL byte and would accept the part before it.
   if (const std::size_t nul = yaml.find('\0'); nul != std::string_view::npos) {
-    const auto line = 1 + std::count(yaml.begin(), yaml.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
-    problems.push_back({"", static_cast<int>(line), "the text contains a NUL byte (not a YAML file?)"});
+    const auto line =
+        1 + std::count(yaml.begin(), yaml.begin() + static_cast<std::ptrdiff_t>(nul), '\n');
+    problems.push_back(
+        {"", static_cast<int>(line), "the text contains a NUL byte (not a YAML file?)"});
     return;
   }
   std::vector<YAML::Node> documents;
@@ -159,9 +160,9 @@ void yaml_to_document(std::string_view yaml, Document& document, std::vector<Pro
     for (const std::string& name : property_names(schema_document())) {
       sections += sections.empty() ? name : ", " + name;
     }
-    problems.push_back({"", line_of(root.Mark()),
-                        "the top level must be a mapping of sections (" + sections + "), got " +
-                            kind_of(root)});
+    problems.push_back(
+        {"", line_of(root.Mark()),
+         "the top level must be a mapping of sections (" + sections + "), got " + kind_of(root)});
     return;
   }
   Converter(document, problems).convert(root, nlohmann::json::json_pointer(), "", document.json);

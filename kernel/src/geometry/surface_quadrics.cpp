@@ -10,9 +10,7 @@ namespace {
 
 /// Direction cos u·X + sin u·Y of the frame.
 Vec3 radial(const Frame& f, double u) { return std::cos(u) * f.x + std::sin(u) * f.y; }
-Vec3 radial_derivative(const Frame& f, double u) {
-  return -std::sin(u) * f.x + std::cos(u) * f.y;
-}
+Vec3 radial_derivative(const Frame& f, double u) { return -std::sin(u) * f.x + std::cos(u) * f.y; }
 
 /// Cylindrical coordinates of p in the frame: polar angle in [0, 2π) (0 on the axis, so that
 /// axis points invert deterministically), distance from the axis, height along z.
@@ -84,9 +82,7 @@ SurfacePtr PlaneSurface::transformed(const Location& loc) const {
 Vec3 CylinderSurface::point(double u, double v) const {
   return frame_.origin + radius_ * radial(frame_, u) + v * frame_.z;
 }
-Vec3 CylinderSurface::du(double u, double) const {
-  return radius_ * radial_derivative(frame_, u);
-}
+Vec3 CylinderSurface::du(double u, double) const { return radius_ * radial_derivative(frame_, u); }
 Vec3 CylinderSurface::dv(double, double) const { return frame_.z; }
 double CylinderSurface::u_period() const { return detail::kTwoPi; }
 
@@ -97,10 +93,10 @@ Vec2 CylinderSurface::closest_parameters(const Vec3& p) const {
 
 BoundingBox CylinderSurface::bounds(const ParamBox& box) const {
   const double r = radius_;
-  return detail::rotational_patch_bounds(
-      frame_, box, [r](double alpha, double beta, double v0, double v1) {
-        return detail::linear_range(beta, alpha * r, v0, v1);
-      });
+  return detail::rotational_patch_bounds(frame_, box,
+                                         [r](double alpha, double beta, double v0, double v1) {
+                                           return detail::linear_range(beta, alpha * r, v0, v1);
+                                         });
 }
 
 SurfacePtr CylinderSurface::transformed(const Location& loc) const {
@@ -150,8 +146,7 @@ BoundingBox ConeSurface::bounds(const ParamBox& box) const {
 }
 
 SurfacePtr ConeSurface::transformed(const Location& loc) const {
-  return std::make_shared<ConeSurface>(frame_.transformed(loc), radius_ * loc.scale(),
-                                       semi_angle_);
+  return std::make_shared<ConeSurface>(frame_.transformed(loc), radius_ * loc.scale(), semi_angle_);
 }
 
 // ---- SphereSurface ------------------------------------------------------------------------
@@ -181,10 +176,10 @@ Vec2 SphereSurface::closest_parameters(const Vec3& p) const {
 
 BoundingBox SphereSurface::bounds(const ParamBox& box) const {
   const double r = radius_;
-  return detail::rotational_patch_bounds(
-      frame_, box, [r](double alpha, double beta, double v0, double v1) {
-        return detail::trig_range(r * alpha, r * beta, v0, v1);
-      });
+  return detail::rotational_patch_bounds(frame_, box,
+                                         [r](double alpha, double beta, double v0, double v1) {
+                                           return detail::trig_range(r * alpha, r * beta, v0, v1);
+                                         });
 }
 
 SurfacePtr SphereSurface::transformed(const Location& loc) const {
@@ -211,9 +206,8 @@ Vec2 TorusSurface::closest_parameters(const Vec3& p) const {
   // tube circle there: straight away from the tube centre (v = 0 on the core circle).
   const Cylindrical c = cylindrical(frame_, p);
   const double x = c.rho - major_;
-  const double v = (x == 0.0 && c.height == 0.0)
-                       ? 0.0
-                       : detail::wrap_two_pi(std::atan2(c.height, x));
+  const double v =
+      (x == 0.0 && c.height == 0.0) ? 0.0 : detail::wrap_two_pi(std::atan2(c.height, x));
   return {c.angle, v};
 }
 

@@ -51,8 +51,7 @@ double projected_closest_parameter(const Curve& curve, const Vec3& p, const Vec3
     case CurveKind::Circle: {
       const auto& circle = static_cast<const CircleCurve&>(curve);
       const Frame& f = circle.frame();
-      return projected_conic_closest(f.origin, circle.radius() * f.x, circle.radius() * f.y, p,
-                                     d);
+      return projected_conic_closest(f.origin, circle.radius() * f.x, circle.radius() * f.y, p, d);
     }
     case CurveKind::Ellipse: {
       const auto& ellipse = static_cast<const EllipseCurve&>(curve);
@@ -86,8 +85,7 @@ double projected_closest_parameter(const Curve& curve, const Vec3& p, const Vec3
 /// a reference point (line origin, conic centre, farthest polyline vertex), falling back to
 /// further points when that one is on the axis. Any choice works for evaluation and bounds
 /// (the radial coordinate is signed); it only decides the normal's side exactly on the axis.
-Vec3 meridian_radial_direction(const Curve& meridian, const Vec3& axis_origin,
-                               const Vec3& axis) {
+Vec3 meridian_radial_direction(const Curve& meridian, const Vec3& axis_origin, const Vec3& axis) {
   std::array<Vec3, 3> references{};
   std::size_t count = 0;
   Vec3 exact_direction = Vec3::Zero();
@@ -146,9 +144,7 @@ Vec3 meridian_radial_direction(const Curve& meridian, const Vec3& axis_origin,
 ExtrusionSurface::ExtrusionSurface(CurvePtr basis, const Vec3& direction)
     : basis_(std::move(basis)), direction_(direction.normalized()) {}
 
-Vec3 ExtrusionSurface::point(double u, double v) const {
-  return basis_->point(u) + v * direction_;
-}
+Vec3 ExtrusionSurface::point(double u, double v) const { return basis_->point(u) + v * direction_; }
 Vec3 ExtrusionSurface::du(double u, double) const { return basis_->derivative(u); }
 Vec3 ExtrusionSurface::dv(double, double) const { return direction_; }
 
@@ -245,7 +241,7 @@ Vec2 RevolutionSurface::closest_parameters(const Vec3& p) const {
   const double noise = 1e-13 * (q.norm() + (s_same - origin_).norm());
   const double d_same = (s_same - p).squaredNorm();
   const double d_mirrored = (point(mirrored.x(), mirrored.y()) - p).squaredNorm();
-  return same;
+  return d_mirrored < d_same - noise * noise ? mirrored : same;
 }
 
 BoundingBox RevolutionSurface::bounds(const ParamBox& box) const {
@@ -270,8 +266,7 @@ BoundingBox RevolutionSurface::bounds(const ParamBox& box) const {
 
 SurfacePtr RevolutionSurface::transformed(const Location& loc) const {
   // u is an angle and is kept; v follows the meridian's rule (a line's t scales).
-  return std::make_shared<RevolutionSurface>(meridian_->transformed(loc),
-                                             loc.apply_point(origin_),
+  return std::make_shared<RevolutionSurface>(meridian_->transformed(loc), loc.apply_point(origin_),
                                              loc.apply_direction(direction_));
 }
 

@@ -58,6 +58,27 @@ Result<Location> Location::from_matrix(const Matrix34& q) {
   return Location(r, s, q.col(3));
 }
 
+Result<Location> Location::from_parts(const Eigen::Matrix3d& rotation, double scale,
+                                      const Vec3& translation) {
+  if (!rotation.allFinite() || !std::isfinite(scale) || !translation.allFinite()) {
+    return Error{ErrorCode::InvalidLocation, "location part has a non-finite entry"};
+  }
+  if (!(scale > 0.0)) {
+    return Error{ErrorCode::InvalidLocation,
+                 "location scale " + format_double(scale) + " is not > 0"};
+  }
+  const double deviation =
+      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (deviation > kSimilarityTolerance) {
+    return Error{ErrorCode::InvalidLocation,
+                 "location rotation is not orthogonal: |R^T R - I| = " + format_double(deviation)};
+  }
+  if (rotation.determinant() <= 0.0) {
+    return Error{ErrorCode::InvalidLocation, "location rotation mirrors (det <= 0)"};
+  }
+  return Location(rotation, scale, translation);
+}
+
 Location Location::translation(const Vec3& t) {
   return Location(Eigen::Matrix3d::Identity(), 1.0, t);
 }

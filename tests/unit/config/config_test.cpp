@@ -19,9 +19,9 @@ void PrintTo(const Problem& p, std::ostream* out) {
 
 namespace {
 
+using nlohmann::json;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
-using nlohmann::json;
 
 std::filesystem::path example(const char* name) {
   return test::source_dir() / "config" / "examples" / name;
@@ -87,7 +87,8 @@ TEST(ConfigLoad, SectionWithoutValueIsAnEmptySection) {
 }
 
 TEST(ConfigLoad, StringKeysKeepTheScalarTextAsWritten) {
-  const Config config = config_of("run:\n  name: 001\n  output: 1.50\nqueue:\n  sqlite_path: true\n");
+  const Config config =
+      config_of("run:\n  name: 001\n  output: 1.50\nqueue:\n  sqlite_path: true\n");
   EXPECT_EQ(config.run.name, "001");
   EXPECT_EQ(config.run.output, "1.50");
   EXPECT_EQ(config.queue.sqlite_path, "true");
@@ -110,9 +111,9 @@ TEST(ConfigLoad, JsonTextIsYamlToo) {
 // ---- one problem of each kind, with its key path and line -----------------------------------
 
 TEST(ConfigProblems, UnknownKeySuggestsTheClosestKey) {
-  EXPECT_THAT(problems_of("queue:\n  max_attmpts: 5\n"),
-              ElementsAre(Problem{"queue.max_attmpts", 2,
-                                  "unknown key (did you mean max_attempts?)"}));
+  EXPECT_THAT(
+      problems_of("queue:\n  max_attmpts: 5\n"),
+      ElementsAre(Problem{"queue.max_attmpts", 2, "unknown key (did you mean max_attempts?)"}));
 }
 
 TEST(ConfigProblems, UnknownKeyFarFromAnyListsTheAllowedKeys) {
@@ -142,9 +143,9 @@ TEST(ConfigProblems, DuplicateSection) {
 }
 
 TEST(ConfigProblems, WrongTypeNamesExpectedAndActual) {
-  EXPECT_THAT(problems_of("queue:\n  max_attempts: five\n"),
-              ElementsAre(Problem{"queue.max_attempts", 2,
-                                  "expected integer, got string \"five\""}));
+  EXPECT_THAT(
+      problems_of("queue:\n  max_attempts: five\n"),
+      ElementsAre(Problem{"queue.max_attempts", 2, "expected integer, got string \"five\""}));
 }
 
 TEST(ConfigProblems, QuotedNumberIsAString) {
@@ -183,9 +184,9 @@ TEST(ConfigProblems, ExclusiveMinimum) {
 }
 
 TEST(ConfigProblems, SeedAboveTwoToThe53) {
-  EXPECT_THAT(problems_of("run:\n  seed: 9007199254740993\n"),
-              ElementsAre(Problem{"run.seed", 2,
-                                  "must be <= 9007199254740992 (got 9007199254740993)"}));
+  EXPECT_THAT(
+      problems_of("run:\n  seed: 9007199254740993\n"),
+      ElementsAre(Problem{"run.seed", 2, "must be <= 9007199254740992 (got 9007199254740993)"}));
 }
 
 TEST(ConfigProblems, BadEnumValueSuggestsTheClosestValue) {
@@ -223,7 +224,7 @@ TEST(ConfigProblems, TypoDuplicateAndWrongTypeAreAllReported) {
   const char* yaml =
       "run:\n"
       "  name: demo\n"
-      "  thraeds: 4\n"          // line 3: typo
+      "  thraeds: 4\n"  // line 3: typo
       "queue:\n"
       "  max_attempts: 3\n"
       "  lease_seconds: ten\n"  // line 6: wrong type
@@ -256,32 +257,30 @@ TEST(ConfigProblems, TopLevelMustBeAMapping) {
 }
 
 TEST(ConfigProblems, MoreThanOneDocument) {
-  EXPECT_THAT(problems_of("run:\n  seed: 2\n---\nrun:\n  seed: 3\n"),
-              ElementsAre(testing::Field(&Problem::message,
-                                         "expected one YAML document, found 2")));
+  EXPECT_THAT(
+      problems_of("run:\n  seed: 2\n---\nrun:\n  seed: 3\n"),
+      ElementsAre(testing::Field(&Problem::message, "expected one YAML document, found 2")));
 }
 
 TEST(ConfigProblems, MissingFileNamesThePathAndTheReason) {
   const LoadResult result = load_file("/nonexistent/csgtile.yaml");
   EXPECT_FALSE(result.ok());
-  ASSERT_THAT(result.problems, ElementsAre(Problem{"", 0,
-                                                   "cannot read file: No such file or directory"}));
+  ASSERT_THAT(result.problems,
+              ElementsAre(Problem{"", 0, "cannot read file: No such file or directory"}));
   EXPECT_EQ(format_problem(result.source, result.problems[0]),
             "/nonexistent/csgtile.yaml: cannot read file: No such file or directory");
 }
 
 TEST(ConfigProblems, DirectoryIsNotAFile) {
   const LoadResult result = load_file(test::source_dir() / "config");
-  EXPECT_THAT(result.problems,
-              ElementsAre(Problem{"", 0, "cannot read file: Is a directory"}));
+  EXPECT_THAT(result.problems, ElementsAre(Problem{"", 0, "cannot read file: Is a directory"}));
 }
 
 TEST(ConfigProblems, HostileTextNeverThrows) {
   const std::vector<std::string> texts = {
       "[", "{a: [}", "\t- x", "run: &a [*a]", std::string("run:\n  name: \xff\xfe\n"),
       std::string(5000, '['), "? [a, b]\n: c\n", "~: 1\n", "run: !!binary aGVsbG8=\n",
-      "run:\n  inputs: {a: 1}\n", std::string("run:\n  name: a\0b\n", 17),
-      "a: &a [*a, *a]\n",
+      "run:\n  inputs: {a: 1}\n", std::string("run:\n  name: a\0b\n", 17), "a: &a [*a, *a]\n",
       // "Billion laughs": each level doubles the values.
       "a: &a [x, x]\nb: &b [*a, *a]\nc: &c [*b, *b]\nd: &d [*c, *c]\ne: &e [*d, *d]\n"
       "f: &f [*e, *e]\ng: &g [*f, *f]\nh: &h [*g, *g]\ni: &i [*h, *h]\nj: &j [*i, *i]\n"
@@ -298,29 +297,29 @@ TEST(ConfigProblems, HostileTextNeverThrows) {
 // ---- environment overrides ---------------------------------------------------------------------
 
 TEST(ConfigEnvironment, OverrideWinsOverTheFile) {
-  const Config config = config_of("queue:\n  max_attempts: 3\n",
-                                  {{"CSGTILE_QUEUE__MAX_ATTEMPTS", "7"}});
+  const Config config =
+      config_of("queue:\n  max_attempts: 3\n", {{"CSGTILE_QUEUE__MAX_ATTEMPTS", "7"}});
   EXPECT_EQ(config.queue.max_attempts, 7);
 }
 
 TEST(ConfigEnvironment, NamesAreCaseInsensitive) {
-  const Config config = config_of("", {{"CSGTILE_queue__Backend", "postgres"},
-                                       {"CSGTILE_LOG__LEVEL", "warn"}});
+  const Config config =
+      config_of("", {{"CSGTILE_queue__Backend", "postgres"}, {"CSGTILE_LOG__LEVEL", "warn"}});
   EXPECT_EQ(config.queue.backend, QueueBackend::Postgres);
   EXPECT_EQ(config.log.level, LogLevel::Warn);
 }
 
 TEST(ConfigEnvironment, InputsAreACommaSeparatedList) {
-  const Config config = config_of("run:\n  inputs: [old.json]\n",
-                                  {{"CSGTILE_RUN__INPUTS", "a.json, b.json,c.json"}});
+  const Config config =
+      config_of("run:\n  inputs: [old.json]\n", {{"CSGTILE_RUN__INPUTS", "a.json, b.json,c.json"}});
   EXPECT_EQ(config.run.inputs, (std::vector<std::string>{"a.json", "b.json", "c.json"}));
-  EXPECT_TRUE(config_of("run:\n  inputs: [old.json]\n", {{"CSGTILE_RUN__INPUTS", ""}})
-                  .run.inputs.empty());
+  EXPECT_TRUE(
+      config_of("run:\n  inputs: [old.json]\n", {{"CSGTILE_RUN__INPUTS", ""}}).run.inputs.empty());
 }
 
 TEST(ConfigEnvironment, StringValuesAreTakenAsWritten) {
-  const Config config = config_of("", {{"CSGTILE_RUN__NAME", "007"},
-                                       {"CSGTILE_QUEUE__POSTGRES_DSN", "postgres://u@h/db"}});
+  const Config config = config_of(
+      "", {{"CSGTILE_RUN__NAME", "007"}, {"CSGTILE_QUEUE__POSTGRES_DSN", "postgres://u@h/db"}});
   EXPECT_EQ(config.run.name, "007");
   EXPECT_EQ(config.queue.postgres_dsn, "postgres://u@h/db");
 }
@@ -376,8 +375,8 @@ TEST(ConfigEnvironment, ProcessEnvironmentIsRead) {
 TEST(ConfigSchema, IsDraft07Json) {
   const json schema = json::parse(schema_json());
   EXPECT_EQ(schema.at("$schema"), "http://json-schema.org/draft-07/schema#");
-  EXPECT_EQ(std::string(schema_json()), test::read_file(test::source_dir() / "config" /
-                                                         "schema" / "csgtile.schema.json"));
+  EXPECT_EQ(std::string(schema_json()),
+            test::read_file(test::source_dir() / "config" / "schema" / "csgtile.schema.json"));
 }
 
 /// Every object closes its keys and every property says what it is for.

@@ -2,6 +2,8 @@
 // formulas of curve.h, derivatives against finite differences, point inversion against dense
 // sampling, exact support/bounds, lengths and transformed() under random similarities.
 
+#include "csgtile/kernel/curve.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -13,7 +15,6 @@
 #include <random>
 #include <vector>
 
-#include "csgtile/kernel/curve.h"
 #include "csgtile/kernel/curve2d.h"
 #include "csgtile/kernel/frame.h"
 
@@ -90,8 +91,8 @@ double sampled_max(const std::function<double(double)>& f, double t0, double t1,
   std::sort(values.begin(), values.end(), std::greater<>());
   double best = values.front().first;
   for (int k = 0; k < 4; ++k) {
-    best = std::max(best, refine_max_1d(f, values[static_cast<std::size_t>(k)].second, 2 * h,
-                                        t0, t1));
+    best =
+        std::max(best, refine_max_1d(f, values[static_cast<std::size_t>(k)].second, 2 * h, t0, t1));
   }
   return best;
 }
@@ -116,7 +117,8 @@ TEST(FrameTest, FromZIsOrthonormalAndRightHanded) {
 }
 
 TEST(FrameTest, FromZWithHintParallelToZPicksAPerpendicular) {
-  for (const Vec3& z : std::vector<Vec3>{Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ(), Vec3(1, 1, 1)}) {
+  for (const Vec3& z :
+       std::vector<Vec3>{Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ(), Vec3(1, 1, 1)}) {
     const Frame f = Frame::from_z(Vec3::Zero(), z, -2.0 * z);
     EXPECT_NEAR(f.x.norm(), 1.0, 1e-15);
     EXPECT_NEAR(f.x.dot(f.z), 0.0, 1e-15);
@@ -299,8 +301,7 @@ TEST(CurveCircleTest, SupportIsExactOnAnyAngleRange) {
     const auto [t0, t1] = random_angle_range(rng);
     const Vec3 w = random_unit(rng) * 2.0;
     const double support = c.support(w, t0, t1);
-    EXPECT_NEAR(support, sampled_max([&](double t) { return c.point(t).dot(w); }, t0, t1),
-                1e-12);
+    EXPECT_NEAR(support, sampled_max([&](double t) { return c.point(t).dot(w); }, t0, t1), 1e-12);
   }
   // The quarter-turn-offset full range [π/2, 5π/2] covers every angle.
   const CircleCurve unit(Frame{}, 1.0);
@@ -354,8 +355,7 @@ TEST(CurveEllipseTest, EvaluatesTheDocumentedParametrisation) {
   EXPECT_EQ(e.kind(), CurveKind::Ellipse);
   EXPECT_DOUBLE_EQ(e.period(), kTwoPi);
   for (double t : {0.0, 0.4, 1.0, 3.0, 5.5}) {
-    expect_near(e.point(t), f.origin + 3.0 * std::cos(t) * f.x + 1.25 * std::sin(t) * f.y,
-                1e-14);
+    expect_near(e.point(t), f.origin + 3.0 * std::cos(t) * f.x + 1.25 * std::sin(t) * f.y, 1e-14);
   }
   expect_derivatives_match_finite_differences(e, -2, 9);
 }
@@ -560,8 +560,8 @@ TEST(CurveBoundsTest, ContainAndTouchDenseSamples) {
         const Vec3 axis = Vec3::Unit(k);
         EXPECT_NEAR(b.max[k], sampled_max([&](double t) { return curve->point(t)[k]; }, t0, t1),
                     1e-12);
-        EXPECT_NEAR(b.min[k],
-                    -sampled_max([&](double t) { return -curve->point(t)[k]; }, t0, t1), 1e-12);
+        EXPECT_NEAR(b.min[k], -sampled_max([&](double t) { return -curve->point(t)[k]; }, t0, t1),
+                    1e-12);
         EXPECT_DOUBLE_EQ(b.max[k], curve->support(axis, t0, t1));
       }
     }
@@ -577,10 +577,8 @@ TEST(Curve2dTest, CircleFollowsItsSense) {
   EXPECT_EQ(cw.sense(), -1);
   EXPECT_EQ(Circle2d(Vec2::Zero(), 1.0, -7).sense(), -1);
   for (double t : {0.0, 0.5, 2.0, 4.0}) {
-    EXPECT_LE((ccw.point(t) - (Vec2(1, 2) + 3.0 * Vec2(std::cos(t), std::sin(t)))).norm(),
-              1e-15);
-    EXPECT_LE((cw.point(t) - (Vec2(1, 2) + 3.0 * Vec2(std::cos(t), -std::sin(t)))).norm(),
-              1e-15);
+    EXPECT_LE((ccw.point(t) - (Vec2(1, 2) + 3.0 * Vec2(std::cos(t), std::sin(t)))).norm(), 1e-15);
+    EXPECT_LE((cw.point(t) - (Vec2(1, 2) + 3.0 * Vec2(std::cos(t), -std::sin(t)))).norm(), 1e-15);
     constexpr double h = 1e-6;
     for (const Circle2d* c : {&ccw, &cw}) {
       const Vec2 fd = (c->point(t + h) - c->point(t - h)) / (2 * h);

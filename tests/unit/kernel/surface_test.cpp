@@ -3,6 +3,8 @@
 // against dense sampling, exact patch bounds against refined dense sampling, and
 // transformed() under random similarities. Every random draw uses a fixed seed.
 
+#include "csgtile/kernel/surface.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -15,8 +17,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include "csgtile/kernel/surface.h"
 
 namespace csgtile::kernel {
 namespace {
@@ -84,14 +84,22 @@ std::vector<Case> make_cases() {
   std::vector<Case> cases;
   {
     const Frame f = random_frame(rng);
-    cases.push_back({"plane", std::make_shared<PlaneSurface>(f), {-2, 3, -1, 2.5}, false,
-                     false, true, true, nullptr});
+    cases.push_back({"plane",
+                     std::make_shared<PlaneSurface>(f),
+                     {-2, 3, -1, 2.5},
+                     false,
+                     false,
+                     true,
+                     true,
+                     nullptr});
   }
   {
     const Frame f = random_frame(rng);
     auto s = std::make_shared<CylinderSurface>(f, 1.5);
-    cases.push_back({"cylinder", s, {0, kTwoPi, -2, 3}, true, false, false, true,
-                     [f](double, double v) { return Vec3(f.origin + v * f.z); }});
+    cases.push_back(
+        {"cylinder", s, {0, kTwoPi, -2, 3}, true, false, false, true, [f](double, double v) {
+           return Vec3(f.origin + v * f.z);
+         }});
   }
   for (double phi : {0.4, -0.3}) {
     const Frame f = random_frame(rng);
@@ -99,20 +107,29 @@ std::vector<Case> make_cases() {
     // Valid nappe: 1 + v·sin φ ≥ 0.
     const ParamBox domain = phi > 0 ? ParamBox{0, kTwoPi, -1 / std::sin(phi), 2.5}
                                     : ParamBox{0, kTwoPi, -2.5, -1 / std::sin(phi)};
-    cases.push_back({"cone" + std::to_string(phi), s, domain, true, false, false, true,
-                     [f, phi](double, double v) { return Vec3(f.origin + v * std::cos(phi) * f.z); }});
+    cases.push_back(
+        {"cone" + std::to_string(phi), s, domain, true, false, false, true,
+         [f, phi](double, double v) { return Vec3(f.origin + v * std::cos(phi) * f.z); }});
   }
   {
     const Frame f = random_frame(rng);
     auto s = std::make_shared<SphereSurface>(f, 2.0);
-    cases.push_back({"sphere", s, {0, kTwoPi, -kPi / 2, kPi / 2}, true, false, false, false,
+    cases.push_back({"sphere",
+                     s,
+                     {0, kTwoPi, -kPi / 2, kPi / 2},
+                     true,
+                     false,
+                     false,
+                     false,
                      [f](double, double) { return f.origin; }});
   }
   {
     const Frame f = random_frame(rng);
     auto s = std::make_shared<TorusSurface>(f, 3.0, 1.0);
-    cases.push_back({"torus", s, {0, kTwoPi, 0, kTwoPi}, true, true, false, false,
-                     [f](double u, double) { return Vec3(f.origin + 3.0 * radial(f, u)); }});
+    cases.push_back(
+        {"torus", s, {0, kTwoPi, 0, kTwoPi}, true, true, false, false, [f](double u, double) {
+           return Vec3(f.origin + 3.0 * radial(f, u));
+         }});
   }
   // Extrusions of each basis kind, perpendicular and oblique.
   {
@@ -120,27 +137,49 @@ std::vector<Case> make_cases() {
     auto basis = std::make_shared<CircleCurve>(f, 1.2);
     cases.push_back({"extrusion_circle",
                      std::make_shared<ExtrusionSurface>(basis, f.z * 2.0),
-                     {0, kTwoPi, -1.5, 2}, true, false, false, true, nullptr});
+                     {0, kTwoPi, -1.5, 2},
+                     true,
+                     false,
+                     false,
+                     true,
+                     nullptr});
   }
   {
     const Frame f = random_frame(rng);
     auto basis = std::make_shared<EllipseCurve>(f, 2.0, 0.7);
     const Vec3 d = (f.z + 0.8 * f.x - 0.5 * f.y).normalized();
-    cases.push_back({"extrusion_ellipse_oblique", std::make_shared<ExtrusionSurface>(basis, d),
-                     {0, kTwoPi, -1.5, 2}, true, false, false, true, nullptr});
+    cases.push_back({"extrusion_ellipse_oblique",
+                     std::make_shared<ExtrusionSurface>(basis, d),
+                     {0, kTwoPi, -1.5, 2},
+                     true,
+                     false,
+                     false,
+                     true,
+                     nullptr});
   }
   {
     const Frame f = random_frame(rng);
     auto basis = std::make_shared<CircleCurve>(f, 1.0);
     const Vec3 d = (f.z + 1.5 * f.y).normalized();
-    cases.push_back({"extrusion_circle_oblique", std::make_shared<ExtrusionSurface>(basis, d),
-                     {0, kTwoPi, -1.5, 2}, true, false, false, true, nullptr});
+    cases.push_back({"extrusion_circle_oblique",
+                     std::make_shared<ExtrusionSurface>(basis, d),
+                     {0, kTwoPi, -1.5, 2},
+                     true,
+                     false,
+                     false,
+                     true,
+                     nullptr});
   }
   {
     auto basis = std::make_shared<LineCurve>(random_point(rng, 3), random_unit(rng));
     cases.push_back({"extrusion_line",
                      std::make_shared<ExtrusionSurface>(basis, random_unit(rng)),
-                     {-2, 3, -1.5, 2}, false, false, true, true, nullptr});
+                     {-2, 3, -1.5, 2},
+                     false,
+                     false,
+                     true,
+                     true,
+                     nullptr});
   }
   {
     // A simple planar zigzag extruded obliquely: the projection along D stays simple, so
@@ -151,7 +190,12 @@ std::vector<Case> make_cases() {
     auto basis = std::make_shared<PolylineCurve>(points, 0.0);
     cases.push_back({"extrusion_polyline",
                      std::make_shared<ExtrusionSurface>(basis, f.z + 0.4 * f.x - 0.2 * f.y),
-                     {0, 4, -1.5, 2}, false, false, false, true, nullptr});
+                     {0, 4, -1.5, 2},
+                     false,
+                     false,
+                     false,
+                     true,
+                     nullptr});
   }
   // Revolutions: meridians in the half-plane of X0 around the axis (P, D).
   const auto axis_frame = [&rng] {
@@ -163,8 +207,31 @@ std::vector<Case> make_cases() {
     const double phi = 0.3;
     auto meridian = std::make_shared<LineCurve>(a.origin + 1.0 * a.x,
                                                 std::sin(phi) * a.x + std::cos(phi) * a.d);
-    cases.push_back({"revolution_line", std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
-                     {0, kTwoPi, -1 / std::sin(phi), 2}, true, false, false, true, nullptr});
+    cases.push_back({"revolution_line",
+                     std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
+                     {0, kTwoPi, -1 / std::sin(phi), 2},
+                     true,
+                     false,
+                     false,
+                     true,
+                     nullptr});
+  }
+  {
+    // The patch lies beyond the point where the meridian line crosses the axis, on the side
+    // opposite to the line's origin: inversion must use the mirrored half-plane.
+    const AxisFrame a = axis_frame();
+    const double phi = 0.5;
+    auto meridian = std::make_shared<LineCurve>(a.origin + 1.0 * a.x,
+                                                -std::sin(phi) * a.x + std::cos(phi) * a.d);
+    const double crossing = 1 / std::sin(phi);
+    cases.push_back({"revolution_line_far_side",
+                     std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
+                     {0, kTwoPi, crossing, crossing + 3},
+                     true,
+                     false,
+                     false,
+                     true,
+                     nullptr});
   }
   {
     const AxisFrame a = axis_frame();
@@ -176,7 +243,12 @@ std::vector<Case> make_cases() {
     auto meridian = std::make_shared<CircleCurve>(mf, 1.0);
     cases.push_back({"revolution_circle",
                      std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
-                     {0, kTwoPi, 0, kTwoPi}, true, true, false, false, nullptr});
+                     {0, kTwoPi, 0, kTwoPi},
+                     true,
+                     true,
+                     false,
+                     false,
+                     nullptr});
   }
   {
     const AxisFrame a = axis_frame();
@@ -189,7 +261,12 @@ std::vector<Case> make_cases() {
     // v is the meridian circle's angle: inversion returns it in [0, 2π).
     cases.push_back({"revolution_half_circle",
                      std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
-                     {0, kTwoPi, -kPi / 2, kPi / 2}, true, true, false, false, nullptr});
+                     {0, kTwoPi, -kPi / 2, kPi / 2},
+                     true,
+                     true,
+                     false,
+                     false,
+                     nullptr});
   }
   {
     const AxisFrame a = axis_frame();
@@ -197,19 +274,29 @@ std::vector<Case> make_cases() {
     auto meridian = std::make_shared<EllipseCurve>(mf, 1.5, 0.8);
     cases.push_back({"revolution_ellipse",
                      std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
-                     {0, kTwoPi, 0, kTwoPi}, true, true, false, false, nullptr});
+                     {0, kTwoPi, 0, kTwoPi},
+                     true,
+                     true,
+                     false,
+                     false,
+                     nullptr});
   }
   {
     const AxisFrame a = axis_frame();
     std::vector<Vec3> points;
-    for (const auto& [rho, z] : std::vector<std::pair<double, double>>{
-             {0, -1}, {1, -1}, {1.5, 0}, {1, 1.2}, {0.2, 1.5}}) {
+    for (const auto& [rho, z] :
+         std::vector<std::pair<double, double>>{{0, -1}, {1, -1}, {1.5, 0}, {1, 1.2}, {0.2, 1.5}}) {
       points.push_back(a.origin + rho * a.x + z * a.d);
     }
     auto meridian = std::make_shared<PolylineCurve>(points, 0.0);
     cases.push_back({"revolution_polyline",
                      std::make_shared<RevolutionSurface>(meridian, a.origin, a.d),
-                     {0, kTwoPi, 0, 4}, true, false, false, false, nullptr});
+                     {0, kTwoPi, 0, 4},
+                     true,
+                     false,
+                     false,
+                     false,
+                     nullptr});
   }
   return cases;
 }
@@ -227,15 +314,14 @@ std::vector<Vec2> interior_samples(const ParamBox& b, int n) {
 }
 
 /// Compass search for the maximum of f over the box, from (u, v).
-double refine_max_2d(const std::function<double(double, double)>& f, const ParamBox& box,
-                     double u, double v, double step_u, double step_v) {
+double refine_max_2d(const std::function<double(double, double)>& f, const ParamBox& box, double u,
+                     double v, double step_u, double step_v) {
   const auto clamp_u = [&](double x) { return std::clamp(x, box.u0, box.u1); };
   const auto clamp_v = [&](double x) { return std::clamp(x, box.v0, box.v1); };
   double best = f(u, v);
-  const int directions[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1},
+  const int directions[8][2] = {{1, 0}, {-1, 0}, {0, 1},  {0, -1},
                                 {1, 1}, {1, -1}, {-1, 1}, {-1, -1}};
-  for (int iteration = 0; iteration < 20000 && (step_u > 1e-13 || step_v > 1e-13);
-       ++iteration) {
+  for (int iteration = 0; iteration < 20000 && (step_u > 1e-13 || step_v > 1e-13); ++iteration) {
     bool improved = false;
     for (const auto& d : directions) {
       const double cu = clamp_u(u + d[0] * step_u);
@@ -293,8 +379,8 @@ TEST(SurfaceEvaluationTest, QuadricsMatchTheDocumentedFormulas) {
       expect_near(cylinder.point(u, v), f.origin + 1.5 * e + v * f.z, 1e-14);
       expect_near(cone.point(u, v),
                   f.origin + (1.2 + v * std::sin(0.35)) * e + v * std::cos(0.35) * f.z, 1e-14);
-      expect_near(sphere.point(u, v),
-                  f.origin + 2.0 * std::cos(v) * e + 2.0 * std::sin(v) * f.z, 1e-14);
+      expect_near(sphere.point(u, v), f.origin + 2.0 * std::cos(v) * e + 2.0 * std::sin(v) * f.z,
+                  1e-14);
       expect_near(torus.point(u, v),
                   f.origin + (3.0 + 0.75 * std::cos(v)) * e + 0.75 * std::sin(v) * f.z, 1e-14);
     }
@@ -412,8 +498,8 @@ TEST(SurfaceNormalTest, SingularPointsGiveTheLimitAlongV) {
   mf.z = f.x.cross(f.z);
   const RevolutionSurface ball(std::make_shared<CircleCurve>(mf, 2.0), f.origin, f.z);
   const RevolutionSurface tip(
-      std::make_shared<LineCurve>(f.origin, std::sin(0.5) * f.x + std::cos(0.5) * f.z),
-      f.origin, f.z);
+      std::make_shared<LineCurve>(f.origin, std::sin(0.5) * f.x + std::cos(0.5) * f.z), f.origin,
+      f.z);
   for (double u : {0.0, 1.0, 3.0, 5.0}) {
     expect_near(ball.normal(u, kPi / 2), f.z, 1e-14);
     expect_near(ball.normal(u, -kPi / 2), -f.z, 1e-14);
@@ -528,10 +614,10 @@ TEST(SurfaceBoundsTest, ExactAgainstRefinedDenseSampling) {
         const double lo =
             -sampled_max_2d([&](double u, double v) { return -s.point(u, v)[i]; }, box, 40);
         // Contains every sample (the refined extremes are samples too) and is tight.
-        EXPECT_NEAR(b.max[i], hi, 1e-9) << "box " << box.u0 << " " << box.u1 << " " << box.v0
-                                        << " " << box.v1 << " axis " << i;
-        EXPECT_NEAR(b.min[i], lo, 1e-9) << "box " << box.u0 << " " << box.u1 << " " << box.v0
-                                        << " " << box.v1 << " axis " << i;
+        EXPECT_NEAR(b.max[i], hi, 1e-9)
+            << "box " << box.u0 << " " << box.u1 << " " << box.v0 << " " << box.v1 << " axis " << i;
+        EXPECT_NEAR(b.min[i], lo, 1e-9)
+            << "box " << box.u0 << " " << box.u1 << " " << box.v0 << " " << box.v1 << " axis " << i;
         EXPECT_LE(hi, b.max[i] + 1e-12);
         EXPECT_GE(lo, b.min[i] - 1e-12);
       }

@@ -101,8 +101,7 @@ struct LoadResult {
 /// An empty text (or only comments) is a valid config with all defaults; a section written
 /// with no value (`queue:`) is an empty section. Unknown and duplicate keys, wrong types,
 /// out-of-range and bad enum values are all reported, not only the first. Thread-safe.
-LoadResult load_string(std::string_view yaml, std::string_view source,
-                       const Environment& env = {});
+LoadResult load_string(std::string_view yaml, std::string_view source, const Environment& env = {});
 /// Reads `path` and calls load_string with the path as source. A file that cannot be read is
 /// one problem ("cannot read file: No such file or directory").
 LoadResult load_file(const std::filesystem::path& path, const Environment& env = {});

@@ -30,6 +30,13 @@ class Location {
   /// non-finite entries).
   static Result<Location> from_matrix(const Matrix34& q);
 
+  /// Rebuilds a location from the values rotation(), scale() and translation() returned,
+  /// keeping them bit for bit (no re-orthonormalisation): the native format's reader needs
+  /// write → read → write to be byte-identical. Errors: InvalidLocation for non-finite values,
+  /// scale <= 0, or a rotation that is not proper orthogonal within relative 1e-9.
+  static Result<Location> from_parts(const Eigen::Matrix3d& rotation, double scale,
+                                     const Vec3& translation);
+
   static Location translation(const Vec3& t);
   /// Rotation by `angle` radians about the axis through `origin` with direction `axis`
   /// (normalised here; a zero axis gives the identity).

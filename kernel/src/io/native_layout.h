@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// The native format's byte layout, version 1: shared by the writer and the reader. Not API.
+///
+///   file     := "CSGT" version:varint flags:varint section* crc:u32le
+///   section  := tag:varint length:varint payload[length]
+///
+/// `crc` is the CRC-32C of every byte before it. Sections appear in strictly increasing tag
+/// order, each at most once. Tag bit 0 set = optional: a reader skips an optional tag it does
+/// not know and refuses an unknown required (even) tag. Absent tables are empty; only the
+/// body section is mandatory. Version 1 writes no optional section; the CSG history (a tree
+/// of Booleans over PrimitiveSpec leaves, per-face provenance) is planned as one.
+///
+/// Payloads (num = varint index into the number table; vec3 = 3 num; frame = origin x y z,
+/// 12 num; every list is count:varint then items):
+///   numbers   (tag 2):  count, count × f64le, all finite, most used first (so most
+///                       references take one byte)
+///   locations (tag 4):  count, count × { rotation row-major 9 num, scale num, vec3 }.
+///                       The identity location is implicit and never stored.
+///   curves    (tag 6):  count, count × { kind:u8 (CurveKind), fields }
+///                       Line: origin vec3, direction vec3 (a preimage whose normalisation
+///                       gives the stored direction bit for bit); Circle: frame, radius;
+///                       Ellipse: frame, major, minor; Polyline: n ≥ 2, n × vec3, tolerance
+///   surfaces  (tag 8):  count, count × { kind:u8 (SurfaceKind), fields }
+///                       Plane: frame; Cylinder: frame, radius; Cone: frame, radius, semi-
+///                       angle; Sphere: frame, radius; Torus: frame, major, minor;
+///                       Extrusion: curve:varint, direction vec3 (preimage as for lines);
+///                       Revolution: curve:varint, axis origin vec3, axis direction vec3
+///   pcurves   (tag 10): count, count × { kind:u8 (kPcurve*), fields }
+///                       Line: origin 2 num, direction 2 num; Circle (counter-clockwise or
+///                       clockwise): centre 2 num, radius; Polyline: n ≥ 2, n × 2 num
+///   bodies    (tag 12): count, count × body, then root
+///     body  := head:varint = child_count << 3 | ShapeKind, then by kind:
+///              Vertex: point vec3, tolerance (no children)
+///              Edge:   curve:varint (0 = degenerate, k = curve k-1), first, last, tolerance,
+///                      start ref (Forward), end ref (Reversed; the start's for degenerate)
+///              Face:   surface:varint, tolerance, wire refs, then for each wire one
+///                      pcurve:varint per edge of that wire
+///              other:  child refs
+///     ref   := varint = delta << 3 | has_location << 2 | Orientation, then
+///              location:varint when has_location. The child is body (this index − delta),
+///              delta ≥ 1: bodies are in post-order, so references point backwards and the
+///              graph cannot have cycles.
+///     root  := varint 0 for the null shape, else a ref counted from index = body count.
+
+#include <cstddef>
+#include <cstdint>
+
+namespace csgtile::kernel::detail {
+
+inline constexpr char kNativeMagic[4] = {'C', 'S', 'G', 'T'};
+inline constexpr std::size_t kNativeChecksumSize = 4;
+
+enum class SectionTag : std::uint32_t {
+  Numbers = 2,
+  Locations = 4,
+  Curves = 6,
+  Surfaces = 8,
+  Pcurves = 10,
+  Bodies = 12,
+};
+
+inline constexpr bool is_optional_tag(std::uint64_t tag) { return (tag & 1U) != 0; }
+
+/// Pcurve kind codes: Curve2dKind, plus a code for clockwise circles (sense −1).
+inline constexpr std::uint8_t kPcurveLine = 0;
+inline constexpr std::uint8_t kPcurveCircle = 1;
+inline constexpr std::uint8_t kPcurvePolyline = 2;
+inline constexpr std::uint8_t kPcurveClockwiseCircle = 3;
+
+/// Child references pack the orientation in bits 0–1 and a location flag in bit 2.
+inline constexpr unsigned kRefShift = 3;
+inline constexpr std::uint64_t kRefHasLocation = 4;
+inline constexpr std::uint64_t kRefOrientationMask = 3;
+/// Body headers pack the ShapeKind in bits 0–2.
+inline constexpr unsigned kBodyHeadShift = 3;
+inline constexpr std::uint64_t kBodyKindMask = 7;
+
+/// Deepest body nesting a reader accepts (compounds of compounds …): deeper shapes could
+/// overflow the stack when they are destroyed. Kernel models nest a few levels.
+inline constexpr int kMaxNestingDepth = 256;
+
+}  // namespace csgtile::kernel::detail
