@@ -13,7 +13,7 @@ packages=(
   # config
   libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev
   # worker and command line
-  libcli11-dev libsqlite3-dev
+  libcli11-dev libsqlite3-dev libssl-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev googletest libbenchmark-dev python3
 )

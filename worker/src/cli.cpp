@@ -16,6 +16,7 @@ int run_cli(int argc, char** argv) {
   detail::register_validate_config(app, action);
   detail::register_config(app, action);
   detail::register_bool(app, action);
+  detail::register_run(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

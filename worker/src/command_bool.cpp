@@ -115,7 +115,7 @@ void register_bool(CLI::App& app, Action& action) {
         if (!*json) std::fprintf(stderr, "csgtile bool: %s\n", failure.message.c_str());
         return error_info(failure.code).exit_code;
       }
-      return r.valid ? 0 : 1;
+      return r.valid ? 0 : error_info(ErrorCode::ResultInvalid).exit_code;
     };
   });
 }

@@ -17,5 +17,6 @@ using Action = std::function<int()>;
 void register_validate_config(CLI::App& app, Action& action);
 void register_config(CLI::App& app, Action& action);
 void register_bool(CLI::App& app, Action& action);
+void register_run(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

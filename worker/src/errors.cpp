@@ -5,9 +5,9 @@
 namespace csgtile::worker {
 
 namespace {
-// Exit codes follow sysexits(3) where one fits; 1 is left for "failed checks" of a command
-// that ran fine (e.g. `bool` on an invalid result) — see README "Exit codes".
-constexpr std::array<ErrorInfo, 8> kTable{{
+// Exit codes follow sysexits(3) where one fits; 1 and 3 report a command that ran but whose
+// result is not clean (an invalid solid, dead jobs) — see README "Exit codes".
+constexpr std::array<ErrorInfo, 10> kTable{{
     {ErrorCode::Ok, "ok", "success", false, 0},
     {ErrorCode::Usage, "usage", "bad command line", false, 64},
     {ErrorCode::ConfigInvalid, "config_invalid", "the configuration is invalid", false, 78},
@@ -17,6 +17,8 @@ constexpr std::array<ErrorInfo, 8> kTable{{
     {ErrorCode::Unsupported, "unsupported", "not supported by this build", false, 69},
     {ErrorCode::Io, "io", "a read or write failed", true, 74},
     {ErrorCode::Internal, "internal", "internal error (a bug in csgtile)", false, 70},
+    {ErrorCode::ResultInvalid, "result_invalid", "the result fails validation", false, 1},
+    {ErrorCode::JobsFailed, "jobs_failed", "the run finished with dead jobs", false, 3},
 }};
 }  // namespace
 

@@ -8,16 +8,7 @@
 
 namespace csgtile::worker {
 
-const char* log_level_name(config::LogLevel level) {
-  switch (level) {
-    case config::LogLevel::Trace: return "trace";
-    case config::LogLevel::Debug: return "debug";
-    case config::LogLevel::Info: return "info";
-    case config::LogLevel::Warn: return "warn";
-    case config::LogLevel::Error: return "error";
-  }
-  return "info";
-}
+const char* log_level_name(config::LogLevel level) { return config::to_string(level).data(); }
 
 Logger::Logger(config::LogLevel level, config::LogFormat format, std::FILE* out)
     : level_(level), out_(out) {

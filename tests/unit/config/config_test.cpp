@@ -3,8 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "test_support.h"
@@ -292,6 +294,23 @@ TEST(ConfigProblems, HostileTextNeverThrows) {
     EXPECT_FALSE(result.ok()) << text.substr(0, 40);
     for (const Problem& p : result.problems) EXPECT_FALSE(p.message.empty());
   }
+}
+
+TEST(ConfigLoad, LoadsFromManyThreadsAtOnce) {
+  const std::string text = test::read_file(example("csgtile.yaml"));
+  const Config expected = config_of(text);
+  std::vector<std::thread> threads;
+  std::atomic<int> matches = 0;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&] {
+      for (int i = 0; i < 20; ++i) {
+        const LoadResult result = load_string(text, "threads.yaml");
+        if (result.ok() && *result.config == expected) ++matches;
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(matches, 80);
 }
 
 // ---- environment overrides ---------------------------------------------------------------------

@@ -19,6 +19,8 @@ enum class ErrorCode {
   Unsupported,         ///< a valid request this build does not handle yet
   Io,                  ///< the operating system refused a read or write
   Internal,            ///< a bug: an invariant of csgtile itself failed
+  ResultInvalid,       ///< the command ran, but its result fails validation
+  JobsFailed,          ///< a run finished with some jobs dead
 };
 
 struct ErrorInfo {

@@ -1,0 +1,76 @@
+#pragma once
+/// \file
+/// The job queue: one interface, the same states and semantics for every backend.
+///
+/// States: queued → running (lease: token + expiry, attempt counted) → done | retry (after
+/// a backoff) | dead (attempts exhausted or a permanent error, with the last error). A job
+/// whose lease expires is claimable again (its worker is presumed dead); a worker whose
+/// lease was taken over can no longer complete or fail the job (fencing by token).
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "csgtile/worker/errors.h"
+
+namespace csgtile::worker {
+
+enum class JobState { Queued, Running, Done, Retry, Dead };
+const char* job_state_name(JobState state);
+
+struct Job {
+  std::int64_t id = 0;
+  std::string key;      ///< unique: enqueueing the same key twice is a no-op
+  std::string kind;     ///< e.g. "build"
+  std::string payload;  ///< JSON text, interpreted by the job's runner
+  int attempts = 0;     ///< including the current one
+  std::string lease_token;
+};
+
+struct QueueCounts {
+  std::int64_t queued = 0, running = 0, done = 0, retry = 0, dead = 0;
+  std::int64_t unfinished() const { return queued + running + retry; }
+};
+
+struct DeadJob {
+  std::string key;
+  std::string last_error;
+  int attempts = 0;
+};
+
+struct QueuePolicy {
+  int max_attempts = 5;
+  std::chrono::seconds lease{60};
+  std::chrono::milliseconds backoff_base{500};  ///< retry delay = base · 2^(attempt-1) · jitter
+  std::uint64_t seed = 1;                        ///< seeds the jitter
+};
+
+class JobQueue {
+ public:
+  virtual ~JobQueue() = default;
+  /// Adds a job unless one with the same key exists. Returns whether it was added.
+  virtual bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
+                       Failure& failure) = 0;
+  /// Claims the next runnable job (queued, retry whose time has come, or running with an
+  /// expired lease), oldest first; nullopt when there is none.
+  virtual std::optional<Job> claim(const std::string& worker_id, Failure& failure) = 0;
+  /// Marks the job done with its result, only if `job.lease_token` still holds the lease.
+  virtual bool complete(const Job& job, const std::string& result, Failure& failure) = 0;
+  /// Records a failure: retry after a backoff if `retryable` and attempts remain, else dead.
+  virtual bool fail(const Job& job, const std::string& error, bool retryable, Failure& failure) = 0;
+  virtual QueueCounts counts(Failure& failure) = 0;
+  virtual std::vector<DeadJob> dead_jobs(Failure& failure) = 0;
+  /// Results of done jobs, ordered by key (for manifests).
+  virtual std::vector<std::pair<std::string, std::string>> results(Failure& failure) = 0;
+};
+
+/// Opens (creating if needed) a SQLite queue file on local disk, in WAL mode; several
+/// processes on one machine may share it. Errors: Io (cannot open, or a network file system).
+std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
+                                            const QueuePolicy& policy, Failure& failure);
+
+}  // namespace csgtile::worker

@@ -1,0 +1,52 @@
+// `csgtile run CONFIG`: a whole run on the embedded SQLite queue.
+
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/worker/run.h"
+
+namespace csgtile::worker::detail {
+
+void register_run(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand("run", "Run a whole job on the embedded SQLite queue: one job per "
+                                        "input, outputs under run.output");
+  auto file = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("CONFIG", *file, "YAML config file")->required();
+  cmd->add_flag("--json", *json, "Print the run summary as one JSON object");
+  cmd->callback([&action, file, json] {
+    action = [file, json] {
+      const auto loaded = config::load_file(*file, config::from_process_environment());
+      if (!loaded.ok()) {
+        for (const auto& p : loaded.problems) std::cerr << config::format_problem(*file, p) << "\n";
+        return error_info(ErrorCode::ConfigInvalid).exit_code;
+      }
+      const config::Config& cfg = *loaded.config;
+      Logger log(cfg.log.level, cfg.log.format);
+      RunSummary summary;
+      const Failure failure = run_embedded(cfg, log, summary);
+      if (!failure.ok()) {
+        log.error("run", failure.message, {{"error", error_info(failure.code).name}});
+        return error_info(failure.code).exit_code;
+      }
+      if (*json) {
+        nlohmann::ordered_json out;
+        out["run"] = cfg.run.name;
+        out["done"] = summary.counts.done;
+        out["dead"] = summary.counts.dead;
+        out["manifest"] = summary.manifest.string();
+        std::cout << out.dump() << "\n";
+      } else {
+        std::cout << "run " << cfg.run.name << ": " << summary.counts.done << " job(s) done, "
+                  << summary.counts.dead << " dead\n";
+        for (const DeadJob& d : summary.dead) std::cout << "  dead " << d.key << ": " << d.last_error << "\n";
+        std::cout << "results: " << summary.run_dir.string() << " (manifest: "
+                  << summary.manifest.string() << ")\n";
+      }
+      return summary.counts.dead > 0 ? error_info(ErrorCode::JobsFailed).exit_code : 0;
+    };
+  });
+}
+
+}  // namespace csgtile::worker::detail

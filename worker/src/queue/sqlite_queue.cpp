@@ -1,0 +1,271 @@
+#include <sqlite3.h>
+#include <sys/vfs.h>
+
+#include <random>
+
+#include "csgtile/worker/queue.h"
+
+namespace csgtile::worker {
+
+const char* job_state_name(JobState state) {
+  switch (state) {
+    case JobState::Queued: return "queued";
+    case JobState::Running: return "running";
+    case JobState::Done: return "done";
+    case JobState::Retry: return "retry";
+    case JobState::Dead: return "dead";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS jobs (
+  id            INTEGER PRIMARY KEY AUTOINCREMENT,
+  key           TEXT NOT NULL UNIQUE,
+  kind          TEXT NOT NULL,
+  payload       TEXT NOT NULL,
+  state         TEXT NOT NULL DEFAULT 'queued'
+                CHECK (state IN ('queued','running','done','retry','dead')),
+  attempts      INTEGER NOT NULL DEFAULT 0,
+  run_after_ms  INTEGER NOT NULL DEFAULT 0,
+  lease_token   TEXT,
+  lease_expires_ms INTEGER,
+  worker        TEXT,
+  last_error    TEXT,
+  result        TEXT,
+  created_ms    INTEGER NOT NULL,
+  updated_ms    INTEGER NOT NULL
+);
+CREATE INDEX IF NOT EXISTS jobs_runnable ON jobs (state, run_after_ms, id);
+)sql";
+
+std::int64_t now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Magic numbers of network file systems, where SQLite's locking is not reliable.
+bool on_network_filesystem(const std::filesystem::path& dir) {
+  struct statfs fs {};
+  if (statfs(dir.c_str(), &fs) != 0) return false;
+  switch (static_cast<unsigned long>(fs.f_type)) {
+    case 0x6969:      // NFS
+    case 0xFF534D42:  // CIFS
+    case 0xFE534D42:  // SMB2
+    case 0x517B:      // SMB
+    case 0x65735546:  // FUSE (sshfs, s3fs, ...)
+      return true;
+    default:
+      return false;
+  }
+}
+
+// A prepared statement that finalizes itself.
+class Statement {
+ public:
+  Statement(sqlite3* db, const char* sql) { rc_ = sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr); }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+  bool ok() const { return rc_ == SQLITE_OK; }
+  Statement& bind(int i, const std::string& v) {
+    sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+    return *this;
+  }
+  Statement& bind(int i, std::int64_t v) {
+    sqlite3_bind_int64(stmt_, i, v);
+    return *this;
+  }
+  int step() { return sqlite3_step(stmt_); }
+  std::int64_t int64(int col) const { return sqlite3_column_int64(stmt_, col); }
+  std::string text(int col) const {
+    const auto* p = sqlite3_column_text(stmt_, col);
+    return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col)))
+             : std::string();
+  }
+
+ private:
+  sqlite3_stmt* stmt_ = nullptr;
+  int rc_ = SQLITE_ERROR;
+};
+
+class SqliteQueue final : public JobQueue {
+ public:
+  SqliteQueue(sqlite3* db, const QueuePolicy& policy) : db_(db), policy_(policy), rng_(policy.seed) {}
+  ~SqliteQueue() override { sqlite3_close(db_); }
+
+  bool exec(const char* sql, Failure& failure) {
+    char* message = nullptr;
+    if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+      failure = {ErrorCode::Io, std::string("sqlite: ") + (message ? message : "error")};
+      sqlite3_free(message);
+      return false;
+    }
+    return true;
+  }
+
+  bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
+               Failure& failure) override {
+    Statement st(db_,
+                 "INSERT OR IGNORE INTO jobs (key, kind, payload, created_ms, updated_ms) "
+                 "VALUES (?1, ?2, ?3, ?4, ?4)");
+    if (!st.ok()) return error(failure);
+    st.bind(1, key).bind(2, kind).bind(3, payload).bind(4, now_ms());
+    if (st.step() != SQLITE_DONE) return error(failure);
+    return sqlite3_changes(db_) > 0;
+  }
+
+  std::optional<Job> claim(const std::string& worker_id, Failure& failure) override {
+    // BEGIN IMMEDIATE takes the write lock up front, so two processes never claim one job.
+    if (!exec("BEGIN IMMEDIATE", failure)) return std::nullopt;
+    const std::int64_t now = now_ms();
+    Statement pick(db_,
+                   "SELECT id, key, kind, payload, attempts FROM jobs "
+                   "WHERE (state IN ('queued','retry') AND run_after_ms <= ?1) "
+                   "   OR (state = 'running' AND lease_expires_ms < ?1) "
+                   "ORDER BY id LIMIT 1");
+    pick.bind(1, now);
+    const int rc = pick.step();
+    if (rc != SQLITE_ROW) {
+      exec("COMMIT", failure);
+      if (rc != SQLITE_DONE) error(failure);
+      return std::nullopt;
+    }
+    Job job;
+    job.id = pick.int64(0);
+    job.key = pick.text(1);
+    job.kind = pick.text(2);
+    job.payload = pick.text(3);
+    job.attempts = static_cast<int>(pick.int64(4)) + 1;
+    job.lease_token = worker_id + "-" + std::to_string(now) + "-" + std::to_string(rng_());
+    Statement lease(db_,
+                    "UPDATE jobs SET state='running', attempts=?2, lease_token=?3, "
+                    "lease_expires_ms=?4, worker=?5, updated_ms=?6 WHERE id=?1");
+    lease.bind(1, job.id).bind(2, static_cast<std::int64_t>(job.attempts)).bind(3, job.lease_token)
+        .bind(4, now + std::chrono::duration_cast<std::chrono::milliseconds>(policy_.lease).count())
+        .bind(5, worker_id).bind(6, now);
+    if (lease.step() != SQLITE_DONE) {
+      error(failure);
+      exec("ROLLBACK", failure);
+      return std::nullopt;
+    }
+    if (!exec("COMMIT", failure)) return std::nullopt;
+    return job;
+  }
+
+  bool complete(const Job& job, const std::string& result, Failure& failure) override {
+    Statement st(db_,
+                 "UPDATE jobs SET state='done', result=?3, lease_token=NULL, "
+                 "lease_expires_ms=NULL, updated_ms=?4 "
+                 "WHERE id=?1 AND state='running' AND lease_token=?2");
+    st.bind(1, job.id).bind(2, job.lease_token).bind(3, result).bind(4, now_ms());
+    if (st.step() != SQLITE_DONE) return error(failure);
+    return sqlite3_changes(db_) > 0;
+  }
+
+  bool fail(const Job& job, const std::string& message, bool retryable, Failure& failure) override {
+    const bool dead = !retryable || job.attempts >= policy_.max_attempts;
+    // Exponential backoff with ±50% jitter (seeded), capped at an hour.
+    const double factor = std::uniform_real_distribution<double>(0.5, 1.5)(rng_);
+    const double delay = std::min(3.6e6, static_cast<double>(policy_.backoff_base.count()) *
+                                             std::ldexp(1.0, std::min(job.attempts - 1, 20)) * factor);
+    Statement st(db_,
+                 "UPDATE jobs SET state=?3, last_error=?4, run_after_ms=?5, lease_token=NULL, "
+                 "lease_expires_ms=NULL, updated_ms=?6 "
+                 "WHERE id=?1 AND state='running' AND lease_token=?2");
+    const std::int64_t now = now_ms();
+    st.bind(1, job.id).bind(2, job.lease_token).bind(3, std::string(dead ? "dead" : "retry"))
+        .bind(4, message).bind(5, now + static_cast<std::int64_t>(delay)).bind(6, now);
+    if (st.step() != SQLITE_DONE) return error(failure);
+    return sqlite3_changes(db_) > 0;
+  }
+
+  QueueCounts counts(Failure& failure) override {
+    QueueCounts c;
+    Statement st(db_, "SELECT state, COUNT(*) FROM jobs GROUP BY state");
+    int rc;
+    while ((rc = st.step()) == SQLITE_ROW) {
+      const std::string s = st.text(0);
+      const std::int64_t n = st.int64(1);
+      if (s == "queued") c.queued = n;
+      else if (s == "running") c.running = n;
+      else if (s == "done") c.done = n;
+      else if (s == "retry") c.retry = n;
+      else if (s == "dead") c.dead = n;
+    }
+    if (rc != SQLITE_DONE) error(failure);
+    return c;
+  }
+
+  std::vector<DeadJob> dead_jobs(Failure& failure) override {
+    std::vector<DeadJob> out;
+    Statement st(db_, "SELECT key, COALESCE(last_error,''), attempts FROM jobs WHERE state='dead' ORDER BY key");
+    int rc;
+    while ((rc = st.step()) == SQLITE_ROW) {
+      out.push_back({st.text(0), st.text(1), static_cast<int>(st.int64(2))});
+    }
+    if (rc != SQLITE_DONE) error(failure);
+    return out;
+  }
+
+  std::vector<std::pair<std::string, std::string>> results(Failure& failure) override {
+    std::vector<std::pair<std::string, std::string>> out;
+    Statement st(db_, "SELECT key, result FROM jobs WHERE state='done' ORDER BY key");
+    int rc;
+    while ((rc = st.step()) == SQLITE_ROW) out.emplace_back(st.text(0), st.text(1));
+    if (rc != SQLITE_DONE) error(failure);
+    return out;
+  }
+
+ private:
+  bool error(Failure& failure) {
+    failure = {ErrorCode::Io, std::string("sqlite: ") + sqlite3_errmsg(db_)};
+    return false;
+  }
+
+  sqlite3* db_;
+  QueuePolicy policy_;
+  std::mt19937_64 rng_;
+};
+
+}  // namespace
+
+std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
+                                            const QueuePolicy& policy, Failure& failure) {
+  std::error_code ec;
+  const auto dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    failure = {ErrorCode::Io, "cannot create queue directory " + dir.string() + ": " + ec.message()};
+    return nullptr;
+  }
+  if (on_network_filesystem(dir)) {
+    failure = {ErrorCode::Io, "queue file " + path.string() +
+                                  " is on a network file system; SQLite needs local disk "
+                                  "(use the postgres backend for shared queues)"};
+    return nullptr;
+  }
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    failure = {ErrorCode::Io, "cannot open queue " + path.string() + ": " +
+                                  (db ? sqlite3_errmsg(db) : "out of memory")};
+    sqlite3_close(db);
+    return nullptr;
+  }
+  sqlite3_busy_timeout(db, 10000);
+  auto queue = std::make_unique<SqliteQueue>(db, policy);
+  if (!queue->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", failure) ||
+      !queue->exec(kSchema, failure) ||
+      !queue->exec("INSERT INTO schema_version SELECT 1 WHERE NOT EXISTS (SELECT 1 FROM schema_version)",
+                   failure)) {
+    return nullptr;
+  }
+  return queue;
+}
+
+}  // namespace csgtile::worker

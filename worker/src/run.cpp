@@ -1,0 +1,165 @@
+#include "csgtile/worker/run.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+#include <nlohmann/json.hpp>
+
+#include "csgtile/geo/scene.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/publish.h"
+
+namespace csgtile::worker {
+
+namespace {
+using nlohmann::ordered_json;
+
+ordered_json topology_json(const kernel::Shape& s) {
+  const auto c = kernel::count_shapes(s);
+  auto n = [&](kernel::ShapeKind k) { return c[static_cast<int>(k)]; };
+  return {{"solids", n(kernel::ShapeKind::Solid)}, {"shells", n(kernel::ShapeKind::Shell)},
+          {"faces", n(kernel::ShapeKind::Face)},   {"edges", n(kernel::ShapeKind::Edge)},
+          {"vertices", n(kernel::ShapeKind::Vertex)}};
+}
+}  // namespace
+
+Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
+                      const config::Config& config, std::string& result) {
+  const auto payload = nlohmann::json::parse(job.payload, nullptr, false);
+  if (payload.is_discarded() || !payload.contains("input") || !payload["input"].is_string()) {
+    return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
+  }
+  const std::string input = payload["input"].get<std::string>();
+  auto scene = geo::read_scene(input);
+  if (!scene.ok()) {
+    return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+            scene.error().message};
+  }
+  ordered_json record;
+  record["input"] = input;
+  record["scene"] = scene->name;
+  ordered_json objects = ordered_json::array();
+  std::vector<kernel::Shape> solids;
+  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+    const auto& p = scene->primitives[i];
+    auto solid = kernel::build_primitive(p.spec, config.kernel.linear_tolerance);
+    const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
+                              kernel::primitive_type_name(p.spec.type) + ")";
+    if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
+    const kernel::CheckReport check = kernel::check_shape(solid.value());
+    if (!check.valid()) {
+      return {ErrorCode::GeometryInvalid,
+              where + ": " + kernel::check_status_name(check.issues.front().status) + ": " +
+                  check.issues.front().message};
+    }
+    const kernel::MassProperties mp = kernel::mass_properties(solid.value());
+    ordered_json o;
+    o["id"] = p.id.empty() ? "p" + std::to_string(i) : p.id;
+    o["type"] = kernel::primitive_type_name(p.spec.type);
+    o["volume"] = mp.volume;
+    o["area"] = mp.area;
+    o["bounds"] = {mp.bounds.min.x(), mp.bounds.min.y(), mp.bounds.min.z(),
+                   mp.bounds.max.x(), mp.bounds.max.y(), mp.bounds.max.z()};
+    objects.push_back(std::move(o));
+    solids.push_back(std::move(solid).value());
+  }
+  auto model = kernel::ShapeFactory::compound(std::move(solids));
+  if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
+  // Content-addressed: the same model always lands under the same key, so a job that runs
+  // twice (after a crash) rewrites identical bytes and publishes nothing new.
+  const std::string bytes = kernel::write_native(model.value());
+  const std::string sha = sha256_hex(bytes);
+  const std::string key = "objects/" + sha + ".csgt";
+  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
+  if (!std::filesystem::exists(run_dir / key)) {
+    if (Failure f = write_file_atomic(run_dir / key, bytes); !f.ok()) return f;
+  }
+  const kernel::MassProperties total = kernel::mass_properties(model.value());
+  record["primitives"] = objects;
+  record["model"] = {{"key", key}, {"sha256", sha}, {"bytes", bytes.size()}};
+  record["volume"] = total.volume;
+  record["area"] = total.area;
+  record["topology"] = topology_json(model.value());
+  record["valid"] = true;
+  result = record.dump();
+  return {};
+}
+
+Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
+  const std::filesystem::path output = config.run.output;
+  summary.run_dir = output / "runs" / config.run.name;
+  const std::filesystem::path queue_path =
+      config.queue.sqlite_path.empty() ? output / "queue.sqlite" : std::filesystem::path(config.queue.sqlite_path);
+  QueuePolicy policy;
+  policy.max_attempts = config.queue.max_attempts;
+  policy.lease = std::chrono::seconds(config.queue.lease_seconds);
+  policy.seed = config.run.seed;
+  Failure failure;
+  auto queue = open_sqlite_queue(queue_path, policy, failure);
+  if (!queue) return failure;
+
+  std::size_t added = 0;
+  for (const std::string& input : config.run.inputs) {
+    const std::string key = "build:" + config.run.name + ":" + input;
+    const std::string payload = nlohmann::json({{"input", input}}).dump();
+    if (queue->enqueue(key, "build", payload, failure)) ++added;
+    if (!failure.ok()) return failure;
+  }
+  log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
+                               {"queue", queue_path.string()}});
+
+  const std::string worker_id = "local-" + std::to_string(getpid());
+  while (true) {
+    auto job = queue->claim(worker_id, failure);
+    if (!failure.ok()) return failure;
+    if (!job) {
+      const QueueCounts c = queue->counts(failure);
+      if (!failure.ok()) return failure;
+      if (c.retry == 0 && c.queued == 0 && c.running == 0) break;
+      // Retries wait for their backoff; a running job of another process holds its lease.
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      continue;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    std::string result;
+    Failure job_failure = run_build_job(*job, summary.run_dir, config, result);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (job_failure.ok()) {
+      queue->complete(*job, result, failure);
+      log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+    } else {
+      const ErrorInfo& info = error_info(job_failure.code);
+      queue->fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable, failure);
+      log.error("job", "failed", {{"job", job->key}, {"error", info.name},
+                                  {"reason", job_failure.message},
+                                  {"attempt", std::to_string(job->attempts)}});
+    }
+    if (!failure.ok()) return failure;
+  }
+
+  summary.counts = queue->counts(failure);
+  summary.dead = queue->dead_jobs(failure);
+  const auto results = queue->results(failure);
+  if (!failure.ok()) return failure;
+  ordered_json manifest;
+  manifest["run"] = config.run.name;
+  manifest["csgtile_version"] = CSGTILE_VERSION;
+  manifest["config_sha256"] = sha256_hex(config::to_json(config));
+  manifest["seed"] = config.run.seed;
+  manifest["jobs"] = ordered_json::array();
+  for (const auto& [key, result] : results) {
+    manifest["jobs"].push_back({{"key", key}, {"result", ordered_json::parse(result)}});
+  }
+  manifest["dead"] = ordered_json::array();
+  for (const DeadJob& d : summary.dead) {
+    manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
+  }
+  summary.manifest = summary.run_dir / "manifest.json";
+  return write_file_atomic(summary.manifest, manifest.dump(2) + "\n");
+}
+
+}  // namespace csgtile::worker
