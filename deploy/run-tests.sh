@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Quick start, command 2 (and what CI runs): installs what is missing, then
+#   1. an optimised build with warnings as errors, and every test (ctest);
+#   2. an ASan+UBSan build, and the kernel, geo, config and CLI tests under it;
+#   3. a libFuzzer build (clang) and a short bounded run of each fuzz target.
+# Set CSGTILE_SKIP_SANITIZE=1 or CSGTILE_SKIP_FUZZ=1 to leave out step 2 or 3 locally.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+deploy/setup.sh
+jobs="$(nproc)"
+
+echo "== optimised build and full test suite"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSGTILE_WERROR=ON \
+      -DCSGTILE_BUILD_TESTS=ON -DCSGTILE_BUILD_BENCH=ON >/dev/null
+cmake --build build -j"$jobs"
+ctest --test-dir build --output-on-failure -j"$jobs"
+
+if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then
+  echo "== ASan+UBSan build: kernel, geo, config and CLI tests"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCSGTILE_WERROR=ON \
+        -DCSGTILE_SANITIZE=ON -DCSGTILE_BUILD_TESTS=ON >/dev/null
+  cmake --build build-asan -j"$jobs"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j"$jobs" -L 'kernel|geo|config|cli|boundaries'
+fi
+
+if [ "${CSGTILE_SKIP_FUZZ:-0}" != 1 ]; then
+  echo "== libFuzzer targets (bounded runs)"
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+        -DCSGTILE_FUZZ=ON -DCSGTILE_BUILD_TESTS=OFF >/dev/null
+  cmake --build build-fuzz -j"$jobs"
+  ctest --test-dir build-fuzz --output-on-failure -L fuzz
+fi
