@@ -11,10 +11,14 @@
 /// body section is mandatory. Version 1 writes no optional section; the CSG history (a tree
 /// of Booleans over PrimitiveSpec leaves, per-face provenance) is planned as one.
 ///
-/// Payloads (num = varint index into the number table; vec3 = 3 num; frame = origin x y z,
-/// 12 num; every list is count:varint then items):
-///   numbers   (tag 2):  count, count × f64le, all finite, most used first (so most
-///                       references take one byte)
+/// Payloads (num = varint index << 1 | sign: the number is the table entry with its sign
+/// bit set when `sign` is 1; vec3 = 3 num; frame = origin x y z, 12 num; every list is
+/// count:varint then items):
+///   numbers   (tag 2):  count, ceil(count / 2) bytes of 4-bit lengths (entry 2k in the low
+///                       nibble, 0–8), then each entry's `length` high-order bytes of its
+///                       IEEE double, little-endian (the dropped low bytes are zero). Entries
+///                       are finite magnitudes (sign clear), most used first, so that most
+///                       references take one byte.
 ///   locations (tag 4):  count, count × { rotation row-major 9 num, scale num, vec3 }.
 ///                       The identity location is implicit and never stored.
 ///   curves    (tag 6):  count, count × { kind:u8 (CurveKind), fields }
@@ -34,8 +38,9 @@
 ///              Vertex: point vec3, tolerance (no children)
 ///              Edge:   curve:varint (0 = degenerate, k = curve k-1), first, last, tolerance,
 ///                      start ref (Forward), end ref (Reversed; the start's for degenerate)
-///              Face:   surface:varint, tolerance, wire refs, then for each wire one
-///                      pcurve:varint per edge of that wire
+///              Face:   surface:varint, tolerance, wire refs, then the pcurves of all
+///                      edge uses (wire by wire): k + 1 when they are the pcurves k, k+1, …
+///                      in order, else 0 followed by one pcurve:varint per edge use
 ///              other:  child refs
 ///     ref   := varint = delta << 3 | has_location << 2 | Orientation, then
 ///              location:varint when has_location. The child is body (this index − delta),
@@ -59,6 +64,19 @@ enum class SectionTag : std::uint32_t {
   Pcurves = 10,
   Bodies = 12,
 };
+
+inline constexpr std::uint64_t kSignBit = std::uint64_t{1} << 63;
+
+/// Bytes of a number-table entry that are kept: the low-order bytes that are zero (short
+/// mantissas: integers, halves, 0) are dropped. 0 to 8.
+inline int significant_bytes(std::uint64_t bits) {
+  int n = 8;
+  while (n > 0 && (bits & 0xFFU) == 0) {
+    bits >>= 8;
+    --n;
+  }
+  return n;
+}
 
 inline constexpr bool is_optional_tag(std::uint64_t tag) { return (tag & 1U) != 0; }
 

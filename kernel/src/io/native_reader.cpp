@@ -67,8 +67,15 @@ class Decoder {
  private:
   // Numbers are references into the table; the table holds finite values only.
   double number(ByteReader& in) {
-    const std::size_t i = in.index(numbers_.size(), "number");
-    return in.failed() ? 0.0 : numbers_[i];
+    const std::uint64_t ref = in.varint();
+    if (in.failed()) return 0.0;
+    const std::uint64_t i = ref >> 1;
+    if (i >= numbers_.size()) {
+      in.fail("number index " + std::to_string(i) + " out of range (" +
+              std::to_string(numbers_.size()) + " entries)");
+      return 0.0;
+    }
+    return (ref & 1U) != 0 ? -numbers_[i] : numbers_[i];
   }
   Vec2 vec2(ByteReader& in) {
     const double x = number(in);
@@ -89,6 +96,13 @@ class Decoder {
   }
   /// A direction that normalisation will not turn into NaNs or leave at zero.
   static bool usable_direction(const Vec3& d) { return d.squaredNorm() > 0.0 && d.allFinite(); }
+  /// Whether a normalised direction is unit. Stored directions are tiny (see the writer);
+  /// should this platform flush subnormals to zero they would come out unnormalised.
+  static bool unit(ByteReader& in, const Vec3& d) {
+    if (std::abs(d.squaredNorm() - 1.0) <= 1e-12) return true;
+    in.fail("a stored direction does not normalise (subnormals flushed to zero?)");
+    return false;
+  }
 
   CurvePtr curve(ByteReader& in);
   SurfacePtr surface(ByteReader& in);
@@ -122,11 +136,30 @@ std::optional<Error> finish(const ByteReader& in, const char* section) {
 std::optional<Error> Decoder::numbers(const Sections::Payload& s) {
   if (!s.present) return std::nullopt;
   ByteReader in(s.bytes, s.offset);
-  const std::size_t n = in.count(8, "number");
-  numbers_.reserve(n);
-  for (std::size_t i = 0; i < n && !in.failed(); ++i) {
-    const double v = in.f64le();
-    if (!std::isfinite(v)) in.fail("number " + std::to_string(i) + " is not finite");
+  const std::uint64_t n = in.varint();
+  // Each entry takes at least its half-byte length.
+  if (!in.failed() && n > 2 * static_cast<std::uint64_t>(in.remaining())) {
+    in.fail("number count " + std::to_string(n) + " exceeds the input");
+  }
+  if (in.failed()) return finish(in, "numbers");
+  std::vector<int> lengths(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < lengths.size(); i += 2) {
+    const std::uint8_t packed = in.byte();
+    lengths[i] = packed & 0x0F;
+    if (i + 1 < lengths.size()) lengths[i + 1] = packed >> 4;
+  }
+  numbers_.reserve(lengths.size());
+  for (std::size_t i = 0; i < lengths.size() && !in.failed(); ++i) {
+    if (lengths[i] > 8) {
+      in.fail("number " + std::to_string(i) + " has length " + std::to_string(lengths[i]));
+      break;
+    }
+    std::uint64_t bits = 0;
+    for (int b = 8 - lengths[i]; b < 8; ++b) bits |= std::uint64_t{in.byte()} << (8 * b);
+    const double v = detail::bits_double(bits);
+    if (!in.failed() && ((bits & detail::kSignBit) != 0 || !std::isfinite(v))) {
+      in.fail("number " + std::to_string(i) + " is negative or not finite");
+    }
     numbers_.push_back(v);
   }
   return finish(in, "numbers");
@@ -166,7 +199,9 @@ CurvePtr Decoder::curve(ByteReader& in) {
         in.fail("line direction is zero");
         return nullptr;
       }
-      return std::make_shared<LineCurve>(origin, direction);
+      auto line = std::make_shared<LineCurve>(origin, direction);
+      if (!unit(in, line->direction())) return nullptr;
+      return line;
     }
     case static_cast<std::uint8_t>(CurveKind::Circle): {
       const Frame f = frame(in);
@@ -266,7 +301,9 @@ SurfacePtr Decoder::surface(ByteReader& in) {
         in.fail("extrusion direction is zero");
         return nullptr;
       }
-      return std::make_shared<ExtrusionSurface>(curves_[basis], direction);
+      auto extrusion = std::make_shared<ExtrusionSurface>(curves_[basis], direction);
+      if (!unit(in, extrusion->direction())) return nullptr;
+      return extrusion;
     }
     case static_cast<std::uint8_t>(SurfaceKind::Revolution): {
       const std::size_t meridian = in.index(curves_.size(), "curve");
@@ -277,7 +314,9 @@ SurfacePtr Decoder::surface(ByteReader& in) {
         in.fail("revolution axis direction is zero");
         return nullptr;
       }
-      return std::make_shared<RevolutionSurface>(curves_[meridian], origin, direction);
+      auto revolution = std::make_shared<RevolutionSurface>(curves_[meridian], origin, direction);
+      if (!unit(in, revolution->axis_direction())) return nullptr;
+      return revolution;
     }
     default:
       in.fail("unknown surface kind " + std::to_string(kind));
@@ -418,20 +457,29 @@ std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index,
       const std::size_t surface = in.index(surfaces_.size(), "surface");
       const double tolerance = number(in);
       if (!read_children(children)) return std::nullopt;
-      std::vector<std::vector<Curve2dPtr>> pcurves(children.size());
-      for (std::size_t w = 0; w < children.size() && !in.failed(); ++w) {
-        if (children[w].kind() != ShapeKind::Wire) {
+      std::size_t uses = 0;
+      for (const Shape& wire : children) {
+        if (wire.kind() != ShapeKind::Wire) {
           in.fail("a face is bounded by wires");
-          break;
+          return std::nullopt;
         }
+        uses += wire.child_count();
+      }
+      // A run k + 1 names pcurves k .. k + uses − 1; 0 is followed by one index per use.
+      const std::uint64_t run = in.varint();
+      if (!in.failed() && run == 0 && uses > in.remaining()) {
+        in.fail("pcurve count exceeds the input");
+      }
+      if (!in.failed() && run != 0 && (run - 1 > pcurves_.size() || uses > pcurves_.size() - (run - 1))) {
+        in.fail("pcurve run out of range");
+      }
+      std::vector<std::vector<Curve2dPtr>> pcurves(children.size());
+      std::size_t next = run == 0 ? 0 : static_cast<std::size_t>(run - 1);
+      for (std::size_t w = 0; w < children.size() && !in.failed(); ++w) {
         const std::size_t edges = children[w].child_count();
-        if (edges > in.remaining()) {
-          in.fail("pcurve count exceeds the input");
-          break;
-        }
         pcurves[w].reserve(edges);
         for (std::size_t e = 0; e < edges && !in.failed(); ++e) {
-          const std::size_t p = in.index(pcurves_.size(), "pcurve");
+          const std::size_t p = run == 0 ? in.index(pcurves_.size(), "pcurve") : next++;
           if (!in.failed()) pcurves[w].push_back(pcurves_[p]);
         }
       }

@@ -33,29 +33,46 @@ bool same_bits(const Vec3& a, const Vec3& b) {
 
 // ---- unit directions --------------------------------------------------------------------
 
-// LineCurve, ExtrusionSurface and RevolutionSurface normalise the direction they are given,
-// and normalising a unit vector again moves about a third of them by an ulp. To read back
-// the very bits a shape holds we store a vector whose normalisation gives them. One always
-// exists (the vector the curve was built from, scaled by a power of two into [1, 2)); we
-// look for one near d·r, trying scales r in a fixed order so that the search, and hence
-// the output, is deterministic. The probe is the real constructor, so the test is exact.
+// LineCurve, ExtrusionSurface and RevolutionSurface normalise the direction they are given
+// (c / sqrt(c·c)), and normalising a unit vector again moves about a third of them by an
+// ulp; builds also differ in how they sum c·c. To read back the very bits a shape holds we
+// store a vector c that normalises to them exactly, whatever the summation order:
+// c = d·2^(m−537). Each c_i² is then a multiple of 2^−1074 (the subnormal spacing), so the
+// sum of the rounded squares is exact; when it comes to 4^m units, sqrt gives exactly
+// 2^(m−537) and c / sqrt(c·c) = d exactly. Some m in 0..25 works for every direction we
+// have tried (10^6 random ones: m = 0 for 91%); the probe is the real constructor. Axis
+// directions normalise to themselves exactly and are kept as they are (they share the
+// number table's 0 and 1).
 
 bool normalises_to(const Vec3& candidate, const Vec3& d) {
   return same_bits(LineCurve(Vec3::Zero(), candidate).direction(), d);
+}
+
+bool is_axis(const Vec3& d) {
+  int ones = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) == 1.0) {
+      ++ones;
+    } else if (d[i] != 0.0) {
+      return false;
+    }
+  }
+  return ones == 1;
 }
 
 /// Candidates c near d·r with c / r rounding to d per component; true with `out` set when a
 /// combination normalises to d.
 bool preimage_at_scale(const Vec3& d, double r, Vec3& out) {
   constexpr int kSpread = 3;  // ulps tried on each side of d[i]·r
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
   std::array<std::array<double, 2 * kSpread + 1>, 3> candidates{};
   std::array<int, 3> counts{};
   for (int i = 0; i < 3; ++i) {
     double c = d[i] * r;
-    for (int k = 0; k < kSpread; ++k) c = std::nextafter(c, -std::numeric_limits<double>::infinity());
+    for (int k = 0; k < kSpread; ++k) c = std::nextafter(c, -kInfinity);
     for (int k = 0; k <= 2 * kSpread; ++k) {
       if (double_bits(c / r) == double_bits(d[i])) candidates[i][counts[i]++] = c;
-      c = std::nextafter(c, std::numeric_limits<double>::infinity());
+      c = std::nextafter(c, kInfinity);
     }
     if (counts[i] == 0) return false;
   }
@@ -73,28 +90,20 @@ bool preimage_at_scale(const Vec3& d, double r, Vec3& out) {
   return false;
 }
 
-/// A vector whose normalisation is d bit for bit. Measured on 10^6 random directions: a
-/// third need a search, which usually succeeds within four scales and always within the
-/// budget; should it not, d itself is stored and only that direction moves by an ulp.
+/// A vector whose normalisation is d bit for bit (see above). Fallbacks for a platform that
+/// flushes subnormals to zero: d itself when it is a fixed point, else a search near d·r over
+/// scales r in [1, 2); should all fail, d is stored and only that direction moves by an ulp.
 Vec3 unit_preimage(const Vec3& d) {
-  if (normalises_to(d, d) || !d.allFinite()) return d;
+  if (is_axis(d) || !d.allFinite() || d.isZero(0.0)) return d;
+  for (int m = 0; m <= 25; ++m) {
+    const Vec3 candidate = d * std::ldexp(1.0, m - 537);
+    if (normalises_to(candidate, d)) return candidate;
+  }
+  if (normalises_to(d, d)) return d;
   Vec3 found;
   constexpr int kGridSteps = 4096;
   for (int k = 0; k < kGridSteps; ++k) {
     const double r = 1.0 + static_cast<double>(k) / kGridSteps;
-    if (preimage_at_scale(d, r, found)) return found;
-    if (preimage_at_scale(d, std::nextafter(r, 2.0), found)) return found;
-  }
-  // Then scales from a fixed pseudo-random sequence (splitmix64) in [1, 2).
-  std::uint64_t state = 0x9E3779B97F4A7C15ULL;
-  constexpr int kRandomSteps = 1 << 16;
-  for (int k = 0; k < kRandomSteps; ++k) {
-    state += 0x9E3779B97F4A7C15ULL;
-    std::uint64_t z = state;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31;
-    const double r = 1.0 + std::ldexp(static_cast<double>(z >> 11), -53);
     if (preimage_at_scale(d, r, found)) return found;
   }
   return d;
@@ -218,11 +227,12 @@ struct ModelTables {
 
 // ---- numbers ----------------------------------------------------------------------------
 
-/// Counts number uses, then gives the most used the smallest indices (ties: first use).
+/// Counts uses of number bit patterns, then gives the most used the smallest indices (ties:
+/// first use).
 class NumberPool {
  public:
-  void count(double v) {
-    auto [it, inserted] = uses_.try_emplace(double_bits(v), Use{0, uses_.size()});
+  void count(std::uint64_t bits) {
+    auto [it, inserted] = uses_.try_emplace(bits, Use{0, uses_.size()});
     ++it->second.count;
   }
 
@@ -239,7 +249,7 @@ class NumberPool {
 
   std::size_t size() const { return order_.size(); }
   std::uint64_t bits(std::size_t i) const { return order_[i].first; }
-  std::size_t index_of(double v) const { return index_.at(double_bits(v)); }
+  std::size_t index_of(std::uint64_t bits) const { return index_.at(bits); }
 
  private:
   struct Use {
@@ -259,11 +269,16 @@ class PayloadEncoder {
 
   void byte(std::uint8_t v) { out_.byte(v); }
   void varint(std::uint64_t v) { out_.varint(v); }
+  /// A reference to |v| in the pool, shifted left once, with the sign in bit 0: v and −v
+  /// share one entry.
   void number(double v) {
+    const std::uint64_t bits = double_bits(v);
+    const std::uint64_t magnitude = bits & ~detail::kSignBit;
     if (counting_) {
-      pool_.count(v);
+      pool_.count(magnitude);
     } else {
-      out_.varint(pool_.index_of(v));
+      out_.varint((static_cast<std::uint64_t>(pool_.index_of(magnitude)) << 1) |
+                  (bits >> 63));
     }
   }
   void vec2(const Vec2& v) {
@@ -425,6 +440,25 @@ void encode_ref(const ModelTables& t, std::size_t from, const Shape& ref, Payloa
   if (has_location) e.varint(t.location_index.at(location_key(ref.location())));
 }
 
+/// A face's pcurves: k + 1 when they are the table entries k, k + 1, … in order (the usual
+/// case: unshared pcurves are listed in first-use order), else 0 and one index per edge use.
+void encode_face_pcurves(const ModelTables& t, const FaceData& face, PayloadEncoder& e) {
+  std::vector<std::size_t> indices;
+  for (const auto& wire : face.pcurves) {
+    for (const Curve2dPtr& pcurve : wire) indices.push_back(t.pcurve_index.at(pcurve.get()));
+  }
+  bool consecutive = !indices.empty();
+  for (std::size_t k = 1; k < indices.size() && consecutive; ++k) {
+    consecutive = indices[k] == indices[0] + k;
+  }
+  if (consecutive) {
+    e.varint(indices[0] + 1);
+    return;
+  }
+  e.varint(0);
+  for (const std::size_t index : indices) e.varint(index);
+}
+
 void encode_bodies(const ModelTables& t, const Shape& root, PayloadEncoder& e) {
   e.varint(t.bodies.size());
   for (std::size_t i = 0; i < t.bodies.size(); ++i) {
@@ -445,11 +479,7 @@ void encode_bodies(const ModelTables& t, const Shape& root, PayloadEncoder& e) {
       e.number(face->tolerance);
     }
     for (const Shape& child : children) encode_ref(t, i, child, e);
-    if (const FaceData* face = body.face()) {
-      for (const auto& wire : face->pcurves) {
-        for (const Curve2dPtr& pcurve : wire) e.varint(t.pcurve_index.at(pcurve.get()));
-      }
-    }
+    if (const FaceData* face = body.face()) encode_face_pcurves(t, *face, e);
   }
   if (root.is_null()) {
     e.varint(0);
@@ -495,7 +525,17 @@ std::string write_native(const Shape& shape) {
 
   ByteWriter numbers;
   numbers.varint(pool.size());
-  for (std::size_t i = 0; i < pool.size(); ++i) numbers.f64le(detail::bits_double(pool.bits(i)));
+  std::vector<int> lengths(pool.size());
+  for (std::size_t i = 0; i < pool.size(); ++i) lengths[i] = detail::significant_bytes(pool.bits(i));
+  for (std::size_t i = 0; i < pool.size(); i += 2) {
+    const int high = i + 1 < pool.size() ? lengths[i + 1] : 0;
+    numbers.byte(static_cast<std::uint8_t>(lengths[i] | (high << 4)));
+  }
+  for (std::size_t i = 0; i < pool.size(); ++i) {
+    for (int b = 8 - lengths[i]; b < 8; ++b) {
+      numbers.byte(static_cast<std::uint8_t>(pool.bits(i) >> (8 * b)));
+    }
+  }
 
   ByteWriter out;
   out.bytes(std::string_view(detail::kNativeMagic, sizeof detail::kNativeMagic));

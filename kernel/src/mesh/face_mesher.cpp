@@ -265,8 +265,9 @@ class DomainRefiner {
   }
 
   // Interior edges to split: those whose midpoint is off the surface by more than the
-  // budget; for a triangle whose centre or corner normals are off, its longest interior
-  // edge. Sorted and unique, so passes are deterministic.
+  // budget; for a triangle whose centre or corner normals are off, its interior edge whose
+  // midpoint is farthest off (the longest when none is: the fault is in the normals).
+  // Sorted and unique, so passes are deterministic.
   std::vector<std::pair<int, int>> marked_edges() const {
     const double cos_angular = std::cos(geometry_.angular);
     std::set<std::pair<int, int>> marked;
@@ -275,22 +276,25 @@ class DomainRefiner {
       const Tri& tri = triangles_[t];
       if (coincide(tri[0], tri[1]) || coincide(tri[1], tri[2]) || coincide(tri[2], tri[0])) continue;
       bool any = false;
-      int longest = -1;
-      double longest_length = -1.0;
+      int pick = -1;
+      double pick_error = -1.0, pick_length = -1.0;
       for (std::size_t k = 0; k < 3; ++k) {
         const int a = tri[k], b = tri[(k + 1) % 3];
         if (!has_edge(b, a)) continue;  // boundary edges stay as the edges made them
-        if (midpoint_error(a, b) > geometry_.chordal) {
+        const double error = midpoint_error(a, b);
+        if (error > geometry_.chordal) {
           marked.emplace(std::min(a, b), std::max(a, b));
           any = true;
         }
-        const double length = (xyz_[static_cast<std::size_t>(a)] - xyz_[static_cast<std::size_t>(b)]).norm();
-        if (length > longest_length) {
-          longest_length = length;
-          longest = static_cast<int>(k);
+        const double length =
+            (xyz_[static_cast<std::size_t>(a)] - xyz_[static_cast<std::size_t>(b)]).norm();
+        if (error > pick_error || (error == pick_error && length > pick_length)) {
+          pick_error = error;
+          pick_length = length;
+          pick = static_cast<int>(k);
         }
       }
-      if (any || longest < 0) continue;
+      if (any || pick < 0) continue;
       const auto p0 = static_cast<std::size_t>(tri[0]), p1 = static_cast<std::size_t>(tri[1]),
                  p2 = static_cast<std::size_t>(tri[2]);
       const Vec2 centre_uv = (uv_[p0] + uv_[p1] + uv_[p2]) / 3.0;
@@ -304,8 +308,8 @@ class DomainRefiner {
         bad = normal.dot(surface_normal) < cos_angular;
       }
       if (bad) {
-        const int a = tri[static_cast<std::size_t>(longest)];
-        const int b = tri[static_cast<std::size_t>((longest + 1) % 3)];
+        const int a = tri[static_cast<std::size_t>(pick)];
+        const int b = tri[static_cast<std::size_t>((pick + 1) % 3)];
         marked.emplace(std::min(a, b), std::max(a, b));
       }
     }
