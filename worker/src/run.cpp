@@ -90,6 +90,11 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
 }
 
 Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
+  if (config.queue.backend != config::QueueBackend::Sqlite) {
+    return {ErrorCode::Unsupported,
+            "queue.backend \"" + std::string(config::to_string(config.queue.backend)) +
+                "\" is not available in this build; `csgtile run` uses the embedded sqlite queue"};
+  }
   const std::filesystem::path output = config.run.output;
   summary.run_dir = output / "runs" / config.run.name;
   const std::filesystem::path queue_path =

@@ -225,7 +225,7 @@ TEST(NativeFormat, UnitDirectionsComeBackBitForBit) {
 
 TEST(NativeFormat, NullShapeAndEmptyCompoundRoundTrip) {
   const std::string null_bytes = expect_round_trip(Shape());
-  EXPECT_EQ(null_bytes.size(), 10U);  // magic, version, flags, body section (3), checksum
+  EXPECT_EQ(null_bytes.size(), 14U);  // magic, version, flags, body section (4), checksum
   EXPECT_TRUE(read_native(null_bytes).value().is_null());
   expect_round_trip(unwrap(ShapeFactory::compound({})));
   EXPECT_FALSE(structurally_equal(Shape(), unwrap(ShapeFactory::compound({}))));
@@ -396,10 +396,15 @@ TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
   // A count far beyond the input.
   expect_corrupt(seal(header() + section(2, std::string("\xff\xff\xff\xff\x0f", 5))),
                  "huge number count");
-  // A NaN in the number table.
-  std::string nan_table("\x01\x00\x00\x00\x00\x00\x00\xf8\x7f", 9);
-  expect_corrupt(seal(header() + section(2, nan_table) + section(12, std::string("\x00\x00", 2))),
+  // A NaN, a negative entry and a 9-byte entry in the number table (count, lengths, bytes).
+  const std::string null_body = section(12, std::string("\x00\x00", 2));
+  expect_corrupt(seal(header() + section(2, std::string("\x01\x02\xf8\x7f", 4)) + null_body),
                  "NaN number");
+  expect_corrupt(seal(header() + section(2, std::string("\x01\x01\x80", 3)) + null_body),
+                 "negative number entry");
+  expect_corrupt(seal(header() + section(2, std::string("\x01\x09", 2) + std::string(9, 'a')) +
+                      null_body),
+                 "number length 9");
   // A vertex whose number index is out of range.
   expect_corrupt(seal(header() + section(12, std::string("\x01\x07\x00\x00\x00\x00\x00", 7))),
                  "number index out of range");
@@ -408,7 +413,7 @@ TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
                       section(12, std::string("\x00\x00", 2))),
                  "unknown curve kind");
   // A solid made of a vertex (ShapeFactory refuses): numbers {0}, vertex, solid of it.
-  const std::string zero_table("\x01\x00\x00\x00\x00\x00\x00\x00\x00", 9);
+  const std::string zero_table("\x01\x00", 2);  // one number, 0.0, stored in no bytes
   expect_corrupt(seal(header() + section(2, zero_table) +
                       section(12, std::string("\x02\x07\x00\x00\x00\x00\x0a\x08\x08", 9))),
                  "solid of a vertex");
