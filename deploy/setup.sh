@@ -10,6 +10,8 @@ packages=(
   libclang-rt-14-dev
   # kernel
   libeigen3-dev libgmp-dev
+  # geo: georeferencing (GeographicLib); PROJ's cs2cs is the tests' independent oracle
+  libgeographiclib-dev proj-bin
   # config
   libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev
   # worker and command line

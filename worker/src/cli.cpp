@@ -17,6 +17,7 @@ int run_cli(int argc, char** argv) {
   detail::register_config(app, action);
   detail::register_bool(app, action);
   detail::register_run(app, action);
+  detail::register_info(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "csgtile/geo/scene.h"
+#include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -36,10 +37,6 @@ Failure evaluate(const std::string& path, BoolReport& report) {
   }
   report.name = scene->name;
   report.op = geo::boolean_op_name(scene->op);
-  if (scene->op != geo::BooleanOp::None) {
-    return {ErrorCode::Unsupported,
-            "Boolean operation \"" + report.op + "\" is not available in this build yet"};
-  }
   std::vector<kernel::Shape> solids;
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
     const auto& p = scene->primitives[i];
@@ -51,7 +48,15 @@ Failure evaluate(const std::string& path, BoolReport& report) {
     }
     solids.push_back(std::move(solid).value());
   }
-  auto compound = kernel::ShapeFactory::compound(std::move(solids));
+  kernel::Result<kernel::Shape> compound = kernel::ShapeFactory::compound({});
+  if (scene->op == geo::BooleanOp::None) {
+    compound = kernel::ShapeFactory::compound(std::move(solids));
+  } else {
+    const kernel::BooleanOp op = scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
+                                 : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
+                                                                       : kernel::BooleanOp::Cut;
+    compound = kernel::boolean_fold(solids, op);
+  }
   if (!compound.ok()) return {from_kernel(compound.error().code), compound.error().message};
   const kernel::CheckReport check = kernel::check_shape(compound.value());
   const kernel::MassProperties mp = kernel::mass_properties(compound.value());

@@ -18,5 +18,6 @@ void register_validate_config(CLI::App& app, Action& action);
 void register_config(CLI::App& app, Action& action);
 void register_bool(CLI::App& app, Action& action);
 void register_run(CLI::App& app, Action& action);
+void register_info(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

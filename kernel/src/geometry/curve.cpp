@@ -400,3 +400,38 @@ double PolylineCurve::length(double t0, double t1) const {
 }
 
 }  // namespace csgtile::kernel
+
+// ---- TrigCurve ---------------------------------------------------------------------------
+
+namespace csgtile::kernel {
+
+Vec3 TrigCurve::point(double t) const { return center_ + std::cos(t) * a_ + std::sin(t) * b_; }
+Vec3 TrigCurve::derivative(double t) const { return -std::sin(t) * a_ + std::cos(t) * b_; }
+Vec3 TrigCurve::second_derivative(double t) const {
+  return -std::cos(t) * a_ - std::sin(t) * b_;
+}
+double TrigCurve::period() const { return detail::kTwoPi; }
+
+double TrigCurve::closest_parameter(const Vec3& p, double t0, double t1) const {
+  // Principal axes: with t = s + θ, C = c + cos s·A + sin s·B where A = a cos θ + b sin θ and
+  // B = −a sin θ + b cos θ are perpendicular when tan 2θ = 2 a·b / (|a|² − |b|²).
+  const double theta = 0.5 * std::atan2(2.0 * a_.dot(b_), a_.squaredNorm() - b_.squaredNorm());
+  const Vec3 major = std::cos(theta) * a_ + std::sin(theta) * b_;
+  const Vec3 minor = -std::sin(theta) * a_ + std::cos(theta) * b_;
+  const double ra = major.norm(), rb = minor.norm();
+  const Vec3 q = p - center_;
+  const double x = ra > 0 ? q.dot(major) / ra : 0.0;
+  const double y = rb > 0 ? q.dot(minor) / rb : 0.0;
+  return detail::ellipse_closest_angle(ra, rb, x, y, t0 - theta, t1 - theta) + theta;
+}
+
+double TrigCurve::support(const Vec3& w, double t0, double t1) const {
+  return center_.dot(w) + detail::trig_range(a_.dot(w), b_.dot(w), t0, t1).max;
+}
+
+CurvePtr TrigCurve::transformed(const Location& loc) const {
+  return std::make_shared<TrigCurve>(loc.apply_point(center_), loc.apply_vector(a_),
+                                     loc.apply_vector(b_));
+}
+
+}  // namespace csgtile::kernel

@@ -59,6 +59,10 @@ double projected_closest_parameter(const Curve& curve, const Vec3& p, const Vec3
       return projected_conic_closest(f.origin, ellipse.major_radius() * f.x,
                                      ellipse.minor_radius() * f.y, p, d);
     }
+    case CurveKind::Trig: {
+      const auto& trig = static_cast<const TrigCurve&>(curve);
+      return projected_conic_closest(trig.center(), trig.a(), trig.b(), p, d);
+    }
     case CurveKind::Polyline: {
       const auto& points = static_cast<const PolylineCurve&>(curve).points();
       double best_t = 0.0;
@@ -104,6 +108,14 @@ Vec3 meridian_radial_direction(const Curve& meridian, const Vec3& axis_origin, c
       // The conic's plane contains the axis, so axis × plane normal is exactly radial.
       exact_direction = axis.cross(f.z);
       references[count++] = f.origin - axis_origin;
+      references[count++] = meridian.point(0.0) - axis_origin;
+      references[count++] = meridian.point(0.5 * detail::kPi) - axis_origin;
+      break;
+    }
+    case CurveKind::Trig: {
+      const auto& trig = static_cast<const TrigCurve&>(meridian);
+      exact_direction = axis.cross(trig.a().cross(trig.b()).normalized());
+      references[count++] = trig.center() - axis_origin;
       references[count++] = meridian.point(0.0) - axis_origin;
       references[count++] = meridian.point(0.5 * detail::kPi) - axis_origin;
       break;

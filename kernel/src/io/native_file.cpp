@@ -18,8 +18,7 @@ namespace csgtile::kernel {
 namespace {
 
 Error io_error(const std::string& what, const std::filesystem::path& path, int error_number) {
-  return Error{ErrorCode::IoError,
-               what + " " + path.string() + ": " + std::strerror(error_number)};
+  return Error{ErrorCode::IoError, what + " " + path.string() + ": " + std::strerror(error_number)};
 }
 
 /// Closes a file descriptor when it goes out of scope (unless released).
@@ -60,8 +59,8 @@ Status write_all(int fd, std::string_view bytes, const std::filesystem::path& pa
 std::filesystem::path temporary_path(const std::filesystem::path& path) {
   static std::atomic<unsigned long> counter{0};
   std::filesystem::path temporary = path;
-  temporary.replace_filename("." + path.filename().string() + ".tmp." +
-                             std::to_string(::getpid()) + "." + std::to_string(++counter));
+  temporary.replace_filename("." + path.filename().string() + ".tmp." + std::to_string(::getpid()) +
+                             "." + std::to_string(++counter));
   return temporary;
 }
 

@@ -11,9 +11,10 @@
 /// body section is mandatory. Version 1 writes no optional section; the CSG history (a tree
 /// of Booleans over PrimitiveSpec leaves, per-face provenance) is planned as one.
 ///
-/// Payloads (num = varint index << 1 | sign: the number is the table entry with its sign
-/// bit set when `sign` is 1; vec3 = 3 num; frame = origin x y z, 12 num; every list is
-/// count:varint then items):
+/// Payloads (num = varint code << 1 | sign, the number being a table entry with its sign bit
+/// set when `sign` is 1: code p < 16 is the entry at position p of the section's
+/// RecentNumbers, code 16 + i is entry i; vec3 = 3 num; frame = origin x y z, 12 num; every
+/// list is count:varint then items):
 ///   numbers   (tag 2):  count, ceil(count / 2) bytes of 4-bit lengths (entry 2k in the low
 ///                       nibble, 0–8), then each entry's `length` high-order bytes of its
 ///                       IEEE double, little-endian (the dropped low bytes are zero). Entries
@@ -48,6 +49,7 @@
 ///              graph cannot have cycles.
 ///     root  := varint 0 for the null shape, else a ref counted from index = body count.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
@@ -77,6 +79,38 @@ inline int significant_bytes(std::uint64_t bits) {
   }
   return n;
 }
+
+/// The most recently used number-table indices, most recent first (move to front). Writer
+/// and reader keep one per section payload, starting empty, and update it after every number
+/// reference, so both always agree on its content. A model's data comes in runs (a box's
+/// vertices, then its edges, …) that reuse a few numbers, so most references hit it and
+/// take one byte even when the table is large.
+class RecentNumbers {
+ public:
+  static constexpr std::size_t kCapacity = 16;
+
+  std::size_t size() const { return size_; }
+  /// Position of `index`, or kCapacity when it is not there.
+  std::size_t find(std::size_t index) const {
+    for (std::size_t p = 0; p < size_; ++p) {
+      if (entries_[p] == index) return p;
+    }
+    return kCapacity;
+  }
+  /// Precondition: position < size().
+  std::size_t at(std::size_t position) const { return entries_[position]; }
+  /// Moves `index` to the front (inserting it, and dropping the oldest when full).
+  void use(std::size_t index) {
+    std::size_t p = find(index);
+    if (p == kCapacity) p = size_ < kCapacity ? size_++ : kCapacity - 1;
+    for (; p > 0; --p) entries_[p] = entries_[p - 1];
+    entries_[0] = index;
+  }
+
+ private:
+  std::array<std::size_t, kCapacity> entries_{};
+  std::size_t size_ = 0;
+};
 
 inline constexpr bool is_optional_tag(std::uint64_t tag) { return (tag & 1U) != 0; }
 

@@ -69,12 +69,22 @@ class Decoder {
   double number(ByteReader& in) {
     const std::uint64_t ref = in.varint();
     if (in.failed()) return 0.0;
-    const std::uint64_t i = ref >> 1;
-    if (i >= numbers_.size()) {
-      in.fail("number index " + std::to_string(i) + " out of range (" +
-              std::to_string(numbers_.size()) + " entries)");
+    const std::uint64_t code = ref >> 1;
+    std::size_t i = 0;
+    if (code < detail::RecentNumbers::kCapacity) {
+      if (code >= recent_.size()) {
+        in.fail("recent number " + std::to_string(code) + " not yet defined");
+        return 0.0;
+      }
+      i = recent_.at(static_cast<std::size_t>(code));
+    } else if (code - detail::RecentNumbers::kCapacity < numbers_.size()) {
+      i = static_cast<std::size_t>(code - detail::RecentNumbers::kCapacity);
+    } else {
+      in.fail("number index " + std::to_string(code - detail::RecentNumbers::kCapacity) +
+              " out of range (" + std::to_string(numbers_.size()) + " entries)");
       return 0.0;
     }
+    recent_.use(i);
     return (ref & 1U) != 0 ? -numbers_[i] : numbers_[i];
   }
   Vec2 vec2(ByteReader& in) {
@@ -121,6 +131,8 @@ class Decoder {
   std::vector<int> depth_;
   /// Body indices of the references read since the last body began (nesting depth).
   std::vector<std::size_t> child_bodies_;
+  /// Reset at the start of every section, as the writer does.
+  detail::RecentNumbers recent_;
 };
 
 /// Turns a reader failure, or bytes left over, into CorruptData naming the section.
@@ -142,11 +154,11 @@ std::optional<Error> Decoder::numbers(const Sections::Payload& s) {
     in.fail("number count " + std::to_string(n) + " exceeds the input");
   }
   if (in.failed()) return finish(in, "numbers");
-  std::vector<int> lengths(static_cast<std::size_t>(n));
+  std::vector<std::uint8_t> lengths(static_cast<std::size_t>(n));
   for (std::size_t i = 0; i < lengths.size(); i += 2) {
     const std::uint8_t packed = in.byte();
-    lengths[i] = packed & 0x0F;
-    if (i + 1 < lengths.size()) lengths[i + 1] = packed >> 4;
+    lengths[i] = static_cast<std::uint8_t>(packed & 0x0FU);
+    if (i + 1 < lengths.size()) lengths[i + 1] = static_cast<std::uint8_t>(packed >> 4);
   }
   numbers_.reserve(lengths.size());
   for (std::size_t i = 0; i < lengths.size() && !in.failed(); ++i) {
@@ -167,6 +179,7 @@ std::optional<Error> Decoder::numbers(const Sections::Payload& s) {
 
 std::optional<Error> Decoder::locations(const Sections::Payload& s) {
   if (!s.present) return std::nullopt;
+  recent_ = {};
   ByteReader in(s.bytes, s.offset);
   const std::size_t n = in.count(13, "location");
   locations_.reserve(n);
@@ -234,14 +247,13 @@ CurvePtr Decoder::curve(ByteReader& in) {
       if (in.failed()) return nullptr;
       return std::make_shared<PolylineCurve>(std::move(points), tolerance);
     }
-    default:
-      in.fail("unknown curve kind " + std::to_string(kind));
-      return nullptr;
+    default: in.fail("unknown curve kind " + std::to_string(kind)); return nullptr;
   }
 }
 
 std::optional<Error> Decoder::curves(const Sections::Payload& s) {
   if (!s.present) return std::nullopt;
+  recent_ = {};
   ByteReader in(s.bytes, s.offset);
   const std::size_t n = in.count(1, "curve");
   curves_.reserve(n);
@@ -318,14 +330,13 @@ SurfacePtr Decoder::surface(ByteReader& in) {
       if (!unit(in, revolution->axis_direction())) return nullptr;
       return revolution;
     }
-    default:
-      in.fail("unknown surface kind " + std::to_string(kind));
-      return nullptr;
+    default: in.fail("unknown surface kind " + std::to_string(kind)); return nullptr;
   }
 }
 
 std::optional<Error> Decoder::surfaces(const Sections::Payload& s) {
   if (!s.present) return std::nullopt;
+  recent_ = {};
   ByteReader in(s.bytes, s.offset);
   const std::size_t n = in.count(1, "surface");
   surfaces_.reserve(n);
@@ -351,8 +362,7 @@ Curve2dPtr Decoder::pcurve(ByteReader& in) {
         in.fail("pcurve circle radius is not > 0");
         return nullptr;
       }
-      return std::make_shared<Circle2d>(center, radius,
-                                        kind == detail::kPcurveCircle ? 1 : -1);
+      return std::make_shared<Circle2d>(center, radius, kind == detail::kPcurveCircle ? 1 : -1);
     }
     case detail::kPcurvePolyline: {
       const std::size_t n = in.count(2, "pcurve polyline point");
@@ -363,14 +373,13 @@ Curve2dPtr Decoder::pcurve(ByteReader& in) {
       if (in.failed()) return nullptr;
       return std::make_shared<Polyline2d>(std::move(points));
     }
-    default:
-      in.fail("unknown pcurve kind " + std::to_string(kind));
-      return nullptr;
+    default: in.fail("unknown pcurve kind " + std::to_string(kind)); return nullptr;
   }
 }
 
 std::optional<Error> Decoder::pcurves(const Sections::Payload& s) {
   if (!s.present) return std::nullopt;
+  recent_ = {};
   ByteReader in(s.bytes, s.offset);
   const std::size_t n = in.count(1, "pcurve");
   pcurves_.reserve(n);
@@ -397,8 +406,7 @@ std::optional<Shape> Decoder::ref(ByteReader& in, std::uint64_t head, std::size_
   return bodies_[from - delta].located(location).oriented(orientation);
 }
 
-std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index,
-                                   std::string& factory_error) {
+std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index, std::string& factory_error) {
   const std::uint64_t head = in.varint();
   const auto kind = static_cast<ShapeKind>(head & detail::kBodyKindMask);
   const std::uint64_t child_count = head >> detail::kBodyHeadShift;
@@ -470,7 +478,8 @@ std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index,
       if (!in.failed() && run == 0 && uses > in.remaining()) {
         in.fail("pcurve count exceeds the input");
       }
-      if (!in.failed() && run != 0 && (run - 1 > pcurves_.size() || uses > pcurves_.size() - (run - 1))) {
+      if (!in.failed() && run != 0 &&
+          (run - 1 > pcurves_.size() || uses > pcurves_.size() - (run - 1))) {
         in.fail("pcurve run out of range");
       }
       std::vector<std::vector<Curve2dPtr>> pcurves(children.size());
@@ -484,8 +493,8 @@ std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index,
         }
       }
       if (in.failed()) return std::nullopt;
-      return factory(ShapeFactory::face(surfaces_[surface], std::move(children),
-                                        std::move(pcurves), tolerance));
+      return factory(ShapeFactory::face(surfaces_[surface], std::move(children), std::move(pcurves),
+                                        tolerance));
     }
     case ShapeKind::Wire:
       if (!read_children(children)) return std::nullopt;
@@ -509,6 +518,7 @@ std::optional<Shape> Decoder::body(ByteReader& in, std::size_t index,
 
 Result<Shape> Decoder::bodies(const Sections::Payload& s) {
   if (!s.present) return corrupt("the body section is missing");
+  recent_ = {};
   ByteReader in(s.bytes, s.offset);
   const std::size_t n = in.count(1, "body");
   bodies_.reserve(n);
@@ -590,7 +600,8 @@ Result<Shape> read_native(std::string_view bytes) {
     const std::size_t section_start = framing.offset();
     const std::uint64_t tag = framing.varint();
     const std::uint64_t length = framing.varint();
-    if (!framing.failed() && length > framing.remaining()) framing.fail("section overruns the file");
+    if (!framing.failed() && length > framing.remaining())
+      framing.fail("section overruns the file");
     if (framing.failed()) break;
     const std::size_t payload_offset = framing.offset();
     const std::string_view payload = framing.take(static_cast<std::size_t>(length));

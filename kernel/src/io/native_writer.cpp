@@ -269,17 +269,21 @@ class PayloadEncoder {
 
   void byte(std::uint8_t v) { out_.byte(v); }
   void varint(std::uint64_t v) { out_.varint(v); }
-  /// A reference to |v| in the pool, shifted left once, with the sign in bit 0: v and −v
-  /// share one entry.
+  /// A reference to |v| (a recent-window position or a pool index, see native_layout.h),
+  /// shifted left once, with the sign in bit 0: v and −v share one entry.
   void number(double v) {
     const std::uint64_t bits = double_bits(v);
     const std::uint64_t magnitude = bits & ~detail::kSignBit;
     if (counting_) {
       pool_.count(magnitude);
-    } else {
-      out_.varint((static_cast<std::uint64_t>(pool_.index_of(magnitude)) << 1) |
-                  (bits >> 63));
+      return;
     }
+    const std::size_t index = pool_.index_of(magnitude);
+    const std::size_t position = recent_.find(index);
+    const std::uint64_t code =
+        position < recent_.size() ? position : detail::RecentNumbers::kCapacity + index;
+    out_.varint((code << 1) | (bits >> 63));
+    recent_.use(index);
   }
   void vec2(const Vec2& v) {
     number(v.x());
@@ -302,6 +306,7 @@ class PayloadEncoder {
   NumberPool& pool_;
   bool counting_;
   ByteWriter out_;
+  detail::RecentNumbers recent_;  // one encoder per section payload: starts empty
 };
 
 void encode_locations(const ModelTables& t, PayloadEncoder& e) {
@@ -355,9 +360,7 @@ void encode_surfaces(const ModelTables& t, PayloadEncoder& e) {
   for (const Surface* surface : t.surfaces) {
     e.byte(static_cast<std::uint8_t>(surface->kind()));
     switch (surface->kind()) {
-      case SurfaceKind::Plane:
-        e.frame(static_cast<const PlaneSurface*>(surface)->frame());
-        break;
+      case SurfaceKind::Plane: e.frame(static_cast<const PlaneSurface*>(surface)->frame()); break;
       case SurfaceKind::Cylinder: {
         const auto* cylinder = static_cast<const CylinderSurface*>(surface);
         e.frame(cylinder->frame());
@@ -492,8 +495,7 @@ struct Payloads {
   std::string locations, curves, surfaces, pcurves, bodies;
 };
 
-Payloads encode_payloads(const ModelTables& t, const Shape& root, NumberPool& pool,
-                         bool counting) {
+Payloads encode_payloads(const ModelTables& t, const Shape& root, NumberPool& pool, bool counting) {
   auto run = [&](auto encode) {
     PayloadEncoder e(pool, counting);
     encode(e);
@@ -526,7 +528,8 @@ std::string write_native(const Shape& shape) {
   ByteWriter numbers;
   numbers.varint(pool.size());
   std::vector<int> lengths(pool.size());
-  for (std::size_t i = 0; i < pool.size(); ++i) lengths[i] = detail::significant_bytes(pool.bits(i));
+  for (std::size_t i = 0; i < pool.size(); ++i)
+    lengths[i] = detail::significant_bytes(pool.bits(i));
   for (std::size_t i = 0; i < pool.size(); i += 2) {
     const int high = i + 1 < pool.size() ? lengths[i + 1] : 0;
     numbers.byte(static_cast<std::uint8_t>(lengths[i] | (high << 4)));

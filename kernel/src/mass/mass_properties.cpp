@@ -81,6 +81,13 @@ class FaceIntegrator {
       }
       case Curve2dKind::Circle:
         return integrate_panels(g, t0, t1, panel_count(t1 - t0, true));
+      case Curve2dKind::Trig: {
+        // Trigonometric in t, plus a linear drift d·t that may sweep angular parameters.
+        const Vec2 d = static_cast<const Trig2d&>(pcurve).d();
+        const int drift = std::max(panel_count(d.x() * (t1 - t0), angular_u_),
+                                   panel_count(d.y() * (t1 - t0), angular_v_));
+        return integrate_panels(g, t0, t1, std::max(panel_count(t1 - t0, true), drift));
+      }
       case Curve2dKind::Polyline: {
         Moments total{};
         const double first = std::floor(t0), last = std::ceil(t1);

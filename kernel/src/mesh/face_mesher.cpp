@@ -72,7 +72,8 @@ std::optional<RectangularDomain> rectangular_domain(const FaceLoops& loops) {
     const auto side = axis_side(uses[i], eps);
     if (!side) return std::nullopt;
     const auto& next = uses[(i + 1) % n];
-    if (uses[i].back().id != next.front().id || (uses[i].back().uv - next.front().uv).norm() > eps) {
+    if (uses[i].back().id != next.front().id ||
+        (uses[i].back().uv - next.front().uv).norm() > eps) {
       return std::nullopt;
     }
     sides.push_back(*side);
@@ -141,7 +142,6 @@ void zip_rows(const std::vector<BoundaryPoint>& lower, const std::vector<Boundar
 // ---- general method ----------------------------------------------------------------------
 
 constexpr int kMaxRefinementPasses = 32;
-constexpr int kMaxFlipSweeps = 16;
 constexpr std::size_t kMaxLocalPoints = std::size_t{1} << 21;
 constexpr std::uint32_t kNoId = std::numeric_limits<std::uint32_t>::max();
 
@@ -159,8 +159,10 @@ class DomainRefiner {
     std::vector<std::vector<Vec2>> polygon;
     for (const auto& wire : loops) {
       std::vector<Vec2> ring;
+      boundary_.emplace_back();
       for (const auto& use : wire) {
         for (std::size_t i = 0; i + 1 < use.size(); ++i) {
+          boundary_.back().push_back(static_cast<int>(uv_.size()));
           ring.push_back(use[i].uv);
           uv_.push_back(use[i].uv);
           xyz_.push_back(vertices[use[i].id]);
@@ -177,7 +179,10 @@ class DomainRefiner {
     for (const auto& t : triangulation.triangles) {
       add({static_cast<int>(t[0]), static_cast<int>(t[1]), static_cast<int>(t[2])});
     }
-    if (geometry_.surface->kind() != SurfaceKind::Plane) refine();
+    if (geometry_.surface->kind() != SurfaceKind::Plane) {
+      refine();
+      repair_flat_triangles();
+    }
     for (std::size_t t = 0; t < triangles_.size(); ++t) {
       if (!alive_[t]) continue;
       std::array<std::uint32_t, 3> ids{};
@@ -207,12 +212,14 @@ class DomainRefiner {
     const int index = static_cast<int>(triangles_.size());
     triangles_.push_back(t);
     alive_.push_back(1);
-    for (int k = 0; k < 3; ++k) edges_[key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)])] = index;
+    for (int k = 0; k < 3; ++k)
+      edges_[key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)])] = index;
   }
   void remove(int index) {
     const Tri& t = triangles_[static_cast<std::size_t>(index)];
     alive_[static_cast<std::size_t>(index)] = 0;
-    for (int k = 0; k < 3; ++k) edges_.erase(key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]));
+    for (int k = 0; k < 3; ++k)
+      edges_.erase(key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]));
   }
   // The vertex of triangle `index` opposite its directed edge (a, b).
   int third(int index, int a, int b) const {
@@ -235,8 +242,6 @@ class DomainRefiner {
   }
 
   void refine() {
-    // Flips use an isotropic metric at the domain centre, so that Delaunay in (u, v) is
-    // close to Delaunay on the surface.
     Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (const Vec2& p : uv_) {
       lo = lo.cwiseMin(p);
@@ -245,9 +250,9 @@ class DomainRefiner {
     const Vec2 centre = 0.5 * (lo + hi);
     const double su = geometry_.surface->du(centre.x(), centre.y()).norm();
     const double sv = geometry_.surface->dv(centre.x(), centre.y()).norm();
-    metric_ = (su > 0 && sv > 0 && std::isfinite(su) && std::isfinite(sv)) ? Vec2(su, sv)
-                                                                            : Vec2(1.0, 1.0);
-    flip_sweeps();
+    if (su > 0 && sv > 0 && std::isfinite(su) && std::isfinite(sv)) metric_ = Vec2(su, sv);
+    make_delaunay();
+    seed_interior(lo, hi);
     for (int pass = 0; pass < kMaxRefinementPasses; ++pass) {
       const std::vector<std::pair<int, int>> marked = marked_edges();
       if (marked.empty()) break;
@@ -255,7 +260,51 @@ class DomainRefiner {
         if (uv_.size() >= kMaxLocalPoints) return;
         split(a, b);
       }
-      flip_sweeps();
+      make_delaunay();
+    }
+  }
+
+  // A triangle valid in (u, v) can be flat in space when a corner is a singular point (a
+  // cone apex or a pole: one point for a whole side of the domain) and the other two lie on
+  // one generatrix through it. Dropping it would leave a crack, so it is flipped with its
+  // neighbour across its longest side (which holds the third corner): the two triangles
+  // that replace them are not flat, and the boundary of the pair is unchanged. The (u, v)
+  // triangulation may stop being valid; only the spatial mesh is used from here on.
+  void repair_flat_triangles() {
+    for (int pass = 0; pass < 4; ++pass) {
+      bool changed = false;
+      for (std::size_t t = 0; t < triangles_.size(); ++t) {
+        if (!alive_[t]) continue;
+        const Tri tri = triangles_[t];
+        if (coincide(tri[0], tri[1]) || coincide(tri[1], tri[2]) || coincide(tri[2], tri[0]))
+          continue;
+        const Vec3& p0 = xyz_[static_cast<std::size_t>(tri[0])];
+        const Vec3& p1 = xyz_[static_cast<std::size_t>(tri[1])];
+        const Vec3& p2 = xyz_[static_cast<std::size_t>(tri[2])];
+        if ((p1 - p0).cross(p2 - p0).squaredNorm() > 0.0) continue;
+        std::size_t longest = 0;
+        double length = -1.0;
+        for (std::size_t k = 0; k < 3; ++k) {
+          const double l = (xyz_[static_cast<std::size_t>(tri[k])] -
+                            xyz_[static_cast<std::size_t>(tri[(k + 1) % 3])])
+                               .squaredNorm();
+          if (l > length) {
+            length = l;
+            longest = k;
+          }
+        }
+        const int x = tri[longest], y = tri[(longest + 1) % 3], z = tri[(longest + 2) % 3];
+        const auto twin = edges_.find(key(y, x));
+        if (twin == edges_.end()) continue;
+        const int w = third(twin->second, y, x);
+        if (w == z || has_edge(w, z) || has_edge(z, w)) continue;
+        remove(twin->second);
+        remove(static_cast<int>(t));
+        add({x, w, z});
+        add({w, y, z});
+        changed = true;
+      }
+      if (!changed) return;
     }
   }
 
@@ -265,29 +314,31 @@ class DomainRefiner {
   }
 
   // Interior edges to split: those whose midpoint is off the surface by more than the
-  // budget; for a triangle whose centre or corner normals are off, its interior edge whose
-  // midpoint is farthest off (the longest when none is: the fault is in the normals).
-  // Sorted and unique, so passes are deterministic.
+  // budget, and for a triangle whose centre is off, its interior edge whose midpoint is
+  // farthest off (the longest among equals). Edges already shorter than the budget are
+  // left alone: splitting them cannot help (slivers along the boundary). Sorted and
+  // unique, so passes are deterministic.
   std::vector<std::pair<int, int>> marked_edges() const {
-    const double cos_angular = std::cos(geometry_.angular);
     std::set<std::pair<int, int>> marked;
     for (std::size_t t = 0; t < triangles_.size(); ++t) {
       if (!alive_[t]) continue;
       const Tri& tri = triangles_[t];
-      if (coincide(tri[0], tri[1]) || coincide(tri[1], tri[2]) || coincide(tri[2], tri[0])) continue;
+      if (coincide(tri[0], tri[1]) || coincide(tri[1], tri[2]) || coincide(tri[2], tri[0]))
+        continue;
       bool any = false;
       int pick = -1;
       double pick_error = -1.0, pick_length = -1.0;
       for (std::size_t k = 0; k < 3; ++k) {
         const int a = tri[k], b = tri[(k + 1) % 3];
         if (!has_edge(b, a)) continue;  // boundary edges stay as the edges made them
+        const double length =
+            (xyz_[static_cast<std::size_t>(a)] - xyz_[static_cast<std::size_t>(b)]).norm();
+        if (!(length > geometry_.chordal)) continue;
         const double error = midpoint_error(a, b);
         if (error > geometry_.chordal) {
           marked.emplace(std::min(a, b), std::max(a, b));
           any = true;
         }
-        const double length =
-            (xyz_[static_cast<std::size_t>(a)] - xyz_[static_cast<std::size_t>(b)]).norm();
         if (error > pick_error || (error == pick_error && length > pick_length)) {
           pick_error = error;
           pick_length = length;
@@ -299,14 +350,7 @@ class DomainRefiner {
                  p2 = static_cast<std::size_t>(tri[2]);
       const Vec2 centre_uv = (uv_[p0] + uv_[p1] + uv_[p2]) / 3.0;
       const Vec3 centre = (xyz_[p0] + xyz_[p1] + xyz_[p2]) / 3.0;
-      bool bad = (geometry_.point(centre_uv) - centre).norm() > geometry_.chordal;
-      const Vec3 normal = (xyz_[p1] - xyz_[p0]).cross(xyz_[p2] - xyz_[p0]).normalized();
-      for (std::size_t k = 0; k < 3 && !bad; ++k) {
-        const Vec2& uv = uv_[static_cast<std::size_t>(tri[k])];
-        const Vec3 surface_normal =
-            geometry_.location.apply_direction(geometry_.surface->normal(uv.x(), uv.y()));
-        bad = normal.dot(surface_normal) < cos_angular;
-      }
+      const bool bad = (geometry_.point(centre_uv) - centre).norm() > geometry_.chordal;
       if (bad) {
         const int a = tri[static_cast<std::size_t>(pick)];
         const int b = tri[static_cast<std::size_t>((pick + 1) % 3)];
@@ -317,24 +361,182 @@ class DomainRefiner {
   }
 
   void split(int a, int b) {
+    split_at(a, b, 0.5 * (uv_[static_cast<std::size_t>(a)] + uv_[static_cast<std::size_t>(b)]));
+  }
+
+  // Splits interior edge (a, b) at a point of it; returns the new point or -1 (a boundary
+  // edge).
+  int split_at(int a, int b, const Vec2& uv) {
     const auto first = edges_.find(key(a, b));
     const auto second = edges_.find(key(b, a));
-    if (first == edges_.end() || second == edges_.end()) return;
+    if (first == edges_.end() || second == edges_.end()) return -1;
     const int t1 = first->second, t2 = second->second;
     const int c = third(t1, a, b), d = third(t2, b, a);
-    const int m = add_point(0.5 * (uv_[static_cast<std::size_t>(a)] + uv_[static_cast<std::size_t>(b)]));
+    const int m = add_point(uv);
     remove(t1);
     remove(t2);
     add({a, m, c});
     add({m, b, c});
     add({b, m, d});
     add({m, a, d});
+    return m;
+  }
+
+  // Triangle containing p, found by walking from `hint` towards p, else by a scan (a
+  // concave boundary can block the walk); -1 when p is outside the domain.
+  int locate(const Vec2& p, int hint) const {
+    int t = hint;
+    if (t < 0 || !alive_[static_cast<std::size_t>(t)]) {
+      t = static_cast<int>(std::find(alive_.begin(), alive_.end(), 1) - alive_.begin());
+    }
+    const std::size_t max_steps = triangles_.size();
+    for (std::size_t step = 0; step < max_steps && t < static_cast<int>(triangles_.size());
+         ++step) {
+      const Tri& tri = triangles_[static_cast<std::size_t>(t)];
+      int next = -1;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const std::size_t k = (i + step) % 3;  // rotating the first edge avoids walk cycles
+        const int a = tri[k], b = tri[(k + 1) % 3];
+        if (orient(uv_[static_cast<std::size_t>(a)], uv_[static_cast<std::size_t>(b)], p) < 0) {
+          const auto twin = edges_.find(key(b, a));
+          next = twin == edges_.end() ? -2 : twin->second;
+          break;
+        }
+      }
+      if (next == -1) return t;
+      if (next == -2) break;
+      t = next;
+    }
+    for (std::size_t u = 0; u < triangles_.size(); ++u) {
+      if (!alive_[u]) continue;
+      const Tri& tri = triangles_[u];
+      bool inside = true;
+      for (std::size_t k = 0; k < 3 && inside; ++k) {
+        inside = orient(uv_[static_cast<std::size_t>(tri[k])],
+                        uv_[static_cast<std::size_t>(tri[(k + 1) % 3])], p) >= 0;
+      }
+      if (inside) return static_cast<int>(u);
+    }
+    return -1;
+  }
+
+  // Inserts a point into the triangulation and restores the Delaunay property around it.
+  // Returns false when p is outside the domain or on a boundary edge.
+  bool insert(const Vec2& p, int& hint) {
+    const int t = locate(p, hint);
+    if (t < 0) return false;
+    const Tri tri = triangles_[static_cast<std::size_t>(t)];
+    std::array<double, 3> side{};
+    for (std::size_t k = 0; k < 3; ++k) {
+      side[k] = orient(uv_[static_cast<std::size_t>(tri[k])],
+                       uv_[static_cast<std::size_t>(tri[(k + 1) % 3])], p);
+    }
+    const double area = side[0] + side[1] + side[2];
+    const auto k =
+        static_cast<std::size_t>(std::min_element(side.begin(), side.end()) - side.begin());
+    std::vector<std::pair<int, int>> stack;
+    if (side[k] <= 1e-9 * area) {
+      // On an edge: split it so that no triangle has zero area.
+      const int a = tri[k], b = tri[(k + 1) % 3];
+      const int c = tri[(k + 2) % 3];
+      const auto twin = edges_.find(key(b, a));
+      if (twin == edges_.end()) return false;
+      const int d = third(twin->second, b, a);
+      if (split_at(a, b, p) < 0) return false;
+      stack = {{b, c}, {c, a}, {a, d}, {d, b}};
+    } else {
+      const int m = add_point(p);
+      remove(t);
+      add({tri[0], tri[1], m});
+      add({tri[1], tri[2], m});
+      add({tri[2], tri[0], m});
+      stack = {{tri[0], tri[1]}, {tri[1], tri[2]}, {tri[2], tri[0]}};
+    }
+    hint = static_cast<int>(triangles_.size() - 1);
+    flip_until_delaunay(std::move(stack));
+    return true;
+  }
+
+  // Distance from p to the domain boundary, with (u, v) scaled by the surface's speeds at p.
+  double boundary_distance(const Vec2& p, const Vec2& speeds) const {
+    double best = std::numeric_limits<double>::infinity();
+    const Vec2 q = p.cwiseProduct(speeds);
+    for (const auto& loop : boundary_) {
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const Vec2 a = uv_[static_cast<std::size_t>(loop[i])].cwiseProduct(speeds);
+        const Vec2 b =
+            uv_[static_cast<std::size_t>(loop[(i + 1) % loop.size()])].cwiseProduct(speeds);
+        const Vec2 d = b - a;
+        const double len2 = d.squaredNorm();
+        const double s = len2 > 0 ? std::clamp((q - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+        best = std::min(best, (a + s * d - q).norm());
+      }
+    }
+    return best;
+  }
+
+  bool inside_domain(const Vec2& p) const {
+    bool inside = false;
+    for (const auto& loop : boundary_) {
+      for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
+        const Vec2& a = uv_[static_cast<std::size_t>(loop[i])];
+        const Vec2& b = uv_[static_cast<std::size_t>(loop[j])];
+        if ((a.y() > p.y()) != (b.y() > p.y()) &&
+            p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+          inside = !inside;
+        }
+      }
+    }
+    return inside;
+  }
+
+  // Interior points on rows of constant v, each direction spaced for half the budget (their
+  // errors add on doubly curved surfaces), each row sampled for its own curvature as in the
+  // row method. Inserted before refinement, they give triangles close to the size they need
+  // and well shaped; points closer to the boundary than half a spacing are left out.
+  void seed_interior(const Vec2& lo, const Vec2& hi) {
+    const Surface& surface = *geometry_.surface;
+    const double half = 0.5 * geometry_.chordal / geometry_.location.scale();  // body units
+    const double span_u = hi.x() - lo.x(), span_v = hi.y() - lo.y();
+    if (!(span_u > 0) || !(span_v > 0)) return;
+    const double h = 1e-5 * std::max(1.0, span_v);
+    double v_step = span_v;
+    for (int k = 0; k <= 16; ++k) {
+      const double u = lo.x() + span_u * k / 16;
+      v_step = std::min(v_step, uniform_step(
+                                    [&](double v) {
+                                      const Vec3 d2 =
+                                          (surface.dv(u, v + h) - surface.dv(u, v - h)) / (2.0 * h);
+                                      return std::make_pair(surface.dv(u, v), d2);
+                                    },
+                                    lo.y(), hi.y(), half, geometry_.angular));
+    }
+    const std::size_t rows = segments_for(span_v, v_step);
+    int hint = -1;
+    for (std::size_t j = 1; j < rows; ++j) {
+      const double v = lo.y() + span_v * static_cast<double>(j) / static_cast<double>(rows);
+      const std::size_t columns =
+          segments_for(span_u, row_step(surface, v, lo.x(), hi.x(), half, geometry_.angular));
+      if (columns == 0) return;
+      for (std::size_t i = 1; i < columns; ++i) {
+        if (uv_.size() >= kMaxLocalPoints / 2) return;
+        const Vec2 p(lo.x() + span_u * static_cast<double>(i) / static_cast<double>(columns), v);
+        if (!inside_domain(p)) continue;
+        const Vec2 speeds(surface.du(p.x(), p.y()).norm(), surface.dv(p.x(), p.y()).norm());
+        const double spacing = std::min(speeds.x() * span_u / static_cast<double>(columns),
+                                        speeds.y() * span_v / static_cast<double>(rows));
+        if (boundary_distance(p, speeds) < 0.5 * spacing) continue;
+        insert(p, hint);
+      }
+    }
   }
 
   Vec2 metric(int p) const { return uv_[static_cast<std::size_t>(p)].cwiseProduct(metric_); }
 
   // Flips interior edge (a, b) of triangles (a, b, c) and (b, a, d) to (c, d) when d lies
-  // inside the circumcircle of (a, b, c) and the quadrilateral is convex.
+  // inside the circumcircle of (a, b, c) and the quadrilateral is convex, both in (u, v)
+  // scaled by the surface's speeds at the domain centre (so that Delaunay there is close
+  // to Delaunay on the surface, and flips terminate: it is a planar triangulation).
   bool try_flip(int a, int b) {
     const auto first = edges_.find(key(a, b));
     const auto second = edges_.find(key(b, a));
@@ -359,21 +561,36 @@ class DomainRefiner {
     return true;
   }
 
-  void flip_sweeps() {
-    for (int sweep = 0; sweep < kMaxFlipSweeps; ++sweep) {
-      bool flipped = false;
-      const std::size_t count = triangles_.size();
-      for (std::size_t t = 0; t < count; ++t) {
-        if (!alive_[t]) continue;
-        const Tri tri = triangles_[t];
-        for (std::size_t k = 0; k < 3; ++k) {
-          if (try_flip(tri[k], tri[(k + 1) % 3])) {
-            flipped = true;
-            break;
-          }
-        }
+  // Lawson's algorithm: flip non-Delaunay edges until none is left, re-examining the four
+  // outer edges of each flipped quadrilateral. Terminates (each flip raises the sorted
+  // angle vector); the cap only guards against rounding cycles.
+  void make_delaunay() {
+    std::vector<std::pair<int, int>> stack;
+    for (std::size_t t = 0; t < triangles_.size(); ++t) {
+      if (!alive_[t]) continue;
+      const Tri& tri = triangles_[t];
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (tri[k] < tri[(k + 1) % 3]) stack.emplace_back(tri[k], tri[(k + 1) % 3]);
       }
-      if (!flipped) return;
+    }
+    flip_until_delaunay(std::move(stack));
+  }
+
+  void flip_until_delaunay(std::vector<std::pair<int, int>> stack) {
+    std::size_t budget = 64 * triangles_.size() + 1024;
+    while (!stack.empty() && budget > 0) {
+      const auto [a, b] = stack.back();
+      stack.pop_back();
+      const auto first = edges_.find(key(a, b));
+      const auto second = edges_.find(key(b, a));
+      if (first == edges_.end() || second == edges_.end()) continue;
+      const int c = third(first->second, a, b), d = third(second->second, b, a);
+      if (!try_flip(a, b)) continue;
+      --budget;
+      stack.emplace_back(a, d);
+      stack.emplace_back(d, b);
+      stack.emplace_back(b, c);
+      stack.emplace_back(c, a);
     }
   }
 
@@ -381,6 +598,7 @@ class DomainRefiner {
   std::vector<Vec2> uv_;
   std::vector<Vec3> xyz_;
   std::vector<std::uint32_t> id_;
+  std::vector<std::vector<int>> boundary_;  // local points of each boundary loop
   std::vector<Tri> triangles_;
   std::vector<char> alive_;
   std::unordered_map<std::uint64_t, int> edges_;  // directed edge -> triangle; lookups only

@@ -36,7 +36,7 @@ class EarClipper {
         outer_ = start;
       } else if (start >= 0) {
         holes_.push_back(start);
-      } else if (loops[l].size() > 0) {
+      } else if (!loops[l].empty()) {
         result_.complete = false;  // a hole without area cannot be meshed around
       }
     }
@@ -120,8 +120,8 @@ class EarClipper {
     do {
       const Vec2& a = node(n).p;
       const Vec2& b = node(node(n).next).p;
-      if (a.y() != b.y() && ((a.y() <= mp.y() && mp.y() <= b.y()) ||
-                             (b.y() <= mp.y() && mp.y() <= a.y()))) {
+      if (a.y() != b.y() &&
+          ((a.y() <= mp.y() && mp.y() <= b.y()) || (b.y() <= mp.y() && mp.y() <= a.y()))) {
         const double x = a.x() + (mp.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
         if (x >= mp.x() && x < best_x) {
           best_x = x;
@@ -147,8 +147,8 @@ class EarClipper {
         if (r != pp && r.x() >= mp.x() && sense * orient(mp, hit, r) >= 0 &&
             sense * orient(hit, pp, r) >= 0 && sense * orient(pp, mp, r) >= 0) {
           const double dx = r.x() - mp.x();
-          const double tan = dx > 0 ? std::abs(r.y() - mp.y()) / dx
-                                    : std::numeric_limits<double>::infinity();
+          const double tan =
+              dx > 0 ? std::abs(r.y() - mp.y()) / dx : std::numeric_limits<double>::infinity();
           if (tan < best_tan || (tan == best_tan && dx < best_dx)) {
             best_tan = tan;
             best_dx = dx;

@@ -47,15 +47,15 @@ double uniform_step(const CurveDerivatives& derivatives, double t0, double t1, d
     const double speed2 = d1.squaredNorm();
     const double bend = d1.cross(d2).norm();  // curvature · speed³
     if (!(speed2 > 0.0) || !(bend > 0.0)) continue;
-    const double turn_rate = bend / speed2;    // radians per unit parameter
+    const double turn_rate = bend / speed2;  // radians per unit parameter
     const double radius = speed2 * std::sqrt(speed2) / bend;
     step = std::min(step, kCurvatureMargin * allowed_turn(radius, chordal, angular) / turn_rate);
   }
   return step;
 }
 
-std::vector<double> curve_parameters(const Curve& curve, double first, double last,
-                                     double chordal, double angular, double max_step) {
+std::vector<double> curve_parameters(const Curve& curve, double first, double last, double chordal,
+                                     double angular, double max_step) {
   double step;
   switch (curve.kind()) {
     case CurveKind::Line:
@@ -63,8 +63,9 @@ std::vector<double> curve_parameters(const Curve& curve, double first, double la
     case CurveKind::Polyline: {
       // A polyline is its own chords: its breakpoints in range are all it needs.
       std::vector<double> t{first};
-      for (double k = std::floor(first) + 1.0; k < last; k += 1.0) {
-        if (k > first) t.push_back(k);
+      const auto lowest = static_cast<long long>(std::floor(first)) + 1;
+      for (long long k = lowest; static_cast<double>(k) < last; ++k) {
+        if (static_cast<double>(k) > first) t.push_back(static_cast<double>(k));
       }
       t.push_back(last);
       return t;

@@ -39,8 +39,8 @@ std::size_t segments_for(double span, double step);
 /// lines their ends, circles an exact uniform subdivision, polylines their breakpoints,
 /// other curves a uniform one from uniform_step(). Curved kinds also keep steps at most
 /// `max_step` (a face's demand). Empty when over kMaxSegments.
-std::vector<double> curve_parameters(const Curve& curve, double first, double last,
-                                     double chordal, double angular,
+std::vector<double> curve_parameters(const Curve& curve, double first, double last, double chordal,
+                                     double angular,
                                      double max_step = std::numeric_limits<double>::infinity());
 
 /// True for surfaces whose u is the angle about an axis (cylinder, cone, sphere, torus,

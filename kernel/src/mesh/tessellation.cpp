@@ -66,7 +66,8 @@ double widest_row_step(const Shape& face, double chordal_body, double angular) {
   constexpr int kRows = 16;
   for (int k = 0; k <= kRows; ++k) {
     const double v = lo.y() + (hi.y() - lo.y()) * k / kRows;
-    step = std::min(step, detail::row_step(*data.surface, v, lo.x(), hi.x(), chordal_body, angular));
+    step =
+        std::min(step, detail::row_step(*data.surface, v, lo.x(), hi.x(), chordal_body, angular));
   }
   return step;
 }
@@ -78,7 +79,7 @@ struct EdgeSamples {
 };
 
 std::string face_name(std::size_t index, const Shape& face) {
-  static const char* const kSurfaceNames[] = {"plane", "cylinder", "cone", "sphere",
+  constexpr const char* kSurfaceNames[] = {"plane", "cylinder",  "cone",      "sphere",
                                               "torus", "extrusion", "revolution"};
   return "face " + std::to_string(index) + " (" +
          kSurfaceNames[static_cast<int>(face.body().face()->surface->kind())] + ")";
@@ -141,8 +142,8 @@ Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options) 
   for (const Shape& face : faces.shapes()) {
     const FaceData& data = *face.body().face();
     if (!detail::revolution_like(*data.surface)) continue;
-    const double chordal = face_chordal(options.chordal_tolerance, *data.surface) /
-                           face.location().scale();
+    const double chordal =
+        face_chordal(options.chordal_tolerance, *data.surface) / face.location().scale();
     const double step = widest_row_step(face, chordal, angular);
     const Shape body_face = face.oriented(Orientation::Forward);
     for (std::size_t w = 0; w < body_face.child_count(); ++w) {

@@ -2,6 +2,8 @@
 // structurally equal, sharing kept), determinism, hostile input (every truncation and
 // byte flip of a small model, hand-made malformed files), versioning, atomic files, size.
 
+#include "csgtile/kernel/native_format.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,7 +18,6 @@
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
-#include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/primitives.h"
 
 namespace csgtile::kernel {
@@ -94,8 +95,14 @@ const NamedBuild kPrimitives[] = {
        return make_extrusion({{0, 0}, {10, 0}, {10, 6}, {4, 9}, {0, 6}},
                              {{{2, 2}, {4, 2}, {4, 4}, {2, 4}}}, 12);
      }},
-    {"revolution_full", [] { return make_revolution({{0, 0}, {2, 0}, {2, 1}, {1, 3}, {0, 3}}, 2 * kPi); }},
-    {"revolution_partial", [] { return make_revolution({{1, 0}, {2, 0}, {2, 1}, {1, 1}}, 1.0); }},
+    {"revolution_full",
+     [] {
+       return make_revolution({{0, 0}, {2, 0}, {2, 1}, {1, 3}, {0, 3}}, 2 * kPi);
+     }},
+    {"revolution_partial",
+     [] {
+       return make_revolution({{1, 0}, {2, 0}, {2, 1}, {1, 1}}, 1.0);
+     }},
 };
 
 // ---- round trips ------------------------------------------------------------------------
@@ -139,8 +146,10 @@ TEST(NativeFormat, SharingSurvivesACompoundHoldingOneSolidTwice) {
 TEST(NativeFormat, SharingIsNotInventedForEqualButSeparateBodies) {
   const Shape a = unwrap(make_box(1, 1, 1));
   const Shape b = unwrap(make_box(1, 1, 1));
-  const Shape separate = unwrap(ShapeFactory::compound({a, b.moved(Location::translation({2, 0, 0}))}));
-  const Shape shared = unwrap(ShapeFactory::compound({a, a.moved(Location::translation({2, 0, 0}))}));
+  const Shape separate =
+      unwrap(ShapeFactory::compound({a, b.moved(Location::translation({2, 0, 0}))}));
+  const Shape shared =
+      unwrap(ShapeFactory::compound({a, a.moved(Location::translation({2, 0, 0}))}));
   expect_round_trip(separate);
   expect_round_trip(shared);
   EXPECT_FALSE(structurally_equal(separate, shared));
@@ -172,9 +181,9 @@ Shape exotic_model(std::uint64_t seed) {
   const Shape e_line_again = edge_on(line, 5.0, 6.0);  // shares the curve
   const Shape pole = unwrap(ShapeFactory::vertex({0, 0, 1}, 1e-6));
   const Shape degenerate = unwrap(ShapeFactory::degenerate_edge(pole, 0.0, 2 * kPi, 1e-7));
-  const Shape wire = unwrap(ShapeFactory::wire(
-      {e_ellipse, e_polyline.reversed(), e_line.oriented(Orientation::Internal),
-       e_line_again.oriented(Orientation::External), degenerate}));
+  const Shape wire = unwrap(
+      ShapeFactory::wire({e_ellipse, e_polyline.reversed(), e_line.oriented(Orientation::Internal),
+                          e_line_again.oriented(Orientation::External), degenerate}));
   std::vector<Curve2dPtr> pcurves = {
       std::make_shared<Circle2d>(Vec2(0.5, -0.25), 2.0, -1),
       std::make_shared<Polyline2d>(std::vector<Vec2>{{0, 0}, {1, 2}, {3, 1}}),
@@ -351,8 +360,7 @@ TEST(NativeFormatHostile, UnknownOptionalSectionsAreSkippedUnknownRequiredRefuse
   EXPECT_EQ(read_native(seal(header() + null_body + null_body)).error().code,
             ErrorCode::CorruptData);
   EXPECT_EQ(read_native(seal(header())).error().code, ErrorCode::CorruptData);
-  EXPECT_EQ(read_native(seal(header() + "\x0c\x10\x00\x00")).error().code,
-            ErrorCode::CorruptData);
+  EXPECT_EQ(read_native(seal(header() + "\x0c\x10\x00\x00")).error().code, ErrorCode::CorruptData);
 }
 
 /// Bodies: `count` compounds, each holding the previous one; root = the last.
@@ -360,7 +368,7 @@ std::string nested_compounds(int count) {
   std::string payload;
   payload.push_back(static_cast<char>((count & 0x7F) | 0x80));
   payload.push_back(static_cast<char>(count >> 7));
-  payload.push_back('\x00');  // body 0: empty compound
+  payload.push_back('\x00');                                              // body 0: empty compound
   for (int i = 1; i < count; ++i) payload += std::string("\x08\x08", 2);  // 1 child, delta 1
   payload.push_back('\x08');  // root: delta 1 from the end
   std::string out = header() + "\x0c";
@@ -383,7 +391,6 @@ TEST(NativeFormatHostile, NestingIsBounded) {
 }
 
 TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
-  const std::string one = std::string(1, '\x01');
   auto expect_corrupt = [](const std::string& file, const char* what) {
     auto read = read_native(file);
     ASSERT_FALSE(read.ok()) << what;
@@ -402,9 +409,9 @@ TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
                  "NaN number");
   expect_corrupt(seal(header() + section(2, std::string("\x01\x01\x80", 3)) + null_body),
                  "negative number entry");
-  expect_corrupt(seal(header() + section(2, std::string("\x01\x09", 2) + std::string(9, 'a')) +
-                      null_body),
-                 "number length 9");
+  expect_corrupt(
+      seal(header() + section(2, std::string("\x01\x09", 2) + std::string(9, 'a')) + null_body),
+      "number length 9");
   // A vertex whose number index is out of range.
   expect_corrupt(seal(header() + section(12, std::string("\x01\x07\x00\x00\x00\x00\x00", 7))),
                  "number index out of range");
@@ -419,9 +426,9 @@ TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
                  "solid of a vertex");
   // An edge whose vertices are both Forward.
   expect_corrupt(
-      seal(header() + section(2, zero_table) +
-           section(12, std::string("\x02\x07\x00\x00\x00\x00\x16\x00\x00\x00\x00\x08\x08\x08",
-                                   14))),
+      seal(
+          header() + section(2, zero_table) +
+          section(12, std::string("\x02\x07\x00\x00\x00\x00\x16\x00\x00\x00\x00\x08\x08\x08", 14))),
       "edge orientations");
   // Varint longer than 10 bytes.
   expect_corrupt(seal(header() + section(12, std::string(12, '\xff'))), "overlong varint");
@@ -514,15 +521,17 @@ TEST(NativeFormat, BytesPerPrimitiveAgainstBinaryStlAtOneCentimetre) {
        static_cast<std::size_t>(2 * cylinder_n + 2 * (cylinder_n - 2))},
       {"sphere r1", unwrap(make_sphere(1)),
        static_cast<std::size_t>(2 * sphere_u * (sphere_v - 1))},
-      {"torus R2 r0.5", unwrap(make_torus(2, 0.5)), static_cast<std::size_t>(2 * torus_u * torus_v)},
+      {"torus R2 r0.5", unwrap(make_torus(2, 0.5)),
+       static_cast<std::size_t>(2 * torus_u * torus_v)},
   };
   std::mt19937_64 rng(3);
   for (const Case& c : cases) {
     const std::size_t local = write_native(c.shape).size();
     const std::size_t placed = write_native(c.shape.moved(random_similarity(rng))).size();
     const std::size_t stl = stl_bytes(c.stl_triangles);
-    std::printf("[ native   ] %-15s %5zu bytes (placed %5zu), binary STL at 1 cm ~%6zu bytes: %5.1f%%\n",
-                c.name, local, placed, stl, 100.0 * static_cast<double>(placed) / stl);
+    std::printf(
+        "[ native   ] %-15s %5zu bytes (placed %5zu), binary STL at 1 cm ~%6zu bytes: %5.1f%%\n",
+        c.name, local, placed, stl, 100.0 * static_cast<double>(placed) / stl);
     EXPECT_LT(placed, stl) << c.name;
   }
 }

@@ -36,8 +36,7 @@ Shape built(const Result<Shape>& shape) {
   return shape.ok() ? shape.value() : Shape();
 }
 
-Mesh mesh_of(const Shape& shape, double tolerance, bool general = false,
-             double angular = 0.5) {
+Mesh mesh_of(const Shape& shape, double tolerance, bool general = false, double angular = 0.5) {
   TessellationOptions options;
   options.chordal_tolerance = tolerance;
   options.angular_tolerance = angular;
@@ -65,7 +64,9 @@ double profile_distance(const std::vector<Vec2>& profile, const Vec2& q) {
 using SurfaceDistance = std::function<double(const Vec3&)>;
 
 SurfaceDistance revolution_distance(std::vector<Vec2> profile) {
-  return [profile](const Vec3& p) { return profile_distance(profile, Vec2(p.head<2>().norm(), p.z())); };
+  return [profile](const Vec3& p) {
+    return profile_distance(profile, Vec2(p.head<2>().norm(), p.z()));
+  };
 }
 
 bool inside_polygon(const std::vector<Vec2>& polygon, const Vec2& q) {
@@ -88,7 +89,8 @@ SurfaceDistance partial_revolution_distance(std::vector<Vec2> profile, double an
     if (phi < -1e-9) phi += kTwoPi;
     if (phi <= angle + 1e-9) best = profile_distance(profile, Vec2(p.head<2>().norm(), p.z()));
     for (double cap : {0.0, angle}) {
-      const Vec3 radial(std::cos(cap), std::sin(cap), 0.0), normal(-std::sin(cap), std::cos(cap), 0.0);
+      const Vec3 radial(std::cos(cap), std::sin(cap), 0.0),
+          normal(-std::sin(cap), std::cos(cap), 0.0);
       const Vec2 q(p.dot(radial), p.z());
       double in_plane = 0.0;
       if (!inside_polygon(profile, q)) {
@@ -150,7 +152,10 @@ std::vector<PrimitiveCase> primitive_cases() {
        [](const Vec3& p) { return std::abs(std::hypot(p.head<2>().norm() - 2.0, p.z()) - 0.5); },
        0.5},
       {"extrusion_with_hole",
-       [] { return make_extrusion({{0, 0}, {4, 0}, {4, 3}, {2, 4}, {0, 3}}, {{{1, 1}, {2, 1}, {2, 2}, {1, 2}}}, 2.0); },
+       [] {
+         return make_extrusion({{0, 0}, {4, 0}, {4, 3}, {2, 4}, {0, 3}},
+                               {{{1, 1}, {2, 1}, {2, 2}, {1, 2}}}, 2.0);
+       },
        (12.0 + 2.0 - 1.0) * 2.0, nullptr, std::numeric_limits<double>::infinity()},
       {"full_revolution_touching_axis", [vase] { return make_revolution(vase, kTwoPi); },
        pappus(vase, kTwoPi), revolution_distance(vase), 1.0},
@@ -180,9 +185,9 @@ double max_edge_chord_error(const Shape& edge, const std::vector<std::uint32_t>&
   double previous_t = data.first;
   for (std::size_t i = 0; i + 1 < ids.size(); ++i) {
     const Vec3 a = mesh.vertices[ids[i]], b = mesh.vertices[ids[i + 1]];
-    const double t1 = i + 2 == ids.size()
-                          ? data.last
-                          : curve->closest_parameter(loc.inverse().apply_point(b), data.first, data.last);
+    const double t1 = i + 2 == ids.size() ? data.last
+                                          : curve->closest_parameter(loc.inverse().apply_point(b),
+                                                                     data.first, data.last);
     for (int k = 1; k < 16; ++k) {
       const Vec3 p = loc.apply_point(curve->point(previous_t + (t1 - previous_t) * k / 16.0));
       const Vec3 d = b - a;
@@ -198,8 +203,9 @@ double max_edge_chord_error(const Shape& edge, const std::vector<std::uint32_t>&
 std::size_t coincident_vertices(const Mesh& mesh, double eps) {
   std::vector<std::size_t> order(mesh.vertices.size());
   std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&](std::size_t a, std::size_t b) { return mesh.vertices[a].x() < mesh.vertices[b].x(); });
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return mesh.vertices[a].x() < mesh.vertices[b].x();
+  });
   std::size_t count = 0;
   for (std::size_t i = 0; i < order.size(); ++i) {
     for (std::size_t j = i + 1; j < order.size(); ++j) {
@@ -368,8 +374,8 @@ TEST(TessellationEdges, CylinderCircleIsSampledOnceAndSharedByItsFaces) {
 TEST(TessellationEdges, LinesKeepTheirEndsAndPolylinesTheirBreakpoints) {
   const Shape a = built(ShapeFactory::vertex(Vec3(0, 0, 0), 1e-7));
   const Shape b = built(ShapeFactory::vertex(Vec3(3, 0, 0), 1e-7));
-  const Shape line = built(ShapeFactory::edge(std::make_shared<LineCurve>(Vec3::Zero(), Vec3::UnitX()),
-                                              0.0, 3.0, a, b, 1e-7));
+  const Shape line = built(ShapeFactory::edge(
+      std::make_shared<LineCurve>(Vec3::Zero(), Vec3::UnitX()), 0.0, 3.0, a, b, 1e-7));
   EXPECT_EQ(discretize_edge(line, 1e-6, 0.1), (std::vector<double>{0.0, 3.0}));
   auto polyline = std::make_shared<PolylineCurve>(
       std::vector<Vec3>{{0, 0, 0}, {1, 1, 0}, {2, 0, 0}, {3, 0, 0}}, 0.0);
@@ -414,10 +420,12 @@ TEST(TessellationPlacement, RandomSimilarityScalesVolumeByCube) {
     EXPECT_TRUE(mesh_is_closed(placed));
     EXPECT_EQ(placed.triangles.size(), local.triangles.size());
     EXPECT_EQ(placed.vertices.size(), local.vertices.size());
-    EXPECT_NEAR(mesh_volume(placed), s * s * s * mesh_volume(local), 1e-9 * s * s * s * mesh_volume(local));
+    EXPECT_NEAR(mesh_volume(placed), s * s * s * mesh_volume(local),
+                1e-9 * s * s * s * mesh_volume(local));
     EXPECT_NEAR(mesh_area(placed), s * s * mesh_area(local), 1e-9 * s * s * mesh_area(local));
     for (std::size_t i = 0; i < local.vertices.size(); ++i) {
-      EXPECT_LE((placed.vertices[i] - loc.apply_point(local.vertices[i])).norm(), 1e-9 * (1 + s) * 60);
+      EXPECT_LE((placed.vertices[i] - loc.apply_point(local.vertices[i])).norm(),
+                1e-9 * (1 + s) * 60);
     }
   }
 }
@@ -436,8 +444,8 @@ TEST(TessellationCompound, TwoSolidsGiveTwoClosedComponents) {
 
 TEST(TessellationCompound, SameSolidPlacedTwiceSharesNothing) {
   const Shape cylinder = built(make_cylinder(1, 1));
-  const Shape compound = built(ShapeFactory::compound(
-      {cylinder, cylinder.moved(Location::translation(Vec3(0, 0, 3)))}));
+  const Shape compound = built(
+      ShapeFactory::compound({cylinder, cylinder.moved(Location::translation(Vec3(0, 0, 3)))}));
   const Mesh mesh = mesh_of(compound, 1e-2);
   const Mesh single = mesh_of(cylinder, 1e-2);
   EXPECT_TRUE(mesh_is_closed(mesh));
@@ -456,9 +464,10 @@ TEST(TessellationOrientation, ReversedSolidTurnsInsideOut) {
 
 TEST(TessellationOrientation, TrianglesFaceAlongTheOutwardNormal) {
   // Every triangle's normal points away from the centre of these star-shaped solids.
-  for (const Shape& shape : {built(make_sphere(1.0)), built(make_cylinder(1, 2).value().moved(
-                                                           Location::translation(Vec3(0, 0, -1)))),
-                             built(make_box(2, 2, 2).value().moved(Location::translation(Vec3(-1, -1, -1))))}) {
+  for (const Shape& shape :
+       {built(make_sphere(1.0)),
+        built(make_cylinder(1, 2).value().moved(Location::translation(Vec3(0, 0, -1)))),
+        built(make_box(2, 2, 2).value().moved(Location::translation(Vec3(-1, -1, -1))))}) {
     const Mesh mesh = mesh_of(shape, 1e-2);
     for (const auto& t : mesh.triangles) {
       const Vec3& a = mesh.vertices[t[0]];
@@ -487,8 +496,8 @@ TEST(TessellationGeneralMethod, PlanarFacesMatchTheirBoundaryExactly) {
 
 TEST(TessellationGeneralMethod, CurvedPrimitivesConvergeWithoutRows) {
   for (const PrimitiveCase& c : primitive_cases()) {
-    if (c.name != "cylinder" && c.name != "sphere" && c.name != "torus" && c.name != "cone_apex_top" &&
-        c.name != "partial_revolution_touching_axis") {
+    if (c.name != "cylinder" && c.name != "sphere" && c.name != "torus" &&
+        c.name != "cone_apex_top" && c.name != "partial_revolution_touching_axis") {
       continue;
     }
     SCOPED_TRACE(c.name);
@@ -535,7 +544,8 @@ TEST(MeshUtilities, BinaryStlLayout) {
   ASSERT_EQ(stl.size(), 84u + 50u * cube.triangles.size());
   EXPECT_NE(stl.substr(0, 5), "solid");  // readers take "solid" for ASCII STL
   std::uint32_t count = 0;
-  for (int i = 0; i < 4; ++i) count |= static_cast<std::uint32_t>(static_cast<unsigned char>(stl[80 + i])) << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    count |= static_cast<std::uint32_t>(static_cast<unsigned char>(stl[80 + i])) << (8 * i);
   EXPECT_EQ(count, cube.triangles.size());
   auto read_float = [&](std::size_t offset) {
     std::uint32_t bits = 0;
@@ -549,7 +559,9 @@ TEST(MeshUtilities, BinaryStlLayout) {
   for (std::size_t t = 0; t < cube.triangles.size(); ++t) {
     const std::size_t base = 84 + 50 * t;
     const Vec3& a = cube.vertices[cube.triangles[t][0]];
-    const Vec3 n = (cube.vertices[cube.triangles[t][1]] - a).cross(cube.vertices[cube.triangles[t][2]] - a).normalized();
+    const Vec3 n = (cube.vertices[cube.triangles[t][1]] - a)
+                       .cross(cube.vertices[cube.triangles[t][2]] - a)
+                       .normalized();
     for (int i = 0; i < 3; ++i) {
       EXPECT_FLOAT_EQ(read_float(base + 4 * i), static_cast<float>(n[i]));
       EXPECT_FLOAT_EQ(read_float(base + 12 + 4 * i), static_cast<float>(a[i]));
@@ -560,7 +572,8 @@ TEST(MeshUtilities, BinaryStlLayout) {
 }
 
 TEST(MeshUtilities, TessellationIsDeterministic) {
-  const Shape shape = built(make_revolution({{0, 0}, {2, 0}, {2, 1}, {1, 2}, {1, 3}, {0, 3}}, kTwoPi));
+  const Shape shape =
+      built(make_revolution({{0, 0}, {2, 0}, {2, 1}, {1, 2}, {1, 3}, {0, 3}}, kTwoPi));
   EXPECT_EQ(to_binary_stl(mesh_of(shape, 1e-3)), to_binary_stl(mesh_of(shape, 1e-3)));
   EXPECT_EQ(to_binary_stl(mesh_of(shape, 1e-2, true)), to_binary_stl(mesh_of(shape, 1e-2, true)));
 }

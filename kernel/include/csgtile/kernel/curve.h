@@ -13,7 +13,7 @@
 
 namespace csgtile::kernel {
 
-enum class CurveKind : std::uint8_t { Line = 0, Circle = 1, Ellipse = 2, Polyline = 3 };
+enum class CurveKind : std::uint8_t { Line = 0, Circle = 1, Ellipse = 2, Polyline = 3, Trig = 4 };
 
 class Curve;
 using CurvePtr = std::shared_ptr<const Curve>;
@@ -135,6 +135,30 @@ class PolylineCurve final : public Curve {
  private:
   std::vector<Vec3> points_;
   double tolerance_;
+};
+
+/// C(t) = c + cos t·a + sin t·b: an ellipse given by two conjugate semi-diameters a, b
+/// (a circle when |a| = |b| and a ⊥ b), period 2π. Boolean section curves use it so that
+/// the curve's parameter is the natural angle of the surfaces it lies on (a plane section of
+/// a cylinder parametrised by the cylinder's angle), which keeps their pcurves exact
+/// (Trig2d). Precondition: a × b ≠ 0.
+class TrigCurve final : public Curve {
+ public:
+  TrigCurve(const Vec3& center, const Vec3& a, const Vec3& b) : center_(center), a_(a), b_(b) {}
+  CurveKind kind() const override { return CurveKind::Trig; }
+  const Vec3& center() const { return center_; }
+  const Vec3& a() const { return a_; }
+  const Vec3& b() const { return b_; }
+  Vec3 point(double t) const override;
+  Vec3 derivative(double t) const override;
+  Vec3 second_derivative(double t) const override;
+  double period() const override;
+  double closest_parameter(const Vec3& p, double t0, double t1) const override;
+  double support(const Vec3& w, double t0, double t1) const override;
+  CurvePtr transformed(const Location& loc) const override;
+
+ private:
+  Vec3 center_, a_, b_;
 };
 
 }  // namespace csgtile::kernel

@@ -4,6 +4,7 @@
 /// edge use, parametrised like the edge's 3D curve: pcurve(t) is the (u, v) of C(t).
 
 #include <cstdint>
+#include <cmath>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -12,7 +13,7 @@
 
 namespace csgtile::kernel {
 
-enum class Curve2dKind : std::uint8_t { Line = 0, Circle = 1, Polyline = 2 };
+enum class Curve2dKind : std::uint8_t { Line = 0, Circle = 1, Polyline = 2, Trig = 3 };
 
 class Curve2d;
 using Curve2dPtr = std::shared_ptr<const Curve2d>;
@@ -69,6 +70,26 @@ class Polyline2d final : public Curve2d {
 
  private:
   std::vector<Vec2> points_;
+};
+
+/// c(t) = c + cos t·a + sin t·b + t·d: the exact pcurve of a TrigCurve or line on a plane,
+/// cylinder, cone, sphere or torus whose angular parameter follows the curve's (lines,
+/// circles, ellipses, and the sinusoids that plane sections draw on a cylinder).
+class Trig2d final : public Curve2d {
+ public:
+  Trig2d(const Vec2& c, const Vec2& a, const Vec2& b, const Vec2& d) : c_(c), a_(a), b_(b), d_(d) {}
+  Curve2dKind kind() const override { return Curve2dKind::Trig; }
+  const Vec2& c() const { return c_; }
+  const Vec2& a() const { return a_; }
+  const Vec2& b() const { return b_; }
+  const Vec2& d() const { return d_; }
+  Vec2 point(double t) const override { return c_ + std::cos(t) * a_ + std::sin(t) * b_ + t * d_; }
+  Vec2 derivative(double t) const override { return -std::sin(t) * a_ + std::cos(t) * b_ + d_; }
+  /// The same curve moved by `offset` in the parameter plane (a period shift, say).
+  Trig2d shifted(const Vec2& offset) const { return Trig2d(c_ + offset, a_, b_, d_); }
+
+ private:
+  Vec2 c_, a_, b_, d_;
 };
 
 }  // namespace csgtile::kernel

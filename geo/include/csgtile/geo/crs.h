@@ -1,0 +1,225 @@
+#pragma once
+/// \file
+/// Coordinate reference systems as plain descriptions: what a LIDAR tile's coordinates mean.
+///
+/// A Crs is built from an EPSG code (a built-in table of the codes a city service meets), from
+/// GeoTIFF keys (LAS GeoKeyDirectory VLRs), from OGC WKT 1 or WKT 2 text, or from a config
+/// string. It carries everything georeference.h needs to compute with it; nothing here
+/// computes coordinates.
+///
+/// Conventions (all builders normalise to them):
+///  - x is easting / longitude, y is northing / latitude, whatever the authority's axis order
+///    (LAS and most GIS files store easting first; so does this model).
+///  - Projection parameters are stored in degrees (angles) and metres (false easting and
+///    northing); `linear_unit` / `angular_unit` say what the coordinates themselves are in.
+///  - Datum shifts are described towards WGS 84 as a 7-parameter Helmert transformation in the
+///    coordinate-frame rotation convention (EPSG method 1032/9607).
+///
+/// Errors (kernel::Result): InvalidArgument for malformed, incomplete or out-of-range
+/// definitions (WKT syntax, a missing projection parameter, a GeoTIFF directory without a CRS);
+/// Unsupported for valid definitions this build does not handle (a projection method, an EPSG
+/// code outside the table, a geocentric model). Messages name the key, WKT node or code.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "csgtile/kernel/result.h"
+
+namespace csgtile::geo {
+
+/// A reference ellipsoid. inverse_flattening == 0 means a sphere.
+struct Ellipsoid {
+  std::string name = "WGS 84";
+  int epsg = 7030;
+  double semi_major_m = 6378137.0;
+  double inverse_flattening = 298.257223563;
+
+  double flattening() const { return inverse_flattening == 0.0 ? 0.0 : 1.0 / inverse_flattening; }
+};
+
+/// Seven-parameter Helmert transformation from a datum to WGS 84, coordinate-frame rotation
+/// convention (EPSG 1032/9607, small-angle form): X_wgs84 = (1 + s) · R · X + T with
+/// R = [[1, rz, -ry], [-rz, 1, rx], [ry, -rx, 1]]. WKT 1 TOWGS84 and GeoTIFF key 2062 use the
+/// position-vector convention; their builders negate the rotations.
+struct Helmert7 {
+  double tx_m = 0.0, ty_m = 0.0, tz_m = 0.0;
+  double rx_arcsec = 0.0, ry_arcsec = 0.0, rz_arcsec = 0.0;
+  double scale_ppm = 0.0;
+
+  /// True when every parameter is zero (a null transformation).
+  bool is_null() const;
+};
+
+/// A geodetic datum: ellipsoid, prime meridian and its relation to WGS 84.
+struct GeodeticDatum {
+  std::string name = "WGS 84";
+  int epsg = 6326;
+  Ellipsoid ellipsoid;
+  double prime_meridian_deg = 0.0;  ///< Greenwich longitude of the prime meridian
+  /// The transformation to WGS 84; nullopt when unknown (such a CRS can be read and projected
+  /// but not placed on the globe). All zeros for datums that EPSG relates to WGS 84 by a null
+  /// transformation (ETRS89, NAD83 and their realisations: metre-level agreement).
+  std::optional<Helmert7> to_wgs84 = Helmert7{};
+  std::string to_wgs84_source = "identity";  ///< e.g. "EPSG:9281 Amersfoort to ETRS89 (8)"
+};
+
+/// A unit of length. US survey foot: 1200/3937 m; international foot: 0.3048 m.
+struct LinearUnit {
+  std::string name = "metre";
+  double metres = 1.0;  ///< size of one unit in metres
+  int epsg = 9001;      ///< 0 when not an EPSG unit
+};
+
+/// A unit of angle.
+struct AngularUnit {
+  std::string name = "degree";
+  double radians = 0.017453292519943295;  ///< size of one unit in radians
+  int epsg = 9102;
+};
+
+LinearUnit metre_unit();
+LinearUnit international_foot_unit();  ///< EPSG:9002, 0.3048 m
+LinearUnit us_survey_foot_unit();      ///< EPSG:9003, 1200/3937 m
+AngularUnit degree_unit();
+
+/// Projection methods this build computes (EPSG method codes in brackets).
+enum class ProjectionMethod {
+  TransverseMercator,        ///< [9807] includes UTM and most US state planes
+  LambertConicConformal1SP,  ///< [9801]
+  LambertConicConformal2SP,  ///< [9802]
+  PolarStereographicA,       ///< [9810] natural origin at a pole with a scale factor (UPS)
+  PolarStereographicB,       ///< [9829] scale 1 on a standard parallel
+  ObliqueStereographic,      ///< [9809] double stereographic, e.g. RD New (EPSG:28992)
+};
+
+/// EPSG name of a method, e.g. "Lambert Conic Conformal (2SP)".
+const char* projection_method_name(ProjectionMethod method);
+
+/// Parameters of a projection, in degrees and metres. Which fields a method reads:
+///  - TransverseMercator, LambertConicConformal1SP, ObliqueStereographic, PolarStereographicA:
+///    latitude/longitude of natural origin, scale_factor, false easting/northing (PS-A: the
+///    latitude of origin is ±90 and picks the pole).
+///  - LambertConicConformal2SP: latitude/longitude of the false origin, both standard
+///    parallels, easting/northing at the false origin.
+///  - PolarStereographicB: standard_parallel_1 (its sign picks the pole), longitude of
+///    origin, false easting/northing.
+struct Projection {
+  ProjectionMethod method = ProjectionMethod::TransverseMercator;
+  double latitude_of_origin_deg = 0.0;
+  double longitude_of_origin_deg = 0.0;
+  double scale_factor = 1.0;
+  double standard_parallel_1_deg = 0.0;
+  double standard_parallel_2_deg = 0.0;
+  double false_easting_m = 0.0;
+  double false_northing_m = 0.0;
+};
+
+/// A vertical CRS: informative (no geoid model is applied, see georeference.h) except for its
+/// unit, which scales z.
+struct VerticalCrs {
+  int epsg = 0;
+  std::string name;
+  LinearUnit unit;
+};
+
+enum class CrsKind { Geographic, Projected };
+
+/// A horizontal CRS (geographic or projected) with an optional vertical CRS.
+struct Crs {
+  CrsKind kind = CrsKind::Geographic;
+  std::string name = "WGS 84";
+  int epsg = 4326;  ///< 0 for user-defined
+  GeodeticDatum datum;
+  AngularUnit angular_unit;             ///< unit of x, y of a geographic CRS
+  LinearUnit linear_unit;               ///< unit of x, y of a projected CRS
+  std::optional<Projection> projection; ///< set exactly when kind == Projected
+  std::optional<VerticalCrs> vertical;
+  /// What a builder had to assume or ignore (e.g. "user-defined datum assumed to be WGS 84").
+  std::vector<std::string> warnings;
+  std::string source;  ///< "EPSG:2992", "GeoTIFF keys", "WKT", "config"
+
+  bool is_projected() const { return kind == CrsKind::Projected; }
+  /// Metres per unit of z: the vertical CRS's unit, else the horizontal linear unit of a
+  /// projected CRS (the LAS convention), else 1 (ellipsoidal height in metres).
+  double z_unit_metres() const;
+};
+
+/// One GeoTIFF key as a LAS reader finds it: SHORT values and DOUBLE params both as numbers;
+/// ASCII params in text (a trailing '|' or NUL is ignored).
+struct GeoKeyEntry {
+  std::uint16_t id = 0;
+  std::vector<double> numbers;
+  std::string text;
+};
+
+/// A CRS from the built-in EPSG table: geographic 4326, 4979, 4258, 4937, 4269, 4152, 6318,
+/// 4289, 4167, 4171, 4173, 4277, 4267; UTM 32601–32660 / 32701–32760 (WGS 84), 25828–25838
+/// (ETRS89), 26901–26923 (NAD83), 6330–6348 (NAD83(2011)); UPS 32661/32761 and 5041/5042;
+/// RD New 28992 (and compound 7415 = 28992 + NAP 5709); polar stereographic 3031, 3413,
+/// 3976, 3995; TM 2193, 2157, 27700, 2236 (ftUS), 2903 (ftUS); LCC 2154, 2991, 2992, 2994,
+/// 2269, 2270, 2913 (ft), 2227, 2229, 2263 (ftUS). `vertical_epsg` (optional) adds a vertical
+/// CRS: 5703, 6360, 8228, 5709, 5941, 5773, 3855, 7837, 5701, 5714; other codes are kept by
+/// number with a warning. Errors: Unsupported naming the code.
+kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg = 0);
+
+/// A CRS from GeoTIFF keys (GeoTIFF 1.0/1.1 ids): model type 1024; EPSG codes 2048
+/// (geographic), 3072 (projected), 3074 (UTM projection codes 16001–16160), 4096 (vertical);
+/// user-defined geographic CRSs (2050 datum, 2051/2061 prime meridian, 2054/2055 angular
+/// unit, 2056–2059 ellipsoid, 2062 TOWGS84) and projections (3075 method: 1 TM, 8 LCC 2SP,
+/// 9 LCC 1SP, 15 polar stereographic, 16 oblique stereographic; 3078–3095 parameters in the
+/// angular unit and in the linear unit 3076/3077); vertical unit 4099. A linear-unit key that
+/// differs from an EPSG code's unit overrides it (coordinates are in the key's unit) with a
+/// warning. Unknown and zero key ids are ignored with a warning.
+/// Errors: InvalidArgument (no CRS, missing parameters), Unsupported (method, code, model).
+kernel::Result<Crs> crs_from_geokeys(const std::vector<GeoKeyEntry>& keys);
+
+/// A CRS from OGC WKT 1 (incl. ESRI and GDAL dialects) or WKT 2 (2015/2019) text: PROJCS /
+/// PROJCRS, GEOGCS / GEOGCRS / GEODCRS, COMPD_CS / COMPOUNDCRS, VERT_CS / VERTCRS, BOUNDCRS
+/// with an abridged Helmert to WGS 84. The parser is tolerant: keywords in any case, '(' or
+/// '[' brackets, unknown nodes skipped; depth and length are bounded (hostile input is refused
+/// cleanly). Errors: InvalidArgument (syntax, missing nodes), Unsupported (method, geocentric).
+kernel::Result<Crs> crs_from_wkt(std::string_view wkt);
+
+/// A CRS from configuration text: "EPSG:28992", "EPSG:28992+5709", "28992", or WKT.
+kernel::Result<Crs> crs_from_config(std::string_view text);
+
+/// Checks ranges: a > 0, 0 <= f < 1, units > 0, |latitudes| <= 90, scale > 0, standard
+/// parallels not symmetric about the equator (LCC 2SP), a polar method at a pole, finiteness.
+kernel::Status validate_crs(const Crs& crs);
+
+/// nullopt when the two CRSs compute the same coordinates (ellipsoid, datum shift, prime
+/// meridian, method, parameters and units within 1e-9 relative, 1e-9 degrees, 1e-6 of a
+/// Helmert parameter, 0.5 mm of false easting/northing: EPSG rounds feet-based false
+/// origins to 0.001 ft); otherwise a
+/// message naming the first difference and both values. Names and EPSG codes are not compared.
+std::optional<std::string> crs_difference(const Crs& a, const Crs& b);
+
+/// The readings of one file (and the config) to reconcile. Each is either absent, a CRS, or
+/// the error its builder returned.
+struct CrsCandidates {
+  std::optional<kernel::Result<Crs>> wkt;
+  std::optional<kernel::Result<Crs>> geokeys;
+  std::optional<kernel::Result<Crs>> config;
+  /// When true the config CRS wins over the file's; otherwise it is used only when the file
+  /// has no readable CRS.
+  bool config_overrides_file = false;
+};
+
+/// Picks one CRS: config (if it overrides), else WKT, else GeoTIFF keys, else config. Every
+/// other present reading that disagrees (crs_difference) or failed becomes a warning on the
+/// returned CRS naming both sources. Errors: the chosen source's error when every present
+/// reading failed; InvalidArgument "no CRS" when none is present.
+kernel::Result<Crs> reconcile_crs(const CrsCandidates& candidates);
+
+/// One line for logs and `csgtile info`, e.g.
+/// "EPSG:2992 NAD83 / Oregon GIC Lambert (ft): Lambert Conic Conformal (2SP), foot".
+std::string describe_crs(const Crs& crs);
+
+/// OGC WKT 1 (GDAL dialect, with TOWGS84 and AUTHORITY where known; COMPD_CS when a vertical
+/// CRS is set), e.g. for writing LAS 1.4 files. crs_from_wkt(crs_to_wkt1(c)) is equivalent to c.
+std::string crs_to_wkt1(const Crs& crs);
+
+}  // namespace csgtile::geo

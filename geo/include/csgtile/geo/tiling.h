@@ -1,0 +1,145 @@
+#pragma once
+/// \file
+/// The city grid: square cells in one CRS, each with a halo, and the index saying which input
+/// files feed which cell.
+///
+/// Cell (column, row) has the core [x0 + column·size, x0 + (column+1)·size) ×
+/// [y0 + row·size, y0 + (row+1)·size), half-open, so every point lies in exactly one core;
+/// cell_of agrees with core_bounds bit for bit (both use the same arithmetic). Its halo bounds
+/// are the core grown by `halo` on every side, closed; halos of neighbours overlap by 2·halo.
+/// All coordinates are in the grid CRS's units (feet for a foot CRS, degrees for a
+/// geographic one).
+///
+/// Determinism: cells are ordered by (row, column); inputs are put in a canonical order (by
+/// name, then bounds) before indexing, so the index does not depend on the order files were
+/// listed in.
+
+#include <compare>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "csgtile/geo/crs.h"
+#include "csgtile/kernel/location.h"
+#include "csgtile/kernel/result.h"
+
+namespace csgtile::geo {
+
+/// An axis-aligned 2D box, min <= max.
+struct Bounds2 {
+  double min_x = 0.0, min_y = 0.0, max_x = 0.0, max_y = 0.0;
+
+  bool is_valid() const;  ///< finite and min <= max
+  /// Closed-box overlap test (touching counts).
+  bool intersects(const Bounds2& other) const;
+};
+
+/// A cell of the grid. Ordered by (row, column).
+struct CellId {
+  std::int64_t column = 0;
+  std::int64_t row = 0;
+
+  std::strong_ordering operator<=>(const CellId& other) const {
+    if (auto c = row <=> other.row; c != 0) return c;
+    return column <=> other.column;
+  }
+  bool operator==(const CellId& other) const = default;
+
+  /// "c<column>_r<row>", e.g. "c12_r-3": stable, used in object keys.
+  std::string to_string() const;
+  /// Inverse of to_string. Errors: InvalidArgument naming the text.
+  static kernel::Result<CellId> parse(std::string_view text);
+};
+
+/// Grid definition, in the grid CRS's units.
+struct GridSpec {
+  double origin_x = 0.0;
+  double origin_y = 0.0;
+  double cell_size = 1000.0;  ///< > 0
+  double halo = 0.0;          ///< >= 0 and < cell_size
+};
+
+/// A city grid. Cheap to copy.
+class CityGrid {
+ public:
+  /// Errors: InvalidArgument for a non-finite spec, cell_size <= 0, halo < 0 or
+  /// halo >= cell_size; as validate_crs.
+  static kernel::Result<CityGrid> create(const Crs& crs, const GridSpec& spec);
+
+  const Crs& crs() const { return crs_; }
+  const GridSpec& spec() const { return spec_; }
+
+  /// The cell whose core holds (x, y). Precondition: finite, and within ±2^52 cells.
+  CellId cell_of(double x, double y) const;
+  Bounds2 core_bounds(CellId cell) const;
+  Bounds2 halo_bounds(CellId cell) const;
+  bool in_core(CellId cell, double x, double y) const;  ///< half-open
+  bool in_halo(CellId cell, double x, double y) const;  ///< closed
+  /// Cells whose halo (or core, when include_halo is false) meets `bounds` (closed), in
+  /// (row, column) order. Errors: InvalidArgument for invalid bounds or more than
+  /// `max_cells` cells.
+  kernel::Result<std::vector<CellId>> cells_meeting(const Bounds2& bounds, bool include_halo,
+                                                    std::size_t max_cells = 1'000'000) const;
+
+ private:
+  CityGrid(Crs crs, GridSpec spec) : crs_(std::move(crs)), spec_(spec) {}
+  double edge_x(std::int64_t column) const;
+  double edge_y(std::int64_t row) const;
+  Crs crs_;
+  GridSpec spec_;
+};
+
+/// One input file's extent in the grid CRS (a LAS header's bounds, transformed with
+/// transform_bounds when the file uses another CRS).
+struct InputBounds {
+  std::string name;  ///< URL or path: the canonical sort key
+  Bounds2 bounds;
+};
+
+/// The inputs feeding one cell (its halo meets their bounds): indices into
+/// TileIndex::inputs(), ascending.
+struct CellInputs {
+  CellId cell;
+  std::vector<std::size_t> inputs;
+};
+
+/// Which inputs feed which cell.
+class TileIndex {
+ public:
+  /// Errors: InvalidArgument naming an input with invalid bounds, or one meeting more than
+  /// `max_cells_per_input` cells.
+  static kernel::Result<TileIndex> build(const CityGrid& grid, std::vector<InputBounds> inputs,
+                                         std::size_t max_cells_per_input = 1'000'000);
+
+  const CityGrid& grid() const { return grid_; }
+  /// The inputs in canonical order (by name, then bounds).
+  const std::vector<InputBounds>& inputs() const { return inputs_; }
+  /// Every cell fed by at least one input, in (row, column) order.
+  const std::vector<CellInputs>& cells() const { return cells_; }
+  /// The inputs of one cell (empty when none). O(log cells).
+  std::span<const std::size_t> inputs_for(CellId cell) const;
+
+ private:
+  explicit TileIndex(CityGrid grid) : grid_(std::move(grid)) {}
+  CityGrid grid_;
+  std::vector<InputBounds> inputs_;
+  std::vector<CellInputs> cells_;
+};
+
+/// Indices of `points` (x, y in the grid CRS) inside a cell's core or halo, ascending: the
+/// points of several files are gathered by calling this per file in the index's order.
+std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell,
+                                       std::span<const kernel::Vec3> points, bool include_halo);
+
+/// Bounds of `bounds` (in `from`) expressed in `to`: the box around `samples_per_edge` points
+/// per edge and an interior grid, transformed by transform_point. Curved images of edges can
+/// bulge past the samples by a little; pad the result when that matters.
+/// Errors: InvalidArgument for invalid bounds or samples < 2; transform_point's errors.
+kernel::Result<Bounds2> transform_bounds(const Crs& from, const Crs& to, const Bounds2& bounds,
+                                         int samples_per_edge = 16);
+
+}  // namespace csgtile::geo

@@ -1,0 +1,57 @@
+#pragma once
+// Private helpers shared by the CRS builders: the EPSG tables (ellipsoids, datums, units,
+// vertical CRSs) and name normalisation.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "csgtile/geo/crs.h"
+
+namespace csgtile::geo::detail {
+
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kDegree = kPi / 180.0;
+inline constexpr double kArcSecondsPerMicroradian = 648000.0 / kPi / 1e6;
+
+/// Lower-case letters and digits only: "Lambert_Conformal_Conic_2SP" → "lambertconformalconic2sp".
+std::string normalise_name(std::string_view name);
+
+std::optional<Ellipsoid> ellipsoid_from_epsg(int code);
+/// Datum by EPSG datum code (6326, 6258, 6289, ...), with its relation to WGS 84.
+std::optional<GeodeticDatum> datum_from_epsg(int code);
+/// Datum recognised by a (normalised) name, for WKT without AUTHORITY and GeoTIFF citations:
+/// WGS 84, ETRS89, NAD83 (+HARN, 2011, CSRS), Amersfoort, OSGB36, NZGD2000, RGF93, IRENET95.
+std::optional<GeodeticDatum> datum_from_name(std::string_view name);
+std::optional<LinearUnit> linear_unit_from_epsg(int code);
+/// Known unit by name ("US survey foot", "Foot_US", "ftUS", "foot", "metre", "meter", ...).
+std::optional<LinearUnit> linear_unit_from_name(std::string_view name);
+std::optional<AngularUnit> angular_unit_from_epsg(int code);
+std::optional<AngularUnit> angular_unit_from_name(std::string_view name);
+/// A linear unit of the given size, snapped to metre / foot / US survey foot when within
+/// 1e-12 relative (WKT prints 0.304800609601219 for 1200/3937).
+LinearUnit linear_unit_from_size(std::string name, double metres);
+AngularUnit angular_unit_from_size(std::string name, double radians);
+/// Known vertical CRS name by EPSG code (empty when unknown) and its unit.
+std::optional<VerticalCrs> vertical_from_epsg(int code);
+
+/// Geographic CRS of the table (4326, 4258, ...).
+std::optional<Crs> geographic_from_epsg(int code);
+
+/// Helmert given in the position-vector convention (WKT 1 TOWGS84, GeoTIFF 2062, PROJ
+/// +towgs84) → coordinate frame.
+Helmert7 helmert_from_position_vector(double tx, double ty, double tz, double rx, double ry,
+                                      double rz, double ppm);
+
+/// True when a projection's parameters are exactly a UTM zone (zone 1..60, north flag set)
+/// or UPS (zone 0).
+bool is_utm(const Projection& p, int* zone, bool* north);
+bool is_ups(const Projection& p, bool* north);
+
+/// Is this datum's ellipsoid WGS 84 exactly?
+bool is_wgs84_ellipsoid(const Ellipsoid& e);
+
+/// Formats a double with enough digits to round-trip.
+std::string format_number(double v);
+
+}  // namespace csgtile::geo::detail

@@ -1,0 +1,321 @@
+// Projections (GeographicLib + our oblique stereographic) and datum shifts for CrsMath.
+
+#include "crs/geodesy.h"
+
+#include <cmath>
+#include <string>
+
+#include <GeographicLib/Constants.hpp>
+#include <GeographicLib/Geocentric.hpp>
+#include <GeographicLib/LambertConformalConic.hpp>
+#include <GeographicLib/Math.hpp>
+#include <GeographicLib/PolarStereographic.hpp>
+#include <GeographicLib/TransverseMercator.hpp>
+#include <GeographicLib/UTMUPS.hpp>
+
+#include "crs/crs_internal.h"
+#include "crs/oblique_stereographic.h"
+
+namespace csgtile::geo::detail {
+namespace {
+
+using kernel::Error;
+using kernel::ErrorCode;
+using kernel::Result;
+
+// UTM / UPS on WGS 84 through GeographicLib::UTMUPS, which also checks that a point lies
+// within the zone's legal bounds (it throws GeographicErr otherwise). zone 0 is UPS.
+class UtmUpsEngine final : public ProjectionEngine {
+ public:
+  UtmUpsEngine(int zone, bool north) : zone_(zone), north_(north) {}
+  void forward(double lat, double lon, double& easting, double& northing) const override {
+    int zone = 0;
+    bool northp = false;
+    GeographicLib::UTMUPS::Forward(lat, lon, zone, northp, easting, northing, zone_);
+    if (northp != north_) {
+      // UTMUPS picks the hemisphere from the latitude; the CRS fixes it.
+      if (zone_ == GeographicLib::UTMUPS::UPS) {
+        throw DomainError("latitude " + format_number(lat) + " is in the other hemisphere of this UPS CRS");
+      }
+      northing += north_ ? -GeographicLib::UTMUPS::UTMShift() : GeographicLib::UTMUPS::UTMShift();
+    }
+  }
+  void reverse(double easting, double northing, double& lat, double& lon) const override {
+    GeographicLib::UTMUPS::Reverse(zone_, north_, easting, northing, lat, lon);
+  }
+
+ private:
+  int zone_;
+  bool north_;
+};
+
+// Transverse Mercator (Krüger series to 6th order, GeographicLib's TransverseMercator:
+// 5 nm within 3900 km of the central meridian) with a latitude of origin. For UTM zones on
+// other ellipsoids than WGS 84 the legal window of UTMUPS is applied too (easting 0-1000 km;
+// northing -100..9700 km north, 900..10100 km south), so a tile behaves the same in
+// EPSG:32631 and EPSG:25831.
+class TransverseMercatorEngine final : public ProjectionEngine {
+ public:
+  TransverseMercatorEngine(double a, double f, const Projection& p)
+      : tm_(a, f, p.scale_factor), p_(p) {
+    double x = 0.0;
+    tm_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x, y_origin_);
+    int zone = 0;
+    bool north = true;
+    if (is_utm(p, &zone, &north)) {
+      utm_zone_ = zone;
+      utm_north_ = north;
+    }
+  }
+  void forward(double lat, double lon, double& easting, double& northing) const override {
+    if (std::fabs(GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon)) > 90.0) {
+      throw DomainError("longitude " + format_number(lon) + " is more than 90 degrees from the central meridian");
+    }
+    double x = 0.0, y = 0.0;
+    tm_.Forward(p_.longitude_of_origin_deg, lat, lon, x, y);
+    easting = p_.false_easting_m + x;
+    northing = p_.false_northing_m + (y - y_origin_);
+    check_utm_window(easting, northing);
+  }
+  void reverse(double easting, double northing, double& lat, double& lon) const override {
+    check_utm_window(easting, northing);
+    tm_.Reverse(p_.longitude_of_origin_deg, easting - p_.false_easting_m,
+                northing - p_.false_northing_m + y_origin_, lat, lon);
+  }
+
+ private:
+  void check_utm_window(double easting, double northing) const {
+    if (utm_zone_ == 0) return;
+    const bool ok = easting >= 0.0 && easting <= 1.0e6 &&
+                    (utm_north_ ? northing >= -1.0e5 && northing < 9.7e6 : northing >= 9.0e5 && northing <= 1.01e7);
+    if (!ok) {
+      throw DomainError("easting " + format_number(easting) + ", northing " + format_number(northing) +
+                        " out of legal bounds for UTM zone " + std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
+    }
+  }
+  GeographicLib::TransverseMercator tm_;
+  Projection p_;
+  double y_origin_ = 0.0;
+  int utm_zone_ = 0;
+  bool utm_north_ = true;
+};
+
+// Lambert conformal conic (1SP: scale k0 on the natural origin's parallel; 2SP: scale 1 on
+// both standard parallels), origin shifted to the (false) origin's latitude.
+class LambertEngine final : public ProjectionEngine {
+ public:
+  LambertEngine(double a, double f, const Projection& p)
+      : lcc_(p.method == ProjectionMethod::LambertConicConformal1SP
+                 ? GeographicLib::LambertConformalConic(a, f, p.latitude_of_origin_deg, p.scale_factor)
+                 : GeographicLib::LambertConformalConic(a, f, p.standard_parallel_1_deg,
+                                                        p.standard_parallel_2_deg, 1.0)),
+        p_(p) {
+    double x = 0.0;
+    lcc_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x, y_origin_);
+  }
+  void forward(double lat, double lon, double& easting, double& northing) const override {
+    double x = 0.0, y = 0.0;
+    lcc_.Forward(p_.longitude_of_origin_deg, lat, lon, x, y);
+    easting = p_.false_easting_m + x;
+    northing = p_.false_northing_m + (y - y_origin_);
+  }
+  void reverse(double easting, double northing, double& lat, double& lon) const override {
+    lcc_.Reverse(p_.longitude_of_origin_deg, easting - p_.false_easting_m,
+                 northing - p_.false_northing_m + y_origin_, lat, lon);
+  }
+
+ private:
+  GeographicLib::LambertConformalConic lcc_;
+  Projection p_;
+  double y_origin_ = 0.0;
+};
+
+// Polar stereographic, variant A (scale k0 at the pole) or B (scale 1 on a standard
+// parallel, GeographicLib's SetScale).
+class PolarEngine final : public ProjectionEngine {
+ public:
+  PolarEngine(double a, double f, const Projection& p)
+      : ps_(a, f, p.method == ProjectionMethod::PolarStereographicA ? p.scale_factor : 1.0), p_(p) {
+    north_ = p.method == ProjectionMethod::PolarStereographicA ? p.latitude_of_origin_deg > 0
+                                                                : p.standard_parallel_1_deg > 0;
+    if (p.method == ProjectionMethod::PolarStereographicB) ps_.SetScale(std::fabs(p.standard_parallel_1_deg), 1.0);
+  }
+  void forward(double lat, double lon, double& easting, double& northing) const override {
+    if ((north_ && lat <= -90.0) || (!north_ && lat >= 90.0)) {
+      throw DomainError("the opposite pole cannot be projected");
+    }
+    double x = 0.0, y = 0.0;
+    ps_.Forward(north_, lat, GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon), x, y);
+    easting = p_.false_easting_m + x;
+    northing = p_.false_northing_m + y;
+  }
+  void reverse(double easting, double northing, double& lat, double& lon) const override {
+    double dlon = 0.0;
+    ps_.Reverse(north_, easting - p_.false_easting_m, northing - p_.false_northing_m, lat, dlon);
+    lon = GeographicLib::Math::AngNormalize(dlon + p_.longitude_of_origin_deg);
+  }
+
+ private:
+  GeographicLib::PolarStereographic ps_;
+  Projection p_;
+  bool north_ = true;
+};
+
+class ObliqueEngine final : public ProjectionEngine {
+ public:
+  ObliqueEngine(double a, double f, const Projection& p)
+      : os_(a, f, p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor, p.false_easting_m,
+            p.false_northing_m) {}
+  void forward(double lat, double lon, double& easting, double& northing) const override {
+    if (!os_.forward(lat, lon, easting, northing)) {
+      throw DomainError("latitude " + format_number(lat) + ", longitude " + format_number(lon) +
+                        " cannot be projected (antipode of the origin)");
+    }
+  }
+  void reverse(double easting, double northing, double& lat, double& lon) const override {
+    if (!os_.reverse(easting, northing, lat, lon)) {
+      throw DomainError("easting " + format_number(easting) + ", northing " + format_number(northing) +
+                        ": the latitude iteration did not converge");
+    }
+  }
+
+ private:
+  ObliqueStereographic os_;
+};
+
+std::unique_ptr<ProjectionEngine> make_engine(const Crs& crs) {
+  const Projection& p = *crs.projection;
+  const double a = crs.datum.ellipsoid.semi_major_m;
+  const double f = crs.datum.ellipsoid.flattening();
+  int zone = 0;
+  bool north = true;
+  if (is_wgs84_ellipsoid(crs.datum.ellipsoid) && crs.datum.prime_meridian_deg == 0.0) {
+    if (is_utm(p, &zone, &north)) return std::make_unique<UtmUpsEngine>(zone, north);
+    if (is_ups(p, &north)) return std::make_unique<UtmUpsEngine>(GeographicLib::UTMUPS::UPS, north);
+  }
+  switch (p.method) {
+    case ProjectionMethod::TransverseMercator: return std::make_unique<TransverseMercatorEngine>(a, f, p);
+    case ProjectionMethod::LambertConicConformal1SP:
+    case ProjectionMethod::LambertConicConformal2SP: return std::make_unique<LambertEngine>(a, f, p);
+    case ProjectionMethod::PolarStereographicA:
+    case ProjectionMethod::PolarStereographicB: return std::make_unique<PolarEngine>(a, f, p);
+    case ProjectionMethod::ObliqueStereographic: return std::make_unique<ObliqueEngine>(a, f, p);
+  }
+  return nullptr;
+}
+
+void require_finite(double a, double b, const char* what) {
+  if (!std::isfinite(a) || !std::isfinite(b)) throw DomainError(std::string("non-finite ") + what);
+}
+
+}  // namespace
+
+Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
+  if (auto status = validate_crs(crs); !status.ok()) return status.error();
+  auto math = std::shared_ptr<CrsMath>(new CrsMath(crs));
+  math->z_to_metres_ = crs.z_unit_metres();
+  math->prime_meridian_deg_ = crs.datum.prime_meridian_deg;
+  if (crs.kind == CrsKind::Geographic) {
+    math->xy_to_degrees_ = crs.angular_unit.radians / kDegree;
+    if (crs.angular_unit.epsg == 9102) math->xy_to_degrees_ = 1.0;  // exact for degrees
+  } else {
+    math->xy_to_metres_ = crs.linear_unit.metres;
+    try {
+      math->engine_ = make_engine(crs);
+    } catch (const std::exception& e) {
+      return Error{ErrorCode::InvalidArgument,
+                   std::string(projection_method_name(crs.projection->method)) + " parameters refused: " + e.what()};
+    }
+  }
+  return std::shared_ptr<const CrsMath>(std::move(math));
+}
+
+GeodeticPoint CrsMath::to_geodetic(const kernel::Vec3& xyz) const {
+  GeodeticPoint g;
+  g.height_m = xyz.z() * z_to_metres_;
+  if (!engine_) {
+    g.longitude_deg = xyz.x() * xy_to_degrees_;
+    g.latitude_deg = xyz.y() * xy_to_degrees_;
+    require_finite(g.latitude_deg, g.longitude_deg, "coordinates");
+    if (std::fabs(g.latitude_deg) > 90.0) throw DomainError("latitude " + format_number(g.latitude_deg) + " beyond ±90");
+  } else {
+    require_finite(xyz.x(), xyz.y(), "coordinates");
+    engine_->reverse(xyz.x() * xy_to_metres_, xyz.y() * xy_to_metres_, g.latitude_deg, g.longitude_deg);
+    require_finite(g.latitude_deg, g.longitude_deg, "geodetic result");
+  }
+  if (prime_meridian_deg_ != 0.0) g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+  return g;
+}
+
+kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
+  require_finite(point.latitude_deg, point.longitude_deg, "geodetic coordinates");
+  if (std::fabs(point.latitude_deg) > 90.0) throw DomainError("latitude " + format_number(point.latitude_deg) + " beyond ±90");
+  double lon = point.longitude_deg;
+  if (prime_meridian_deg_ != 0.0) lon = GeographicLib::Math::AngNormalize(lon - prime_meridian_deg_);
+  const double z = point.height_m / z_to_metres_;
+  if (!engine_) return kernel::Vec3(lon / xy_to_degrees_, point.latitude_deg / xy_to_degrees_, z);
+  double e = 0.0, n = 0.0;
+  engine_->forward(point.latitude_deg, lon, e, n);
+  require_finite(e, n, "projected result");
+  return kernel::Vec3(e / xy_to_metres_, n / xy_to_metres_, z);
+}
+
+Result<DatumShift> DatumShift::create(const GeodeticDatum& datum) {
+  if (!datum.to_wgs84) {
+    return Error{ErrorCode::Unsupported, "datum '" + datum.name + "' has no known transformation to WGS 84 (" +
+                                             datum.to_wgs84_source + "); supply TOWGS84 in the CRS"};
+  }
+  DatumShift shift;
+  try {
+    shift.earth_ = std::make_shared<const GeographicLib::Geocentric>(datum.ellipsoid.semi_major_m,
+                                                                     datum.ellipsoid.flattening());
+  } catch (const std::exception& e) {
+    return Error{ErrorCode::InvalidArgument, "ellipsoid '" + datum.ellipsoid.name + "' refused: " + e.what()};
+  }
+  const Helmert7& h = *datum.to_wgs84;
+  shift.identity_ = h.is_null();
+  if (!shift.identity_) {
+    const double arcsec = kPi / 648000.0;
+    const double rx = h.rx_arcsec * arcsec, ry = h.ry_arcsec * arcsec, rz = h.rz_arcsec * arcsec;
+    Eigen::Matrix3d r;
+    // Coordinate-frame rotation, small-angle form (EPSG GN 7-2 §4.3.3, method 1032/9607).
+    r << 1.0, rz, -ry,  //
+        -rz, 1.0, rx,   //
+        ry, -rx, 1.0;
+    shift.matrix_ = (1.0 + h.scale_ppm * 1e-6) * r;
+    shift.inverse_ = shift.matrix_.inverse();
+    shift.translation_ = kernel::Vec3(h.tx_m, h.ty_m, h.tz_m);
+  }
+  return shift;
+}
+
+kernel::Vec3 DatumShift::to_wgs84_ecef(const GeodeticPoint& p) const {
+  kernel::Vec3 x;
+  const GeographicLib::Geocentric& earth = identity_ ? GeographicLib::Geocentric::WGS84() : *earth_;
+  earth.Forward(p.latitude_deg, p.longitude_deg, p.height_m, x.x(), x.y(), x.z());
+  return identity_ ? x : apply(x);
+}
+
+GeodeticPoint DatumShift::from_wgs84_ecef(const kernel::Vec3& ecef) const {
+  GeodeticPoint p;
+  if (identity_) {
+    GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), p.latitude_deg, p.longitude_deg, p.height_m);
+  } else {
+    const kernel::Vec3 x = apply_inverse(ecef);
+    earth_->Reverse(x.x(), x.y(), x.z(), p.latitude_deg, p.longitude_deg, p.height_m);
+  }
+  return p;
+}
+
+Eigen::Matrix3d enu_rotation(double lat_deg, double lon_deg) {
+  double sphi = 0.0, cphi = 0.0, slam = 0.0, clam = 0.0;
+  GeographicLib::Math::sincosd(lat_deg, sphi, cphi);
+  GeographicLib::Math::sincosd(lon_deg, slam, clam);
+  Eigen::Matrix3d r;
+  r.col(0) = kernel::Vec3(-slam, clam, 0.0);                     // east
+  r.col(1) = kernel::Vec3(-sphi * clam, -sphi * slam, cphi);     // north
+  r.col(2) = kernel::Vec3(cphi * clam, cphi * slam, sphi);       // up
+  return r;
+}
+
+}  // namespace csgtile::geo::detail

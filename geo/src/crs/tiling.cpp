@@ -1,0 +1,200 @@
+// The city grid and the tile index.
+//
+// Invariant: cell_of(x, y) == c exactly when core_bounds(c) holds (x, y) half-open. Both use
+// edge_x / edge_y (origin + index·size, one rounding), and cell_of corrects the floor of the
+// division by comparing with those edges, so rounding in the division cannot put a point in
+// a cell whose published bounds do not contain it.
+
+#include "csgtile/geo/tiling.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <tuple>
+#include <utility>
+
+#include "csgtile/geo/georeference.h"
+
+namespace csgtile::geo {
+
+using kernel::Error;
+using kernel::ErrorCode;
+using kernel::Result;
+
+bool Bounds2::is_valid() const {
+  return std::isfinite(min_x) && std::isfinite(min_y) && std::isfinite(max_x) && std::isfinite(max_y) &&
+         min_x <= max_x && min_y <= max_y;
+}
+
+bool Bounds2::intersects(const Bounds2& o) const {
+  return min_x <= o.max_x && o.min_x <= max_x && min_y <= o.max_y && o.min_y <= max_y;
+}
+
+std::string CellId::to_string() const { return "c" + std::to_string(column) + "_r" + std::to_string(row); }
+
+Result<CellId> CellId::parse(std::string_view text) {
+  auto fail = [&] { return Error{ErrorCode::InvalidArgument, "cell id '" + std::string(text) + "' is not c<column>_r<row>"}; };
+  if (text.size() < 5 || text[0] != 'c') return fail();
+  const auto sep = text.find("_r");
+  if (sep == std::string_view::npos) return fail();
+  CellId id;
+  const char* b1 = text.data() + 1;
+  const char* e1 = text.data() + sep;
+  const char* b2 = text.data() + sep + 2;
+  const char* e2 = text.data() + text.size();
+  auto r1 = std::from_chars(b1, e1, id.column);
+  auto r2 = std::from_chars(b2, e2, id.row);
+  if (r1.ec != std::errc() || r1.ptr != e1 || r2.ec != std::errc() || r2.ptr != e2 || b1 == e1 || b2 == e2) {
+    return fail();
+  }
+  return id;
+}
+
+Result<CityGrid> CityGrid::create(const Crs& crs, const GridSpec& spec) {
+  if (!std::isfinite(spec.origin_x) || !std::isfinite(spec.origin_y) || !std::isfinite(spec.cell_size) ||
+      !std::isfinite(spec.halo)) {
+    return Error{ErrorCode::InvalidArgument, "grid: origin, cell size and halo must be finite"};
+  }
+  if (!(spec.cell_size > 0)) return Error{ErrorCode::InvalidArgument, "grid: cell size must be positive"};
+  if (spec.halo < 0 || spec.halo >= spec.cell_size) {
+    return Error{ErrorCode::InvalidArgument, "grid: halo must be >= 0 and smaller than the cell size"};
+  }
+  if (auto status = validate_crs(crs); !status.ok()) return status.error();
+  return CityGrid(crs, spec);
+}
+
+double CityGrid::edge_x(std::int64_t column) const {
+  return spec_.origin_x + static_cast<double>(column) * spec_.cell_size;
+}
+double CityGrid::edge_y(std::int64_t row) const { return spec_.origin_y + static_cast<double>(row) * spec_.cell_size; }
+
+CellId CityGrid::cell_of(double x, double y) const {
+  auto index = [&](double v, double origin, auto edge) {
+    auto i = static_cast<std::int64_t>(std::floor((v - origin) / spec_.cell_size));
+    while (v < edge(i)) --i;
+    while (v >= edge(i + 1)) ++i;
+    return i;
+  };
+  CellId id;
+  id.column = index(x, spec_.origin_x, [this](std::int64_t i) { return edge_x(i); });
+  id.row = index(y, spec_.origin_y, [this](std::int64_t i) { return edge_y(i); });
+  return id;
+}
+
+Bounds2 CityGrid::core_bounds(CellId c) const {
+  return Bounds2{edge_x(c.column), edge_y(c.row), edge_x(c.column + 1), edge_y(c.row + 1)};
+}
+
+Bounds2 CityGrid::halo_bounds(CellId c) const {
+  const Bounds2 core = core_bounds(c);
+  const double h = spec_.halo;
+  return Bounds2{core.min_x - h, core.min_y - h, core.max_x + h, core.max_y + h};
+}
+
+bool CityGrid::in_core(CellId c, double x, double y) const {
+  const Bounds2 b = core_bounds(c);
+  return x >= b.min_x && x < b.max_x && y >= b.min_y && y < b.max_y;
+}
+
+bool CityGrid::in_halo(CellId c, double x, double y) const {
+  const Bounds2 b = halo_bounds(c);
+  return x >= b.min_x && x <= b.max_x && y >= b.min_y && y <= b.max_y;
+}
+
+Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool include_halo,
+                                                    std::size_t max_cells) const {
+  if (!bounds.is_valid()) return Error{ErrorCode::InvalidArgument, "cells_meeting: invalid bounds"};
+  const double h = include_halo ? spec_.halo : 0.0;
+  // Candidates: cells whose core meets the bounds grown by the halo; then the exact test.
+  const double span_x = (bounds.max_x - bounds.min_x + 2 * h) / spec_.cell_size + 3;
+  const double span_y = (bounds.max_y - bounds.min_y + 2 * h) / spec_.cell_size + 3;
+  if (!(span_x * span_y <= static_cast<double>(max_cells) * 4 + 64)) {
+    return Error{ErrorCode::InvalidArgument, "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
+  }
+  const CellId lo = cell_of(bounds.min_x - h, bounds.min_y - h);
+  const CellId hi = cell_of(bounds.max_x + h, bounds.max_y + h);
+  std::vector<CellId> out;
+  for (std::int64_t row = lo.row - 1; row <= hi.row + 1; ++row) {
+    for (std::int64_t column = lo.column - 1; column <= hi.column + 1; ++column) {
+      const CellId c{column, row};
+      const Bounds2 b = include_halo ? halo_bounds(c) : core_bounds(c);
+      // Cores are half-open: a box touching a core's upper edge does not meet it.
+      const bool meets = include_halo ? b.intersects(bounds)
+                                      : (bounds.min_x < b.max_x && b.min_x <= bounds.max_x &&
+                                         bounds.min_y < b.max_y && b.min_y <= bounds.max_y);
+      if (!meets) continue;
+      out.push_back(c);
+      if (out.size() > max_cells) {
+        return Error{ErrorCode::InvalidArgument, "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
+      }
+    }
+  }
+  return out;  // row-major loops: already in (row, column) order
+}
+
+Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds> inputs,
+                                   std::size_t max_cells_per_input) {
+  std::stable_sort(inputs.begin(), inputs.end(), [](const InputBounds& a, const InputBounds& b) {
+    return std::tie(a.name, a.bounds.min_x, a.bounds.min_y, a.bounds.max_x, a.bounds.max_y) <
+           std::tie(b.name, b.bounds.min_x, b.bounds.min_y, b.bounds.max_x, b.bounds.max_y);
+  });
+  std::vector<std::pair<CellId, std::size_t>> pairs;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (!inputs[i].bounds.is_valid()) {
+      return Error{ErrorCode::InvalidArgument, "input '" + inputs[i].name + "' has invalid bounds"};
+    }
+    auto cells = grid.cells_meeting(inputs[i].bounds, true, max_cells_per_input);
+    if (!cells.ok()) return Error{ErrorCode::InvalidArgument, "input '" + inputs[i].name + "': " + cells.error().message};
+    for (const CellId& c : cells.value()) pairs.emplace_back(c, i);
+  }
+  std::sort(pairs.begin(), pairs.end());
+  TileIndex index(grid);
+  index.inputs_ = std::move(inputs);
+  for (const auto& [cell, input] : pairs) {
+    if (index.cells_.empty() || !(index.cells_.back().cell == cell)) index.cells_.push_back(CellInputs{cell, {}});
+    index.cells_.back().inputs.push_back(input);
+  }
+  return index;
+}
+
+std::span<const std::size_t> TileIndex::inputs_for(CellId cell) const {
+  auto it = std::lower_bound(cells_.begin(), cells_.end(), cell,
+                             [](const CellInputs& a, const CellId& b) { return a.cell < b; });
+  if (it == cells_.end() || !(it->cell == cell)) return {};
+  return it->inputs;
+}
+
+std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell, std::span<const kernel::Vec3> points,
+                                       bool include_halo) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double x = points[i].x();
+    const double y = points[i].y();
+    if (include_halo ? grid.in_halo(cell, x, y) : grid.in_core(cell, x, y)) out.push_back(i);
+  }
+  return out;
+}
+
+Result<Bounds2> transform_bounds(const Crs& from, const Crs& to, const Bounds2& bounds, int samples_per_edge) {
+  if (!bounds.is_valid()) return Error{ErrorCode::InvalidArgument, "transform_bounds: invalid bounds"};
+  if (samples_per_edge < 2 || samples_per_edge > 10000) {
+    return Error{ErrorCode::InvalidArgument, "transform_bounds: samples per edge must be in [2, 10000]"};
+  }
+  Bounds2 out{INFINITY, INFINITY, -INFINITY, -INFINITY};
+  const int n = samples_per_edge;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double x = bounds.min_x + (bounds.max_x - bounds.min_x) * i / (n - 1);
+      const double y = bounds.min_y + (bounds.max_y - bounds.min_y) * j / (n - 1);
+      auto p = transform_point(from, to, kernel::Vec3(x, y, 0.0));
+      if (!p.ok()) return p.error();
+      out.min_x = std::min(out.min_x, p.value().x());
+      out.min_y = std::min(out.min_y, p.value().y());
+      out.max_x = std::max(out.max_x, p.value().x());
+      out.max_y = std::max(out.max_y, p.value().y());
+    }
+  }
+  return out;
+}
+
+}  // namespace csgtile::geo

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// Exact Boolean operations on CSG-BRep solids (paper §4.2, completed with face–face
+/// intersection curves and the degenerate configurations).
+///
+/// Method: every face of one operand is intersected with every face of the other whose
+/// bounding boxes meet (analytic section curves with exact trig-linear pcurves); edges are
+/// split where section curves end on them, faces are split along the section curves in
+/// their (u, v) planes, each piece is classified in / out / on the other solid (exact ray
+/// casting), kept or dropped per operation, and the kept pieces are sewn into shells and
+/// solids that share their edges and vertices. Faces on one plane that meet along an edge
+/// bounding nothing are merged. Every result is checked; an operation that cannot produce a
+/// valid solid returns a named error and never a silently wrong shape.
+
+#include <vector>
+
+#include "csgtile/kernel/shape.h"
+
+namespace csgtile::kernel {
+
+enum class BooleanOp { Fuse, Common, Cut };
+const char* boolean_op_name(BooleanOp op);  ///< "fuse", "common", "cut"
+
+struct BooleanOptions {
+  double tolerance = 1e-7;  ///< linear tolerance (world units) of every decision and new edge
+  bool check_result = true; ///< run the validity checker on the result (InvalidShape if bad)
+};
+
+/// a ∪ b, a ∩ b or a − b. Arguments: solids, or compounds/compsolids of solids (treated as
+/// the union of their solids' interiors). The result is a compound of solids (empty when the
+/// result has no volume). Errors: InvalidArgument (not solids), Unsupported (a surface pair
+/// whose intersection this version cannot compute exactly, named), InvalidShape (the result
+/// failed the checker — a bug to report).
+Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
+                                const BooleanOptions& options = {});
+
+/// fuse: union of all; common: intersection of all; cut: the first minus all the others.
+Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,
+                           const BooleanOptions& options = {});
+
+}  // namespace csgtile::kernel

@@ -1,0 +1,898 @@
+// Boolean operations: orchestration (see csgtile/kernel/boolean.h for the method).
+
+#include "csgtile/kernel/boolean.h"
+
+#include <algorithm>
+#include <functional>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <string>
+
+#include "boolean/classifier.h"
+#include "boolean/face_split.h"
+#include "boolean/model.h"
+#include "boolean/pcurve_fit.h"
+#include "boolean/surface_intersection.h"
+#include "boolean/uv_geometry.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "mesh/polygon_triangulation.h"
+
+namespace csgtile::kernel {
+
+const char* boolean_op_name(BooleanOp op) {
+  switch (op) {
+    case BooleanOp::Fuse: return "fuse";
+    case BooleanOp::Common: return "common";
+    case BooleanOp::Cut: return "cut";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using namespace detail;
+
+const char* surface_name(SurfaceKind k) {
+  static const char* kNames[] = {"plane", "cylinder", "cone", "sphere", "torus", "extrusion", "revolution"};
+  return kNames[static_cast<int>(k)];
+}
+
+// The pcurve of `edge` on `surface`, shifted by whole periods so that at `point` it lands
+// where `old_uv` is (a seam is used at u = 0 and at u = 2π: the side must be kept).
+Curve2dPtr aligned_fit(const BEdge& edge, const Surface& surface, const Vec3& point,
+                       const Vec2& old_uv, double tolerance) {
+  auto pc = fit_pcurve(*edge.curve, edge.t0, edge.t1, surface, tolerance);
+  if (!pc) return nullptr;
+  const Vec2 new_uv = pc->point(edge.curve->closest_parameter(point, edge.t0, edge.t1));
+  Vec2 offset = Vec2::Zero();
+  if (surface.u_period() > 0) offset.x() = surface.u_period() * std::round((old_uv.x() - new_uv.x()) / surface.u_period());
+  if (surface.v_period() > 0) offset.y() = surface.v_period() * std::round((old_uv.y() - new_uv.y()) / surface.v_period());
+  return shift_pcurve(pc, offset);
+}
+
+// A face piece after splitting, with its fate.
+struct Piece {
+  int face;  // index into model.faces
+  Region region;
+  bool keep = false;
+  bool flip = false;  // orientation reversed in the result (cut: B's pieces)
+};
+
+class BooleanEngine {
+ public:
+  BooleanEngine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options)
+      : a_(a), b_(b), op_(op), options_(options), model_(options.tolerance) {}
+
+  Result<Shape> run() {
+    if (auto s = import_operand(model_, a_, 0); !s.ok()) return s.error();
+    first_b_face_ = model_.faces.size();
+    if (auto s = import_operand(model_, b_, 1); !s.ok()) return s.error();
+    polygons_.resize(model_.faces.size());
+    for (std::size_t i = 0; i < model_.faces.size(); ++i) polygons_[i] = face_polygon(model_, model_.faces[i]);
+    unify_shared_edges();
+    split_at_touching_vertices();
+    if (auto s = intersect_faces(); !s.ok()) return s.error();
+    split_edges();
+    std::vector<Piece> pieces;
+    if (auto s = split_faces(pieces); !s.ok()) return s.error();
+    if (auto s = classify(pieces); !s.ok()) return s.error();
+    return build(pieces);
+  }
+
+ private:
+  // Edges of the two operands that coincide (touching solids) become one edge, so the
+  // result shares them.
+  void unify_shared_edges() {
+    std::map<std::pair<int, int>, std::vector<int>> by_ends;
+    for (std::size_t i = 0; i < model_.edges.size(); ++i) {
+      const BEdge& e = model_.edges[i];
+      if (e.degenerate()) continue;
+      by_ends[{std::min(e.v0, e.v1), std::max(e.v0, e.v1)}].push_back(static_cast<int>(i));
+    }
+    std::map<int, int> replace;
+    for (auto& [ends, list] : by_ends) {
+      for (std::size_t i = 0; i < list.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j) {
+          if (replace.count(list[j])) continue;
+          const BEdge& x = model_.edges[static_cast<std::size_t>(list[i])];
+          const BEdge& y = model_.edges[static_cast<std::size_t>(list[j])];
+          const Vec3 mx = x.curve->point(0.5 * (x.t0 + x.t1));
+          const double t = y.curve->closest_parameter(mx, y.t0, y.t1);
+          if ((y.curve->point(t) - mx).norm() <= options_.tolerance && ends.first != ends.second) {
+            replace[list[i]] = list[j];
+            break;
+          }
+        }
+      }
+    }
+    if (replace.empty()) return;
+    for (BFace& f : model_.faces) {
+      for (BLoop& loop : f.loops) {
+        for (BUse& u : loop) {
+          auto it = replace.find(u.edge);
+          if (it == replace.end()) continue;
+          const BEdge& from = model_.edges[static_cast<std::size_t>(u.edge)];
+          const BEdge& to = model_.edges[static_cast<std::size_t>(it->second)];
+          const bool same_direction = from.v0 == to.v0;
+          const double mid = 0.5 * (from.t0 + from.t1);
+          auto pc = aligned_fit(to, *f.surface, from.curve->point(mid), u.pcurve->point(mid),
+                                options_.tolerance * 1e-2);
+          if (!pc) continue;  // keep the separate edge (the checker speaks if it matters)
+          u.edge = it->second;
+          u.forward = same_direction ? u.forward : !u.forward;
+          u.pcurve = pc;
+        }
+      }
+    }
+  }
+
+  // A vertex of one operand lying inside an edge of the other (touching or overlapping
+  // boundaries) splits that edge there.
+  void split_at_touching_vertices() {
+    const double tol = options_.tolerance;
+    std::vector<int> operand_of_vertex(model_.vertices.size(), -1);
+    std::vector<int> operand_of_edge(model_.edges.size(), -1);
+    for (const BFace& f : model_.faces) {
+      for (const BLoop& loop : f.loops) {
+        for (const BUse& u : loop) {
+          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          for (int v : {e.v0, e.v1}) {
+            int& o = operand_of_vertex[static_cast<std::size_t>(v)];
+            o = (o == -1 || o == f.operand) ? f.operand : 2;  // 2: shared by both
+          }
+          operand_of_edge[static_cast<std::size_t>(u.edge)] = f.operand;
+        }
+      }
+    }
+    for (std::size_t ei = 0; ei < model_.edges.size(); ++ei) {
+      BEdge& e = model_.edges[ei];
+      if (e.degenerate() || operand_of_edge[ei] < 0) continue;
+      BoundingBox box = e.curve->bounds(e.t0, e.t1);
+      box.enlarge(tol);
+      for (std::size_t v = 0; v < model_.vertices.size(); ++v) {
+        const int o = operand_of_vertex[v];
+        if (o == operand_of_edge[ei] || o < 0 || static_cast<int>(v) == e.v0 || static_cast<int>(v) == e.v1) continue;
+        const Vec3& p = model_.vertices[v].point;
+        if (!box.contains(p)) continue;
+        const double t = e.curve->closest_parameter(p, e.t0, e.t1);
+        if ((e.curve->point(t) - p).norm() > tol) continue;
+        const double span = 1e-9 * std::max(1.0, e.t1 - e.t0);
+        if (t <= e.t0 + span || t >= e.t1 - span) continue;
+        e.splits.emplace_back(t, static_cast<int>(v));
+      }
+    }
+  }
+
+  double uv_margin(std::size_t face) const {
+    const FacePolygon& p = polygons_[face];
+    return 1e-9 * std::max({1.0, p.max.x() - p.min.x(), p.max.y() - p.min.y()});
+  }
+
+  // Crossings of a curve (pcurve `pc` on face f) with f's boundary: (curve parameter, edge,
+  // edge parameter) triples.
+  struct Hit {
+    double t;
+    int edge;
+    double s;
+  };
+  void boundary_hits(std::size_t f, const Curve2d& pc, double t0, double t1, int skip_edge,
+                     std::vector<Hit>& hits) {
+    const BFace& face = model_.faces[f];
+    const double pu = face.surface->u_period(), pv = face.surface->v_period();
+    const int ku = pu > 0 ? 2 : 0, kv = pv > 0 ? 1 : 0;
+    const double tol = uv_margin(f) * 10;
+    std::set<int> done;
+    for (const BLoop& loop : face.loops) {
+      for (const BUse& u : loop) {
+        if (u.edge == skip_edge) continue;
+        const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+        for (int i = -ku; i <= ku; ++i) {
+          for (int j = -kv; j <= kv; ++j) {
+            Curve2dPtr shifted = shift_pcurve(u.pcurve, Vec2(i * pu, j * pv));
+            for (const Crossing& c : intersect_pcurves(pc, t0, t1, *shifted, e.t0, e.t1, tol)) {
+              hits.push_back({c.t, u.edge, c.s});
+            }
+          }
+        }
+      }
+    }
+  }
+
+  // Adds the part of a curve lying inside both faces (fa, fb) as section edges (or, with
+  // `existing` >= 0, marks an existing edge of fb's boundary as lying in fa).
+  Status add_section(std::size_t fa, std::size_t fb, const CurvePtr& curve, double t0, double t1,
+                     int existing) {
+    const double fit_tol = options_.tolerance * 1e-2;
+    Curve2dPtr pa = fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
+    Curve2dPtr pb = existing >= 0 ? nullptr : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
+    if (!pa || (existing < 0 && !pb)) {
+      return Status(ErrorCode::Unsupported,
+                    std::string("the section of a ") + surface_name(model_.faces[fa].surface->kind()) +
+                        " and a " + surface_name(model_.faces[fb].surface->kind()) +
+                        " has no exact pcurve in this version");
+    }
+    std::vector<Hit> hits;
+    boundary_hits(fa, *pa, t0, t1, -1, hits);
+    if (existing < 0) boundary_hits(fb, *pb, t0, t1, -1, hits);
+    std::vector<double> cuts{t0, t1};
+    for (const Hit& h : hits) cuts.push_back(h.t);
+    std::sort(cuts.begin(), cuts.end());
+    const double min_span = 1e-9 * std::max(1.0, t1 - t0);
+    for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+      const double c0 = cuts[i], c1 = cuts[i + 1];
+      if (c1 - c0 <= min_span) continue;
+      const double mid = 0.5 * (c0 + c1);
+      auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * 1e3);
+      if (!shift_a) continue;
+      std::optional<Vec2> shift_b = Vec2::Zero();
+      if (existing < 0) {
+        shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3);
+        if (!shift_b) continue;
+      }
+      // Vertices at the piece's ends: split the boundary edges they fall on.
+      const int v0 = vertex_on_curve(*curve, c0, hits);
+      const int v1 = vertex_on_curve(*curve, c1, hits);
+      int edge_id = existing;
+      if (edge_id < 0) {
+        edge_id = find_edge(v0, v1, curve->point(mid));
+        if (edge_id < 0) {
+          BEdge e;
+          e.curve = curve;
+          e.t0 = c0;
+          e.t1 = c1;
+          e.v0 = v0;
+          e.v1 = v1;
+          e.tolerance = options_.tolerance;
+          edge_id = model_.add_edge(std::move(e));
+          section_edges_.push_back(edge_id);
+        }
+      }
+      if (existing >= 0) {
+        BEdge& own = model_.edges[static_cast<std::size_t>(existing)];
+        for (auto [c, v] : {std::pair{c0, v0}, std::pair{c1, v1}}) {
+          if (c > own.t0 + min_span && c < own.t1 - min_span && v != own.v0 && v != own.v1) {
+            own.splits.emplace_back(c, v);
+          }
+        }
+      }
+      const BEdge& e = model_.edges[static_cast<std::size_t>(edge_id)];
+      if (existing >= 0) {
+        // Only the part [c0, c1] of the existing edge lies inside fa; such partial pieces
+        // are handled by splitting the edge at the hits (the part is then a sub-edge).
+        if (std::abs(c0 - e.t0) > min_span || std::abs(c1 - e.t1) > min_span) {
+          pending_partials_.push_back({fa, edge_id, c0, c1, shift_pcurve(pa, *shift_a)});
+          continue;
+        }
+      }
+      add_extra(fa, edge_id, refit_for(edge_id, fa, shift_pcurve(pa, *shift_a), curve));
+      if (existing < 0) add_extra(fb, edge_id, refit_for(edge_id, fb, shift_pcurve(pb, *shift_b), curve));
+    }
+    return {};
+  }
+
+  // The pcurve for `edge` on face f: the section pcurve when the edge is on the section's
+  // curve, else refitted on the edge's own curve.
+  Curve2dPtr refit_for(int edge, std::size_t f, const Curve2dPtr& pc, const CurvePtr& curve) {
+    const BEdge& e = model_.edges[static_cast<std::size_t>(edge)];
+    if (e.curve == curve) return pc;
+    const Vec3 mid = e.curve->point(0.5 * (e.t0 + e.t1));
+    const double lo = curve->period() > 0 ? 0.0 : -1e300, hi = curve->period() > 0 ? curve->period() : 1e300;
+    const Vec2 old_uv = pc->point(curve->closest_parameter(mid, lo, hi));
+    auto fitted = aligned_fit(e, *model_.faces[f].surface, mid, old_uv, options_.tolerance * 1e-2);
+    return fitted ? fitted : pc;
+  }
+
+  void add_extra(std::size_t f, int edge, Curve2dPtr pcurve) {
+    BFace& face = model_.faces[f];
+    for (const BUse& u : face.extra) {
+      if (u.edge == edge) return;
+    }
+    for (const BLoop& loop : face.loops) {
+      for (const BUse& u : loop) {
+        if (u.edge == edge) return;  // already on the boundary
+      }
+    }
+    face.extra.push_back({edge, true, std::move(pcurve)});
+  }
+
+  // An existing edge between v0 and v1 through `mid`, or -1.
+  int find_edge(int v0, int v1, const Vec3& mid) {
+    for (std::size_t i = 0; i < model_.edges.size(); ++i) {
+      const BEdge& e = model_.edges[i];
+      if (e.degenerate()) continue;
+      if (!((e.v0 == v0 && e.v1 == v1) || (e.v0 == v1 && e.v1 == v0))) continue;
+      const double t = e.curve->closest_parameter(mid, e.t0, e.t1);
+      if ((e.curve->point(t) - mid).norm() <= options_.tolerance) return static_cast<int>(i);
+    }
+    return -1;
+  }
+
+  // The vertex at curve(t): an existing vertex within tolerance, else new; every boundary
+  // edge hit there gets a split.
+  int vertex_on_curve(const Curve& curve, double t, const std::vector<Hit>& hits) {
+    const Vec3 p = curve.point(t);
+    const int v = model_.vertex_at(p);
+    for (const Hit& h : hits) {
+      if (std::abs(h.t - t) > 1e-9 * std::max(1.0, std::abs(t))) continue;
+      BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
+      if (v == e.v0 || v == e.v1) continue;
+      e.splits.emplace_back(h.s, v);
+    }
+    return v;
+  }
+
+  Status intersect_faces() {
+    const double tol = options_.tolerance;
+    for (std::size_t fa = 0; fa < first_b_face_; ++fa) {
+      for (std::size_t fb = first_b_face_; fb < model_.faces.size(); ++fb) {
+        BoundingBox ba = model_.faces[fa].box, bb = model_.faces[fb].box;
+        ba.enlarge(tol);
+        bb.enlarge(tol);
+        if (!ba.intersects(bb)) continue;
+        BoundingBox clip;
+        clip.min = ba.min.cwiseMax(bb.min);
+        clip.max = ba.max.cwiseMin(bb.max);
+        const SsiResult ssi = intersect_surfaces(*model_.faces[fa].surface, *model_.faces[fb].surface, clip, tol);
+        if (ssi.kind == SsiKind::Unsupported) return Status(ErrorCode::Unsupported, ssi.reason);
+        if (ssi.kind == SsiKind::Coincident) {
+          coincident_.emplace_back(fa, fb);
+          continue;
+        }
+        for (const SectionCurve& c : ssi.curves) {
+          if (auto s = add_section(fa, fb, c.curve, c.first, c.last, -1); !s.ok()) return s;
+        }
+      }
+    }
+    // Coincident faces: each one's boundary edges that lie inside the other split it.
+    for (const auto& [fa, fb] : coincident_) {
+      for (auto [from, into] : {std::pair{fb, fa}, std::pair{fa, fb}}) {
+        std::set<int> seen;
+        for (const BLoop& loop : model_.faces[from].loops) {
+          for (const BUse& u : loop) {
+            const BEdge e = model_.edges[static_cast<std::size_t>(u.edge)];
+            if (e.degenerate() || !seen.insert(u.edge).second) continue;
+            if (auto s = add_section(into, from, e.curve, e.t0, e.t1, u.edge); !s.ok()) return s;
+          }
+        }
+      }
+    }
+    return {};
+  }
+
+  // Applies the splits gathered on edges: each split edge becomes a chain of sub-edges, and
+  // every use of it (boundary loops, extras) the chain of sub-uses.
+  void split_edges() {
+    std::map<int, std::vector<int>> chains;  // edge -> sub-edges in parameter order
+    const std::size_t count = model_.edges.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      BEdge& e = model_.edges[i];
+      if (e.splits.empty()) continue;
+      std::sort(e.splits.begin(), e.splits.end());
+      std::vector<std::pair<double, int>> cuts{{e.t0, e.v0}};
+      for (const auto& [t, v] : e.splits) {
+        if (v == cuts.back().second) continue;
+        if (t <= e.t0 || t >= e.t1) continue;
+        cuts.emplace_back(t, v);
+      }
+      cuts.emplace_back(e.t1, e.v1);
+      if (cuts.size() <= 2) continue;
+      std::vector<int> chain;
+      for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+        BEdge sub;
+        sub.curve = e.curve;
+        sub.t0 = cuts[k].first;
+        sub.t1 = cuts[k + 1].first;
+        sub.v0 = cuts[k].second;
+        sub.v1 = cuts[k + 1].second;
+        sub.tolerance = e.tolerance;
+        sub.seam = e.seam;
+        chain.push_back(model_.add_edge(std::move(sub)));
+      }
+      chains[static_cast<int>(i)] = chain;
+    }
+    auto expand = [&](const BUse& u, std::vector<BUse>& out) {
+      auto it = chains.find(u.edge);
+      if (it == chains.end()) {
+        out.push_back(u);
+        return;
+      }
+      std::vector<int> chain = it->second;
+      if (!u.forward) std::reverse(chain.begin(), chain.end());
+      for (int sub : chain) out.push_back({sub, u.forward, u.pcurve});
+    };
+    for (BFace& f : model_.faces) {
+      for (BLoop& loop : f.loops) {
+        BLoop next;
+        for (const BUse& u : loop) expand(u, next);
+        loop = std::move(next);
+      }
+      std::vector<BUse> extra;
+      for (const BUse& u : f.extra) expand(u, extra);
+      f.extra = std::move(extra);
+    }
+    // Partial pieces of existing edges that lie in a coincident face: now whole sub-edges.
+    for (const PendingPartial& p : pending_partials_) {
+      auto it = chains.find(p.edge);
+      if (it == chains.end()) continue;
+      for (int sub : it->second) {
+        const BEdge& s = model_.edges[static_cast<std::size_t>(sub)];
+        const double mid = 0.5 * (s.t0 + s.t1);
+        if (mid > p.t0 && mid < p.t1) add_extra(p.face, sub, p.pcurve);
+      }
+    }
+  }
+
+  Status split_faces(std::vector<Piece>& pieces) {
+    for (std::size_t f = 0; f < model_.faces.size(); ++f) {
+      auto regions = split_face(model_, model_.faces[f]);
+      if (!regions.ok()) return regions.error();
+      for (Region& r : regions.value()) pieces.push_back({static_cast<int>(f), std::move(r)});
+    }
+    return {};
+  }
+
+  // A point well inside a piece: the centroid of the largest triangle of its (u, v) polygon.
+  std::optional<Vec3> interior_point(const Piece& piece) {
+    std::vector<std::vector<Vec2>> loops;
+    for (const BLoop& loop : piece.region.loops) {
+      std::vector<Vec2> pts;
+      for (const BUse& u : loop) {
+        auto s = sample_use(model_, u, 16);
+        pts.insert(pts.end(), s.begin(), s.end() - 1);
+      }
+      loops.push_back(std::move(pts));
+    }
+    const PolygonTriangulation tri = triangulate_polygon(loops);
+    std::vector<Vec2> flat;
+    for (const auto& l : loops) flat.insert(flat.end(), l.begin(), l.end());
+    double best = -1;
+    Vec2 at;
+    for (const auto& t : tri.triangles) {
+      const Vec2 &p = flat[t[0]], &q = flat[t[1]], &r = flat[t[2]];
+      const double area = std::abs((q - p).x() * (r - p).y() - (q - p).y() * (r - p).x());
+      if (area > best) {
+        best = area;
+        at = (p + q + r) / 3.0;
+      }
+    }
+    if (best <= 0) return std::nullopt;
+    const Surface& s = *model_.faces[static_cast<std::size_t>(piece.face)].surface;
+    return s.point(at.x(), at.y());
+  }
+
+  Vec3 outward_normal(const Piece& piece, const Vec3& p) {
+    const BFace& f = model_.faces[static_cast<std::size_t>(piece.face)];
+    const Vec2 uv = f.surface->closest_parameters(p);
+    const Vec3 n = f.surface->normal(uv.x(), uv.y());
+    return f.reversed ? Vec3(-n) : n;
+  }
+
+  Status classify(std::vector<Piece>& pieces) {
+    auto ca = SolidClassifier::create(a_, options_.tolerance);
+    auto cb = SolidClassifier::create(b_, options_.tolerance);
+    if (!ca.ok()) return ca.error();
+    if (!cb.ok()) return cb.error();
+    for (Piece& piece : pieces) {
+      const bool from_a = static_cast<std::size_t>(piece.face) < first_b_face_;
+      const SolidClassifier& other = from_a ? cb.value() : ca.value();
+      auto p = interior_point(piece);
+      if (!p) continue;  // a degenerate sliver bounds nothing
+      const Containment c = other.classify(*p);
+      bool in = c == Containment::Inside, out = c == Containment::Outside;
+      bool on_same = false, on_opposite = false;
+      if (c == Containment::OnBoundary) {
+        auto n = other.boundary_normal(*p);
+        if (!n) return Status(ErrorCode::InvalidShape, "a boundary point has no normal");
+        (outward_normal(piece, *p).dot(*n) > 0 ? on_same : on_opposite) = true;
+      }
+      switch (op_) {
+        case BooleanOp::Fuse:
+          piece.keep = out || (on_same && from_a);
+          break;
+        case BooleanOp::Common:
+          piece.keep = in || (on_same && from_a);
+          break;
+        case BooleanOp::Cut:
+          piece.keep = from_a ? (out || on_opposite) : in;
+          piece.flip = !from_a;
+          break;
+      }
+    }
+    return {};
+  }
+
+  Result<Shape> build(std::vector<Piece>& pieces);
+
+  struct PendingPartial {
+    std::size_t face;
+    int edge;
+    double t0, t1;
+    Curve2dPtr pcurve;
+  };
+
+  Shape a_, b_;
+  BooleanOp op_;
+  BooleanOptions options_;
+  BModel model_;
+  std::size_t first_b_face_ = 0;
+  std::vector<FacePolygon> polygons_;
+  std::vector<std::pair<std::size_t, std::size_t>> coincident_;
+  std::vector<int> section_edges_;
+  std::vector<PendingPartial> pending_partials_;
+};
+
+}  // namespace
+
+namespace {
+
+// A face of the result before it becomes a Shape.
+struct RFace {
+  int source_face;  // model face it comes from
+  SurfacePtr surface;
+  bool reversed;
+  std::vector<BLoop> loops;
+  bool alive = true;
+};
+
+// Positions of a use of `edge` in a face: (loop, index).
+std::optional<std::pair<std::size_t, std::size_t>> find_use(const RFace& f, int edge, bool forward) {
+  for (std::size_t l = 0; l < f.loops.size(); ++l) {
+    for (std::size_t i = 0; i < f.loops[l].size(); ++i) {
+      if (f.loops[l][i].edge == edge && f.loops[l][i].forward == forward) return std::make_pair(l, i);
+    }
+  }
+  return std::nullopt;
+}
+
+// Loop rotated so that position i comes last.
+BLoop rotated_to_end(const BLoop& loop, std::size_t i) {
+  BLoop out;
+  for (std::size_t k = 1; k <= loop.size(); ++k) out.push_back(loop[(i + k) % loop.size()]);
+  return out;
+}
+
+// Joins two loops (or the two sides of one) along an edge used in opposite directions at
+// (la, ia) and (lb, ib) of face f; the edge disappears. Loops that close on themselves
+// split off; empty ones vanish.
+void splice(RFace& f, std::size_t la, std::size_t ia, std::size_t lb, std::size_t ib) {
+  if (la == lb) {
+    BLoop loop = rotated_to_end(f.loops[la], ia);  // ... , e
+    // Now find the opposite use in the rotated loop.
+    std::size_t j = 0;
+    while (j < loop.size() && !(loop[j].edge == f.loops[la][ia].edge && loop[j].forward != f.loops[la][ia].forward)) ++j;
+    BLoop first(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(j));
+    BLoop second(loop.begin() + static_cast<std::ptrdiff_t>(j) + 1, loop.end() - 1);
+    f.loops.erase(f.loops.begin() + static_cast<std::ptrdiff_t>(la));
+    if (!first.empty()) f.loops.push_back(std::move(first));
+    if (!second.empty()) f.loops.push_back(std::move(second));
+    return;
+  }
+  BLoop a = rotated_to_end(f.loops[la], ia);
+  BLoop b = rotated_to_end(f.loops[lb], ib);
+  a.pop_back();
+  b.pop_back();
+  a.insert(a.end(), b.begin(), b.end());
+  const std::size_t hi = std::max(la, lb), lo = std::min(la, lb);
+  f.loops.erase(f.loops.begin() + static_cast<std::ptrdiff_t>(hi));
+  f.loops.erase(f.loops.begin() + static_cast<std::ptrdiff_t>(lo));
+  if (!a.empty()) f.loops.push_back(std::move(a));
+}
+
+bool same_plane(const Surface& x, bool xr, const Surface& y, bool yr, double tol) {
+  if (x.kind() != SurfaceKind::Plane || y.kind() != SurfaceKind::Plane) return false;
+  const Frame& fx = static_cast<const PlaneSurface&>(x).frame();
+  const Frame& fy = static_cast<const PlaneSurface&>(y).frame();
+  const Vec3 nx = xr ? Vec3(-fx.z) : fx.z, ny = yr ? Vec3(-fy.z) : fy.z;
+  return nx.dot(ny) > 1 - 1e-12 && std::abs((fy.origin - fx.origin).dot(fx.z)) <= tol;
+}
+
+}  // namespace
+
+Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
+  const double tol = options_.tolerance;
+  std::vector<RFace> faces;
+  for (const Piece& p : pieces) {
+    if (!p.keep) continue;
+    const BFace& f = model_.faces[static_cast<std::size_t>(p.face)];
+    faces.push_back({p.face, f.surface, f.reversed != p.flip, p.region.loops});
+  }
+  // 1. Pieces of one periodic face that meet across its seam become one face.
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    for (std::size_t j = 0; j < faces.size(); ++j) {
+      if (i == j || !faces[i].alive || !faces[j].alive) continue;
+      if (faces[i].source_face != faces[j].source_face || faces[i].surface->u_period() <= 0) continue;
+      bool merged = true;
+      while (merged && faces[j].alive) {
+        merged = false;
+        for (std::size_t l = 0; l < faces[i].loops.size() && !merged; ++l) {
+          for (std::size_t k = 0; k < faces[i].loops[l].size() && !merged; ++k) {
+            const BUse u = faces[i].loops[l][k];
+            if (!model_.edges[static_cast<std::size_t>(u.edge)].seam) continue;
+            auto other = find_use(faces[j], u.edge, !u.forward);
+            if (!other) continue;
+            // Shift j's pcurves by whole periods so the shared seam coincides.
+            const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+            const double tm = 0.5 * (e.t0 + e.t1);
+            const Vec2 offset = u.pcurve->point(tm) - faces[j].loops[other->first][other->second].pcurve->point(tm);
+            for (BLoop& loop : faces[j].loops) {
+              for (BUse& w : loop) w.pcurve = shift_pcurve(w.pcurve, offset);
+            }
+            const std::size_t base = faces[i].loops.size();
+            for (BLoop& loop : faces[j].loops) faces[i].loops.push_back(std::move(loop));
+            faces[j].loops.clear();
+            faces[j].alive = false;
+            splice(faces[i], l, k, base + other->first, other->second);
+            merged = true;
+          }
+        }
+      }
+    }
+  }
+  // 2. Faces on one plane meeting along an edge are one face (the edge bounds nothing).
+  bool changed = true;
+  while (changed) {
+    changed = false;
+    std::map<int, std::vector<std::pair<std::size_t, bool>>> uses;
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (!faces[i].alive) continue;
+      for (const BLoop& loop : faces[i].loops) {
+        for (const BUse& u : loop) uses[u.edge].emplace_back(i, u.forward);
+      }
+    }
+    for (const auto& [edge, list] : uses) {
+      if (list.size() != 2 || list[0].second == list[1].second) continue;
+      const std::size_t i = list[0].first, j = list[1].first;
+      if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed, tol)) continue;
+      if (i != j) {
+        // Refit j's pcurves on i's plane, then join.
+        for (BLoop& loop : faces[j].loops) {
+          for (BUse& w : loop) {
+            const BEdge& e = model_.edges[static_cast<std::size_t>(w.edge)];
+            if (e.degenerate()) continue;
+            auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *faces[i].surface, tol * 1e-2);
+            if (pc) w.pcurve = pc;
+          }
+        }
+        for (BLoop& loop : faces[j].loops) faces[i].loops.push_back(std::move(loop));
+        faces[j].loops.clear();
+        faces[j].alive = false;
+      }
+      auto a = find_use(faces[i], edge, list[0].second);
+      auto b = find_use(faces[i], edge, !list[0].second);
+      if (!a || !b) continue;
+      splice(faces[i], a->first, a->second, b->first, b->second);
+      changed = true;
+      break;
+    }
+  }
+  // 3. Straight edges meeting end to end at a vertex nothing else uses become one edge.
+  changed = true;
+  while (changed) {
+    changed = false;
+    std::map<int, std::set<int>> vertex_edges;
+    for (const RFace& f : faces) {
+      if (!f.alive) continue;
+      for (const BLoop& loop : f.loops) {
+        for (const BUse& u : loop) {
+          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          vertex_edges[e.v0].insert(u.edge);
+          vertex_edges[e.v1].insert(u.edge);
+        }
+      }
+    }
+    for (const auto& [v, edges] : vertex_edges) {
+      if (edges.size() != 2) continue;
+      const int e1 = *edges.begin(), e2 = *edges.rbegin();
+      const BEdge& x = model_.edges[static_cast<std::size_t>(e1)];
+      const BEdge& y = model_.edges[static_cast<std::size_t>(e2)];
+      if (x.degenerate() || y.degenerate() || x.curve->kind() != CurveKind::Line || y.curve->kind() != CurveKind::Line) continue;
+      const int xa = x.v0 == v ? x.v1 : x.v0, yb = y.v0 == v ? y.v1 : y.v0;
+      if (xa == yb) continue;
+      const Vec3 pa = model_.vertices[static_cast<std::size_t>(xa)].point;
+      const Vec3 pb = model_.vertices[static_cast<std::size_t>(yb)].point;
+      const Vec3 pv = model_.vertices[static_cast<std::size_t>(v)].point;
+      const Vec3 d = pb - pa;
+      if ((pv - pa).cross(d).norm() > tol * d.norm()) continue;
+      BEdge merged;
+      merged.curve = std::make_shared<LineCurve>(pa, d);
+      merged.t0 = 0;
+      merged.t1 = d.norm();
+      merged.v0 = xa;
+      merged.v1 = yb;
+      merged.tolerance = std::max(x.tolerance, y.tolerance);
+      const int id = model_.add_edge(std::move(merged));
+      // Replace "x then y" (or "y^-1 then x^-1") in every loop by the merged edge.
+      for (RFace& f : faces) {
+        if (!f.alive) continue;
+        for (BLoop& loop : f.loops) {
+          BLoop out;
+          for (std::size_t k = 0; k < loop.size(); ++k) {
+            const BUse& u = loop[k];
+            if (u.edge != e1 && u.edge != e2) {
+              out.push_back(u);
+              continue;
+            }
+            const bool starts_at_a = use_start(model_, u) == xa || use_start(model_, u) == yb;
+            if (!starts_at_a) continue;  // the second half: dropped, the first stands for both
+            const bool forward = use_start(model_, u) == xa;
+            const BEdge& m = model_.edges[static_cast<std::size_t>(id)];
+            const BEdge& old = model_.edges[static_cast<std::size_t>(u.edge)];
+            const double old_mid = 0.5 * (old.t0 + old.t1);
+            auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid), u.pcurve->point(old_mid), tol * 1e-2);
+            out.push_back({id, forward, pc ? pc : u.pcurve});
+          }
+          loop = std::move(out);
+        }
+      }
+      changed = true;
+      break;
+    }
+  }
+
+  // 4. Shapes: vertices, edges and faces, shared by index.
+  std::vector<double> vertex_tol(model_.vertices.size(), tol);
+  std::set<int> used_edges;
+  for (const RFace& f : faces) {
+    if (!f.alive) continue;
+    for (const BLoop& loop : f.loops) {
+      for (const BUse& u : loop) used_edges.insert(u.edge);
+    }
+  }
+  for (int id : used_edges) {
+    const BEdge& e = model_.edges[static_cast<std::size_t>(id)];
+    for (int end = 0; end < 2; ++end) {
+      const int v = end == 0 ? e.v0 : e.v1;
+      double gap = 0;
+      if (!e.degenerate()) gap = (e.curve->point(end == 0 ? e.t0 : e.t1) - model_.vertices[static_cast<std::size_t>(v)].point).norm();
+      vertex_tol[static_cast<std::size_t>(v)] = std::max({vertex_tol[static_cast<std::size_t>(v)], gap * 1.01, e.tolerance});
+    }
+  }
+  std::map<int, Shape> vertex_shapes, edge_shapes;
+  auto vertex_shape = [&](int v) -> Result<Shape> {
+    if (auto it = vertex_shapes.find(v); it != vertex_shapes.end()) return it->second;
+    auto s = ShapeFactory::vertex(model_.vertices[static_cast<std::size_t>(v)].point, vertex_tol[static_cast<std::size_t>(v)]);
+    if (s.ok()) vertex_shapes.emplace(v, s.value());
+    return s;
+  };
+  auto edge_shape = [&](int id) -> Result<Shape> {
+    if (auto it = edge_shapes.find(id); it != edge_shapes.end()) return it->second;
+    const BEdge& e = model_.edges[static_cast<std::size_t>(id)];
+    auto v0 = vertex_shape(e.v0);
+    auto v1 = vertex_shape(e.v1);
+    if (!v0.ok()) return v0;
+    if (!v1.ok()) return v1;
+    Result<Shape> s = e.degenerate() ? ShapeFactory::degenerate_edge(v0.value(), e.t0, e.t1, e.tolerance)
+                                     : ShapeFactory::edge(e.curve, e.t0, e.t1, v0.value(), v1.value(), e.tolerance);
+    if (s.ok()) edge_shapes.emplace(id, s.value());
+    return s;
+  };
+  std::vector<Shape> face_shapes;
+  std::vector<std::size_t> face_of_shape;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const RFace& f = faces[i];
+    if (!f.alive || f.loops.empty()) continue;
+    std::vector<Shape> wires;
+    std::vector<std::vector<Curve2dPtr>> pcurves;
+    // Outer loop first.
+    std::vector<BLoop> loops = f.loops;
+    std::stable_sort(loops.begin(), loops.end(), [&](const BLoop& x, const BLoop& y) {
+      return loop_area2(model_, x) > loop_area2(model_, y);
+    });
+    for (const BLoop& loop : loops) {
+      std::vector<Shape> edges;
+      std::vector<Curve2dPtr> curves;
+      for (const BUse& u : loop) {
+        auto e = edge_shape(u.edge);
+        if (!e.ok()) return e.error();
+        edges.push_back(u.forward ? e.value() : e.value().reversed());
+        curves.push_back(u.pcurve);
+      }
+      auto w = ShapeFactory::wire(std::move(edges));
+      if (!w.ok()) return w.error();
+      wires.push_back(w.value());
+      pcurves.push_back(std::move(curves));
+    }
+    auto face = ShapeFactory::face(f.surface, std::move(wires), std::move(pcurves), tol);
+    if (!face.ok()) return face.error();
+    face_shapes.push_back(face.value().oriented(f.reversed ? Orientation::Reversed : Orientation::Forward));
+    face_of_shape.push_back(i);
+  }
+
+  // 5. Shells: faces joined through edges that exactly two faces use (an edge shared by
+  // four faces is where two solids touch: it joins nothing).
+  std::vector<std::size_t> parent(face_shapes.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) { return parent[x] == x ? x : parent[x] = root(parent[x]); };
+  std::map<int, std::vector<std::size_t>> edge_users;
+  for (std::size_t k = 0; k < face_shapes.size(); ++k) {
+    std::set<int> mine;
+    for (const BLoop& loop : faces[face_of_shape[k]].loops) {
+      for (const BUse& u : loop) {
+        if (!model_.edges[static_cast<std::size_t>(u.edge)].degenerate()) mine.insert(u.edge);
+      }
+    }
+    for (int e : mine) edge_users[e].push_back(k);
+  }
+  for (const auto& [e, users] : edge_users) {
+    if (users.size() == 2) parent[root(users[0])] = root(users[1]);
+  }
+  std::map<std::size_t, std::vector<Shape>> groups;
+  for (std::size_t k = 0; k < face_shapes.size(); ++k) groups[root(k)].push_back(face_shapes[k]);
+  struct ShellInfo {
+    Shape shell;
+    double volume;
+  };
+  std::vector<ShellInfo> outer, cavities;
+  for (auto& [r, list] : groups) {
+    auto shell = ShapeFactory::shell(list);
+    if (!shell.ok()) return shell.error();
+    auto probe = ShapeFactory::solid({shell.value()});
+    if (!probe.ok()) return probe.error();
+    const double v = mass_properties(probe.value()).volume;
+    if (std::abs(v) <= tol * tol * tol) continue;  // no volume: a leftover sheet
+    (v > 0 ? outer : cavities).push_back({shell.value(), v});
+  }
+  std::vector<std::vector<Shape>> solid_shells;
+  for (const ShellInfo& o : outer) solid_shells.push_back({o.shell});
+  for (const ShellInfo& c : cavities) {
+    // The smallest outer shell around the cavity.
+    const Vec3 p = vertex_point(*Explorer(c.shell, ShapeKind::Vertex).begin());
+    int best = -1;
+    for (std::size_t k = 0; k < outer.size(); ++k) {
+      auto cls = SolidClassifier::create(ShapeFactory::solid({outer[k].shell}).value(), tol);
+      if (!cls.ok()) continue;
+      if (cls->classify(p) != Containment::Inside) continue;
+      if (best < 0 || outer[k].volume < outer[static_cast<std::size_t>(best)].volume) best = static_cast<int>(k);
+    }
+    if (best < 0) return Error{ErrorCode::InvalidShape, "a cavity of the result lies in no solid"};
+    solid_shells[static_cast<std::size_t>(best)].push_back(c.shell);
+  }
+  std::vector<Shape> solids;
+  for (auto& shells : solid_shells) {
+    auto s = ShapeFactory::solid(shells);
+    if (!s.ok()) return s.error();
+    solids.push_back(s.value());
+  }
+  auto result = ShapeFactory::compound(std::move(solids));
+  if (!result.ok()) return result;
+  if (options_.check_result) {
+    const CheckReport report = check_shape(result.value());
+    if (!report.valid()) {
+      return Error{ErrorCode::InvalidShape, std::string("the ") + boolean_op_name(op_) +
+                                                " result fails the checker: " +
+                                                check_status_name(report.issues.front().status) +
+                                                ": " + report.issues.front().message};
+    }
+  }
+  return result;
+}
+
+Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
+                                const BooleanOptions& options) {
+  return BooleanEngine(a, b, op, options).run();
+}
+
+Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,
+                           const BooleanOptions& options) {
+  if (shapes.empty()) return ShapeFactory::compound({});
+  Shape acc = shapes.front();
+  for (std::size_t i = 1; i < shapes.size(); ++i) {
+    // An empty intermediate result: common stays empty, cut stays empty.
+    if (map_child_shapes(acc, ShapeKind::Solid).size() == 0) {
+      if (op != BooleanOp::Fuse) return acc;
+      acc = shapes[i];
+      continue;
+    }
+    auto r = boolean_operation(acc, shapes[i], op, options);
+    if (!r.ok()) return r;
+    acc = r.value();
+  }
+  if (acc.kind() != ShapeKind::Compound) return ShapeFactory::compound({acc});
+  return acc;
+}
+
+}  // namespace csgtile::kernel

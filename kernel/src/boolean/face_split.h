@@ -1,0 +1,23 @@
+#pragma once
+// Splitting a face along the section edges that lie in it: the (u, v)-plane arrangement of
+// its boundary uses and section edges, traced into the boundary cycles of its pieces.
+
+#include "boolean/model.h"
+
+namespace csgtile::kernel::detail {
+
+/// A piece of a face: loops in the face's (u, v) plane, outer loop first (counter-clockwise),
+/// then holes (clockwise).
+struct Region {
+  std::vector<BLoop> loops;
+};
+
+/// Pieces of `face` cut by `face.extra` (each section edge bounds a piece on both sides;
+/// section edges with a free end are ignored). Error: InvalidShape when a cycle cannot be
+/// closed or a hole has no piece around it.
+Result<std::vector<Region>> split_face(const BModel& m, const BFace& face);
+
+/// Twice the signed area of a loop in (u, v) (sampled pcurves).
+double loop_area2(const BModel& m, const BLoop& loop);
+
+}  // namespace csgtile::kernel::detail

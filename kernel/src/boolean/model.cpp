@@ -1,0 +1,134 @@
+#include "boolean/model.h"
+
+#include <cmath>
+
+#include "boolean/pcurve_fit.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+
+namespace csgtile::kernel::detail {
+
+int BModel::vertex_at(const Vec3& p) {
+  const double cell = std::max(tolerance_ * 4.0, 1e-12);
+  const long long cx = std::llround(std::floor(p.x() / cell));
+  const long long cy = std::llround(std::floor(p.y() / cell));
+  const long long cz = std::llround(std::floor(p.z() / cell));
+  int best = -1;
+  double best_d = tolerance_;
+  for (long long dx = -1; dx <= 1; ++dx) {
+    for (long long dy = -1; dy <= 1; ++dy) {
+      for (long long dz = -1; dz <= 1; ++dz) {
+        auto it = grid_.find(cell_key(cx + dx, cy + dy, cz + dz));
+        if (it == grid_.end()) continue;
+        for (int v : it->second) {
+          const double d = (vertices[static_cast<std::size_t>(v)].point - p).norm();
+          if (d <= best_d) {
+            best_d = d;
+            best = v;
+          }
+        }
+      }
+    }
+  }
+  if (best >= 0) return best;
+  vertices.push_back({p, tolerance_});
+  const int id = static_cast<int>(vertices.size()) - 1;
+  grid_[cell_key(cx, cy, cz)].push_back(id);
+  return id;
+}
+
+Status import_operand(BModel& model, const Shape& shape, int operand) {
+  if (shape.is_null()) return Status(ErrorCode::InvalidArgument, "a Boolean argument is null");
+  if (map_child_shapes(shape, ShapeKind::Solid).size() == 0) {
+    return Status(ErrorCode::InvalidArgument,
+                  std::string("a Boolean argument must hold solids, got a ") +
+                      shape_kind_name(shape.kind()));
+  }
+  const double fit_tolerance = model.tolerance() * 1e-2;
+  ShapeIndex edge_index;
+  std::vector<int> edge_ids;  // edge_index position -> model edge id
+  auto edge_id = [&](const Shape& edge) -> Result<int> {
+    const std::size_t before = edge_index.size();
+    const std::size_t k = edge_index.add(edge);
+    if (k < before) return edge_ids[k];
+    const EdgeData& d = *edge.body().edge();
+    BEdge e;
+    const Location& loc = edge.location();
+    // Length parameters (lines) scale with the location; angles do not.
+    const double k_param = (d.curve && d.curve->kind() == CurveKind::Line) ? loc.scale() : 1.0;
+    e.t0 = d.first * k_param;
+    e.t1 = d.last * k_param;
+    e.tolerance = std::max(d.tolerance * loc.scale(), model.tolerance());
+    if (d.curve) e.curve = d.curve->transformed(loc);
+    const Shape start = edge.oriented(Orientation::Forward).child(0);
+    const Shape end = edge.oriented(Orientation::Forward).child(1);
+    e.v0 = model.vertex_at(vertex_point(start));
+    e.v1 = model.vertex_at(vertex_point(end));
+    const int id = model.add_edge(std::move(e));
+    edge_ids.push_back(id);
+    return id;
+  };
+
+  const ShapeIndex faces = map_child_shapes(shape, ShapeKind::Face);
+  for (std::size_t fi = 0; fi < faces.size(); ++fi) {
+    // Faces are taken once each; their orientation comes from the first use in the walk.
+    const Shape& face = faces[fi];
+    if (face.orientation() != Orientation::Forward && face.orientation() != Orientation::Reversed) continue;
+    const FaceData& fd = *face.body().face();
+    BFace bf;
+    bf.surface = fd.surface->transformed(face.location());
+    bf.reversed = face.orientation() == Orientation::Reversed;
+    bf.operand = operand;
+    bf.source = static_cast<int>(fi);
+    bf.box = bounding_box(face);
+    const Shape body_face = face.oriented(Orientation::Forward);
+    for (std::size_t w = 0; w < body_face.child_count(); ++w) {
+      const Shape wire = body_face.child(w);
+      BLoop loop;
+      for (std::size_t k = 0; k < wire.child_count(); ++k) {
+        const Shape edge = wire.child(k);
+        auto id = edge_id(edge);
+        if (!id.ok()) return id.error();
+        BEdge& e = model.edges[static_cast<std::size_t>(id.value())];
+        BUse use{id.value(), edge.orientation() != Orientation::Reversed, nullptr};
+        if (e.degenerate()) {
+          // A pole or apex: u runs with the parameter, v is fixed where the point is.
+          const auto& old = static_cast<const Line2d&>(*fd.pcurves[w][k]);
+          const Vec2 at = bf.surface->closest_parameters(model.vertices[static_cast<std::size_t>(e.v0)].point);
+          use.pcurve = std::make_shared<Line2d>(Vec2(old.origin().x(), at.y()), old.direction());
+        } else {
+          use.pcurve = fit_pcurve(*e.curve, e.t0, e.t1, *bf.surface, fit_tolerance);
+          if (!use.pcurve) {
+            return Status(ErrorCode::Unsupported, "an edge of an argument has no exact pcurve on its face");
+          }
+          // Keep the face's own (u, v) window (a seam is used at u = 0 and at u = 2π): shift
+          // the refitted pcurve by whole periods onto the original one.
+          const EdgeData& d = *edge.body().edge();
+          const double mid_body = 0.5 * (d.first + d.last);
+          const double mid_world = 0.5 * (e.t0 + e.t1);
+          const Vec2 old_uv = fd.pcurves[w][k]->point(mid_body);
+          const Vec2 new_uv = use.pcurve->point(mid_world);
+          Vec2 offset = Vec2::Zero();
+          const double pu = bf.surface->u_period(), pv = bf.surface->v_period();
+          if (pu > 0) offset.x() = pu * std::round((old_uv.x() - new_uv.x()) / pu);
+          if (pv > 0) offset.y() = pv * std::round((old_uv.y() - new_uv.y()) / pv);
+          use.pcurve = shift_pcurve(use.pcurve, offset);
+        }
+        loop.push_back(std::move(use));
+      }
+      bf.loops.push_back(std::move(loop));
+    }
+    // A seam is an edge used twice by one face (at both ends of a periodic parameter).
+    std::map<int, int> uses_in_face;
+    for (const BLoop& face_loop : bf.loops) {
+      for (const BUse& u : face_loop) ++uses_in_face[u.edge];
+    }
+    for (const auto& [edge, count] : uses_in_face) {
+      if (count == 2) model.edges[static_cast<std::size_t>(edge)].seam = true;
+    }
+    model.faces.push_back(std::move(bf));
+  }
+  return {};
+}
+
+}  // namespace csgtile::kernel::detail

@@ -1,0 +1,285 @@
+// `csgtile info FILE [--json] [--scan]`: what a point-cloud file says about itself — version,
+// point format, counts, bounds, scale/offset, CRS records, VLRs/EVLRs, extra bytes — and the
+// problems the reader found. LAS headers are reported without reading the points unless
+// --scan is given; PLY/PCD/XYZ have no header bounds, so their points are always scanned.
+
+#include <cinttypes>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/geo/las.h"
+#include "csgtile/geo/point_reader.h"
+#include "csgtile/worker/errors.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+struct InfoOptions {
+  std::string file;
+  bool json = false;
+  bool scan = false;
+};
+
+Json optional_code(const std::optional<std::uint16_t>& code) {
+  return code ? Json(*code) : Json(nullptr);
+}
+
+Json bounds_json(const geo::Bounds3& b) {
+  if (b.empty()) return nullptr;
+  return Json{{"min", {b.min[0], b.min[1], b.min[2]}}, {"max", {b.max[0], b.max[1], b.max[2]}}};
+}
+
+Json record_json(const geo::LasRecord& r) {
+  return Json{{"user_id", r.user_id},
+              {"record_id", r.record_id},
+              {"length", r.length},
+              {"description", r.description}};
+}
+
+Json extra_json(const geo::ExtraLayout& layout) {
+  Json dims = Json::array();
+  for (const auto& d : layout.dimensions) {
+    Json j{{"name", d.name},
+           {"type", geo::extra_type_name(d.type)},
+           {"elements", d.elements},
+           {"byte_offset", d.byte_offset},
+           {"description", d.description}};
+    if (d.scale) j["scale"] = *d.scale;
+    if (d.offset) j["offset"] = *d.offset;
+    if (d.no_data) j["no_data"] = *d.no_data;
+    if (d.minimum) j["min"] = *d.minimum;
+    if (d.maximum) j["max"] = *d.maximum;
+    dims.push_back(std::move(j));
+  }
+  return Json{{"bytes_per_point", layout.record_size},
+              {"undescribed_bytes", layout.undescribed_bytes()},
+              {"dimensions", std::move(dims)}};
+}
+
+Json crs_json(const geo::LasCrsRecords& crs) {
+  Json keys = Json::array();
+  for (const auto& k : crs.keys) {
+    Json j{{"id", k.id}, {"location", k.location}, {"count", k.count}};
+    if (k.location == 0) j["value"] = k.value_offset;
+    else if (k.location == 34736) j["value"] = k.doubles;
+    else if (k.location == 34737) j["value"] = k.ascii;
+    keys.push_back(std::move(j));
+  }
+  return Json{{"projected_cs", optional_code(crs.projected_cs)},
+              {"geographic_cs", optional_code(crs.geographic_cs)},
+              {"vertical_cs", optional_code(crs.vertical_cs)},
+              {"projected_linear_units", optional_code(crs.projected_linear_units)},
+              {"vertical_units", optional_code(crs.vertical_units)},
+              {"model_type", optional_code(crs.model_type)},
+              {"wkt", crs.wkt ? Json(*crs.wkt) : Json(nullptr)},
+              {"wkt_from_evlr", crs.wkt_from_evlr},
+              {"wkt_flag", crs.wkt_flag},
+              {"liblas_wkt", crs.liblas_wkt ? Json(*crs.liblas_wkt) : Json(nullptr)},
+              {"geotiff_keys", std::move(keys)}};
+}
+
+std::string code_text(const std::optional<std::uint16_t>& code) {
+  if (!code) return "";
+  if (*code == geo::kGeoKeyUserDefined) return "user-defined";
+  return "EPSG:" + std::to_string(*code);
+}
+
+std::string shorten(const std::string& text, std::size_t size) {
+  std::string one_line;
+  for (char c : text) one_line += (c == '\n' || c == '\r') ? ' ' : c;
+  return one_line.size() <= size ? one_line : one_line.substr(0, size) + "…";
+}
+
+void print_bounds(const char* label, const geo::Bounds3& b) {
+  if (b.empty()) {
+    std::printf("%-13s(none)\n", label);
+    return;
+  }
+  std::printf("%-13sx [%.10g, %.10g]  y [%.10g, %.10g]  z [%.10g, %.10g]\n", label, b.min[0],
+              b.max[0], b.min[1], b.max[1], b.min[2], b.max[2]);
+}
+
+int run_info(const InfoOptions& o) {
+  Json out;
+  out["file"] = o.file;
+  auto fail = [&](ErrorCode code, const std::string& message) {
+    if (o.json) {
+      out["error"] = std::string(error_info(code).name) + ": " + message;
+      std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+    } else {
+      std::fprintf(stderr, "csgtile info: %s\n", message.c_str());
+    }
+    return error_info(code).exit_code;
+  };
+
+  auto format = geo::detect_point_format(o.file);
+  if (!format.ok()) return fail(from_kernel(format.error().code), format.error().message);
+  std::unique_ptr<geo::PointReader> reader;
+  geo::LasReader* las = nullptr;
+  if (format.value() == geo::PointFileFormat::Las) {
+    auto opened = geo::LasReader::open(o.file);
+    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+    las = opened.value().get();
+    reader = std::move(opened).value();
+  } else {
+    auto opened = geo::open_point_file(o.file);
+    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+    reader = std::move(opened).value();
+  }
+
+  // Scan the points when asked, and always for formats without header bounds.
+  const bool scan = o.scan || las == nullptr;
+  std::optional<kernel::Error> scan_error;
+  if (scan) {
+    geo::PointBatch batch;
+    for (;;) {
+      auto n = reader->read(batch, 1 << 16);
+      if (!n.ok()) {
+        scan_error = n.error();
+        break;
+      }
+      if (n.value() == 0) break;
+    }
+  }
+
+  const geo::PointCloudInfo& info = reader->info();
+  out["format"] = geo::point_file_format_name(info.format);
+  out["description"] = info.description;
+  if (las != nullptr) {
+    const geo::LasHeader& h = las->header();
+    out["version"] = std::to_string(h.version_major) + "." + std::to_string(h.version_minor);
+    out["point_format"] = h.point_format;
+    out["record_length"] = h.record_length;
+    out["system_identifier"] = h.system_identifier;
+    out["generating_software"] = h.generating_software;
+    out["creation"] = {{"day", h.creation_day}, {"year", h.creation_year}};
+    out["global_encoding"] = h.global_encoding;
+  }
+  out["point_count"] = info.point_count ? Json(*info.point_count) : Json(nullptr);
+  if (las != nullptr) {
+    const geo::LasHeader& h = las->header();
+    out["points_by_return"] = h.points_by_return;
+    out["scale"] = h.scale;
+    out["offset"] = h.offset;
+  }
+  out["bounds"] = info.bounds ? bounds_json(*info.bounds) : Json(nullptr);
+  if (scan) {
+    out["points_read"] = reader->points_read();
+    out["scanned_bounds"] = bounds_json(reader->bounds_read());
+  }
+  if (las != nullptr) {
+    out["crs"] = crs_json(las->crs());
+    Json vlrs = Json::array();
+    for (const auto& r : las->vlrs()) vlrs.push_back(record_json(r));
+    Json evlrs = Json::array();
+    for (const auto& r : las->evlrs()) evlrs.push_back(record_json(r));
+    out["vlrs"] = std::move(vlrs);
+    out["evlrs"] = std::move(evlrs);
+  }
+  out["extra_bytes"] = info.extra ? extra_json(*info.extra) : Json(nullptr);
+  out["warnings"] = reader->warnings();
+
+  if (scan_error) {
+    return fail(from_kernel(scan_error->code), scan_error->message);
+  }
+  if (o.json) {
+    out["error"] = nullptr;
+    std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+    return 0;
+  }
+
+  std::printf("%-13s%s\n", "file", o.file.c_str());
+  std::printf("%-13s%s", "format", info.description.c_str());
+  if (las != nullptr) {
+    const geo::LasHeader& h = las->header();
+    std::printf(" (record %u bytes, %u extra)", unsigned{h.record_length},
+                unsigned{h.extra_bytes_per_point()});
+    std::printf("\n%-13s%s / %s, created day %u of %u", "software", h.system_identifier.c_str(),
+                h.generating_software.c_str(), unsigned{h.creation_day},
+                unsigned{h.creation_year});
+  }
+  std::printf("\n");
+  if (info.point_count) std::printf("%-13s%" PRIu64 "\n", "points", *info.point_count);
+  if (las != nullptr) {
+    const geo::LasHeader& h = las->header();
+    std::printf("%-13s%.17g %.17g %.17g\n", "scale", h.scale[0], h.scale[1], h.scale[2]);
+    std::printf("%-13s%.17g %.17g %.17g\n", "offset", h.offset[0], h.offset[1], h.offset[2]);
+  }
+  if (info.bounds) print_bounds("bounds", *info.bounds);
+  if (scan) {
+    std::printf("%-13s%" PRIu64 "\n", "points read", reader->points_read());
+    print_bounds("scanned", reader->bounds_read());
+  }
+  if (las != nullptr) {
+    const geo::LasCrsRecords& crs = las->crs();
+    std::string text;
+    auto add = [&](const char* what, const std::string& value) {
+      if (value.empty()) return;
+      if (!text.empty()) text += ", ";
+      text += std::string(what) + " " + value;
+    };
+    add("projected", code_text(crs.projected_cs));
+    add("geographic", code_text(crs.geographic_cs));
+    add("vertical", code_text(crs.vertical_cs));
+    add("linear units", code_text(crs.projected_linear_units));
+    add("vertical units", code_text(crs.vertical_units));
+    if (crs.has_geotiff && text.empty()) text = "GeoTIFF keys without EPSG codes";
+    if (crs.empty()) text = "none in the file";
+    std::printf("%-13s%s\n", "crs", text.c_str());
+    if (crs.wkt) {
+      std::printf("%-13s%s%s\n", "wkt", crs.wkt_from_evlr ? "(EVLR) " : "",
+                  shorten(*crs.wkt, 100).c_str());
+    } else if (crs.liblas_wkt) {
+      std::printf("%-13s(libLAS VLR) %s\n", "wkt", shorten(*crs.liblas_wkt, 100).c_str());
+    }
+    auto list = [](const char* label, const std::vector<geo::LasRecord>& records) {
+      std::printf("%-13s%zu\n", label, records.size());
+      for (const auto& r : records) {
+        std::printf("  %-16s %6u %10" PRIu64 " bytes  %s\n", r.user_id.c_str(),
+                    unsigned{r.record_id}, r.length, r.description.c_str());
+      }
+    };
+    list("vlrs", las->vlrs());
+    if (las->header().version_minor >= 4) list("evlrs", las->evlrs());
+  }
+  if (info.extra) {
+    std::printf("%-13s%zu bytes per point", "extra bytes", info.extra->record_size);
+    if (info.extra->undescribed_bytes() > 0) {
+      std::printf(" (%zu undescribed)", info.extra->undescribed_bytes());
+    }
+    std::printf("\n");
+    for (const auto& d : info.extra->dimensions) {
+      std::printf("  %-24s %-8s x%d at +%zu", d.name.c_str(), geo::extra_type_name(d.type),
+                  d.elements, d.byte_offset);
+      if (d.scale) std::printf("  scale %.10g", *d.scale);
+      if (d.offset) std::printf("  offset %.10g", *d.offset);
+      std::printf("\n");
+    }
+  }
+  std::printf("%-13s%zu\n", "warnings", reader->warnings().size());
+  for (const auto& w : reader->warnings()) std::printf("  %s\n", w.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void register_info(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand(
+      "info", "Describe a point-cloud file (LAS, PLY, PCD, XYZ): version, format, counts, "
+              "bounds, scale/offset, CRS records, VLRs/EVLRs, extra bytes and warnings");
+  auto options = std::make_shared<InfoOptions>();
+  cmd->add_option("FILE", options->file, "Point-cloud file")->required();
+  cmd->add_flag("--json", options->json, "Print one JSON object");
+  cmd->add_flag("--scan", options->scan,
+                "Read every point: recomputed bounds and count, and the warnings only the "
+                "points reveal (always on for PLY/PCD/XYZ)");
+  cmd->callback([&action, options] { action = [options] { return run_info(*options); }; });
+}
+
+}  // namespace csgtile::worker::detail
