@@ -3,6 +3,8 @@
 #include "csgtile/kernel/boolean.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <cmath>
 #include <map>
@@ -76,7 +78,9 @@ class BooleanEngine {
     unify_shared_edges();
     split_at_touching_vertices();
     if (auto s = intersect_faces(); !s.ok()) return s.error();
+    split_crossing_sections();
     split_edges();
+    unify_shared_edges();  // pieces of the two operands' edges may coincide only after splitting
     std::vector<Piece> pieces;
     if (auto s = split_faces(pieces); !s.ok()) return s.error();
     if (auto s = classify(pieces); !s.ok()) return s.error();
@@ -111,8 +115,11 @@ class BooleanEngine {
     }
     if (replace.empty()) return;
     for (BFace& f : model_.faces) {
-      for (BLoop& loop : f.loops) {
-        for (BUse& u : loop) {
+      std::vector<BLoop*> lists;
+      for (BLoop& loop : f.loops) lists.push_back(&loop);
+      lists.push_back(&f.extra);
+      for (BLoop* list : lists) {
+        for (BUse& u : *list) {
           auto it = replace.find(u.edge);
           if (it == replace.end()) continue;
           const BEdge& from = model_.edges[static_cast<std::size_t>(u.edge)];
@@ -127,6 +134,16 @@ class BooleanEngine {
           u.pcurve = pc;
         }
       }
+      // A section edge that turned out to be a boundary edge (or a repeat) is not extra.
+      std::set<int> seen;
+      for (const BLoop& loop : f.loops) {
+        for (const BUse& u : loop) seen.insert(u.edge);
+      }
+      std::vector<BUse> extra;
+      for (const BUse& u : f.extra) {
+        if (seen.insert(u.edge).second) extra.push_back(u);
+      }
+      f.extra = std::move(extra);
     }
   }
 
@@ -227,6 +244,7 @@ class BooleanEngine {
       if (c1 - c0 <= min_span) continue;
       const double mid = 0.5 * (c0 + c1);
       auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * 1e3);
+      if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "section fa %zu fb %zu piece [%g,%g] in_a %d in_b %d existing %d\n", fa, fb, c0, c1, (int)shift_a.has_value(), existing < 0 ? (int)polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3).has_value() : -1, existing);
       if (!shift_a) continue;
       std::optional<Vec2> shift_b = Vec2::Zero();
       if (existing < 0) {
@@ -238,7 +256,8 @@ class BooleanEngine {
       const int v1 = vertex_on_curve(*curve, c1, hits);
       int edge_id = existing;
       if (edge_id < 0) {
-        edge_id = find_edge(v0, v1, curve->point(mid));
+        edge_id = find_edge(v0, v1, {curve->point(c0 + 0.25 * (c1 - c0)), curve->point(mid),
+                                     curve->point(c0 + 0.75 * (c1 - c0))});
         if (edge_id < 0) {
           BEdge e;
           e.curve = curve;
@@ -299,14 +318,18 @@ class BooleanEngine {
     face.extra.push_back({edge, true, std::move(pcurve)});
   }
 
-  // An existing edge between v0 and v1 through `mid`, or -1.
-  int find_edge(int v0, int v1, const Vec3& mid) {
+  // An existing edge between v0 and v1 through all of `probes`, or -1.
+  int find_edge(int v0, int v1, const std::vector<Vec3>& probes) {
     for (std::size_t i = 0; i < model_.edges.size(); ++i) {
       const BEdge& e = model_.edges[i];
       if (e.degenerate()) continue;
       if (!((e.v0 == v0 && e.v1 == v1) || (e.v0 == v1 && e.v1 == v0))) continue;
-      const double t = e.curve->closest_parameter(mid, e.t0, e.t1);
-      if ((e.curve->point(t) - mid).norm() <= options_.tolerance) return static_cast<int>(i);
+      bool on = true;
+      for (const Vec3& p : probes) {
+        const double t = e.curve->closest_parameter(p, e.t0, e.t1);
+        on = on && (e.curve->point(t) - p).norm() <= options_.tolerance;
+      }
+      if (on) return static_cast<int>(i);
     }
     return -1;
   }
@@ -363,14 +386,42 @@ class BooleanEngine {
     return {};
   }
 
+  // Section curves of one face may cross each other inside it (the two ellipses of a
+  // Steinmetz pair meet on the axes): both edges are split at each crossing.
+  void split_crossing_sections() {
+    for (std::size_t f = 0; f < model_.faces.size(); ++f) {
+      const std::vector<BUse> extra = model_.faces[f].extra;
+      const double tol = uv_margin(f) * 10;
+      for (std::size_t i = 0; i < extra.size(); ++i) {
+        for (std::size_t j = i + 1; j < extra.size(); ++j) {
+          const BEdge a = model_.edges[static_cast<std::size_t>(extra[i].edge)];
+          const BEdge b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
+          if (a.degenerate() || b.degenerate()) continue;
+          if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "face %zu extras %zu,%zu crossings %zu\n", f, i, j, intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol).size());
+          for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol)) {
+            if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "  t %g s %g\n", c.t, c.s);
+            const double sa = 1e-9 * std::max(1.0, a.t1 - a.t0), sb = 1e-9 * std::max(1.0, b.t1 - b.t0);
+            const bool inner_a = c.t > a.t0 + sa && c.t < a.t1 - sa;
+            const bool inner_b = c.s > b.t0 + sb && c.s < b.t1 - sb;
+            if (!inner_a && !inner_b) continue;
+            const int v = model_.vertex_at(a.curve->point(c.t));
+            if (inner_a && v != a.v0 && v != a.v1) model_.edges[static_cast<std::size_t>(extra[i].edge)].splits.emplace_back(c.t, v);
+            if (inner_b && v != b.v0 && v != b.v1) model_.edges[static_cast<std::size_t>(extra[j].edge)].splits.emplace_back(c.s, v);
+          }
+        }
+      }
+    }
+  }
+
   // Applies the splits gathered on edges: each split edge becomes a chain of sub-edges, and
   // every use of it (boundary loops, extras) the chain of sub-uses.
   void split_edges() {
     std::map<int, std::vector<int>> chains;  // edge -> sub-edges in parameter order
     const std::size_t count = model_.edges.size();
     for (std::size_t i = 0; i < count; ++i) {
-      BEdge& e = model_.edges[i];
-      if (e.splits.empty()) continue;
+      if (model_.edges[i].splits.empty()) continue;
+      // A copy: adding sub-edges below reallocates the edge table.
+      BEdge e = model_.edges[i];
       std::sort(e.splits.begin(), e.splits.end());
       std::vector<std::pair<double, int>> cuts{{e.t0, e.v0}};
       for (const auto& [t, v] : e.splits) {
@@ -605,6 +656,19 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     for (std::size_t j = 0; j < faces.size(); ++j) {
       if (i == j || !faces[i].alive || !faces[j].alive) continue;
       if (faces[i].source_face != faces[j].source_face || faces[i].surface->u_period() <= 0) continue;
+      // Pieces that also meet along a real edge (a tangent line other faces use too) stay
+      // two faces: only an edge that bounds nothing else may disappear.
+      bool share_other = false;
+      std::set<int> edges_i;
+      for (const BLoop& loop : faces[i].loops) {
+        for (const BUse& u : loop) {
+          if (!model_.edges[static_cast<std::size_t>(u.edge)].seam) edges_i.insert(u.edge);
+        }
+      }
+      for (const BLoop& loop : faces[j].loops) {
+        for (const BUse& u : loop) share_other = share_other || edges_i.count(u.edge) > 0;
+      }
+      if (share_other) continue;
       bool merged = true;
       while (merged && faces[j].alive) {
         merged = false;

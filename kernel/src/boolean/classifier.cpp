@@ -433,8 +433,9 @@ std::uint32_t BoxTree::build_node(std::vector<std::uint32_t>& order,
   return index;
 }
 
-bool BoxTree::meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction) {
-  double lo = 0.0, hi = kInfinity;
+bool BoxTree::meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction,
+                        double t_max) {
+  double lo = 0.0, hi = t_max;
   for (int i = 0; i < 3; ++i) {
     if (std::isinf(inverse_direction[i])) {
       if (origin[i] < box.min[i] || origin[i] > box.max[i]) return false;
@@ -524,12 +525,20 @@ Result<SolidClassifier> SolidClassifier::create(const Shape& shape, double toler
     widest_band = std::max(widest_band, e.band);
     c.bounds_.add(e.bounds);
   }
+  c.group_bounds_.assign(c.group_count_, BoundingBox());
   std::vector<BoundingBox> boxes;
-  for (const FaceQuery& f : c.faces_) {
-    c.bounds_.add(f.world_bounds());
-    boxes.push_back(f.world_bounds());
+  for (std::size_t f = 0; f < c.faces_.size(); ++f) {
+    const BoundingBox& box = c.faces_[f].world_bounds();
+    c.bounds_.add(box);
+    c.group_bounds_[c.face_group_[f]].add(box);
+    boxes.push_back(box);
+  }
+  for (const EdgeRecord& e : c.edges_) {
+    for (std::uint32_t g : e.groups) c.group_bounds_[g].add(e.bounds);
   }
   c.bounds_.enlarge(widest_band);
+  for (BoundingBox& box : c.group_bounds_) box.enlarge(widest_band);
+  c.group_tree_.build(c.group_bounds_);
   c.face_tree_.build(boxes);
   boxes.clear();
   for (const EdgeRecord& e : c.edges_) boxes.push_back(e.bounds);
@@ -545,33 +554,64 @@ double SolidClassifier::edge_distance(const EdgeRecord& edge, const Vec3& p) con
   return (edge.curve->point(t) - local).norm() * edge.location.scale();
 }
 
-std::vector<std::uint8_t> SolidClassifier::boundary_groups(const Vec3& p) const {
-  std::vector<std::uint8_t> on(group_count_, 0);
+int SolidClassifier::Candidates::find(std::uint32_t g) const {
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    if (groups[i] == g) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+SolidClassifier::Candidates SolidClassifier::candidates(const Vec3& p) const {
+  Candidates c;
+  group_tree_.visit_point(p, 0.0, [&](std::uint32_t g) { c.groups.push_back(g); });
+  std::sort(c.groups.begin(), c.groups.end());
+  c.open.assign(c.groups.size(), 1);
+  return c;
+}
+
+std::vector<std::uint8_t> SolidClassifier::on_boundary(const Vec3& p, const Candidates& c) const {
+  std::vector<std::uint8_t> on(c.groups.size(), 0);
   face_tree_.visit_point(p, tolerance_, [&](std::uint32_t f) {
-    const std::uint32_t g = face_group_[f];
-    if (on[g] != 0) return;
+    const int k = c.find(face_group_[f]);
+    if (k < 0 || on[static_cast<std::size_t>(k)] != 0) return;
     const FaceQuery& face = faces_[f];
     const auto [uv, distance] = face.project(p);
-    if (distance <= tolerance_ && face.locate_uv(uv) != Containment::Outside) on[g] = 1;
+    if (distance <= tolerance_ && face.locate_uv(uv) != Containment::Outside) {
+      on[static_cast<std::size_t>(k)] = 1;
+    }
   });
   edge_tree_.visit_point(p, 0.0, [&](std::uint32_t e) {
     const EdgeRecord& edge = edges_[e];
     bool pending = false;
-    for (std::uint32_t g : edge.groups) pending = pending || on[g] == 0;
+    for (std::uint32_t g : edge.groups) {
+      const int k = c.find(g);
+      pending = pending || (k >= 0 && on[static_cast<std::size_t>(k)] == 0);
+    }
     if (!pending || edge_distance(edge, p) > tolerance_) return;
-    for (std::uint32_t g : edge.groups) on[g] = 1;
+    for (std::uint32_t g : edge.groups) {
+      const int k = c.find(g);
+      if (k >= 0) on[static_cast<std::size_t>(k)] = 1;
+    }
   });
   return on;
 }
 
 SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& direction,
-                                                  const std::vector<std::uint8_t>& mask) const {
+                                                  const Candidates& c) const {
   RayOutcome out;
-  out.parity.assign(group_count_, 0);
+  out.parity.assign(c.groups.size(), 0);
+  // Hits that matter lie in the open candidates' boxes: the ray stops where it leaves them.
+  double t_max = 0.0;
+  for (std::size_t k = 0; k < c.groups.size(); ++k) {
+    double lo = 0.0, hi = 0.0;
+    if (c.open[k] != 0 && clip_ray(group_bounds_[c.groups[k]], p, direction, lo, hi)) {
+      t_max = std::max(t_max, hi);
+    }
+  }
   LineSurfaceIntersection intersection;
-  face_tree_.visit_ray(p, direction, [&](std::uint32_t f) {
-    const std::uint32_t g = face_group_[f];
-    if (mask[g] == 0) return;
+  face_tree_.visit_ray(p, direction, t_max, [&](std::uint32_t f) {
+    const int k = c.find(face_group_[f]);
+    if (k < 0 || c.open[static_cast<std::size_t>(k)] == 0) return;
     const FaceQuery& face = faces_[f];
     double lo = 0.0, hi = 0.0;
     const double scale = face.location().scale();
@@ -596,28 +636,28 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
           break;
         }
       }
-      if (where == Containment::Inside) out.parity[g] ^= 1;
+      if (where == Containment::Inside) out.parity[static_cast<std::size_t>(k)] ^= 1;
     }
   });
   return out;
 }
 
-std::vector<std::uint8_t> SolidClassifier::inside_groups(
-    const Vec3& p, const std::vector<std::uint8_t>& mask, ClassifyStats& stats) const {
-  std::vector<int> votes(group_count_, 0);
+std::vector<std::uint8_t> SolidClassifier::inside(const Vec3& p, const Candidates& c,
+                                                  ClassifyStats& stats) const {
+  std::vector<int> votes(c.groups.size(), 0);
   for (const Vec3& direction : directions_) {
-    const RayOutcome ray = cast(p, direction, mask);
+    const RayOutcome ray = cast(p, direction, c);
     ++stats.rays;
     if (!ray.ambiguous) return ray.parity;
-    for (std::size_t g = 0; g < group_count_; ++g) votes[g] += ray.parity[g];
+    for (std::size_t k = 0; k < votes.size(); ++k) votes[k] += ray.parity[k];
   }
   // Every ray was ambiguous: the majority of their parities decides, per solid.
   stats.voted = true;
-  std::vector<std::uint8_t> inside(group_count_, 0);
-  for (std::size_t g = 0; g < group_count_; ++g) {
-    inside[g] = 2 * votes[g] > static_cast<int>(directions_.size()) ? 1 : 0;
+  std::vector<std::uint8_t> result(votes.size(), 0);
+  for (std::size_t k = 0; k < votes.size(); ++k) {
+    result[k] = 2 * votes[k] > static_cast<int>(directions_.size()) ? 1 : 0;
   }
-  return inside;
+  return result;
 }
 
 Containment SolidClassifier::classify(const Vec3& p, ClassifyStats* stats) const {
@@ -625,18 +665,19 @@ Containment SolidClassifier::classify(const Vec3& p, ClassifyStats* stats) const
   ClassifyStats& counts = stats != nullptr ? *stats : local_stats;
   counts = ClassifyStats{};
   if (group_count_ == 0 || !bounds_.contains(p)) return Containment::Outside;
-  const std::vector<std::uint8_t> on = boundary_groups(p);
-  std::vector<std::uint8_t> mask(group_count_, 0);
+  Candidates c = candidates(p);
+  if (c.groups.empty()) return Containment::Outside;
+  const std::vector<std::uint8_t> on = on_boundary(p, c);
   bool any_on = false, any_open = false;
-  for (std::size_t g = 0; g < group_count_; ++g) {
-    any_on = any_on || on[g] != 0;
-    mask[g] = on[g] == 0 ? 1 : 0;
-    any_open = any_open || mask[g] != 0;
+  for (std::size_t k = 0; k < on.size(); ++k) {
+    any_on = any_on || on[k] != 0;
+    c.open[k] = on[k] == 0 ? 1 : 0;
+    any_open = any_open || c.open[k] != 0;
   }
   if (!any_open) return Containment::OnBoundary;
-  const std::vector<std::uint8_t> inside = inside_groups(p, mask, counts);
-  for (std::size_t g = 0; g < group_count_; ++g) {
-    if (mask[g] != 0 && inside[g] != 0) return Containment::Inside;
+  const std::vector<std::uint8_t> in = inside(p, c, counts);
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    if (c.open[k] != 0 && in[k] != 0) return Containment::Inside;
   }
   return any_on ? Containment::OnBoundary : Containment::Outside;
 }

@@ -112,9 +112,10 @@ class BoxTree {
   /// Calls f(item) for every item whose box, grown by `margin`, contains p (any order).
   template <class F>
   void visit_point(const Vec3& p, double margin, F&& f) const;
-  /// Calls f(item) for every item whose box the ray origin + t·direction, t ≥ 0, meets.
+  /// Calls f(item) for every item whose box the ray origin + t·direction, 0 ≤ t ≤ t_max,
+  /// meets.
   template <class F>
-  void visit_ray(const Vec3& origin, const Vec3& direction, F&& f) const;
+  void visit_ray(const Vec3& origin, const Vec3& direction, double t_max, F&& f) const;
 
  private:
   struct Node {
@@ -124,7 +125,8 @@ class BoxTree {
   };
   std::uint32_t build_node(std::vector<std::uint32_t>& order, const std::vector<BoundingBox>& boxes,
                            std::uint32_t first, std::uint32_t count);
-  static bool meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction);
+  static bool meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction,
+                        double t_max);
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> items_;
 };
@@ -151,7 +153,7 @@ void BoxTree::visit_point(const Vec3& p, double margin, F&& f) const {
 }
 
 template <class F>
-void BoxTree::visit_ray(const Vec3& origin, const Vec3& direction, F&& f) const {
+void BoxTree::visit_ray(const Vec3& origin, const Vec3& direction, double t_max, F&& f) const {
   if (nodes_.empty()) return;
   const Vec3 inverse_direction = direction.cwiseInverse();
   std::uint32_t stack[64];
@@ -159,7 +161,7 @@ void BoxTree::visit_ray(const Vec3& origin, const Vec3& direction, F&& f) const 
   stack[size++] = 0;
   while (size > 0) {
     const Node& node = nodes_[stack[--size]];
-    if (!meets_ray(node.box, origin, inverse_direction)) continue;
+    if (!meets_ray(node.box, origin, inverse_direction, t_max)) continue;
     if (node.count > 0) {
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i) f(items_[i]);
     } else {
@@ -231,19 +233,27 @@ class SolidClassifier {
     double band = 0;            // max(classifier tolerance, edge tolerance)
     std::vector<std::uint32_t> groups;
   };
+  // The solids (groups) a query involves: those whose box holds the point, ascending, and
+  // per candidate whether rays must decide it (it is not on its boundary).
+  struct Candidates {
+    std::vector<std::uint32_t> groups;
+    std::vector<std::uint8_t> open;
+    /// Position of group g in `groups`, or -1.
+    int find(std::uint32_t g) const;
+  };
   struct RayOutcome {
-    std::vector<std::uint8_t> parity;
+    std::vector<std::uint8_t> parity;  // per candidate
     bool ambiguous = false;
   };
 
   SolidClassifier() = default;
   double edge_distance(const EdgeRecord& edge, const Vec3& p) const;
-  /// Per group: whether p is within tolerance of its boundary.
-  std::vector<std::uint8_t> boundary_groups(const Vec3& p) const;
-  RayOutcome cast(const Vec3& p, const Vec3& direction, const std::vector<std::uint8_t>& mask) const;
-  /// Per group (mask): whether p is inside, by rays.
-  std::vector<std::uint8_t> inside_groups(const Vec3& p, const std::vector<std::uint8_t>& mask,
-                                          ClassifyStats& stats) const;
+  Candidates candidates(const Vec3& p) const;
+  /// Per candidate: whether p is within tolerance of its boundary.
+  std::vector<std::uint8_t> on_boundary(const Vec3& p, const Candidates& c) const;
+  RayOutcome cast(const Vec3& p, const Vec3& direction, const Candidates& c) const;
+  /// Per candidate (open ones): whether p is inside, by rays.
+  std::vector<std::uint8_t> inside(const Vec3& p, const Candidates& c, ClassifyStats& stats) const;
 
   std::vector<FaceQuery> faces_;
   std::vector<std::uint32_t> face_group_;
@@ -254,6 +264,8 @@ class SolidClassifier {
   ClassifierOptions options_;
   std::vector<Vec3> directions_;
   BoundingBox bounds_;  // everything, enlarged by the largest band
+  std::vector<BoundingBox> group_bounds_;  // per group, enlarged by the largest band
+  BoxTree group_tree_;  // over group_bounds_
   BoxTree face_tree_;   // over the faces' world boxes
   BoxTree edge_tree_;   // over the edges' world boxes (enlarged by their bands)
 };

@@ -256,11 +256,14 @@ class DomainRefiner {
     for (int pass = 0; pass < kMaxRefinementPasses; ++pass) {
       const std::vector<std::pair<int, int>> marked = marked_edges();
       if (marked.empty()) break;
+      // Splits only disturb the Delaunay property next to them: re-check the outer edges of
+      // each split quadrilateral.
+      std::vector<std::pair<int, int>> around;
       for (const auto& [a, b] : marked) {
         if (uv_.size() >= kMaxLocalPoints) return;
-        split(a, b);
+        split(a, b, around);
       }
-      make_delaunay();
+      flip_until_delaunay(std::move(around));
     }
   }
 
@@ -360,8 +363,15 @@ class DomainRefiner {
     return {marked.begin(), marked.end()};
   }
 
-  void split(int a, int b) {
+  // Splits interior edge (a, b) at its midpoint and appends the outer edges of its two
+  // triangles to `around`.
+  void split(int a, int b, std::vector<std::pair<int, int>>& around) {
+    const auto first = edges_.find(key(a, b));
+    const auto second = edges_.find(key(b, a));
+    if (first == edges_.end() || second == edges_.end()) return;
+    const int c = third(first->second, a, b), d = third(second->second, b, a);
     split_at(a, b, 0.5 * (uv_[static_cast<std::size_t>(a)] + uv_[static_cast<std::size_t>(b)]));
+    around.insert(around.end(), {{b, c}, {c, a}, {a, d}, {d, b}});
   }
 
   // Splits interior edge (a, b) at a point of it; returns the new point or -1 (a boundary

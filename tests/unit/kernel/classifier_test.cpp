@@ -423,6 +423,65 @@ TEST(Classifier, OverlappingSolidsInACompoundClassifyAsTheirUnion) {
   EXPECT_EQ(c.classify(Vec3(3.5, 1, 1)), Containment::Outside);
 }
 
+// A city block: a grid of overlapping boxes and cylinders in one compound (the trees keep a
+// query near the solids it can meet).
+TEST(Classifier, ManyOverlappingSolidsInACompound) {
+  std::mt19937_64 rng(kSeed + 10);
+  std::uniform_real_distribution<double> unit(0, 1);
+  struct Part {
+    bool box;
+    Vec3 corner;  // box: min corner; cylinder: base centre
+    Vec3 size;    // box: sizes; cylinder: (r, r, h)
+  };
+  std::vector<Part> parts;
+  std::vector<Shape> solids;
+  for (int i = 0; i < 30; ++i) {
+    for (int j = 0; j < 30; ++j) {
+      const Vec3 at(i * 10.0 + 3 * unit(rng), j * 10.0 + 3 * unit(rng), 0);
+      if ((i + j) % 3 != 0) {
+        const Vec3 size(5 + 8 * unit(rng), 5 + 8 * unit(rng), 5 + 20 * unit(rng));
+        parts.push_back({true, at, size});
+        solids.push_back(make_box(size.x(), size.y(), size.z()).value().moved(Location::translation(at)));
+      } else {
+        const double r = 2 + 4 * unit(rng), h = 5 + 20 * unit(rng);
+        parts.push_back({false, at, Vec3(r, r, h)});
+        solids.push_back(make_cylinder(r, h).value().moved(Location::translation(at)));
+      }
+    }
+  }
+  const auto c = SolidClassifier::create(ShapeFactory::compound(solids).value(), kTolerance).value();
+  auto estimate = [&](const Vec3& p) {
+    double best = std::numeric_limits<double>::infinity();  // min over parts: the union
+    bool inside = false;
+    for (const Part& part : parts) {
+      const Vec3 q = p - part.corner;
+      double d;
+      if (part.box) {
+        d = std::max({-q.x(), q.x() - part.size.x(), -q.y(), q.y() - part.size.y(), -q.z(),
+                      q.z() - part.size.z()});
+      } else {
+        d = std::max({std::hypot(q.x(), q.y()) - part.size.x(), -q.z(), q.z() - part.size.z()});
+      }
+      inside = inside || d < 0;
+      best = std::min(best, std::abs(d));
+    }
+    return inside ? -best : best;
+  };
+  std::vector<Vec3> points;
+  for (int i = 0; i < 3000; ++i) points.emplace_back(310 * unit(rng), 310 * unit(rng), 30 * unit(rng));
+  std::vector<Containment> got;
+  const auto start = std::chrono::steady_clock::now();
+  for (const Vec3& p : points) got.push_back(c.classify(p));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("900-solid compound (%zu faces): %.0f classifications per second\n", c.face_count(),
+              static_cast<double>(points.size()) / seconds);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double e = estimate(points[i]);
+    if (std::abs(e) < kSkipBand) continue;
+    ASSERT_EQ(got[i], e < 0 ? Containment::Inside : Containment::Outside) << points[i].transpose();
+  }
+}
+
 TEST(Classifier, CavityIsOutside) {
   // A box shell and a reversed sphere shell in one solid: material between them.
   const Shape box = make_box(10, 10, 10).value();
