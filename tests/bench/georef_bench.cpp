@@ -35,9 +35,12 @@ struct Family {
 
 Family family(int index) {
   switch (index) {
-    case 0: return {32631, Vec3(640000, 5700000, 20)};
-    case 1: return {28992, Vec3(85000, 446000, 0)};
-    default: return {2263, Vec3(988000, 210000, 30)};
+    case 0:
+      return {32631, Vec3(640000, 5700000, 20)};
+    case 1:
+      return {28992, Vec3(85000, 446000, 0)};
+    default:
+      return {2263, Vec3(988000, 210000, 30)};
   }
 }
 
@@ -62,7 +65,8 @@ double affine_rate(const std::vector<Vec3>& in, std::vector<Vec3>& out) {
     for (std::size_t i = 0; i < in.size(); ++i) out[i] = m.leftCols<3>() * in[i] + m.col(3);
     benchmark::DoNotOptimize(out.data());
     benchmark::ClobberMemory();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     best = std::max(best, static_cast<double>(in.size()) / seconds);
   }
   return best;
@@ -105,13 +109,21 @@ void BM_ProjectedToLocal(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(out.data());
   }
-  const double processed = static_cast<double>(state.iterations()) * static_cast<double>(points.size());
+  const double processed =
+      static_cast<double>(state.iterations()) * static_cast<double>(points.size());
   state.SetItemsProcessed(static_cast<std::int64_t>(processed));
   state.counters["affine_points_per_second"] = baseline;
   state.counters["ratio_to_affine"] = (processed / seconds) / baseline;
-  state.SetLabel(state.range(0) == 0 ? "utm EPSG:32631" : state.range(0) == 1 ? "rd EPSG:28992" : "lccft EPSG:2263");
+  state.SetLabel(state.range(0) == 0   ? "utm EPSG:32631"
+                 : state.range(0) == 1 ? "rd EPSG:28992"
+                                       : "lccft EPSG:2263");
 }
-BENCHMARK(BM_ProjectedToLocal)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_ProjectedToLocal)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(2);
 
 }  // namespace
 

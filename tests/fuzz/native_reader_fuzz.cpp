@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
                          {{std::make_shared<Polyline2d>(std::vector<Vec2>{{0, 0}, {1, 1}, {2, 0}}),
                            std::make_shared<Circle2d>(Vec2(0, 0), 1.0, -1)}},
                          1e-8));
+  auto trig = std::make_shared<TrigCurve>(Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(0, 1, 0.5));
+  const Shape tv0 = must(ShapeFactory::vertex(trig->point(0.0), 1e-7));
+  const Shape tv1 = must(ShapeFactory::vertex(trig->point(2.0), 1e-7));
   const struct {
     const char* name;
     Shape shape;
@@ -118,6 +121,7 @@ int main(int argc, char** argv) {
        must(make_extrusion({{0, 0}, {4, 0}, {4, 3}, {0, 3}}, {{{1, 1}, {2, 1}, {2, 2}}}, 5))},
       {"revolution", must(make_revolution({{1, 0}, {2, 0}, {2, 1}, {1, 1}}, 1.0))},
       {"exotic_face", face},
+      {"trig_edge", must(ShapeFactory::edge(trig, 0.0, 2.0, tv0, tv1, 1e-7))},
   };
   for (const auto& seed : seeds) {
     std::ofstream out(dir / (std::string(seed.name) + ".csgt"), std::ios::binary);

@@ -25,12 +25,18 @@ AngularUnit degree_unit() { return AngularUnit{"degree", detail::kDegree, 9102};
 
 const char* projection_method_name(ProjectionMethod method) {
   switch (method) {
-    case ProjectionMethod::TransverseMercator: return "Transverse Mercator";
-    case ProjectionMethod::LambertConicConformal1SP: return "Lambert Conic Conformal (1SP)";
-    case ProjectionMethod::LambertConicConformal2SP: return "Lambert Conic Conformal (2SP)";
-    case ProjectionMethod::PolarStereographicA: return "Polar Stereographic (variant A)";
-    case ProjectionMethod::PolarStereographicB: return "Polar Stereographic (variant B)";
-    case ProjectionMethod::ObliqueStereographic: return "Oblique Stereographic";
+    case ProjectionMethod::TransverseMercator:
+      return "Transverse Mercator";
+    case ProjectionMethod::LambertConicConformal1SP:
+      return "Lambert Conic Conformal (1SP)";
+    case ProjectionMethod::LambertConicConformal2SP:
+      return "Lambert Conic Conformal (2SP)";
+    case ProjectionMethod::PolarStereographicA:
+      return "Polar Stereographic (variant A)";
+    case ProjectionMethod::PolarStereographicB:
+      return "Polar Stereographic (variant B)";
+    case ProjectionMethod::ObliqueStereographic:
+      return "Oblique Stereographic";
   }
   return "?";
 }
@@ -50,7 +56,9 @@ bool finite_all(std::initializer_list<double> values) {
   return true;
 }
 
-Status invalid(std::string message) { return Status(ErrorCode::InvalidArgument, std::move(message)); }
+Status invalid(std::string message) {
+  return Status(ErrorCode::InvalidArgument, std::move(message));
+}
 
 bool latitude_ok(double lat) { return std::fabs(lat) <= 90.0; }
 
@@ -62,10 +70,12 @@ Status validate_crs(const Crs& crs) {
     return invalid("ellipsoid '" + e.name + "': semi-major axis must be positive and finite");
   }
   if (e.inverse_flattening != 0.0 && e.inverse_flattening <= 1.0) {
-    return invalid("ellipsoid '" + e.name + "': inverse flattening must be 0 (sphere) or > 1, got " +
+    return invalid("ellipsoid '" + e.name +
+                   "': inverse flattening must be 0 (sphere) or > 1, got " +
                    detail::format_number(e.inverse_flattening));
   }
-  if (!std::isfinite(crs.datum.prime_meridian_deg) || std::fabs(crs.datum.prime_meridian_deg) > 180) {
+  if (!std::isfinite(crs.datum.prime_meridian_deg) ||
+      std::fabs(crs.datum.prime_meridian_deg) > 180) {
     return invalid("prime meridian must be within ±180 degrees");
   }
   if (crs.datum.to_wgs84) {
@@ -80,7 +90,8 @@ Status validate_crs(const Crs& crs) {
   if (!(crs.linear_unit.metres > 0) || !std::isfinite(crs.linear_unit.metres)) {
     return invalid("linear unit '" + crs.linear_unit.name + "' must have a positive size");
   }
-  if (crs.vertical && (!(crs.vertical->unit.metres > 0) || !std::isfinite(crs.vertical->unit.metres))) {
+  if (crs.vertical &&
+      (!(crs.vertical->unit.metres > 0) || !std::isfinite(crs.vertical->unit.metres))) {
     return invalid("vertical unit '" + crs.vertical->unit.name + "' must have a positive size");
   }
   if (crs.kind == CrsKind::Geographic) {
@@ -109,21 +120,25 @@ Status validate_crs(const Crs& crs) {
     case ProjectionMethod::PolarStereographicA:
       if (!(p.scale_factor > 0)) return invalid(method + ": scale factor must be positive");
       break;
-    default: break;
+    default:
+      break;
   }
   if (p.method == ProjectionMethod::LambertConicConformal1SP &&
       (p.latitude_of_origin_deg == 0.0 || std::fabs(p.latitude_of_origin_deg) == 90.0)) {
-    return invalid(method + ": latitude of natural origin must be strictly between the equator and a pole");
+    return invalid(method +
+                   ": latitude of natural origin must be strictly between the equator and a pole");
   }
   if (p.method == ProjectionMethod::LambertConicConformal2SP) {
     if (p.standard_parallel_1_deg + p.standard_parallel_2_deg == 0.0) {
       return invalid(method + ": standard parallels symmetric about the equator");
     }
-    if (std::fabs(p.standard_parallel_1_deg) == 90.0 || std::fabs(p.standard_parallel_2_deg) == 90.0) {
+    if (std::fabs(p.standard_parallel_1_deg) == 90.0 ||
+        std::fabs(p.standard_parallel_2_deg) == 90.0) {
       return invalid(method + ": a standard parallel at a pole");
     }
   }
-  if (p.method == ProjectionMethod::PolarStereographicA && std::fabs(p.latitude_of_origin_deg) != 90.0) {
+  if (p.method == ProjectionMethod::PolarStereographicA &&
+      std::fabs(p.latitude_of_origin_deg) != 90.0) {
     return invalid(method + ": latitude of natural origin must be ±90, got " +
                    detail::format_number(p.latitude_of_origin_deg));
   }
@@ -131,9 +146,11 @@ Status validate_crs(const Crs& crs) {
       (p.standard_parallel_1_deg == 0.0 || std::fabs(p.standard_parallel_1_deg) == 90.0 ||
        (std::fabs(p.latitude_of_origin_deg) == 90.0 &&
         (p.latitude_of_origin_deg > 0) != (p.standard_parallel_1_deg > 0)))) {
-    return invalid(method + ": the standard parallel must lie strictly between the equator and the pole");
+    return invalid(method +
+                   ": the standard parallel must lie strictly between the equator and the pole");
   }
-  if (p.method == ProjectionMethod::ObliqueStereographic && std::fabs(p.latitude_of_origin_deg) == 90.0) {
+  if (p.method == ProjectionMethod::ObliqueStereographic &&
+      std::fabs(p.latitude_of_origin_deg) == 90.0) {
     return invalid(method + ": latitude of origin at a pole (use a polar stereographic method)");
   }
   return Status();
@@ -164,7 +181,8 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
     return both("ellipsoid semi-major axis", num(ea.semi_major_m), num(eb.semi_major_m));
   }
   if (!close_rel(ea.flattening(), eb.flattening(), 1e-9)) {
-    return both("ellipsoid inverse flattening", num(ea.inverse_flattening), num(eb.inverse_flattening));
+    return both("ellipsoid inverse flattening", num(ea.inverse_flattening),
+                num(eb.inverse_flattening));
   }
   if (std::fabs(a.datum.prime_meridian_deg - b.datum.prime_meridian_deg) > 1e-11) {
     return both("prime meridian", num(a.datum.prime_meridian_deg), num(b.datum.prime_meridian_deg));
@@ -176,9 +194,10 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
                 hb ? b.datum.to_wgs84_source : "unknown");
   }
   if (ha) {
-    const double d[] = {ha->tx_m - hb->tx_m, ha->ty_m - hb->ty_m, ha->tz_m - hb->tz_m,
-                        ha->rx_arcsec - hb->rx_arcsec, ha->ry_arcsec - hb->ry_arcsec,
-                        ha->rz_arcsec - hb->rz_arcsec, ha->scale_ppm - hb->scale_ppm};
+    const double d[] = {ha->tx_m - hb->tx_m,           ha->ty_m - hb->ty_m,
+                        ha->tz_m - hb->tz_m,           ha->rx_arcsec - hb->rx_arcsec,
+                        ha->ry_arcsec - hb->ry_arcsec, ha->rz_arcsec - hb->rz_arcsec,
+                        ha->scale_ppm - hb->scale_ppm};
     for (double v : d) {
       if (std::fabs(v) > 1e-6) {
         return both("datum shift to WGS 84",
@@ -203,7 +222,8 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
     const Projection& pa = *a.projection;
     const Projection& pb = *b.projection;
     if (pa.method != pb.method) {
-      return both("projection method", projection_method_name(pa.method), projection_method_name(pb.method));
+      return both("projection method", projection_method_name(pa.method),
+                  projection_method_name(pb.method));
     }
     struct Field {
       const char* name;
@@ -293,18 +313,22 @@ std::string describe_crs(const Crs& crs) {
     out += ": geographic, " + crs.angular_unit.name;
   }
   if (crs.vertical) {
-    out += " + " + (crs.vertical->epsg ? "EPSG:" + std::to_string(crs.vertical->epsg) + " " : std::string()) +
-           crs.vertical->name;
+    out +=
+        " + " +
+        (crs.vertical->epsg ? "EPSG:" + std::to_string(crs.vertical->epsg) + " " : std::string()) +
+        crs.vertical->name;
   }
   return out;
 }
 
 Result<Crs> crs_from_config(std::string_view text) {
   auto trim = [](std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\n' || s.front() == '\r')) {
+    while (!s.empty() &&
+           (s.front() == ' ' || s.front() == '\t' || s.front() == '\n' || s.front() == '\r')) {
       s.remove_prefix(1);
     }
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\n' || s.back() == '\r')) {
+    while (!s.empty() &&
+           (s.back() == ' ' || s.back() == '\t' || s.back() == '\n' || s.back() == '\r')) {
       s.remove_suffix(1);
     }
     return s;
@@ -338,8 +362,9 @@ Result<Crs> crs_from_config(std::string_view text) {
                       : parse_int(trim(codes.substr(0, plus)), &horizontal) &&
                             parse_int(trim(codes.substr(plus + 1)), &vertical);
   if (!ok || horizontal == 0) {
-    return Error{ErrorCode::InvalidArgument,
-                 "config CRS '" + std::string(s) + "' is neither EPSG:<code>[+<vertical code>] nor WKT"};
+    return Error{
+        ErrorCode::InvalidArgument,
+        "config CRS '" + std::string(s) + "' is neither EPSG:<code>[+<vertical code>] nor WKT"};
   }
   auto crs = crs_from_epsg(horizontal, vertical);
   if (crs.ok()) crs.value().source = "config (" + std::string(s) + ")";

@@ -141,8 +141,7 @@ Crs projected(int code, std::string name, int geographic_code, const Projection&
 
 Crs utm(int code, int zone, bool north, int geographic_code) {
   const Crs base = *geographic_from_epsg(geographic_code);
-  const std::string name =
-      base.name + " / UTM zone " + std::to_string(zone) + (north ? "N" : "S");
+  const std::string name = base.name + " / UTM zone " + std::to_string(zone) + (north ? "N" : "S");
   return projected(code, name, geographic_code,
                    tm(0.0, -183.0 + 6.0 * zone, 0.9996, 500000.0, north ? 0.0 : 10000000.0));
 }
@@ -157,10 +156,14 @@ std::optional<Crs> projected_from_epsg(int code) {
   if (code >= 6330 && code <= 6348) return utm(code, code - 6329, true, 6318);
   if (code == 6328 || code == 6329) return utm(code, code - 6328 + 59, true, 6318);
   switch (code) {
-    case 32661: return projected(code, "WGS 84 / UPS North (N,E)", 4326, ups(true));
-    case 32761: return projected(code, "WGS 84 / UPS South (N,E)", 4326, ups(false));
-    case 5041: return projected(code, "WGS 84 / UPS North (E,N)", 4326, ups(true));
-    case 5042: return projected(code, "WGS 84 / UPS South (E,N)", 4326, ups(false));
+    case 32661:
+      return projected(code, "WGS 84 / UPS North (N,E)", 4326, ups(true));
+    case 32761:
+      return projected(code, "WGS 84 / UPS South (N,E)", 4326, ups(false));
+    case 5041:
+      return projected(code, "WGS 84 / UPS North (E,N)", 4326, ups(true));
+    case 5042:
+      return projected(code, "WGS 84 / UPS South (E,N)", 4326, ups(false));
     case 28992: {
       Projection p;
       p.method = ProjectionMethod::ObliqueStereographic;
@@ -171,12 +174,16 @@ std::optional<Crs> projected_from_epsg(int code) {
       p.false_northing_m = 463000.0;
       return projected(code, "Amersfoort / RD New", 4289, p);
     }
-    case 3031: return projected(code, "WGS 84 / Antarctic Polar Stereographic", 4326, polar_b(-71, 0));
+    case 3031:
+      return projected(code, "WGS 84 / Antarctic Polar Stereographic", 4326, polar_b(-71, 0));
     case 3413:
-      return projected(code, "WGS 84 / NSIDC Sea Ice Polar Stereographic North", 4326, polar_b(70, -45));
+      return projected(code, "WGS 84 / NSIDC Sea Ice Polar Stereographic North", 4326,
+                       polar_b(70, -45));
     case 3976:
-      return projected(code, "WGS 84 / NSIDC Sea Ice Polar Stereographic South", 4326, polar_b(-70, 0));
-    case 3995: return projected(code, "WGS 84 / Arctic Polar Stereographic", 4326, polar_b(71, 0));
+      return projected(code, "WGS 84 / NSIDC Sea Ice Polar Stereographic South", 4326,
+                       polar_b(-70, 0));
+    case 3995:
+      return projected(code, "WGS 84 / Arctic Polar Stereographic", 4326, polar_b(71, 0));
     case 2193:
       return projected(code, "NZGD2000 / New Zealand Transverse Mercator 2000", 4167,
                        tm(0, 173, 0.9996, 1600000, 10000000));
@@ -189,44 +196,50 @@ std::optional<Crs> projected_from_epsg(int code) {
     case 2154:
       return projected(code, "RGF93 v1 / Lambert-93", 4171, lcc2(46.5, 3, 49, 44, 700000, 6600000));
     case 2991:
-      return projected(code, "NAD83 / Oregon LCC (m)", 4269, lcc2(41.75, -120.5, 43, 45.5, 400000, 0));
+      return projected(code, "NAD83 / Oregon LCC (m)", 4269,
+                       lcc2(41.75, -120.5, 43, 45.5, 400000, 0));
     case 2992:
       return projected(code, "NAD83 / Oregon GIC Lambert (ft)", 4269,
-                       lcc2(41.75, -120.5, 43, 45.5, 1312335.958 * ft, 0), international_foot_unit());
+                       lcc2(41.75, -120.5, 43, 45.5, 1312335.958 * ft, 0),
+                       international_foot_unit());
     case 2994:
       return projected(code, "NAD83(HARN) / Oregon GIC Lambert (ft)", 4152,
-                       lcc2(41.75, -120.5, 43, 45.5, 1312335.958 * ft, 0), international_foot_unit());
+                       lcc2(41.75, -120.5, 43, 45.5, 1312335.958 * ft, 0),
+                       international_foot_unit());
     case 2269:
     case 2913:
-      return projected(code, code == 2269 ? "NAD83 / Oregon North (ft)" : "NAD83(HARN) / Oregon North (ft)",
-                       code == 2269 ? 4269 : 4152,
-                       lcc2(dms(43, 40), -120.5, 46, dms(44, 20), 8202099.738 * ft, 0),
-                       international_foot_unit());
+      return projected(
+          code, code == 2269 ? "NAD83 / Oregon North (ft)" : "NAD83(HARN) / Oregon North (ft)",
+          code == 2269 ? 4269 : 4152,
+          lcc2(dms(43, 40), -120.5, 46, dms(44, 20), 8202099.738 * ft, 0),
+          international_foot_unit());
     case 2270:
       return projected(code, "NAD83 / Oregon South (ft)", 4269,
                        lcc2(dms(41, 40), -120.5, 44, dms(42, 20), 4921259.843 * ft, 0),
                        international_foot_unit());
     case 2227:
-      return projected(code, "NAD83 / California zone 3 (ftUS)", 4269,
-                       lcc2(36.5, -120.5, dms(38, 26), dms(37, 4), 6561666.667 * us_ft,
-                            1640416.667 * us_ft),
-                       us_survey_foot_unit());
+      return projected(
+          code, "NAD83 / California zone 3 (ftUS)", 4269,
+          lcc2(36.5, -120.5, dms(38, 26), dms(37, 4), 6561666.667 * us_ft, 1640416.667 * us_ft),
+          us_survey_foot_unit());
     case 2229:
-      return projected(code, "NAD83 / California zone 5 (ftUS)", 4269,
-                       lcc2(33.5, -118, dms(35, 28), dms(34, 2), 6561666.667 * us_ft,
-                            1640416.667 * us_ft),
-                       us_survey_foot_unit());
+      return projected(
+          code, "NAD83 / California zone 5 (ftUS)", 4269,
+          lcc2(33.5, -118, dms(35, 28), dms(34, 2), 6561666.667 * us_ft, 1640416.667 * us_ft),
+          us_survey_foot_unit());
     case 2263:
       return projected(code, "NAD83 / New York Long Island (ftUS)", 4269,
                        lcc2(dms(40, 10), -74, dms(41, 2), dms(40, 40), 984250 * us_ft, 0),
                        us_survey_foot_unit());
     case 2236:
       return projected(code, "NAD83 / Florida East (ftUS)", 4269,
-                       tm(dms(24, 20), -81, 0.999941177, 656166.667 * us_ft, 0), us_survey_foot_unit());
+                       tm(dms(24, 20), -81, 0.999941177, 656166.667 * us_ft, 0),
+                       us_survey_foot_unit());
     case 2903:
       return projected(code, "NAD83(HARN) / New Mexico Central (ftUS)", 4152,
                        tm(31, -106.25, 0.9999, 1640416.667 * us_ft, 0), us_survey_foot_unit());
-    default: return std::nullopt;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -234,21 +247,31 @@ std::optional<Crs> projected_from_epsg(int code) {
 
 std::optional<Ellipsoid> ellipsoid_from_epsg(int code) {
   switch (code) {
-    case 7030: return make_ellipsoid("WGS 84", 7030, 6378137.0, 298.257223563);
-    case 7019: return make_ellipsoid("GRS 1980", 7019, 6378137.0, 298.257222101);
-    case 7004: return make_ellipsoid("Bessel 1841", 7004, 6377397.155, 299.1528128);
-    case 7001: return make_ellipsoid("Airy 1830", 7001, 6377563.396, 299.3249646);
-    case 7008: return make_ellipsoid("Clarke 1866", 7008, 6378206.4, 294.978698213898);
-    case 7022: return make_ellipsoid("International 1924", 7022, 6378388.0, 297.0);
-    case 7024: return make_ellipsoid("Krassowsky 1940", 7024, 6378245.0, 298.3);
-    case 7043: return make_ellipsoid("WGS 72", 7043, 6378135.0, 298.26);
-    default: return std::nullopt;
+    case 7030:
+      return make_ellipsoid("WGS 84", 7030, 6378137.0, 298.257223563);
+    case 7019:
+      return make_ellipsoid("GRS 1980", 7019, 6378137.0, 298.257222101);
+    case 7004:
+      return make_ellipsoid("Bessel 1841", 7004, 6377397.155, 299.1528128);
+    case 7001:
+      return make_ellipsoid("Airy 1830", 7001, 6377563.396, 299.3249646);
+    case 7008:
+      return make_ellipsoid("Clarke 1866", 7008, 6378206.4, 294.978698213898);
+    case 7022:
+      return make_ellipsoid("International 1924", 7022, 6378388.0, 297.0);
+    case 7024:
+      return make_ellipsoid("Krassowsky 1940", 7024, 6378245.0, 298.3);
+    case 7043:
+      return make_ellipsoid("WGS 72", 7043, 6378135.0, 298.26);
+    default:
+      return std::nullopt;
   }
 }
 
 std::optional<GeodeticDatum> datum_from_epsg(int code) {
   switch (code) {
-    case 6326: return null_datum("World Geodetic System 1984", 6326, 7030, "identity");
+    case 6326:
+      return null_datum("World Geodetic System 1984", 6326, 7030, "identity");
     case 6258:
       return null_datum("European Terrestrial Reference System 1989", 6258, 7019,
                         "EPSG:1149 ETRS89 to WGS 84 (1) (null, 1 m)");
@@ -269,8 +292,10 @@ std::optional<GeodeticDatum> datum_from_epsg(int code) {
                         "EPSG:1671 RGF93 v1 to WGS 84 (1) (null, 1 m)");
     case 6173:
       return null_datum("IRENET95", 6173, 7019, "EPSG:1678 IRENET95 to WGS 84 (1) (null, 1 m)");
-    case 6289: return amersfoort_datum();
-    case 6277: return osgb36_datum();
+    case 6289:
+      return amersfoort_datum();
+    case 6277:
+      return osgb36_datum();
     case 6267: {
       GeodeticDatum d;
       d.name = "North American Datum 1927";
@@ -280,7 +305,8 @@ std::optional<GeodeticDatum> datum_from_epsg(int code) {
       d.to_wgs84_source = "unknown (NAD27 needs NADCON grids)";
       return d;
     }
-    default: return std::nullopt;
+    default:
+      return std::nullopt;
   }
 }
 
@@ -288,7 +314,8 @@ std::optional<GeodeticDatum> datum_from_name(std::string_view name) {
   const std::string n = normalise_name(name);
   auto has = [&](const char* s) { return n.find(s) != std::string::npos; };
   if (n.empty()) return std::nullopt;
-  if (has("wgs84") || has("wgs1984") || has("worldgeodeticsystem1984")) return datum_from_epsg(6326);
+  if (has("wgs84") || has("wgs1984") || has("worldgeodeticsystem1984"))
+    return datum_from_epsg(6326);
   if (has("etrs89") || has("europeanterrestrialreferencesystem1989") || has("etrf")) {
     return datum_from_epsg(6258);
   }
@@ -312,17 +339,23 @@ std::optional<GeodeticDatum> datum_from_name(std::string_view name) {
 
 std::optional<LinearUnit> linear_unit_from_epsg(int code) {
   switch (code) {
-    case 9001: return metre_unit();
-    case 9002: return international_foot_unit();
-    case 9003: return us_survey_foot_unit();
-    case 9036: return LinearUnit{"kilometre", 1000.0, 9036};
-    default: return std::nullopt;
+    case 9001:
+      return metre_unit();
+    case 9002:
+      return international_foot_unit();
+    case 9003:
+      return us_survey_foot_unit();
+    case 9036:
+      return LinearUnit{"kilometre", 1000.0, 9036};
+    default:
+      return std::nullopt;
   }
 }
 
 std::optional<LinearUnit> linear_unit_from_name(std::string_view name) {
   const std::string n = normalise_name(name);
-  if (n == "metre" || n == "meter" || n == "metres" || n == "meters" || n == "m") return metre_unit();
+  if (n == "metre" || n == "meter" || n == "metres" || n == "meters" || n == "m")
+    return metre_unit();
   if (n == "ussurveyfoot" || n == "footus" || n == "ftus" || n == "usfoot" || n == "ussurveyfeet" ||
       n == "usft" || n == "surveyfoot") {
     return us_survey_foot_unit();
@@ -341,10 +374,14 @@ std::optional<AngularUnit> angular_unit_from_epsg(int code) {
     case 9122:
     case 9110:  // sexagesimal DMS as a storage unit: GeoTIFF writers mean degrees
       return degree_unit();
-    case 9101: return AngularUnit{"radian", 1.0, 9101};
-    case 9105: return AngularUnit{"grad", kPi / 200.0, 9105};
-    case 9104: return AngularUnit{"arc-second", kPi / 648000.0, 9104};
-    default: return std::nullopt;
+    case 9101:
+      return AngularUnit{"radian", 1.0, 9101};
+    case 9105:
+      return AngularUnit{"grad", kPi / 200.0, 9105};
+    case 9104:
+      return AngularUnit{"arc-second", kPi / 648000.0, 9104};
+    default:
+      return std::nullopt;
   }
 }
 
@@ -377,36 +414,61 @@ std::optional<VerticalCrs> vertical_from_epsg(int code) {
     return VerticalCrs{code, name, std::move(unit)};
   };
   switch (code) {
-    case 5703: return make("NAVD88 height", metre_unit());
-    case 6360: return make("NAVD88 height (ftUS)", us_survey_foot_unit());
-    case 8228: return make("NAVD88 height (ft)", international_foot_unit());
-    case 5709: return make("NAP height", metre_unit());
-    case 5941: return make("NN2000 height", metre_unit());
-    case 5773: return make("EGM96 height", metre_unit());
-    case 3855: return make("EGM2008 height", metre_unit());
-    case 7837: return make("DHHN2016 height", metre_unit());
-    case 5701: return make("ODN height", metre_unit());
-    case 5714: return make("MSL height", metre_unit());
-    default: return std::nullopt;
+    case 5703:
+      return make("NAVD88 height", metre_unit());
+    case 6360:
+      return make("NAVD88 height (ftUS)", us_survey_foot_unit());
+    case 8228:
+      return make("NAVD88 height (ft)", international_foot_unit());
+    case 5709:
+      return make("NAP height", metre_unit());
+    case 5941:
+      return make("NN2000 height", metre_unit());
+    case 5773:
+      return make("EGM96 height", metre_unit());
+    case 3855:
+      return make("EGM2008 height", metre_unit());
+    case 7837:
+      return make("DHHN2016 height", metre_unit());
+    case 5701:
+      return make("ODN height", metre_unit());
+    case 5714:
+      return make("MSL height", metre_unit());
+    default:
+      return std::nullopt;
   }
 }
 
 std::optional<Crs> geographic_from_epsg(int code) {
   switch (code) {
-    case 4326: return geographic(code, "WGS 84", 6326);
-    case 4979: return geographic(code, "WGS 84", 6326);
-    case 4258: return geographic(code, "ETRS89", 6258);
-    case 4937: return geographic(code, "ETRS89", 6258);
-    case 4269: return geographic(code, "NAD83", 6269);
-    case 4152: return geographic(code, "NAD83(HARN)", 6152);
-    case 6318: return geographic(code, "NAD83(2011)", 1116);
-    case 4289: return geographic(code, "Amersfoort", 6289);
-    case 4167: return geographic(code, "NZGD2000", 6167);
-    case 4171: return geographic(code, "RGF93 v1", 6171);
-    case 4173: return geographic(code, "IRENET95", 6173);
-    case 4277: return geographic(code, "OSGB36", 6277);
-    case 4267: return geographic(code, "NAD27", 6267);
-    default: return std::nullopt;
+    case 4326:
+      return geographic(code, "WGS 84", 6326);
+    case 4979:
+      return geographic(code, "WGS 84", 6326);
+    case 4258:
+      return geographic(code, "ETRS89", 6258);
+    case 4937:
+      return geographic(code, "ETRS89", 6258);
+    case 4269:
+      return geographic(code, "NAD83", 6269);
+    case 4152:
+      return geographic(code, "NAD83(HARN)", 6152);
+    case 6318:
+      return geographic(code, "NAD83(2011)", 1116);
+    case 4289:
+      return geographic(code, "Amersfoort", 6289);
+    case 4167:
+      return geographic(code, "NZGD2000", 6167);
+    case 4171:
+      return geographic(code, "RGF93 v1", 6171);
+    case 4173:
+      return geographic(code, "IRENET95", 6173);
+    case 4277:
+      return geographic(code, "OSGB36", 6277);
+    case 4267:
+      return geographic(code, "NAD27", 6267);
+    default:
+      return std::nullopt;
   }
 }
 
@@ -428,8 +490,10 @@ std::string normalise_name(std::string_view name) {
   std::string out;
   out.reserve(name.size());
   for (char ch : name) {
-    if (ch >= 'A' && ch <= 'Z') out.push_back(static_cast<char>(ch - 'A' + 'a'));
-    else if ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9')) out.push_back(ch);
+    if (ch >= 'A' && ch <= 'Z')
+      out.push_back(static_cast<char>(ch - 'A' + 'a'));
+    else if ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9'))
+      out.push_back(ch);
   }
   return out;
 }
@@ -440,7 +504,8 @@ bool is_wgs84_ellipsoid(const Ellipsoid& e) {
 
 bool is_utm(const Projection& p, int* zone, bool* north) {
   if (p.method != ProjectionMethod::TransverseMercator) return false;
-  if (p.latitude_of_origin_deg != 0.0 || p.scale_factor != 0.9996 || p.false_easting_m != 500000.0) {
+  if (p.latitude_of_origin_deg != 0.0 || p.scale_factor != 0.9996 ||
+      p.false_easting_m != 500000.0) {
     return false;
   }
   if (p.false_northing_m != 0.0 && p.false_northing_m != 10000000.0) return false;
@@ -455,7 +520,8 @@ bool is_utm(const Projection& p, int* zone, bool* north) {
 bool is_ups(const Projection& p, bool* north) {
   if (p.method != ProjectionMethod::PolarStereographicA) return false;
   if (std::fabs(p.latitude_of_origin_deg) != 90.0 || p.longitude_of_origin_deg != 0.0 ||
-      p.scale_factor != 0.994 || p.false_easting_m != 2000000.0 || p.false_northing_m != 2000000.0) {
+      p.scale_factor != 0.994 || p.false_easting_m != 2000000.0 ||
+      p.false_northing_m != 2000000.0) {
     return false;
   }
   *north = p.latitude_of_origin_deg > 0;
@@ -494,15 +560,16 @@ kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg) {
                                " (Web Mercator) is not supported: its method (Popular "
                                "Visualisation Pseudo Mercator) is not a survey projection"};
     }
-    return kernel::Error{kernel::ErrorCode::Unsupported,
-                         "EPSG:" + std::to_string(code) +
-                             " is not in the built-in CRS table (supply WKT instead)"};
+    return kernel::Error{
+        kernel::ErrorCode::Unsupported,
+        "EPSG:" + std::to_string(code) + " is not in the built-in CRS table (supply WKT instead)"};
   }
   if (vertical_epsg != 0) {
     if (auto v = detail::vertical_from_epsg(vertical_epsg)) {
       crs->vertical = *v;
     } else {
-      crs->vertical = VerticalCrs{vertical_epsg, "EPSG:" + std::to_string(vertical_epsg), metre_unit()};
+      crs->vertical =
+          VerticalCrs{vertical_epsg, "EPSG:" + std::to_string(vertical_epsg), metre_unit()};
       crs->warnings.push_back("vertical CRS EPSG:" + std::to_string(vertical_epsg) +
                               " is not in the built-in table: its unit is assumed to be metre");
     }

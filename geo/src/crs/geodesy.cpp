@@ -35,7 +35,8 @@ class UtmUpsEngine final : public ProjectionEngine {
     if (northp != north_) {
       // UTMUPS picks the hemisphere from the latitude; the CRS fixes it.
       if (zone_ == GeographicLib::UTMUPS::UPS) {
-        throw DomainError("latitude " + format_number(lat) + " is in the other hemisphere of this UPS CRS");
+        throw DomainError("latitude " + format_number(lat) +
+                          " is in the other hemisphere of this UPS CRS");
       }
       northing += north_ ? -GeographicLib::UTMUPS::UTMShift() : GeographicLib::UTMUPS::UTMShift();
     }
@@ -59,7 +60,8 @@ class TransverseMercatorEngine final : public ProjectionEngine {
   TransverseMercatorEngine(double a, double f, const Projection& p)
       : tm_(a, f, p.scale_factor), p_(p) {
     double x = 0.0;
-    tm_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x, y_origin_);
+    tm_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x,
+                y_origin_);
     int zone = 0;
     bool north = true;
     if (is_utm(p, &zone, &north)) {
@@ -69,7 +71,8 @@ class TransverseMercatorEngine final : public ProjectionEngine {
   }
   void forward(double lat, double lon, double& easting, double& northing) const override {
     if (std::fabs(GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon)) > 90.0) {
-      throw DomainError("longitude " + format_number(lon) + " is more than 90 degrees from the central meridian");
+      throw DomainError("longitude " + format_number(lon) +
+                        " is more than 90 degrees from the central meridian");
     }
     double x = 0.0, y = 0.0;
     tm_.Forward(p_.longitude_of_origin_deg, lat, lon, x, y);
@@ -87,10 +90,12 @@ class TransverseMercatorEngine final : public ProjectionEngine {
   void check_utm_window(double easting, double northing) const {
     if (utm_zone_ == 0) return;
     const bool ok = easting >= 0.0 && easting <= 1.0e6 &&
-                    (utm_north_ ? northing >= -1.0e5 && northing < 9.7e6 : northing >= 9.0e5 && northing <= 1.01e7);
+                    (utm_north_ ? northing >= -1.0e5 && northing < 9.7e6
+                                : northing >= 9.0e5 && northing <= 1.01e7);
     if (!ok) {
-      throw DomainError("easting " + format_number(easting) + ", northing " + format_number(northing) +
-                        " out of legal bounds for UTM zone " + std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
+      throw DomainError("easting " + format_number(easting) + ", northing " +
+                        format_number(northing) + " out of legal bounds for UTM zone " +
+                        std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
     }
   }
   GeographicLib::TransverseMercator tm_;
@@ -106,12 +111,14 @@ class LambertEngine final : public ProjectionEngine {
  public:
   LambertEngine(double a, double f, const Projection& p)
       : lcc_(p.method == ProjectionMethod::LambertConicConformal1SP
-                 ? GeographicLib::LambertConformalConic(a, f, p.latitude_of_origin_deg, p.scale_factor)
+                 ? GeographicLib::LambertConformalConic(a, f, p.latitude_of_origin_deg,
+                                                        p.scale_factor)
                  : GeographicLib::LambertConformalConic(a, f, p.standard_parallel_1_deg,
                                                         p.standard_parallel_2_deg, 1.0)),
         p_(p) {
     double x = 0.0;
-    lcc_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x, y_origin_);
+    lcc_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x,
+                 y_origin_);
   }
   void forward(double lat, double lon, double& easting, double& northing) const override {
     double x = 0.0, y = 0.0;
@@ -137,8 +144,9 @@ class PolarEngine final : public ProjectionEngine {
   PolarEngine(double a, double f, const Projection& p)
       : ps_(a, f, p.method == ProjectionMethod::PolarStereographicA ? p.scale_factor : 1.0), p_(p) {
     north_ = p.method == ProjectionMethod::PolarStereographicA ? p.latitude_of_origin_deg > 0
-                                                                : p.standard_parallel_1_deg > 0;
-    if (p.method == ProjectionMethod::PolarStereographicB) ps_.SetScale(std::fabs(p.standard_parallel_1_deg), 1.0);
+                                                               : p.standard_parallel_1_deg > 0;
+    if (p.method == ProjectionMethod::PolarStereographicB)
+      ps_.SetScale(std::fabs(p.standard_parallel_1_deg), 1.0);
   }
   void forward(double lat, double lon, double& easting, double& northing) const override {
     if ((north_ && lat <= -90.0) || (!north_ && lat >= 90.0)) {
@@ -164,8 +172,8 @@ class PolarEngine final : public ProjectionEngine {
 class ObliqueEngine final : public ProjectionEngine {
  public:
   ObliqueEngine(double a, double f, const Projection& p)
-      : os_(a, f, p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor, p.false_easting_m,
-            p.false_northing_m) {}
+      : os_(a, f, p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor,
+            p.false_easting_m, p.false_northing_m) {}
   void forward(double lat, double lon, double& easting, double& northing) const override {
     if (!os_.forward(lat, lon, easting, northing)) {
       throw DomainError("latitude " + format_number(lat) + ", longitude " + format_number(lon) +
@@ -174,8 +182,8 @@ class ObliqueEngine final : public ProjectionEngine {
   }
   void reverse(double easting, double northing, double& lat, double& lon) const override {
     if (!os_.reverse(easting, northing, lat, lon)) {
-      throw DomainError("easting " + format_number(easting) + ", northing " + format_number(northing) +
-                        ": the latitude iteration did not converge");
+      throw DomainError("easting " + format_number(easting) + ", northing " +
+                        format_number(northing) + ": the latitude iteration did not converge");
     }
   }
 
@@ -194,12 +202,16 @@ std::unique_ptr<ProjectionEngine> make_engine(const Crs& crs) {
     if (is_ups(p, &north)) return std::make_unique<UtmUpsEngine>(GeographicLib::UTMUPS::UPS, north);
   }
   switch (p.method) {
-    case ProjectionMethod::TransverseMercator: return std::make_unique<TransverseMercatorEngine>(a, f, p);
+    case ProjectionMethod::TransverseMercator:
+      return std::make_unique<TransverseMercatorEngine>(a, f, p);
     case ProjectionMethod::LambertConicConformal1SP:
-    case ProjectionMethod::LambertConicConformal2SP: return std::make_unique<LambertEngine>(a, f, p);
+    case ProjectionMethod::LambertConicConformal2SP:
+      return std::make_unique<LambertEngine>(a, f, p);
     case ProjectionMethod::PolarStereographicA:
-    case ProjectionMethod::PolarStereographicB: return std::make_unique<PolarEngine>(a, f, p);
-    case ProjectionMethod::ObliqueStereographic: return std::make_unique<ObliqueEngine>(a, f, p);
+    case ProjectionMethod::PolarStereographicB:
+      return std::make_unique<PolarEngine>(a, f, p);
+    case ProjectionMethod::ObliqueStereographic:
+      return std::make_unique<ObliqueEngine>(a, f, p);
   }
   return nullptr;
 }
@@ -224,7 +236,8 @@ Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
       math->engine_ = make_engine(crs);
     } catch (const std::exception& e) {
       return Error{ErrorCode::InvalidArgument,
-                   std::string(projection_method_name(crs.projection->method)) + " parameters refused: " + e.what()};
+                   std::string(projection_method_name(crs.projection->method)) +
+                       " parameters refused: " + e.what()};
     }
   }
   return std::shared_ptr<const CrsMath>(std::move(math));
@@ -237,21 +250,26 @@ GeodeticPoint CrsMath::to_geodetic(const kernel::Vec3& xyz) const {
     g.longitude_deg = xyz.x() * xy_to_degrees_;
     g.latitude_deg = xyz.y() * xy_to_degrees_;
     require_finite(g.latitude_deg, g.longitude_deg, "coordinates");
-    if (std::fabs(g.latitude_deg) > 90.0) throw DomainError("latitude " + format_number(g.latitude_deg) + " beyond ±90");
+    if (std::fabs(g.latitude_deg) > 90.0)
+      throw DomainError("latitude " + format_number(g.latitude_deg) + " beyond ±90");
   } else {
     require_finite(xyz.x(), xyz.y(), "coordinates");
-    engine_->reverse(xyz.x() * xy_to_metres_, xyz.y() * xy_to_metres_, g.latitude_deg, g.longitude_deg);
+    engine_->reverse(xyz.x() * xy_to_metres_, xyz.y() * xy_to_metres_, g.latitude_deg,
+                     g.longitude_deg);
     require_finite(g.latitude_deg, g.longitude_deg, "geodetic result");
   }
-  if (prime_meridian_deg_ != 0.0) g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+  if (prime_meridian_deg_ != 0.0)
+    g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
   return g;
 }
 
 kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
   require_finite(point.latitude_deg, point.longitude_deg, "geodetic coordinates");
-  if (std::fabs(point.latitude_deg) > 90.0) throw DomainError("latitude " + format_number(point.latitude_deg) + " beyond ±90");
+  if (std::fabs(point.latitude_deg) > 90.0)
+    throw DomainError("latitude " + format_number(point.latitude_deg) + " beyond ±90");
   double lon = point.longitude_deg;
-  if (prime_meridian_deg_ != 0.0) lon = GeographicLib::Math::AngNormalize(lon - prime_meridian_deg_);
+  if (prime_meridian_deg_ != 0.0)
+    lon = GeographicLib::Math::AngNormalize(lon - prime_meridian_deg_);
   const double z = point.height_m / z_to_metres_;
   if (!engine_) return kernel::Vec3(lon / xy_to_degrees_, point.latitude_deg / xy_to_degrees_, z);
   double e = 0.0, n = 0.0;
@@ -262,15 +280,17 @@ kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
 
 Result<DatumShift> DatumShift::create(const GeodeticDatum& datum) {
   if (!datum.to_wgs84) {
-    return Error{ErrorCode::Unsupported, "datum '" + datum.name + "' has no known transformation to WGS 84 (" +
-                                             datum.to_wgs84_source + "); supply TOWGS84 in the CRS"};
+    return Error{ErrorCode::Unsupported,
+                 "datum '" + datum.name + "' has no known transformation to WGS 84 (" +
+                     datum.to_wgs84_source + "); supply TOWGS84 in the CRS"};
   }
   DatumShift shift;
   try {
     shift.earth_ = std::make_shared<const GeographicLib::Geocentric>(datum.ellipsoid.semi_major_m,
                                                                      datum.ellipsoid.flattening());
   } catch (const std::exception& e) {
-    return Error{ErrorCode::InvalidArgument, "ellipsoid '" + datum.ellipsoid.name + "' refused: " + e.what()};
+    return Error{ErrorCode::InvalidArgument,
+                 "ellipsoid '" + datum.ellipsoid.name + "' refused: " + e.what()};
   }
   const Helmert7& h = *datum.to_wgs84;
   shift.identity_ = h.is_null();
@@ -299,7 +319,8 @@ kernel::Vec3 DatumShift::to_wgs84_ecef(const GeodeticPoint& p) const {
 GeodeticPoint DatumShift::from_wgs84_ecef(const kernel::Vec3& ecef) const {
   GeodeticPoint p;
   if (identity_) {
-    GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), p.latitude_deg, p.longitude_deg, p.height_m);
+    GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), p.latitude_deg,
+                                               p.longitude_deg, p.height_m);
   } else {
     const kernel::Vec3 x = apply_inverse(ecef);
     earth_->Reverse(x.x(), x.y(), x.z(), p.latitude_deg, p.longitude_deg, p.height_m);
@@ -312,9 +333,9 @@ Eigen::Matrix3d enu_rotation(double lat_deg, double lon_deg) {
   GeographicLib::Math::sincosd(lat_deg, sphi, cphi);
   GeographicLib::Math::sincosd(lon_deg, slam, clam);
   Eigen::Matrix3d r;
-  r.col(0) = kernel::Vec3(-slam, clam, 0.0);                     // east
-  r.col(1) = kernel::Vec3(-sphi * clam, -sphi * slam, cphi);     // north
-  r.col(2) = kernel::Vec3(cphi * clam, cphi * slam, sphi);       // up
+  r.col(0) = kernel::Vec3(-slam, clam, 0.0);                  // east
+  r.col(1) = kernel::Vec3(-sphi * clam, -sphi * slam, cphi);  // north
+  r.col(2) = kernel::Vec3(cphi * clam, cphi * slam, sphi);    // up
   return r;
 }
 

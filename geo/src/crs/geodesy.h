@@ -71,13 +71,17 @@ class DatumShift {
   /// WGS 84 ECEF → geodetic on the datum.
   GeodeticPoint from_wgs84_ecef(const kernel::Vec3& ecef) const;
   /// Datum ECEF ↔ WGS 84 ECEF (the Helmert itself).
-  kernel::Vec3 apply(const kernel::Vec3& datum_ecef) const { return matrix_ * datum_ecef + translation_; }
-  kernel::Vec3 apply_inverse(const kernel::Vec3& wgs84_ecef) const { return inverse_ * (wgs84_ecef - translation_); }
+  kernel::Vec3 apply(const kernel::Vec3& datum_ecef) const {
+    return matrix_ * datum_ecef + translation_;
+  }
+  kernel::Vec3 apply_inverse(const kernel::Vec3& wgs84_ecef) const {
+    return inverse_ * (wgs84_ecef - translation_);
+  }
 
  private:
   bool identity_ = true;
   std::shared_ptr<const GeographicLib::Geocentric> earth_;  // the datum's ellipsoid
-  Eigen::Matrix3d matrix_ = Eigen::Matrix3d::Identity();   // (1 + s)·R
+  Eigen::Matrix3d matrix_ = Eigen::Matrix3d::Identity();    // (1 + s)·R
   Eigen::Matrix3d inverse_ = Eigen::Matrix3d::Identity();
   kernel::Vec3 translation_ = kernel::Vec3::Zero();
 };

@@ -90,10 +90,13 @@ class Keys {
         unknown.insert(e.id);
         continue;
       }
-      if (by_id_.count(e.id)) warnings.push_back("GeoKey " + std::to_string(e.id) + " repeated: the last one is used");
+      if (by_id_.count(e.id))
+        warnings.push_back("GeoKey " + std::to_string(e.id) + " repeated: the last one is used");
       by_id_[e.id] = &e;
     }
-    if (zero) warnings.push_back(std::to_string(zero) + " GeoKey entr" + (zero == 1 ? "y" : "ies") + " with id 0 ignored");
+    if (zero)
+      warnings.push_back(std::to_string(zero) + " GeoKey entr" + (zero == 1 ? "y" : "ies") +
+                         " with id 0 ignored");
     if (!unknown.empty()) {
       std::string list;
       for (auto id : unknown) list += (list.empty() ? "" : ", ") + std::to_string(id);
@@ -165,13 +168,14 @@ Result<AngularUnit> angular_unit(const Keys& keys) {
     auto size = keys.number(GeogAngularUnitSize);
     if (!size || !(*size > 0)) {
       return key_error(ErrorCode::InvalidArgument,
-                       "user-defined GeogAngularUnitsGeoKey (2054) without a positive GeogAngularUnitSizeGeoKey (2055)");
+                       "user-defined GeogAngularUnitsGeoKey (2054) without a positive "
+                       "GeogAngularUnitSizeGeoKey (2055)");
     }
     return detail::angular_unit_from_size("user-defined angle", *size);
   }
   if (auto unit = detail::angular_unit_from_epsg(*code.value())) return *unit;
-  return key_error(ErrorCode::Unsupported,
-                   "GeogAngularUnitsGeoKey (2054) unit EPSG:" + std::to_string(*code.value()) + " is not supported");
+  return key_error(ErrorCode::Unsupported, "GeogAngularUnitsGeoKey (2054) unit EPSG:" +
+                                               std::to_string(*code.value()) + " is not supported");
 }
 
 Result<LinearUnit> linear_unit(const Keys& keys, std::uint16_t code_key, std::uint16_t size_key,
@@ -190,7 +194,8 @@ Result<LinearUnit> linear_unit(const Keys& keys, std::uint16_t code_key, std::ui
   }
   if (auto unit = detail::linear_unit_from_epsg(*code.value())) {
     // A size key beside a known code must agree; writers add it for readers without tables.
-    if (auto size = keys.number(size_key); size && std::fabs(*size - unit->metres) > 1e-9 * unit->metres) {
+    if (auto size = keys.number(size_key);
+        size && std::fabs(*size - unit->metres) > 1e-9 * unit->metres) {
       return key_error(ErrorCode::InvalidArgument,
                        std::string(what) + " EPSG:" + std::to_string(*code.value()) + " (" +
                            detail::format_number(unit->metres) + " m) contradicts its size key " +
@@ -223,18 +228,20 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
   if (code.value() && *code.value() != kUserDefined && *code.value() != 0) {
     auto known = detail::geographic_from_epsg(*code.value());
     if (!known) {
-      return key_error(ErrorCode::Unsupported, "GeographicTypeGeoKey (2048) EPSG:" +
-                                                   std::to_string(*code.value()) +
-                                                   " is not in the built-in table");
+      return key_error(ErrorCode::Unsupported,
+                       "GeographicTypeGeoKey (2048) EPSG:" + std::to_string(*code.value()) +
+                           " is not in the built-in table");
     }
     crs = *known;
     crs.angular_unit = unit.value();
     crs.source = "GeoTIFF keys";
     // Redundant ellipsoid keys (writers add them) must agree with the code.
-    if (auto a = keys.number(GeogSemiMajorAxis); a && std::fabs(*a - crs.datum.ellipsoid.semi_major_m) > 1e-3) {
+    if (auto a = keys.number(GeogSemiMajorAxis);
+        a && std::fabs(*a - crs.datum.ellipsoid.semi_major_m) > 1e-3) {
       warnings.push_back("GeogSemiMajorAxisGeoKey (2057) " + detail::format_number(*a) +
                          " disagrees with EPSG:" + std::to_string(crs.epsg) + " (" +
-                         detail::format_number(crs.datum.ellipsoid.semi_major_m) + "); using the EPSG code");
+                         detail::format_number(crs.datum.ellipsoid.semi_major_m) +
+                         "); using the EPSG code");
     }
   } else {
     // User-defined: datum, ellipsoid and prime meridian from their own keys.
@@ -245,8 +252,9 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
         datum = *d;
         datum_known = true;
       } else {
-        warnings.push_back("GeogGeodeticDatumGeoKey (2050) EPSG:" + std::to_string(*datum_code.value()) +
-                           " is not in the built-in table: using the ellipsoid keys");
+        warnings.push_back(
+            "GeogGeodeticDatumGeoKey (2050) EPSG:" + std::to_string(*datum_code.value()) +
+            " is not in the built-in table: using the ellipsoid keys");
       }
     }
     std::string datum_name = citation_field(citation, "Datum");
@@ -256,7 +264,8 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
     }
     // Ellipsoid: a code, or the axis keys; a known datum supplies one too.
     std::optional<Ellipsoid> ellipsoid;
-    if (ellipsoid_code.value() && *ellipsoid_code.value() != kUserDefined && *ellipsoid_code.value() != 0) {
+    if (ellipsoid_code.value() && *ellipsoid_code.value() != kUserDefined &&
+        *ellipsoid_code.value() != 0) {
       ellipsoid = detail::ellipsoid_from_epsg(*ellipsoid_code.value());
       if (!ellipsoid) {
         if (!keys.has(GeogSemiMajorAxis)) {
@@ -295,8 +304,9 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
     }
     if (!ellipsoid && datum_known) ellipsoid = datum.ellipsoid;
     if (!ellipsoid) {
-      return key_error(ErrorCode::InvalidArgument,
-                       "user-defined geographic CRS without an ellipsoid (GeoKeys 2050, 2056-2059)");
+      return key_error(
+          ErrorCode::InvalidArgument,
+          "user-defined geographic CRS without an ellipsoid (GeoKeys 2050, 2056-2059)");
     }
     if (datum_known && std::fabs(datum.ellipsoid.semi_major_m - ellipsoid->semi_major_m) > 1e-3) {
       warnings.push_back("ellipsoid keys disagree with datum EPSG:" + std::to_string(datum.epsg) +
@@ -317,8 +327,8 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
         datum.to_wgs84 = Helmert7{};
         datum.to_wgs84_source = "assumed null (user-defined datum on a WGS 84/GRS 80 ellipsoid)";
         if (!keys.has(GeogTOWGS84)) {
-          warnings.push_back("user-defined datum '" + datum.name +
-                             "' on the " + ellipsoid->name + " ellipsoid assumed equal to WGS 84");
+          warnings.push_back("user-defined datum '" + datum.name + "' on the " + ellipsoid->name +
+                             " ellipsoid assumed equal to WGS 84");
         }
       } else {
         datum.to_wgs84 = std::nullopt;
@@ -334,22 +344,28 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
     if (!pm.ok()) return pm.error();
     if (pm.value() && *pm.value() == 8903) {
       datum.prime_meridian_deg = 2.0 + 20.0 / 60.0 + 14.025 / 3600.0;  // Paris
-    } else if (pm.value() && *pm.value() != 8901 && *pm.value() != kUserDefined && *pm.value() != 0) {
-      return key_error(ErrorCode::Unsupported, "GeogPrimeMeridianGeoKey (2051) EPSG:" +
-                                                   std::to_string(*pm.value()) + " is not supported");
+    } else if (pm.value() && *pm.value() != 8901 && *pm.value() != kUserDefined &&
+               *pm.value() != 0) {
+      return key_error(ErrorCode::Unsupported,
+                       "GeogPrimeMeridianGeoKey (2051) EPSG:" + std::to_string(*pm.value()) +
+                           " is not supported");
     } else if (auto pm_long = keys.number(GeogPrimeMeridianLong)) {
       datum.prime_meridian_deg = *pm_long * unit.value().radians / detail::kDegree;
     }
     crs.datum = datum;
     const std::string gcs_name = citation_field(citation, "GCS Name");
-    crs.name = !gcs_name.empty() ? gcs_name : (!citation.empty() && citation.find('=') == std::string::npos ? citation : datum.name);
+    crs.name = !gcs_name.empty()
+                   ? gcs_name
+                   : (!citation.empty() && citation.find('=') == std::string::npos ? citation
+                                                                                   : datum.name);
     crs.epsg = 0;
   }
   // An explicit TOWGS84 key wins over the table (the writer said so).
   if (const auto* t = keys.numbers(GeogTOWGS84)) {
     if (t->size() != 3 && t->size() != 7) {
-      return key_error(ErrorCode::InvalidArgument, "GeogTOWGS84GeoKey (2062) must hold 3 or 7 values, has " +
-                                                       std::to_string(t->size()));
+      return key_error(
+          ErrorCode::InvalidArgument,
+          "GeogTOWGS84GeoKey (2062) must hold 3 or 7 values, has " + std::to_string(t->size()));
     }
     const auto v = [&](std::size_t i) { return i < t->size() ? (*t)[i] : 0.0; };
     Helmert7 h = detail::helmert_from_position_vector(v(0), v(1), v(2), v(3), v(4), v(5), v(6));
@@ -363,7 +379,8 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
   return crs;
 }
 
-Result<std::optional<VerticalCrs>> vertical_from_keys(const Keys& keys, std::vector<std::string>& warnings) {
+Result<std::optional<VerticalCrs>> vertical_from_keys(const Keys& keys,
+                                                      std::vector<std::string>& warnings) {
   auto code = keys.code(VerticalCSType);
   if (!code.ok()) return code.error();
   const bool has_unit = keys.has(VerticalUnits);
@@ -374,33 +391,40 @@ Result<std::optional<VerticalCrs>> vertical_from_keys(const Keys& keys, std::vec
     unit = detail::linear_unit_from_epsg(*u.value());
     if (!unit) {
       return key_error(ErrorCode::Unsupported,
-                       "VerticalUnitsGeoKey (4099) unit EPSG:" + std::to_string(*u.value()) + " is not supported");
+                       "VerticalUnitsGeoKey (4099) unit EPSG:" + std::to_string(*u.value()) +
+                           " is not supported");
     }
   }
   const std::string citation = keys.text(VerticalCitation);
   if (!code.value() || *code.value() == 0 || *code.value() == kUserDefined) {
     if (!has_unit && citation.empty()) return std::optional<VerticalCrs>{};
-    VerticalCrs v{0, citation.empty() ? "user-defined vertical CRS" : citation, unit.value_or(metre_unit())};
+    VerticalCrs v{0, citation.empty() ? "user-defined vertical CRS" : citation,
+                  unit.value_or(metre_unit())};
     return std::optional<VerticalCrs>(v);
   }
   auto known = detail::vertical_from_epsg(*code.value());
-  VerticalCrs v = known ? *known
-                        : VerticalCrs{*code.value(), citation.empty() ? "EPSG:" + std::to_string(*code.value()) : citation,
-                                      unit.value_or(metre_unit())};
+  VerticalCrs v =
+      known ? *known
+            : VerticalCrs{*code.value(),
+                          citation.empty() ? "EPSG:" + std::to_string(*code.value()) : citation,
+                          unit.value_or(metre_unit())};
   if (!known && !has_unit) {
-    warnings.push_back("vertical CRS EPSG:" + std::to_string(*code.value()) +
-                       " is not in the built-in table and VerticalUnitsGeoKey (4099) is absent: metre assumed");
+    warnings.push_back(
+        "vertical CRS EPSG:" + std::to_string(*code.value()) +
+        " is not in the built-in table and VerticalUnitsGeoKey (4099) is absent: metre assumed");
   }
   if (known && unit && std::fabs(unit->metres - known->unit.metres) > 1e-12) {
-    warnings.push_back("VerticalUnitsGeoKey (4099) " + unit->name + " differs from the unit of EPSG:" +
-                       std::to_string(known->epsg) + " (" + known->unit.name + "); using the key");
+    warnings.push_back("VerticalUnitsGeoKey (4099) " + unit->name +
+                       " differs from the unit of EPSG:" + std::to_string(known->epsg) + " (" +
+                       known->unit.name + "); using the key");
     v.unit = *unit;
   }
   return std::optional<VerticalCrs>(v);
 }
 
 // The user-defined projection of keys 3075 + 3078..3095, in degrees and metres.
-Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& angle, const LinearUnit& length,
+Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& angle,
+                                        const LinearUnit& length,
                                         std::vector<std::string>& warnings) {
   auto method = keys.code(ProjCoordTrans);
   if (!method.ok()) return method.error();
@@ -410,7 +434,9 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
     auto v = keys.first(ids);
     return v ? std::optional<double>(*v * to_deg) : std::nullopt;
   };
-  auto metres = [&](std::initializer_list<std::uint16_t> ids) { return keys.first(ids).value_or(0.0) * to_m; };
+  auto metres = [&](std::initializer_list<std::uint16_t> ids) {
+    return keys.first(ids).value_or(0.0) * to_m;
+  };
   auto origin = [&](std::initializer_list<std::uint16_t> ids, const char* what) {
     auto v = deg(ids);
     if (!v) warnings.push_back(std::string("GeoTIFF projection: ") + what + " absent, 0 assumed");
@@ -419,8 +445,8 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
   Projection p;
   const int ct = *method.value();
   switch (ct) {
-    case 1:  // CT_TransverseMercator
-    case 16:  // CT_ObliqueStereographic
+    case 1:    // CT_TransverseMercator
+    case 16:   // CT_ObliqueStereographic
     case 9: {  // CT_LambertConfConic_1SP
       p.method = ct == 1    ? ProjectionMethod::TransverseMercator
                  : ct == 16 ? ProjectionMethod::ObliqueStereographic
@@ -429,8 +455,10 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
         return key_error(ErrorCode::InvalidArgument,
                          "ProjCoordTransGeoKey 9 (LCC 1SP) needs ProjNatOriginLatGeoKey (3081)");
       }
-      p.latitude_of_origin_deg = origin({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat}, "latitude of origin");
-      p.longitude_of_origin_deg = origin({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}, "longitude of origin");
+      p.latitude_of_origin_deg =
+          origin({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat}, "latitude of origin");
+      p.longitude_of_origin_deg =
+          origin({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}, "longitude of origin");
       p.scale_factor = keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0);
       p.false_easting_m = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
       p.false_northing_m = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
@@ -447,16 +475,19 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
       }
       p.standard_parallel_1_deg = *sp1;
       p.standard_parallel_2_deg = *sp2;
-      p.latitude_of_origin_deg = origin({ProjFalseOriginLat, ProjNatOriginLat, ProjCenterLat}, "latitude of false origin");
-      p.longitude_of_origin_deg = origin({ProjFalseOriginLong, ProjNatOriginLong, ProjCenterLong}, "longitude of false origin");
+      p.latitude_of_origin_deg =
+          origin({ProjFalseOriginLat, ProjNatOriginLat, ProjCenterLat}, "latitude of false origin");
+      p.longitude_of_origin_deg = origin({ProjFalseOriginLong, ProjNatOriginLong, ProjCenterLong},
+                                         "longitude of false origin");
       p.false_easting_m = metres({ProjFalseOriginEasting, ProjFalseEasting, ProjCenterEasting});
       p.false_northing_m = metres({ProjFalseOriginNorthing, ProjFalseNorthing, ProjCenterNorthing});
       break;
     }
-    case 15: {  // CT_PolarStereographic: |latitude| = 90 → variant A, else the standard parallel (B)
+    case 15: {  // CT_PolarStereographic: |latitude| = 90 → variant A, else the standard parallel
+                // (B)
       const double lat = origin({ProjNatOriginLat, ProjCenterLat}, "latitude of origin");
-      p.longitude_of_origin_deg =
-          origin({ProjStraightVertPoleLong, ProjNatOriginLong, ProjCenterLong}, "longitude of origin");
+      p.longitude_of_origin_deg = origin(
+          {ProjStraightVertPoleLong, ProjNatOriginLong, ProjCenterLong}, "longitude of origin");
       p.false_easting_m = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
       p.false_northing_m = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
       const double k = keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0);
@@ -477,15 +508,36 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
       break;
     }
     default: {
-      static const char* const names[] = {
-          "", "TransverseMercator", "TransvMercator_Modified_Alaska", "ObliqueMercator",
-          "ObliqueMercator_Laborde", "ObliqueMercator_Rosenmund", "ObliqueMercator_Spherical",
-          "Mercator", "LambertConfConic_2SP", "LambertConfConic_1SP", "LambertAzimEqualArea",
-          "AlbersEqualArea", "AzimuthalEquidistant", "EquidistantConic", "Stereographic",
-          "PolarStereographic", "ObliqueStereographic", "Equirectangular", "CassiniSoldner",
-          "Gnomonic", "MillerCylindrical", "Orthographic", "Polyconic", "Robinson", "Sinusoidal",
-          "VanDerGrinten", "NewZealandMapGrid", "TransvMercator_SouthOriented"};
-      const std::string name = ct > 0 && ct < 28 ? std::string(" (CT_") + names[ct] + ")" : std::string();
+      static const char* const names[] = {"",
+                                          "TransverseMercator",
+                                          "TransvMercator_Modified_Alaska",
+                                          "ObliqueMercator",
+                                          "ObliqueMercator_Laborde",
+                                          "ObliqueMercator_Rosenmund",
+                                          "ObliqueMercator_Spherical",
+                                          "Mercator",
+                                          "LambertConfConic_2SP",
+                                          "LambertConfConic_1SP",
+                                          "LambertAzimEqualArea",
+                                          "AlbersEqualArea",
+                                          "AzimuthalEquidistant",
+                                          "EquidistantConic",
+                                          "Stereographic",
+                                          "PolarStereographic",
+                                          "ObliqueStereographic",
+                                          "Equirectangular",
+                                          "CassiniSoldner",
+                                          "Gnomonic",
+                                          "MillerCylindrical",
+                                          "Orthographic",
+                                          "Polyconic",
+                                          "Robinson",
+                                          "Sinusoidal",
+                                          "VanDerGrinten",
+                                          "NewZealandMapGrid",
+                                          "TransvMercator_SouthOriented"};
+      const std::string name =
+          ct > 0 && ct < 28 ? std::string(" (CT_") + names[ct] + ")" : std::string();
       return key_error(ErrorCode::Unsupported,
                        "ProjCoordTransGeoKey (3075) method " + std::to_string(ct) + name +
                            " is not supported (supported: 1 TM, 8 LCC 2SP, 9 LCC 1SP, 15 polar "
@@ -511,7 +563,8 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
   auto projection_code = keys.code(ProjectionCode);
   if (!projection_code.ok()) return projection_code.error();
   const bool user_projection = keys.has(ProjCoordTrans);
-  const std::string citation = keys.text(PCSCitation).empty() ? keys.text(GTCitation) : keys.text(PCSCitation);
+  const std::string citation =
+      keys.text(PCSCitation).empty() ? keys.text(GTCitation) : keys.text(PCSCitation);
 
   std::optional<LinearUnit> key_unit;
   if (keys.has(ProjLinearUnits)) {
@@ -525,16 +578,18 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
     if (known.ok() && known.value().is_projected()) {
       Crs crs = known.value();
       crs.source = "GeoTIFF keys";
-      if (key_unit && std::fabs(key_unit->metres - crs.linear_unit.metres) > 1e-12 * crs.linear_unit.metres) {
-        warnings.push_back("ProjLinearUnitsGeoKey (3076) " + key_unit->name + " overrides the unit of EPSG:" +
-                           std::to_string(crs.epsg) + " (" + crs.linear_unit.name +
-                           "): coordinates are read in " + key_unit->name);
+      if (key_unit &&
+          std::fabs(key_unit->metres - crs.linear_unit.metres) > 1e-12 * crs.linear_unit.metres) {
+        warnings.push_back("ProjLinearUnitsGeoKey (3076) " + key_unit->name +
+                           " overrides the unit of EPSG:" + std::to_string(crs.epsg) + " (" +
+                           crs.linear_unit.name + "): coordinates are read in " + key_unit->name);
         crs.linear_unit = *key_unit;
       }
-      if (auto g = keys.code(GeographicType); g.ok() && g.value() && *g.value() != kUserDefined &&
-                                               *g.value() != 0) {
+      if (auto g = keys.code(GeographicType);
+          g.ok() && g.value() && *g.value() != kUserDefined && *g.value() != 0) {
         auto geog = detail::geographic_from_epsg(*g.value());
-        if (geog && std::fabs(geog->datum.ellipsoid.semi_major_m - crs.datum.ellipsoid.semi_major_m) > 1e-3) {
+        if (geog && std::fabs(geog->datum.ellipsoid.semi_major_m -
+                              crs.datum.ellipsoid.semi_major_m) > 1e-3) {
           warnings.push_back("GeographicTypeGeoKey (2048) EPSG:" + std::to_string(*g.value()) +
                              " disagrees with the datum of EPSG:" + std::to_string(crs.epsg) +
                              "; using EPSG:" + std::to_string(crs.epsg));
@@ -547,8 +602,9 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
           Crs other = crs;
           other.projection = p.value();
           if (auto diff = crs_difference(crs, other)) {
-            warnings.push_back("projection keys (3075-3095) disagree with EPSG:" + std::to_string(crs.epsg) +
-                               ": " + *diff + "; using EPSG:" + std::to_string(crs.epsg));
+            warnings.push_back(
+                "projection keys (3075-3095) disagree with EPSG:" + std::to_string(crs.epsg) +
+                ": " + *diff + "; using EPSG:" + std::to_string(crs.epsg));
           }
         }
       }
@@ -591,10 +647,12 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
     if (!p.ok()) return p.error();
     crs.projection = p.value();
   } else {
-    return key_error(ErrorCode::InvalidArgument,
-                     pc != 0 && pc != kUserDefined
-                         ? "ProjectionGeoKey (3074) " + std::to_string(pc) + " is not supported (only UTM codes 16001-16160)"
-                         : std::string("user-defined projected CRS without ProjCoordTransGeoKey (3075)"));
+    return key_error(
+        ErrorCode::InvalidArgument,
+        pc != 0 && pc != kUserDefined
+            ? "ProjectionGeoKey (3074) " + std::to_string(pc) +
+                  " is not supported (only UTM codes 16001-16160)"
+            : std::string("user-defined projected CRS without ProjCoordTransGeoKey (3075)"));
   }
   return crs;
 }
@@ -610,12 +668,14 @@ Result<Crs> crs_from_geokeys(const std::vector<GeoKeyEntry>& entries) {
   if (type == 0) {
     if (keys.has(ProjectedCSType) || keys.has(ProjCoordTrans)) {
       type = 1;
-    } else if (keys.has(GeographicType) || keys.has(GeogGeodeticDatum) || keys.has(GeogSemiMajorAxis)) {
+    } else if (keys.has(GeographicType) || keys.has(GeogGeodeticDatum) ||
+               keys.has(GeogSemiMajorAxis)) {
       type = 2;
     } else {
-      return key_error(ErrorCode::InvalidArgument,
-                       "the GeoTIFF keys define no CRS (no GTModelTypeGeoKey, ProjectedCSTypeGeoKey or "
-                       "GeographicTypeGeoKey)");
+      return key_error(
+          ErrorCode::InvalidArgument,
+          "the GeoTIFF keys define no CRS (no GTModelTypeGeoKey, ProjectedCSTypeGeoKey or "
+          "GeographicTypeGeoKey)");
     }
     warnings.push_back("GTModelTypeGeoKey (1024) absent: model inferred from the other keys");
   }
@@ -625,7 +685,8 @@ Result<Crs> crs_from_geokeys(const std::vector<GeoKeyEntry>& entries) {
   } else if (type == 2) {
     crs = geographic_from_keys(keys, warnings);
   } else if (type == 3) {
-    return key_error(ErrorCode::Unsupported, "GTModelTypeGeoKey (1024) 3 (geocentric) is not supported");
+    return key_error(ErrorCode::Unsupported,
+                     "GTModelTypeGeoKey (1024) 3 (geocentric) is not supported");
   } else {
     return key_error(ErrorCode::InvalidArgument,
                      "GTModelTypeGeoKey (1024) has the invalid value " + std::to_string(type));

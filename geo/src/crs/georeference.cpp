@@ -30,8 +30,9 @@ namespace {
 
 Error domain_error(const Crs& crs, const Vec3& p, const std::exception& e) {
   return Error{ErrorCode::InvalidArgument, "point (" + detail::format_number(p.x()) + ", " +
-                                               detail::format_number(p.y()) + ", " + detail::format_number(p.z()) +
-                                               ") of " + describe_crs(crs) + ": " + e.what()};
+                                               detail::format_number(p.y()) + ", " +
+                                               detail::format_number(p.z()) + ") of " +
+                                               describe_crs(crs) + ": " + e.what()};
 }
 
 Vec3 nan_vector() {
@@ -39,12 +40,15 @@ Vec3 nan_vector() {
   return Vec3(nan, nan, nan);
 }
 
-bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+bool finite(const Vec3& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
 
 Status check_geodetic(const GeodeticPoint& g, const char* what) {
-  if (!std::isfinite(g.latitude_deg) || !std::isfinite(g.longitude_deg) || !std::isfinite(g.height_m) ||
-      std::fabs(g.latitude_deg) > 90.0) {
-    return Status(ErrorCode::InvalidArgument, std::string(what) + " must be finite with |latitude| <= 90");
+  if (!std::isfinite(g.latitude_deg) || !std::isfinite(g.longitude_deg) ||
+      !std::isfinite(g.height_m) || std::fabs(g.latitude_deg) > 90.0) {
+    return Status(ErrorCode::InvalidArgument,
+                  std::string(what) + " must be finite with |latitude| <= 90");
   }
   return Status();
 }
@@ -91,8 +95,8 @@ Result<GeodeticPoint> datum_to_wgs84(const GeodeticDatum& datum, const GeodeticP
   if (shift.value().is_identity()) return point;
   const Vec3 ecef = shift.value().to_wgs84_ecef(point);
   GeodeticPoint out;
-  GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), out.latitude_deg, out.longitude_deg,
-                                             out.height_m);
+  GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), out.latitude_deg,
+                                             out.longitude_deg, out.height_m);
   return out;
 }
 
@@ -101,8 +105,8 @@ Result<GeodeticPoint> wgs84_to_datum(const GeodeticDatum& datum, const GeodeticP
   if (!shift.ok()) return shift.error();
   if (shift.value().is_identity()) return point;
   Vec3 ecef;
-  GeographicLib::Geocentric::WGS84().Forward(point.latitude_deg, point.longitude_deg, point.height_m, ecef.x(),
-                                             ecef.y(), ecef.z());
+  GeographicLib::Geocentric::WGS84().Forward(point.latitude_deg, point.longitude_deg,
+                                             point.height_m, ecef.x(), ecef.y(), ecef.z());
   return shift.value().from_wgs84_ecef(ecef);
 }
 
@@ -177,8 +181,9 @@ Result<Georeferencer> Georeferencer::create(const Crs& source, const GeodeticPoi
   impl->frame.origin = origin;
   impl->local.Reset(origin.latitude_deg, origin.longitude_deg, origin.height_m);
   impl->rotation = detail::enu_rotation(origin.latitude_deg, origin.longitude_deg);
-  GeographicLib::Geocentric::WGS84().Forward(origin.latitude_deg, origin.longitude_deg, origin.height_m,
-                                             impl->origin_ecef.x(), impl->origin_ecef.y(), impl->origin_ecef.z());
+  GeographicLib::Geocentric::WGS84().Forward(origin.latitude_deg, origin.longitude_deg,
+                                             origin.height_m, impl->origin_ecef.x(),
+                                             impl->origin_ecef.y(), impl->origin_ecef.z());
   auto location = kernel::Location::from_parts(impl->rotation, 1.0, impl->origin_ecef);
   if (!location.ok()) return location.error();
   impl->frame.local_to_ecef = location.value();
@@ -196,8 +201,8 @@ Result<Georeferencer> Georeferencer::create_at(const Crs& source, const Vec3& or
     g.height_m += options.geoid_undulation_m;
     if (!shift.value().is_identity()) {
       const Vec3 ecef = shift.value().to_wgs84_ecef(g);
-      GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), g.latitude_deg, g.longitude_deg,
-                                                 g.height_m);
+      GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), g.latitude_deg,
+                                                 g.longitude_deg, g.height_m);
     }
     return create(source, g, options);
   } catch (const std::exception& e) {
@@ -240,16 +245,18 @@ Result<Vec3> Georeferencer::to_source_checked(const Vec3& l) const {
     if (!finite(out)) throw detail::DomainError("non-finite result");
     return out;
   } catch (const std::exception& e) {
-    return Error{ErrorCode::InvalidArgument, "local point (" + detail::format_number(l.x()) + ", " +
-                                                 detail::format_number(l.y()) + ", " + detail::format_number(l.z()) +
-                                                 ") has no coordinates in " + describe_crs(crs()) + ": " + e.what()};
+    return Error{ErrorCode::InvalidArgument,
+                 "local point (" + detail::format_number(l.x()) + ", " +
+                     detail::format_number(l.y()) + ", " + detail::format_number(l.z()) +
+                     ") has no coordinates in " + describe_crs(crs()) + ": " + e.what()};
   }
 }
 
 Status Georeferencer::to_local(std::span<const Vec3> in, std::span<Vec3> out) const {
   if (in.size() != out.size()) {
-    return Status(ErrorCode::InvalidArgument, "to_local: input and output sizes differ (" + std::to_string(in.size()) +
-                                                  " vs " + std::to_string(out.size()) + ")");
+    return Status(ErrorCode::InvalidArgument, "to_local: input and output sizes differ (" +
+                                                  std::to_string(in.size()) + " vs " +
+                                                  std::to_string(out.size()) + ")");
   }
   const Impl& impl = *impl_;
   for (std::size_t i = 0; i < in.size(); ++i) {
@@ -257,13 +264,16 @@ Status Georeferencer::to_local(std::span<const Vec3> in, std::span<Vec3> out) co
       out[i] = impl.forward(in[i]);
       if (!finite(out[i])) throw detail::DomainError("non-finite result");
     } catch (const std::exception& e) {
-      return Status(ErrorCode::InvalidArgument, "point " + std::to_string(i) + ": " + domain_error(crs(), in[i], e).message);
+      return Status(ErrorCode::InvalidArgument,
+                    "point " + std::to_string(i) + ": " + domain_error(crs(), in[i], e).message);
     }
   }
   return Status();
 }
 
-Vec3 Georeferencer::local_to_ecef(const Vec3& local) const { return impl_->frame.local_to_ecef.apply_point(local); }
+Vec3 Georeferencer::local_to_ecef(const Vec3& local) const {
+  return impl_->frame.local_to_ecef.apply_point(local);
+}
 
 Vec3 Georeferencer::ecef_to_local(const Vec3& ecef) const {
   return impl_->rotation.transpose() * (ecef - impl_->origin_ecef);
@@ -271,7 +281,8 @@ Vec3 Georeferencer::ecef_to_local(const Vec3& ecef) const {
 
 GeodeticPoint Georeferencer::local_to_geodetic(const Vec3& local) const {
   GeodeticPoint g;
-  impl_->local.Reverse(local.x(), local.y(), local.z(), g.latitude_deg, g.longitude_deg, g.height_m);
+  impl_->local.Reverse(local.x(), local.y(), local.z(), g.latitude_deg, g.longitude_deg,
+                       g.height_m);
   return g;
 }
 
@@ -321,7 +332,8 @@ Result<SimilarityFit> Georeferencer::fit_similarity(double radius_m) const {
   fit.source_to_local = t.topRows<3>();
   fit.radius_m = radius_m;
   for (int k = 0; k < 2 * count; ++k) {
-    const Vec3 predicted = fit.source_to_local.leftCols<3>() * source2.col(k) + fit.source_to_local.col(3);
+    const Vec3 predicted =
+        fit.source_to_local.leftCols<3>() * source2.col(k) + fit.source_to_local.col(3);
     fit.max_error_m = std::max(fit.max_error_m, (predicted - local2.col(k)).norm());
   }
   return fit;
@@ -331,15 +343,19 @@ Result<SimilarityFit> Georeferencer::fit_similarity(double radius_m) const {
 
 Eigen::Matrix3d scanner_rotation(double heading_deg, double pitch_deg, double roll_deg) {
   const double deg = detail::kDegree;
-  const Eigen::Matrix3d yaw = Eigen::AngleAxisd((90.0 - heading_deg) * deg, Vec3::UnitZ()).toRotationMatrix();
-  const Eigen::Matrix3d pitch = Eigen::AngleAxisd(-pitch_deg * deg, Vec3::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d yaw =
+      Eigen::AngleAxisd((90.0 - heading_deg) * deg, Vec3::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d pitch =
+      Eigen::AngleAxisd(-pitch_deg * deg, Vec3::UnitY()).toRotationMatrix();
   const Eigen::Matrix3d roll = Eigen::AngleAxisd(roll_deg * deg, Vec3::UnitX()).toRotationMatrix();
   return yaw * pitch * roll;
 }
 
-Result<ScannerPlacement> ScannerPlacement::from_pose(const Georeferencer& tile, const ScannerPose& pose) {
+Result<ScannerPlacement> ScannerPlacement::from_pose(const Georeferencer& tile,
+                                                     const ScannerPose& pose) {
   if (auto s = check_geodetic(pose.position, "scanner position"); !s.ok()) return s.error();
-  if (!std::isfinite(pose.heading_deg) || !std::isfinite(pose.pitch_deg) || !std::isfinite(pose.roll_deg)) {
+  if (!std::isfinite(pose.heading_deg) || !std::isfinite(pose.pitch_deg) ||
+      !std::isfinite(pose.roll_deg)) {
     return Error{ErrorCode::InvalidArgument, "scanner heading, pitch and roll must be finite"};
   }
   // scanner → ENU at the scanner → WGS 84 ECEF → tile ENU: three rigid motions, so one exact
@@ -347,13 +363,15 @@ Result<ScannerPlacement> ScannerPlacement::from_pose(const Georeferencer& tile, 
   const GeodeticPoint& p = pose.position;
   const Eigen::Matrix3d scanner_enu = detail::enu_rotation(p.latitude_deg, p.longitude_deg);
   Vec3 scanner_ecef;
-  GeographicLib::Geocentric::WGS84().Forward(p.latitude_deg, p.longitude_deg, p.height_m, scanner_ecef.x(),
-                                             scanner_ecef.y(), scanner_ecef.z());
+  GeographicLib::Geocentric::WGS84().Forward(p.latitude_deg, p.longitude_deg, p.height_m,
+                                             scanner_ecef.x(), scanner_ecef.y(), scanner_ecef.z());
   const Eigen::Matrix3d tile_enu = tile.frame().local_to_ecef.rotation();
   const Eigen::Matrix3d rotation =
-      tile_enu.transpose() * scanner_enu * scanner_rotation(pose.heading_deg, pose.pitch_deg, pose.roll_deg);
+      tile_enu.transpose() * scanner_enu *
+      scanner_rotation(pose.heading_deg, pose.pitch_deg, pose.roll_deg);
   const Vec3 translation = tile.ecef_to_local(scanner_ecef);
-  auto location = kernel::Location::from_matrix((kernel::Matrix34() << rotation, translation).finished());
+  auto location =
+      kernel::Location::from_matrix((kernel::Matrix34() << rotation, translation).finished());
   if (!location.ok()) return location.error();
   ScannerPlacement placement;
   placement.location_ = location.value();
@@ -362,12 +380,14 @@ Result<ScannerPlacement> ScannerPlacement::from_pose(const Georeferencer& tile, 
 
 Result<ScannerPlacement> ScannerPlacement::from_projected_matrix(const Georeferencer& tile,
                                                                  const Eigen::Matrix4d& m) {
-  if (!m.allFinite()) return Error{ErrorCode::InvalidArgument, "scanner matrix has non-finite entries"};
+  if (!m.allFinite())
+    return Error{ErrorCode::InvalidArgument, "scanner matrix has non-finite entries"};
   if (m(3, 0) != 0.0 || m(3, 1) != 0.0 || m(3, 2) != 0.0 || m(3, 3) != 1.0) {
     return Error{ErrorCode::InvalidArgument, "scanner matrix: the last row must be (0, 0, 0, 1)"};
   }
   const double det = m.topLeftCorner<3, 3>().determinant();
-  if (!(std::fabs(det) > 1e-12)) return Error{ErrorCode::InvalidArgument, "scanner matrix: singular 3×3 part"};
+  if (!(std::fabs(det) > 1e-12))
+    return Error{ErrorCode::InvalidArgument, "scanner matrix: singular 3×3 part"};
   ScannerPlacement placement;
   placement.tile_ = tile;
   placement.matrix_ = m;

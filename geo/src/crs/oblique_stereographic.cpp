@@ -27,8 +27,8 @@ double wrap_pi(double x) {
 }
 }  // namespace
 
-ObliqueStereographic::ObliqueStereographic(double a, double f, double lat0_deg, double lon0_deg, double k0,
-                                           double false_easting, double false_northing)
+ObliqueStereographic::ObliqueStereographic(double a, double f, double lat0_deg, double lon0_deg,
+                                           double k0, double false_easting, double false_northing)
     : lon0_(lon0_deg * kDeg), k0_(k0), fe_(false_easting), fn_(false_northing) {
   const double e2 = f * (2.0 - f);
   e_ = std::sqrt(e2);
@@ -52,7 +52,8 @@ ObliqueStereographic::ObliqueStereographic(double a, double f, double lat0_deg, 
   h_ = 4.0 * r_ * k0_ * std::tan(chi0_) + g_;
 }
 
-bool ObliqueStereographic::forward(double lat_deg, double lon_deg, double& easting, double& northing) const {
+bool ObliqueStereographic::forward(double lat_deg, double lon_deg, double& easting,
+                                   double& northing) const {
   const double phi = lat_deg * kDeg;
   const double dlambda = n_ * wrap_pi(lon_deg * kDeg - lon0_);  // Λ − Λ0
   const double ln_w = std::log(c_) + 2.0 * n_ * isometric_latitude(phi, e_);
@@ -67,7 +68,8 @@ bool ObliqueStereographic::forward(double lat_deg, double lon_deg, double& easti
   return std::isfinite(easting) && std::isfinite(northing);
 }
 
-bool ObliqueStereographic::reverse(double easting, double northing, double& lat_deg, double& lon_deg) const {
+bool ObliqueStereographic::reverse(double easting, double northing, double& lat_deg,
+                                   double& lon_deg) const {
   if (!std::isfinite(easting) || !std::isfinite(northing)) return false;
   const double de = easting - fe_;
   const double dn = northing - fn_;
@@ -83,7 +85,8 @@ bool ObliqueStereographic::reverse(double easting, double northing, double& lat_
   double phi = 2.0 * std::atan(std::exp(psi)) - kPi / 2.0;
   for (int iteration = 0; iteration < 50; ++iteration) {
     const double s = std::sin(phi);
-    const double step = (isometric_latitude(phi, e_) - psi) * std::cos(phi) * (1.0 - e2 * s * s) / (1.0 - e2);
+    const double step =
+        (isometric_latitude(phi, e_) - psi) * std::cos(phi) * (1.0 - e2 * s * s) / (1.0 - e2);
     phi -= step;
     if (std::fabs(step) < 1e-14) {
       lat_deg = phi / kDeg;

@@ -21,15 +21,15 @@ class ObliqueStereographic {
   bool reverse(double easting, double northing, double& lat_deg, double& lon_deg) const;
 
  private:
-  double e_;                  // first eccentricity
-  double lon0_;               // radians
+  double e_;     // first eccentricity
+  double lon0_;  // radians
   double k0_, fe_, fn_;
-  double r_;                  // radius of the conformal sphere, sqrt(rho0 · nu0)
-  double n_;                  // longitude ratio between sphere and ellipsoid
-  double c_;                  // latitude mapping constant
-  double chi0_;               // conformal latitude of the origin
+  double r_;     // radius of the conformal sphere, sqrt(rho0 · nu0)
+  double n_;     // longitude ratio between sphere and ellipsoid
+  double c_;     // latitude mapping constant
+  double chi0_;  // conformal latitude of the origin
   double sin_chi0_, cos_chi0_;
-  double g_, h_;              // reverse constants of GN 7-2
+  double g_, h_;  // reverse constants of GN 7-2
 };
 
 }  // namespace csgtile::geo::detail

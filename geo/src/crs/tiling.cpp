@@ -22,18 +22,23 @@ using kernel::ErrorCode;
 using kernel::Result;
 
 bool Bounds2::is_valid() const {
-  return std::isfinite(min_x) && std::isfinite(min_y) && std::isfinite(max_x) && std::isfinite(max_y) &&
-         min_x <= max_x && min_y <= max_y;
+  return std::isfinite(min_x) && std::isfinite(min_y) && std::isfinite(max_x) &&
+         std::isfinite(max_y) && min_x <= max_x && min_y <= max_y;
 }
 
 bool Bounds2::intersects(const Bounds2& o) const {
   return min_x <= o.max_x && o.min_x <= max_x && min_y <= o.max_y && o.min_y <= max_y;
 }
 
-std::string CellId::to_string() const { return "c" + std::to_string(column) + "_r" + std::to_string(row); }
+std::string CellId::to_string() const {
+  return "c" + std::to_string(column) + "_r" + std::to_string(row);
+}
 
 Result<CellId> CellId::parse(std::string_view text) {
-  auto fail = [&] { return Error{ErrorCode::InvalidArgument, "cell id '" + std::string(text) + "' is not c<column>_r<row>"}; };
+  auto fail = [&] {
+    return Error{ErrorCode::InvalidArgument,
+                 "cell id '" + std::string(text) + "' is not c<column>_r<row>"};
+  };
   if (text.size() < 5 || text[0] != 'c') return fail();
   const auto sep = text.find("_r");
   if (sep == std::string_view::npos) return fail();
@@ -44,20 +49,23 @@ Result<CellId> CellId::parse(std::string_view text) {
   const char* e2 = text.data() + text.size();
   auto r1 = std::from_chars(b1, e1, id.column);
   auto r2 = std::from_chars(b2, e2, id.row);
-  if (r1.ec != std::errc() || r1.ptr != e1 || r2.ec != std::errc() || r2.ptr != e2 || b1 == e1 || b2 == e2) {
+  if (r1.ec != std::errc() || r1.ptr != e1 || r2.ec != std::errc() || r2.ptr != e2 || b1 == e1 ||
+      b2 == e2) {
     return fail();
   }
   return id;
 }
 
 Result<CityGrid> CityGrid::create(const Crs& crs, const GridSpec& spec) {
-  if (!std::isfinite(spec.origin_x) || !std::isfinite(spec.origin_y) || !std::isfinite(spec.cell_size) ||
-      !std::isfinite(spec.halo)) {
+  if (!std::isfinite(spec.origin_x) || !std::isfinite(spec.origin_y) ||
+      !std::isfinite(spec.cell_size) || !std::isfinite(spec.halo)) {
     return Error{ErrorCode::InvalidArgument, "grid: origin, cell size and halo must be finite"};
   }
-  if (!(spec.cell_size > 0)) return Error{ErrorCode::InvalidArgument, "grid: cell size must be positive"};
+  if (!(spec.cell_size > 0))
+    return Error{ErrorCode::InvalidArgument, "grid: cell size must be positive"};
   if (spec.halo < 0 || spec.halo >= spec.cell_size) {
-    return Error{ErrorCode::InvalidArgument, "grid: halo must be >= 0 and smaller than the cell size"};
+    return Error{ErrorCode::InvalidArgument,
+                 "grid: halo must be >= 0 and smaller than the cell size"};
   }
   if (auto status = validate_crs(crs); !status.ok()) return status.error();
   return CityGrid(crs, spec);
@@ -66,7 +74,9 @@ Result<CityGrid> CityGrid::create(const Crs& crs, const GridSpec& spec) {
 double CityGrid::edge_x(std::int64_t column) const {
   return spec_.origin_x + static_cast<double>(column) * spec_.cell_size;
 }
-double CityGrid::edge_y(std::int64_t row) const { return spec_.origin_y + static_cast<double>(row) * spec_.cell_size; }
+double CityGrid::edge_y(std::int64_t row) const {
+  return spec_.origin_y + static_cast<double>(row) * spec_.cell_size;
+}
 
 CellId CityGrid::cell_of(double x, double y) const {
   auto index = [&](double v, double origin, auto edge) {
@@ -109,7 +119,8 @@ Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool 
   const double span_x = (bounds.max_x - bounds.min_x + 2 * h) / spec_.cell_size + 3;
   const double span_y = (bounds.max_y - bounds.min_y + 2 * h) / spec_.cell_size + 3;
   if (!(span_x * span_y <= static_cast<double>(max_cells) * 4 + 64)) {
-    return Error{ErrorCode::InvalidArgument, "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
+    return Error{ErrorCode::InvalidArgument,
+                 "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
   }
   const CellId lo = cell_of(bounds.min_x - h, bounds.min_y - h);
   const CellId hi = cell_of(bounds.max_x + h, bounds.max_y + h);
@@ -125,7 +136,8 @@ Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool 
       if (!meets) continue;
       out.push_back(c);
       if (out.size() > max_cells) {
-        return Error{ErrorCode::InvalidArgument, "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
+        return Error{ErrorCode::InvalidArgument, "cells_meeting: bounds span more than " +
+                                                     std::to_string(max_cells) + " cells"};
       }
     }
   }
@@ -144,14 +156,17 @@ Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds
       return Error{ErrorCode::InvalidArgument, "input '" + inputs[i].name + "' has invalid bounds"};
     }
     auto cells = grid.cells_meeting(inputs[i].bounds, true, max_cells_per_input);
-    if (!cells.ok()) return Error{ErrorCode::InvalidArgument, "input '" + inputs[i].name + "': " + cells.error().message};
+    if (!cells.ok())
+      return Error{ErrorCode::InvalidArgument,
+                   "input '" + inputs[i].name + "': " + cells.error().message};
     for (const CellId& c : cells.value()) pairs.emplace_back(c, i);
   }
   std::sort(pairs.begin(), pairs.end());
   TileIndex index(grid);
   index.inputs_ = std::move(inputs);
   for (const auto& [cell, input] : pairs) {
-    if (index.cells_.empty() || !(index.cells_.back().cell == cell)) index.cells_.push_back(CellInputs{cell, {}});
+    if (index.cells_.empty() || !(index.cells_.back().cell == cell))
+      index.cells_.push_back(CellInputs{cell, {}});
     index.cells_.back().inputs.push_back(input);
   }
   return index;
@@ -164,8 +179,8 @@ std::span<const std::size_t> TileIndex::inputs_for(CellId cell) const {
   return it->inputs;
 }
 
-std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell, std::span<const kernel::Vec3> points,
-                                       bool include_halo) {
+std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell,
+                                       std::span<const kernel::Vec3> points, bool include_halo) {
   std::vector<std::size_t> out;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const double x = points[i].x();
@@ -175,10 +190,13 @@ std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell, std::s
   return out;
 }
 
-Result<Bounds2> transform_bounds(const Crs& from, const Crs& to, const Bounds2& bounds, int samples_per_edge) {
-  if (!bounds.is_valid()) return Error{ErrorCode::InvalidArgument, "transform_bounds: invalid bounds"};
+Result<Bounds2> transform_bounds(const Crs& from, const Crs& to, const Bounds2& bounds,
+                                 int samples_per_edge) {
+  if (!bounds.is_valid())
+    return Error{ErrorCode::InvalidArgument, "transform_bounds: invalid bounds"};
   if (samples_per_edge < 2 || samples_per_edge > 10000) {
-    return Error{ErrorCode::InvalidArgument, "transform_bounds: samples per edge must be in [2, 10000]"};
+    return Error{ErrorCode::InvalidArgument,
+                 "transform_bounds: samples per edge must be in [2, 10000]"};
   }
   Bounds2 out{INFINITY, INFINITY, -INFINITY, -INFINITY};
   const int n = samples_per_edge;

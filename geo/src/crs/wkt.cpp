@@ -75,7 +75,9 @@ struct WktNode {
     auto n = numbers();
     return index < n.size() ? std::optional<double>(n[index]) : std::nullopt;
   }
-  const WktItem* item(std::size_t index) const { return index < items.size() ? &items[index] : nullptr; }
+  const WktItem* item(std::size_t index) const {
+    return index < items.size() ? &items[index] : nullptr;
+  }
 };
 
 class Parser {
@@ -96,11 +98,14 @@ class Parser {
 
  private:
   Error error(const std::string& what) const {
-    return Error{ErrorCode::InvalidArgument, "WKT syntax error at offset " + std::to_string(pos_) + ": " + what};
+    return Error{ErrorCode::InvalidArgument,
+                 "WKT syntax error at offset " + std::to_string(pos_) + ": " + what};
   }
 
   void skip_space() {
-    while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r')) ++pos_;
+    while (pos_ < s_.size() &&
+           (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r'))
+      ++pos_;
   }
 
   static bool is_word_char(char c) {
@@ -122,7 +127,8 @@ class Parser {
       if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');
     }
     skip_space();
-    if (pos_ >= s_.size() || (s_[pos_] != '[' && s_[pos_] != '(')) return error("expected '[' after " + keyword);
+    if (pos_ >= s_.size() || (s_[pos_] != '[' && s_[pos_] != '('))
+      return error("expected '[' after " + keyword);
     const char close = s_[pos_] == '[' ? ']' : ')';
     ++pos_;
     auto node = std::make_unique<WktNode>();
@@ -155,8 +161,9 @@ class Parser {
         }
       } else if (c == '-' || c == '+' || c == '.' || (c >= '0' && c <= '9')) {
         const std::size_t start = pos_;
-        while (pos_ < s_.size() && (s_[pos_] == '-' || s_[pos_] == '+' || s_[pos_] == '.' || s_[pos_] == 'e' ||
-                                    s_[pos_] == 'E' || (s_[pos_] >= '0' && s_[pos_] <= '9'))) {
+        while (pos_ < s_.size() &&
+               (s_[pos_] == '-' || s_[pos_] == '+' || s_[pos_] == '.' || s_[pos_] == 'e' ||
+                s_[pos_] == 'E' || (s_[pos_] >= '0' && s_[pos_] <= '9'))) {
           ++pos_;
         }
         const std::string spelled(s_.substr(start, pos_ - start));
@@ -234,12 +241,13 @@ LinearUnit linear_unit_of(const WktNode& unit, Context& ctx) {
   const double factor = unit.number(0).value_or(1.0);
   const auto by_name = detail::linear_unit_from_name(name);
   if (by_name && factor == 1.0 && by_name->metres != 1.0) {
-    ctx.warnings.push_back("WKT unit '" + name + "' has conversion factor 1: read as " + by_name->name + " (" +
-                           detail::format_number(by_name->metres) + " m)");
+    ctx.warnings.push_back("WKT unit '" + name + "' has conversion factor 1: read as " +
+                           by_name->name + " (" + detail::format_number(by_name->metres) + " m)");
     return *by_name;
   }
   if (int code = epsg_code(unit)) {
-    if (auto known = detail::linear_unit_from_epsg(code); known && std::fabs(known->metres - factor) <= 1e-12 * factor) {
+    if (auto known = detail::linear_unit_from_epsg(code);
+        known && std::fabs(known->metres - factor) <= 1e-12 * factor) {
       return *known;
     }
   }
@@ -261,7 +269,9 @@ const WktNode* crs_unit_node(const WktNode& crs, std::initializer_list<const cha
 
 Result<Ellipsoid> ellipsoid_of(const WktNode& node, Context& ctx) {
   const auto n = node.numbers();
-  if (n.size() < 2) return invalid("WKT " + node.keyword + "[\"" + node.name() + "\"] needs a semi-major axis and an inverse flattening");
+  if (n.size() < 2)
+    return invalid("WKT " + node.keyword + "[\"" + node.name() +
+                   "\"] needs a semi-major axis and an inverse flattening");
   Ellipsoid e;
   e.name = node.name();
   e.epsg = epsg_code(node);
@@ -288,8 +298,9 @@ Result<GeodeticDatum> datum_of(const WktNode& geog, const AngularUnit& angle, Co
   std::optional<GeodeticDatum> known = code ? detail::datum_from_epsg(code) : std::nullopt;
   if (!known) known = detail::datum_from_name(datum->name());
   if (known && std::fabs(known->ellipsoid.semi_major_m - ellipsoid.value().semi_major_m) > 1e-3) {
-    ctx.warnings.push_back("WKT datum '" + datum->name() + "' is named like " + known->name +
-                           " but its ellipsoid differs: its relation to WGS 84 is not taken from the table");
+    ctx.warnings.push_back(
+        "WKT datum '" + datum->name() + "' is named like " + known->name +
+        " but its ellipsoid differs: its relation to WGS 84 is not taken from the table");
     known.reset();
   }
   if (known) {
@@ -309,8 +320,9 @@ Result<GeodeticDatum> datum_of(const WktNode& geog, const AngularUnit& angle, Co
       d.to_wgs84 = std::nullopt;
       d.to_wgs84_source = "unknown";
       if (!datum->child({"TOWGS84"})) {
-        ctx.warnings.push_back("WKT datum '" + d.name +
-                               "' is not known and has no TOWGS84: it cannot be placed on the globe");
+        ctx.warnings.push_back(
+            "WKT datum '" + d.name +
+            "' is not known and has no TOWGS84: it cannot be placed on the globe");
       }
     }
   }
@@ -321,7 +333,8 @@ Result<GeodeticDatum> datum_of(const WktNode& geog, const AngularUnit& angle, Co
       return invalid("WKT TOWGS84 needs 3 or 7 numbers, has " + std::to_string(v.size()));
     }
     auto at = [&](std::size_t i) { return i < v.size() ? v[i] : 0.0; };
-    d.to_wgs84 = detail::helmert_from_position_vector(at(0), at(1), at(2), at(3), at(4), at(5), at(6));
+    d.to_wgs84 =
+        detail::helmert_from_position_vector(at(0), at(1), at(2), at(3), at(4), at(5), at(6));
     d.to_wgs84_source = "WKT TOWGS84";
   }
   if (const WktNode* pm = geog.child({"PRIMEM", "PRIMEMERIDIAN"})) {
@@ -336,7 +349,8 @@ Result<Crs> geographic_of(const WktNode& geog, Context& ctx) {
   if (const WktNode* cs = geog.child({"CS"})) {
     const WktItem* type = cs->item(0);
     if (type && detail::normalise_name(type->text) == "cartesian") {
-      return unsupported("WKT " + geog.keyword + "[\"" + geog.name() + "\"] is geocentric (Cartesian CS): not supported");
+      return unsupported("WKT " + geog.keyword + "[\"" + geog.name() +
+                         "\"] is geocentric (Cartesian CS): not supported");
     }
   }
   Crs crs;
@@ -345,25 +359,49 @@ Result<Crs> geographic_of(const WktNode& geog, Context& ctx) {
   crs.epsg = epsg_code(geog);
   crs.source = "WKT";
   crs.angular_unit = degree_unit();
-  if (const WktNode* u = crs_unit_node(geog, {"ANGLEUNIT", "UNIT"})) crs.angular_unit = angular_unit_of(*u);
+  if (const WktNode* u = crs_unit_node(geog, {"ANGLEUNIT", "UNIT"}))
+    crs.angular_unit = angular_unit_of(*u);
   auto datum = datum_of(geog, crs.angular_unit, ctx);
   if (!datum.ok()) return datum.error();
   crs.datum = datum.value();
   return crs;
 }
 
-enum class Role { Latitude, Longitude, StandardParallel1, StandardParallel2, Scale, Easting, Northing, Unknown };
+enum class Role {
+  Latitude,
+  Longitude,
+  StandardParallel1,
+  StandardParallel2,
+  Scale,
+  Easting,
+  Northing,
+  Unknown
+};
 
 Role role_of_parameter(const WktNode& parameter) {
   switch (epsg_code(parameter)) {
-    case 8801: case 8821: return Role::Latitude;
-    case 8802: case 8822: case 8833: return Role::Longitude;
-    case 8805: return Role::Scale;
-    case 8806: case 8826: return Role::Easting;
-    case 8807: case 8827: return Role::Northing;
-    case 8823: case 8832: return Role::StandardParallel1;
-    case 8824: return Role::StandardParallel2;
-    default: break;
+    case 8801:
+    case 8821:
+      return Role::Latitude;
+    case 8802:
+    case 8822:
+    case 8833:
+      return Role::Longitude;
+    case 8805:
+      return Role::Scale;
+    case 8806:
+    case 8826:
+      return Role::Easting;
+    case 8807:
+    case 8827:
+      return Role::Northing;
+    case 8823:
+    case 8832:
+      return Role::StandardParallel1;
+    case 8824:
+      return Role::StandardParallel2;
+    default:
+      break;
   }
   const std::string n = detail::normalise_name(parameter.name());
   if (n == "latitudeoforigin" || n == "latitudeofnaturalorigin" || n == "latitudeoffalseorigin" ||
@@ -375,38 +413,61 @@ Role role_of_parameter(const WktNode& parameter) {
       n == "straightverticallongitudefrompole") {
     return Role::Longitude;
   }
-  if (n == "scalefactor" || n == "scalefactoratnaturalorigin" || n == "scalefactoratorigin") return Role::Scale;
+  if (n == "scalefactor" || n == "scalefactoratnaturalorigin" || n == "scalefactoratorigin")
+    return Role::Scale;
   if (n == "falseeasting" || n == "eastingatfalseorigin") return Role::Easting;
   if (n == "falsenorthing" || n == "northingatfalseorigin") return Role::Northing;
-  if (n == "standardparallel1" || n == "latitudeof1ststandardparallel" || n == "latitudeofstandardparallel" ||
-      n == "standardparallel" || n == "latitudeoftruescale") {
+  if (n == "standardparallel1" || n == "latitudeof1ststandardparallel" ||
+      n == "latitudeofstandardparallel" || n == "standardparallel" || n == "latitudeoftruescale") {
     return Role::StandardParallel1;
   }
-  if (n == "standardparallel2" || n == "latitudeof2ndstandardparallel") return Role::StandardParallel2;
+  if (n == "standardparallel2" || n == "latitudeof2ndstandardparallel")
+    return Role::StandardParallel2;
   return Role::Unknown;
 }
 
-enum class MethodGuess { TM, LCC1, LCC2, LCCAmbiguous, PolarGdal, PolarA, PolarB, PolarNorthEsri, PolarSouthEsri, Oblique, Unknown };
+enum class MethodGuess {
+  TM,
+  LCC1,
+  LCC2,
+  LCCAmbiguous,
+  PolarGdal,
+  PolarA,
+  PolarB,
+  PolarNorthEsri,
+  PolarSouthEsri,
+  Oblique,
+  Unknown
+};
 
 MethodGuess method_of(const WktNode& method_node) {
   switch (epsg_code(method_node)) {
-    case 9807: return MethodGuess::TM;
-    case 9801: return MethodGuess::LCC1;
-    case 9802: return MethodGuess::LCC2;
-    case 9810: return MethodGuess::PolarA;
-    case 9829: return MethodGuess::PolarB;
-    case 9809: return MethodGuess::Oblique;
-    default: break;
+    case 9807:
+      return MethodGuess::TM;
+    case 9801:
+      return MethodGuess::LCC1;
+    case 9802:
+      return MethodGuess::LCC2;
+    case 9810:
+      return MethodGuess::PolarA;
+    case 9829:
+      return MethodGuess::PolarB;
+    case 9809:
+      return MethodGuess::Oblique;
+    default:
+      break;
   }
   const std::string n = detail::normalise_name(method_node.name());
   if (n.find("southorient") != std::string::npos || n.find("belgium") != std::string::npos ||
       n.find("variantc") != std::string::npos || n.find("michigan") != std::string::npos) {
     return MethodGuess::Unknown;
   }
-  if (n == "transversemercator" || n == "gausskruger" || n == "transversemercatorgausskruger") return MethodGuess::TM;
+  if (n == "transversemercator" || n == "gausskruger" || n == "transversemercatorgausskruger")
+    return MethodGuess::TM;
   if (n == "lambertconformalconic1sp" || n == "lambertconicconformal1sp") return MethodGuess::LCC1;
   if (n == "lambertconformalconic2sp" || n == "lambertconicconformal2sp") return MethodGuess::LCC2;
-  if (n == "lambertconformalconic" || n == "lambertconicconformal") return MethodGuess::LCCAmbiguous;
+  if (n == "lambertconformalconic" || n == "lambertconicconformal")
+    return MethodGuess::LCCAmbiguous;
   if (n == "polarstereographic") return MethodGuess::PolarGdal;
   if (n == "polarstereographicvarianta") return MethodGuess::PolarA;
   if (n == "polarstereographicvariantb") return MethodGuess::PolarB;
@@ -417,11 +478,13 @@ MethodGuess method_of(const WktNode& method_node) {
 }
 
 /// The projection of a PROJCS (WKT 1) or PROJCRS (WKT 2) node.
-Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversion, const AngularUnit& angle,
-                                 const LinearUnit& length, Context& ctx) {
-  const WktNode* method_node =
-      conversion ? conversion->child({"METHOD", "PROJECTION"}) : projcs.child({"PROJECTION", "METHOD"});
-  if (!method_node) return invalid("WKT " + projcs.keyword + "[\"" + projcs.name() + "\"] has no PROJECTION/METHOD");
+Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversion,
+                                 const AngularUnit& angle, const LinearUnit& length, Context& ctx) {
+  const WktNode* method_node = conversion ? conversion->child({"METHOD", "PROJECTION"})
+                                          : projcs.child({"PROJECTION", "METHOD"});
+  if (!method_node)
+    return invalid("WKT " + projcs.keyword + "[\"" + projcs.name() +
+                   "\"] has no PROJECTION/METHOD");
   const WktNode& holder = conversion ? *conversion : projcs;
 
   struct Value {
@@ -440,14 +503,16 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
       case Role::StandardParallel1:
       case Role::StandardParallel2: {
         double radians = angle.radians;
-        if (const WktNode* u = parameter->child({"ANGLEUNIT", "UNIT"})) radians = angular_unit_of(*u).radians;
+        if (const WktNode* u = parameter->child({"ANGLEUNIT", "UNIT"}))
+          radians = angular_unit_of(*u).radians;
         value = value * radians / detail::kDegree;
         break;
       }
       case Role::Easting:
       case Role::Northing: {
         double metres = length.metres;
-        if (const WktNode* u = parameter->child({"LENGTHUNIT", "UNIT"})) metres = linear_unit_of(*u, ctx).metres;
+        if (const WktNode* u = parameter->child({"LENGTHUNIT", "UNIT"}))
+          metres = linear_unit_of(*u, ctx).metres;
         value *= metres;
         break;
       }
@@ -455,8 +520,9 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
         if (const WktNode* u = parameter->child({"SCALEUNIT"})) value *= u->number(0).value_or(1.0);
         break;
       case Role::Unknown:
-        ctx.warnings.push_back("WKT parameter '" + parameter->name() + "' (" + detail::format_number(value) +
-                               ") is not used by " + method_node->name() + ": ignored");
+        ctx.warnings.push_back("WKT parameter '" + parameter->name() + "' (" +
+                               detail::format_number(value) + ") is not used by " +
+                               method_node->name() + ": ignored");
         continue;
     }
     Value* slot = role == Role::Latitude            ? &lat
@@ -493,8 +559,10 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
       break;
     case MethodGuess::LCC1:
       p.method = ProjectionMethod::LambertConicConformal1SP;
-      if (!lat.present && sp1.present) p.latitude_of_origin_deg = sp1.value;
-      else if (auto e = require(lat, "latitude of origin")) return *e;
+      if (!lat.present && sp1.present)
+        p.latitude_of_origin_deg = sp1.value;
+      else if (auto e = require(lat, "latitude of origin"))
+        return *e;
       break;
     case MethodGuess::LCC2:
       p.method = ProjectionMethod::LambertConicConformal2SP;
@@ -506,16 +574,19 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
         p.method = ProjectionMethod::LambertConicConformal2SP;
         if (auto e = require(sp1, "standard parallel 1")) return *e;
         if (scale.present && scale.value != 1.0) {
-          return unsupported("WKT " + method_name + " with two standard parallels and scale factor " +
+          return unsupported("WKT " + method_name +
+                             " with two standard parallels and scale factor " +
                              detail::format_number(scale.value) + " is not supported");
         }
       } else {
         p.method = ProjectionMethod::LambertConicConformal1SP;
         p.latitude_of_origin_deg = sp1.present ? sp1.value : lat.value;
-        if (!sp1.present && !lat.present) return *require(lat, "latitude of origin or standard parallel 1");
+        if (!sp1.present && !lat.present)
+          return *require(lat, "latitude of origin or standard parallel 1");
       }
       break;
-    case MethodGuess::PolarGdal:  // GDAL WKT 1: latitude_of_origin ±90 → A, otherwise the standard parallel
+    case MethodGuess::PolarGdal:  // GDAL WKT 1: latitude_of_origin ±90 → A, otherwise the standard
+                                  // parallel
       if (std::fabs(lat.value) == 90.0) {
         p.method = ProjectionMethod::PolarStereographicA;
       } else {
@@ -523,8 +594,10 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
         p.standard_parallel_1_deg = lat.present ? lat.value : sp1.value;
         p.latitude_of_origin_deg = p.standard_parallel_1_deg < 0 ? -90.0 : 90.0;
         if (scale.present && scale.value != 1.0) {
-          ctx.warnings.push_back("WKT Polar_Stereographic with latitude_of_origin " + detail::format_number(lat.value) +
-                                 " read as variant B: scale factor " + detail::format_number(scale.value) + " ignored");
+          ctx.warnings.push_back("WKT Polar_Stereographic with latitude_of_origin " +
+                                 detail::format_number(lat.value) +
+                                 " read as variant B: scale factor " +
+                                 detail::format_number(scale.value) + " ignored");
         }
       }
       break;
@@ -546,18 +619,21 @@ Result<Projection> projection_of(const WktNode& projcs, const WktNode* conversio
       break;
     }
     case MethodGuess::Unknown:
-      return unsupported("WKT projection method '" + method_name +
-                         "' is not supported (supported: Transverse Mercator, Lambert Conic Conformal 1SP/2SP, "
-                         "Polar Stereographic A/B, Oblique Stereographic)");
+      return unsupported(
+          "WKT projection method '" + method_name +
+          "' is not supported (supported: Transverse Mercator, Lambert Conic Conformal 1SP/2SP, "
+          "Polar Stereographic A/B, Oblique Stereographic)");
   }
   return p;
 }
 
 Result<Crs> projected_of(const WktNode& node, Context& ctx) {
   const bool wkt2 = node.keyword == "PROJCRS" || node.keyword == "PROJECTEDCRS";
-  const WktNode* geog = wkt2 ? node.child({"BASEGEOGCRS", "BASEGEODCRS", "BASEGEOGRAPHICCRS", "GEOGCRS", "GEODCRS"})
-                             : node.child({"GEOGCS"});
-  if (!geog) return invalid("WKT " + node.keyword + "[\"" + node.name() + "\"] has no base geographic CRS");
+  const WktNode* geog =
+      wkt2 ? node.child({"BASEGEOGCRS", "BASEGEODCRS", "BASEGEOGRAPHICCRS", "GEOGCRS", "GEODCRS"})
+           : node.child({"GEOGCS"});
+  if (!geog)
+    return invalid("WKT " + node.keyword + "[\"" + node.name() + "\"] has no base geographic CRS");
   auto base = geographic_of(*geog, ctx);
   if (!base.ok()) return base.error();
   Crs crs = base.value();
@@ -568,10 +644,12 @@ Result<Crs> projected_of(const WktNode& node, Context& ctx) {
   if (const WktNode* u = crs_unit_node(node, {"LENGTHUNIT", "UNIT"})) {
     crs.linear_unit = linear_unit_of(*u, ctx);
   } else {
-    ctx.warnings.push_back("WKT " + node.keyword + "[\"" + node.name() + "\"] has no UNIT: metre assumed");
+    ctx.warnings.push_back("WKT " + node.keyword + "[\"" + node.name() +
+                           "\"] has no UNIT: metre assumed");
   }
   const WktNode* conversion = wkt2 ? node.child({"CONVERSION"}) : nullptr;
-  if (wkt2 && !conversion) return invalid("WKT " + node.keyword + "[\"" + node.name() + "\"] has no CONVERSION");
+  if (wkt2 && !conversion)
+    return invalid("WKT " + node.keyword + "[\"" + node.name() + "\"] has no CONVERSION");
   auto projection = projection_of(node, conversion, crs.angular_unit, crs.linear_unit, ctx);
   if (!projection.ok()) return projection.error();
   crs.projection = projection.value();
@@ -601,7 +679,8 @@ Result<Crs> interpret(const WktNode& node, Context& ctx, int depth = 0) {
       const std::string& ck = item.node->keyword;
       if (ck == "VERT_CS" || ck == "VERTCS" || ck == "VERTCRS" || ck == "VERTICALCRS") {
         if (!vertical) vertical = item.node.get();
-      } else if (ck != "AUTHORITY" && ck != "ID" && ck != "USAGE" && ck != "REMARK" && !horizontal) {
+      } else if (ck != "AUTHORITY" && ck != "ID" && ck != "USAGE" && ck != "REMARK" &&
+                 !horizontal) {
         horizontal = item.node.get();
       }
     }
@@ -626,17 +705,22 @@ Result<Crs> interpret(const WktNode& node, Context& ctx, int depth = 0) {
       to_wgs84 = epsg_code(t) == 4326 || detail::normalise_name(t.name()) == "wgs84";
     }
     if (!to_wgs84 || !transformation) {
-      ctx.warnings.push_back("WKT BOUNDCRS: only an abridged transformation to WGS 84 is used; ignored");
+      ctx.warnings.push_back(
+          "WKT BOUNDCRS: only an abridged transformation to WGS 84 is used; ignored");
       return crs;
     }
     const WktNode* method = transformation->child({"METHOD"});
     const std::string mn = method ? detail::normalise_name(method->name()) : std::string();
     const int mc = method ? epsg_code(*method) : 0;
-    const bool position_vector = mn.find("positionvector") != std::string::npos || mc == 9606 || mc == 1033;
-    const bool coordinate_frame = mn.find("coordinateframe") != std::string::npos || mc == 9607 || mc == 1032;
-    const bool translation = mn.find("geocentrictranslation") != std::string::npos || mc == 9603 || mc == 1031;
+    const bool position_vector =
+        mn.find("positionvector") != std::string::npos || mc == 9606 || mc == 1033;
+    const bool coordinate_frame =
+        mn.find("coordinateframe") != std::string::npos || mc == 9607 || mc == 1032;
+    const bool translation =
+        mn.find("geocentrictranslation") != std::string::npos || mc == 9603 || mc == 1031;
     if (!position_vector && !coordinate_frame && !translation) {
-      return unsupported("WKT BOUNDCRS transformation method '" + (method ? method->name() : std::string()) +
+      return unsupported("WKT BOUNDCRS transformation method '" +
+                         (method ? method->name() : std::string()) +
                          "' is not supported (Helmert methods only)");
     }
     double v[7] = {0, 0, 0, 0, 0, 0, 0};
@@ -644,18 +728,27 @@ Result<Crs> interpret(const WktNode& node, Context& ctx, int depth = 0) {
       const int code = epsg_code(*parameter);
       const std::string pn = detail::normalise_name(parameter->name());
       int slot = -1;
-      if (code >= 8605 && code <= 8611) slot = code - 8605;
-      else if (pn == "xaxistranslation") slot = 0;
-      else if (pn == "yaxistranslation") slot = 1;
-      else if (pn == "zaxistranslation") slot = 2;
-      else if (pn == "xaxisrotation") slot = 3;
-      else if (pn == "yaxisrotation") slot = 4;
-      else if (pn == "zaxisrotation") slot = 5;
-      else if (pn == "scaledifference") slot = 6;
+      if (code >= 8605 && code <= 8611)
+        slot = code - 8605;
+      else if (pn == "xaxistranslation")
+        slot = 0;
+      else if (pn == "yaxistranslation")
+        slot = 1;
+      else if (pn == "zaxistranslation")
+        slot = 2;
+      else if (pn == "xaxisrotation")
+        slot = 3;
+      else if (pn == "yaxisrotation")
+        slot = 4;
+      else if (pn == "zaxisrotation")
+        slot = 5;
+      else if (pn == "scaledifference")
+        slot = 6;
       if (slot >= 0) v[slot] = parameter->number(0).value_or(0.0);
     }
     Helmert7 h{v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
-    if (position_vector) h = detail::helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+    if (position_vector)
+      h = detail::helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
     crs.value().datum.to_wgs84 = h;
     crs.value().datum.to_wgs84_source = "WKT BOUNDCRS " + (method ? method->name() : std::string());
     return crs;
@@ -664,13 +757,16 @@ Result<Crs> interpret(const WktNode& node, Context& ctx, int depth = 0) {
     auto crs = projected_of(node, ctx);
     if (!crs.ok()) return crs;
     // Some writers (Global Mapper) nest the vertical CRS inside PROJCS.
-    if (const WktNode* v = node.child({"VERT_CS", "VERTCS", "VERTCRS"})) crs.value().vertical = vertical_of(*v, ctx);
+    if (const WktNode* v = node.child({"VERT_CS", "VERTCS", "VERTCRS"}))
+      crs.value().vertical = vertical_of(*v, ctx);
     return crs;
   }
-  if (k == "GEOGCS" || k == "GEOGCRS" || k == "GEODCRS" || k == "GEOGRAPHICCRS" || k == "GEODETICCRS") {
+  if (k == "GEOGCS" || k == "GEOGCRS" || k == "GEODCRS" || k == "GEOGRAPHICCRS" ||
+      k == "GEODETICCRS") {
     auto crs = geographic_of(node, ctx);
     if (!crs.ok()) return crs;
-    if (const WktNode* v = node.child({"VERT_CS", "VERTCS", "VERTCRS"})) crs.value().vertical = vertical_of(*v, ctx);
+    if (const WktNode* v = node.child({"VERT_CS", "VERTCS", "VERTCRS"}))
+      crs.value().vertical = vertical_of(*v, ctx);
     return crs;
   }
   if (k == "GEOCCS") return unsupported("WKT GEOCCS (geocentric CRS) is not supported");
@@ -688,8 +784,10 @@ Result<Crs> interpret(const WktNode& node, Context& ctx, int depth = 0) {
 std::string quoted(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
-    if (c == '"') out += "\"\"";
-    else out.push_back(c);
+    if (c == '"')
+      out += "\"\"";
+    else
+      out.push_back(c);
   }
   return out + "\"";
 }
@@ -707,19 +805,23 @@ std::string unit_wkt(const LinearUnit& u) {
 std::string geogcs_wkt(const Crs& crs) {
   const GeodeticDatum& d = crs.datum;
   const Ellipsoid& e = d.ellipsoid;
-  std::string s = "GEOGCS[" + quoted(crs.kind == CrsKind::Geographic ? crs.name : d.name) + ",DATUM[" +
-                  quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," + num(e.semi_major_m) + "," +
-                  num(e.inverse_flattening) + authority(e.epsg) + "]";
+  std::string s = "GEOGCS[" + quoted(crs.kind == CrsKind::Geographic ? crs.name : d.name) +
+                  ",DATUM[" + quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," +
+                  num(e.semi_major_m) + "," + num(e.inverse_flattening) + authority(e.epsg) + "]";
   if (d.to_wgs84 && d.epsg != 6326) {
     const Helmert7& h = *d.to_wgs84;  // WKT 1 TOWGS84 is position vector: negate rotations
-    s += ",TOWGS84[" + num(h.tx_m) + "," + num(h.ty_m) + "," + num(h.tz_m) + "," + num(-h.rx_arcsec + 0.0) + "," +
-         num(-h.ry_arcsec + 0.0) + "," + num(-h.rz_arcsec + 0.0) + "," + num(h.scale_ppm) + "]";
+    s += ",TOWGS84[" + num(h.tx_m) + "," + num(h.ty_m) + "," + num(h.tz_m) + "," +
+         num(-h.rx_arcsec + 0.0) + "," + num(-h.ry_arcsec + 0.0) + "," + num(-h.rz_arcsec + 0.0) +
+         "," + num(h.scale_ppm) + "]";
   }
   const AngularUnit& a = crs.angular_unit;  // WKT 1 gives the prime meridian in the GEOGCS unit
-  s += authority(d.epsg) + "],PRIMEM[" + quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
+  s += authority(d.epsg) + "],PRIMEM[" +
+       quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
        num(d.prime_meridian_deg * detail::kDegree / a.radians) + "],";
-  s += "UNIT[" + quoted(a.name) + "," + num(a.radians) + authority(a.epsg == 9102 ? 9122 : a.epsg) + "]";
-  if (crs.kind == CrsKind::Geographic) s += ",AXIS[\"Longitude\",EAST],AXIS[\"Latitude\",NORTH]" + authority(crs.epsg);
+  s += "UNIT[" + quoted(a.name) + "," + num(a.radians) + authority(a.epsg == 9102 ? 9122 : a.epsg) +
+       "]";
+  if (crs.kind == CrsKind::Geographic)
+    s += ",AXIS[\"Longitude\",EAST],AXIS[\"Latitude\",NORTH]" + authority(crs.epsg);
   return s + "]";
 }
 
@@ -727,10 +829,13 @@ std::string geogcs_wkt(const Crs& crs) {
 
 Result<Crs> crs_from_wkt(std::string_view wkt) {
   if (wkt.size() > kMaxWktLength) {
-    return Error{ErrorCode::InvalidArgument, "WKT longer than " + std::to_string(kMaxWktLength) + " bytes"};
+    return Error{ErrorCode::InvalidArgument,
+                 "WKT longer than " + std::to_string(kMaxWktLength) + " bytes"};
   }
   auto trim = [](std::string_view s) {
-    auto blank = [](char c) { return c == '\0' || c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+    auto blank = [](char c) {
+      return c == '\0' || c == ' ' || c == '\t' || c == '\r' || c == '\n';
+    };
     while (!s.empty() && blank(s.back())) s.remove_suffix(1);
     while (!s.empty() && blank(s.front())) s.remove_prefix(1);
     return s;
@@ -772,10 +877,11 @@ std::string crs_to_wkt1(const Crs& crs) {
       case ProjectionMethod::ObliqueStereographic:
       case ProjectionMethod::PolarStereographicA:
         s += std::string(",PROJECTION[\"") +
-             (p.method == ProjectionMethod::TransverseMercator         ? "Transverse_Mercator"
-              : p.method == ProjectionMethod::LambertConicConformal1SP ? "Lambert_Conformal_Conic_1SP"
-              : p.method == ProjectionMethod::ObliqueStereographic     ? "Oblique_Stereographic"
-                                                                       : "Polar_Stereographic") +
+             (p.method == ProjectionMethod::TransverseMercator ? "Transverse_Mercator"
+              : p.method == ProjectionMethod::LambertConicConformal1SP
+                  ? "Lambert_Conformal_Conic_1SP"
+              : p.method == ProjectionMethod::ObliqueStereographic ? "Oblique_Stereographic"
+                                                                   : "Polar_Stereographic") +
              "\"]";
         s += parameter("latitude_of_origin", p.latitude_of_origin_deg);
         s += parameter("central_meridian", p.longitude_of_origin_deg);
@@ -797,13 +903,14 @@ std::string crs_to_wkt1(const Crs& crs) {
     }
     s += parameter("false_easting", p.false_easting_m / unit);
     s += parameter("false_northing", p.false_northing_m / unit);
-    s += "," + unit_wkt(crs.linear_unit) + ",AXIS[\"Easting\",EAST],AXIS[\"Northing\",NORTH]" + authority(crs.epsg) + "]";
+    s += "," + unit_wkt(crs.linear_unit) + ",AXIS[\"Easting\",EAST],AXIS[\"Northing\",NORTH]" +
+         authority(crs.epsg) + "]";
   }
   if (!crs.vertical) return s;
   const VerticalCrs& v = *crs.vertical;
-  return "COMPD_CS[" + quoted(crs.name + " + " + v.name) + "," + s + ",VERT_CS[" + quoted(v.name) + ",VERT_DATUM[" +
-         quoted(v.name) + ",2005]," + unit_wkt(v.unit) + ",AXIS[\"Gravity-related height\",UP]" + authority(v.epsg) +
-         "]]";
+  return "COMPD_CS[" + quoted(crs.name + " + " + v.name) + "," + s + ",VERT_CS[" + quoted(v.name) +
+         ",VERT_DATUM[" + quoted(v.name) + ",2005]," + unit_wkt(v.unit) +
+         ",AXIS[\"Gravity-related height\",UP]" + authority(v.epsg) + "]]";
 }
 
 }  // namespace csgtile::geo

@@ -8,6 +8,7 @@
 #include <functional>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <set>
 #include <string>
@@ -73,6 +74,7 @@ class BooleanEngine {
     if (auto s = import_operand(model_, a_, 0); !s.ok()) return s.error();
     first_b_face_ = model_.faces.size();
     if (auto s = import_operand(model_, b_, 1); !s.ok()) return s.error();
+    reframe_spheres();
     polygons_.resize(model_.faces.size());
     for (std::size_t i = 0; i < model_.faces.size(); ++i) polygons_[i] = face_polygon(model_, model_.faces[i]);
     unify_shared_edges();
@@ -145,6 +147,133 @@ class BooleanEngine {
       }
       f.extra = std::move(extra);
     }
+  }
+
+  // A full sphere's (u, v) frame is free: choose its axis so that every section with the
+  // other operand is a latitude or a meridian (whose pcurves are exact lines), and turn its
+  // seam away from the meridian planes. Spheres cut by surfaces with no common axis keep
+  // their frame (their sections then report Unsupported).
+  void reframe_spheres() {
+    const double tol = options_.tolerance;
+    for (std::size_t f = 0; f < model_.faces.size(); ++f) {
+      BFace& face = model_.faces[f];
+      if (face.surface->kind() != SurfaceKind::Sphere || face.loops.size() != 1 || face.loops[0].size() != 4) continue;
+      const auto& sphere = static_cast<const SphereSurface&>(*face.surface);
+      const Vec3 center = sphere.frame().origin;
+      const double r = sphere.radius();
+      // Constraints from the overlapping faces of the other operand.
+      std::vector<Vec3> axes;         // must be the sphere's axis (sphere centres, revolution axes)
+      std::vector<std::pair<Vec3, bool>> planes;  // normal, passes through the centre
+      bool impossible = false;
+      const std::size_t lo = face.operand == 0 ? first_b_face_ : 0;
+      const std::size_t hi = face.operand == 0 ? model_.faces.size() : first_b_face_;
+      BoundingBox box = face.box;
+      box.enlarge(tol);
+      for (std::size_t g = lo; g < hi; ++g) {
+        if (!box.intersects(model_.faces[g].box)) continue;
+        const Surface& other = *model_.faces[g].surface;
+        switch (other.kind()) {
+          case SurfaceKind::Plane: {
+            const Frame& pf = static_cast<const PlaneSurface&>(other).frame();
+            planes.emplace_back(pf.z, std::abs((center - pf.origin).dot(pf.z)) <= tol);
+            break;
+          }
+          case SurfaceKind::Sphere: {
+            const Vec3 d = static_cast<const SphereSurface&>(other).frame().origin - center;
+            if (d.norm() > tol) axes.push_back(d.normalized());
+            break;
+          }
+          case SurfaceKind::Cylinder:
+          case SurfaceKind::Cone:
+          case SurfaceKind::Torus: {
+            const Frame& of = other.kind() == SurfaceKind::Cylinder ? static_cast<const CylinderSurface&>(other).frame()
+                              : other.kind() == SurfaceKind::Cone   ? static_cast<const ConeSurface&>(other).frame()
+                                                                    : static_cast<const TorusSurface&>(other).frame();
+            const Vec3 w = center - of.origin;
+            if ((w - w.dot(of.z) * of.z).norm() > tol) impossible = true;
+            axes.push_back(of.z);
+            break;
+          }
+          default:
+            impossible = true;
+        }
+      }
+      if (impossible) continue;
+      auto compatible = [&](const Vec3& z) {
+        for (const Vec3& a : axes) {
+          if (a.cross(z).norm() > 1e-12) return false;
+        }
+        for (const auto& [n, through_center] : planes) {
+          const bool latitude = n.cross(z).norm() <= 1e-12;
+          const bool meridian = through_center && std::abs(n.dot(z)) <= 1e-12;
+          if (!latitude && !meridian) return false;
+        }
+        return true;
+      };
+      std::vector<Vec3> candidates{sphere.frame().z};
+      for (const Vec3& a : axes) candidates.push_back(a);
+      for (const auto& pl : planes) candidates.push_back(pl.first);
+      std::optional<Vec3> z;
+      for (const Vec3& c : candidates) {
+        if (compatible(c.normalized())) {
+          z = c.normalized();
+          break;
+        }
+      }
+      if (!z) continue;
+      // Seam direction: away from every meridian plane.
+      const Frame base = Frame::from_z(center, *z, sphere.frame().x);
+      double best_angle = 0, best_score = -1;
+      for (int k = 0; k < 16; ++k) {
+        const double phi = 0.3 + k * 0.39;  // not a simple fraction of π
+        const Vec3 x = std::cos(phi) * base.x + std::sin(phi) * base.y;
+        double score = 1.0;
+        for (const auto& [n, through_center] : planes) {
+          if (through_center && std::abs(n.dot(*z)) <= 1e-12) score = std::min(score, std::abs(x.dot(n)));
+        }
+        if (score > best_score + 1e-9) {
+          best_score = score;
+          best_angle = phi;
+        }
+      }
+      Frame frame;
+      frame.origin = center;
+      frame.z = *z;
+      frame.x = std::cos(best_angle) * base.x + std::sin(best_angle) * base.y;
+      frame.y = frame.z.cross(frame.x);
+      rebuild_full_sphere(face, frame, r);
+    }
+  }
+
+  void rebuild_full_sphere(BFace& face, const Frame& frame, double r) {
+    constexpr double kHalfPi = std::numbers::pi / 2, kTwoPi = 2 * std::numbers::pi;
+    face.surface = std::make_shared<SphereSurface>(frame, r);
+    const int south = model_.vertex_at(frame.origin - r * frame.z);
+    const int north = model_.vertex_at(frame.origin + r * frame.z);
+    Frame meridian;
+    meridian.origin = frame.origin;
+    meridian.x = frame.x;
+    meridian.y = frame.z;
+    meridian.z = meridian.x.cross(meridian.y);
+    BEdge seam;
+    seam.curve = std::make_shared<CircleCurve>(meridian, r);
+    seam.t0 = -kHalfPi;
+    seam.t1 = kHalfPi;
+    seam.v0 = south;
+    seam.v1 = north;
+    seam.tolerance = options_.tolerance;
+    seam.seam = true;
+    BEdge pole_s, pole_n;
+    pole_s.t0 = pole_n.t0 = 0;
+    pole_s.t1 = pole_n.t1 = kTwoPi;
+    pole_s.v0 = pole_s.v1 = south;
+    pole_n.v0 = pole_n.v1 = north;
+    pole_s.tolerance = pole_n.tolerance = options_.tolerance;
+    const int es = model_.add_edge(seam), ps = model_.add_edge(pole_s), pn = model_.add_edge(pole_n);
+    face.loops = {{{ps, true, std::make_shared<Line2d>(Vec2(0, -kHalfPi), Vec2(1, 0))},
+                   {es, true, std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1))},
+                   {pn, false, std::make_shared<Line2d>(Vec2(0, kHalfPi), Vec2(1, 0))},
+                   {es, false, std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))}}};
   }
 
   // A vertex of one operand lying inside an edge of the other (touching or overlapping
@@ -227,6 +356,30 @@ class BooleanEngine {
     Curve2dPtr pa = fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
     Curve2dPtr pb = existing >= 0 ? nullptr : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
     if (!pa || (existing < 0 && !pb)) {
+      // A great circle through a sphere's poles folds in v there: fit each half apart.
+      std::vector<double> folds;
+      for (std::size_t f : {fa, fb}) {
+        if (model_.faces[f].surface->kind() != SurfaceKind::Sphere) continue;
+        const auto& sp = static_cast<const SphereSurface&>(*model_.faces[f].surface);
+        for (double sign : {-1.0, 1.0}) {
+          const Vec3 pole = sp.frame().origin + sign * sp.radius() * sp.frame().z;
+          const double t = curve->closest_parameter(pole, t0, t1);
+          const double span = 1e-9 * std::max(1.0, t1 - t0);
+          if ((curve->point(t) - pole).norm() <= options_.tolerance && t > t0 + span && t < t1 - span) {
+            folds.push_back(t);
+          }
+        }
+      }
+      if (!folds.empty()) {
+        std::sort(folds.begin(), folds.end());
+        double start = t0;
+        folds.push_back(t1);
+        for (double end : folds) {
+          if (auto st = add_section(fa, fb, curve, start, end, existing); !st.ok()) return st;
+          start = end;
+        }
+        return {};
+      }
       return Status(ErrorCode::Unsupported,
                     std::string("the section of a ") + surface_name(model_.faces[fa].surface->kind()) +
                         " and a " + surface_name(model_.faces[fb].surface->kind()) +
@@ -342,7 +495,8 @@ class BooleanEngine {
     for (const Hit& h : hits) {
       if (std::abs(h.t - t) > 1e-9 * std::max(1.0, std::abs(t))) continue;
       BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
-      if (v == e.v0 || v == e.v1) continue;
+      // A pole (degenerate edge) is split in its parameter where a meridian reaches it.
+      if (!e.degenerate() && (v == e.v0 || v == e.v1)) continue;
       e.splits.emplace_back(h.s, v);
     }
     return v;
@@ -424,15 +578,17 @@ class BooleanEngine {
       BEdge e = model_.edges[i];
       std::sort(e.splits.begin(), e.splits.end());
       std::vector<std::pair<double, int>> cuts{{e.t0, e.v0}};
+      const double eps = 1e-9 * std::max(1.0, e.t1 - e.t0);
       for (const auto& [t, v] : e.splits) {
-        if (v == cuts.back().second) continue;
-        if (t <= e.t0 || t >= e.t1) continue;
+        if (t <= e.t0 + eps || t >= e.t1 - eps) continue;
+        if (e.degenerate() ? t - cuts.back().first <= eps : v == cuts.back().second) continue;
         cuts.emplace_back(t, v);
       }
       cuts.emplace_back(e.t1, e.v1);
       if (cuts.size() <= 2) continue;
       std::vector<int> chain;
       for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+        if (!e.degenerate() && cuts[k].second == cuts[k + 1].second) continue;
         BEdge sub;
         sub.curve = e.curve;
         sub.t0 = cuts[k].first;

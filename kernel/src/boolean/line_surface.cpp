@@ -6,6 +6,8 @@
 #include <limits>
 #include <numbers>
 
+#include <Eigen/LU>
+
 namespace csgtile::kernel::detail {
 
 namespace {
@@ -432,6 +434,26 @@ bool in_piece(double s, const AffinePiece& piece, bool& flag) {
   return true;
 }
 
+// Newton steps on S(u, v) = o + t·d from a root of the swept-surface equations: those
+// eliminate a variable by dividing by a quantity that may be small (the line's component
+// along the axis), which magnifies rounding in the eliminated one. Stops at a singular
+// Jacobian (the line touches the surface there: the caller flags the hit as tangent anyway).
+void polish(const Surface& s, const Vec3& o, const Vec3& d, double& t, Vec2& uv) {
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const Vec3 residual = s.point(uv.x(), uv.y()) - (o + t * d);
+    Eigen::Matrix3d jacobian;
+    jacobian.col(0) = s.du(uv.x(), uv.y());
+    jacobian.col(1) = s.dv(uv.x(), uv.y());
+    jacobian.col(2) = -d;
+    const double det = jacobian.determinant();
+    if (!(std::abs(det) > 1e-12 * jacobian.col(0).norm() * jacobian.col(1).norm())) return;
+    const Vec3 step = jacobian.inverse() * residual;
+    uv -= Vec2(step.x(), step.y());
+    t -= step.z();
+    if (step.norm() <= 4.0 * kEps * (std::abs(t) + uv.norm() + 1.0)) return;
+  }
+}
+
 void intersect_extrusion(const ExtrusionSurface& s, const Vec3& o, const Vec3& d, double t0,
                          double t1, const ParamBox& range, double tolerance,
                          LineSurfaceIntersection& out) {
@@ -480,13 +502,13 @@ void intersect_extrusion(const ExtrusionSurface& s, const Vec3& o, const Vec3& d
     us.push_back({u, flag});
   }
   for (const Root& root : us) {
-    const double u = root.u;
-    const Vec3 w = basis.point(u) - o;
-    const double t = (w.dot(d) - cos_ad * w.dot(axis)) / (1.0 - cos_ad * cos_ad);
+    const Vec3 w = basis.point(root.u) - o;
+    double t = (w.dot(d) - cos_ad * w.dot(axis)) / (1.0 - cos_ad * cos_ad);
+    Vec2 uv(root.u, cos_ad * t - w.dot(axis));
+    polish(s, o, d, t, uv);
     if (t < t0 || t > t1) continue;
-    const double v = cos_ad * t - w.dot(axis);
-    const double cosine = std::abs(s.normal(u, v).dot(d));
-    push_hit(out, t, Vec2(u, v), root.flag || cosine < kGrazingCosine);
+    const double cosine = std::abs(s.normal(uv.x(), uv.y()).dot(d));
+    push_hit(out, t, uv, root.flag || cosine < kGrazingCosine);
   }
 }
 
@@ -606,15 +628,17 @@ void intersect_revolution(const RevolutionSurface& s, const Vec3& o, const Vec3&
   }
   for (const Root& root : vs) {
     const Vec3 meridian_point = meridian.point(root.v) - s.axis_origin();
-    const double tau = (meridian_point.dot(axis) - qz) / dz;
-    if (tau < line.lo || tau > line.hi) continue;
+    double tau = (meridian_point.dot(axis) - qz) / dz;
     const Vec3 x = q + tau * d;
     const Vec3 x_perp = perp(x), m_perp = perp(meridian_point);
     const double u = m_perp.squaredNorm() > 0.0
                          ? wrap(std::atan2(axis.dot(m_perp.cross(x_perp)), m_perp.dot(x_perp)))
                          : 0.0;
-    const double cosine = std::abs(s.normal(u, root.v).dot(d));
-    push_hit(out, line.shift + tau, Vec2(u, root.v), root.flag || cosine < kGrazingCosine);
+    Vec2 uv(u, root.v);
+    polish(s, line.origin, d, tau, uv);
+    if (tau < line.lo || tau > line.hi) continue;
+    const double cosine = std::abs(s.normal(uv.x(), uv.y()).dot(d));
+    push_hit(out, line.shift + tau, uv, root.flag || cosine < kGrazingCosine);
   }
 }
 

@@ -25,7 +25,8 @@
 ///   curves    (tag 6):  count, count × { kind:u8 (CurveKind), fields }
 ///                       Line: origin vec3, direction vec3 (a preimage whose normalisation
 ///                       gives the stored direction bit for bit); Circle: frame, radius;
-///                       Ellipse: frame, major, minor; Polyline: n ≥ 2, n × vec3, tolerance
+///                       Ellipse: frame, major, minor; Polyline: n ≥ 2, n × vec3, tolerance;
+///                       Trig: centre vec3, a vec3, b vec3 (a × b ≠ 0)
 ///   surfaces  (tag 8):  count, count × { kind:u8 (SurfaceKind), fields }
 ///                       Plane: frame; Cylinder: frame, radius; Cone: frame, radius, semi-
 ///                       angle; Sphere: frame, radius; Torus: frame, major, minor;
@@ -33,7 +34,8 @@
 ///                       Revolution: curve:varint, axis origin vec3, axis direction vec3
 ///   pcurves   (tag 10): count, count × { kind:u8 (kPcurve*), fields }
 ///                       Line: origin 2 num, direction 2 num; Circle (counter-clockwise or
-///                       clockwise): centre 2 num, radius; Polyline: n ≥ 2, n × 2 num
+///                       clockwise): centre 2 num, radius; Polyline: n ≥ 2, n × 2 num;
+///                       Trig: c, a, b, d, 2 num each
 ///   bodies    (tag 12): count, count × body, then root
 ///     body  := head:varint = child_count << 3 | ShapeKind, then by kind:
 ///              Vertex: point vec3, tolerance (no children)
@@ -114,11 +116,12 @@ class RecentNumbers {
 
 inline constexpr bool is_optional_tag(std::uint64_t tag) { return (tag & 1U) != 0; }
 
-/// Pcurve kind codes: Curve2dKind, plus a code for clockwise circles (sense −1).
+/// Pcurve kind codes: the Curve2dKind values, plus a code for clockwise circles (sense −1).
 inline constexpr std::uint8_t kPcurveLine = 0;
 inline constexpr std::uint8_t kPcurveCircle = 1;
 inline constexpr std::uint8_t kPcurvePolyline = 2;
-inline constexpr std::uint8_t kPcurveClockwiseCircle = 3;
+inline constexpr std::uint8_t kPcurveTrig = 3;
+inline constexpr std::uint8_t kPcurveClockwiseCircle = 4;
 
 /// Child references pack the orientation in bits 0–1 and a location flag in bit 2.
 inline constexpr unsigned kRefShift = 3;

@@ -43,13 +43,20 @@ struct Sections {
 
   Payload* find(std::uint64_t tag) {
     switch (tag) {
-      case static_cast<std::uint64_t>(SectionTag::Numbers): return &numbers;
-      case static_cast<std::uint64_t>(SectionTag::Locations): return &locations;
-      case static_cast<std::uint64_t>(SectionTag::Curves): return &curves;
-      case static_cast<std::uint64_t>(SectionTag::Surfaces): return &surfaces;
-      case static_cast<std::uint64_t>(SectionTag::Pcurves): return &pcurves;
-      case static_cast<std::uint64_t>(SectionTag::Bodies): return &bodies;
-      default: return nullptr;
+      case static_cast<std::uint64_t>(SectionTag::Numbers):
+        return &numbers;
+      case static_cast<std::uint64_t>(SectionTag::Locations):
+        return &locations;
+      case static_cast<std::uint64_t>(SectionTag::Curves):
+        return &curves;
+      case static_cast<std::uint64_t>(SectionTag::Surfaces):
+        return &surfaces;
+      case static_cast<std::uint64_t>(SectionTag::Pcurves):
+        return &pcurves;
+      case static_cast<std::uint64_t>(SectionTag::Bodies):
+        return &bodies;
+      default:
+        return nullptr;
     }
   }
 };
@@ -247,7 +254,20 @@ CurvePtr Decoder::curve(ByteReader& in) {
       if (in.failed()) return nullptr;
       return std::make_shared<PolylineCurve>(std::move(points), tolerance);
     }
-    default: in.fail("unknown curve kind " + std::to_string(kind)); return nullptr;
+    case static_cast<std::uint8_t>(CurveKind::Trig): {
+      const Vec3 center = vec3(in);
+      const Vec3 a = vec3(in);
+      const Vec3 b = vec3(in);
+      if (in.failed()) return nullptr;
+      if (!(a.cross(b).squaredNorm() > 0.0)) {
+        in.fail("trig curve has parallel semi-diameters");
+        return nullptr;
+      }
+      return std::make_shared<TrigCurve>(center, a, b);
+    }
+    default:
+      in.fail("unknown curve kind " + std::to_string(kind));
+      return nullptr;
   }
 }
 
@@ -330,7 +350,9 @@ SurfacePtr Decoder::surface(ByteReader& in) {
       if (!unit(in, revolution->axis_direction())) return nullptr;
       return revolution;
     }
-    default: in.fail("unknown surface kind " + std::to_string(kind)); return nullptr;
+    default:
+      in.fail("unknown surface kind " + std::to_string(kind));
+      return nullptr;
   }
 }
 
@@ -373,7 +395,17 @@ Curve2dPtr Decoder::pcurve(ByteReader& in) {
       if (in.failed()) return nullptr;
       return std::make_shared<Polyline2d>(std::move(points));
     }
-    default: in.fail("unknown pcurve kind " + std::to_string(kind)); return nullptr;
+    case detail::kPcurveTrig: {
+      const Vec2 c = vec2(in);
+      const Vec2 a = vec2(in);
+      const Vec2 b = vec2(in);
+      const Vec2 d = vec2(in);
+      if (in.failed()) return nullptr;
+      return std::make_shared<Trig2d>(c, a, b, d);
+    }
+    default:
+      in.fail("unknown pcurve kind " + std::to_string(kind));
+      return nullptr;
   }
 }
 

@@ -351,6 +351,13 @@ void encode_curves(const ModelTables& t, PayloadEncoder& e) {
         e.number(polyline->tolerance());
         break;
       }
+      case CurveKind::Trig: {
+        const auto* trig = static_cast<const TrigCurve*>(curve);
+        e.vec3(trig->center());
+        e.vec3(trig->a());
+        e.vec3(trig->b());
+        break;
+      }
     }
   }
 }
@@ -360,7 +367,9 @@ void encode_surfaces(const ModelTables& t, PayloadEncoder& e) {
   for (const Surface* surface : t.surfaces) {
     e.byte(static_cast<std::uint8_t>(surface->kind()));
     switch (surface->kind()) {
-      case SurfaceKind::Plane: e.frame(static_cast<const PlaneSurface*>(surface)->frame()); break;
+      case SurfaceKind::Plane:
+        e.frame(static_cast<const PlaneSurface*>(surface)->frame());
+        break;
       case SurfaceKind::Cylinder: {
         const auto* cylinder = static_cast<const CylinderSurface*>(surface);
         e.frame(cylinder->frame());
@@ -427,6 +436,15 @@ void encode_pcurves(const ModelTables& t, PayloadEncoder& e) {
         e.byte(detail::kPcurvePolyline);
         e.varint(polyline->points().size());
         for (const Vec2& p : polyline->points()) e.vec2(p);
+        break;
+      }
+      case Curve2dKind::Trig: {
+        const auto* trig = static_cast<const Trig2d*>(pcurve);
+        e.byte(detail::kPcurveTrig);
+        e.vec2(trig->c());
+        e.vec2(trig->a());
+        e.vec2(trig->b());
+        e.vec2(trig->d());
         break;
       }
     }

@@ -80,9 +80,13 @@ class Comparer {
       return false;
     }
     switch (bodies_.pair(&a.body(), &b.body())) {
-      case Pairing::Outcome::New: pending_.emplace_back(&a.body(), &b.body()); return true;
-      case Pairing::Outcome::Known: return true;
-      case Pairing::Outcome::Conflict: return false;
+      case Pairing::Outcome::New:
+        pending_.emplace_back(&a.body(), &b.body());
+        return true;
+      case Pairing::Outcome::Known:
+        return true;
+      case Pairing::Outcome::Conflict:
+        return false;
     }
     return false;
   }
@@ -130,9 +134,12 @@ class Comparer {
 
   bool curves(const Curve& a, const Curve& b) {
     switch (curves_.pair(&a, &b)) {
-      case Pairing::Outcome::Known: return true;
-      case Pairing::Outcome::Conflict: return false;
-      case Pairing::Outcome::New: break;
+      case Pairing::Outcome::Known:
+        return true;
+      case Pairing::Outcome::Conflict:
+        return false;
+      case Pairing::Outcome::New:
+        break;
     }
     if (a.kind() != b.kind()) return false;
     switch (a.kind()) {
@@ -163,15 +170,24 @@ class Comparer {
         }
         return true;
       }
+      case CurveKind::Trig: {
+        const auto& ta = static_cast<const TrigCurve&>(a);
+        const auto& tb = static_cast<const TrigCurve&>(b);
+        return same_vector(ta.center(), tb.center()) && same_vector(ta.a(), tb.a()) &&
+               same_vector(ta.b(), tb.b());
+      }
     }
     return false;
   }
 
   bool surfaces(const Surface& a, const Surface& b) {
     switch (surfaces_.pair(&a, &b)) {
-      case Pairing::Outcome::Known: return true;
-      case Pairing::Outcome::Conflict: return false;
-      case Pairing::Outcome::New: break;
+      case Pairing::Outcome::Known:
+        return true;
+      case Pairing::Outcome::Conflict:
+        return false;
+      case Pairing::Outcome::New:
+        break;
     }
     if (a.kind() != b.kind()) return false;
     switch (a.kind()) {
@@ -219,9 +235,12 @@ class Comparer {
 
   bool pcurves(const Curve2d& a, const Curve2d& b) {
     switch (pcurves_.pair(&a, &b)) {
-      case Pairing::Outcome::Known: return true;
-      case Pairing::Outcome::Conflict: return false;
-      case Pairing::Outcome::New: break;
+      case Pairing::Outcome::Known:
+        return true;
+      case Pairing::Outcome::Conflict:
+        return false;
+      case Pairing::Outcome::New:
+        break;
     }
     if (a.kind() != b.kind()) return false;
     switch (a.kind()) {
@@ -244,6 +263,12 @@ class Comparer {
           if (!same_vector(pa.points()[i], pb.points()[i])) return false;
         }
         return true;
+      }
+      case Curve2dKind::Trig: {
+        const auto& ta = static_cast<const Trig2d&>(a);
+        const auto& tb = static_cast<const Trig2d&>(b);
+        return same_vector(ta.c(), tb.c()) && same_vector(ta.a(), tb.a()) &&
+               same_vector(ta.b(), tb.b()) && same_vector(ta.d(), tb.d());
       }
     }
     return false;

@@ -142,6 +142,7 @@ void zip_rows(const std::vector<BoundaryPoint>& lower, const std::vector<Boundar
 // ---- general method ----------------------------------------------------------------------
 
 constexpr int kMaxRefinementPasses = 32;
+constexpr double kStraightColumnShrink = 0.05;
 constexpr std::size_t kMaxLocalPoints = std::size_t{1} << 21;
 constexpr std::uint32_t kNoId = std::numeric_limits<std::uint32_t>::max();
 
@@ -251,8 +252,13 @@ class DomainRefiner {
     const double su = geometry_.surface->du(centre.x(), centre.y()).norm();
     const double sv = geometry_.surface->dv(centre.x(), centre.y()).norm();
     if (su > 0 && sv > 0 && std::isfinite(su) && std::isfinite(sv)) metric_ = Vec2(su, sv);
+    // On a surface straight along v (cylinder, cone, extrusion) the error of a triangle only
+    // depends on its extent in u: shrinking v in the flip metric makes Delaunay join points
+    // nearest in u, as the row method's strips do, instead of splitting across.
+    const double v_step = column_step(lo, hi);
+    if (!(v_step < hi.y() - lo.y())) metric_.y() *= kStraightColumnShrink;
     make_delaunay();
-    seed_interior(lo, hi);
+    seed_interior(lo, hi, v_step);
     for (int pass = 0; pass < kMaxRefinementPasses; ++pass) {
       const std::vector<std::pair<int, int>> marked = marked_edges();
       if (marked.empty()) break;
@@ -504,23 +510,31 @@ class DomainRefiner {
   // errors add on doubly curved surfaces), each row sampled for its own curvature as in the
   // row method. Inserted before refinement, they give triangles close to the size they need
   // and well shaped; points closer to the boundary than half a spacing are left out.
-  void seed_interior(const Vec2& lo, const Vec2& hi) {
+  // Largest v step over the domain's columns u = const, for half the budget.
+  double column_step(const Vec2& lo, const Vec2& hi) const {
+    const Surface& surface = *geometry_.surface;
+    const double half = 0.5 * geometry_.chordal / geometry_.location.scale();  // body units
+    const double span_u = hi.x() - lo.x(), span_v = hi.y() - lo.y();
+    const double h = 1e-5 * std::max(1.0, span_v);
+    double step = span_v;
+    for (int k = 0; k <= 16; ++k) {
+      const double u = lo.x() + span_u * k / 16;
+      step = std::min(step, uniform_step(
+                                [&](double v) {
+                                  const Vec3 d2 =
+                                      (surface.dv(u, v + h) - surface.dv(u, v - h)) / (2.0 * h);
+                                  return std::make_pair(surface.dv(u, v), d2);
+                                },
+                                lo.y(), hi.y(), half, geometry_.angular));
+    }
+    return step;
+  }
+
+  void seed_interior(const Vec2& lo, const Vec2& hi, double v_step) {
     const Surface& surface = *geometry_.surface;
     const double half = 0.5 * geometry_.chordal / geometry_.location.scale();  // body units
     const double span_u = hi.x() - lo.x(), span_v = hi.y() - lo.y();
     if (!(span_u > 0) || !(span_v > 0)) return;
-    const double h = 1e-5 * std::max(1.0, span_v);
-    double v_step = span_v;
-    for (int k = 0; k <= 16; ++k) {
-      const double u = lo.x() + span_u * k / 16;
-      v_step = std::min(v_step, uniform_step(
-                                    [&](double v) {
-                                      const Vec3 d2 =
-                                          (surface.dv(u, v + h) - surface.dv(u, v - h)) / (2.0 * h);
-                                      return std::make_pair(surface.dv(u, v), d2);
-                                    },
-                                    lo.y(), hi.y(), half, geometry_.angular));
-    }
     const std::size_t rows = segments_for(span_v, v_step);
     int hint = -1;
     for (std::size_t j = 1; j < rows; ++j) {

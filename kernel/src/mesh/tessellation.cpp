@@ -20,11 +20,6 @@ namespace {
 // A closed curve needs at least three segments to bound any area.
 constexpr double kMaxTurn = 2.0 * std::numbers::pi / 3.0;
 
-// Share of the chordal tolerance given to the edges of a face. Where a face is curved in
-// both parameter directions (sphere, torus, a revolution of a curved meridian) its interior
-// error is about the sum of the errors along u and along v, and the v spacing of its rows is
-// its side edges' discretisation: edges and interior rows get half the budget each. Ruled
-// faces (cylinder, cone, extrusion, revolution of a line) are exact across their rows.
 bool doubly_curved(const Surface& surface) {
   switch (surface.kind()) {
     case SurfaceKind::Sphere:
@@ -36,10 +31,45 @@ bool doubly_curved(const Surface& surface) {
       return false;
   }
 }
-double budget_share(const Surface& surface) { return doubly_curved(surface) ? 0.5 : 1.0; }
-// What is left of the tolerance for a face's interior (world units).
-double face_chordal(double tolerance, const Surface& surface) {
-  return tolerance * (doubly_curved(surface) ? 1.0 - budget_share(surface) : 1.0);
+
+// A face whose single loop is made of axis-parallel straight pcurves: the row method applies
+// (it re-checks the sampled boundary and falls back to the general method otherwise).
+bool axis_aligned_domain(const Shape& face) {
+  const FaceData& data = *face.body().face();
+  if (data.pcurves.size() != 1 || data.pcurves[0].size() < 4) return false;
+  for (const Curve2dPtr& pcurve : data.pcurves[0]) {
+    if (pcurve->kind() != Curve2dKind::Line) return false;
+    const Vec2 d = static_cast<const Line2d&>(*pcurve).direction();
+    if (d.x() != 0.0 && d.y() != 0.0) return false;
+  }
+  return true;
+}
+
+enum class FaceMethod { Planar, Rows, General };
+
+// How a face is meshed, and how the chordal tolerance is split between its edges and its
+// interior (fractions of the tolerance).
+struct FacePlan {
+  FaceMethod method;
+  double edge_share;
+  double interior_share;
+};
+
+// Planes need no interior points. On rows, a face curved in both directions (sphere, torus,
+// a revolution of a curved meridian) errs by about the sum of its errors along u and along
+// v, and its row spacing in v is its side edges' sampling: edges and interior rows get half
+// the budget each; ruled faces (cylinder, cone, extrusion, revolution of a line) are exact
+// across their rows and give all of it to their edges. The general method measures its
+// real error inside (the whole budget), but its triangles join boundary points that are not
+// aligned as rows are, so it needs the margin of edges sampled at half the budget.
+FacePlan plan_face(const Shape& face, const TessellationOptions& options) {
+  const Surface& surface = *face.body().face()->surface;
+  if (surface.kind() == SurfaceKind::Plane) return {FaceMethod::Planar, 1.0, 1.0};
+  if (!options.general_method_only && axis_aligned_domain(face)) {
+    return doubly_curved(surface) ? FacePlan{FaceMethod::Rows, 0.5, 0.5}
+                                  : FacePlan{FaceMethod::Rows, 1.0, 1.0};
+  }
+  return {FaceMethod::General, 0.5, 1.0};
 }
 
 // Smallest row step (in u) over the face's v range, sampled at 17 values of v (exact for
@@ -126,12 +156,13 @@ Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options) 
   const ShapeIndex faces = map_child_shapes(shape, ShapeKind::Face);
 
   // An edge is sampled once, for the most demanding face it bounds.
+  std::vector<FacePlan> plans;
   std::vector<double> share(edges.size(), 1.0);
   for (const Shape& face : faces.shapes()) {
-    const double s = budget_share(*face.body().face()->surface);
+    plans.push_back(plan_face(face, options));
     for (const Shape& edge : Explorer(face, ShapeKind::Edge)) {
       const std::size_t e = edges.find(edge);
-      if (e != ShapeIndex::npos) share[e] = std::min(share[e], s);
+      if (e != ShapeIndex::npos) share[e] = std::min(share[e], plans.back().edge_share);
     }
   }
 
@@ -139,11 +170,12 @@ Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options) 
   // circles differ); strips between rows join points up to one step apart in u, so the
   // circles bounding such a face take the step that its widest row needs.
   std::vector<double> max_step(edges.size(), std::numeric_limits<double>::infinity());
-  for (const Shape& face : faces.shapes()) {
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const Shape& face = faces[f];
     const FaceData& data = *face.body().face();
-    if (!detail::revolution_like(*data.surface)) continue;
+    if (plans[f].method != FaceMethod::Rows || !detail::revolution_like(*data.surface)) continue;
     const double chordal =
-        face_chordal(options.chordal_tolerance, *data.surface) / face.location().scale();
+        options.chordal_tolerance * plans[f].interior_share / face.location().scale();
     const double step = widest_row_step(face, chordal, angular);
     const Shape body_face = face.oriented(Orientation::Forward);
     for (std::size_t w = 0; w < body_face.child_count(); ++w) {
@@ -232,11 +264,11 @@ Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options) 
     detail::FaceGeometry geometry;
     geometry.surface = data.surface.get();
     geometry.location = face.location();
-    geometry.chordal = face_chordal(options.chordal_tolerance, *data.surface);
+    geometry.chordal = options.chordal_tolerance * plans[f].interior_share;
     geometry.angular = angular;
     std::vector<detail::Triangle> triangles;
     bool done = false;
-    if (!options.general_method_only && data.surface->kind() != SurfaceKind::Plane) {
+    if (plans[f].method == FaceMethod::Rows) {
       Result<bool> rows = detail::mesh_rectangular_face(geometry, loops, mesh.vertices, triangles);
       if (!rows.ok()) {
         return Error{rows.error().code, face_name(f, face) + ": " + rows.error().message};

@@ -22,7 +22,9 @@ namespace {
 using kernel::ErrorCode;
 
 GeoKeyEntry key(std::uint16_t id, double value) { return GeoKeyEntry{id, {value}, {}}; }
-GeoKeyEntry text_key(std::uint16_t id, std::string text) { return GeoKeyEntry{id, {}, std::move(text)}; }
+GeoKeyEntry text_key(std::uint16_t id, std::string text) {
+  return GeoKeyEntry{id, {}, std::move(text)};
+}
 
 bool mentions(const std::vector<std::string>& warnings, const std::string& needle) {
   for (const auto& w : warnings) {
@@ -136,16 +138,17 @@ std::optional<LasCrsRecords> shared_file(const char* relative) {
   return read_las_crs(path);
 }
 
-#define SHARED_FILE(var, relative)                                                    \
-  auto var = shared_file(relative);                                                   \
+#define SHARED_FILE(var, relative)  \
+  auto var = shared_file(relative); \
   if (!var) GTEST_SKIP() << "../shared/data/" << relative << " not present: skipped"
 
 // ---- EPSG table --------------------------------------------------------------------------
 
 TEST(CrsEpsg, TableCoversTheCityCodes) {
-  for (int code : {4326, 4979, 4258, 4937, 4269, 4152, 6318, 4289, 32601, 32660, 32701, 32760, 25828, 25838, 26901,
-                   26923, 6330, 6348, 32661, 32761, 5041, 5042, 28992, 7415, 3031, 3413, 3976, 3995, 2193, 2157,
-                   27700, 2154, 2991, 2992, 2994, 2269, 2270, 2913, 2227, 2229, 2263, 2236, 2903}) {
+  for (int code : {4326,  4979,  4258,  4937,  4269,  4152, 6318, 4289,  32601, 32660, 32701,
+                   32760, 25828, 25838, 26901, 26923, 6330, 6348, 32661, 32761, 5041,  5042,
+                   28992, 7415,  3031,  3413,  3976,  3995, 2193, 2157,  27700, 2154,  2991,
+                   2992,  2994,  2269,  2270,  2913,  2227, 2229, 2263,  2236,  2903}) {
     auto crs = crs_from_epsg(code);
     ASSERT_TRUE(crs.ok()) << code << ": " << crs.error().message;
     EXPECT_TRUE(validate_crs(crs.value()).ok()) << code;
@@ -208,11 +211,27 @@ TEST(CrsEpsg, ZUnitFollowsVerticalThenHorizontal) {
 // ---- GeoTIFF keys (values as the shared files carry them) --------------------------------
 
 std::vector<GeoKeyEntry> autzen_trim_keys() {
-  return {key(1024, 1), key(1025, 1), text_key(1026, "NAD_1983_HARN_Lambert_Conformal_Conic|"), key(2048, 32767),
-          text_key(2049, "GCS Name = GCS_North_American_1983_HARN|Primem = Greenwich||"), key(2050, 6152),
-          key(2054, 9102), key(2057, 6378137.0), key(2059, 298.257222101), key(2061, 0.0), key(3059, 1),
-          key(3072, 32767), key(3074, 32767), key(3075, 8), key(3076, 9002), key(3078, 43.0), key(3079, 45.5),
-          key(3084, -120.5), key(3085, 41.75), key(3086, 1312335.958005249), key(3087, 0.0)};
+  return {key(1024, 1),
+          key(1025, 1),
+          text_key(1026, "NAD_1983_HARN_Lambert_Conformal_Conic|"),
+          key(2048, 32767),
+          text_key(2049, "GCS Name = GCS_North_American_1983_HARN|Primem = Greenwich||"),
+          key(2050, 6152),
+          key(2054, 9102),
+          key(2057, 6378137.0),
+          key(2059, 298.257222101),
+          key(2061, 0.0),
+          key(3059, 1),
+          key(3072, 32767),
+          key(3074, 32767),
+          key(3075, 8),
+          key(3076, 9002),
+          key(3078, 43.0),
+          key(3079, 45.5),
+          key(3084, -120.5),
+          key(3085, 41.75),
+          key(3086, 1312335.958005249),
+          key(3087, 0.0)};
 }
 
 TEST(CrsGeoKeys, UserDefinedLambertInFeet) {
@@ -230,9 +249,9 @@ TEST(CrsGeoKeys, UserDefinedLambertInFeet) {
 }
 
 TEST(CrsGeoKeys, EpsgCodesWithVerticalCrs) {
-  auto srs = crs_from_geokeys({key(1024, 1), key(1025, 1), key(3072, 32617), key(3076, 9001), key(4096, 5703),
-                               text_key(4097, "North American Vertical Datum of 1988|"), key(4098, 5103),
-                               key(4099, 9001)});
+  auto srs = crs_from_geokeys(
+      {key(1024, 1), key(1025, 1), key(3072, 32617), key(3076, 9001), key(4096, 5703),
+       text_key(4097, "North American Vertical Datum of 1988|"), key(4098, 5103), key(4099, 9001)});
   ASSERT_TRUE(srs.ok()) << srs.error().message;
   EXPECT_EQ(srs.value().epsg, 32617);
   ASSERT_TRUE(srs.value().vertical.has_value());
@@ -248,19 +267,36 @@ TEST(CrsGeoKeys, EpsgCodesWithVerticalCrs) {
 
 TEST(CrsGeoKeys, UnknownEpsgCodeFallsBackToProjectionKeys) {
   // pdal/mvk-thin.las: EPSG:26995 (not in the table) with TM keys in US survey feet.
-  auto crs = crs_from_geokeys({key(1024, 1), key(2048, 4269), key(2050, 6269), key(2051, 8901), key(2054, 9102),
-                               key(2055, 0.017453292519943295), key(2056, 7019), key(2057, 6378137.0),
-                               key(2059, 298.257222101), key(2061, 0.0), key(3072, 26995),
-                               text_key(3073, "NAD_1983_StatePlane_Mississippi_West_FIPS_2302_Feet|"), key(3075, 1),
-                               key(3076, 9003), key(3077, 0.30480060960121924), key(3081, 29.5),
-                               key(3082, 2296583.333333333), key(3083, 0.0), key(3088, -90.33333333333333),
-                               key(3092, 0.99995), text_key(4097, "NAVD88 - Geoid03 (Feet)|"), key(4099, 9003)});
+  auto crs =
+      crs_from_geokeys({key(1024, 1),
+                        key(2048, 4269),
+                        key(2050, 6269),
+                        key(2051, 8901),
+                        key(2054, 9102),
+                        key(2055, 0.017453292519943295),
+                        key(2056, 7019),
+                        key(2057, 6378137.0),
+                        key(2059, 298.257222101),
+                        key(2061, 0.0),
+                        key(3072, 26995),
+                        text_key(3073, "NAD_1983_StatePlane_Mississippi_West_FIPS_2302_Feet|"),
+                        key(3075, 1),
+                        key(3076, 9003),
+                        key(3077, 0.30480060960121924),
+                        key(3081, 29.5),
+                        key(3082, 2296583.333333333),
+                        key(3083, 0.0),
+                        key(3088, -90.33333333333333),
+                        key(3092, 0.99995),
+                        text_key(4097, "NAVD88 - Geoid03 (Feet)|"),
+                        key(4099, 9003)});
   ASSERT_TRUE(crs.ok()) << crs.error().message;
   const Crs& c = crs.value();
   EXPECT_TRUE(mentions(c.warnings, "EPSG:26995")) << all(c.warnings);
   EXPECT_EQ(c.projection->method, ProjectionMethod::TransverseMercator);
   EXPECT_NEAR(c.projection->false_easting_m, 700000.0, 1e-6);
-  EXPECT_DOUBLE_EQ(c.projection->longitude_of_origin_deg, -90.33333333333333);  // from the "center" key
+  EXPECT_DOUBLE_EQ(c.projection->longitude_of_origin_deg,
+                   -90.33333333333333);  // from the "center" key
   EXPECT_DOUBLE_EQ(c.projection->scale_factor, 0.99995);
   EXPECT_EQ(c.linear_unit.epsg, 9003);
   EXPECT_DOUBLE_EQ(c.z_unit_metres(), 1200.0 / 3937.0);
@@ -275,28 +311,46 @@ TEST(CrsGeoKeys, LinearUnitKeyOverridesTheEpsgUnitWithAWarning) {
 
 TEST(CrsGeoKeys, ZeroAndUnknownKeysAreWarnings) {
   // pdal/bad-geotiff-keys.las: four zero entries after the real keys.
-  auto crs = crs_from_geokeys({key(1024, 1), key(1025, 1), key(3072, 32617), key(3076, 9001), GeoKeyEntry{0, {0}, {}},
-                               GeoKeyEntry{0, {0}, {}}, GeoKeyEntry{0, {0}, {}}, GeoKeyEntry{0, {0}, {}}});
+  auto crs = crs_from_geokeys({key(1024, 1), key(1025, 1), key(3072, 32617), key(3076, 9001),
+                               GeoKeyEntry{0, {0}, {}}, GeoKeyEntry{0, {0}, {}},
+                               GeoKeyEntry{0, {0}, {}}, GeoKeyEntry{0, {0}, {}}});
   ASSERT_TRUE(crs.ok());
   EXPECT_EQ(crs.value().epsg, 32617);
   EXPECT_TRUE(mentions(crs.value().warnings, "id 0")) << all(crs.value().warnings);
 }
 
 TEST(CrsGeoKeys, GeographicAndUserDefinedDatums) {
-  auto wgs84 = crs_from_geokeys({key(1024, 2), key(1025, 1), key(2048, 4326), text_key(2049, "WGS 84|"),
-                                 key(2054, 9102), key(2057, 6378137.0), key(2059, 298.257223563)});
+  auto wgs84 =
+      crs_from_geokeys({key(1024, 2), key(1025, 1), key(2048, 4326), text_key(2049, "WGS 84|"),
+                        key(2054, 9102), key(2057, 6378137.0), key(2059, 298.257223563)});
   ASSERT_TRUE(wgs84.ok());
   EXPECT_EQ(wgs84.value().kind, CrsKind::Geographic);
   EXPECT_TRUE(wgs84.value().warnings.empty()) << all(wgs84.value().warnings);
 
   // laspy/plane.las: user-defined everything on GRS 80 with a null TOWGS84.
-  auto plane = crs_from_geokeys({key(1024, 1), key(1025, 1), text_key(1026, "unnamed|"), key(2048, 32767),
-                                 text_key(2049, "GCS Name = GRS 1980(IUGG, 1980)|Datum = unknown|Ellipsoid = GRS80|"),
-                                 key(2050, 32767), key(2054, 9102), key(2056, 32767), key(2057, 6378137.0),
-                                 key(2059, 298.257222101), key(2061, 0.0), GeoKeyEntry{2062, {0, 0, 0}, {}},
-                                 key(3072, 32767), key(3074, 32767), key(3075, 8), key(3076, 9001), key(3078, 44.25),
-                                 key(3079, 45.75), key(3084, 3.0), key(3085, 45.0), key(3086, 1700000.0),
-                                 key(3087, 4200000.0)});
+  auto plane = crs_from_geokeys(
+      {key(1024, 1),
+       key(1025, 1),
+       text_key(1026, "unnamed|"),
+       key(2048, 32767),
+       text_key(2049, "GCS Name = GRS 1980(IUGG, 1980)|Datum = unknown|Ellipsoid = GRS80|"),
+       key(2050, 32767),
+       key(2054, 9102),
+       key(2056, 32767),
+       key(2057, 6378137.0),
+       key(2059, 298.257222101),
+       key(2061, 0.0),
+       GeoKeyEntry{2062, {0, 0, 0}, {}},
+       key(3072, 32767),
+       key(3074, 32767),
+       key(3075, 8),
+       key(3076, 9001),
+       key(3078, 44.25),
+       key(3079, 45.75),
+       key(3084, 3.0),
+       key(3085, 45.0),
+       key(3086, 1700000.0),
+       key(3087, 4200000.0)});
   ASSERT_TRUE(plane.ok()) << plane.error().message;
   ASSERT_TRUE(plane.value().datum.to_wgs84.has_value());
   EXPECT_TRUE(plane.value().datum.to_wgs84->is_null());
@@ -304,46 +358,53 @@ TEST(CrsGeoKeys, GeographicAndUserDefinedDatums) {
   EXPECT_DOUBLE_EQ(plane.value().projection->false_northing_m, 4200000.0);
 
   // A user-defined Bessel datum without TOWGS84 reads, but cannot be placed on the globe.
-  auto bessel = crs_from_geokeys({key(1024, 2), key(2048, 32767), key(2050, 32767), key(2056, 7004)});
+  auto bessel =
+      crs_from_geokeys({key(1024, 2), key(2048, 32767), key(2050, 32767), key(2056, 7004)});
   ASSERT_TRUE(bessel.ok()) << bessel.error().message;
   EXPECT_FALSE(bessel.value().datum.to_wgs84.has_value());
   EXPECT_TRUE(mentions(bessel.value().warnings, "TOWGS84"));
 
   // TOWGS84 key in the position-vector convention becomes coordinate frame.
-  auto shifted = crs_from_geokeys({key(1024, 2), key(2048, 32767), key(2050, 32767), key(2056, 7004),
-                                   GeoKeyEntry{2062, {565.2, 50.0, 465.6, -0.4, 0.35, -1.87, 4.08}, {}}});
+  auto shifted =
+      crs_from_geokeys({key(1024, 2), key(2048, 32767), key(2050, 32767), key(2056, 7004),
+                        GeoKeyEntry{2062, {565.2, 50.0, 465.6, -0.4, 0.35, -1.87, 4.08}, {}}});
   ASSERT_TRUE(shifted.ok());
   EXPECT_DOUBLE_EQ(shifted.value().datum.to_wgs84->rx_arcsec, 0.4);
   EXPECT_DOUBLE_EQ(shifted.value().datum.to_wgs84->rz_arcsec, 1.87);
 }
 
 TEST(CrsGeoKeys, PolarStereographicAndObliqueStereographicKeys) {
-  auto ps = crs_from_geokeys({key(1024, 1), key(2048, 4326), key(3072, 32767), key(3075, 15), key(3076, 9001),
-                              key(3081, -71.0), key(3095, 0.0), key(3092, 1.0), key(3082, 0), key(3083, 0)});
+  auto ps = crs_from_geokeys({key(1024, 1), key(2048, 4326), key(3072, 32767), key(3075, 15),
+                              key(3076, 9001), key(3081, -71.0), key(3095, 0.0), key(3092, 1.0),
+                              key(3082, 0), key(3083, 0)});
   ASSERT_TRUE(ps.ok()) << ps.error().message;
   EXPECT_EQ(ps.value().projection->method, ProjectionMethod::PolarStereographicB);
   EXPECT_EQ(crs_difference(ps.value(), crs_from_epsg(3031).value()), std::nullopt);
 
-  auto rd = crs_from_geokeys({key(1024, 1), key(2048, 4289), key(3072, 32767), key(3075, 16), key(3076, 9001),
-                              key(3081, 52.15616055555555), key(3080, 5.38763888888889), key(3092, 0.9999079),
-                              key(3082, 155000), key(3083, 463000)});
+  auto rd =
+      crs_from_geokeys({key(1024, 1), key(2048, 4289), key(3072, 32767), key(3075, 16),
+                        key(3076, 9001), key(3081, 52.15616055555555), key(3080, 5.38763888888889),
+                        key(3092, 0.9999079), key(3082, 155000), key(3083, 463000)});
   ASSERT_TRUE(rd.ok()) << rd.error().message;
   EXPECT_EQ(crs_difference(rd.value(), crs_from_epsg(28992).value()), std::nullopt);
 }
 
 TEST(CrsGeoKeys, ErrorsNameTheKey) {
-  auto none = crs_from_geokeys({key(1025, 2), key(2052, 9001), key(2054, 9102), key(3076, 9001), key(4099, 9001)});
+  auto none = crs_from_geokeys(
+      {key(1025, 2), key(2052, 9001), key(2054, 9102), key(3076, 9001), key(4099, 9001)});
   ASSERT_FALSE(none.ok());
   EXPECT_EQ(none.error().code, ErrorCode::InvalidArgument);
   EXPECT_NE(none.error().message.find("no CRS"), std::string::npos);
 
-  auto mercator = crs_from_geokeys({key(1024, 1), key(2048, 4326), key(3072, 32767), key(3075, 7), key(3076, 9001)});
+  auto mercator = crs_from_geokeys(
+      {key(1024, 1), key(2048, 4326), key(3072, 32767), key(3075, 7), key(3076, 9001)});
   ASSERT_FALSE(mercator.ok());
   EXPECT_EQ(mercator.error().code, ErrorCode::Unsupported);
-  EXPECT_NE(mercator.error().message.find("CT_Mercator"), std::string::npos) << mercator.error().message;
+  EXPECT_NE(mercator.error().message.find("CT_Mercator"), std::string::npos)
+      << mercator.error().message;
 
-  auto lcc = crs_from_geokeys({key(1024, 1), key(2048, 4269), key(3072, 32767), key(3075, 8), key(3076, 9001),
-                               key(3078, 43.0)});
+  auto lcc = crs_from_geokeys({key(1024, 1), key(2048, 4269), key(3072, 32767), key(3075, 8),
+                               key(3076, 9001), key(3078, 43.0)});
   ASSERT_FALSE(lcc.ok());
   EXPECT_NE(lcc.error().message.find("3079"), std::string::npos);
 
@@ -361,7 +422,8 @@ TEST(CrsGeoKeys, ErrorsNameTheKey) {
 }
 
 TEST(CrsGeoKeys, UtmProjectionCodeWithUserDefinedPcs) {
-  auto crs = crs_from_geokeys({key(1024, 1), key(2048, 4269), key(3072, 32767), key(3074, 16010), key(3076, 9001)});
+  auto crs = crs_from_geokeys(
+      {key(1024, 1), key(2048, 4269), key(3072, 32767), key(3074, 16010), key(3076, 9001)});
   ASSERT_TRUE(crs.ok()) << crs.error().message;
   EXPECT_EQ(crs_difference(crs.value(), crs_from_epsg(26910).value()), std::nullopt);
 }
@@ -406,10 +468,12 @@ TEST(CrsSharedFiles, KeysOfTheFormatCaseFiles) {
     int epsg;
     int vertical;
   };
-  for (const Case& c : {Case{"pdal/autzen-utm.las", 26910, 0}, Case{"pdal/permutations_1.2_0.las", 26915, 0},
-                        Case{"liblas/srs_vertcs.las", 32617, 5703}, Case{"las-rs/32-1-472-150-76.las", 25832, 5941},
-                        Case{"pdal/bad-geotiff-keys.las", 32617, 0}, Case{"liblas/certainty3d-color-utm-feet-navd88.las", 2229, 0},
-                        Case{"pdal/epsg_4326.las", 4326, 0}, Case{"pdal/autzen-dd.las", 4326, 0}}) {
+  for (const Case& c :
+       {Case{"pdal/autzen-utm.las", 26910, 0}, Case{"pdal/permutations_1.2_0.las", 26915, 0},
+        Case{"liblas/srs_vertcs.las", 32617, 5703}, Case{"las-rs/32-1-472-150-76.las", 25832, 5941},
+        Case{"pdal/bad-geotiff-keys.las", 32617, 0},
+        Case{"liblas/certainty3d-color-utm-feet-navd88.las", 2229, 0},
+        Case{"pdal/epsg_4326.las", 4326, 0}, Case{"pdal/autzen-dd.las", 4326, 0}}) {
     auto file = shared_file(c.file);
     if (!file) GTEST_SKIP() << "../shared/data not present";
     ASSERT_TRUE(file->geokeys.has_value()) << c.file;
@@ -509,13 +573,15 @@ TEST(CrsWkt, EsriAndGdalDialects) {
   for (const Case& c : cases) {
     auto crs = crs_from_wkt(c.wkt);
     ASSERT_TRUE(crs.ok()) << c.same_as << ": " << crs.error().message;
-    EXPECT_EQ(crs_difference(crs.value(), crs_from_epsg(c.same_as).value()), std::nullopt) << c.same_as;
+    EXPECT_EQ(crs_difference(crs.value(), crs_from_epsg(c.same_as).value()), std::nullopt)
+        << c.same_as;
   }
 }
 
 TEST(CrsWkt, WriterRoundTripsEveryTableCode) {
-  for (int code : {4326, 4258, 4289, 4277, 32631, 32733, 25832, 26910, 6339, 32661, 32761, 28992, 7415, 3031, 3413,
-                   2193, 2157, 27700, 2154, 2991, 2992, 2263, 2227, 2236, 2903}) {
+  for (int code :
+       {4326, 4258, 4289, 4277, 32631, 32733, 25832, 26910, 6339, 32661, 32761, 28992, 7415,
+        3031, 3413, 2193, 2157, 27700, 2154,  2991,  2992,  2263, 2227,  2236,  2903}) {
     const Crs crs = crs_from_epsg(code).value();
     const std::string wkt = crs_to_wkt1(crs);
     auto back = crs_from_wkt(wkt);
@@ -538,11 +604,13 @@ TEST(CrsWkt, ErrorsAreNamed) {
   EXPECT_EQ(mercator.error().code, ErrorCode::Unsupported);
   EXPECT_NE(mercator.error().message.find("Mercator_1SP"), std::string::npos);
 
-  auto geocentric = crs_from_wkt(R"wkt(GEOCCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]]])wkt");
+  auto geocentric = crs_from_wkt(
+      R"wkt(GEOCCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]]])wkt");
   ASSERT_FALSE(geocentric.ok());
   EXPECT_EQ(geocentric.error().code, ErrorCode::Unsupported);
 
-  auto vertical_only = crs_from_wkt(R"wkt(VERT_CS["NAVD88",VERT_DATUM["NAVD88",2005],UNIT["metre",1]])wkt");
+  auto vertical_only =
+      crs_from_wkt(R"wkt(VERT_CS["NAVD88",VERT_DATUM["NAVD88",2005],UNIT["metre",1]])wkt");
   ASSERT_FALSE(vertical_only.ok());
 
   // Hostile input: deep nesting and huge text are refused without recursion blow-ups.
@@ -571,7 +639,8 @@ TEST(CrsWkt, TowgsConventionAndUnknownDatums) {
   ASSERT_TRUE(diff.has_value());  // 15739 vs 9281
   EXPECT_NE(diff->find("datum shift"), std::string::npos);
 
-  auto odd = crs_from_wkt(R"wkt(GEOGCS["odd",DATUM["D_Odd",SPHEROID["Clarke 1880",6378249.145,293.465]],PRIMEM["Greenwich",0],UNIT["Degree",0.0174532925199433]])wkt");
+  auto odd = crs_from_wkt(
+      R"wkt(GEOGCS["odd",DATUM["D_Odd",SPHEROID["Clarke 1880",6378249.145,293.465]],PRIMEM["Greenwich",0],UNIT["Degree",0.0174532925199433]])wkt");
   ASSERT_TRUE(odd.ok());
   EXPECT_FALSE(odd.value().datum.to_wgs84.has_value());
   EXPECT_TRUE(mentions(odd.value().warnings, "TOWGS84"));
@@ -606,7 +675,8 @@ TEST(CrsReconcile, PrecedenceAndErrors) {
   broken.geokeys = crs_from_epsg(26910);
   auto fallback = reconcile_crs(broken);
   ASSERT_TRUE(fallback.ok());
-  EXPECT_TRUE(mentions(fallback.value().warnings, "WKT unreadable")) << all(fallback.value().warnings);
+  EXPECT_TRUE(mentions(fallback.value().warnings, "WKT unreadable"))
+      << all(fallback.value().warnings);
 
   CrsCandidates only_bad;
   only_bad.wkt = crs_from_wkt("PROJCS[");
@@ -650,7 +720,8 @@ TEST(CrsDescribe, OneLine) {
   EXPECT_EQ(describe_crs(crs_from_epsg(2992).value()),
             "EPSG:2992 NAD83 / Oregon GIC Lambert (ft): Lambert Conic Conformal (2SP), foot");
   EXPECT_EQ(describe_crs(crs_from_epsg(7415).value()),
-            "EPSG:28992 Amersfoort / RD New + NAP height: Oblique Stereographic, metre + EPSG:5709 NAP height");
+            "EPSG:28992 Amersfoort / RD New + NAP height: Oblique Stereographic, metre + EPSG:5709 "
+            "NAP height");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -18,7 +19,6 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "csgtile/geo/crs.h"
@@ -40,9 +40,11 @@ bool tool_available(const char* tool) {
 
 // Runs `command` with one "a b c" line per input point on stdin; returns one triple per line
 // (NaNs where the tool printed '*'), or nullopt when the tool failed.
-std::optional<std::vector<Triple>> run_tool(const std::string& command, const std::vector<Triple>& input) {
+std::optional<std::vector<Triple>> run_tool(const std::string& command,
+                                            const std::vector<Triple>& input) {
   static int counter = 0;
-  const std::string base = "/tmp/csgtile_geo_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  const std::string base =
+      "/tmp/csgtile_geo_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
   {
     std::ofstream in(base + ".in");
     in.precision(17);
@@ -74,13 +76,15 @@ std::optional<std::vector<Triple>> run_tool(const std::string& command, const st
   return out;
 }
 
-std::optional<std::vector<Triple>> cs2cs(const std::string& from, const std::string& to, const std::vector<Triple>& in) {
+std::optional<std::vector<Triple>> cs2cs(const std::string& from, const std::string& to,
+                                         const std::vector<Triple>& in) {
   return run_tool("cs2cs -f %.10f " + from + " " + to, in);
 }
 
-#define REQUIRE_PROJ()                                                                            \
-  if (!tool_available("cs2cs") || !tool_available("cct")) {                                       \
-    GTEST_SKIP() << "PROJ's cs2cs/cct not installed (apt-get install proj-bin): oracle tests skipped"; \
+#define REQUIRE_PROJ()                                                                        \
+  if (!tool_available("cs2cs") || !tool_available("cct")) {                                   \
+    GTEST_SKIP()                                                                              \
+        << "PROJ's cs2cs/cct not installed (apt-get install proj-bin): oracle tests skipped"; \
   }
 
 Crs epsg(int code) {
@@ -98,8 +102,8 @@ double geodetic_gap_m(double lat1, double lon1, double lat2, double lon2) {
 struct Family {
   const char* name;
   int projected;
-  int geographic;          // the projected CRS's own base (no datum shift in cs2cs)
-  bool northing_first;     // authority axis order of the projected CRS
+  int geographic;       // the projected CRS's own base (no datum shift in cs2cs)
+  bool northing_first;  // authority axis order of the projected CRS
   double lat_min, lat_max, lon_min, lon_max;
 };
 
@@ -119,7 +123,8 @@ std::vector<Triple> random_geodetic(const Family& f, int n, std::uint64_t seed) 
 std::optional<Agreement> compare_family(const Family& f, int n = 2500) {
   const Crs crs = epsg(f.projected);
   const auto points = random_geodetic(f, n, 0x5eed0000u + static_cast<std::uint64_t>(f.projected));
-  auto oracle = cs2cs("EPSG:" + std::to_string(f.geographic), "EPSG:" + std::to_string(f.projected), points);
+  auto oracle =
+      cs2cs("EPSG:" + std::to_string(f.geographic), "EPSG:" + std::to_string(f.projected), points);
   if (!oracle) return std::nullopt;
   const double unit = crs.linear_unit.metres;
   Agreement a;
@@ -127,25 +132,29 @@ std::optional<Agreement> compare_family(const Family& f, int n = 2500) {
     const Triple& g = points[i];
     Triple o = (*oracle)[i];
     if (f.northing_first) std::swap(o[0], o[1]);
-    EXPECT_TRUE(std::isfinite(o[0]) && std::isfinite(o[1])) << f.name << " cs2cs refused point " << i;
+    EXPECT_TRUE(std::isfinite(o[0]) && std::isfinite(o[1]))
+        << f.name << " cs2cs refused point " << i;
     auto mine = geodetic_to_projected(crs, GeodeticPoint{g[0], g[1], 0.0});
     EXPECT_TRUE(mine.ok()) << f.name << ": " << (mine.ok() ? "" : mine.error().message);
     if (!mine.ok()) continue;
-    a.forward_m = std::max(a.forward_m, unit * std::hypot(mine.value().x() - o[0], mine.value().y() - o[1]));
+    a.forward_m =
+        std::max(a.forward_m, unit * std::hypot(mine.value().x() - o[0], mine.value().y() - o[1]));
     auto back = projected_to_geodetic(crs, Vec3(o[0], o[1], 0.0));
     EXPECT_TRUE(back.ok()) << f.name;
     if (back.ok()) {
-      a.inverse_m = std::max(a.inverse_m, geodetic_gap_m(back.value().latitude_deg, back.value().longitude_deg, g[0], g[1]));
+      a.inverse_m = std::max(a.inverse_m, geodetic_gap_m(back.value().latitude_deg,
+                                                         back.value().longitude_deg, g[0], g[1]));
     }
     auto round = projected_to_geodetic(crs, mine.value());
     if (round.ok()) {
-      a.round_trip_m = std::max(a.round_trip_m,
-                                geodetic_gap_m(round.value().latitude_deg, round.value().longitude_deg, g[0], g[1]));
+      a.round_trip_m = std::max(
+          a.round_trip_m,
+          geodetic_gap_m(round.value().latitude_deg, round.value().longitude_deg, g[0], g[1]));
     }
   }
-  std::cout << "[agreement] " << f.name << " (EPSG:" << f.projected << ", " << n << " points): forward max "
-            << a.forward_m * 1e3 << " mm, inverse max " << a.inverse_m * 1e3 << " mm, round trip max "
-            << a.round_trip_m * 1e9 << " nm\n";
+  std::cout << "[agreement] " << f.name << " (EPSG:" << f.projected << ", " << n
+            << " points): forward max " << a.forward_m * 1e3 << " mm, inverse max "
+            << a.inverse_m * 1e3 << " mm, round trip max " << a.round_trip_m * 1e9 << " nm\n";
   return a;
 }
 
@@ -210,7 +219,8 @@ TEST(GeoProjectionVsCs2cs, LambertConic1SpFromWktAgrees) {
   REQUIRE_PROJ();
   // A user-defined LCC 1SP (no EPSG code for PROJ to look up): the same WKT goes to both.
   const std::string wkt =
-      "PROJCS[\"test LCC 1SP\",GEOGCS[\"NAD83\",DATUM[\"North_American_Datum_1983\",SPHEROID[\"GRS 1980\","
+      "PROJCS[\"test LCC 1SP\",GEOGCS[\"NAD83\",DATUM[\"North_American_Datum_1983\",SPHEROID[\"GRS "
+      "1980\","
       "6378137,298.257222101]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433]],"
       "PROJECTION[\"Lambert_Conformal_Conic_1SP\"],PARAMETER[\"latitude_of_origin\",18],"
       "PARAMETER[\"central_meridian\",-77],PARAMETER[\"scale_factor\",0.99999],"
@@ -226,7 +236,8 @@ TEST(GeoProjectionVsCs2cs, LambertConic1SpFromWktAgrees) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     auto mine = geodetic_to_projected(crs.value(), GeodeticPoint{points[i][0], points[i][1], 0});
     ASSERT_TRUE(mine.ok());
-    worst = std::max(worst, std::hypot(mine.value().x() - (*oracle)[i][0], mine.value().y() - (*oracle)[i][1]));
+    worst = std::max(
+        worst, std::hypot(mine.value().x() - (*oracle)[i][0], mine.value().y() - (*oracle)[i][1]));
   }
   std::cout << "[agreement] LCC 1SP (WKT, 2000 points): forward max " << worst * 1e3 << " mm\n";
   EXPECT_LT(worst, 1e-3);
@@ -239,8 +250,9 @@ TEST(GeoWktWriter, Cs2csReadsOurWktLikeTheEpsgCode) {
     int geographic;
     double lat, lon;
   };
-  for (const Case& c : {Case{2263, 4269, 40.8, -73.2}, Case{3031, 4326, -75.0, 30.0}, Case{2157, 4173, 53.3, -6.3},
-                        Case{32631, 4326, 48.8, 2.3}, Case{2994, 4152, 44.05, -123.07}}) {
+  for (const Case& c :
+       {Case{2263, 4269, 40.8, -73.2}, Case{3031, 4326, -75.0, 30.0}, Case{2157, 4173, 53.3, -6.3},
+        Case{32631, 4326, 48.8, 2.3}, Case{2994, 4152, 44.05, -123.07}}) {
     const Crs crs = epsg(c.code);
     const std::string wkt = crs_to_wkt1(crs);
     const std::vector<Triple> in = {{c.lat, c.lon, 0.0}};
@@ -263,8 +275,10 @@ TEST(GeoGeographic, EcefAgreesWithCs2csOnWgs84AndGrs80) {
   std::uniform_real_distribution<double> lat(-89.9, 89.9), lon(-180, 180), h(-100, 9000);
   std::vector<Triple> points;
   for (int i = 0; i < 2000; ++i) points.push_back({lat(rng), lon(rng), h(rng)});
-  for (auto [geographic, geocentric, ellipsoid_code] : {std::tuple{4979, 4978, 4326}, std::tuple{4937, 4936, 4258}}) {
-    auto oracle = cs2cs("EPSG:" + std::to_string(geographic), "EPSG:" + std::to_string(geocentric), points);
+  for (auto [geographic, geocentric, ellipsoid_code] :
+       {std::tuple{4979, 4978, 4326}, std::tuple{4937, 4936, 4258}}) {
+    auto oracle =
+        cs2cs("EPSG:" + std::to_string(geographic), "EPSG:" + std::to_string(geocentric), points);
     ASSERT_TRUE(oracle.has_value());
     const Ellipsoid e = epsg(ellipsoid_code).datum.ellipsoid;
     double worst = 0, worst_back = 0;
@@ -274,11 +288,12 @@ TEST(GeoGeographic, EcefAgreesWithCs2csOnWgs84AndGrs80) {
       const Vec3 o((*oracle)[i][0], (*oracle)[i][1], (*oracle)[i][2]);
       worst = std::max(worst, (x - o).norm());
       const GeodeticPoint back = ecef_to_geodetic(e, o);
-      worst_back = std::max(worst_back, geodetic_gap_m(back.latitude_deg, back.longitude_deg, g.latitude_deg, g.longitude_deg) +
+      worst_back = std::max(worst_back, geodetic_gap_m(back.latitude_deg, back.longitude_deg,
+                                                       g.latitude_deg, g.longitude_deg) +
                                             std::fabs(back.height_m - g.height_m));
     }
-    std::cout << "[agreement] geodetic->ECEF EPSG:" << geographic << " (2000 points): max " << worst * 1e3
-              << " mm; ECEF->geodetic max " << worst_back * 1e3 << " mm\n";
+    std::cout << "[agreement] geodetic->ECEF EPSG:" << geographic << " (2000 points): max "
+              << worst * 1e3 << " mm; ECEF->geodetic max " << worst_back * 1e3 << " mm\n";
     EXPECT_LT(worst, 1e-3);
     EXPECT_LT(worst_back, 1e-3);
   }
@@ -310,7 +325,8 @@ TEST(RdNewProjection, MatchesTheWorkedExampleOfGuidanceNote72) {
   ASSERT_TRUE(g.ok());
   EXPECT_LT(geodetic_gap_m(g.value().latitude_deg, g.value().longitude_deg, 53.0, 6.0), 1e-3);
   // The origin maps to the false origin.
-  auto origin = geodetic_to_projected(rd, GeodeticPoint{52.0 + 9.0 / 60 + 22.178 / 3600, 5.0 + 23.0 / 60 + 15.5 / 3600, 0});
+  auto origin = geodetic_to_projected(
+      rd, GeodeticPoint{52.0 + 9.0 / 60 + 22.178 / 3600, 5.0 + 23.0 / 60 + 15.5 / 3600, 0});
   ASSERT_TRUE(origin.ok());
   EXPECT_NEAR(origin.value().x(), 155000.0, 1e-9);
   EXPECT_NEAR(origin.value().y(), 463000.0, 1e-9);
@@ -319,7 +335,8 @@ TEST(RdNewProjection, MatchesTheWorkedExampleOfGuidanceNote72) {
 TEST(RdNewProjection, ObliqueStereographicAgreesWithCs2cs) {
   REQUIRE_PROJ();
   // Amersfoort geographic → RD New: projection only, no datum shift involved.
-  expect_family({"RD New oblique stereographic (Bessel)", 28992, 4289, false, 50.6, 53.7, 3.2, 7.3}, 1e-4);
+  expect_family({"RD New oblique stereographic (Bessel)", 28992, 4289, false, 50.6, 53.7, 3.2, 7.3},
+                1e-4);
 }
 
 // RD → ETRS89 lat/lon with our EPSG:9281 Helmert against cs2cs EPSG:28992 → EPSG:4937, which
@@ -339,9 +356,11 @@ TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
     ASSERT_TRUE(g.ok());
     auto w = datum_to_wgs84(rd.datum, g.value());
     ASSERT_TRUE(w.ok());
-    worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg, (*oracle)[i][0], (*oracle)[i][1]));
+    worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg,
+                                           (*oracle)[i][0], (*oracle)[i][1]));
   }
-  std::cout << "[agreement] RD New -> ETRS89 (EPSG:9281 Helmert) vs cs2cs EPSG:28992->4937 (2500 points): max "
+  std::cout << "[agreement] RD New -> ETRS89 (EPSG:9281 Helmert) vs cs2cs EPSG:28992->4937 (2500 "
+               "points): max "
             << worst * 1e3 << " mm\n";
   EXPECT_LT(worst, 1e-3);
 
@@ -357,9 +376,11 @@ TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
     ASSERT_TRUE(a.ok());
     auto p = geodetic_to_projected(rd, a.value());
     ASSERT_TRUE(p.ok());
-    worst_back = std::max(worst_back, std::hypot(p.value().x() - (*back_oracle)[i][0], p.value().y() - (*back_oracle)[i][1]));
+    worst_back = std::max(worst_back, std::hypot(p.value().x() - (*back_oracle)[i][0],
+                                                 p.value().y() - (*back_oracle)[i][1]));
   }
-  std::cout << "[agreement] ETRS89 -> RD New vs cs2cs EPSG:4937->28992: max " << worst_back * 1e3 << " mm\n";
+  std::cout << "[agreement] ETRS89 -> RD New vs cs2cs EPSG:4937->28992: max " << worst_back * 1e3
+            << " mm\n";
   EXPECT_LT(worst_back, 2e-3);
 }
 
@@ -380,10 +401,12 @@ TEST(RdNewDatumShift, DifferenceToCs2csWgs84IsTheHelmertSetDifference) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     auto g = projected_to_geodetic(rd, Vec3(points[i][0], points[i][1], 0.0));
     auto w = datum_to_wgs84(rd.datum, g.value());
-    worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg, (*oracle)[i][0], (*oracle)[i][1]));
+    worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg,
+                                           (*oracle)[i][0], (*oracle)[i][1]));
   }
-  std::cout << "[agreement] RD New -> WGS 84 ours (EPSG:9281) vs cs2cs EPSG:28992->4326 (EPSG:4833): max "
-            << worst * 1e3 << " mm\n";
+  std::cout
+      << "[agreement] RD New -> WGS 84 ours (EPSG:9281) vs cs2cs EPSG:28992->4326 (EPSG:4833): max "
+      << worst * 1e3 << " mm\n";
   EXPECT_LT(worst, 1.0);  // EPSG:4833's stated accuracy
 }
 
@@ -391,24 +414,29 @@ TEST(RdNewDatumShift, DifferenceToCs2csWgs84IsTheHelmertSetDifference) {
 
 // Our to_local against a PROJ pipeline doing the same steps (inverse projection, cart,
 // Helmert, topocentric) with EPSG parameters.
-void expect_local_matches_cct(const Crs& crs, const Vec3& origin_xyz, const std::string& inverse_projection_steps,
-                              double half_width, std::uint64_t seed, const char* name) {
+void expect_local_matches_cct(const Crs& crs, const Vec3& origin_xyz,
+                              const std::string& inverse_projection_steps, double half_width,
+                              std::uint64_t seed, const char* name) {
   auto georef = Georeferencer::create_at(crs, origin_xyz);
   ASSERT_TRUE(georef.ok()) << georef.error().message;
   const GeodeticPoint& o = georef.value().frame().origin;
   char topocentric[256];
-  std::snprintf(topocentric, sizeof topocentric, " +step +proj=topocentric +ellps=WGS84 +lat_0=%.15f +lon_0=%.15f +h_0=%.9f",
+  std::snprintf(topocentric, sizeof topocentric,
+                " +step +proj=topocentric +ellps=WGS84 +lat_0=%.15f +lon_0=%.15f +h_0=%.9f",
                 o.latitude_deg, o.longitude_deg, o.height_m);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> d(-half_width, half_width), h(-50, 300);
   std::vector<Triple> points;
-  for (int i = 0; i < 2000; ++i) points.push_back({origin_xyz.x() + d(rng), origin_xyz.y() + d(rng), h(rng)});
-  auto oracle = run_tool("cct -d 10 +proj=pipeline " + inverse_projection_steps + topocentric, points);
+  for (int i = 0; i < 2000; ++i)
+    points.push_back({origin_xyz.x() + d(rng), origin_xyz.y() + d(rng), h(rng)});
+  auto oracle =
+      run_tool("cct -d 10 +proj=pipeline " + inverse_projection_steps + topocentric, points);
   ASSERT_TRUE(oracle.has_value()) << name;
   double worst = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3 local = georef.value().to_local(Vec3(points[i][0], points[i][1], points[i][2]));
-    worst = std::max(worst, (local - Vec3((*oracle)[i][0], (*oracle)[i][1], (*oracle)[i][2])).norm());
+    worst =
+        std::max(worst, (local - Vec3((*oracle)[i][0], (*oracle)[i][1], (*oracle)[i][2])).norm());
   }
   std::cout << "[agreement] " << name << " to_local vs cct pipeline (2000 points, ±" << half_width
             << " units): max " << worst * 1e3 << " mm\n";
@@ -417,9 +445,10 @@ void expect_local_matches_cct(const Crs& crs, const Vec3& origin_xyz, const std:
 
 TEST(GeoLocalFrame, UtmToLocalMatchesProjTopocentric) {
   REQUIRE_PROJ();
-  expect_local_matches_cct(epsg(32631), Vec3(640000, 5700000, 40),
-                           "+step +inv +proj=utm +zone=31 +ellps=WGS84 +step +proj=cart +ellps=WGS84", 2000, 1,
-                           "UTM 31N");
+  expect_local_matches_cct(
+      epsg(32631), Vec3(640000, 5700000, 40),
+      "+step +inv +proj=utm +zone=31 +ellps=WGS84 +step +proj=cart +ellps=WGS84", 2000, 1,
+      "UTM 31N");
 }
 
 TEST(RdNewLocalFrame, RdToLocalMatchesProjPipelineWithHelmert) {
@@ -427,14 +456,16 @@ TEST(RdNewLocalFrame, RdToLocalMatchesProjPipelineWithHelmert) {
   const double arcsec = 648000.0 / kPi / 1e6;
   char helmert[512];
   std::snprintf(helmert, sizeof helmert,
-                "+step +proj=helmert +x=565.7381 +y=50.4018 +z=465.2904 +rx=%.15f +ry=%.15f +rz=%.15f +s=4.07244 "
+                "+step +proj=helmert +x=565.7381 +y=50.4018 +z=465.2904 +rx=%.15f +ry=%.15f "
+                "+rz=%.15f +s=4.07244 "
                 "+convention=coordinate_frame",
                 1.91514 * arcsec, -1.60363 * arcsec, 9.09546 * arcsec);
-  expect_local_matches_cct(epsg(28992), Vec3(85000, 446000, 0),
-                           "+step +inv +proj=sterea +lat_0=52.156160555555555 +lon_0=5.387638888888889 "
-                           "+k=0.9999079 +x_0=155000 +y_0=463000 +ellps=bessel +step +proj=cart +ellps=bessel " +
-                               std::string(helmert),
-                           1500, 2, "RD New (Delft)");
+  expect_local_matches_cct(
+      epsg(28992), Vec3(85000, 446000, 0),
+      "+step +inv +proj=sterea +lat_0=52.156160555555555 +lon_0=5.387638888888889 "
+      "+k=0.9999079 +x_0=155000 +y_0=463000 +ellps=bessel +step +proj=cart +ellps=bessel " +
+          std::string(helmert),
+      1500, 2, "RD New (Delft)");
 }
 
 TEST(GeoLocalFrame, LambertFeetToLocalMatchesProjTopocentric) {
@@ -442,11 +473,13 @@ TEST(GeoLocalFrame, LambertFeetToLocalMatchesProjTopocentric) {
   // z stays in metres in the pipeline: give the CRS a metre vertical unit.
   Crs crs = epsg(2263);
   crs.vertical = VerticalCrs{5703, "NAVD88 height", metre_unit()};
-  expect_local_matches_cct(crs, Vec3(988000, 210000, 0),
-                           "+step +proj=unitconvert +xy_in=us-ft +xy_out=m +step +inv +proj=lcc +lat_0=40.166666666666667 "
-                           "+lon_0=-74 +lat_1=41.033333333333333 +lat_2=40.666666666666667 +x_0=300000 +y_0=0 "
-                           "+ellps=GRS80 +step +proj=cart +ellps=GRS80",
-                           6000, 3, "NY Long Island ftUS");
+  expect_local_matches_cct(
+      crs, Vec3(988000, 210000, 0),
+      "+step +proj=unitconvert +xy_in=us-ft +xy_out=m +step +inv +proj=lcc "
+      "+lat_0=40.166666666666667 "
+      "+lon_0=-74 +lat_1=41.033333333333333 +lat_2=40.666666666666667 +x_0=300000 +y_0=0 "
+      "+ellps=GRS80 +step +proj=cart +ellps=GRS80",
+      6000, 3, "NY Long Island ftUS");
 }
 
 TEST(GeoLocalFrame, DistancesArePreservedNearTheOrigin) {
@@ -454,12 +487,14 @@ TEST(GeoLocalFrame, DistancesArePreservedNearTheOrigin) {
   // points computed along an independent path (geodetic → ECEF), to 1e-9 relative.
   for (int code : {32631, 28992, 2992}) {
     const Crs crs = epsg(code);
-    const Vec3 origin = code == 32631 ? Vec3(640000, 5700000, 0) : code == 28992 ? Vec3(121000, 487000, 0)
-                                                                                  : Vec3(635000, 851000, 400);
+    const Vec3 origin = code == 32631   ? Vec3(640000, 5700000, 0)
+                        : code == 28992 ? Vec3(121000, 487000, 0)
+                                        : Vec3(635000, 851000, 400);
     auto georef = Georeferencer::create_at(crs, origin);
     ASSERT_TRUE(georef.ok());
     std::mt19937_64 rng(code);
-    std::uniform_real_distribution<double> d(-1000 / crs.linear_unit.metres, 1000 / crs.linear_unit.metres);
+    std::uniform_real_distribution<double> d(-1000 / crs.linear_unit.metres,
+                                             1000 / crs.linear_unit.metres);
     std::vector<Vec3> local, ecef;
     for (int i = 0; i < 200; ++i) {
       const Vec3 p = origin + Vec3(d(rng), d(rng), d(rng) * 0.05);
@@ -487,7 +522,9 @@ TEST(GeoLocalFrame, LocationPlacesTheFrameExactlyInEcef) {
   const TileFrame& frame = georef.value().frame();
   EXPECT_EQ(frame.local_to_ecef.scale(), 1.0);
   EXPECT_NEAR((frame.local_to_ecef.rotation() * frame.local_to_ecef.rotation().transpose() -
-               Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-15);
+               Eigen::Matrix3d::Identity())
+                  .norm(),
+              0.0, 1e-15);
   // The origin's up axis is the ellipsoid normal; the origin itself maps to local zero.
   const Vec3 p(121000, 487000, 2);
   EXPECT_LT(georef.value().to_local(p).norm(), 1e-6);
@@ -522,8 +559,9 @@ TEST(GeoLocalFrame, RoundTripsAcrossFamilies) {
       const Vec3 p = c.origin + Vec3(d(rng), d(rng), h(rng));
       const Vec3 back = georef.value().to_source(georef.value().to_local(p));
       const Vec3 delta = back - p;
-      const double horizontal = crs.is_projected() ? std::hypot(delta.x(), delta.y()) * crs.linear_unit.metres
-                                                   : std::hypot(delta.x(), delta.y()) * kMetresPerDegree;
+      const double horizontal = crs.is_projected()
+                                    ? std::hypot(delta.x(), delta.y()) * crs.linear_unit.metres
+                                    : std::hypot(delta.x(), delta.y()) * kMetresPerDegree;
       worst = std::max(worst, horizontal + std::fabs(delta.z()) * crs.z_unit_metres());
     }
     EXPECT_LT(worst, 1e-6) << c.code;
@@ -551,8 +589,8 @@ TEST(GeoLocalFrame, SimilarityIsOnlyAnApproximation) {
   EXPECT_LT(near.value().max_error_m, 2e-3);
   EXPECT_GT(far.value().max_error_m, 0.1);  // Earth curvature: ~2 m drop at 5 km
   EXPECT_GT(far.value().max_error_m, 100 * near.value().max_error_m);
-  std::cout << "[info] UTM 31N similarity fit: max error " << near.value().max_error_m * 1e3 << " mm at 100 m, "
-            << far.value().max_error_m << " m at 5 km\n";
+  std::cout << "[info] UTM 31N similarity fit: max error " << near.value().max_error_m * 1e3
+            << " mm at 100 m, " << far.value().max_error_m << " m at 5 km\n";
 }
 
 TEST(GeoLocalFrame, GeoidUndulationShiftsHeightsAndRoundTrips) {
@@ -569,7 +607,8 @@ TEST(GeoLocalFrame, GeoidUndulationShiftsHeightsAndRoundTrips) {
 // ---- errors ------------------------------------------------------------------------------
 
 TEST(GeoErrors, GeographicLibExceptionsBecomeTypedErrors) {
-  // UTMUPS refuses a point far outside zone 31 (GeographicErr): NaN in bulk, a message when checked.
+  // UTMUPS refuses a point far outside zone 31 (GeographicErr): NaN in bulk, a message when
+  // checked.
   auto georef = Georeferencer::create_at(epsg(32631), Vec3(640000, 5700000, 0));
   ASSERT_TRUE(georef.ok());
   const Vec3 bad(640000, 95000000, 0);
@@ -577,7 +616,8 @@ TEST(GeoErrors, GeographicLibExceptionsBecomeTypedErrors) {
   auto checked = georef.value().to_local_checked(bad);
   ASSERT_FALSE(checked.ok());
   EXPECT_EQ(checked.error().code, kernel::ErrorCode::InvalidArgument);
-  EXPECT_NE(checked.error().message.find("UTM zone 31N"), std::string::npos) << checked.error().message;
+  EXPECT_NE(checked.error().message.find("UTM zone 31N"), std::string::npos)
+      << checked.error().message;
 
   std::vector<Vec3> in = {Vec3(640000, 5700000, 0), bad};
   std::vector<Vec3> out(2);
@@ -636,12 +676,17 @@ TEST(ScannerPose, AxesFollowTheDocumentedConvention) {
     return s.value();
   };
   const double tol = 1e-9;
-  EXPECT_LT((place(0, 0, 0).to_local(Vec3(10, 0, 0)) - Vec3(0, 10, 0)).norm(), tol);   // forward = north
-  EXPECT_LT((place(90, 0, 0).to_local(Vec3(10, 0, 0)) - Vec3(10, 0, 0)).norm(), tol);  // heading 90 = east
-  EXPECT_LT((place(90, 0, 0).to_local(Vec3(0, 1, 0)) - Vec3(0, 1, 0)).norm(), tol);   // left of east = north
+  EXPECT_LT((place(0, 0, 0).to_local(Vec3(10, 0, 0)) - Vec3(0, 10, 0)).norm(),
+            tol);  // forward = north
+  EXPECT_LT((place(90, 0, 0).to_local(Vec3(10, 0, 0)) - Vec3(10, 0, 0)).norm(),
+            tol);  // heading 90 = east
+  EXPECT_LT((place(90, 0, 0).to_local(Vec3(0, 1, 0)) - Vec3(0, 1, 0)).norm(),
+            tol);  // left of east = north
   const double c = std::cos(30 * kPi / 180), s = std::sin(30 * kPi / 180);
-  EXPECT_LT((place(0, 30, 0).to_local(Vec3(10, 0, 0)) - Vec3(0, 10 * c, 10 * s)).norm(), tol);  // nose up
-  EXPECT_LT((place(0, 0, 90).to_local(Vec3(0, 1, 0)) - Vec3(0, 0, 1)).norm(), tol);  // right side down: left goes up
+  EXPECT_LT((place(0, 30, 0).to_local(Vec3(10, 0, 0)) - Vec3(0, 10 * c, 10 * s)).norm(),
+            tol);  // nose up
+  EXPECT_LT((place(0, 0, 90).to_local(Vec3(0, 1, 0)) - Vec3(0, 0, 1)).norm(),
+            tol);  // right side down: left goes up
   EXPECT_LT((place(0, 0, 0).to_local(Vec3(0, 0, 2)) - Vec3(0, 0, 2)).norm(), tol);
 }
 
@@ -650,7 +695,8 @@ TEST(ScannerPose, PoseAwayFromTheOriginIsRigidAndRoundTrips) {
   ASSERT_TRUE(tile.ok());
   // A scanner 400 m north-east of the tile origin.
   const GeodeticPoint scanner = tile.value().local_to_geodetic(Vec3(300, 260, 1.8));
-  auto placement = ScannerPlacement::from_pose(tile.value(), ScannerPose{scanner, 37.5, -2.0, 1.25});
+  auto placement =
+      ScannerPlacement::from_pose(tile.value(), ScannerPose{scanner, 37.5, -2.0, 1.25});
   ASSERT_TRUE(placement.ok());
   ASSERT_TRUE(placement.value().location().has_value());
   EXPECT_LT((placement.value().to_local(Vec3::Zero()) - Vec3(300, 260, 1.8)).norm(), 1e-6);
@@ -684,7 +730,10 @@ TEST(ScannerPose, ProjectedMatrixTakesTheExactPathAndRoundTrips) {
   auto placement = ScannerPlacement::from_projected_matrix(tile.value(), m);
   ASSERT_TRUE(placement.ok());
   EXPECT_FALSE(placement.value().location().has_value());
-  EXPECT_LT((placement.value().to_local(Vec3::Zero()) - tile.value().to_local(Vec3(988500, 210400, 12))).norm(), 1e-9);
+  EXPECT_LT(
+      (placement.value().to_local(Vec3::Zero()) - tile.value().to_local(Vec3(988500, 210400, 12)))
+          .norm(),
+      1e-9);
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> d(-50, 50);
   for (int i = 0; i < 300; ++i) {

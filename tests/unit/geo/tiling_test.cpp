@@ -34,13 +34,15 @@ TEST(TilingGrid, EveryPointIsInExactlyOneCore) {
     for (int i = 0; i < 20000; ++i) {
       double x = spec.origin_x + offset(rng) * spec.cell_size;
       double y = spec.origin_y + offset(rng) * spec.cell_size;
-      if (i % 3 == 0) x = spec.origin_x + edge(rng) * spec.cell_size;  // exactly on (computed) edges
+      if (i % 3 == 0)
+        x = spec.origin_x + edge(rng) * spec.cell_size;  // exactly on (computed) edges
       if (i % 5 == 0) y = spec.origin_y + edge(rng) * spec.cell_size;
       const CellId c = g.cell_of(x, y);
       ASSERT_TRUE(g.in_core(c, x, y)) << c.to_string() << " x=" << x << " y=" << y;
       int cores = 0;
       for (int dr = -1; dr <= 1; ++dr) {
-        for (int dc = -1; dc <= 1; ++dc) cores += g.in_core(CellId{c.column + dc, c.row + dr}, x, y) ? 1 : 0;
+        for (int dc = -1; dc <= 1; ++dc)
+          cores += g.in_core(CellId{c.column + dc, c.row + dr}, x, y) ? 1 : 0;
       }
       ASSERT_EQ(cores, 1) << "x=" << x << " y=" << y;
       ASSERT_TRUE(g.in_halo(c, x, y));
@@ -102,7 +104,8 @@ TEST(TilingCellId, TextRoundTrip) {
     EXPECT_EQ(back.value(), c);
   }
   EXPECT_EQ(CellId({12, -3}).to_string(), "c12_r-3");
-  for (const char* bad : {"", "c1", "c1_r", "x1_r2", "c1_r2x", "c_r2", "c1_x2"}) EXPECT_FALSE(CellId::parse(bad).ok()) << bad;
+  for (const char* bad : {"", "c1", "c1_r", "x1_r2", "c1_r2x", "c_r2", "c1_x2"})
+    EXPECT_FALSE(CellId::parse(bad).ok()) << bad;
 }
 
 std::vector<InputBounds> random_inputs(std::uint64_t seed, int n) {
@@ -111,8 +114,9 @@ std::vector<InputBounds> random_inputs(std::uint64_t seed, int n) {
   std::vector<InputBounds> inputs;
   for (int i = 0; i < n; ++i) {
     const double x0 = x(rng), y0 = y(rng);
-    inputs.push_back(InputBounds{"s3://ahn/tile_" + std::to_string(i % 37) + "_" + std::to_string(i) + ".las",
-                                 Bounds2{x0, y0, x0 + size(rng), y0 + size(rng)}});
+    inputs.push_back(
+        InputBounds{"s3://ahn/tile_" + std::to_string(i % 37) + "_" + std::to_string(i) + ".las",
+                    Bounds2{x0, y0, x0 + size(rng), y0 + size(rng)}});
   }
   return inputs;
 }
@@ -139,10 +143,14 @@ TEST(TilingIndex, DeterministicWhateverTheInputOrder) {
   }
   // Cells in (row, column) order; inputs ascending; names sorted.
   const auto& cells = first.value().cells();
-  EXPECT_TRUE(std::is_sorted(cells.begin(), cells.end(), [](const CellInputs& a, const CellInputs& b) { return a.cell < b.cell; }));
+  EXPECT_TRUE(
+      std::is_sorted(cells.begin(), cells.end(),
+                     [](const CellInputs& a, const CellInputs& b) { return a.cell < b.cell; }));
   for (const CellInputs& c : cells) EXPECT_TRUE(std::is_sorted(c.inputs.begin(), c.inputs.end()));
   const auto& in = first.value().inputs();
-  EXPECT_TRUE(std::is_sorted(in.begin(), in.end(), [](const InputBounds& a, const InputBounds& b) { return a.name < b.name; }));
+  EXPECT_TRUE(std::is_sorted(in.begin(), in.end(), [](const InputBounds& a, const InputBounds& b) {
+    return a.name < b.name;
+  }));
 }
 
 TEST(TilingIndex, EachInputFeedsExactlyTheCellsWhoseHaloItMeets) {
@@ -165,7 +173,8 @@ TEST(TilingIndex, EachInputFeedsExactlyTheCellsWhoseHaloItMeets) {
 
 TEST(TilingIndex, PointsOfSeveralFilesGatheredWithTheHalo) {
   const CityGrid g = grid(0, 0, 100, 10);
-  auto index = TileIndex::build(g, {InputBounds{"b.las", Bounds2{95, 0, 195, 100}}, InputBounds{"a.las", Bounds2{0, 0, 100, 100}}});
+  auto index = TileIndex::build(g, {InputBounds{"b.las", Bounds2{95, 0, 195, 100}},
+                                    InputBounds{"a.las", Bounds2{0, 0, 100, 100}}});
   ASSERT_TRUE(index.ok());
   const auto feeding = index.value().inputs_for(CellId{0, 0});
   ASSERT_EQ(feeding.size(), 2u);
@@ -190,7 +199,8 @@ TEST(TilingBounds, TransformBoundsBetweenCrss) {
   EXPECT_LT(b.value().max_x - b.value().min_x, 2150);
   EXPECT_GT(b.value().max_y - b.value().min_y, 3000);
   EXPECT_LT(b.value().max_y - b.value().min_y, 3100);
-  for (const Vec3& corner : {Vec3(84000, 445000, 0), Vec3(86000, 448000, 0), Vec3(84000, 448000, 0), Vec3(86000, 445000, 0)}) {
+  for (const Vec3& corner : {Vec3(84000, 445000, 0), Vec3(86000, 448000, 0), Vec3(84000, 448000, 0),
+                             Vec3(86000, 445000, 0)}) {
     auto p = transform_point(rd, utm, corner);
     ASSERT_TRUE(p.ok());
     EXPECT_TRUE(p.value().x() >= b.value().min_x && p.value().x() <= b.value().max_x);

@@ -133,9 +133,9 @@ struct Crs {
   std::string name = "WGS 84";
   int epsg = 4326;  ///< 0 for user-defined
   GeodeticDatum datum;
-  AngularUnit angular_unit;             ///< unit of x, y of a geographic CRS
-  LinearUnit linear_unit;               ///< unit of x, y of a projected CRS
-  std::optional<Projection> projection; ///< set exactly when kind == Projected
+  AngularUnit angular_unit;              ///< unit of x, y of a geographic CRS
+  LinearUnit linear_unit;                ///< unit of x, y of a projected CRS
+  std::optional<Projection> projection;  ///< set exactly when kind == Projected
   std::optional<VerticalCrs> vertical;
   /// What a builder had to assume or ignore (e.g. "user-defined datum assumed to be WGS 84").
   std::vector<std::string> warnings;

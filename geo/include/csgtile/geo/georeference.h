@@ -69,12 +69,15 @@ kernel::Vec3 geodetic_to_ecef(const Ellipsoid& ellipsoid, const GeodeticPoint& p
 GeodeticPoint ecef_to_geodetic(const Ellipsoid& ellipsoid, const kernel::Vec3& ecef);
 /// Geodetic on a datum → geodetic on WGS 84 (via ECEF and the datum's Helmert; unchanged for
 /// null transformations). Errors: Unsupported when the datum's relation is unknown.
-kernel::Result<GeodeticPoint> datum_to_wgs84(const GeodeticDatum& datum, const GeodeticPoint& point);
+kernel::Result<GeodeticPoint> datum_to_wgs84(const GeodeticDatum& datum,
+                                             const GeodeticPoint& point);
 /// The inverse of datum_to_wgs84 (the exact inverse of the Helmert similarity).
-kernel::Result<GeodeticPoint> wgs84_to_datum(const GeodeticDatum& datum, const GeodeticPoint& point);
+kernel::Result<GeodeticPoint> wgs84_to_datum(const GeodeticDatum& datum,
+                                             const GeodeticPoint& point);
 /// CRS → CRS through WGS 84 (datum shifts as above). For tests, bounds and one-off points;
 /// use a Georeferencer for bulk work.
-kernel::Result<kernel::Vec3> transform_point(const Crs& from, const Crs& to, const kernel::Vec3& xyz);
+kernel::Result<kernel::Vec3> transform_point(const Crs& from, const Crs& to,
+                                             const kernel::Vec3& xyz);
 
 /// Options of a Georeferencer.
 struct GeoreferenceOptions {
@@ -85,8 +88,8 @@ struct GeoreferenceOptions {
 /// The tile-local frame: an east-north-up Cartesian frame tangent to the WGS 84 ellipsoid at
 /// `origin`; x east, y north, z up, metres.
 struct TileFrame {
-  GeodeticPoint origin;             ///< on WGS 84
-  kernel::Location local_to_ecef;   ///< exact: rotation + translation into WGS 84 ECEF
+  GeodeticPoint origin;            ///< on WGS 84
+  kernel::Location local_to_ecef;  ///< exact: rotation + translation into WGS 84 ECEF
 };
 
 /// The best similarity "CRS coordinates → local" over a disc around the origin and how far it
@@ -163,12 +166,13 @@ class ScannerPlacement {
  public:
   /// From a geodetic pose: an exact rigid motion, available as location().
   /// Errors: InvalidArgument for non-finite angles or a bad position.
-  static kernel::Result<ScannerPlacement> from_pose(const Georeferencer& tile, const ScannerPose& pose);
+  static kernel::Result<ScannerPlacement> from_pose(const Georeferencer& tile,
+                                                    const ScannerPose& pose);
   /// From a 4×4 matrix mapping scanner coordinates (metres) to the tile's source CRS
   /// coordinates (its units): each point then takes the exact path, so location() is empty.
   /// Errors: InvalidArgument unless the last row is (0, 0, 0, 1) and the 3×3 part invertible.
-  static kernel::Result<ScannerPlacement> from_projected_matrix(const Georeferencer& tile,
-                                                               const Eigen::Matrix4d& scanner_to_source);
+  static kernel::Result<ScannerPlacement> from_projected_matrix(
+      const Georeferencer& tile, const Eigen::Matrix4d& scanner_to_source);
 
   kernel::Vec3 to_local(const kernel::Vec3& scanner_point) const;
   kernel::Vec3 to_scanner(const kernel::Vec3& local) const;
