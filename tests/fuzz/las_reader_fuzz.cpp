@@ -25,9 +25,11 @@
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
 
-namespace {
-
 using namespace csgtile::geo;
+
+#ifndef CSGTILE_LAS_SEED_GENERATOR
+
+namespace {
 
 void check(bool condition, const char* what) {
   if (!condition) {
@@ -88,8 +90,6 @@ void fuzz_las(std::span<const std::uint8_t> bytes, bool accept_truncated) {
 }
 
 }  // namespace
-
-#ifndef CSGTILE_LAS_SEED_GENERATOR
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::span<const std::uint8_t> bytes(data, size);

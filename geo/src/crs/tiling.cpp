@@ -79,10 +79,16 @@ double CityGrid::edge_y(std::int64_t row) const {
 }
 
 CellId CityGrid::cell_of(double x, double y) const {
-  auto index = [&](double v, double origin, auto edge) {
-    auto i = static_cast<std::int64_t>(std::floor((v - origin) / spec_.cell_size));
-    while (v < edge(i)) --i;
-    while (v >= edge(i + 1)) ++i;
+  auto index = [&](double v, double origin, auto edge) -> std::int64_t {
+    const double q = std::floor((v - origin) / spec_.cell_size);
+    // Outside the precondition (NaN, or beyond 2^52 cells where edges stop being distinct
+    // doubles) return a clamped index instead of overflowing the cast or looping.
+    if (!(std::fabs(q) < 4503599627370496.0))
+      return q > 0 ? (std::int64_t{1} << 52) : -(std::int64_t{1} << 52);
+    auto i = static_cast<std::int64_t>(q);
+    // The division is off by at most one cell; a few steps settle it against the edges.
+    for (int step = 0; step < 4 && v < edge(i); ++step) --i;
+    for (int step = 0; step < 4 && v >= edge(i + 1); ++step) ++i;
     return i;
   };
   CellId id;

@@ -225,7 +225,9 @@ int epsg_code(const WktNode& node) {
   if (!id || id->items.size() < 2) return 0;
   if (detail::normalise_name(id->name()) != "epsg") return 0;
   const WktItem& code = id->items[1];
-  if (code.kind == WktItem::Kind::Number) return static_cast<int>(code.number);
+  if (code.kind == WktItem::Kind::Number) {
+    return code.number >= 0 && code.number < 1e9 ? static_cast<int>(code.number) : 0;
+  }
   if (code.kind == WktItem::Kind::Text) return std::atoi(code.text.c_str());
   return 0;
 }

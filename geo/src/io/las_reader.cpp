@@ -81,7 +81,7 @@ std::uint64_t decode_records(const Decoding& d, const std::uint8_t* data, std::s
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint8_t* p = data + i * d.record_length;
     Point& q = out[i];
-    q = Point{};
+    q = Point{};  // the batch may hold an earlier read's points
     q.x = load_le<std::int32_t>(p) * d.scale[0] + d.offset[0];
     q.y = load_le<std::int32_t>(p + 4) * d.scale[1] + d.offset[1];
     q.z = load_le<std::int32_t>(p + 8) * d.scale[2] + d.offset[2];

@@ -101,14 +101,17 @@ void PointReader::warn(std::string message) {
 
 kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max) {
   if (failed_) return *failed_;
-  batch.clear();
-  batch.layout = info_.extra;
-  if (at_end_) return std::size_t{0};
+  if (at_end_) {
+    batch.clear();
+    batch.layout = info_.extra;
+    return std::size_t{0};
+  }
   if (max == 0) {
     return kernel::Error{ErrorCode::InvalidArgument, name_ + ": read() needs max >= 1"};
   }
   for (;;) {
-    batch.clear();
+    // read_records sets the batch's size itself: a reused batch of the same size is not
+    // re-initialised (that pass costs as much as decoding LAS records).
     batch.layout = info_.extra;
     auto records = read_records(batch, max);
     if (!records.ok()) {
@@ -121,16 +124,32 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       batch.clear();
       return std::size_t{0};
     }
-    // Drop non-finite points (and their extra bytes), keeping order.
-    if (options_.skip_non_finite) {
+    // One pass for the common case: the batch's bounds and a non-finite detector (v·0 is 0
+    // for finite v and NaN for NaN or infinity, so `poison` stays 0 exactly when all are
+    // finite).
+    Bounds3 batch_bounds;
+    double poison = 0.0;
+    for (const Point& p : batch.points) {
+      poison += p.x * 0.0 + p.y * 0.0 + p.z * 0.0;
+      batch_bounds.min[0] = std::min(batch_bounds.min[0], p.x);
+      batch_bounds.min[1] = std::min(batch_bounds.min[1], p.y);
+      batch_bounds.min[2] = std::min(batch_bounds.min[2], p.z);
+      batch_bounds.max[0] = std::max(batch_bounds.max[0], p.x);
+      batch_bounds.max[1] = std::max(batch_bounds.max[1], p.y);
+      batch_bounds.max[2] = std::max(batch_bounds.max[2], p.z);
+    }
+    if (poison != 0.0) {
+      // Some coordinate is NaN or infinite: drop those points (keeping order and their
+      // extra bytes) unless asked to keep them, and recompute the bounds of the rest.
       const std::size_t stride = batch.extra_record_size();
       std::size_t kept = 0;
+      batch_bounds = Bounds3{};
       for (std::size_t i = 0; i < batch.points.size(); ++i) {
-        const Point& p = batch.points[i];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-          ++non_finite_;
-          continue;
-        }
+        const Point p = batch.points[i];
+        const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        if (!finite) ++non_finite_;
+        if (!finite && options_.skip_non_finite) continue;
+        if (finite) batch_bounds.add(p.x, p.y, p.z);
         if (kept != i) {
           batch.points[kept] = p;
           if (stride > 0) {
@@ -143,10 +162,19 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       batch.points.resize(kept);
       batch.extra_bytes.resize(kept * stride);
     }
-    for (const Point& p : batch.points) {
-      bounds_read_.add(p.x, p.y, p.z);
-      if (info_.bounds && !info_.bounds->contains(p.x, p.y, p.z, info_.bounds_tolerance)) {
-        if (outside_bounds_++ == 0) first_outside_ = p;
+    bounds_read_.add(batch_bounds);
+    // Per-point bounds checks only when the batch reaches outside the header's box.
+    const auto& tol = info_.bounds_tolerance;
+    if (info_.bounds && !batch_bounds.empty() &&
+        !(info_.bounds->contains(batch_bounds.min[0], batch_bounds.min[1], batch_bounds.min[2],
+                                 tol) &&
+          info_.bounds->contains(batch_bounds.max[0], batch_bounds.max[1], batch_bounds.max[2],
+                                 tol))) {
+      for (const Point& p : batch.points) {
+        if (!info_.bounds->contains(p.x, p.y, p.z, tol) && std::isfinite(p.x) &&
+            std::isfinite(p.y) && std::isfinite(p.z)) {
+          if (outside_bounds_++ == 0) first_outside_ = p;
+        }
       }
     }
     points_read_ += batch.points.size();
@@ -158,8 +186,8 @@ void PointReader::finish_reading() {
   at_end_ = true;
   finish();
   if (non_finite_ > 0) {
-    warn(name_ + ": " + std::to_string(non_finite_) +
-         " points with NaN or infinite coordinates were dropped");
+    warn(name_ + ": " + std::to_string(non_finite_) + " points with NaN or infinite coordinates" +
+         (options_.skip_non_finite ? " were dropped" : " were passed on"));
   }
   if (outside_bounds_ > 0 && info_.bounds) {
     char box[256];

@@ -41,6 +41,7 @@ class XyzReader final : public PointReader {
  protected:
   kernel::Result<std::size_t> read_records(PointBatch& batch, std::size_t max) override {
     const std::size_t stride = batch.extra_record_size();
+    batch.clear();
     std::string_view line;
     while (batch.points.size() < max) {
       auto more = lines_.next_line(line);

@@ -3,8 +3,6 @@
 #include "csgtile/kernel/boolean.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <cmath>
 #include <map>
@@ -397,13 +395,17 @@ class BooleanEngine {
       if (c1 - c0 <= min_span) continue;
       const double mid = 0.5 * (c0 + c1);
       auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * 1e3);
-      if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "section fa %zu fb %zu piece [%g,%g] in_a %d in_b %d existing %d\n", fa, fb, c0, c1, (int)shift_a.has_value(), existing < 0 ? (int)polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3).has_value() : -1, existing);
-      if (!shift_a) continue;
       std::optional<Vec2> shift_b = Vec2::Zero();
-      if (existing < 0) {
-        shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3);
-        if (!shift_b) continue;
+      if (existing < 0) shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3);
+      if (existing < 0 && shift_a.has_value() != shift_b.has_value()) {
+        // The piece runs inside one face along an edge of the other (an edge lying in a
+        // face): that edge, or the part of it the piece covers, splits the first face.
+        const std::size_t inside = shift_a ? fa : fb, along = shift_a ? fb : fa;
+        const int e = boundary_edge_through(along, curve->point(mid));
+        if (e >= 0) add_edge_part(inside, e, curve->point(c0), curve->point(c1));
+        continue;
       }
+      if (!shift_a || !shift_b) continue;
       // Vertices at the piece's ends: split the boundary edges they fall on.
       const int v0 = vertex_on_curve(*curve, c0, hits);
       const int v1 = vertex_on_curve(*curve, c1, hits);
@@ -444,6 +446,45 @@ class BooleanEngine {
       if (existing < 0) add_extra(fb, edge_id, refit_for(edge_id, fb, shift_pcurve(pb, *shift_b), curve));
     }
     return {};
+  }
+
+  // A boundary edge of face f passing through p (within tolerance), or -1.
+  int boundary_edge_through(std::size_t f, const Vec3& p) {
+    for (const BLoop& loop : model_.faces[f].loops) {
+      for (const BUse& u : loop) {
+        const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+        if (e.degenerate()) continue;
+        const double t = e.curve->closest_parameter(p, e.t0, e.t1);
+        if ((e.curve->point(t) - p).norm() <= options_.tolerance) return u.edge;
+      }
+    }
+    return -1;
+  }
+
+  // Adds the part of edge `e` between the points p0 and p1 to face f as a section edge,
+  // splitting `e` at p0 and p1 when they are inside it.
+  void add_edge_part(std::size_t f, int e_id, const Vec3& p0, const Vec3& p1) {
+    const BEdge e = model_.edges[static_cast<std::size_t>(e_id)];
+    double a = e.curve->closest_parameter(p0, e.t0, e.t1), b = e.curve->closest_parameter(p1, e.t0, e.t1);
+    if (a > b) std::swap(a, b);
+    const double span = 1e-9 * std::max(1.0, e.t1 - e.t0);
+    if (b - a <= span) return;
+    for (double t : {a, b}) {
+      if (t > e.t0 + span && t < e.t1 - span) {
+        const int v = model_.vertex_at(e.curve->point(t));
+        if (v != e.v0 && v != e.v1) model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
+      }
+    }
+    auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface, options_.tolerance * 1e-2);
+    if (!pc) return;
+    auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * 1e3);
+    if (!shift) return;
+    pc = shift_pcurve(pc, *shift);
+    if (a <= e.t0 + span && b >= e.t1 - span) {
+      add_extra(f, e_id, pc);
+    } else {
+      pending_partials_.push_back({f, e_id, a, b, pc});
+    }
   }
 
   // The pcurve for `edge` on face f: the section pcurve when the edge is on the section's
@@ -551,9 +592,7 @@ class BooleanEngine {
           const BEdge a = model_.edges[static_cast<std::size_t>(extra[i].edge)];
           const BEdge b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
           if (a.degenerate() || b.degenerate()) continue;
-          if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "face %zu extras %zu,%zu crossings %zu\n", f, i, j, intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol).size());
           for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol)) {
-            if (std::getenv("CSGTILE_DEBUG")) std::fprintf(stderr, "  t %g s %g\n", c.t, c.s);
             const double sa = 1e-9 * std::max(1.0, a.t1 - a.t0), sb = 1e-9 * std::max(1.0, b.t1 - b.t0);
             const bool inner_a = c.t > a.t0 + sa && c.t < a.t1 - sa;
             const bool inner_b = c.s > b.t0 + sb && c.s < b.t1 - sb;

@@ -546,8 +546,11 @@ Result<SolidClassifier> SolidClassifier::create(const Shape& shape, double toler
   return c;
 }
 
-double SolidClassifier::edge_distance(const EdgeRecord& edge, const Vec3& p) const {
-  if (!edge.bounds.contains(p)) return kInfinity;
+double SolidClassifier::edge_distance(const EdgeRecord& edge, const Vec3& p, double margin) const {
+  if (!((edge.bounds.min.array() - margin <= p.array()).all() &&
+        (p.array() <= edge.bounds.max.array() + margin).all())) {
+    return kInfinity;
+  }
   if (edge.curve == nullptr) return (p - edge.point).norm();
   const Vec3 local = edge.inverse.apply_point(p);
   const double t = edge.curve->closest_parameter(local, edge.first, edge.last);
@@ -587,7 +590,7 @@ std::vector<std::uint8_t> SolidClassifier::on_boundary(const Vec3& p, const Cand
       const int k = c.find(g);
       pending = pending || (k >= 0 && on[static_cast<std::size_t>(k)] == 0);
     }
-    if (!pending || edge_distance(edge, p) > tolerance_) return;
+    if (!pending || edge_distance(edge, p, 0.0) > tolerance_) return;
     for (std::uint32_t g : edge.groups) {
       const int k = c.find(g);
       if (k >= 0) on[static_cast<std::size_t>(k)] = 1;
@@ -624,6 +627,10 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
     intersect_line_surface(face.surface(), origin, local_direction, lo, hi, range,
                            tolerance_ / scale, intersection);
     if (intersection.degenerate) out.ambiguous = true;
+    // A touching pair of roots comes back as one root somewhere between them (they are up to
+    // about sqrt(eps) of the face's size apart): it is only harmless well inside or well
+    // outside the face.
+    const double touching = 1e-6 * face.world_bounds().size().norm();
     for (const LineSurfaceHit& hit : intersection.hits) {
       const Containment where = face.locate_uv(hit.uv);
       if (where == Containment::OnBoundary || (hit.tangent && where == Containment::Inside)) {
@@ -631,7 +638,8 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
       }
       const Vec3 x = p + (hit.t * scale) * direction;
       for (std::uint32_t e : face_edges_[f]) {
-        if (edge_distance(edges_[e], x) <= edges_[e].band) {
+        const double band = hit.tangent ? std::max(edges_[e].band, touching) : edges_[e].band;
+        if (edge_distance(edges_[e], x, band - edges_[e].band) <= band) {
           out.ambiguous = true;
           break;
         }
@@ -700,7 +708,7 @@ std::optional<Vec3> SolidClassifier::boundary_normal(const Vec3& p) const {
   std::size_t edge = edges_.size();
   double nearest = kInfinity;
   edge_tree_.visit_point(p, 0.0, [&](std::uint32_t e) {
-    const double d = edge_distance(edges_[e], p);
+    const double d = edge_distance(edges_[e], p, 0.0);
     if (d <= tolerance_ && (d < nearest || (d == nearest && e < edge))) {
       nearest = d;
       edge = e;

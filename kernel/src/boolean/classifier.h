@@ -194,7 +194,8 @@ struct ClassifyStats {
 /// with every face surface (closed forms, see boolean/line_surface.h) and the hits that lie
 /// inside their faces are counted per solid; odd means inside. A ray that passes within
 /// max(tolerance, edge tolerance) of a face boundary, runs along a surface or touches one
-/// inside a face is ambiguous and another direction is cast; after ClassifierOptions::max_rays
+/// inside a face (or within 1e-6 of the face's size from its boundary) is ambiguous and
+/// another direction is cast; after ClassifierOptions::max_rays
 /// ambiguous rays the majority of their parities decides. Faces with Internal or External
 /// orientation bound nothing and are skipped; faces not inside any solid form one extra
 /// region. Trees of face and edge boxes (slab tests) skip what a ray or a point cannot meet,
@@ -247,7 +248,8 @@ class SolidClassifier {
   };
 
   SolidClassifier() = default;
-  double edge_distance(const EdgeRecord& edge, const Vec3& p) const;
+  /// Distance from p to the edge; infinity when p is outside its box grown by `margin`.
+  double edge_distance(const EdgeRecord& edge, const Vec3& p, double margin) const;
   Candidates candidates(const Vec3& p) const;
   /// Per candidate: whether p is within tolerance of its boundary.
   std::vector<std::uint8_t> on_boundary(const Vec3& p, const Candidates& c) const;

@@ -468,8 +468,10 @@ class DomainRefiner {
       add({tri[2], tri[0], m});
       stack = {{tri[0], tri[1]}, {tri[1], tri[2]}, {tri[2], tri[0]}};
     }
-    hint = static_cast<int>(triangles_.size() - 1);
     flip_until_delaunay(std::move(stack));
+    // The newest live triangle is next to the new point, and so to the next one in a row.
+    hint = static_cast<int>(triangles_.size()) - 1;
+    while (hint > 0 && !alive_[static_cast<std::size_t>(hint)]) --hint;
     return true;
   }
 
@@ -536,8 +538,18 @@ class DomainRefiner {
     const double span_u = hi.x() - lo.x(), span_v = hi.y() - lo.y();
     if (!(span_u > 0) || !(span_v > 0)) return;
     const std::size_t rows = segments_for(span_v, v_step);
+    // Rows coarse to fine (every 2^k-th row, then the ones halfway between, …): each row
+    // then splits triangles no taller than a few rows, which keeps flip cascades short.
+    std::vector<std::size_t> order;
+    std::size_t stride = 1;
+    while (stride * 2 < rows) stride *= 2;
+    for (; stride > 0; stride /= 2) {
+      for (std::size_t j = stride; j < rows; j += stride) {
+        if (j % (2 * stride) != 0 || 2 * stride >= rows) order.push_back(j);
+      }
+    }
     int hint = -1;
-    for (std::size_t j = 1; j < rows; ++j) {
+    for (const std::size_t j : order) {
       const double v = lo.y() + span_v * static_cast<double>(j) / static_cast<double>(rows);
       const std::size_t columns =
           segments_for(span_u, row_step(surface, v, lo.x(), hi.x(), half, geometry_.angular));

@@ -48,10 +48,12 @@ Result<bool> mesh_rectangular_face(const FaceGeometry& geometry, const FaceLoops
                                    std::vector<Vec3>& vertices, std::vector<Triangle>& triangles);
 
 /// General method: triangulates the boundary polygon in the (u, v) plane (ear clipping with
-/// hole bridging), then, unless the surface is a plane, refines interior edges (never
-/// boundary ones) by midpoint splits and Delaunay flips until the chordal error at triangle
-/// centres and edge midpoints, and the normal deviation at corners, are within the budget
-/// (at most 32 passes). Error: DegenerateGeometry when the boundary cannot be triangulated.
+/// hole bridging). Unless the surface is a plane it then makes the triangulation Delaunay
+/// (in (u, v) scaled by the surface's speeds at the domain centre; v shrunk where the surface
+/// is straight along v), inserts interior points on rows spaced for half the budget in each
+/// direction, and refines interior edges (never boundary ones) by midpoint splits until the
+/// chordal error at edge midpoints and triangle centres is within the budget (at most 32
+/// passes). Error: DegenerateGeometry when the boundary cannot be triangulated.
 Status mesh_general_face(const FaceGeometry& geometry, const FaceLoops& loops,
                          std::vector<Vec3>& vertices, std::vector<Triangle>& triangles);
 

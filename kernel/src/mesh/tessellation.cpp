@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -110,9 +111,10 @@ struct EdgeSamples {
 
 std::string face_name(std::size_t index, const Shape& face) {
   constexpr const char* kSurfaceNames[] = {"plane", "cylinder",  "cone",      "sphere",
-                                              "torus", "extrusion", "revolution"};
+                                           "torus", "extrusion", "revolution"};
+  const auto kind = static_cast<std::size_t>(face.body().face()->surface->kind());
   return "face " + std::to_string(index) + " (" +
-         kSurfaceNames[static_cast<int>(face.body().face()->surface->kind())] + ")";
+         (kind < std::size(kSurfaceNames) ? kSurfaceNames[kind] : "surface") + ")";
 }
 
 void put_u32(std::string& out, std::uint32_t v) {

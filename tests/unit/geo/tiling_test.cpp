@@ -69,6 +69,16 @@ TEST(TilingGrid, HalosOverlapNeighbours) {
   EXPECT_DOUBLE_EQ(g.core_bounds(a).max_y, 500.0);
 }
 
+TEST(TilingGrid, HostileCoordinatesNeitherHangNorOverflow) {
+  const CityGrid g = grid(0, 0, 0.5, 0.1);
+  for (double v : std::initializer_list<double>{NAN, INFINITY, -INFINITY, 1e300, -1e300, 1e17}) {
+    const CellId c = g.cell_of(v, v);
+    EXPECT_FALSE(g.in_core(c, v, v)) << v;
+  }
+  auto far = g.cells_meeting(Bounds2{1e300, 1e300, 1e300, 1e300}, true);
+  EXPECT_TRUE(far.ok());
+}
+
 TEST(TilingGrid, InvalidSpecsAreRefused) {
   const Crs crs = crs_from_epsg(28992).value();
   EXPECT_FALSE(CityGrid::create(crs, GridSpec{0, 0, 0, 0}).ok());

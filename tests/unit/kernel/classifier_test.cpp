@@ -628,6 +628,27 @@ TEST(Classifier, SweptSurfacesClassifyLikeTheQuadricsTheyEqual) {
   }
 }
 
+// Regression (stress seed 101, cylinder_swept14): a ray nearly perpendicular to a revolution
+// axis; eliminating the ray parameter divided by its tiny axial component, and the unpolished
+// root fell outside the face's box window and was lost.
+TEST(Classifier, RevolutionHitsOfARayNearlyPerpendicularToTheAxisArePolished) {
+  const double r = 8.937;
+  std::vector<Vec3> meridian;
+  for (int k = 0; k <= 12; ++k) meridian.emplace_back(r, 0, k);
+  const RevolutionSurface surface(std::make_shared<PolylineCurve>(meridian, 0.0), Vec3::Zero(), Vec3::UnitZ());
+  const Vec3 origin(-20, 3, 0.8456);
+  const Vec3 direction = Vec3(1, 0, 3.9e-6).normalized();
+  LineSurfaceIntersection out;
+  intersect_line_surface(surface, origin, direction, 0.0, 100.0, {0, 2 * kPi, 0, 12}, kTolerance, out);
+  ASSERT_FALSE(out.degenerate);
+  ASSERT_EQ(out.hits.size(), 2u);
+  for (const LineSurfaceHit& hit : out.hits) {
+    const Vec3 x = origin + hit.t * direction;
+    EXPECT_NEAR(std::hypot(x.x(), x.y()), r, 1e-10);
+    EXPECT_LT((surface.point(hit.uv.x(), hit.uv.y()) - x).norm(), 1e-10);
+  }
+}
+
 // ---- face domains --------------------------------------------------------------------------
 
 TEST(Classifier, FaceWithoutSeamIsTheBandBetweenItsCircles) {

@@ -100,7 +100,8 @@ class PointReader {
  protected:
   PointReader(std::string name, PointCloudInfo info, PointReadOptions options);
 
-  /// Fills `batch` (cleared, layout set) with up to `max` records; 0 at the end of the data.
+  /// Sets `batch` (layout already set; points and extra bytes hold stale data of an earlier
+  /// read) to exactly the next up-to-`max` records; 0 at the end of the data.
   virtual kernel::Result<std::size_t> read_records(PointBatch& batch, std::size_t max) = 0;
   /// Called once when the end is reached, to add summary warnings.
   virtual void finish() {}

@@ -73,7 +73,8 @@ class CityGrid {
   const Crs& crs() const { return crs_; }
   const GridSpec& spec() const { return spec_; }
 
-  /// The cell whose core holds (x, y). Precondition: finite, and within ±2^52 cells.
+  /// The cell whose core holds (x, y). Precondition: finite, and within ±2^52 cells of the
+  /// origin; otherwise a clamped cell is returned (whose core does not hold the point).
   CellId cell_of(double x, double y) const;
   Bounds2 core_bounds(CellId cell) const;
   Bounds2 halo_bounds(CellId cell) const;

@@ -43,20 +43,28 @@ struct Mesh {
   std::vector<std::vector<std::uint32_t>> edge_vertices;
 };
 
-/// Tessellates every face of `shape` (any kind; faces with Internal or External orientation
-/// are skipped, they bound nothing). Faces are placed by their composed Location, and the
-/// triangles of a face used Reversed are flipped. Zero-area triangles are never emitted.
-/// Errors: InvalidArgument (null shape, tolerance out of range), DegenerateGeometry (a face
-/// boundary that cannot be triangulated). Deterministic; roughly linear in the output size
-/// (planar faces: quadratic in their boundary point count). Thread-safe.
+/// Tessellates every face of `shape` (any kind) once, as map_child_shapes(shape, Face)
+/// lists it: placed by its composed Location and oriented by its first use (a face shared
+/// by two solids of a compsolid is meshed once; faces used Internal or External bound
+/// nothing and are skipped). Triangles of a face used Reversed are flipped. Each edge is
+/// sampled once and its points are shared by its faces, so closed shells give closed meshes.
+/// Zero-area triangles are never emitted. Curved faces with a rectangular (u, v) domain (the
+/// primitives') are meshed in rows; other faces by the general method (see
+/// general_method_only). Errors: InvalidArgument (null shape, tolerance out of range or too
+/// small for the model), DegenerateGeometry (a face boundary that cannot be triangulated).
+/// Deterministic. Linear in the output for rows; planar faces are quadratic in their boundary
+/// points; the general method costs a few hash lookups per flip. Thread-safe.
 Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options = {});
 
-/// Parameters t_0 = first < … < t_k = last at which tessellate() samples `edge`'s curve for
-/// the given tolerances (body frame scaled by the edge's location): lines give their ends,
-/// circles a uniform subdivision, polylines all their breakpoints in range, other curves a
-/// uniform subdivision bounded by their curvature; a degenerate edge gives {first, last}.
-/// tessellate() halves the chordal tolerance for edges of doubly curved faces (sphere,
-/// torus, curved revolutions), whose interior error adds the errors along u and v.
+/// Parameters t_0 = first < … < t_k = last at which an edge's curve is sampled for the given
+/// tolerances (world units: the body frame's tolerance is divided by the edge's scale):
+/// lines give their ends, circles a uniform subdivision, polylines all their breakpoints in
+/// range, other curves a uniform subdivision bounded by their curvature; a degenerate edge
+/// gives {first, last}. Empty when more than 2^20 segments would be needed.
+/// tessellate() passes half the chordal tolerance for edges of doubly curved faces (sphere,
+/// torus, curved revolutions, whose interior error adds the errors along u and v) and of
+/// faces meshed by the general method, and refines circles bounding a cone to the step its
+/// widest circle needs.
 std::vector<double> discretize_edge(const Shape& edge, double chordal_tolerance,
                                     double angular_tolerance);
 

@@ -1,0 +1,157 @@
+// LAS read throughput. Synthesises a LAS 1.4 point-format-7 file of N points (default 5 M,
+// 36 bytes each), then measures in this one process:
+//   baseline — a plain sequential read() loop over the same file (1 MiB chunks), and
+//   reader   — LasReader decoding every point in batches of 65536,
+// each the best of three passes over the warm page cache, and prints one JSON object: points/s,
+// MB/s, the reader/baseline ratio, the resident-memory growth while reading, and peak RSS.
+//
+// Usage: las_read_bench [POINTS] [FILE]   (FILE defaults to a temporary file, removed after)
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "csgtile/geo/las.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// A field of /proc/self/status in MiB ("VmRSS", "VmHWM").
+double status_mib(const char* field) {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == std::string(field) + ":") {
+      double kib = 0;
+      status >> kib;
+      return kib / 1024.0;
+    }
+    std::getline(status, key);
+  }
+  return 0;
+}
+
+bool synthesise(const fs::path& path, std::size_t count) {
+  csgtile::geo::LasWriteOptions options;
+  options.point_format = 7;
+  options.scale = {0.001, 0.001, 0.001};
+  options.offset = {650000.0, 5400000.0, 0.0};
+  auto writer = csgtile::geo::LasWriter::create(path, options);
+  if (!writer.ok()) {
+    std::fprintf(stderr, "%s\n", writer.error().message.c_str());
+    return false;
+  }
+  csgtile::geo::PointBatch batch;
+  std::uint64_t state = 88172645463325252ull;  // xorshift: fixed, fast, no <random> needed
+  auto next = [&] {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return state;
+  };
+  for (std::size_t done = 0; done < count;) {
+    batch.clear();
+    const std::size_t n = std::min<std::size_t>(100000, count - done);
+    for (std::size_t i = 0; i < n; ++i) {
+      csgtile::geo::Point p;
+      p.x = 650000.0 + static_cast<double>(next() % 1000000) * 0.001;
+      p.y = 5400000.0 + static_cast<double>(next() % 1000000) * 0.001;
+      p.z = static_cast<double>(next() % 50000) * 0.001;
+      p.intensity = static_cast<std::uint16_t>(next());
+      p.return_number = 1;
+      p.number_of_returns = 1;
+      p.classification = static_cast<std::uint8_t>(next() % 7);
+      p.gps_time = static_cast<double>(done + i) * 1e-5;
+      p.red = p.green = p.blue = static_cast<std::uint16_t>(next());
+      batch.append(p);
+    }
+    if (auto st = writer.value()->write(batch); !st.ok()) {
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+      return false;
+    }
+    done += n;
+  }
+  return writer.value()->close().ok();
+}
+
+double baseline_pass(const fs::path& path, std::uint64_t& checksum) {
+  const auto start = Clock::now();
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return -1;
+  std::vector<unsigned char> buffer(1 << 20);
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n <= 0) break;
+    for (ssize_t i = 0; i < n; i += 4096) checksum += buffer[static_cast<std::size_t>(i)];
+  }
+  ::close(fd);
+  return seconds_since(start);
+}
+
+double reader_pass(const fs::path& path, double& sum, std::uint64_t& points, double& growth) {
+  const auto start = Clock::now();
+  auto reader = csgtile::geo::LasReader::open(path);
+  if (!reader.ok()) {
+    std::fprintf(stderr, "%s\n", reader.error().message.c_str());
+    return -1;
+  }
+  csgtile::geo::PointBatch batch;
+  const double before = status_mib("VmRSS");
+  double peak = before;
+  points = 0;
+  for (;;) {
+    auto n = reader.value()->read(batch, 65536);
+    if (!n.ok() || n.value() == 0) break;
+    for (const auto& p : batch.points) sum += p.x + p.gps_time;
+    points += n.value();
+    if ((points >> 16) % 16 == 0) peak = std::max(peak, status_mib("VmRSS"));
+  }
+  growth = std::max(growth, peak - before);
+  return seconds_since(start);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::size_t count = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 5'000'000;
+  const bool temporary = argc <= 2;
+  const fs::path path = temporary ? fs::temp_directory_path() /
+                                        ("csgtile_las_bench_" + std::to_string(::getpid()) + ".las")
+                                  : fs::path(argv[2]);
+  if (!fs::exists(path) && !synthesise(path, count)) return 1;
+  const double bytes = static_cast<double>(fs::file_size(path));
+
+  double best_baseline = 1e300, best_reader = 1e300, sum = 0, growth = 0;
+  std::uint64_t checksum = 0, points = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    best_baseline = std::min(best_baseline, baseline_pass(path, checksum));
+    best_reader = std::min(best_reader, reader_pass(path, sum, points, growth));
+  }
+  if (temporary) fs::remove(path);
+  const double mb = bytes / 1e6;
+  std::printf(
+      "{\"points\": %llu, \"file_bytes\": %.0f, \"record_length\": 36, \"cache\": \"warm\",\n"
+      " \"baseline\": {\"seconds\": %.4f, \"mb_per_s\": %.1f},\n"
+      " \"las_reader\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": %.1f},\n"
+      " \"ratio_to_baseline\": %.3f, \"read_rss_growth_mib\": %.1f, \"peak_rss_mib\": %.1f,\n"
+      " \"checksum\": %.6g}\n",
+      static_cast<unsigned long long>(points), bytes, best_baseline, mb / best_baseline,
+      best_reader, static_cast<double>(points) / best_reader, mb / best_reader,
+      (mb / best_reader) / (mb / best_baseline), growth, status_mib("VmHWM"),
+      sum + static_cast<double>(checksum));
+  return 0;
+}

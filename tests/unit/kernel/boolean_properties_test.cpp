@@ -1,0 +1,200 @@
+// Seeded property tests of the Boolean operations, and the degenerate configurations each by
+// name. A failing seed prints the case index; it becomes a named regression below.
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <cstdio>
+#include <random>
+
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "random_shapes.h"
+
+namespace csgtile::kernel {
+namespace {
+
+double volume(const Shape& s) { return mass_properties(s).volume; }
+std::size_t solids(const Shape& s) { return map_child_shapes(s, ShapeKind::Solid).size(); }
+
+Shape valid(Result<Shape> r, const std::string& what) {
+  EXPECT_TRUE(r.ok()) << what << ": " << (r.ok() ? "" : r.error().message);
+  if (!r.ok()) return Shape();
+  const CheckReport report = check_shape(r.value());
+  EXPECT_TRUE(report.valid()) << what << ": " << (report.valid() ? "" : report.issues.front().message);
+  return r.value();
+}
+
+Shape box_at(const Vec3& size, const Location& at) {
+  return make_box(size.x(), size.y(), size.z()).value().moved(at);
+}
+
+// Random box pairs, often touching or sharing faces: snapped placements on a coarse grid.
+TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<int> grid(0, 4);
+  std::uniform_int_distribution<int> turn(0, 7);
+  int checked = 0;
+  for (int i = 0; i < 400; ++i) {
+    // Drawn one by one: argument evaluation order is unspecified, the sequence must not be.
+    double v[13];
+    for (int k = 0; k < 12; ++k) v[k] = grid(rng);
+    v[12] = turn(rng);
+    const Vec3 sa(1 + v[0], 1 + v[1], 1 + v[2]), sb(1 + v[3], 1 + v[4], 1 + v[5]);
+    const Vec3 ta = 0.5 * Vec3(v[6], v[7], v[8]), tb = 0.5 * Vec3(v[9], v[10], v[11]);
+    const Location la = Location::translation(ta);
+    // Half the cases turn B about Z by a multiple of π/4 (oblique faces).
+    const Location lb = Location::translation(tb) *
+                        Location::rotation(Vec3::Zero(), Vec3::UnitZ(), v[12] * std::numbers::pi / 4);
+    const Shape a = box_at(sa, la), b = box_at(sb, lb);
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "case %d: A %gx%gx%g at (%g,%g,%g); B %gx%gx%g at (%g,%g,%g) turned %g*pi/4", i,
+                  sa.x(), sa.y(), sa.z(), ta.x(), ta.y(), ta.z(), sb.x(), sb.y(), sb.z(), tb.x(), tb.y(), tb.z(), v[12]);
+    const std::string tag = buf;
+    const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
+    const Shape c = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
+    const Shape d = valid(boolean_operation(a, b, BooleanOp::Cut), tag + " cut");
+    if (u.is_null() || c.is_null() || d.is_null()) continue;
+    const double va = volume(a), vb = volume(b);
+    EXPECT_NEAR(volume(u) + volume(c), va + vb, 1e-9 * (va + vb)) << tag;
+    EXPECT_NEAR(volume(d), va - volume(c), 1e-9 * va) << tag;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 400);
+}
+
+TEST(BooleanProperty, SelfOperationsOfEveryPrimitive) {
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 3 * kPrimitiveTypeCount; ++i) {
+    PrimitiveSpec spec = test::random_primitive(rng, static_cast<PrimitiveType>(i % kPrimitiveTypeCount));
+    spec.placement = test::random_similarity(rng);
+    const Shape a = build_primitive(spec).value();
+    const std::string tag = std::string(primitive_type_name(spec.type)) + " case " + std::to_string(i);
+    const double va = volume(a);
+    const Shape empty = valid(boolean_operation(a, a, BooleanOp::Cut), tag + " A-A");
+    const Shape same = valid(boolean_operation(a, a, BooleanOp::Common), tag + " A&A");
+    const Shape whole = valid(boolean_operation(a, a, BooleanOp::Fuse), tag + " A|A");
+    if (!empty.is_null()) EXPECT_EQ(solids(empty), 0u) << tag;
+    if (!same.is_null()) EXPECT_NEAR(volume(same), va, 1e-9 * va) << tag;
+    if (!whole.is_null()) EXPECT_NEAR(volume(whole), va, 1e-9 * va) << tag;
+  }
+}
+
+TEST(BooleanProperty, SimilarityScalesVolumeByTheCube) {
+  std::mt19937_64 rng(13);
+  for (int i = 0; i < 60; ++i) {
+    const Shape a = make_box(2, 3, 1).value();
+    const Shape b = make_cylinder(0.7, 3).value().moved(Location::translation(Vec3(1, 1.5, -1)));
+    const Shape s = make_sphere(0.5).value().moved(Location::translation(Vec3(1, 1.5, 1.3)));
+    const Location m = test::random_similarity(rng);
+    const double s3 = std::pow(m.scale(), 3);
+    for (const auto& [x, y, op] : {std::tuple{a, b, BooleanOp::Cut}, std::tuple{a, s, BooleanOp::Fuse},
+                                   std::tuple{a, s, BooleanOp::Common}}) {
+      auto base = boolean_operation(x, y, op);
+      auto moved = boolean_operation(x.moved(m), y.moved(m), op);
+      ASSERT_TRUE(base.ok()) << base.error().message;
+      ASSERT_TRUE(moved.ok()) << "case " << i << ": " << moved.error().message;
+      EXPECT_NEAR(volume(moved.value()), volume(base.value()) * s3, 1e-9 * volume(moved.value()))
+          << "case " << i << " " << boolean_op_name(op);
+      EXPECT_TRUE(check_shape(moved.value()).valid()) << "case " << i;
+    }
+  }
+}
+
+// ---- degenerate configurations, by name -------------------------------------------------
+
+TEST(BooleanDegenerate, CoplanarOverlappingFacesFuseIntoOneFace) {
+  const Shape a = make_box(2, 2, 1).value();
+  const Shape b = make_box(2, 2, 1).value().moved(Location::translation(Vec3(1, 1, 0)));
+  const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
+  EXPECT_NEAR(volume(u), 7.0, 1e-12);
+  // Bottom and top are single L-shaped... octagonal faces: 2 + 8 sides.
+  EXPECT_EQ(map_child_shapes(u, ShapeKind::Face).size(), 10u);
+}
+
+TEST(BooleanDegenerate, FacesSharingAnEdgeOnlyStayTwoSolids) {
+  const Shape a = make_box(1, 1, 1).value();
+  const Shape b = make_box(1, 1, 1).value().moved(Location::translation(Vec3(1, 1, 0)));
+  const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
+  EXPECT_EQ(solids(u), 2u);
+  EXPECT_EQ(map_child_shapes(u, ShapeKind::Edge).size(), 23u);  // the shared edge once
+  EXPECT_EQ(solids(valid(boolean_operation(a, b, BooleanOp::Common), "common")), 0u);
+}
+
+TEST(BooleanDegenerate, FacesSharingAVertexOnlyShareThatVertex) {
+  const Shape a = make_box(1, 1, 1).value();
+  const Shape b = make_box(1, 1, 1).value().moved(Location::translation(Vec3(1, 1, 1)));
+  const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
+  EXPECT_EQ(map_child_shapes(u, ShapeKind::Vertex).size(), 15u);
+}
+
+TEST(BooleanDegenerate, IdenticalSolids) {
+  const Shape a = make_cylinder(1, 2).value();
+  EXPECT_NEAR(volume(valid(boolean_operation(a, a, BooleanOp::Fuse), "fuse")), 2 * std::numbers::pi, 1e-12);
+  EXPECT_EQ(solids(valid(boolean_operation(a, a, BooleanOp::Cut), "cut")), 0u);
+}
+
+TEST(BooleanDegenerate, NestedSolidCutLeavesACavity) {
+  const Shape box = make_box(4, 4, 4).value();
+  const Shape ball = make_sphere(1).value().moved(Location::translation(Vec3(2, 2, 2)));
+  const Shape r = valid(boolean_operation(box, ball, BooleanOp::Cut), "cut");
+  ASSERT_EQ(solids(r), 1u);
+  EXPECT_EQ(map_child_shapes(r, ShapeKind::Shell).size(), 2u);
+  EXPECT_NEAR(volume(r), 64 - 4.0 / 3 * std::numbers::pi, 1e-12);
+}
+
+TEST(BooleanDegenerate, TangentCylinderOnABoxTouchesAlongALine) {
+  const Shape box = make_box(2, 2, 1).value();
+  // Cylinder axis along X at height 1.5, radius 0.5: it touches the box top along y = 1.
+  const Shape cyl = make_cylinder(0.5, 2).value().moved(
+      Location::translation(Vec3(0, 1, 1.5)) * Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
+  const Shape u = valid(boolean_operation(box, cyl, BooleanOp::Fuse), "fuse");
+  EXPECT_EQ(solids(u), 2u);
+  EXPECT_NEAR(volume(u), 4 + 0.25 * std::numbers::pi * 2, 1e-12);
+}
+
+TEST(BooleanDegenerate, EdgeLyingInAFace) {
+  // B's bottom edge y = 1 lies in A's top face (z = 1) without crossing anything.
+  const Shape a = make_box(2, 2, 1).value();
+  const Shape b = make_box(1, 1, 1).value().moved(
+      Location::translation(Vec3(0.5, 1, 1)) * Location::rotation(Vec3::Zero(), Vec3::UnitX(), std::numbers::pi / 4));
+  const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
+  EXPECT_NEAR(volume(u), 4 + 1, 1e-12);
+  EXPECT_EQ(solids(u), 2u);  // they touch along the edge only
+}
+
+TEST(BooleanDegenerate, EmptyResults) {
+  const Shape a = make_box(1, 1, 1).value();
+  const Shape far = make_sphere(0.5).value().moved(Location::translation(Vec3(5, 5, 5)));
+  EXPECT_EQ(solids(valid(boolean_operation(a, far, BooleanOp::Common), "common")), 0u);
+  const Shape big = make_box(3, 3, 3).value().moved(Location::translation(Vec3(-1, -1, -1)));
+  EXPECT_EQ(solids(valid(boolean_operation(a, big, BooleanOp::Cut), "cut")), 0u);
+}
+
+TEST(BooleanDegenerate, CutIntoSeveralSolids) {
+  const Shape bar = make_box(3, 1, 1).value();
+  const Shape slab = make_box(1, 3, 3).value().moved(Location::translation(Vec3(1, -1, -1)));
+  const Shape r = valid(boolean_operation(bar, slab, BooleanOp::Cut), "cut");
+  EXPECT_EQ(solids(r), 2u);
+  EXPECT_NEAR(volume(r), 2.0, 1e-12);
+}
+
+TEST(BooleanErrors, NonSolidArgumentsAndUnsupportedPairsAreNamed) {
+  const Shape a = make_box(1, 1, 1).value();
+  auto face_only = boolean_operation(a, a.child(0).child(0), BooleanOp::Fuse);
+  ASSERT_FALSE(face_only.ok());
+  EXPECT_EQ(face_only.error().code, ErrorCode::InvalidArgument);
+  // Two cylinders of different radii crossing at right angles: a general quartic section.
+  const Shape c1 = make_cylinder(1, 4).value().moved(Location::translation(Vec3(0, 0, -2)));
+  const Shape c2 = make_cylinder(0.5, 4).value().moved(
+      Location::translation(Vec3(-2, 0, 0.3)) * Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
+  auto r = boolean_operation(c1, c2, BooleanOp::Fuse);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().code, ErrorCode::Unsupported);
+  EXPECT_NE(r.error().message.find("cylinder"), std::string::npos) << r.error().message;
+}
+
+}  // namespace
+}  // namespace csgtile::kernel
