@@ -1135,6 +1135,49 @@ Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
   return BooleanEngine(a, b, op, options).run();
 }
 
+Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options) {
+  const std::size_t n = shapes.size();
+  std::vector<BoundingBox> boxes(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    boxes[i] = bounding_box(shapes[i]);
+    boxes[i].enlarge(options.tolerance);
+  }
+  // Sweep along x: candidate pairs are boxes whose x-intervals overlap.
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return boxes[a].min.x() < boxes[b].min.x() || (boxes[a].min.x() == boxes[b].min.x() && a < b);
+  });
+  std::vector<std::size_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) { return parent[x] == x ? x : parent[x] = root(parent[x]); };
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t a = order[i];
+    for (std::size_t j = i + 1; j < n && boxes[order[j]].min.x() <= boxes[a].max.x(); ++j) {
+      const std::size_t b = order[j];
+      if (boxes[a].intersects(boxes[b])) {
+        const std::size_t ra = root(a), rb = root(b);
+        parent[std::max(ra, rb)] = std::min(ra, rb);
+      }
+    }
+  }
+  std::map<std::size_t, std::vector<std::size_t>> groups;  // keyed by smallest member: input order
+  for (std::size_t i = 0; i < n; ++i) groups[root(i)].push_back(i);
+  std::vector<Shape> out;
+  for (const auto& [r, members] : groups) {
+    std::vector<Shape> group;
+    for (std::size_t i : members) group.push_back(shapes[i]);
+    if (group.size() == 1) {
+      for (const Shape& s : Explorer(group[0], ShapeKind::Solid)) out.push_back(s);
+      continue;
+    }
+    auto fused = boolean_fold(group, BooleanOp::Fuse, options);
+    if (!fused.ok()) return fused;
+    for (const Shape& s : Explorer(fused.value(), ShapeKind::Solid)) out.push_back(s);
+  }
+  return ShapeFactory::compound(std::move(out));
+}
+
 Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,
                            const BooleanOptions& options) {
   if (shapes.empty()) return ShapeFactory::compound({});

@@ -34,6 +34,12 @@ struct BooleanOptions {
 Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
                                 const BooleanOptions& options = {});
 
+/// The union of many solids in one call: a sweep over their bounding boxes finds the groups
+/// of solids that can touch (connected components of the box-overlap graph); each group is
+/// fused pairwise in input order and the groups are gathered in one compound. Solids that
+/// touch nothing pass through unchanged. Deterministic. Errors as boolean_operation.
+Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options = {});
+
 /// fuse: union of all; common: intersection of all; cut: the first minus all the others.
 Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,
                            const BooleanOptions& options = {});

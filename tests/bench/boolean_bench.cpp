@@ -1,0 +1,94 @@
+// Boolean benchmark: n-ary fuse of a synthetic city block (boxes and columns on a grid,
+// about 30% overlapping a neighbour) for n = 10, 100, 1000 (and 5000 with --big), against
+// the pairwise fold of the same primitives in the same process (up to --fold-max), plus the
+// volumes (equal for both methods). Prints one JSON object.
+// Run: build/tests/bench/boolean_bench [--big] [--fold-max N]
+
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/primitives.h"
+
+using namespace csgtile::kernel;
+
+namespace {
+
+// Buildings of one or two boxes per lot and a column at some corners; neighbours overlap in
+// about 30% of the lots (a wing reaching into the next lot, a column against a wall).
+std::vector<Shape> city_block(int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Shape> out;
+  const int side = static_cast<int>(std::ceil(std::sqrt(n / 1.5)));
+  for (int lot = 0; static_cast<int>(out.size()) < n; ++lot) {
+    const double x0 = (lot % side) * 12.0, y0 = (lot / side) * 12.0;
+    const double w = 6 + 3 * u(rng), d = 6 + 3 * u(rng), h = 5 + 20 * u(rng);
+    out.push_back(make_box(w, d, h).value().moved(Location::translation(Vec3(x0, y0, 0))));
+    if (static_cast<int>(out.size()) < n && u(rng) < 0.3) {
+      // A wing reaching into the gap and beyond the lot: overlaps the main box.
+      const double ww = 3 + 4 * u(rng), wd = 2 + 2 * u(rng), wh = 3 + 6 * u(rng);
+      out.push_back(make_box(ww, wd, wh).value().moved(Location::translation(Vec3(x0 + w - 1, y0 + 1 + u(rng), 0))));
+    }
+    if (static_cast<int>(out.size()) < n && u(rng) < 0.2) {
+      const double r = 0.3 + 0.3 * u(rng);
+      out.push_back(make_cylinder(r, h + 2).value().moved(Location::translation(Vec3(x0 + w, y0 + d, 0))));
+    }
+  }
+  return out;
+}
+
+long peak_rss_kb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool big = false;
+  int fold_max = 1000;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--big")) big = true;
+    if (!std::strcmp(argv[i], "--fold-max") && i + 1 < argc) fold_max = std::atoi(argv[++i]);
+  }
+  std::vector<int> sizes{10, 100, 1000};
+  if (big) sizes.push_back(5000);
+  std::printf("{\"benchmark\": \"city_block_fuse\", \"runs\": [\n");
+  bool first = true;
+  for (int n : sizes) {
+    const std::vector<Shape> prims = city_block(n, 42);
+    auto t0 = std::chrono::steady_clock::now();
+    auto nary = boolean_fuse_all(prims);
+    const double nary_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!nary.ok()) {
+      std::fprintf(stderr, "n=%d: %s\n", n, nary.error().message.c_str());
+      return 1;
+    }
+    const auto counts = count_shapes(nary.value());
+    double fold_s = -1, fold_volume = -1;
+    if (n <= fold_max) {
+      t0 = std::chrono::steady_clock::now();
+      auto fold = boolean_fold(prims, BooleanOp::Fuse);
+      fold_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (fold.ok()) fold_volume = mass_properties(fold.value()).volume;
+    }
+    std::printf("%s  {\"n\": %d, \"nary_seconds\": %.4f, \"fold_seconds\": %.4f, \"fold_over_nary\": %.2f, "
+                "\"solids\": %zu, \"faces\": %zu, \"volume\": %.6f, \"fold_volume\": %.6f, \"peak_rss_mb\": %.1f}",
+                first ? "" : ",\n", n, nary_s, fold_s, fold_s > 0 ? fold_s / nary_s : -1.0,
+                counts[static_cast<int>(ShapeKind::Solid)], counts[static_cast<int>(ShapeKind::Face)],
+                mass_properties(nary.value()).volume, fold_volume, peak_rss_kb() / 1024.0);
+    std::fflush(stdout);
+    first = false;
+  }
+  std::printf("\n]}\n");
+  return 0;
+}
