@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "csgtile/geo/scene.h"
+#include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -42,6 +43,7 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   ordered_json record;
   record["input"] = input;
   record["scene"] = scene->name;
+  record["op"] = geo::boolean_op_name(scene->op);
   ordered_json objects = ordered_json::array();
   std::vector<kernel::Shape> solids;
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
@@ -67,8 +69,17 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
     objects.push_back(std::move(o));
     solids.push_back(std::move(solid).value());
   }
-  auto model = kernel::ShapeFactory::compound(std::move(solids));
-  if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
+  // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
+  kernel::BooleanOptions boolean_options;
+  boolean_options.tolerance = config.kernel.linear_tolerance;
+  auto model = scene->op == geo::BooleanOp::None
+                   ? kernel::ShapeFactory::compound(std::move(solids))
+                   : kernel::boolean_fold(solids,
+                                          scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
+                                          : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
+                                                                                : kernel::BooleanOp::Cut,
+                                          boolean_options);
+  if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
   // Content-addressed: the same model always lands under the same key, so a job that runs
   // twice (after a crash) rewrites identical bytes and publishes nothing new.
   const std::string bytes = kernel::write_native(model.value());

@@ -91,13 +91,17 @@ void initial_parameters(const Curve2d& curve, double t_start, double t_end,
       // Breakpoints strictly between the ends, in walking order.
       const double lo = std::min(t_start, t_end), hi = std::max(t_start, t_end);
       const std::size_t first = out.size();
-      for (double k = std::floor(lo) + 1.0; k < hi; k += 1.0) out.push_back(k);
-      if (t_end < t_start) std::reverse(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+      const auto from = static_cast<long long>(std::floor(lo)) + 1;
+      for (long long k = from; static_cast<double>(k) < hi; ++k)
+        out.push_back(static_cast<double>(k));
+      if (t_end < t_start)
+        std::reverse(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
       break;
     }
     case Curve2dKind::Circle:
     case Curve2dKind::Trig: {
-      const int n = std::max(1, static_cast<int>(std::ceil(std::abs(t_end - t_start) / kInitialStep)));
+      const int n =
+          std::max(1, static_cast<int>(std::ceil(std::abs(t_end - t_start) / kInitialStep)));
       for (int k = 1; k < n; ++k) out.push_back(t_start + (t_end - t_start) * k / n);
       break;
     }
@@ -137,8 +141,10 @@ int periodic_candidates(double x, double lo, double hi, double period, double ep
   const double k0 = std::ceil((lo - eps - x) / period);
   const double k1 = std::floor((hi + eps - x) / period);
   int n = 0;
-  for (double k = k0; k <= k1 && n < static_cast<int>(out.size()); k += 1.0) {
-    out[static_cast<std::size_t>(n++)] = x + k * period;
+  if (!(k0 <= k1)) return 0;
+  const auto first = static_cast<long long>(k0);
+  for (long long k = first; static_cast<double>(k) <= k1 && n < static_cast<int>(out.size()); ++k) {
+    out[static_cast<std::size_t>(n++)] = x + static_cast<double>(k) * period;
   }
   return n;
 }
@@ -147,9 +153,12 @@ int periodic_candidates(double x, double lo, double hi, double period, double ep
 
 const char* containment_name(Containment c) {
   switch (c) {
-    case Containment::Inside: return "inside";
-    case Containment::Outside: return "outside";
-    case Containment::OnBoundary: return "on_boundary";
+    case Containment::Inside:
+      return "inside";
+    case Containment::Outside:
+      return "outside";
+    case Containment::OnBoundary:
+      return "on_boundary";
   }
   return "?";
 }
@@ -225,8 +234,8 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
         use.offset = Vec2(-period_steps(gap.x(), period_u) * period_u,
                           -period_steps(gap.y(), period_v) * period_v);
       }
-      raw_start.push_back(start + use.offset);
-      raw_end.push_back(pcurve->point(use.t_end) + use.offset);
+      raw_start.emplace_back(start + use.offset);
+      raw_end.emplace_back(pcurve->point(use.t_end) + use.offset);
       q.uses_.push_back(std::move(use));
     }
     const std::size_t count = q.uses_.size() - first_use;
@@ -249,7 +258,8 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
       const EdgeUse& use = q.uses_[index];
       initial_parameters(*use.curve, use.t_start, use.t_end, params);
       const Vec2 junction_start = i == 0 ? raw_start.front() : raw_end[i - 1];
-      const Vec2 junction_end = i + 1 < count ? raw_end[i] : (open ? raw_end[i] : raw_start.front());
+      const Vec2 junction_end =
+          i + 1 < count ? raw_end[i] : (open ? raw_end[i] : raw_start.front());
       Vec2 a = junction_start;
       for (std::size_t k = 1; k < params.size(); ++k) {
         const Vec2 b = k + 1 == params.size() ? junction_end : use.point(params[k]);
@@ -257,7 +267,8 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
         a = b;
       }
     }
-    if (open) open_loops.push_back({q.loops_.size(), raw_end.back(), raw_start.front(), open_u != 0.0});
+    if (open)
+      open_loops.push_back({q.loops_.size(), raw_end.back(), raw_start.front(), open_u != 0.0});
     q.loops_.push_back(std::move(loop));
   }
   if (q.loops_.empty()) return Error{ErrorCode::InvalidShape, "face has no boundary loop"};
@@ -280,8 +291,9 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
     return Error{ErrorCode::InvalidShape, "face boundary has non-finite parameters"};
   }
   q.parameter_box_ = {u0, u1, v0, v1};
-  q.uv_epsilon_ = kUvRelativeEpsilon * (1.0 + std::max({u1 - u0, v1 - v0, std::abs(u0),
-                                                        std::abs(u1), std::abs(v0), std::abs(v1)}));
+  q.uv_epsilon_ =
+      kUvRelativeEpsilon *
+      (1.0 + std::max({u1 - u0, v1 - v0, std::abs(u0), std::abs(u1), std::abs(v0), std::abs(v1)}));
   // Loops open by a period close far outside the domain, all on the same side (low v for
   // loops around u, low u for loops around v): the even–odd rule then keeps the band between
   // two such loops.
@@ -335,7 +347,8 @@ Containment FaceQuery::locate_uv(const Vec2& uv) const {
 Containment FaceQuery::locate_once(const Vec2& q) const {
   const ParamBox& box = parameter_box_;
   const double eps = uv_epsilon_;
-  if (q.x() < box.u0 - eps || q.x() > box.u1 + eps || q.y() < box.v0 - eps || q.y() > box.v1 + eps) {
+  if (q.x() < box.u0 - eps || q.x() > box.u1 + eps || q.y() < box.v0 - eps ||
+      q.y() > box.v1 + eps) {
     return Containment::Outside;
   }
   bool inside = false;

@@ -72,10 +72,10 @@ class FaceQuery {
   // A pcurve as walked in its loop: c̃(t) = c(t) + offset + blend of the gaps at its ends.
   struct EdgeUse {
     Curve2dPtr curve;
-    double t_start, t_end;  // walking direction: t_start → t_end (either order)
-    Vec2 offset;            // period shift
-    Vec2 gap_start, gap_end;
-    double second;          // bound on |c''| (0 for straight pieces)
+    double t_start = 0, t_end = 0;  // walking direction: t_start → t_end (either order)
+    Vec2 offset = Vec2::Zero();     // period shift
+    Vec2 gap_start = Vec2::Zero(), gap_end = Vec2::Zero();
+    double second = 0;  // bound on |c''| (0 for straight pieces)
     Vec2 point(double t) const;
   };
   // A chord of an edge use over [t0, t1] (use == kStraight: an exact straight segment).
@@ -265,11 +265,11 @@ class SolidClassifier {
   double tolerance_ = 0.0;
   ClassifierOptions options_;
   std::vector<Vec3> directions_;
-  BoundingBox bounds_;  // everything, enlarged by the largest band
+  BoundingBox bounds_;                     // everything, enlarged by the largest band
   std::vector<BoundingBox> group_bounds_;  // per group, enlarged by the largest band
-  BoxTree group_tree_;  // over group_bounds_
-  BoxTree face_tree_;   // over the faces' world boxes
-  BoxTree edge_tree_;   // over the edges' world boxes (enlarged by their bands)
+  BoxTree group_tree_;                     // over group_bounds_
+  BoxTree face_tree_;                      // over the faces' world boxes
+  BoxTree edge_tree_;                      // over the edges' world boxes (enlarged by their bands)
 };
 
 }  // namespace csgtile::kernel::detail

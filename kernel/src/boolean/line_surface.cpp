@@ -191,7 +191,9 @@ Vec3 in_frame(const Frame& f, const Vec3& p) {
   const Vec3 q = p - f.origin;
   return {q.dot(f.x), q.dot(f.y), q.dot(f.z)};
 }
-Vec3 direction_in_frame(const Frame& f, const Vec3& d) { return {d.dot(f.x), d.dot(f.y), d.dot(f.z)}; }
+Vec3 direction_in_frame(const Frame& f, const Vec3& d) {
+  return {d.dot(f.x), d.dot(f.y), d.dot(f.z)};
+}
 
 // The line re-centred at the middle of the window: roots are solved for τ = t − shift, whose
 // coefficients are small (the window is where the face is), then shifted back.
@@ -199,7 +201,7 @@ struct CentredLine {
   Vec3 origin;     // original origin + shift·direction
   Vec3 direction;  // unit
   double shift;
-  double lo, hi;   // the window in τ
+  double lo, hi;  // the window in τ
 };
 
 CentredLine centre(const Vec3& o, const Vec3& d, double t0, double t1) {
@@ -288,8 +290,8 @@ void intersect_cone(const ConeSurface& s, const Vec3& o, const Vec3& d, double t
     const double rho = std::hypot(x.x(), x.y());
     bool tangent = multiple || rho <= tolerance;
     if (!tangent) {
-      const double cosine = std::abs(std::cos(phi) * (x.x() * e.x() + x.y() * e.y()) / rho -
-                                     std::sin(phi) * e.z());
+      const double cosine =
+          std::abs(std::cos(phi) * (x.x() * e.x() + x.y() * e.y()) / rho - std::sin(phi) * e.z());
       tangent = cosine < kGrazingCosine;
     }
     const double u = rho > 0.0 ? wrap(std::atan2(x.y(), x.x())) : 0.0;
@@ -358,7 +360,8 @@ void intersect_torus(const TorusSurface& s, const Vec3& o, const Vec3& d, double
     const double radial = rho - big;
     const double v = (radial == 0.0 && x.z() == 0.0) ? 0.0 : wrap(std::atan2(x.z(), radial));
     // Normal: from the tube's centre circle to x.
-    const Vec3 tube_centre = rho > 0.0 ? Vec3(big * x.x() / rho, big * x.y() / rho, 0.0) : Vec3::Zero();
+    const Vec3 tube_centre =
+        rho > 0.0 ? Vec3(big * x.x() / rho, big * x.y() / rho, 0.0) : Vec3::Zero();
     const Vec3 n = x - tube_centre;
     const double len = n.norm();
     const double cosine = len > 0.0 ? std::abs(n.dot(e)) / len : 0.0;
@@ -415,8 +418,9 @@ std::vector<AffinePiece> affine_pieces(const Curve& curve, double t0, double t1)
     const auto last = static_cast<double>(points.size() - 1);
     const double from = std::max(0.0, std::floor(t0));
     const double to = std::min(last, std::ceil(t1));
-    for (double i = from; i < to; i += 1.0) {
-      const auto k = static_cast<std::size_t>(i);
+    if (!(from < to)) return pieces;
+    for (auto k = static_cast<std::size_t>(from); static_cast<double>(k) < to; ++k) {
+      const auto i = static_cast<double>(k);
       const Vec3 e = points[k + 1] - points[k];
       pieces.push_back({points[k] - i * e, e, i, i + 1.0});
     }
@@ -611,7 +615,8 @@ void intersect_revolution(const RevolutionSurface& s, const Vec3& o, const Vec3&
     const double qc = a0.squaredNorm() - dz2 * m_perp.squaredNorm();
     const double size = a0.squaredNorm() + dz2 * m_perp.squaredNorm();
     if (std::abs(qa) <= 1e-14 * (a1.squaredNorm() + dz2 * e_perp.squaredNorm() + 1e-300) &&
-        std::abs(hb) <= 1e-14 * (std::sqrt(size) * (a1.norm() + std::abs(dz) * e_perp.norm()) + 1e-300)) {
+        std::abs(hb) <=
+            1e-14 * (std::sqrt(size) * (a1.norm() + std::abs(dz) * e_perp.norm()) + 1e-300)) {
       // The line lies on the cone (or cylinder) this segment sweeps, or never meets it.
       if (std::abs(qc) <= 2.0 * tolerance * std::sqrt(size)) out.degenerate = true;
       continue;
@@ -668,8 +673,8 @@ void intersect_line_surface(const Surface& surface, const Vec3& origin, const Ve
                          tolerance, out);
       break;
     case SurfaceKind::Cone:
-      intersect_cone(static_cast<const ConeSurface&>(surface), origin, direction, t0, t1,
-                     tolerance, out);
+      intersect_cone(static_cast<const ConeSurface&>(surface), origin, direction, t0, t1, tolerance,
+                     out);
       break;
     case SurfaceKind::Sphere:
       intersect_sphere(static_cast<const SphereSurface&>(surface), origin, direction, t0, t1,
@@ -679,8 +684,8 @@ void intersect_line_surface(const Surface& surface, const Vec3& origin, const Ve
       intersect_torus(static_cast<const TorusSurface&>(surface), origin, direction, t0, t1, out);
       break;
     case SurfaceKind::Extrusion:
-      intersect_extrusion(static_cast<const ExtrusionSurface&>(surface), origin, direction, t0,
-                          t1, range, tolerance, out);
+      intersect_extrusion(static_cast<const ExtrusionSurface&>(surface), origin, direction, t0, t1,
+                          range, tolerance, out);
       break;
     case SurfaceKind::Revolution:
       intersect_revolution(static_cast<const RevolutionSurface&>(surface), origin, direction, t0,

@@ -20,6 +20,7 @@
 #include "csgtile/kernel/native_format.h"
 #include "io/byte_stream.h"
 #include "io/native_layout.h"
+#include "io/unit_direction.h"
 
 namespace csgtile::kernel {
 
@@ -113,12 +114,18 @@ class Decoder {
   }
   /// A direction that normalisation will not turn into NaNs or leave at zero.
   static bool usable_direction(const Vec3& d) { return d.squaredNorm() > 0.0 && d.allFinite(); }
-  /// Whether a normalised direction is unit. Stored directions are tiny (see the writer);
-  /// should this platform flush subnormals to zero they would come out unnormalised.
-  static bool unit(ByteReader& in, const Vec3& d) {
-    if (std::abs(d.squaredNorm() - 1.0) <= 1e-12) return true;
-    in.fail("a stored direction does not normalise (subnormals flushed to zero?)");
-    return false;
+  /// Whether the direction a constructor made of `stored` is the one the writer would store
+  /// `stored` for (unit_direction.h): then writing the shape again reproduces the file.
+  /// Anything else (hand-made vectors, a platform flushing subnormals) is refused.
+  static bool canonical(ByteReader& in, const Vec3& stored, const Vec3& direction) {
+    const Vec3 again = detail::stored_unit_direction(direction);
+    for (int i = 0; i < 3; ++i) {
+      if (detail::double_bits(again[i]) != detail::double_bits(stored[i])) {
+        in.fail("a stored direction is not in canonical form");
+        return false;
+      }
+    }
+    return true;
   }
 
   CurvePtr curve(ByteReader& in);
@@ -220,7 +227,7 @@ CurvePtr Decoder::curve(ByteReader& in) {
         return nullptr;
       }
       auto line = std::make_shared<LineCurve>(origin, direction);
-      if (!unit(in, line->direction())) return nullptr;
+      if (!canonical(in, direction, line->direction())) return nullptr;
       return line;
     }
     case static_cast<std::uint8_t>(CurveKind::Circle): {
@@ -334,7 +341,7 @@ SurfacePtr Decoder::surface(ByteReader& in) {
         return nullptr;
       }
       auto extrusion = std::make_shared<ExtrusionSurface>(curves_[basis], direction);
-      if (!unit(in, extrusion->direction())) return nullptr;
+      if (!canonical(in, direction, extrusion->direction())) return nullptr;
       return extrusion;
     }
     case static_cast<std::uint8_t>(SurfaceKind::Revolution): {
@@ -347,7 +354,7 @@ SurfacePtr Decoder::surface(ByteReader& in) {
         return nullptr;
       }
       auto revolution = std::make_shared<RevolutionSurface>(curves_[meridian], origin, direction);
-      if (!unit(in, revolution->axis_direction())) return nullptr;
+      if (!canonical(in, direction, revolution->axis_direction())) return nullptr;
       return revolution;
     }
     default:

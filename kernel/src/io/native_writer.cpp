@@ -5,10 +5,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 #include <compare>
 #include <cstdint>
-#include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -17,6 +15,7 @@
 #include "csgtile/kernel/native_format.h"
 #include "io/byte_stream.h"
 #include "io/native_layout.h"
+#include "io/unit_direction.h"
 
 namespace csgtile::kernel {
 
@@ -25,89 +24,6 @@ namespace {
 using detail::ByteWriter;
 using detail::double_bits;
 using detail::SectionTag;
-
-bool same_bits(const Vec3& a, const Vec3& b) {
-  return double_bits(a.x()) == double_bits(b.x()) && double_bits(a.y()) == double_bits(b.y()) &&
-         double_bits(a.z()) == double_bits(b.z());
-}
-
-// ---- unit directions --------------------------------------------------------------------
-
-// LineCurve, ExtrusionSurface and RevolutionSurface normalise the direction they are given
-// (c / sqrt(c·c)), and normalising a unit vector again moves about a third of them by an
-// ulp; builds also differ in how they sum c·c. To read back the very bits a shape holds we
-// store a vector c that normalises to them exactly, whatever the summation order:
-// c = d·2^(m−537). Each c_i² is then a multiple of 2^−1074 (the subnormal spacing), so the
-// sum of the rounded squares is exact; when it comes to 4^m units, sqrt gives exactly
-// 2^(m−537) and c / sqrt(c·c) = d exactly. Some m in 0..25 works for every direction we
-// have tried (10^6 random ones: m = 0 for 91%); the probe is the real constructor. Axis
-// directions normalise to themselves exactly and are kept as they are (they share the
-// number table's 0 and 1).
-
-bool normalises_to(const Vec3& candidate, const Vec3& d) {
-  return same_bits(LineCurve(Vec3::Zero(), candidate).direction(), d);
-}
-
-bool is_axis(const Vec3& d) {
-  int ones = 0;
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(d[i]) == 1.0) {
-      ++ones;
-    } else if (d[i] != 0.0) {
-      return false;
-    }
-  }
-  return ones == 1;
-}
-
-/// Candidates c near d·r with c / r rounding to d per component; true with `out` set when a
-/// combination normalises to d.
-bool preimage_at_scale(const Vec3& d, double r, Vec3& out) {
-  constexpr int kSpread = 3;  // ulps tried on each side of d[i]·r
-  constexpr double kInfinity = std::numeric_limits<double>::infinity();
-  std::array<std::array<double, 2 * kSpread + 1>, 3> candidates{};
-  std::array<int, 3> counts{};
-  for (int i = 0; i < 3; ++i) {
-    double c = d[i] * r;
-    for (int k = 0; k < kSpread; ++k) c = std::nextafter(c, -kInfinity);
-    for (int k = 0; k <= 2 * kSpread; ++k) {
-      if (double_bits(c / r) == double_bits(d[i])) candidates[i][counts[i]++] = c;
-      c = std::nextafter(c, kInfinity);
-    }
-    if (counts[i] == 0) return false;
-  }
-  for (int a = 0; a < counts[0]; ++a) {
-    for (int b = 0; b < counts[1]; ++b) {
-      for (int c = 0; c < counts[2]; ++c) {
-        const Vec3 candidate(candidates[0][a], candidates[1][b], candidates[2][c]);
-        if (normalises_to(candidate, d)) {
-          out = candidate;
-          return true;
-        }
-      }
-    }
-  }
-  return false;
-}
-
-/// A vector whose normalisation is d bit for bit (see above). Fallbacks for a platform that
-/// flushes subnormals to zero: d itself when it is a fixed point, else a search near d·r over
-/// scales r in [1, 2); should all fail, d is stored and only that direction moves by an ulp.
-Vec3 unit_preimage(const Vec3& d) {
-  if (is_axis(d) || !d.allFinite() || d.isZero(0.0)) return d;
-  for (int m = 0; m <= 25; ++m) {
-    const Vec3 candidate = d * std::ldexp(1.0, m - 537);
-    if (normalises_to(candidate, d)) return candidate;
-  }
-  if (normalises_to(d, d)) return d;
-  Vec3 found;
-  constexpr int kGridSteps = 4096;
-  for (int k = 0; k < kGridSteps; ++k) {
-    const double r = 1.0 + static_cast<double>(k) / kGridSteps;
-    if (preimage_at_scale(d, r, found)) return found;
-  }
-  return d;
-}
 
 // ---- locations --------------------------------------------------------------------------
 
@@ -161,7 +77,8 @@ struct ModelTables {
     if (!curve_index.try_emplace(curve, curves.size()).second) return;
     curves.push_back(curve);
     if (curve->kind() == CurveKind::Line) {
-      stored_direction[curve] = unit_preimage(static_cast<const LineCurve*>(curve)->direction());
+      stored_direction[curve] =
+          detail::stored_unit_direction(static_cast<const LineCurve*>(curve)->direction());
     }
   }
 
@@ -170,11 +87,11 @@ struct ModelTables {
     if (surface->kind() == SurfaceKind::Extrusion) {
       const auto* extrusion = static_cast<const ExtrusionSurface*>(surface);
       add_curve(extrusion->basis().get());
-      stored_direction[surface] = unit_preimage(extrusion->direction());
+      stored_direction[surface] = detail::stored_unit_direction(extrusion->direction());
     } else if (surface->kind() == SurfaceKind::Revolution) {
       const auto* revolution = static_cast<const RevolutionSurface*>(surface);
       add_curve(revolution->meridian().get());
-      stored_direction[surface] = unit_preimage(revolution->axis_direction());
+      stored_direction[surface] = detail::stored_unit_direction(revolution->axis_direction());
     }
     surface_index.emplace(surface, surfaces.size());
     surfaces.push_back(surface);

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -644,6 +645,65 @@ TEST(CrsWkt, TowgsConventionAndUnknownDatums) {
   ASSERT_TRUE(odd.ok());
   EXPECT_FALSE(odd.value().datum.to_wgs84.has_value());
   EXPECT_TRUE(mentions(odd.value().warnings, "TOWGS84"));
+}
+
+// Seeded mutation property: damaged WKT and random key sets return a CRS or a named error,
+// never crash (the sanitizer job runs this too). A failing seed becomes a named regression.
+TEST(CrsRobustness, MutatedWktAndRandomKeysNeverCrash) {
+  std::mt19937_64 rng(0xC55);
+  const std::string seeds[] = {kRdNapWkt2, kNyBoundWkt2,
+                               crs_to_wkt1(crs_from_epsg(2992, 6360).value())};
+  const char alphabet[] = "[](),\"AZaz09.-+eE_ ";
+  int ok = 0;
+  for (int i = 0; i < 6000; ++i) {
+    std::string text = seeds[i % 3];
+    const int edits = 1 + static_cast<int>(rng() % 8);
+    for (int e = 0; e < edits && !text.empty(); ++e) {
+      const std::size_t at = rng() % text.size();
+      switch (rng() % 4) {
+        case 0:
+          text[at] = alphabet[rng() % (sizeof alphabet - 1)];
+          break;
+        case 1:
+          text.erase(at, 1 + rng() % 20);
+          break;
+        case 2:
+          text.insert(at, text.substr(rng() % text.size(), rng() % 40));
+          break;
+        default:
+          text.resize(at);
+          break;
+      }
+    }
+    auto crs = crs_from_wkt(text);
+    if (crs.ok()) {
+      ++ok;
+      EXPECT_TRUE(validate_crs(crs.value()).ok());
+    } else {
+      EXPECT_FALSE(crs.error().message.empty());
+    }
+  }
+  EXPECT_GT(ok, 0);
+  const std::uint16_t ids[] = {0,    1024, 1025, 2048, 2050, 2054, 2055, 2056, 2057,
+                               2058, 2059, 2061, 2062, 3072, 3074, 3075, 3076, 3077,
+                               3078, 3079, 3080, 3081, 3082, 3083, 3084, 3085, 3086,
+                               3087, 3088, 3092, 3095, 4096, 4099, 5000};
+  const double values[] = {
+      0,    1,    2,    3,    8,  9,     15,  16,   32767,  4326,    26910,         9001, 9002,
+      9003, 9102, 6326, 7030, -1, 1e308, -90, 45.5, 0.9996, 6378137, 298.257223563, 65535};
+  for (int i = 0; i < 6000; ++i) {
+    std::vector<GeoKeyEntry> keys;
+    const int n = static_cast<int>(rng() % 12);
+    for (int k = 0; k < n; ++k) {
+      GeoKeyEntry e{ids[rng() % std::size(ids)], {}, {}};
+      const int count = static_cast<int>(rng() % 4);
+      for (int c = 0; c < count; ++c) e.numbers.push_back(values[rng() % std::size(values)]);
+      if (rng() % 5 == 0) e.text = "Datum = D_North_American_1983|";
+      keys.push_back(e);
+    }
+    auto crs = crs_from_geokeys(keys);
+    if (crs.ok()) EXPECT_TRUE(validate_crs(crs.value()).ok());
+  }
 }
 
 // ---- reconciliation, config, validation --------------------------------------------------

@@ -7,8 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <numbers>
 #include <random>
@@ -91,7 +91,8 @@ DistanceEstimate revolution_estimate(std::vector<Vec2> profile, double angle) {
       if (theta < 0) theta += 2 * kPi;
       in = in && theta <= angle;
       // Distances to the planes of the two end caps bound the distance to the caps.
-      d2 = std::min({d2, std::abs(p.y()), std::abs(-p.x() * std::sin(angle) + p.y() * std::cos(angle))});
+      d2 = std::min(
+          {d2, std::abs(p.y()), std::abs(-p.x() * std::sin(angle) + p.y() * std::cos(angle))});
     }
     return in ? -d2 : d2;
   };
@@ -114,12 +115,24 @@ std::vector<Vec2> star(std::mt19937_64& rng, int n, double r_min, double r_max) 
 }
 
 enum class Variant {
-  Box, Cylinder, ConeApex, Frustum, Sphere, Torus, ExtrusionWithHole, RevolutionFull,
+  Box,
+  Cylinder,
+  ConeApex,
+  Frustum,
+  Sphere,
+  Torus,
+  ExtrusionWithHole,
+  RevolutionFull,
   RevolutionPartial
 };
-constexpr Variant kVariants[] = {Variant::Box,      Variant::Cylinder,          Variant::ConeApex,
-                                 Variant::Frustum,  Variant::Sphere,            Variant::Torus,
-                                 Variant::ExtrusionWithHole, Variant::RevolutionFull,
+constexpr Variant kVariants[] = {Variant::Box,
+                                 Variant::Cylinder,
+                                 Variant::ConeApex,
+                                 Variant::Frustum,
+                                 Variant::Sphere,
+                                 Variant::Torus,
+                                 Variant::ExtrusionWithHole,
+                                 Variant::RevolutionFull,
                                  Variant::RevolutionPartial};
 
 Model make_model(Variant variant, std::mt19937_64& rng) {
@@ -165,7 +178,8 @@ Model make_model(Variant variant, std::mt19937_64& rng) {
       std::vector<Vec2> outer = star(rng, n, 4.0, 10.0);
       const double c = std::cos(0.3), s = std::sin(0.3), half = 1.5;
       std::vector<Vec2> hole;
-      for (const Vec2& corner : {Vec2(-half, -half), Vec2(half, -half), Vec2(half, half), Vec2(-half, half)}) {
+      for (const Vec2& corner :
+           {Vec2(-half, -half), Vec2(half, -half), Vec2(half, half), Vec2(-half, half)}) {
         hole.emplace_back(c * corner.x() - s * corner.y(), s * corner.x() + c * corner.y());
       }
       const double h = size(rng);
@@ -177,12 +191,13 @@ Model make_model(Variant variant, std::mt19937_64& rng) {
       // An L-shaped profile, touching the axis half of the time.
       const double r0 = std::bernoulli_distribution(0.5)(rng) ? 0.0 : size(rng) * 0.3;
       const double w = size(rng), h = size(rng);
-      const std::vector<Vec2> profile{{r0, 0},          {r0 + w, 0},      {r0 + w, 0.4 * h},
-                                      {r0 + 0.5 * w, 0.6 * h}, {r0 + 0.5 * w, h}, {r0, h}};
+      const std::vector<Vec2> profile{{r0, 0},           {r0 + w, 0},
+                                      {r0 + w, 0.4 * h}, {r0 + 0.5 * w, 0.6 * h},
+                                      {r0 + 0.5 * w, h}, {r0, h}};
       const bool full = variant == Variant::RevolutionFull;
       const double angle = full ? 2 * kPi : std::uniform_real_distribution<double>(0.4, 6.0)(rng);
-      return {full ? "revolution_full" : "revolution_partial", make_revolution(profile, angle).value(),
-              revolution_estimate(profile, angle)};
+      return {full ? "revolution_full" : "revolution_partial",
+              make_revolution(profile, angle).value(), revolution_estimate(profile, angle)};
     }
   }
   return {};
@@ -213,8 +228,8 @@ Containment expected(double estimate) {
 std::string describe(const Placed& c, const Vec3& p) {
   std::ostringstream s;
   s.precision(17);
-  s << c.model.name << " at (" << p.x() << ", " << p.y() << ", " << p.z()
-    << "), estimate " << c.estimate(p);
+  s << c.model.name << " at (" << p.x() << ", " << p.y() << ", " << p.z() << "), estimate "
+    << c.estimate(p);
   return s.str();
 }
 
@@ -227,7 +242,8 @@ std::vector<Vec3> sample_points(const Placed& c, int count, std::mt19937_64& rng
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Vec3> points;
   for (int i = 0; i < count; ++i) {
-    points.push_back(c.placement.apply_point(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size())));
+    points.push_back(
+        c.placement.apply_point(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size())));
   }
   return points;
 }
@@ -327,7 +343,8 @@ TEST(Classifier, PointsNearFacesClassifyRight) {
           const Vec3 p = on + offset * n;
           const double e = c.estimate(p);
           if (std::abs(e) < kSkipBand) continue;
-          ASSERT_EQ(c.classifier.classify(p), expected(e)) << describe(c, p) << " offset " << offset;
+          ASSERT_EQ(c.classifier.classify(p), expected(e))
+              << describe(c, p) << " offset " << offset;
         }
       }
     }
@@ -415,7 +432,8 @@ TEST(Classifier, CompoundOfTwoDisjointSolidsIsTheirUnion) {
 TEST(Classifier, OverlappingSolidsInACompoundClassifyAsTheirUnion) {
   const Shape a = make_box(2, 2, 2).value();
   const Shape b = make_box(2, 2, 2).value().moved(Location::translation(Vec3(1, 0.5, 0.5)));
-  const auto c = SolidClassifier::create(ShapeFactory::compound({a, b}).value(), kTolerance).value();
+  const auto c =
+      SolidClassifier::create(ShapeFactory::compound({a, b}).value(), kTolerance).value();
   EXPECT_EQ(c.classify(Vec3(1.5, 1, 1)), Containment::Inside);  // in both: parity would say out
   EXPECT_EQ(c.classify(Vec3(2, 1, 1)), Containment::Inside);    // on a's face, inside b
   EXPECT_EQ(c.classify(Vec3(2.5, 1, 1)), Containment::Inside);
@@ -441,7 +459,8 @@ TEST(Classifier, ManyOverlappingSolidsInACompound) {
       if ((i + j) % 3 != 0) {
         const Vec3 size(5 + 8 * unit(rng), 5 + 8 * unit(rng), 5 + 20 * unit(rng));
         parts.push_back({true, at, size});
-        solids.push_back(make_box(size.x(), size.y(), size.z()).value().moved(Location::translation(at)));
+        solids.push_back(
+            make_box(size.x(), size.y(), size.z()).value().moved(Location::translation(at)));
       } else {
         const double r = 2 + 4 * unit(rng), h = 5 + 20 * unit(rng);
         parts.push_back({false, at, Vec3(r, r, h)});
@@ -449,7 +468,8 @@ TEST(Classifier, ManyOverlappingSolidsInACompound) {
       }
     }
   }
-  const auto c = SolidClassifier::create(ShapeFactory::compound(solids).value(), kTolerance).value();
+  const auto c =
+      SolidClassifier::create(ShapeFactory::compound(solids).value(), kTolerance).value();
   auto estimate = [&](const Vec3& p) {
     double best = std::numeric_limits<double>::infinity();  // min over parts: the union
     bool inside = false;
@@ -468,11 +488,13 @@ TEST(Classifier, ManyOverlappingSolidsInACompound) {
     return inside ? -best : best;
   };
   std::vector<Vec3> points;
-  for (int i = 0; i < 3000; ++i) points.emplace_back(310 * unit(rng), 310 * unit(rng), 30 * unit(rng));
+  for (int i = 0; i < 3000; ++i)
+    points.emplace_back(310 * unit(rng), 310 * unit(rng), 30 * unit(rng));
   std::vector<Containment> got;
   const auto start = std::chrono::steady_clock::now();
   for (const Vec3& p : points) got.push_back(c.classify(p));
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("900-solid compound (%zu faces): %.0f classifications per second\n", c.face_count(),
               static_cast<double>(points.size()) / seconds);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -489,9 +511,10 @@ TEST(Classifier, CavityIsOutside) {
   const Shape box_shell = Explorer(box, ShapeKind::Shell).begin().operator*();
   const Shape sphere_shell = Explorer(sphere, ShapeKind::Shell).begin().operator*();
   const Shape solid = ShapeFactory::solid({box_shell, sphere_shell.reversed()}).value();
-  for (const Location& placement : {Location(), Location::translation(Vec3(-40, 3, 7)) *
-                                                    Location::rotation(Vec3::Zero(), Vec3(1, 2, 3), 0.7) *
-                                                    Location::scaling(1.7)}) {
+  for (const Location& placement :
+       {Location(), Location::translation(Vec3(-40, 3, 7)) *
+                        Location::rotation(Vec3::Zero(), Vec3(1, 2, 3), 0.7) *
+                        Location::scaling(1.7)}) {
     const auto c = SolidClassifier::create(solid.moved(placement), kTolerance).value();
     auto at = [&](const Vec3& p) { return placement.apply_point(p); };
     EXPECT_EQ(c.classify(at(Vec3(5, 5, 5))), Containment::Outside);
@@ -512,7 +535,8 @@ TEST(Classifier, CavityIsOutside) {
       const double to_box = std::max({-p.x(), p.x() - 10, -p.y(), p.y() - 10, -p.z(), p.z() - 10});
       const double to_sphere = (p - Vec3(5, 5, 5)).norm() - 3.0;
       if (std::abs(to_box) < kSkipBand || std::abs(to_sphere) < kSkipBand) continue;
-      ASSERT_EQ(c.classify(at(p)), to_box < 0 && to_sphere > 0 ? Containment::Inside : Containment::Outside)
+      ASSERT_EQ(c.classify(at(p)),
+                to_box < 0 && to_sphere > 0 ? Containment::Inside : Containment::Outside)
           << p.transpose();
     }
   }
@@ -544,7 +568,8 @@ SurfacePtr swept_equivalent(const Surface& s, int flavour) {
       const auto& c = static_cast<const CylinderSurface&>(s);
       const Frame& f = c.frame();
       const double r = c.radius();
-      if (flavour % 3 == 0) return std::make_shared<ExtrusionSurface>(std::make_shared<CircleCurve>(f, r), f.z);
+      if (flavour % 3 == 0)
+        return std::make_shared<ExtrusionSurface>(std::make_shared<CircleCurve>(f, r), f.z);
       if (flavour % 3 == 1) {
         return std::make_shared<ExtrusionSurface>(
             std::make_shared<TrigCurve>(f.origin, r * f.x, r * f.y), f.z);
@@ -553,7 +578,8 @@ SurfacePtr swept_equivalent(const Surface& s, int flavour) {
       // height, like the cylinder's v (heights stay below 10 here).
       std::vector<Vec3> points;
       for (int k = 0; k <= 12; ++k) points.push_back(f.origin + r * f.x + k * f.z);
-      return std::make_shared<RevolutionSurface>(std::make_shared<PolylineCurve>(points, 0.0), f.origin, f.z);
+      return std::make_shared<RevolutionSurface>(std::make_shared<PolylineCurve>(points, 0.0),
+                                                 f.origin, f.z);
     }
     case SurfaceKind::Cone: {
       const auto& c = static_cast<const ConeSurface&>(s);
@@ -571,10 +597,11 @@ SurfacePtr swept_equivalent(const Surface& s, int flavour) {
       meridian.x = c.frame().x;
       meridian.y = c.frame().z;
       meridian.z = meridian.x.cross(meridian.y);
-      CurvePtr curve = flavour % 2 == 0
-                           ? CurvePtr(std::make_shared<CircleCurve>(meridian, c.radius()))
-                           : CurvePtr(std::make_shared<TrigCurve>(meridian.origin, c.radius() * meridian.x,
-                                                                  c.radius() * meridian.y));
+      CurvePtr curve =
+          flavour % 2 == 0
+              ? CurvePtr(std::make_shared<CircleCurve>(meridian, c.radius()))
+              : CurvePtr(std::make_shared<TrigCurve>(meridian.origin, c.radius() * meridian.x,
+                                                     c.radius() * meridian.y));
       return std::make_shared<RevolutionSurface>(curve, c.frame().origin, c.frame().z);
     }
     case SurfaceKind::Torus: {
@@ -584,8 +611,8 @@ SurfacePtr swept_equivalent(const Surface& s, int flavour) {
       meridian.x = c.frame().x;
       meridian.y = c.frame().z;
       meridian.z = meridian.x.cross(meridian.y);
-      return std::make_shared<RevolutionSurface>(std::make_shared<CircleCurve>(meridian, c.minor_radius()),
-                                                 c.frame().origin, c.frame().z);
+      return std::make_shared<RevolutionSurface>(
+          std::make_shared<CircleCurve>(meridian, c.minor_radius()), c.frame().origin, c.frame().z);
     }
     default:
       return nullptr;
@@ -635,11 +662,13 @@ TEST(Classifier, RevolutionHitsOfARayNearlyPerpendicularToTheAxisArePolished) {
   const double r = 8.937;
   std::vector<Vec3> meridian;
   for (int k = 0; k <= 12; ++k) meridian.emplace_back(r, 0, k);
-  const RevolutionSurface surface(std::make_shared<PolylineCurve>(meridian, 0.0), Vec3::Zero(), Vec3::UnitZ());
+  const RevolutionSurface surface(std::make_shared<PolylineCurve>(meridian, 0.0), Vec3::Zero(),
+                                  Vec3::UnitZ());
   const Vec3 origin(-20, 3, 0.8456);
   const Vec3 direction = Vec3(1, 0, 3.9e-6).normalized();
   LineSurfaceIntersection out;
-  intersect_line_surface(surface, origin, direction, 0.0, 100.0, {0, 2 * kPi, 0, 12}, kTolerance, out);
+  intersect_line_surface(surface, origin, direction, 0.0, 100.0, {0, 2 * kPi, 0, 12}, kTolerance,
+                         out);
   ASSERT_FALSE(out.degenerate);
   ASSERT_EQ(out.hits.size(), 2u);
   for (const LineSurfaceHit& hit : out.hits) {
@@ -659,17 +688,19 @@ TEST(Classifier, FaceWithoutSeamIsTheBandBetweenItsCircles) {
   top_frame.origin = Vec3(0, 0, h);
   const Shape v0 = ShapeFactory::vertex(Vec3(r, 0, 0), kTolerance).value();
   const Shape v1 = ShapeFactory::vertex(Vec3(r, 0, h), kTolerance).value();
-  const Shape bottom = ShapeFactory::edge(std::make_shared<CircleCurve>(bottom_frame, r), 0, 2 * kPi,
-                                          v0, v0, kTolerance).value();
-  const Shape top = ShapeFactory::edge(std::make_shared<CircleCurve>(top_frame, r), 0, 2 * kPi, v1, v1,
-                                       kTolerance).value();
-  const Shape face =
-      ShapeFactory::face(std::make_shared<CylinderSurface>(Frame(), r),
-                         {ShapeFactory::wire({bottom}).value(), ShapeFactory::wire({top.reversed()}).value()},
-                         {{std::make_shared<Line2d>(Vec2(0, 0), Vec2(1, 0))},
-                          {std::make_shared<Line2d>(Vec2(0, h), Vec2(1, 0))}},
-                         kTolerance)
-          .value();
+  const Shape bottom = ShapeFactory::edge(std::make_shared<CircleCurve>(bottom_frame, r), 0,
+                                          2 * kPi, v0, v0, kTolerance)
+                           .value();
+  const Shape top = ShapeFactory::edge(std::make_shared<CircleCurve>(top_frame, r), 0, 2 * kPi, v1,
+                                       v1, kTolerance)
+                        .value();
+  const Shape face = ShapeFactory::face(std::make_shared<CylinderSurface>(Frame(), r),
+                                        {ShapeFactory::wire({bottom}).value(),
+                                         ShapeFactory::wire({top.reversed()}).value()},
+                                        {{std::make_shared<Line2d>(Vec2(0, 0), Vec2(1, 0))},
+                                         {std::make_shared<Line2d>(Vec2(0, h), Vec2(1, 0))}},
+                                        kTolerance)
+                         .value();
   const FaceQuery q = FaceQuery::create(face).value();
   EXPECT_TRUE(q.contains_uv(Vec2(1.0, 1.5)));
   EXPECT_TRUE(q.contains_uv(Vec2(1.0 + 2 * kPi, 1.5)));  // another period
@@ -684,8 +715,9 @@ TEST(Classifier, CircularHoleInAPlanarFaceIsExactNearItsRim) {
   // outside the rim, far closer than any fixed sampling of the circle could resolve.
   const double r = 1.0;
   const Shape vc = ShapeFactory::vertex(Vec3(r, 0, 0), kTolerance).value();
-  const Shape rim = ShapeFactory::edge(std::make_shared<CircleCurve>(Frame(), r), 0, 2 * kPi, vc, vc,
-                                       kTolerance).value();
+  const Shape rim =
+      ShapeFactory::edge(std::make_shared<CircleCurve>(Frame(), r), 0, 2 * kPi, vc, vc, kTolerance)
+          .value();
   std::vector<Shape> corners;
   const Vec3 square[] = {{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}};
   for (const Vec3& p : square) corners.push_back(ShapeFactory::vertex(p, kTolerance).value());
@@ -693,15 +725,19 @@ TEST(Classifier, CircularHoleInAPlanarFaceIsExactNearItsRim) {
   std::vector<Curve2dPtr> side_curves;
   for (int i = 0; i < 4; ++i) {
     const Vec3 a = square[i], b = square[(i + 1) % 4];
-    sides.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(a, b - a), 0, 6, corners[static_cast<std::size_t>(i)],
+    sides.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(a, b - a), 0, 6,
+                                       corners[static_cast<std::size_t>(i)],
                                        corners[static_cast<std::size_t>((i + 1) % 4)], kTolerance)
                         .value());
-    side_curves.push_back(std::make_shared<Line2d>(Vec2(a.x(), a.y()), Vec2(b.x() - a.x(), b.y() - a.y()) / 6));
+    side_curves.push_back(
+        std::make_shared<Line2d>(Vec2(a.x(), a.y()), Vec2(b.x() - a.x(), b.y() - a.y()) / 6));
   }
-  const Shape face = ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()),
-                                        {ShapeFactory::wire(sides).value(), ShapeFactory::wire({rim.reversed()}).value()},
-                                        {side_curves, {std::make_shared<Circle2d>(Vec2::Zero(), r)}}, kTolerance)
-                         .value();
+  const Shape face =
+      ShapeFactory::face(
+          std::make_shared<PlaneSurface>(Frame()),
+          {ShapeFactory::wire(sides).value(), ShapeFactory::wire({rim.reversed()}).value()},
+          {side_curves, {std::make_shared<Circle2d>(Vec2::Zero(), r)}}, kTolerance)
+          .value();
   const FaceQuery q = FaceQuery::create(face).value();
   for (int i = 0; i < 100; ++i) {
     const double a = 0.0731 * i;
@@ -754,8 +790,12 @@ TEST(Classifier, IsDeterministicAndThreadSafe) {
     points.push_back(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size()));
   }
   std::vector<Containment> a(points.size()), b(points.size());
-  std::thread t1([&] { for (std::size_t i = 0; i < points.size(); ++i) a[i] = c.classifier.classify(points[i]); });
-  std::thread t2([&] { for (std::size_t i = 0; i < points.size(); ++i) b[i] = c.classifier.classify(points[i]); });
+  std::thread t1([&] {
+    for (std::size_t i = 0; i < points.size(); ++i) a[i] = c.classifier.classify(points[i]);
+  });
+  std::thread t2([&] {
+    for (std::size_t i = 0; i < points.size(); ++i) b[i] = c.classifier.classify(points[i]);
+  });
   t1.join();
   t2.join();
   EXPECT_EQ(a, b);
@@ -770,11 +810,13 @@ double classifications_per_second(const Shape& shape) {
   std::mt19937_64 rng(kSeed + 8);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Vec3> points;
-  for (int i = 0; i < 100000; ++i) points.push_back(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size()));
+  for (int i = 0; i < 100000; ++i)
+    points.push_back(box.min + Vec3(u(rng), u(rng), u(rng)).cwiseProduct(box.size()));
   int inside = 0;
   const auto start = std::chrono::steady_clock::now();
   for (const Vec3& p : points) inside += c.classify(p) == Containment::Inside;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_GT(inside, 0);
   return static_cast<double>(points.size()) / seconds;
 }
@@ -785,7 +827,8 @@ TEST(Classifier, Throughput) {
   const double box = classifications_per_second(make_box(1, 2, 3).value().moved(placement));
   const double torus = classifications_per_second(make_torus(3, 1).value().moved(placement));
   const double cylinder = classifications_per_second(make_cylinder(1, 3).value().moved(placement));
-  std::printf("classifications per second: box %.0f, cylinder %.0f, torus %.0f\n", box, cylinder, torus);
+  std::printf("classifications per second: box %.0f, cylinder %.0f, torus %.0f\n", box, cylinder,
+              torus);
   RecordProperty("box_per_second", std::to_string(box));
   RecordProperty("torus_per_second", std::to_string(torus));
   // Loose floors (a slow sanitizer build still passes): the point is that it is not
