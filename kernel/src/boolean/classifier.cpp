@@ -141,7 +141,7 @@ int periodic_candidates(double x, double lo, double hi, double period, double ep
   const double k0 = std::ceil((lo - eps - x) / period);
   const double k1 = std::floor((hi + eps - x) / period);
   int n = 0;
-  if (!(k0 <= k1)) return 0;
+  if (!(k0 <= k1) || !(std::abs(k0) < 1e15)) return 0;  // none, or too far to mean anything
   const auto first = static_cast<long long>(k0);
   for (long long k = first; static_cast<double>(k) <= k1 && n < static_cast<int>(out.size()); ++k) {
     out[static_cast<std::size_t>(n++)] = x + static_cast<double>(k) * period;

@@ -188,7 +188,17 @@ BoundingBox bounding_box(const Shape& shape) {
         }
       }
     }
-    if (pb.u0 <= pb.u1) box.add(d.surface->transformed(f.location())->bounds(pb));
+    if (pb.u0 <= pb.u1) {
+      // The moved surface measures its length parameters in world units (scaled by the
+      // location); angles are unchanged.
+      const double s = f.location().scale();
+      const SurfaceKind k = d.surface->kind();
+      if (k == SurfaceKind::Cylinder || k == SurfaceKind::Cone || k == SurfaceKind::Extrusion) {
+        pb.v0 *= s;
+        pb.v1 *= s;
+      }
+      box.add(d.surface->transformed(f.location())->bounds(pb));
+    }
   }
   return box;
 }

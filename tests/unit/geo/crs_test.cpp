@@ -702,7 +702,9 @@ TEST(CrsRobustness, MutatedWktAndRandomKeysNeverCrash) {
       keys.push_back(e);
     }
     auto crs = crs_from_geokeys(keys);
-    if (crs.ok()) EXPECT_TRUE(validate_crs(crs.value()).ok());
+    if (crs.ok()) {
+      EXPECT_TRUE(validate_crs(crs.value()).ok());
+    }
   }
 }
 

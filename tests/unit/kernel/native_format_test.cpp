@@ -454,6 +454,15 @@ TEST(NativeFormatHostile, MalformedRecordsAreCorruptData) {
           header() + section(2, zero_table) +
           section(12, std::string("\x02\x07\x00\x00\x00\x00\x16\x00\x00\x00\x00\x08\x08\x08", 14))),
       "edge orientations");
+  // Regression (fuzzer, crash-7472bc5c): a line direction stored as (1, 1, 1) normalises to a
+  // direction whose canonical stored form is another vector, so writing the shape again
+  // would not reproduce it; such files are refused. Numbers {0, 1}; the line's six number
+  // references are 16 + index on first use, then recent-window positions.
+  const std::string zero_one("\x02\x20\xf0\x3f", 4);
+  expect_corrupt(seal(header() + section(2, zero_one) +
+                      section(6, std::string("\x01\x00\x20\x00\x00\x22\x00\x00", 8)) +
+                      section(12, std::string("\x00\x00", 2))),
+                 "non-canonical direction");
   // Varint longer than 10 bytes.
   expect_corrupt(seal(header() + section(12, std::string(12, '\xff'))), "overlong varint");
 }
