@@ -192,14 +192,13 @@ int main(int argc, char** argv) {
       const std::string ext = entry.path().extension().string();
       if (!entry.is_regular_file() || entry.file_size() > 64 * 1024) continue;
       if (ext != ".las" && ext != ".laz" && ext != ".pcd" && ext != ".ply") continue;
-      const std::string name = "shared_" + entry.path().parent_path().filename().string() +
-                               "_" + entry.path().filename().string();
+      const std::string name = "shared_" + entry.path().parent_path().filename().string() + "_" +
+                               entry.path().filename().string();
       fs::copy_file(entry.path(), dir / name, fs::copy_options::overwrite_existing, error);
       if (!error) ++copied;
     }
   }
-  std::printf("seeds in %s: synthesised 7, copied %zu from the shared data\n", dir.c_str(),
-              copied);
+  std::printf("seeds in %s: synthesised 7, copied %zu from the shared data\n", dir.c_str(), copied);
   return 0;
 }
 

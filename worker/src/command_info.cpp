@@ -66,9 +66,12 @@ Json crs_json(const geo::LasCrsRecords& crs) {
   Json keys = Json::array();
   for (const auto& k : crs.keys) {
     Json j{{"id", k.id}, {"location", k.location}, {"count", k.count}};
-    if (k.location == 0) j["value"] = k.value_offset;
-    else if (k.location == 34736) j["value"] = k.doubles;
-    else if (k.location == 34737) j["value"] = k.ascii;
+    if (k.location == 0)
+      j["value"] = k.value_offset;
+    else if (k.location == 34736)
+      j["value"] = k.doubles;
+    else if (k.location == 34737)
+      j["value"] = k.ascii;
     keys.push_back(std::move(j));
   }
   return Json{{"projected_cs", optional_code(crs.projected_cs)},
@@ -201,15 +204,16 @@ int run_info(const InfoOptions& o) {
     std::printf(" (record %u bytes, %u extra)", unsigned{h.record_length},
                 unsigned{h.extra_bytes_per_point()});
     std::printf("\n%-13s%s / %s, created day %u of %u", "software", h.system_identifier.c_str(),
-                h.generating_software.c_str(), unsigned{h.creation_day},
-                unsigned{h.creation_year});
+                h.generating_software.c_str(), unsigned{h.creation_day}, unsigned{h.creation_year});
   }
   std::printf("\n");
   if (info.point_count) std::printf("%-13s%" PRIu64 "\n", "points", *info.point_count);
   if (las != nullptr) {
     const geo::LasHeader& h = las->header();
     std::printf("%-13s%.17g %.17g %.17g\n", "scale", h.scale[0], h.scale[1], h.scale[2]);
-    std::printf("%-13s%.17g %.17g %.17g\n", "offset", h.offset[0], h.offset[1], h.offset[2]);
+    // + 0.0 prints a stored -0 as 0.
+    std::printf("%-13s%.17g %.17g %.17g\n", "offset", h.offset[0] + 0.0, h.offset[1] + 0.0,
+                h.offset[2] + 0.0);
   }
   if (info.bounds) print_bounds("bounds", *info.bounds);
   if (scan) {
@@ -271,8 +275,9 @@ int run_info(const InfoOptions& o) {
 
 void register_info(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand(
-      "info", "Describe a point-cloud file (LAS, PLY, PCD, XYZ): version, format, counts, "
-              "bounds, scale/offset, CRS records, VLRs/EVLRs, extra bytes and warnings");
+      "info",
+      "Describe a point-cloud file (LAS, PLY, PCD, XYZ): version, format, counts, "
+      "bounds, scale/offset, CRS records, VLRs/EVLRs, extra bytes and warnings");
   auto options = std::make_shared<InfoOptions>();
   cmd->add_option("FILE", options->file, "Point-cloud file")->required();
   cmd->add_flag("--json", options->json, "Print one JSON object");

@@ -28,13 +28,13 @@ class FileSource final : public ByteSource {
     if (offset > size_ || out.size() > size_ - offset) {
       return {ErrorCode::CorruptData, name() + ": read of " + std::to_string(out.size()) +
                                           " bytes at offset " + std::to_string(offset) +
-                                          " passes the end of the file (" +
-                                          std::to_string(size_) + " bytes)"};
+                                          " passes the end of the file (" + std::to_string(size_) +
+                                          " bytes)"};
     }
     std::size_t done = 0;
     while (done < out.size()) {
-      const ssize_t n = ::pread(fd_, out.data() + done, out.size() - done,
-                                static_cast<off_t>(offset + done));
+      const ssize_t n =
+          ::pread(fd_, out.data() + done, out.size() - done, static_cast<off_t>(offset + done));
       if (n < 0) {
         if (errno == EINTR) continue;
         return {ErrorCode::IoError, name() + ": read failed at offset " +
@@ -103,10 +103,13 @@ std::unique_ptr<ByteSource> memory_source(std::string name, std::span<const std:
   return std::make_unique<MemorySource>(std::move(name), bytes);
 }
 
-SequentialReader::SequentialReader(ByteSource& source, std::uint64_t start,
-                                   std::size_t buffer_size)
+SequentialReader::SequentialReader(ByteSource& source, std::uint64_t start, std::size_t buffer_size)
     : source_(source),
-      buffer_(buffer_size),
+      // No larger than the data (plus one byte, so that a full buffer always means a line
+      // longer than the data could hold): small files do not pay for a 1 MiB buffer.
+      buffer_(static_cast<std::size_t>(std::max<std::uint64_t>(
+          64, std::min<std::uint64_t>(source.size() - std::min(start, source.size()) + 1,
+                                      buffer_size)))),
       file_position_(std::min(start, source.size())),
       position_(std::min(start, source.size())) {}
 
@@ -118,8 +121,8 @@ kernel::Status SequentialReader::fill() {
     begin_ = 0;
   }
   const std::uint64_t left = source_.size() - file_position_;
-  const std::size_t n = static_cast<std::size_t>(
-      std::min<std::uint64_t>(left, buffer_.size() - end_));
+  const std::size_t n =
+      static_cast<std::size_t>(std::min<std::uint64_t>(left, buffer_.size() - end_));
   if (n == 0) return {};
   auto status = source_.read_at(file_position_, std::span(buffer_.data() + end_, n));
   if (!status.ok()) return status;
@@ -132,8 +135,8 @@ kernel::Result<bool> SequentialReader::next_line(std::string_view& line) {
   std::size_t scanned = begin_;
   for (;;) {
     const auto* first = buffer_.data() + scanned;
-    const auto* newline = static_cast<const std::uint8_t*>(
-        std::memchr(first, '\n', end_ - scanned));
+    const auto* newline =
+        static_cast<const std::uint8_t*>(std::memchr(first, '\n', end_ - scanned));
     if (newline != nullptr) {
       const std::size_t stop = static_cast<std::size_t>(newline - buffer_.data());
       std::size_t length = stop - begin_;
@@ -180,8 +183,8 @@ kernel::Status SequentialReader::read_exact(std::span<std::uint8_t> out) {
     const std::size_t rest = out.size() - done;
     if (rest > source_.size() - file_position_) {
       return {kernel::ErrorCode::CorruptData,
-              source_.name() + ": data ends at byte " + std::to_string(source_.size()) +
-                  ", " + std::to_string(rest - (source_.size() - file_position_)) +
+              source_.name() + ": data ends at byte " + std::to_string(source_.size()) + ", " +
+                  std::to_string(rest - (source_.size() - file_position_)) +
                   " bytes short of the record being read"};
     }
     auto status = source_.read_at(file_position_, out.subspan(done));
@@ -198,7 +201,8 @@ kernel::Status SequentialReader::skip(std::uint64_t count) {
             source_.name() + ": data ends at byte " + std::to_string(source_.size()) + ", " +
                 std::to_string(count - remaining()) + " bytes short of the records being skipped"};
   }
-  const std::size_t buffered = static_cast<std::size_t>(std::min<std::uint64_t>(count, end_ - begin_));
+  const std::size_t buffered =
+      static_cast<std::size_t>(std::min<std::uint64_t>(count, end_ - begin_));
   begin_ += buffered;
   file_position_ += count - buffered;
   position_ += count;

@@ -39,8 +39,8 @@ const GeoKey* LasCrsRecords::find(std::uint16_t id) const {
 }
 
 void parse_geotiff_keys(std::span<const std::uint8_t> directory,
-                        std::span<const std::uint8_t> doubles,
-                        std::span<const std::uint8_t> ascii, LasCrsRecords& records) {
+                        std::span<const std::uint8_t> doubles, std::span<const std::uint8_t> ascii,
+                        LasCrsRecords& records) {
   using detail::load_le;
   records.has_geotiff = true;
   auto& warnings = records.warnings;
@@ -103,12 +103,11 @@ void parse_geotiff_keys(std::span<const std::uint8_t> directory,
       }
     } else if (key.location == 34737) {
       if (std::size_t{key.value_offset} + key.count > ascii.size()) {
-        warnings.push_back(label + ": ASCII parameter [" + std::to_string(key.value_offset) +
-                           ", " + std::to_string(key.value_offset + key.count) + ") passes the " +
+        warnings.push_back(label + ": ASCII parameter [" + std::to_string(key.value_offset) + ", " +
+                           std::to_string(key.value_offset + key.count) + ") passes the " +
                            std::to_string(ascii.size()) + " bytes of GeoAsciiParams");
       } else {
-        std::string text(reinterpret_cast<const char*>(ascii.data() + key.value_offset),
-                         key.count);
+        std::string text(reinterpret_cast<const char*>(ascii.data() + key.value_offset), key.count);
         // The count includes the '|' that ends each value; NULs pad some writers' values.
         while (!text.empty() && (text.back() == '|' || text.back() == '\0')) text.pop_back();
         key.ascii = std::move(text);
@@ -120,15 +119,26 @@ void parse_geotiff_keys(std::span<const std::uint8_t> directory,
     if (key.location == 0 && seen.count(key.id) == 1) {
       const std::uint16_t v = key.value_offset;
       switch (key.id) {
-        case kGeoKeyModelType: records.model_type = records.model_type.value_or(v); break;
-        case kGeoKeyProjectedCsType: records.projected_cs = records.projected_cs.value_or(v); break;
-        case kGeoKeyGeographicType: records.geographic_cs = records.geographic_cs.value_or(v); break;
-        case kGeoKeyVerticalCsType: records.vertical_cs = records.vertical_cs.value_or(v); break;
+        case kGeoKeyModelType:
+          records.model_type = records.model_type.value_or(v);
+          break;
+        case kGeoKeyProjectedCsType:
+          records.projected_cs = records.projected_cs.value_or(v);
+          break;
+        case kGeoKeyGeographicType:
+          records.geographic_cs = records.geographic_cs.value_or(v);
+          break;
+        case kGeoKeyVerticalCsType:
+          records.vertical_cs = records.vertical_cs.value_or(v);
+          break;
         case kGeoKeyProjLinearUnits:
           records.projected_linear_units = records.projected_linear_units.value_or(v);
           break;
-        case kGeoKeyVerticalUnits: records.vertical_units = records.vertical_units.value_or(v); break;
-        default: break;
+        case kGeoKeyVerticalUnits:
+          records.vertical_units = records.vertical_units.value_or(v);
+          break;
+        default:
+          break;
       }
     }
     records.keys.push_back(std::move(key));
@@ -143,10 +153,9 @@ void parse_geotiff_keys(std::span<const std::uint8_t> directory,
 namespace detail {
 
 bool las_extra_type(std::uint8_t data_type, ExtraType& type, int& elements) {
-  static constexpr ExtraType kBase[] = {ExtraType::U8,  ExtraType::I8,  ExtraType::U16,
-                                        ExtraType::I16, ExtraType::U32, ExtraType::I32,
-                                        ExtraType::U64, ExtraType::I64, ExtraType::F32,
-                                        ExtraType::F64};
+  static constexpr ExtraType kBase[] = {
+      ExtraType::U8,  ExtraType::I8,  ExtraType::U16, ExtraType::I16, ExtraType::U32,
+      ExtraType::I32, ExtraType::U64, ExtraType::I64, ExtraType::F32, ExtraType::F64};
   if (data_type == 0) {
     type = ExtraType::Raw;
     elements = 1;

@@ -30,7 +30,7 @@ inline constexpr std::size_t kLasLegacyCount = 107;
 inline constexpr std::size_t kLasLegacyByReturn = 111;
 inline constexpr std::size_t kLasScale = 131;
 inline constexpr std::size_t kLasOffset = 155;
-inline constexpr std::size_t kLasBounds = 179;  // max x, min x, max y, min y, max z, min z
+inline constexpr std::size_t kLasBounds = 179;         // max x, min x, max y, min y, max z, min z
 inline constexpr std::size_t kLasWaveformStart = 227;  // 1.3
 inline constexpr std::size_t kLasEvlrOffset = 235;     // 1.4
 inline constexpr std::size_t kLasEvlrCount = 243;
@@ -59,7 +59,9 @@ inline constexpr int las_first_version_of_format(int format) {
 }
 
 inline constexpr bool las_format_has_gps(int f) { return f == 1 || f >= 3; }
-inline constexpr bool las_format_has_rgb(int f) { return f == 2 || f == 3 || f == 5 || f == 7 || f == 8 || f == 10; }
+inline constexpr bool las_format_has_rgb(int f) {
+  return f == 2 || f == 3 || f == 5 || f == 7 || f == 8 || f == 10;
+}
 inline constexpr bool las_format_has_nir(int f) { return f == 8 || f == 10; }
 inline constexpr bool las_format_has_waves(int f) { return f == 4 || f == 5 || f == 9 || f == 10; }
 

@@ -25,6 +25,8 @@ using kernel::ErrorCode;
 constexpr std::size_t kChunkBytes = 1 << 20;
 // EVLR payloads above this size (waveform data, big custom records) are described, not loaded.
 constexpr std::uint64_t kMaxLoadedEvlr = 16u << 20;
+// VLR payloads loaded in total (the largest real VLR areas hold a few hundred KiB).
+constexpr std::uint64_t kMaxLoadedVlrBytes = 64u << 20;
 
 std::string num(std::uint64_t v) { return std::to_string(v); }
 
@@ -143,10 +145,10 @@ using Decoder = std::uint64_t (*)(const Decoding&, const std::uint8_t*, std::siz
                                   std::uint8_t*);
 
 Decoder decoder_for(int format) {
-  static constexpr Decoder kDecoders[] = {
-      decode_records<0>, decode_records<1>, decode_records<2>, decode_records<3>,
-      decode_records<4>, decode_records<5>, decode_records<6>, decode_records<7>,
-      decode_records<8>, decode_records<9>, decode_records<10>};
+  static constexpr Decoder kDecoders[] = {decode_records<0>, decode_records<1>, decode_records<2>,
+                                          decode_records<3>, decode_records<4>, decode_records<5>,
+                                          decode_records<6>, decode_records<7>, decode_records<8>,
+                                          decode_records<9>, decode_records<10>};
   return kDecoders[format];
 }
 
@@ -156,12 +158,15 @@ double descriptor_value(const std::uint8_t* p, ExtraType type) {
     case ExtraType::U8:
     case ExtraType::U16:
     case ExtraType::U32:
-    case ExtraType::U64: return static_cast<double>(load_le<std::uint64_t>(p));
+    case ExtraType::U64:
+      return static_cast<double>(load_le<std::uint64_t>(p));
     case ExtraType::I8:
     case ExtraType::I16:
     case ExtraType::I32:
-    case ExtraType::I64: return static_cast<double>(load_le<std::int64_t>(p));
-    default: return load_le<double>(p);
+    case ExtraType::I64:
+      return static_cast<double>(load_le<std::int64_t>(p));
+    default:
+      return load_le<double>(p);
   }
 }
 
@@ -177,8 +182,7 @@ struct Parsed {
 };
 
 // Parses and checks everything before the points, in the order the fields are needed.
-kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
-                               std::vector<std::string>& warnings,
+kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std::string>& warnings,
                                const PointReadOptions& options) {
   detail::ByteSource& src = *s.source;
   const std::string& name = src.name();
@@ -187,7 +191,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
 
   // Signature and version first: they decide how to read the rest.
   std::array<std::uint8_t, detail::kLasHeaderSize14> head{};
-  const std::size_t head_read = static_cast<std::size_t>(std::min<std::uint64_t>(size, head.size()));
+  const std::size_t head_read =
+      static_cast<std::size_t>(std::min<std::uint64_t>(size, head.size()));
   if (auto st = src.read_at(0, std::span(head.data(), head_read)); !st.ok()) return st.error();
   if (size < 4 || std::memcmp(head.data(), "LASF", 4) != 0) {
     return corrupt(name, "not a LAS file: the file signature is \"" +
@@ -202,9 +207,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   h.version_major = head[detail::kLasVersionMajor];
   h.version_minor = head[detail::kLasVersionMinor];
   if (h.version_major != 1 || h.version_minor > 4) {
-    return Error{ErrorCode::UnsupportedVersion,
-                 name + ": LAS version " + num(h.version_major) + "." + num(h.version_minor) +
-                     " is not supported (1.0-1.4)"};
+    return Error{ErrorCode::UnsupportedVersion, name + ": LAS version " + num(h.version_major) +
+                                                    "." + num(h.version_minor) +
+                                                    " is not supported (1.0-1.4)"};
   }
   h.header_size = load_le<std::uint16_t>(&head[detail::kLasHeaderSize]);
   const std::size_t version_header = detail::las_header_size(h.version_minor);
@@ -236,7 +241,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   h.record_length = load_le<std::uint16_t>(&head[detail::kLasRecordLength]);
   h.legacy_point_count = load_le<std::uint32_t>(&head[detail::kLasLegacyCount]);
   for (int i = 0; i < 5; ++i) {
-    h.legacy_points_by_return[i] = load_le<std::uint32_t>(&head[detail::kLasLegacyByReturn + 4 * i]);
+    h.legacy_points_by_return[i] =
+        load_le<std::uint32_t>(&head[detail::kLasLegacyByReturn + 4 * i]);
   }
   for (int i = 0; i < 3; ++i) {
     h.scale[i] = load_le<double>(&head[detail::kLasScale + 8 * i]);
@@ -264,9 +270,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
       "; no LASzip decoder is available — decompress it first (e.g. `pdal translate in.laz "
       "out.las` or `las2las -i in.laz -o out.las`)";
   if ((format_id & 0xC0) != 0) {
-    return Error{ErrorCode::Unsupported,
-                 name + ": LAZ-compressed (point format id " + num(format_id) +
-                     " has the compression bit set)" + kLazAdvice};
+    return Error{ErrorCode::Unsupported, name + ": LAZ-compressed (point format id " +
+                                             num(format_id) + " has the compression bit set)" +
+                                             kLazAdvice};
   }
 
   // Offsets and the VLR area.
@@ -282,19 +288,20 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   if (std::uint64_t{h.vlr_count} * detail::kLasVlrHeaderSize > vlr_area) {
     return corrupt(name, "VLR count " + num(h.vlr_count) + " needs at least " +
                              num(std::uint64_t{h.vlr_count} * detail::kLasVlrHeaderSize) +
-                             " bytes, but only " + num(vlr_area) +
-                             " lie between the header (" + num(h.header_size) +
-                             " bytes) and the point data (offset " +
+                             " bytes, but only " + num(vlr_area) + " lie between the header (" +
+                             num(h.header_size) + " bytes) and the point data (offset " +
                              num(h.offset_to_point_data) + ")");
   }
   std::uint64_t pos = h.header_size;
-  s.vlrs.reserve(h.vlr_count);
+  // Reservations are capped: a count is only as good as the records that parse.
+  s.vlrs.reserve(std::min<std::uint32_t>(h.vlr_count, 1024));
+  std::uint64_t vlr_loaded = 0;
   for (std::uint32_t i = 0; i < h.vlr_count; ++i) {
     if (pos + detail::kLasVlrHeaderSize > h.offset_to_point_data) {
-      return corrupt(name, "VLR " + num(i + 1) + " of " + num(h.vlr_count) + ": its header at byte " +
-                               num(pos) + " passes the start of the point data (offset " +
-                               num(h.offset_to_point_data) +
-                               "): the VLR count or a VLR length is wrong");
+      return corrupt(name,
+                     "VLR " + num(i + 1) + " of " + num(h.vlr_count) + ": its header at byte " +
+                         num(pos) + " passes the start of the point data (offset " +
+                         num(h.offset_to_point_data) + "): the VLR count or a VLR length is wrong");
     }
     std::array<std::uint8_t, detail::kLasVlrHeaderSize> rh{};
     if (auto st = src.read_at(pos, rh); !st.ok()) return st.error();
@@ -312,9 +319,18 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
                                            : "the start of the point data (offset " +
                                                  num(h.offset_to_point_data) + ")"));
     }
-    std::vector<std::uint8_t> payload(r.length);
-    if (auto st = src.read_at(r.payload_offset, payload); !st.ok()) return st.error();
-    r.data = std::move(payload);
+    // VLRs are at most 64 KiB each, but a huge VLR area could hold thousands: past
+    // kMaxLoadedVlrBytes in total they are listed without their payload.
+    if (vlr_loaded + r.length <= kMaxLoadedVlrBytes) {
+      std::vector<std::uint8_t> payload(r.length);
+      if (auto st = src.read_at(r.payload_offset, payload); !st.ok()) return st.error();
+      r.data = std::move(payload);
+      vlr_loaded += r.length;
+    } else if (vlr_loaded <= kMaxLoadedVlrBytes) {
+      warnings.push_back(name + ": VLR payloads beyond " + num(kMaxLoadedVlrBytes) +
+                         " bytes in total are listed but not loaded");
+      vlr_loaded = kMaxLoadedVlrBytes + 1;
+    }
     s.vlrs.push_back(std::move(r));
     pos = end;
   }
@@ -324,9 +340,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
                    name + ": LAZ-compressed (it has a LASzip VLR)" + std::string(kLazAdvice)};
     }
     if (r.user_id == "copc" && r.record_id == 1) {
-      return Error{ErrorCode::Unsupported,
-                   name + ": COPC (LAZ-compressed cloud-optimised point cloud)" +
-                       std::string(kLazAdvice)};
+      return Error{
+          ErrorCode::Unsupported,
+          name + ": COPC (LAZ-compressed cloud-optimised point cloud)" + std::string(kLazAdvice)};
     }
   }
 
@@ -342,8 +358,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
                              "'s minimum of " + num(base_length) + " bytes");
   }
   if (detail::las_first_version_of_format(h.point_format) > h.version_minor) {
-    warnings.push_back(name + ": point format " + num(h.point_format) + " is not defined in LAS 1." +
-                       num(h.version_minor) + " (it needs 1." +
+    warnings.push_back(name + ": point format " + num(h.point_format) +
+                       " is not defined in LAS 1." + num(h.version_minor) + " (it needs 1." +
                        num(detail::las_first_version_of_format(h.point_format)) +
                        "); read as the format says");
   }
@@ -377,12 +393,12 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   const std::uint64_t complete = data_bytes / h.record_length;
   s.readable = h.point_count;
   if (h.point_count > complete) {
-    const std::string what =
-        "truncated: the header's point count is " + num(h.point_count) + " records of " +
-        num(h.record_length) + " bytes, but only " + num(data_bytes) +
-        " bytes of point data lie between the offset to point data (" +
-        num(h.offset_to_point_data) + ") and " + data_end_what + " (byte " + num(data_end) +
-        "): " + num(complete) + " complete records";
+    const std::string what = "truncated: the header's point count is " + num(h.point_count) +
+                             " records of " + num(h.record_length) + " bytes, but only " +
+                             num(data_bytes) +
+                             " bytes of point data lie between the offset to point data (" +
+                             num(h.offset_to_point_data) + ") and " + data_end_what + " (byte " +
+                             num(data_end) + "): " + num(complete) + " complete records";
     if (!options.accept_truncated) return corrupt(name, what);
     warnings.push_back(name + ": " + what + "; reading those");
     s.readable = complete;
@@ -404,7 +420,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
     }
     std::uint64_t at = h.evlr_offset;
     std::uint64_t loaded = 0;
-    s.evlrs.reserve(h.evlr_count);
+    s.evlrs.reserve(std::min<std::uint32_t>(h.evlr_count, 1024));
     for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
       if (at + detail::kLasEvlrHeaderSize > size) {
         return corrupt(name, "EVLR " + num(i + 1) + " of " + num(h.evlr_count) +
@@ -423,8 +439,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
       if (r.length > size - r.payload_offset) {
         return corrupt(name, record_label("EVLR", i, h.evlr_count, r) + ": length " +
                                  num(r.length) + " passes the end of the file (" + num(size) +
-                                 " bytes; the payload starts at byte " +
-                                 num(r.payload_offset) + ")");
+                                 " bytes; the payload starts at byte " + num(r.payload_offset) +
+                                 ")");
       }
       if (r.length <= kMaxLoadedEvlr && loaded + r.length <= 4 * kMaxLoadedEvlr) {
         std::vector<std::uint8_t> payload(static_cast<std::size_t>(r.length));
@@ -476,8 +492,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
         const std::uint8_t opts = e[3];
         if (!detail::las_extra_type(data_type, dim.type, dim.elements)) {
           warnings.push_back(name + ": extra-bytes descriptor " + num(k + 1) + " (\"" +
-                             printable(dim.name) + "\") has reserved data type " +
-                             num(data_type) + "; it and later descriptors are ignored");
+                             printable(dim.name) + "\") has reserved data type " + num(data_type) +
+                             "; it and later descriptors are ignored");
           break;
         }
         if (dim.type == ExtraType::Raw) {
@@ -492,9 +508,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
         dim.byte_offset = used;
         if (used + dim.size() > extra_length) {
           warnings.push_back(name + ": extra-bytes descriptor " + num(k + 1) + " (\"" +
-                             printable(dim.name) + "\", " + num(dim.size()) +
-                             " bytes at offset " + num(used) + ") does not fit the " +
-                             num(extra_length) +
+                             printable(dim.name) + "\", " + num(dim.size()) + " bytes at offset " +
+                             num(used) + ") does not fit the " + num(extra_length) +
                              " extra bytes of each record; it and later descriptors are ignored");
           break;
         }
@@ -530,7 +545,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
                                    " appears more than once; the first is used");
           continue;
         }
-        if (*slot != nullptr && r.record_id == 2112 && wkt_text(*(*slot)->data) != wkt_text(*r.data)) {
+        if (*slot != nullptr && r.record_id == 2112 &&
+            wkt_text(*(*slot)->data) != wkt_text(*r.data)) {
           s.crs.warnings.push_back("two OGC WKT records differ; the " +
                                    std::string(r.extended ? "EVLR" : "later VLR") + "'s is used");
         }
@@ -542,8 +558,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   }
   if (keys != nullptr) {
     static const std::vector<std::uint8_t> kNone;
-    parse_geotiff_keys(*keys->data, doubles ? *doubles->data : kNone,
-                       ascii ? *ascii->data : kNone, s.crs);
+    parse_geotiff_keys(*keys->data, doubles ? *doubles->data : kNone, ascii ? *ascii->data : kNone,
+                       s.crs);
   } else if (doubles != nullptr || ascii != nullptr) {
     s.crs.warnings.push_back("GeoTIFF parameter records without a GeoKeyDirectory (34735)");
   }
@@ -560,8 +576,11 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
     }
   }
   s.crs.wkt_flag = h.version_minor >= 4 && (h.global_encoding & 16) != 0;
-  if (s.crs.wkt_flag && wkt == nullptr) {
-    s.crs.warnings.push_back("global encoding says the CRS is WKT, but there is no WKT record");
+  // The WKT bit without a WKT record is a file without a CRS (LAS 1.4 sets the bit for every
+  // file of formats 6-10): nothing to warn about. GeoTIFF keys with the bit set are.
+  if (s.crs.wkt_flag && wkt == nullptr && keys != nullptr) {
+    s.crs.warnings.push_back(
+        "global encoding says the CRS is WKT, but the file has GeoTIFF keys and no WKT record");
   }
   if (h.point_format >= 6 && keys != nullptr && wkt == nullptr) {
     s.crs.warnings.push_back("point format " + num(h.point_format) +
@@ -584,8 +603,8 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
     }
   }
   info.format = PointFileFormat::Las;
-  info.description = "LAS " + num(h.version_major) + "." + num(h.version_minor) +
-                     " point format " + num(h.point_format);
+  info.description = "LAS " + num(h.version_major) + "." + num(h.version_minor) + " point format " +
+                     num(h.point_format);
   info.point_count = h.point_count;
   Bounds3 bounds;
   bounds.min = h.min;
@@ -593,13 +612,12 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info,
   info.bounds = bounds;
   for (int i = 0; i < 3; ++i) {
     // Half a quantisation step, plus the rounding of the header's doubles.
-    info.bounds_tolerance[i] = 0.5 * std::abs(h.scale[i]) +
-                               1e-9 * std::max(std::abs(h.min[i]), std::abs(h.max[i]));
+    info.bounds_tolerance[i] =
+        0.5 * std::abs(h.scale[i]) + 1e-9 * std::max(std::abs(h.min[i]), std::abs(h.max[i]));
   }
   info.fields = las_point_fields(h.point_format);
   return true;
 }
-
 
 }  // namespace
 

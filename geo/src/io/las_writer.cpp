@@ -79,11 +79,26 @@ std::vector<std::uint8_t> extra_descriptors(const ExtraLayout& layout) {
           store_le<std::uint64_t>(&e[at], static_cast<std::uint64_t>(v));
         }
       };
-      if (d.no_data) { options |= 1; put_any(40, *d.no_data); }
-      if (d.minimum) { options |= 2; put_any(64, *d.minimum); }
-      if (d.maximum) { options |= 4; put_any(88, *d.maximum); }
-      if (d.scale) { options |= 8; store_le<double>(&e[112], *d.scale); }
-      if (d.offset) { options |= 16; store_le<double>(&e[136], *d.offset); }
+      if (d.no_data) {
+        options |= 1;
+        put_any(40, *d.no_data);
+      }
+      if (d.minimum) {
+        options |= 2;
+        put_any(64, *d.minimum);
+      }
+      if (d.maximum) {
+        options |= 4;
+        put_any(88, *d.maximum);
+      }
+      if (d.scale) {
+        options |= 8;
+        store_le<double>(&e[112], *d.scale);
+      }
+      if (d.offset) {
+        options |= 16;
+        store_le<double>(&e[136], *d.offset);
+      }
     }
     e[3] = options;
     put_fixed(e, 4, d.name, 32);
@@ -280,9 +295,8 @@ kernel::Status LasWriter::write(const PointBatch& batch) {
   const std::size_t extra = o.extra.record_size;
   const std::size_t given = batch.extra_record_size();
   if (given != 0 && given != extra) {
-    return {ErrorCode::InvalidArgument,
-            s.name + ": the batch carries " + num(given) + " extra bytes per point, the file " +
-                num(extra)};
+    return {ErrorCode::InvalidArgument, s.name + ": the batch carries " + num(given) +
+                                            " extra bytes per point, the file " + num(extra)};
   }
   s.buffer.assign(batch.points.size() * s.record_length, 0);
   for (std::size_t i = 0; i < batch.points.size(); ++i) {
@@ -324,15 +338,14 @@ kernel::Status LasWriter::write(const PointBatch& batch) {
       at = 20;
     } else {
       if (q.return_number > 15 || q.number_of_returns > 15) {
-        return {ErrorCode::InvalidArgument,
-                s.name + ": point " + num(s.count + i) + ": return " + num(q.return_number) +
-                    " of " + num(q.number_of_returns) + " does not fit 4 bits"};
+        return {ErrorCode::InvalidArgument, s.name + ": point " + num(s.count + i) + ": return " +
+                                                num(q.return_number) + " of " +
+                                                num(q.number_of_returns) + " does not fit 4 bits"};
       }
       p[14] = static_cast<std::uint8_t>(q.return_number | (q.number_of_returns << 4));
-      p[15] = static_cast<std::uint8_t>((q.classification_flags & 15) |
-                                        ((q.scanner_channel & 3) << 4) |
-                                        (q.scan_direction ? 0x40 : 0) |
-                                        (q.edge_of_flight_line ? 0x80 : 0));
+      p[15] = static_cast<std::uint8_t>(
+          (q.classification_flags & 15) | ((q.scanner_channel & 3) << 4) |
+          (q.scan_direction ? 0x40 : 0) | (q.edge_of_flight_line ? 0x80 : 0));
       p[16] = q.classification;
       p[17] = q.user_data;
       const double steps = std::clamp(std::round(q.scan_angle / 0.006), -32768.0, 32767.0);
@@ -368,8 +381,8 @@ kernel::Status LasWriter::close() {
   const int minor = o.version_minor;
   const int format = o.point_format;
   if (s.count > std::numeric_limits<std::uint32_t>::max() && minor < 4) {
-    return {ErrorCode::InvalidArgument, s.name + ": " + num(s.count) +
-                                            " points need LAS 1.4 (32-bit count before)"};
+    return {ErrorCode::InvalidArgument,
+            s.name + ": " + num(s.count) + " points need LAS 1.4 (32-bit count before)"};
   }
   std::uint64_t evlr_offset = 0;
   if (minor >= 4 && !s.evlrs.empty()) {
@@ -382,7 +395,8 @@ kernel::Status LasWriter::close() {
   std::memcpy(h.data(), "LASF", 4);
   store_le<std::uint16_t>(&h[detail::kLasFileSourceId], o.file_source_id);
   std::uint16_t encoding = o.global_encoding;
-  if (minor >= 4 && o.wkt) encoding |= 16;
+  // LAS 1.4: the WKT bit is required for formats 6-10, and says which CRS record counts.
+  if (minor >= 4 && (o.wkt || (format >= 6 && o.geo_keys.empty()))) encoding |= 16;
   store_le<std::uint16_t>(&h[detail::kLasGlobalEncoding], encoding);
   h[detail::kLasVersionMajor] = 1;
   h[detail::kLasVersionMinor] = static_cast<std::uint8_t>(minor);

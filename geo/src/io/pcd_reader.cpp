@@ -39,30 +39,48 @@ struct PcdField {
 std::optional<ExtraType> pcd_type(char type, std::size_t size) {
   switch (type) {
     case 'I':
-      return size == 1 ? ExtraType::I8 : size == 2 ? ExtraType::I16 : size == 4 ? ExtraType::I32
-             : size == 8 ? std::optional(ExtraType::I64) : std::nullopt;
+      return size == 1   ? ExtraType::I8
+             : size == 2 ? ExtraType::I16
+             : size == 4 ? ExtraType::I32
+             : size == 8 ? std::optional(ExtraType::I64)
+                         : std::nullopt;
     case 'U':
-      return size == 1 ? ExtraType::U8 : size == 2 ? ExtraType::U16 : size == 4 ? ExtraType::U32
-             : size == 8 ? std::optional(ExtraType::U64) : std::nullopt;
+      return size == 1   ? ExtraType::U8
+             : size == 2 ? ExtraType::U16
+             : size == 4 ? ExtraType::U32
+             : size == 8 ? std::optional(ExtraType::U64)
+                         : std::nullopt;
     case 'F':
       return size == 4 ? ExtraType::F32 : size == 8 ? std::optional(ExtraType::F64) : std::nullopt;
-    default: return std::nullopt;
+    default:
+      return std::nullopt;
   }
 }
 
 double le_value(const std::uint8_t* p, ExtraType type) {
   switch (type) {
-    case ExtraType::I8: return static_cast<std::int8_t>(p[0]);
-    case ExtraType::U8: return p[0];
-    case ExtraType::I16: return load_le<std::int16_t>(p);
-    case ExtraType::U16: return load_le<std::uint16_t>(p);
-    case ExtraType::I32: return load_le<std::int32_t>(p);
-    case ExtraType::U32: return load_le<std::uint32_t>(p);
-    case ExtraType::I64: return static_cast<double>(load_le<std::int64_t>(p));
-    case ExtraType::U64: return static_cast<double>(load_le<std::uint64_t>(p));
-    case ExtraType::F32: return load_le<float>(p);
-    case ExtraType::F64: return load_le<double>(p);
-    default: return 0;
+    case ExtraType::I8:
+      return static_cast<std::int8_t>(p[0]);
+    case ExtraType::U8:
+      return p[0];
+    case ExtraType::I16:
+      return load_le<std::int16_t>(p);
+    case ExtraType::U16:
+      return load_le<std::uint16_t>(p);
+    case ExtraType::I32:
+      return load_le<std::int32_t>(p);
+    case ExtraType::U32:
+      return load_le<std::uint32_t>(p);
+    case ExtraType::I64:
+      return static_cast<double>(load_le<std::int64_t>(p));
+    case ExtraType::U64:
+      return static_cast<double>(load_le<std::uint64_t>(p));
+    case ExtraType::F32:
+      return load_le<float>(p);
+    case ExtraType::F64:
+      return load_le<double>(p);
+    default:
+      return 0;
   }
 }
 
@@ -88,8 +106,7 @@ class PcdReader final : public PointReader {
 
  protected:
   kernel::Result<std::size_t> read_records(PointBatch& batch, std::size_t max) override {
-    const std::size_t n =
-        static_cast<std::size_t>(std::min<std::uint64_t>(max, readable_ - next_));
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(max, readable_ - next_));
     if (n == 0) return std::size_t{0};
     const std::size_t stride = batch.extra_record_size();
     batch.points.assign(n, Point{});
@@ -195,8 +212,8 @@ class PcdReader final : public PointReader {
     return i;
   }
 
-  kernel::Status store_text(PointBatch& batch, std::size_t i, std::size_t stride,
-                            const PcdField& f, std::size_t element, std::string_view token) {
+  kernel::Status store_text(PointBatch& batch, std::size_t i, std::size_t stride, const PcdField& f,
+                            std::size_t element, std::string_view token) {
     auto not_a_number = [&] {
       return kernel::Status{ErrorCode::CorruptData,
                             name() + ": line " + std::to_string(data_->line_number()) +
@@ -217,14 +234,16 @@ class PcdReader final : public PointReader {
     } else {
       const auto v = parse_number<double>(token);
       if (!v) return not_a_number();
-      if (f.size == 4) store_le<float>(bytes, static_cast<float>(*v));
-      else store_le<double>(bytes, *v);
+      if (f.size == 4)
+        store_le<float>(bytes, static_cast<float>(*v));
+      else
+        store_le<double>(bytes, *v);
     }
     if (f.extra_offset >= 0) {
       // Little-endian truncation of the 64-bit integer keeps the low bytes: the value itself
       // when it fits the field.
-      std::memcpy(batch.extra_bytes.data() + i * stride +
-                      static_cast<std::size_t>(f.extra_offset) + element * f.size,
+      std::memcpy(batch.extra_bytes.data() + i * stride + static_cast<std::size_t>(f.extra_offset) +
+                      element * f.size,
                   bytes, f.size);
       return {};
     }
@@ -310,9 +329,12 @@ kernel::Result<std::unique_ptr<PointReader>> open_pcd(std::unique_ptr<ByteSource
       viewpoint = std::string(line.substr(9));
     } else if (key == "DATA") {
       if (t.size() != 2) return bad("DATA needs one of ascii, binary, binary_compressed");
-      if (t[1] == "ascii") kind = PcdData::Ascii;
-      else if (t[1] == "binary") kind = PcdData::Binary;
-      else if (t[1] == "binary_compressed") kind = PcdData::BinaryCompressed;
+      if (t[1] == "ascii")
+        kind = PcdData::Ascii;
+      else if (t[1] == "binary")
+        kind = PcdData::Binary;
+      else if (t[1] == "binary_compressed")
+        kind = PcdData::BinaryCompressed;
       else {
         return Error{ErrorCode::Unsupported,
                      name + ": PCD DATA \"" + std::string(t[1].substr(0, 40)) +
@@ -337,9 +359,9 @@ kernel::Result<std::unique_ptr<PointReader>> open_pcd(std::unique_ptr<ByteSource
   }
   const std::uint64_t total = *width * *height;
   if (points && *points != total) {
-    return bad("POINTS " + std::to_string(*points) + " disagrees with WIDTH × HEIGHT = " +
-               std::to_string(*width) + " × " + std::to_string(*height) + " = " +
-               std::to_string(total));
+    return bad("POINTS " + std::to_string(*points) +
+               " disagrees with WIDTH × HEIGHT = " + std::to_string(*width) + " × " +
+               std::to_string(*height) + " = " + std::to_string(total));
   }
 
   std::vector<PcdField> fields;
@@ -430,10 +452,10 @@ kernel::Result<std::unique_ptr<PointReader>> open_pcd(std::unique_ptr<ByteSource
     const std::uint32_t compressed = load_le<std::uint32_t>(sizes_bytes);
     const std::uint32_t uncompressed = load_le<std::uint32_t>(sizes_bytes + 4);
     if (compressed > data->remaining()) {
-      return Error{ErrorCode::CorruptData,
-                   name + ": truncated: compressed size " + std::to_string(compressed) +
-                       " passes the end of the file (" + std::to_string(data->remaining()) +
-                       " bytes left)"};
+      return Error{ErrorCode::CorruptData, name + ": truncated: compressed size " +
+                                               std::to_string(compressed) +
+                                               " passes the end of the file (" +
+                                               std::to_string(data->remaining()) + " bytes left)"};
     }
     if (total > 0 && record_size > std::numeric_limits<std::uint64_t>::max() / total) {
       return Error{ErrorCode::CorruptData, name + ": POINTS × record size overflows"};
@@ -447,10 +469,9 @@ kernel::Result<std::unique_ptr<PointReader>> open_pcd(std::unique_ptr<ByteSource
     // LZF produces at most 264 bytes per 3 input bytes: a larger claim is a lie, found
     // before allocating for it.
     if (std::uint64_t{uncompressed} > 88 * std::uint64_t{compressed}) {
-      return Error{ErrorCode::CorruptData, name + ": uncompressed size " +
-                                               std::to_string(uncompressed) +
-                                               " cannot come from " + std::to_string(compressed) +
-                                               " LZF-compressed bytes"};
+      return Error{ErrorCode::CorruptData,
+                   name + ": uncompressed size " + std::to_string(uncompressed) +
+                       " cannot come from " + std::to_string(compressed) + " LZF-compressed bytes"};
     }
     std::vector<std::uint8_t> packed(compressed);
     if (auto st = data->read_exact(packed); !st.ok()) return st.error();
@@ -467,9 +488,8 @@ kernel::Result<std::unique_ptr<PointReader>> open_pcd(std::unique_ptr<ByteSource
     }
   }
   auto reader = std::make_unique<PcdReader>(name, std::move(info), options, std::move(source),
-                                            std::move(data), *kind, std::move(fields),
-                                            record_size, readable, std::move(decoded),
-                                            float32_xyz);
+                                            std::move(data), *kind, std::move(fields), record_size,
+                                            readable, std::move(decoded), float32_xyz);
   reader->set_total(total);
   for (auto& w : warnings) reader->note(std::move(w));
   return std::unique_ptr<PointReader>(std::move(reader));

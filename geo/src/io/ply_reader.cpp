@@ -49,9 +49,9 @@ struct PlyProperty {
   PlyType type;
   bool is_list = false;
   PlyType count_type;
-  std::size_t offset = 0;       // in a binary vertex record
+  std::size_t offset = 0;  // in a binary vertex record
   PointTarget target = PointTarget::None;
-  int extra_offset = -1;        // in a point's extra bytes, or -1
+  int extra_offset = -1;  // in a point's extra bytes, or -1
 };
 
 struct PlyElement {
@@ -69,30 +69,56 @@ double binary_value(const std::uint8_t* p, ExtraType type, bool big) {
     return static_cast<double>(big ? load_be<T>(p) : load_le<T>(p));
   };
   switch (type) {
-    case ExtraType::I8: return static_cast<std::int8_t>(p[0]);
-    case ExtraType::U8: return p[0];
-    case ExtraType::I16: return load(std::int16_t{});
-    case ExtraType::U16: return load(std::uint16_t{});
-    case ExtraType::I32: return load(std::int32_t{});
-    case ExtraType::U32: return load(std::uint32_t{});
-    case ExtraType::F32: return load(float{});
-    case ExtraType::F64: return load(double{});
-    default: return 0;
+    case ExtraType::I8:
+      return static_cast<std::int8_t>(p[0]);
+    case ExtraType::U8:
+      return p[0];
+    case ExtraType::I16:
+      return load(std::int16_t{});
+    case ExtraType::U16:
+      return load(std::uint16_t{});
+    case ExtraType::I32:
+      return load(std::int32_t{});
+    case ExtraType::U32:
+      return load(std::uint32_t{});
+    case ExtraType::F32:
+      return load(float{});
+    case ExtraType::F64:
+      return load(double{});
+    default:
+      return 0;
   }
 }
 
 // Stores a text value in an extra slot of `type`, little-endian.
 void store_extra(std::uint8_t* at, ExtraType type, double v) {
   switch (type) {
-    case ExtraType::I8: at[0] = static_cast<std::uint8_t>(static_cast<std::int8_t>(v)); break;
-    case ExtraType::U8: at[0] = static_cast<std::uint8_t>(v); break;
-    case ExtraType::I16: store_le<std::int16_t>(at, static_cast<std::int16_t>(v)); break;
-    case ExtraType::U16: store_le<std::uint16_t>(at, static_cast<std::uint16_t>(v)); break;
-    case ExtraType::I32: store_le<std::int32_t>(at, static_cast<std::int32_t>(v)); break;
-    case ExtraType::U32: store_le<std::uint32_t>(at, static_cast<std::uint32_t>(v)); break;
-    case ExtraType::F32: store_le<float>(at, static_cast<float>(v)); break;
-    case ExtraType::F64: store_le<double>(at, v); break;
-    default: break;
+    case ExtraType::I8:
+      at[0] = static_cast<std::uint8_t>(static_cast<std::int8_t>(v));
+      break;
+    case ExtraType::U8:
+      at[0] = static_cast<std::uint8_t>(v);
+      break;
+    case ExtraType::I16:
+      store_le<std::int16_t>(at, static_cast<std::int16_t>(v));
+      break;
+    case ExtraType::U16:
+      store_le<std::uint16_t>(at, static_cast<std::uint16_t>(v));
+      break;
+    case ExtraType::I32:
+      store_le<std::int32_t>(at, static_cast<std::int32_t>(v));
+      break;
+    case ExtraType::U32:
+      store_le<std::uint32_t>(at, static_cast<std::uint32_t>(v));
+      break;
+    case ExtraType::F32:
+      store_le<float>(at, static_cast<float>(v));
+      break;
+    case ExtraType::F64:
+      store_le<double>(at, v);
+      break;
+    default:
+      break;
   }
 }
 
@@ -193,8 +219,8 @@ class PlyReader final : public PointReader {
   void store(PointBatch& batch, std::size_t i, std::size_t stride, const PlyProperty& prop,
              double v, const std::uint8_t* raw) {
     if (prop.extra_offset >= 0) {
-      std::uint8_t* at = batch.extra_bytes.data() + i * stride +
-                         static_cast<std::size_t>(prop.extra_offset);
+      std::uint8_t* at =
+          batch.extra_bytes.data() + i * stride + static_cast<std::size_t>(prop.extra_offset);
       if (raw != nullptr) {
         std::memcpy(at, raw, prop.type.size);
         if (encoding_ == PlyEncoding::BinaryBig) std::reverse(at, at + prop.type.size);
@@ -248,10 +274,14 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
     if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
     if (t[0] == "format") {
       if (t.size() != 3) return bad("\"format\" needs an encoding and a version");
-      if (t[1] == "ascii") encoding = PlyEncoding::Ascii;
-      else if (t[1] == "binary_little_endian") encoding = PlyEncoding::BinaryLittle;
-      else if (t[1] == "binary_big_endian") encoding = PlyEncoding::BinaryBig;
-      else return bad("unknown format \"" + std::string(t[1]) + "\"");
+      if (t[1] == "ascii")
+        encoding = PlyEncoding::Ascii;
+      else if (t[1] == "binary_little_endian")
+        encoding = PlyEncoding::BinaryLittle;
+      else if (t[1] == "binary_big_endian")
+        encoding = PlyEncoding::BinaryBig;
+      else
+        return bad("unknown format \"" + std::string(t[1]) + "\"");
       if (t[2] != "1.0") return bad("PLY version " + std::string(t[2]) + " (1.0 expected)");
     } else if (t[0] == "element") {
       if (t.size() != 3) return bad("\"element\" needs a name and a count");
@@ -308,10 +338,10 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
   for (auto it = elements.begin(); it != vertex_it; ++it) {
     const PlyElement& e = *it;
     auto short_of = [&](std::uint64_t index) {
-      return Error{ErrorCode::CorruptData,
-                   name + ": truncated: element \"" + e.name + "\" declares " +
-                       std::to_string(e.count) + " records, the data ends in record " +
-                       std::to_string(index)};
+      return Error{ErrorCode::CorruptData, name + ": truncated: element \"" + e.name +
+                                               "\" declares " + std::to_string(e.count) +
+                                               " records, the data ends in record " +
+                                               std::to_string(index)};
     };
     if (!binary) {
       for (std::uint64_t i = 0; i < e.count; ++i) {
@@ -320,7 +350,8 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
         if (!more.value()) return short_of(i);
       }
     } else if (!e.has_list) {
-      if (e.record_size != 0 && e.count > data->remaining() / e.record_size) return short_of(data->remaining() / e.record_size);
+      if (e.record_size != 0 && e.count > data->remaining() / e.record_size)
+        return short_of(data->remaining() / e.record_size);
       if (auto st = data->skip(e.count * e.record_size); !st.ok()) return st.error();
     } else {
       std::uint8_t value[8];
@@ -334,9 +365,11 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
           const double items = binary_value(value, prop.count_type.type, big);
           if (items < 0) {
             return Error{ErrorCode::CorruptData, name + ": element \"" + e.name + "\" record " +
-                                                     std::to_string(i) + " has a negative list size"};
+                                                     std::to_string(i) +
+                                                     " has a negative list size"};
           }
-          if (!data->skip(static_cast<std::uint64_t>(items) * prop.type.size).ok()) return short_of(i);
+          if (!data->skip(static_cast<std::uint64_t>(items) * prop.type.size).ok())
+            return short_of(i);
         }
       }
     }
@@ -344,10 +377,10 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
 
   PointCloudInfo info;
   info.format = PointFileFormat::Ply;
-  info.description = std::string("PLY ") +
-                     (*encoding == PlyEncoding::Ascii          ? "ascii"
-                      : *encoding == PlyEncoding::BinaryLittle ? "binary_little_endian"
-                                                               : "binary_big_endian");
+  info.description =
+      std::string("PLY ") + (*encoding == PlyEncoding::Ascii          ? "ascii"
+                             : *encoding == PlyEncoding::BinaryLittle ? "binary_little_endian"
+                                                                      : "binary_big_endian");
   info.point_count = vertex.count;
   auto layout = std::make_shared<ExtraLayout>();
   bool has_xyz[3] = {false, false, false};
@@ -394,8 +427,8 @@ kernel::Result<std::unique_ptr<PointReader>> open_ply(std::unique_ptr<ByteSource
     readable = complete;
   }
   auto reader = std::make_unique<PlyReader>(name, std::move(info), options, std::move(source),
-                                            std::move(data), *encoding, std::move(vertex),
-                                            readable, float32_xyz);
+                                            std::move(data), *encoding, std::move(vertex), readable,
+                                            float32_xyz);
   for (auto& w : warnings) reader->note(std::move(w));
   return std::unique_ptr<PointReader>(std::move(reader));
 }

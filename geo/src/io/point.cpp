@@ -24,8 +24,7 @@ void Bounds3::add(const Bounds3& other) {
   add(other.max[0], other.max[1], other.max[2]);
 }
 
-bool Bounds3::contains(double x, double y, double z,
-                       const std::array<double, 3>& tolerance) const {
+bool Bounds3::contains(double x, double y, double z, const std::array<double, 3>& tolerance) const {
   const double v[3] = {x, y, z};
   for (int i = 0; i < 3; ++i) {
     if (!(v[i] >= min[i] - tolerance[i] && v[i] <= max[i] + tolerance[i])) return false;
@@ -37,32 +36,47 @@ std::size_t extra_type_size(ExtraType type) {
   switch (type) {
     case ExtraType::Raw:
     case ExtraType::U8:
-    case ExtraType::I8: return 1;
+    case ExtraType::I8:
+      return 1;
     case ExtraType::U16:
-    case ExtraType::I16: return 2;
+    case ExtraType::I16:
+      return 2;
     case ExtraType::U32:
     case ExtraType::I32:
-    case ExtraType::F32: return 4;
+    case ExtraType::F32:
+      return 4;
     case ExtraType::U64:
     case ExtraType::I64:
-    case ExtraType::F64: return 8;
+    case ExtraType::F64:
+      return 8;
   }
   return 1;
 }
 
 const char* extra_type_name(ExtraType type) {
   switch (type) {
-    case ExtraType::Raw: return "raw";
-    case ExtraType::U8: return "uint8";
-    case ExtraType::I8: return "int8";
-    case ExtraType::U16: return "uint16";
-    case ExtraType::I16: return "int16";
-    case ExtraType::U32: return "uint32";
-    case ExtraType::I32: return "int32";
-    case ExtraType::U64: return "uint64";
-    case ExtraType::I64: return "int64";
-    case ExtraType::F32: return "float32";
-    case ExtraType::F64: return "float64";
+    case ExtraType::Raw:
+      return "raw";
+    case ExtraType::U8:
+      return "uint8";
+    case ExtraType::I8:
+      return "int8";
+    case ExtraType::U16:
+      return "uint16";
+    case ExtraType::I16:
+      return "int16";
+    case ExtraType::U32:
+      return "uint32";
+    case ExtraType::I32:
+      return "int32";
+    case ExtraType::U64:
+      return "uint64";
+    case ExtraType::I64:
+      return "int64";
+    case ExtraType::F32:
+      return "float32";
+    case ExtraType::F64:
+      return "float64";
   }
   return "raw";
 }
@@ -91,24 +105,34 @@ std::optional<ExtraValue> decode_extra(const ExtraDimension& dimension,
   const std::uint8_t* p = point_extra.data() + at;
   using detail::load_le;
   switch (dimension.type) {
-    case ExtraType::U8: return ExtraValue(std::uint64_t{p[0]});
-    case ExtraType::I8: return ExtraValue(std::int64_t{static_cast<std::int8_t>(p[0])});
-    case ExtraType::U16: return ExtraValue(std::uint64_t{load_le<std::uint16_t>(p)});
-    case ExtraType::I16: return ExtraValue(std::int64_t{load_le<std::int16_t>(p)});
-    case ExtraType::U32: return ExtraValue(std::uint64_t{load_le<std::uint32_t>(p)});
-    case ExtraType::I32: return ExtraValue(std::int64_t{load_le<std::int32_t>(p)});
-    case ExtraType::U64: return ExtraValue(load_le<std::uint64_t>(p));
-    case ExtraType::I64: return ExtraValue(load_le<std::int64_t>(p));
-    case ExtraType::F32: return ExtraValue(double{load_le<float>(p)});
-    case ExtraType::F64: return ExtraValue(load_le<double>(p));
-    case ExtraType::Raw: break;
+    case ExtraType::U8:
+      return ExtraValue(std::uint64_t{p[0]});
+    case ExtraType::I8:
+      return ExtraValue(std::int64_t{static_cast<std::int8_t>(p[0])});
+    case ExtraType::U16:
+      return ExtraValue(std::uint64_t{load_le<std::uint16_t>(p)});
+    case ExtraType::I16:
+      return ExtraValue(std::int64_t{load_le<std::int16_t>(p)});
+    case ExtraType::U32:
+      return ExtraValue(std::uint64_t{load_le<std::uint32_t>(p)});
+    case ExtraType::I32:
+      return ExtraValue(std::int64_t{load_le<std::int32_t>(p)});
+    case ExtraType::U64:
+      return ExtraValue(load_le<std::uint64_t>(p));
+    case ExtraType::I64:
+      return ExtraValue(load_le<std::int64_t>(p));
+    case ExtraType::F32:
+      return ExtraValue(double{load_le<float>(p)});
+    case ExtraType::F64:
+      return ExtraValue(load_le<double>(p));
+    case ExtraType::Raw:
+      break;
   }
   return std::nullopt;
 }
 
 std::optional<double> decode_extra_scaled(const ExtraDimension& dimension,
-                                          std::span<const std::uint8_t> point_extra,
-                                          int element) {
+                                          std::span<const std::uint8_t> point_extra, int element) {
   const auto raw = decode_extra(dimension, point_extra, element);
   if (!raw) return std::nullopt;
   const double value = std::visit([](auto v) { return static_cast<double>(v); }, *raw);

@@ -53,14 +53,18 @@ std::optional<PointFileFormat> sniff(std::span<const std::uint8_t> head, std::st
   return std::nullopt;
 }
 
-kernel::Result<std::unique_ptr<PointReader>> open_source(
-    std::unique_ptr<detail::ByteSource> source, PointFileFormat format,
-    const PointReadOptions& options) {
+kernel::Result<std::unique_ptr<PointReader>> open_source(std::unique_ptr<detail::ByteSource> source,
+                                                         PointFileFormat format,
+                                                         const PointReadOptions& options) {
   switch (format) {
-    case PointFileFormat::Ply: return detail::open_ply(std::move(source), options);
-    case PointFileFormat::Pcd: return detail::open_pcd(std::move(source), options);
-    case PointFileFormat::Xyz: return detail::open_xyz(std::move(source), options);
-    case PointFileFormat::Las: break;
+    case PointFileFormat::Ply:
+      return detail::open_ply(std::move(source), options);
+    case PointFileFormat::Pcd:
+      return detail::open_pcd(std::move(source), options);
+    case PointFileFormat::Xyz:
+      return detail::open_xyz(std::move(source), options);
+    case PointFileFormat::Las:
+      break;
   }
   return kernel::Error{ErrorCode::Unsupported, source->name() + ": internal: LAS dispatch"};
 }
@@ -75,10 +79,14 @@ std::string format_point(const Point& p) {
 
 const char* point_file_format_name(PointFileFormat format) {
   switch (format) {
-    case PointFileFormat::Las: return "las";
-    case PointFileFormat::Ply: return "ply";
-    case PointFileFormat::Pcd: return "pcd";
-    case PointFileFormat::Xyz: return "xyz";
+    case PointFileFormat::Las:
+      return "las";
+    case PointFileFormat::Ply:
+      return "ply";
+    case PointFileFormat::Pcd:
+      return "pcd";
+    case PointFileFormat::Xyz:
+      return "xyz";
   }
   return "unknown";
 }
@@ -194,9 +202,8 @@ void PointReader::finish_reading() {
     std::snprintf(box, sizeof box, "[%.10g, %.10g, %.10g] - [%.10g, %.10g, %.10g]",
                   info_.bounds->min[0], info_.bounds->min[1], info_.bounds->min[2],
                   info_.bounds->max[0], info_.bounds->max[1], info_.bounds->max[2]);
-    warn(name_ + ": " + std::to_string(outside_bounds_) +
-         " points lie outside the header bounds " + box + ", the first at " +
-         format_point(*first_outside_));
+    warn(name_ + ": " + std::to_string(outside_bounds_) + " points lie outside the header bounds " +
+         box + ", the first at " + format_point(*first_outside_));
   }
 }
 
@@ -210,8 +217,9 @@ kernel::Result<PointFileFormat> detect_point_format(const std::filesystem::path&
   const auto format = sniff(head, path.filename().string());
   if (!format) {
     return kernel::Error{ErrorCode::Unsupported,
-                         path.string() + ": not a point-cloud format known here (LAS, PLY, "
-                                         "PCD, or XYZ text with a .xyz/.txt/.csv/.pts extension)"};
+                         path.string() +
+                             ": not a point-cloud format known here (LAS, PLY, "
+                             "PCD, or XYZ text with a .xyz/.txt/.csv/.pts extension)"};
   }
   return *format;
 }
@@ -230,8 +238,9 @@ kernel::Result<std::unique_ptr<PointReader>> open_point_file(const std::filesyst
   return open_source(std::move(source).value(), format.value(), options);
 }
 
-kernel::Result<std::unique_ptr<PointReader>> open_point_memory(
-    std::string name, std::span<const std::uint8_t> bytes, const PointReadOptions& options) {
+kernel::Result<std::unique_ptr<PointReader>> open_point_memory(std::string name,
+                                                               std::span<const std::uint8_t> bytes,
+                                                               const PointReadOptions& options) {
   const auto format = sniff(bytes.first(std::min<std::size_t>(bytes.size(), 4096)), name);
   if (!format) {
     return kernel::Error{ErrorCode::Unsupported,

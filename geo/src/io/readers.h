@@ -54,8 +54,26 @@ class Float32PrecisionCheck {
 
 /// Which Point field an input column or property feeds.
 enum class PointTarget {
-  None, X, Y, Z, NormalX, NormalY, NormalZ, Red, Green, Blue, Rgb, Intensity, Classification,
-  GpsTime, ReturnNumber, NumberOfReturns, PointSourceId, UserData, ScanAngle, Nir
+  None,
+  X,
+  Y,
+  Z,
+  NormalX,
+  NormalY,
+  NormalZ,
+  Red,
+  Green,
+  Blue,
+  Rgb,
+  Intensity,
+  Classification,
+  GpsTime,
+  ReturnNumber,
+  NumberOfReturns,
+  PointSourceId,
+  UserData,
+  ScanAngle,
+  Nir
 };
 /// The field named `name` (PLY / PCD / XYZ conventions, case-insensitive), or None.
 PointTarget point_target(std::string_view name);

@@ -110,16 +110,35 @@ std::uint16_t color(double v, bool eight_bit) {
 
 void assign_target(Point& p, PointTarget target, double v, bool eight_bit_color) {
   switch (target) {
-    case PointTarget::None: break;
-    case PointTarget::X: p.x = v; break;
-    case PointTarget::Y: p.y = v; break;
-    case PointTarget::Z: p.z = v; break;
-    case PointTarget::NormalX: p.normal[0] = static_cast<float>(v); break;
-    case PointTarget::NormalY: p.normal[1] = static_cast<float>(v); break;
-    case PointTarget::NormalZ: p.normal[2] = static_cast<float>(v); break;
-    case PointTarget::Red: p.red = color(v, eight_bit_color); break;
-    case PointTarget::Green: p.green = color(v, eight_bit_color); break;
-    case PointTarget::Blue: p.blue = color(v, eight_bit_color); break;
+    case PointTarget::None:
+      break;
+    case PointTarget::X:
+      p.x = v;
+      break;
+    case PointTarget::Y:
+      p.y = v;
+      break;
+    case PointTarget::Z:
+      p.z = v;
+      break;
+    case PointTarget::NormalX:
+      p.normal[0] = static_cast<float>(v);
+      break;
+    case PointTarget::NormalY:
+      p.normal[1] = static_cast<float>(v);
+      break;
+    case PointTarget::NormalZ:
+      p.normal[2] = static_cast<float>(v);
+      break;
+    case PointTarget::Red:
+      p.red = color(v, eight_bit_color);
+      break;
+    case PointTarget::Green:
+      p.green = color(v, eight_bit_color);
+      break;
+    case PointTarget::Blue:
+      p.blue = color(v, eight_bit_color);
+      break;
     case PointTarget::Rgb: {
       // PCL packs 8-bit colours as 0x00RRGGBB (alpha in the top byte for rgba).
       const auto packed = static_cast<std::uint32_t>(clamp_round<std::uint32_t>(v));
@@ -128,15 +147,33 @@ void assign_target(Point& p, PointTarget target, double v, bool eight_bit_color)
       p.blue = static_cast<std::uint16_t>((packed & 0xFF) * 257);
       break;
     }
-    case PointTarget::Intensity: p.intensity = clamp_round<std::uint16_t>(v); break;
-    case PointTarget::Classification: p.classification = clamp_round<std::uint8_t>(v); break;
-    case PointTarget::GpsTime: p.gps_time = v; break;
-    case PointTarget::ReturnNumber: p.return_number = clamp_round<std::uint8_t>(v); break;
-    case PointTarget::NumberOfReturns: p.number_of_returns = clamp_round<std::uint8_t>(v); break;
-    case PointTarget::PointSourceId: p.point_source_id = clamp_round<std::uint16_t>(v); break;
-    case PointTarget::UserData: p.user_data = clamp_round<std::uint8_t>(v); break;
-    case PointTarget::ScanAngle: p.scan_angle = static_cast<float>(v); break;
-    case PointTarget::Nir: p.nir = color(v, eight_bit_color); break;
+    case PointTarget::Intensity:
+      p.intensity = clamp_round<std::uint16_t>(v);
+      break;
+    case PointTarget::Classification:
+      p.classification = clamp_round<std::uint8_t>(v);
+      break;
+    case PointTarget::GpsTime:
+      p.gps_time = v;
+      break;
+    case PointTarget::ReturnNumber:
+      p.return_number = clamp_round<std::uint8_t>(v);
+      break;
+    case PointTarget::NumberOfReturns:
+      p.number_of_returns = clamp_round<std::uint8_t>(v);
+      break;
+    case PointTarget::PointSourceId:
+      p.point_source_id = clamp_round<std::uint16_t>(v);
+      break;
+    case PointTarget::UserData:
+      p.user_data = clamp_round<std::uint8_t>(v);
+      break;
+    case PointTarget::ScanAngle:
+      p.scan_angle = static_cast<float>(v);
+      break;
+    case PointTarget::Nir:
+      p.nir = color(v, eight_bit_color);
+      break;
   }
 }
 
@@ -144,21 +181,42 @@ void mark_field(PointFields& f, PointTarget target) {
   switch (target) {
     case PointTarget::NormalX:
     case PointTarget::NormalY:
-    case PointTarget::NormalZ: f.normals = true; break;
+    case PointTarget::NormalZ:
+      f.normals = true;
+      break;
     case PointTarget::Red:
     case PointTarget::Green:
     case PointTarget::Blue:
-    case PointTarget::Rgb: f.color = true; break;
-    case PointTarget::Intensity: f.intensity = true; break;
-    case PointTarget::Classification: f.classification = true; break;
-    case PointTarget::GpsTime: f.gps_time = true; break;
+    case PointTarget::Rgb:
+      f.color = true;
+      break;
+    case PointTarget::Intensity:
+      f.intensity = true;
+      break;
+    case PointTarget::Classification:
+      f.classification = true;
+      break;
+    case PointTarget::GpsTime:
+      f.gps_time = true;
+      break;
     case PointTarget::ReturnNumber:
-    case PointTarget::NumberOfReturns: f.returns = true; break;
-    case PointTarget::PointSourceId: f.point_source_id = true; break;
-    case PointTarget::UserData: f.user_data = true; break;
-    case PointTarget::ScanAngle: f.scan_angle = true; break;
-    case PointTarget::Nir: f.nir = true; break;
-    default: break;
+    case PointTarget::NumberOfReturns:
+      f.returns = true;
+      break;
+    case PointTarget::PointSourceId:
+      f.point_source_id = true;
+      break;
+    case PointTarget::UserData:
+      f.user_data = true;
+      break;
+    case PointTarget::ScanAngle:
+      f.scan_angle = true;
+      break;
+    case PointTarget::Nir:
+      f.nir = true;
+      break;
+    default:
+      break;
   }
 }
 

@@ -150,8 +150,10 @@ kernel::Result<std::unique_ptr<PointReader>> open_xyz(std::unique_ptr<ByteSource
     }
     if (t == PointTarget::X || t == PointTarget::Y || t == PointTarget::Z) {
       const int axis = static_cast<int>(t) - static_cast<int>(PointTarget::X);
-      if (has_xyz[axis]) t = PointTarget::None;  // a repeated name: keep the first
-      else has_xyz[axis] = true;
+      if (has_xyz[axis])
+        t = PointTarget::None;  // a repeated name: keep the first
+      else
+        has_xyz[axis] = true;
     }
     targets[c] = t;
     if (t == PointTarget::None) {
@@ -167,14 +169,14 @@ kernel::Result<std::unique_ptr<PointReader>> open_xyz(std::unique_ptr<ByteSource
     }
   }
   if (header && !(has_xyz[0] && has_xyz[1] && has_xyz[2])) {
-    return Error{ErrorCode::CorruptData,
-                 name + ": the header line names no x, y and z columns (\"" +
-                     std::string(trim(line)).substr(0, 80) + "\")"};
+    return Error{ErrorCode::CorruptData, name +
+                                             ": the header line names no x, y and z columns (\"" +
+                                             std::string(trim(line)).substr(0, 80) + "\")"};
   }
   if (!layout->dimensions.empty()) info.extra = std::move(layout);
-  std::unique_ptr<PointReader> reader = std::make_unique<XyzReader>(
-      name, std::move(info), options, std::move(source), first_data, std::move(targets),
-      std::move(extra_slot), commas);
+  std::unique_ptr<PointReader> reader =
+      std::make_unique<XyzReader>(name, std::move(info), options, std::move(source), first_data,
+                                  std::move(targets), std::move(extra_slot), commas);
   return reader;
 }
 

@@ -7,9 +7,9 @@
 
 #include <atomic>
 #include <cerrno>
-#include <cstring>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 #include "csgtile/kernel/native_format.h"
 
@@ -17,8 +17,10 @@ namespace csgtile::kernel {
 
 namespace {
 
+/// The message comes from std::generic_category (thread-safe, unlike strerror).
 Error io_error(const std::string& what, const std::filesystem::path& path, int error_number) {
-  return Error{ErrorCode::IoError, what + " " + path.string() + ": " + std::strerror(error_number)};
+  return Error{ErrorCode::IoError,
+               what + " " + path.string() + ": " + std::generic_category().message(error_number)};
 }
 
 /// Closes a file descriptor when it goes out of scope (unless released).

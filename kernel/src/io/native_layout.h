@@ -23,8 +23,9 @@
 ///   locations (tag 4):  count, count × { rotation row-major 9 num, scale num, vec3 }.
 ///                       The identity location is implicit and never stored.
 ///   curves    (tag 6):  count, count × { kind:u8 (CurveKind), fields }
-///                       Line: origin vec3, direction vec3 (a preimage whose normalisation
-///                       gives the stored direction bit for bit); Circle: frame, radius;
+///                       Line: origin vec3, direction vec3 (stored_unit_direction of the
+///                       line's direction, unit_direction.h; readers refuse any other
+///                       vector); Circle: frame, radius;
 ///                       Ellipse: frame, major, minor; Polyline: n ≥ 2, n × vec3, tolerance;
 ///                       Trig: centre vec3, a vec3, b vec3 (a × b ≠ 0)
 ///   surfaces  (tag 8):  count, count × { kind:u8 (SurfaceKind), fields }

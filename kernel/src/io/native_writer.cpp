@@ -43,8 +43,8 @@ LocationKey location_key(const Location& location) {
 
 /// Bitwise identity: a translation of -0.0 is not the identity here (it must round-trip).
 bool is_exact_identity(const Location& location) {
-  static const LocationKey kIdentity = location_key(Location());
-  return location_key(location) == kIdentity;
+  static const LocationKey identity = location_key(Location());
+  return location_key(location) == identity;
 }
 
 // ---- tables -----------------------------------------------------------------------------
@@ -155,7 +155,7 @@ class NumberPool {
 
   void assign_indices() {
     order_.clear();
-    for (const auto& [bits, use] : uses_) order_.push_back({bits, use});
+    for (const auto& [bits, use] : uses_) order_.emplace_back(bits, use);
     std::sort(order_.begin(), order_.end(), [](const auto& a, const auto& b) {
       if (a.second.count != b.second.count) return a.second.count > b.second.count;
       return a.second.first_use < b.second.first_use;

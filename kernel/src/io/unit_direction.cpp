@@ -51,7 +51,7 @@ bool is_axis(const Vec3& d) {
 Vec3 stored_unit_direction(const Vec3& d) {
   if (is_axis(d) || !d.allFinite() || d.isZero(0.0)) return d;
   for (int m = 0; m <= 25; ++m) {
-    const Vec3 candidate = d * std::ldexp(1.0, m - 537);
+    Vec3 candidate = d * std::ldexp(1.0, m - 537);
     if (normalises_to(candidate, d)) return candidate;
   }
   // A platform that flushes subnormals to zero ends here: d itself is right when it is a

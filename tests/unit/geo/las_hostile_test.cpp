@@ -25,7 +25,8 @@ using Bytes = std::vector<std::uint8_t>;
 
 class TempDir {
  public:
-  TempDir() : path_(fs::temp_directory_path() / ("csgtile_geo_hostile_" + std::to_string(::getpid()))) {
+  TempDir()
+      : path_(fs::temp_directory_path() / ("csgtile_geo_hostile_" + std::to_string(::getpid()))) {
     fs::create_directories(path_);
   }
   ~TempDir() {
@@ -91,9 +92,9 @@ kernel::Error open_error(const Bytes& bytes, const PointReadOptions& options = {
                      : reader.error();
 }
 
-constexpr std::size_t kHeaderSize = 94, kOffsetToPoints = 96, kVlrCount = 100,
-                      kPointFormat = 104, kRecordLength = 105, kLegacyCount = 107,
-                      kScaleX = 131, kEvlrOffset = 235, kEvlrCount = 243, kPointCount = 247;
+constexpr std::size_t kHeaderSize = 94, kOffsetToPoints = 96, kVlrCount = 100, kPointFormat = 104,
+                      kRecordLength = 105, kLegacyCount = 107, kScaleX = 131, kEvlrOffset = 235,
+                      kEvlrCount = 243, kPointCount = 247;
 
 TEST(LasHostile, HugeLegacyPointCountIsATruncationNamingBothCounts) {
   Bytes las = valid_las(2, 3, 10);
@@ -156,8 +157,9 @@ TEST(LasHostile, VlrLengthPastTheEndOfTheFile) {
 TEST(LasHostile, VlrLengthIntoThePointData) {
   Bytes las = valid_las(2, 1, 300, true);
   poke<std::uint16_t>(las, 227 + 20, 200);
-  EXPECT_THAT(open_error(las).message,
-              HasSubstr("length 200 ends at byte 481, past the start of the point data (offset 381)"));
+  EXPECT_THAT(
+      open_error(las).message,
+      HasSubstr("length 200 ends at byte 481, past the start of the point data (offset 381)"));
 }
 
 TEST(LasHostile, RecordLengthSmallerThanTheFormat) {
@@ -282,9 +284,9 @@ TEST(LasHostile, BrokenGeoKeysAndExtraDescriptorsAreWarningsNotCrashes) {
   const std::size_t extra_vlr = 227;
   const std::size_t keys_vlr = extra_vlr + 54 + 192;
   ASSERT_EQ(peek<std::uint16_t>(las, keys_vlr + 18), 34735);
-  poke<std::uint16_t>(las, keys_vlr + 54 + 6, 50);      // NumberOfKeys: 50, 2 fit
+  poke<std::uint16_t>(las, keys_vlr + 54 + 6, 50);         // NumberOfKeys: 50, 2 fit
   poke<std::uint16_t>(las, keys_vlr + 54 + 8 + 8 + 6, 9);  // key 2 double index 9 of 1
-  poke<std::uint8_t>(las, extra_vlr + 54 + 2, 30);       // three doubles: 24 bytes, 8 present
+  poke<std::uint8_t>(las, extra_vlr + 54 + 2, 30);         // three doubles: 24 bytes, 8 present
   auto reader = LasReader::open_memory("keys.las", las);
   ASSERT_TRUE(reader.ok()) << reader.error().message;
   const auto& warnings = reader.value()->warnings();

@@ -25,18 +25,18 @@ using ::testing::HasSubstr;
 
 fs::path data_dir() { return test::shared_dir() / "data"; }
 
-#define SKIP_WITHOUT_DATA()                                                                  \
-  if (!fs::is_directory(data_dir())) {                                                       \
-    GTEST_SKIP() << "shared test data not found at " << data_dir()                           \
-                 << " (see ../shared/data/README.md)";                                       \
+#define SKIP_WITHOUT_DATA()                                        \
+  if (!fs::is_directory(data_dir())) {                             \
+    GTEST_SKIP() << "shared test data not found at " << data_dir() \
+                 << " (see ../shared/data/README.md)";             \
   }
 
 // Opens `relative` under the data directory, skipping when that one file is absent.
-#define OPEN_LAS(var, relative)                                                              \
-  SKIP_WITHOUT_DATA();                                                                       \
-  if (!fs::exists(data_dir() / (relative))) GTEST_SKIP() << (relative) << " is absent";     \
-  auto var##_result = LasReader::open(data_dir() / (relative));                              \
-  ASSERT_TRUE(var##_result.ok()) << var##_result.error().message;                            \
+#define OPEN_LAS(var, relative)                                                         \
+  SKIP_WITHOUT_DATA();                                                                  \
+  if (!fs::exists(data_dir() / (relative))) GTEST_SKIP() << (relative) << " is absent"; \
+  auto var##_result = LasReader::open(data_dir() / (relative));                         \
+  ASSERT_TRUE(var##_result.ok()) << var##_result.error().message;                       \
   LasReader& var = *var##_result.value();
 
 struct ReadAll {
@@ -415,7 +415,8 @@ TEST(SharedLas, SeekRereadsTheSamePoints) {
   ASSERT_TRUE(las.seek(500).ok());
   ASSERT_TRUE(las.read(again, 10).ok());
   ASSERT_EQ(first.size(), 10u);
-  for (std::size_t i = 0; i < 10; ++i) EXPECT_EQ(first.points[i].gps_time, again.points[i].gps_time);
+  for (std::size_t i = 0; i < 10; ++i)
+    EXPECT_EQ(first.points[i].gps_time, again.points[i].gps_time);
   EXPECT_FALSE(las.seek(las.readable_points() + 1).ok());
 }
 

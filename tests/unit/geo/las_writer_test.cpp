@@ -77,9 +77,7 @@ ExtraLayout test_layout() {
 PointBatch synth_points(int format, std::size_t count, const ExtraLayout* layout,
                         std::uint32_t seed) {
   std::mt19937_64 random(seed);
-  auto uniform = [&](int lo, int hi) {
-    return std::uniform_int_distribution<int>(lo, hi)(random);
-  };
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(random); };
   PointBatch batch;
   if (layout != nullptr) batch.layout = std::make_shared<ExtraLayout>(*layout);
   const bool extended = format >= 6;
@@ -199,8 +197,8 @@ TEST_P(LasRoundTrip, EveryFieldAndExtraByteSurvives) {
   EXPECT_EQ(layout.record_size, 38u);
   std::vector<std::string> names;
   for (const auto& d : layout.dimensions) names.push_back(d.name);
-  EXPECT_THAT(names, ::testing::ElementsAre("u8", "height", "colour3", "big", "unused 17",
-                                            "value", "pair"));
+  EXPECT_THAT(names, ::testing::ElementsAre("u8", "height", "colour3", "big", "unused 17", "value",
+                                            "pair"));
   EXPECT_EQ(layout.find("height")->scale, 0.05);
   EXPECT_EQ(layout.find("height")->offset, 100.0);
   EXPECT_EQ(layout.find("value")->no_data, -9999.0);
@@ -236,9 +234,9 @@ TEST_P(LasRoundTrip, EveryFieldAndExtraByteSurvives) {
   for (int r = 0; r < (minor >= 4 ? 15 : 5); ++r) {
     EXPECT_EQ(h.points_by_return[r], by_return[r]) << "return " << r + 1;
   }
-  EXPECT_FALSE(
-      std::any_of(las.warnings().begin(), las.warnings().end(),
-                  [](const std::string& w) { return w.find("outside") != std::string::npos; }));
+  EXPECT_FALSE(std::any_of(las.warnings().begin(), las.warnings().end(), [](const std::string& w) {
+    return w.find("outside") != std::string::npos;
+  }));
 }
 
 std::string version_format_name(const ::testing::TestParamInfo<VersionFormat>& info) {

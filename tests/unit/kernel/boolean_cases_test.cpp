@@ -62,15 +62,27 @@ TEST_P(BooleanCase, MatchesClosedForm) {
   }
   const double rel = planar ? 1e-9 : 1e-7;
   EXPECT_NEAR(mp.volume, *ex.volume, rel * std::max(1.0, *ex.volume)) << name;
-  if (ex.area) EXPECT_NEAR(mp.area, *ex.area, rel * std::max(1.0, *ex.area)) << name;
+  if (ex.area) {
+    EXPECT_NEAR(mp.area, *ex.area, rel * std::max(1.0, *ex.area)) << name;
+  }
   const auto counts = count_shapes(result.value());
   auto n = [&](ShapeKind k) { return static_cast<long long>(counts[static_cast<int>(k)]); };
   const geo::TopologyCounts& t = *ex.topology;
-  if (t.solids >= 0) EXPECT_EQ(n(ShapeKind::Solid), t.solids) << name;
-  if (t.shells >= 0) EXPECT_EQ(n(ShapeKind::Shell), t.shells) << name;
-  if (t.faces >= 0) EXPECT_EQ(n(ShapeKind::Face), t.faces) << name;
-  if (t.edges >= 0) EXPECT_EQ(n(ShapeKind::Edge), t.edges) << name;
-  if (t.vertices >= 0) EXPECT_EQ(n(ShapeKind::Vertex), t.vertices) << name;
+  if (t.solids >= 0) {
+    EXPECT_EQ(n(ShapeKind::Solid), t.solids) << name;
+  }
+  if (t.shells >= 0) {
+    EXPECT_EQ(n(ShapeKind::Shell), t.shells) << name;
+  }
+  if (t.faces >= 0) {
+    EXPECT_EQ(n(ShapeKind::Face), t.faces) << name;
+  }
+  if (t.edges >= 0) {
+    EXPECT_EQ(n(ShapeKind::Edge), t.edges) << name;
+  }
+  if (t.vertices >= 0) {
+    EXPECT_EQ(n(ShapeKind::Vertex), t.vertices) << name;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(SharedCases, BooleanCase, ::testing::ValuesIn(case_names()),

@@ -76,9 +76,15 @@ TEST(BooleanProperty, SelfOperationsOfEveryPrimitive) {
     const Shape empty = valid(boolean_operation(a, a, BooleanOp::Cut), tag + " A-A");
     const Shape same = valid(boolean_operation(a, a, BooleanOp::Common), tag + " A&A");
     const Shape whole = valid(boolean_operation(a, a, BooleanOp::Fuse), tag + " A|A");
-    if (!empty.is_null()) EXPECT_EQ(solids(empty), 0u) << tag;
-    if (!same.is_null()) EXPECT_NEAR(volume(same), va, 1e-9 * va) << tag;
-    if (!whole.is_null()) EXPECT_NEAR(volume(whole), va, 1e-9 * va) << tag;
+    if (!empty.is_null()) {
+      EXPECT_EQ(solids(empty), 0u) << tag;
+    }
+    if (!same.is_null()) {
+      EXPECT_NEAR(volume(same), va, 1e-9 * va) << tag;
+    }
+    if (!whole.is_null()) {
+      EXPECT_NEAR(volume(whole), va, 1e-9 * va) << tag;
+    }
   }
 }
 

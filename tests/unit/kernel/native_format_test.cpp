@@ -560,7 +560,9 @@ TEST(NativeFormat, BytesPerPrimitiveAgainstBinaryStlAtOneCentimetre) {
         "(%zu triangles): %5.1f%%\n",
         c.name, local, placed, stl, mesh->triangles.size(),
         100.0 * static_cast<double>(placed) / static_cast<double>(stl));
-    if (c.curved) EXPECT_LT(placed * 10, stl) << c.name;
+    if (c.curved) {
+      EXPECT_LT(placed * 10, stl) << c.name;
+    }
   }
 }
 

@@ -43,11 +43,11 @@ struct LasHeader {
   std::uint16_t header_size = 0;
   std::uint32_t offset_to_point_data = 0;
   std::uint32_t vlr_count = 0;
-  std::uint8_t point_format = 0;       ///< with the compression bits (6, 7) cleared
-  std::uint16_t record_length = 0;     ///< bytes per point record, extra bytes included
+  std::uint8_t point_format = 0;    ///< with the compression bits (6, 7) cleared
+  std::uint16_t record_length = 0;  ///< bytes per point record, extra bytes included
   std::uint32_t legacy_point_count = 0;
   std::array<std::uint32_t, 5> legacy_points_by_return{};
-  std::uint64_t point_count = 0;       ///< the count in force (1.4: 64-bit field, else legacy)
+  std::uint64_t point_count = 0;  ///< the count in force (1.4: 64-bit field, else legacy)
   std::array<std::uint64_t, 15> points_by_return{};  ///< 1.4 field, else the legacy five
   std::array<double, 3> scale{1.0, 1.0, 1.0};
   std::array<double, 3> offset{0.0, 0.0, 0.0};
@@ -65,12 +65,13 @@ struct LasHeader {
 struct LasRecord {
   std::string user_id;
   std::uint16_t record_id = 0;
-  std::uint64_t length = 0;        ///< payload bytes the record declares
+  std::uint64_t length = 0;  ///< payload bytes the record declares
   std::string description;
   std::uint64_t payload_offset = 0;  ///< where the payload starts in the file
   bool extended = false;             ///< an EVLR
-  /// The payload when loaded: VLRs always (they are at most 64 KiB); EVLRs up to 16 MiB.
-  /// Waveform data and other bulky EVLRs are described but not loaded.
+  /// The payload when loaded: VLRs (at most 64 KiB each) up to 64 MiB in total, EVLRs up to
+  /// 16 MiB each and 64 MiB in total. Waveform data and other bulky records are described
+  /// but not loaded.
   std::optional<std::vector<std::uint8_t>> data;
 };
 
@@ -91,7 +92,7 @@ inline constexpr std::uint16_t kGeoKeyUserDefined = 32767;
 /// One GeoKeyDirectory entry with its value resolved from the parameter records.
 struct GeoKey {
   std::uint16_t id = 0;
-  std::uint16_t location = 0;      ///< 0: inline short; 34736: doubles; 34737: ASCII
+  std::uint16_t location = 0;  ///< 0: inline short; 34736: doubles; 34737: ASCII
   std::uint16_t count = 0;
   std::uint16_t value_offset = 0;  ///< the short value (location 0) or the parameter index
   std::vector<double> doubles;     ///< location 34736, when in range
@@ -110,7 +111,7 @@ struct LasCrsRecords {
   bool has_geotiff = false;  ///< a GeoKeyDirectory record is present
   /// KeyDirectoryVersion, KeyRevision, MinorRevision.
   std::array<std::uint16_t, 3> geotiff_version{0, 0, 0};
-  std::vector<GeoKey> keys;  ///< in file order; keys with id 0 are dropped (with a warning)
+  std::vector<GeoKey> keys;        ///< in file order; keys with id 0 are dropped (with a warning)
   std::optional<std::string> wkt;  ///< OGC WKT, NULs stripped; may be empty (see warnings)
   bool wkt_from_evlr = false;
   /// A copy of the WKT some writers (libLAS, old PDAL) store in a "liblas" 2112 VLR. Not
@@ -118,12 +119,12 @@ struct LasCrsRecords {
   std::optional<std::string> liblas_wkt;
   bool wkt_flag = false;  ///< global encoding bit 4: the CRS is WKT (1.4)
 
-  std::optional<std::uint16_t> model_type;          ///< 1024: 1 projected, 2 geographic, 3 geocentric
-  std::optional<std::uint16_t> projected_cs;        ///< 3072 ProjectedCSTypeGeoKey
-  std::optional<std::uint16_t> geographic_cs;       ///< 2048 GeographicTypeGeoKey
-  std::optional<std::uint16_t> vertical_cs;         ///< 4096 VerticalCSTypeGeoKey
+  std::optional<std::uint16_t> model_type;     ///< 1024: 1 projected, 2 geographic, 3 geocentric
+  std::optional<std::uint16_t> projected_cs;   ///< 3072 ProjectedCSTypeGeoKey
+  std::optional<std::uint16_t> geographic_cs;  ///< 2048 GeographicTypeGeoKey
+  std::optional<std::uint16_t> vertical_cs;    ///< 4096 VerticalCSTypeGeoKey
   std::optional<std::uint16_t> projected_linear_units;  ///< 3076 ProjLinearUnitsGeoKey
-  std::optional<std::uint16_t> vertical_units;      ///< 4099 VerticalUnitsGeoKey
+  std::optional<std::uint16_t> vertical_units;          ///< 4099 VerticalUnitsGeoKey
 
   /// Problems found in the records (counts past the record, dangling parameter indices,
   /// empty WKT, ...). They are also among the reader's warnings.
@@ -139,8 +140,8 @@ struct LasCrsRecords {
 /// warnings). Never fails: counts are checked against the payload lengths and whatever does
 /// not fit is reported in records.warnings. Linear in the payload sizes.
 void parse_geotiff_keys(std::span<const std::uint8_t> directory,
-                        std::span<const std::uint8_t> doubles,
-                        std::span<const std::uint8_t> ascii, LasCrsRecords& records);
+                        std::span<const std::uint8_t> doubles, std::span<const std::uint8_t> ascii,
+                        LasCrsRecords& records);
 
 /// Bytes of point format `format`'s own fields (0 → 20 ... 10 → 67); 0 for formats > 10.
 std::uint16_t las_point_format_length(int format);
@@ -157,8 +158,7 @@ class LasReader final : public PointReader {
                                                          const PointReadOptions& options = {});
   /// As open, over bytes in memory that outlive the reader.
   static kernel::Result<std::unique_ptr<LasReader>> open_memory(
-      std::string name, std::span<const std::uint8_t> bytes,
-      const PointReadOptions& options = {});
+      std::string name, std::span<const std::uint8_t> bytes, const PointReadOptions& options = {});
   ~LasReader() override;
 
   const LasHeader& header() const;
@@ -186,24 +186,26 @@ class LasReader final : public PointReader {
 
 /// What to write. Defaults give LAS 1.4, point format 6, millimetre scale.
 struct LasWriteOptions {
-  std::uint8_t version_minor = 4;   ///< 0-4; the format must exist in that version
-  std::uint8_t point_format = 6;    ///< 0-10 (waveform fields of 4, 5, 9, 10 are written as 0)
+  std::uint8_t version_minor = 4;  ///< 0-4; the format must exist in that version
+  std::uint8_t point_format = 6;   ///< 0-10 (waveform fields of 4, 5, 9, 10 are written as 0)
   std::array<double, 3> scale{0.001, 0.001, 0.001};
   std::array<double, 3> offset{0.0, 0.0, 0.0};
   /// Extra bytes of each point: record_size bytes; described dimensions are written as an
   /// Extra Bytes VLR (LASF_Spec 4), undescribed bytes are written without one.
   ExtraLayout extra;
-  std::optional<std::string> wkt;   ///< written as LASF_Projection 2112 (sets encoding bit 4 in 1.4)
-  bool wkt_in_evlr = false;         ///< 1.4 only: put the WKT in an EVLR instead of a VLR
+  /// Written as LASF_Projection 2112. In 1.4 global encoding bit 4 (WKT) is set when a WKT is
+  /// given, or for formats 6-10 without GeoTIFF keys (the standard requires WKT there).
+  std::optional<std::string> wkt;
+  bool wkt_in_evlr = false;  ///< 1.4 only: put the WKT in an EVLR instead of a VLR
   /// GeoTIFF keys, written as LASF_Projection 34735 (+ 34736 / 34737 from the keys' doubles
   /// and ASCII values; location and value_offset are recomputed).
   std::vector<GeoKey> geo_keys;
-  std::vector<LasRecord> vlrs;      ///< further VLRs (payload from `data`)
-  std::vector<LasRecord> evlrs;     ///< further EVLRs (1.4 only)
+  std::vector<LasRecord> vlrs;   ///< further VLRs (payload from `data`)
+  std::vector<LasRecord> evlrs;  ///< further EVLRs (1.4 only)
   std::string system_identifier = "csgtile";
   std::string generating_software = "csgtile";
   std::uint16_t file_source_id = 0;
-  std::uint16_t global_encoding = 0;  ///< bit 4 is set for you when the WKT is written in 1.4
+  std::uint16_t global_encoding = 0;  ///< bit 4 is managed as `wkt` says
   std::uint16_t creation_day = 1;     ///< fixed defaults keep outputs byte-identical
   std::uint16_t creation_year = 2025;
 };

@@ -47,14 +47,14 @@ struct Point {
   double x = 0, y = 0, z = 0;  ///< coordinates in file units, LAS scale and offset applied
   double gps_time = 0;         ///< LAS GPS time (week seconds or adjusted standard, see header)
   std::array<float, 3> normal{0.0F, 0.0F, 0.0F};  ///< PLY/PCD normals; zero when absent
-  float scan_angle = 0;        ///< degrees, negative left of nadir (LAS rank or 0.006° steps)
+  float scan_angle = 0;  ///< degrees, negative left of nadir (LAS rank or 0.006° steps)
   std::uint16_t intensity = 0;
   std::uint16_t red = 0, green = 0, blue = 0;  ///< 16-bit range; 8-bit sources are scaled ×257
   std::uint16_t nir = 0;                       ///< near infrared (LAS formats 8 and 10)
   std::uint16_t point_source_id = 0;
-  std::uint8_t return_number = 0;      ///< 1-based; 0-7 in formats 0-5, 0-15 in 6-10
-  std::uint8_t number_of_returns = 0;  ///< returns of the pulse
-  std::uint8_t classification = 0;     ///< ASPRS class: 0-31 in formats 0-5, 0-255 in 6-10
+  std::uint8_t return_number = 0;         ///< 1-based; 0-7 in formats 0-5, 0-15 in 6-10
+  std::uint8_t number_of_returns = 0;     ///< returns of the pulse
+  std::uint8_t classification = 0;        ///< ASPRS class: 0-31 in formats 0-5, 0-255 in 6-10
   std::uint8_t classification_flags = 0;  ///< kFlag* bits
   std::uint8_t scanner_channel = 0;       ///< 0-3 (formats 6-10)
   std::uint8_t user_data = 0;
@@ -76,9 +76,9 @@ struct ExtraDimension {
   std::string name;
   std::string description;
   ExtraType type = ExtraType::Raw;
-  int elements = 1;              ///< 1-3 values (LAS deprecated array types); Raw: byte count
-  std::size_t byte_offset = 0;   ///< position inside a point's extra bytes
-  std::optional<double> scale;   ///< value = raw × scale + offset, when given
+  int elements = 1;             ///< 1-3 values (LAS deprecated array types); Raw: byte count
+  std::size_t byte_offset = 0;  ///< position inside a point's extra bytes
+  std::optional<double> scale;  ///< value = raw × scale + offset, when given
   std::optional<double> offset;
   std::optional<double> no_data;  ///< first element's values as the descriptor gives them
   std::optional<double> minimum;
@@ -107,8 +107,7 @@ using ExtraValue = std::variant<std::int64_t, std::uint64_t, double>;
 /// Decodes element `element` of `dimension` from one point's extra bytes (little-endian, as
 /// LAS stores them). nullopt for Raw dimensions, a bad element, or too few bytes.
 std::optional<ExtraValue> decode_extra(const ExtraDimension& dimension,
-                                       std::span<const std::uint8_t> point_extra,
-                                       int element = 0);
+                                       std::span<const std::uint8_t> point_extra, int element = 0);
 /// As decode_extra, converted to double with the dimension's scale and offset applied.
 std::optional<double> decode_extra_scaled(const ExtraDimension& dimension,
                                           std::span<const std::uint8_t> point_extra,

@@ -58,7 +58,7 @@ struct PointReadOptions {
 /// What a reader knows before reading points.
 struct PointCloudInfo {
   PointFileFormat format = PointFileFormat::Las;
-  std::string description;                ///< e.g. "LAS 1.4 point format 6", "PCD binary"
+  std::string description;                   ///< e.g. "LAS 1.4 point format 6", "PCD binary"
   std::optional<std::uint64_t> point_count;  ///< records the header declares (XYZ: none)
   std::optional<Bounds3> bounds;             ///< bounds the header declares (LAS only)
   /// Points outside `bounds` widened by this much per axis give a warning (LAS: half a

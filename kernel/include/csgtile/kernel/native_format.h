@@ -9,8 +9,9 @@
 /// A section is tag (varint) + payload length (varint) + payload. Tag bit 0 marks an optional
 /// section: readers skip optional sections they do not know and refuse unknown required
 /// ones (UnsupportedVersion), so later versions add sections (e.g. CSG history) without
-/// breaking older readers. Numbers are little-endian IEEE doubles, written once in a number
-/// table and referenced by index; counts and indices are LEB128 varints.
+/// breaking older readers. Numbers are IEEE doubles, written once in a number table (short
+/// mantissas shortened) and referenced by index or by position in a window of recently used
+/// numbers; counts and indices are LEB128 varints; geometry is shared by pointer identity.
 
 #include <cstdint>
 #include <filesystem>
@@ -28,8 +29,9 @@ inline constexpr std::uint32_t kNativeFormatVersion = 1;
 /// Serialises a shape of any kind (the null shape too) losslessly: read_native gives back a
 /// shape that is structurally_equal to it, and writing that again gives the same bytes.
 /// Deterministic: the same shape gives the same bytes (no dependence on pointer values).
-/// Precondition: the geometry's numbers are finite (ShapeFactory guarantees it for points,
-/// parameters and tolerances). O(n log n) in the model size; thread-safe.
+/// Preconditions: the geometry's numbers are finite (ShapeFactory guarantees it for points,
+/// parameters and tolerances) and line, extrusion and revolution directions are non-zero.
+/// O(n log n) in the model size; thread-safe.
 std::string write_native(const Shape& shape);
 
 /// Parses bytes written by write_native. Never crashes on hostile input: every count is
@@ -38,7 +40,9 @@ std::string write_native(const Shape& shape);
 /// Errors: UnsupportedVersion (another format version, non-zero flags, an unknown required
 /// section); CorruptData (bad magic, checksum mismatch, truncation, out-of-range index, bad
 /// kind/orientation, non-finite number, nesting deeper than 256, a body ShapeFactory
-/// rejects, trailing bytes). O(n) in the input size.
+/// rejects, a geometry precondition broken, a direction not stored the way write_native
+/// stores it, trailing bytes). Whatever it accepts, write_native writes back so that it
+/// reads as the same shape. O(n) in the input size.
 Result<Shape> read_native(std::string_view bytes);
 
 /// Writes write_native(shape) to `path` atomically: a temporary file in the same directory
