@@ -13,6 +13,8 @@
 #include <limits>
 #include <numbers>
 #include <random>
+
+#include "random_geometry.h"
 #include <vector>
 
 #include "csgtile/kernel/curve2d.h"
@@ -24,40 +26,11 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  Vec3 v;
-  do {
-    v = Vec3(n(rng), n(rng), n(rng));
-  } while (v.norm() < 1e-3);
-  return v.normalized();
-}
-
-Vec3 random_point(std::mt19937& rng, double extent) {
-  std::uniform_real_distribution<double> d(-extent, extent);
-  return {d(rng), d(rng), d(rng)};
-}
-
-Frame random_frame(std::mt19937& rng) {
-  return Frame::from_z(random_point(rng, 5.0), random_unit(rng), random_unit(rng));
-}
-
-/// A random proper similarity built through the public matrix constructor.
-Location random_similarity(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Quaterniond q = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
-  std::uniform_real_distribution<double> scale(0.3, 3.0);
-  Matrix34 m;
-  m.leftCols<3>() = scale(rng) * q.toRotationMatrix();
-  m.col(3) = random_point(rng, 10.0);
-  const Result<Location> loc = Location::from_matrix(m);
-  EXPECT_TRUE(loc.ok());
-  return loc.ok() ? loc.value() : Location();
-}
-
-void expect_near(const Vec3& a, const Vec3& b, double tolerance) {
-  EXPECT_LE((a - b).norm(), tolerance) << "a = " << a.transpose() << "\nb = " << b.transpose();
-}
+using test::expect_near;
+using test::random_frame;
+using test::random_point;
+using test::random_similarity;
+using test::random_unit;
 
 /// Golden-section refinement of a 1-D maximum found by sampling, kept inside [lo, hi].
 double refine_max_1d(const std::function<double(double)>& f, double t, double h, double lo,
