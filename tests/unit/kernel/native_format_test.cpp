@@ -51,7 +51,7 @@ Vec3 random_unit(std::mt19937_64& rng) {
 
 /// Writes, reads, compares and writes again; returns the bytes.
 std::string expect_round_trip(const Shape& shape) {
-  const std::string bytes = write_native(shape);
+  std::string bytes = write_native(shape);
   auto read = read_native(bytes);
   EXPECT_TRUE(read.ok()) << read.error().message;
   if (!read.ok()) return bytes;
@@ -85,7 +85,7 @@ struct NamedBuild {
   Result<Shape> (*build)();
 };
 
-const NamedBuild kPrimitives[] = {
+constexpr NamedBuild kPrimitives[] = {
     {"box", [] { return make_box(10, 8, 6); }},
     {"cylinder", [] { return make_cylinder(1, 3); }},
     {"cone", [] { return make_cone(2, 0, 3); }},
@@ -384,7 +384,8 @@ TEST(NativeFormatHostile, UnknownOptionalSectionsAreSkippedUnknownRequiredRefuse
   EXPECT_EQ(read_native(seal(header() + null_body + null_body)).error().code,
             ErrorCode::CorruptData);
   EXPECT_EQ(read_native(seal(header())).error().code, ErrorCode::CorruptData);
-  EXPECT_EQ(read_native(seal(header() + "\x0c\x10\x00\x00")).error().code, ErrorCode::CorruptData);
+  EXPECT_EQ(read_native(seal(header() + std::string("\x0c\x10\x00\x00", 4))).error().code,
+            ErrorCode::CorruptData);
 }
 
 /// Bodies: `count` compounds, each holding the previous one; root = the last.
