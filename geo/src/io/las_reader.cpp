@@ -270,9 +270,15 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
       "; no LASzip decoder is available — decompress it first (e.g. `pdal translate in.laz "
       "out.las` or `las2las -i in.laz -o out.las`)";
   if ((format_id & 0xC0) != 0) {
-    return Error{ErrorCode::Unsupported, name + ": LAZ-compressed (point format id " +
-                                             num(format_id) + " has the compression bit set)" +
-                                             kLazAdvice};
+    // COPC puts its "copc" info VLR first, right after the header: name it when present.
+    std::array<std::uint8_t, 6> first_vlr_user{};
+    const bool copc = load_le<std::uint32_t>(&head[detail::kLasVlrCount]) > 0 &&
+                      h.header_size + 8u <= size &&
+                      src.read_at(h.header_size + 2u, first_vlr_user).ok() &&
+                      std::memcmp(first_vlr_user.data(), "copc\0", 5) == 0;
+    return Error{ErrorCode::Unsupported, name + (copc ? ": COPC (cloud-optimised LAZ), " : ": ") +
+                                             "LAZ-compressed (point format id " + num(format_id) +
+                                             " has the compression bit set)" + kLazAdvice};
   }
 
   // Offsets and the VLR area.
