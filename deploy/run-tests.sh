@@ -28,6 +28,8 @@ if [ "${CSGTILE_SKIP_FUZZ:-0}" != 1 ]; then
   echo "== libFuzzer targets (bounded runs)"
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCSGTILE_FUZZ=ON -DCSGTILE_BUILD_TESTS=OFF >/dev/null
-  cmake --build build-fuzz -j"$jobs"
+  # Only the fuzz targets (and the libraries they parse with) need this instrumented build.
+  cmake --build build-fuzz -j"$jobs" --target native_reader_fuzz native_reader_fuzz_seeds \
+        las_reader_fuzz las_reader_fuzz_seeds
   ctest --test-dir build-fuzz --output-on-failure -L fuzz
 fi
