@@ -422,7 +422,6 @@ class BooleanEngine {
           e.v1 = v1;
           e.tolerance = options_.tolerance;
           edge_id = model_.add_edge(std::move(e));
-          section_edges_.push_back(edge_id);
         }
       }
       if (existing >= 0) {
@@ -767,7 +766,6 @@ class BooleanEngine {
   std::size_t first_b_face_ = 0;
   std::vector<FacePolygon> polygons_;
   std::vector<std::pair<std::size_t, std::size_t>> coincident_;
-  std::vector<int> section_edges_;
   std::vector<PendingPartial> pending_partials_;
 };
 
