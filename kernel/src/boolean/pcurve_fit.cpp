@@ -9,7 +9,6 @@ namespace csgtile::kernel::detail {
 
 namespace {
 
-constexpr double kTwoPi = 2 * std::numbers::pi;
 
 bool is_angular_curve(const Curve& c) { return c.period() > 0; }
 

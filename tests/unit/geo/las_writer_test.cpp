@@ -34,6 +34,7 @@ class TempFile {
   ~TempFile() {
     std::error_code ignored;
     fs::remove(path_, ignored);
+    fs::remove(path_.parent_path(), ignored);  // only once empty: other files may still live
   }
   const fs::path& path() const { return path_; }
 
