@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <sstream>
 
@@ -16,6 +18,16 @@ std::string read_file(const std::filesystem::path& path) {
   std::ostringstream out;
   out << in.rdbuf();
   return out.str();
+}
+
+TempDir::TempDir(const std::string& prefix)
+    : path_(std::filesystem::temp_directory_path() / (prefix + std::to_string(::getpid()))) {
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
 }
 
 }  // namespace csgtile::test

@@ -16,4 +16,19 @@ std::filesystem::path csgtile_binary();
 /// Reads a whole file; empty string when missing.
 std::string read_file(const std::filesystem::path& path);
 
+/// A temporary directory `<tmp>/<prefix><pid>`, created on construction and removed with
+/// everything in it on destruction.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix);
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
 }  // namespace csgtile::test

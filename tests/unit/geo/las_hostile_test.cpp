@@ -23,20 +23,9 @@ using ::testing::HasSubstr;
 
 using Bytes = std::vector<std::uint8_t>;
 
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() / ("csgtile_geo_hostile_" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
+// Temporary directories of this suite.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("csgtile_geo_hostile_") {}
 };
 
 Bytes file_bytes(const fs::path& path) {

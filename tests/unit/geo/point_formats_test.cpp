@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "csgtile/geo/point_reader.h"
+#include "test_support.h"
 
 namespace csgtile::geo {
 namespace {
@@ -26,23 +27,13 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using Bytes = std::vector<std::uint8_t>;
 
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() / ("csgtile_geo_formats_" + std::to_string(::getpid()))) {
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
+// Temporary directory of this suite, with a helper that writes a file into it.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("csgtile_geo_formats_") {}
   fs::path write(const std::string& name, const std::string& content) const {
-    std::ofstream(path_ / name, std::ios::binary) << content;
-    return path_ / name;
+    std::ofstream(*this / name, std::ios::binary) << content;
+    return *this / name;
   }
-
- private:
-  fs::path path_;
 };
 
 template <class T>
