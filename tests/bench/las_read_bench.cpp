@@ -1,11 +1,15 @@
-// LAS read throughput. Synthesises a LAS 1.4 point-format-7 file of N points (default 5 M,
-// 36 bytes each), then measures in this one process:
-//   baseline — a plain sequential read() loop over the same file (1 MiB chunks), and
-//   reader   — LasReader decoding every point in batches of 65536,
-// each the best of three passes over the warm page cache, and prints one JSON object: points/s,
-// MB/s, the reader/baseline ratio, the resident-memory growth while reading, and peak RSS.
+// LAS read (+ georeference) throughput. Synthesises a LAS 1.4 point-format-7 file of N points
+// (default 5 M, 36 bytes each, UTM 31N with its WKT), then measures in this one process:
+//   baseline — a plain sequential read() loop over the same file (1 MiB chunks),
+//   reader   — LasReader decoding every point in batches of 65536, and
+//   georef   — the same, plus the file's CRS resolved from its WKT and every point taken into
+//              the tile's east-north-up frame (Georeferencer::to_local, exact per point),
+// each the best of three passes (`--passes`) over the warm page cache, and prints one JSON
+// object: points/s, MB/s, the ratios to the baseline, the resident-memory growth while reading,
+// and peak RSS (compare the peak for 5 M and 50 M points: it must not grow with the file).
 //
-// Usage: las_read_bench [POINTS] [FILE]   (FILE defaults to a temporary file, removed after)
+// Usage: las_read_bench [POINTS] [FILE] [--passes K]
+//        (FILE defaults to a temporary file, removed after; an existing FILE is read as is)
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -19,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "csgtile/geo/georeference.h"
 #include "csgtile/geo/las.h"
 
 namespace {
@@ -50,6 +55,9 @@ bool synthesise(const fs::path& path, std::size_t count) {
   options.point_format = 7;
   options.scale = {0.001, 0.001, 0.001};
   options.offset = {650000.0, 5400000.0, 0.0};
+  if (auto crs = csgtile::geo::crs_from_epsg(32631); crs.ok()) {
+    options.wkt = csgtile::geo::crs_to_wkt1(crs.value());
+  }
   auto writer = csgtile::geo::LasWriter::create(path, options);
   if (!writer.ok()) {
     std::fprintf(stderr, "%s\n", writer.error().message.c_str());
@@ -124,22 +132,75 @@ double reader_pass(const fs::path& path, double& sum, std::uint64_t& points, dou
   return seconds_since(start);
 }
 
+// As reader_pass, and every batch taken into the tile frame centred on the header bounds.
+double georef_pass(const fs::path& path, double& sum, double& growth) {
+  const auto start = Clock::now();
+  auto reader = csgtile::geo::LasReader::open(path);
+  if (!reader.ok()) {
+    std::fprintf(stderr, "%s\n", reader.error().message.c_str());
+    return -1;
+  }
+  auto crs = csgtile::geo::las_file_crs(reader.value()->crs());
+  if (!crs.ok()) {
+    std::fprintf(stderr, "%s\n", crs.error().message.c_str());
+    return -1;
+  }
+  const auto& h = reader.value()->header();
+  const csgtile::kernel::Vec3 centre(0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]),
+                                     h.min[2]);
+  auto geo = csgtile::geo::Georeferencer::create_at(crs.value(), centre);
+  if (!geo.ok()) {
+    std::fprintf(stderr, "%s\n", geo.error().message.c_str());
+    return -1;
+  }
+  csgtile::geo::PointBatch batch;
+  std::vector<csgtile::kernel::Vec3> in, out;
+  const double before = status_mib("VmRSS");
+  double peak = before;
+  std::uint64_t points = 0;
+  for (;;) {
+    auto n = reader.value()->read(batch, 65536);
+    if (!n.ok() || n.value() == 0) break;
+    in.resize(batch.points.size());
+    out.resize(batch.points.size());
+    for (std::size_t i = 0; i < batch.points.size(); ++i) {
+      in[i] = csgtile::kernel::Vec3(batch.points[i].x, batch.points[i].y, batch.points[i].z);
+    }
+    if (!geo.value().to_local(in, out).ok()) return -1;
+    for (const auto& p : out) sum += p.x();
+    points += n.value();
+    if ((points >> 16) % 16 == 0) peak = std::max(peak, status_mib("VmRSS"));
+  }
+  growth = std::max(growth, peak - before);
+  return seconds_since(start);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::size_t count = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 5'000'000;
-  const bool temporary = argc <= 2;
+  std::vector<std::string> args;
+  int passes = 3;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--passes" && i + 1 < argc) {
+      passes = std::max(1, std::atoi(argv[++i]));
+    } else {
+      args.emplace_back(argv[i]);
+    }
+  }
+  const std::size_t count = !args.empty() ? std::strtoull(args[0].c_str(), nullptr, 10) : 5'000'000;
+  const bool temporary = args.size() < 2;
   const fs::path path = temporary ? fs::temp_directory_path() /
                                         ("csgtile_las_bench_" + std::to_string(::getpid()) + ".las")
-                                  : fs::path(argv[2]);
+                                  : fs::path(args[1]);
   if (!fs::exists(path) && !synthesise(path, count)) return 1;
   const double bytes = static_cast<double>(fs::file_size(path));
 
-  double best_baseline = 1e300, best_reader = 1e300, sum = 0, growth = 0;
+  double best_baseline = 1e300, best_reader = 1e300, best_georef = 1e300, sum = 0, growth = 0;
   std::uint64_t checksum = 0, points = 0;
-  for (int pass = 0; pass < 3; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     best_baseline = std::min(best_baseline, baseline_pass(path, checksum));
     best_reader = std::min(best_reader, reader_pass(path, sum, points, growth));
+    best_georef = std::min(best_georef, georef_pass(path, sum, growth));
   }
   if (temporary) fs::remove(path);
   const double mb = bytes / 1e6;
@@ -147,11 +208,16 @@ int main(int argc, char** argv) {
       "{\"points\": %llu, \"file_bytes\": %.0f, \"record_length\": 36, \"cache\": \"warm\",\n"
       " \"baseline\": {\"seconds\": %.4f, \"mb_per_s\": %.1f},\n"
       " \"las_reader\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": %.1f},\n"
-      " \"ratio_to_baseline\": %.3f, \"read_rss_growth_mib\": %.1f, \"peak_rss_mib\": %.1f,\n"
+      " \"ratio_to_baseline\": %.3f,\n"
+      " \"read_and_georef\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": %.1f},\n"
+      " \"georef_ratio_to_baseline\": %.4f, \"georef_ratio_to_reader\": %.3f,\n"
+      " \"read_rss_growth_mib\": %.1f, \"peak_rss_mib\": %.1f,\n"
       " \"checksum\": %.6g}\n",
       static_cast<unsigned long long>(points), bytes, best_baseline, mb / best_baseline,
       best_reader, static_cast<double>(points) / best_reader, mb / best_reader,
-      (mb / best_reader) / (mb / best_baseline), growth, status_mib("VmHWM"),
+      best_baseline / best_reader, best_georef, static_cast<double>(points) / best_georef,
+      mb / best_georef, best_baseline / best_georef, best_reader / best_georef, growth,
+      status_mib("VmHWM"),
       sum + static_cast<double>(checksum));
   return 0;
 }

@@ -1,5 +1,5 @@
 // `csgtile info FILE [--json] [--scan]`: what a point-cloud file says about itself — version,
-// point format, counts, bounds, scale/offset, CRS records, VLRs/EVLRs, extra bytes — and the
+// point format, counts, bounds, scale/offset, CRS (interpreted, with its records), VLRs/EVLRs, extra bytes — and the
 // problems the reader found. LAS headers are reported without reading the points unless
 // --scan is given; PLY/PCD/XYZ have no header bounds, so their points are always scanned.
 
@@ -24,6 +24,7 @@ struct InfoOptions {
   std::string file;
   bool json = false;
   bool scan = false;
+  std::string crs;  ///< the CRS to assume when the file has none (config syntax)
 };
 
 Json optional_code(const std::optional<std::uint16_t>& code) {
@@ -85,6 +86,21 @@ Json crs_json(const geo::LasCrsRecords& crs) {
               {"wkt_flag", crs.wkt_flag},
               {"liblas_wkt", crs.liblas_wkt ? Json(*crs.liblas_wkt) : Json(nullptr)},
               {"geotiff_keys", std::move(keys)}};
+}
+
+/// The CRS the file's records (or --crs) resolve to, interpreted.
+Json resolved_crs_json(const kernel::Result<geo::Crs>& crs) {
+  if (!crs.ok()) return Json{{"error", crs.error().message}};
+  const geo::Crs& c = crs.value();
+  return Json{{"epsg", c.epsg == 0 ? Json(nullptr) : Json(c.epsg)},
+              {"name", c.name},
+              {"kind", c.is_projected() ? "projected" : "geographic"},
+              {"description", geo::describe_crs(c)},
+              {"vertical_epsg", c.vertical && c.vertical->epsg != 0 ? Json(c.vertical->epsg)
+                                                                    : Json(nullptr)},
+              {"source", c.source},
+              {"warnings", c.warnings},
+              {"error", nullptr}};
 }
 
 std::string code_text(const std::optional<std::uint16_t>& code) {
@@ -178,6 +194,7 @@ int run_info(const InfoOptions& o) {
   }
   if (las != nullptr) {
     out["crs"] = crs_json(las->crs());
+    out["crs"]["resolved"] = resolved_crs_json(geo::las_file_crs(las->crs(), o.crs));
     Json vlrs = Json::array();
     for (const auto& r : las->vlrs()) vlrs.push_back(record_json(r));
     Json evlrs = Json::array();
@@ -235,7 +252,15 @@ int run_info(const InfoOptions& o) {
     add("vertical units", code_text(crs.vertical_units));
     if (crs.has_geotiff && text.empty()) text = "GeoTIFF keys without EPSG codes";
     if (crs.empty()) text = "none in the file";
-    std::printf("%-13s%s\n", "crs", text.c_str());
+    const auto resolved = geo::las_file_crs(crs, o.crs);
+    if (resolved.ok()) {
+      std::printf("%-13s%s%s\n", "crs", geo::describe_crs(resolved.value()).c_str(),
+                  crs.empty() ? " (from --crs)" : "");
+      for (const auto& w : resolved.value().warnings) std::printf("  %s\n", w.c_str());
+    } else {
+      std::printf("%-13s%s\n", "crs", resolved.error().message.c_str());
+    }
+    std::printf("%-13s%s\n", "crs records", text.c_str());
     if (crs.wkt) {
       std::printf("%-13s%s%s\n", "wkt", crs.wkt_from_evlr ? "(EVLR) " : "",
                   shorten(*crs.wkt, 100).c_str());
@@ -284,6 +309,8 @@ void register_info(CLI::App& app, Action& action) {
   cmd->add_flag("--scan", options->scan,
                 "Read every point: recomputed bounds and count, and the warnings only the "
                 "points reveal (always on for PLY/PCD/XYZ)");
+  cmd->add_option("--crs", options->crs,
+                  "CRS to assume when the file has none, e.g. EPSG:28992 or EPSG:28992+5709");
   cmd->callback([&action, options] { action = [options] { return run_info(*options); }; });
 }
 

@@ -146,6 +146,23 @@ Crs utm(int code, int zone, bool north, int geographic_code) {
                    tm(0.0, -183.0 + 6.0 * zone, 0.9996, 500000.0, north ? 0.0 : 10000000.0));
 }
 
+// JGD2011 / Japan Plane Rectangular CS I-XIX: transverse Mercator, k = 0.9999, no false
+// origin; the natural origins per zone as EPSG lists them (degrees, minutes).
+Crs japan_plane_rectangular(int code, int zone) {
+  static constexpr double kOrigins[19][4] = {
+      {33, 0, 129, 30}, {33, 0, 131, 0},  {36, 0, 132, 10}, {33, 0, 133, 30}, {36, 0, 134, 20},
+      {36, 0, 136, 0},  {36, 0, 137, 10}, {36, 0, 138, 30}, {36, 0, 139, 50}, {40, 0, 140, 50},
+      {44, 0, 140, 15}, {44, 0, 142, 15}, {44, 0, 144, 15}, {26, 0, 142, 0},  {26, 0, 127, 30},
+      {26, 0, 124, 0},  {26, 0, 131, 0},  {20, 0, 136, 0},  {26, 0, 154, 0}};
+  static const char* const kRoman[19] = {"I",    "II",  "III", "IV",   "V",     "VI", "VII",
+                                         "VIII", "IX",  "X",   "XI",   "XII",   "XIII", "XIV",
+                                         "XV",   "XVI", "XVII", "XVIII", "XIX"};
+  const auto& o = kOrigins[zone - 1];
+  return projected(code,
+                   std::string("JGD2011 / Japan Plane Rectangular CS ") + kRoman[zone - 1], 6668,
+                   tm(dms(o[0], o[1]), dms(o[2], o[3]), 0.9999, 0, 0));
+}
+
 std::optional<Crs> projected_from_epsg(int code) {
   const double ft = international_foot_unit().metres;
   const double us_ft = us_survey_foot_unit().metres;
@@ -155,6 +172,7 @@ std::optional<Crs> projected_from_epsg(int code) {
   if (code >= 26901 && code <= 26923) return utm(code, code - 26900, true, 4269);
   if (code >= 6330 && code <= 6348) return utm(code, code - 6329, true, 6318);
   if (code == 6328 || code == 6329) return utm(code, code - 6328 + 59, true, 6318);
+  if (code >= 6669 && code <= 6687) return japan_plane_rectangular(code, code - 6668);
   switch (code) {
     case 32661:
       return projected(code, "WGS 84 / UPS North (N,E)", 4326, ups(true));
@@ -235,6 +253,9 @@ std::optional<Crs> projected_from_epsg(int code) {
       return projected(code, "NAD83 / Florida East (ftUS)", 4269,
                        tm(dms(24, 20), -81, 0.999941177, 656166.667 * us_ft, 0),
                        us_survey_foot_unit());
+    case 6580:
+      return projected(code, "NAD83(2011) / Texas Centric Lambert Conformal", 6318,
+                       lcc2(18, -100, 27.5, 35, 1500000, 5000000));
     case 2903:
       return projected(code, "NAD83(HARN) / New Mexico Central (ftUS)", 4152,
                        tm(31, -106.25, 0.9999, 1640416.667 * us_ft, 0), us_survey_foot_unit());
@@ -290,6 +311,9 @@ std::optional<GeodeticDatum> datum_from_epsg(int code) {
     case 6171:
       return null_datum("Reseau Geodesique Francais 1993 v1", 6171, 7019,
                         "EPSG:1671 RGF93 v1 to WGS 84 (1) (null, 1 m)");
+    case 1128:
+      return null_datum("Japanese Geodetic Datum 2011", 1128, 7019,
+                        "JGD2011 to WGS 84 (null, 1 m)");
     case 6173:
       return null_datum("IRENET95", 6173, 7019, "EPSG:1678 IRENET95 to WGS 84 (1) (null, 1 m)");
     case 6289:
@@ -328,6 +352,7 @@ std::optional<GeodeticDatum> datum_from_name(std::string_view name) {
     return datum_from_epsg(6267);
   }
   if (has("amersfoort")) return datum_from_epsg(6289);
+  if (has("jgd2011") || has("japanesegeodeticdatum2011")) return datum_from_epsg(1128);
   if (has("osgb1936") || has("osgb36") || has("ordnancesurveyofgreatbritain1936")) {
     return datum_from_epsg(6277);
   }
@@ -459,6 +484,8 @@ std::optional<Crs> geographic_from_epsg(int code) {
       return geographic(code, "Amersfoort", 6289);
     case 4167:
       return geographic(code, "NZGD2000", 6167);
+    case 6668:
+      return geographic(code, "JGD2011", 1128);
     case 4171:
       return geographic(code, "RGF93 v1", 6171);
     case 4173:

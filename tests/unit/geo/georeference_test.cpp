@@ -207,6 +207,15 @@ TEST(GeoProjectionVsCs2cs, LambertConicInFeet) {
   expect_family({"Oregon GIC Lambert ft", 2992, 4269, false, 41.8, 46.3, -124.8, -116.4});
   expect_family({"Oregon GIC Lambert ft HARN", 2994, 4152, false, 41.8, 46.3, -124.8, -116.4});
   expect_family({"Lambert-93", 2154, 4171, false, 41.0, 51.5, -5.5, 10.0});
+  expect_family({"Texas Centric LCC", 6580, 6318, false, 25.8, 36.5, -106.6, -93.5});
+}
+
+// The Japanese plane rectangular systems (northing-first axes), as in the pnext test files.
+TEST(GeoProjectionVsCs2cs, JapanPlaneRectangular) {
+  REQUIRE_PROJ();
+  expect_family({"Japan PRCS I", 6669, 6668, true, 31.0, 34.5, 128.5, 130.5});
+  expect_family({"Japan PRCS VIII", 6676, 6668, true, 35.0, 38.5, 137.5, 139.5});
+  expect_family({"Japan PRCS XIII", 6681, 6668, true, 42.0, 45.5, 143.0, 145.5});
 }
 
 TEST(GeoProjectionVsCs2cs, PolarStereographicVariantB) {

@@ -383,6 +383,84 @@ TEST(SharedLas, NoCrsRecordsInTheAhnFiles) {
   EXPECT_TRUE(las.vlrs().empty());
 }
 
+// The records interpreted (las_file_crs): EPSG codes and descriptions of what each file
+// declares, and clear errors where it declares nothing usable.
+TEST(SharedLas, CrsRecordsResolveToTheirCrs) {
+  SKIP_WITHOUT_DATA();
+  struct Case {
+    const char* file;
+    int epsg;               // 0: user-defined
+    const char* contains;  // in describe_crs
+    int vertical;
+  };
+  const Case cases[] = {
+      {"las-rs/32-1-472-150-76.las", 25832, "UTM zone 32N", 5941},
+      {"liblas/srs_vertcs.las", 32617, "UTM zone 17N", 5703},
+      {"pdal/permutations_1.2_0.las", 26915, "NAD83 / UTM zone 15N", 0},
+      {"pdal/autzen-utm.las", 26910, "UTM zone 10N", 0},
+      {"pdal/epsg_4326.las", 4326, "geographic", 0},
+      {"pdal/autzen-dd.las", 4326, "geographic", 0},
+      {"pdal/interesting.las", 0, "Lambert Conic Conformal (2SP), foot", 0},
+      {"laspy/plane.las", 0, "Lambert Conic Conformal (2SP), metre", 0},
+      {"liblas/certainty3d-color-utm-feet-navd88.las", 2229, "US survey foot", 0},
+      {"pdal/test1_4.las", 2903, "New Mexico Central (ftUS)", 5703},
+      {"pdal/wontcompress3.las", 26919, "UTM zone 19N", 0},
+      {"pdal/crop-on-edge_crop.las", 2154, "Lambert-93", 0},
+      {"pnext/v4d0.las", 6676, "Japan Plane Rectangular CS VIII", 0},
+      {"pnext/v1d0.las", 6676, "Japan Plane Rectangular CS VIII", 0},
+      {"lazperf/1815.las", 6580, "Texas Centric", 5703},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.file);
+    if (!fs::exists(data_dir() / c.file)) continue;
+    auto opened = LasReader::open(data_dir() / c.file);
+    ASSERT_TRUE(opened.ok()) << opened.error().message;
+    auto crs = las_file_crs(opened.value()->crs());
+    ASSERT_TRUE(crs.ok()) << crs.error().message;
+    EXPECT_EQ(crs.value().epsg, c.epsg);
+    EXPECT_THAT(describe_crs(crs.value()), HasSubstr(c.contains));
+    EXPECT_EQ(crs.value().vertical ? crs.value().vertical->epsg : 0, c.vertical);
+  }
+}
+
+TEST(SharedLas, FilesWithoutACrsTakeTheConfiguredOne) {
+  OPEN_LAS(las, "3dfier/ahn3_cropped_2.las");
+  auto none = las_file_crs(las.crs());
+  ASSERT_FALSE(none.ok());
+  EXPECT_THAT(none.error().message, HasSubstr("no CRS"));
+  auto rd = las_file_crs(las.crs(), "EPSG:28992+5709");
+  ASSERT_TRUE(rd.ok()) << rd.error().message;
+  EXPECT_EQ(rd.value().epsg, 28992);
+  EXPECT_EQ(rd.value().vertical->epsg, 5709);
+}
+
+TEST(SharedLas, ConfiguredCrsThatDisagreesWithTheFileIsAWarningOrAnOverride) {
+  OPEN_LAS(las, "pdal/autzen-utm.las");
+  auto file_wins = las_file_crs(las.crs(), "EPSG:28992");
+  ASSERT_TRUE(file_wins.ok());
+  EXPECT_EQ(file_wins.value().epsg, 26910);
+  ASSERT_FALSE(file_wins.value().warnings.empty());
+  EXPECT_THAT(file_wins.value().warnings.back(), HasSubstr("config"));
+  auto config_wins = las_file_crs(las.crs(), "EPSG:28992", /*config_overrides_file=*/true);
+  ASSERT_TRUE(config_wins.ok());
+  EXPECT_EQ(config_wins.value().epsg, 28992);
+}
+
+TEST(SharedLas, EmptyOrUndefinedCrsRecordsAreNamedErrors) {
+  {
+    OPEN_LAS(las, "pdal/warsaw_small.las");
+    auto crs = las_file_crs(las.crs());
+    ASSERT_FALSE(crs.ok());
+    EXPECT_THAT(crs.error().message, HasSubstr("WKT"));
+  }
+  {
+    OPEN_LAS(las, "pdal/1.2-empty-geotiff-vlrs.las");
+    auto crs = las_file_crs(las.crs());
+    ASSERT_FALSE(crs.ok());
+    EXPECT_THAT(crs.error().message, HasSubstr("GeoTIFF keys define no CRS"));
+  }
+}
+
 TEST(SharedLas, EvlrAndManyVlrsAreListed) {
   {
     OPEN_LAS(las, "laspy/1_4_w_evlr.las");

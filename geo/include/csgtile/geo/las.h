@@ -17,8 +17,10 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "csgtile/geo/crs.h"
 #include "csgtile/geo/point.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/kernel/result.h"
@@ -134,6 +136,15 @@ struct LasCrsRecords {
   const GeoKey* find(std::uint16_t id) const;
   bool empty() const { return !has_geotiff && !wkt && !liblas_wkt; }
 };
+
+/// The CRS of a LAS file: its WKT (VLR or EVLR, else the libLAS copy) and its GeoTIFF keys,
+/// each interpreted (crs.h) and reconciled by reconcile_crs. `config` (text as
+/// crs_from_config takes; empty: none) is used when the file has no CRS, or always when
+/// `config_overrides_file`. Disagreements and unreadable records become warnings on the CRS.
+/// Errors: InvalidArgument "no CRS" when neither the file nor the config gives one; else the
+/// chosen source's error.
+kernel::Result<Crs> las_file_crs(const LasCrsRecords& records, std::string_view config = {},
+                                 bool config_overrides_file = false);
 
 /// Parses a GeoKeyDirectory (the payload of LASF_Projection 34735) with its double and ASCII
 /// parameter payloads (34736, 34737; empty when absent) into `records` (keys, codes,
