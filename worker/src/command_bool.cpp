@@ -1,5 +1,6 @@
-// `csgtile bool CASE.json [--json]`: builds a scene's primitives and reports the spec's
-// result fields (../shared/spec/scene-format.md).
+// `csgtile bool CASE.json [--json] [--out MODEL.csgt]`: builds a scene's primitives, applies
+// its operation, reports the spec's result fields (../shared/spec/scene-format.md) and, with
+// --out, writes the native model with its CSG tree and face history.
 
 #include <chrono>
 #include <cstdio>
@@ -10,8 +11,10 @@
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
+#include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::detail {
@@ -28,7 +31,7 @@ struct BoolReport {
 };
 
 // Runs the scene; the failure code is Ok when the scene was evaluated (valid or not).
-Failure evaluate(const std::string& path, BoolReport& report) {
+Failure evaluate(const std::string& path, const std::string& out, BoolReport& report) {
   const auto start = std::chrono::steady_clock::now();
   auto scene = geo::read_scene(path);
   if (!scene.ok()) {
@@ -37,27 +40,37 @@ Failure evaluate(const std::string& path, BoolReport& report) {
   }
   report.name = scene->name;
   report.op = geo::boolean_op_name(scene->op);
+  std::vector<kernel::CsgModel> leaves;
   std::vector<kernel::Shape> solids;
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
     const auto& p = scene->primitives[i];
-    auto solid = kernel::build_primitive(p.spec);
-    if (!solid.ok()) {
-      return {from_kernel(solid.error().code),
+    auto leaf = kernel::csg_primitive(p.spec, p.id);
+    if (!leaf.ok()) {
+      return {from_kernel(leaf.error().code),
               "primitives[" + std::to_string(i) + "] (" + kernel::primitive_type_name(p.spec.type) +
-                  "): " + solid.error().message};
+                  "): " + leaf.error().message};
     }
-    solids.push_back(std::move(solid).value());
+    solids.push_back(leaf.value().shape);
+    leaves.push_back(std::move(leaf).value());
   }
-  kernel::Result<kernel::Shape> compound = kernel::ShapeFactory::compound({});
+  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
   if (scene->op == geo::BooleanOp::None) {
-    compound = kernel::ShapeFactory::compound(std::move(solids));
+    auto set = kernel::ShapeFactory::compound(std::move(solids));
+    if (!set.ok()) return {from_kernel(set.error().code), set.error().message};
+    model.value().shape = set.value();
   } else {
     const kernel::BooleanOp op = scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
                                  : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
                                                                        : kernel::BooleanOp::Cut;
-    compound = kernel::boolean_fold(solids, op);
+    model = kernel::csg_combine(leaves, op);
   }
-  if (!compound.ok()) return {from_kernel(compound.error().code), compound.error().message};
+  if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
+  if (!out.empty()) {
+    if (auto st = kernel::write_native_model_file(out, model.value()); !st.ok()) {
+      return {ErrorCode::Io, st.error().message};
+    }
+  }
+  const kernel::Result<kernel::Shape> compound = model.value().shape;
   const kernel::CheckReport check = kernel::check_shape(compound.value());
   const kernel::MassProperties mp = kernel::mass_properties(compound.value());
   report.counts = kernel::count_shapes(compound.value());
@@ -79,12 +92,15 @@ void register_bool(CLI::App& app, Action& action) {
               "volume, area and topology counts");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
+  auto model_path = std::make_shared<std::string>();
   cmd->add_option("CASE", *file, "Scene / case JSON file")->required();
+  cmd->add_option("--out", *model_path,
+                  "Write the result as a native model (.csgt) with its CSG tree and face history");
   cmd->add_flag("--json", *json, "Print one JSON object with the spec's result fields");
-  cmd->callback([&action, file, json] {
-    action = [file, json] {
+  cmd->callback([&action, file, json, model_path] {
+    action = [file, json, model_path] {
       BoolReport r;
-      const Failure failure = evaluate(*file, r);
+      const Failure failure = evaluate(*file, *model_path, r);
       auto count = [&](kernel::ShapeKind k) { return r.counts[static_cast<int>(k)]; };
       if (*json) {
         nlohmann::ordered_json out;

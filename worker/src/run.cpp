@@ -9,6 +9,7 @@
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
+#include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
@@ -45,10 +46,13 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   record["scene"] = scene->name;
   record["op"] = geo::boolean_op_name(scene->op);
   ordered_json objects = ordered_json::array();
-  std::vector<kernel::Shape> solids;
+  std::vector<kernel::CsgModel> leaves;
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
     const auto& p = scene->primitives[i];
-    auto solid = kernel::build_primitive(p.spec, config.kernel.linear_tolerance);
+    const std::string id = p.id.empty() ? "p" + std::to_string(i) : p.id;
+    auto leaf = kernel::csg_primitive(p.spec, id, config.kernel.linear_tolerance);
+    auto solid = leaf.ok() ? kernel::Result<kernel::Shape>(leaf.value().shape)
+                           : kernel::Result<kernel::Shape>(leaf.error());
     const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
                               kernel::primitive_type_name(p.spec.type) + ")";
     if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
@@ -60,41 +64,50 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
     }
     const kernel::MassProperties mp = kernel::mass_properties(solid.value());
     ordered_json o;
-    o["id"] = p.id.empty() ? "p" + std::to_string(i) : p.id;
+    o["id"] = id;
     o["type"] = kernel::primitive_type_name(p.spec.type);
     o["volume"] = mp.volume;
     o["area"] = mp.area;
     o["bounds"] = {mp.bounds.min.x(), mp.bounds.min.y(), mp.bounds.min.z(),
                    mp.bounds.max.x(), mp.bounds.max.y(), mp.bounds.max.z()};
     objects.push_back(std::move(o));
-    solids.push_back(std::move(solid).value());
+    leaves.push_back(std::move(leaf).value());
   }
   // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
   kernel::BooleanOptions boolean_options;
   boolean_options.tolerance = config.kernel.linear_tolerance;
-  auto model = scene->op == geo::BooleanOp::None
-                   ? kernel::ShapeFactory::compound(std::move(solids))
-                   : kernel::boolean_fold(solids,
-                                          scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
-                                          : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
-                                                                                : kernel::BooleanOp::Cut,
-                                          boolean_options);
+  // Boolean results keep their CSG tree and face history (native CSG section).
+  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
+  if (scene->op == geo::BooleanOp::None) {
+    std::vector<kernel::Shape> solids;
+    for (const auto& leaf : leaves) solids.push_back(leaf.shape);
+    auto set = kernel::ShapeFactory::compound(std::move(solids));
+    if (!set.ok()) return {from_kernel(set.error().code), input + ": " + set.error().message};
+    model.value().shape = set.value();
+  } else {
+    model = kernel::csg_combine(leaves,
+                                scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
+                                : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
+                                                                      : kernel::BooleanOp::Cut,
+                                boolean_options);
+  }
   if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
   // Content-addressed: the same model always lands under the same key, so a job that runs
   // twice (after a crash) rewrites identical bytes and publishes nothing new.
-  const std::string bytes = kernel::write_native(model.value());
+  const std::string bytes = kernel::write_native_model(model.value());
   const std::string sha = sha256_hex(bytes);
   const std::string key = "objects/" + sha + ".csgt";
   if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
   if (!std::filesystem::exists(run_dir / key)) {
     if (Failure f = write_file_atomic(run_dir / key, bytes); !f.ok()) return f;
   }
-  const kernel::MassProperties total = kernel::mass_properties(model.value());
+  const kernel::MassProperties total = kernel::mass_properties(model.value().shape);
   record["primitives"] = objects;
   record["model"] = {{"key", key}, {"sha256", sha}, {"bytes", bytes.size()}};
   record["volume"] = total.volume;
   record["area"] = total.area;
-  record["topology"] = topology_json(model.value());
+  record["topology"] = topology_json(model.value().shape);
+  record["csg_nodes"] = model.value().nodes.size();
   record["valid"] = true;
   result = record.dump();
   return {};

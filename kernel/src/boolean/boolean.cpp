@@ -13,6 +13,7 @@
 
 #include "boolean/classifier.h"
 #include "boolean/face_split.h"
+#include "boolean/fuse_groups.h"
 #include "boolean/model.h"
 #include "boolean/pcurve_fit.h"
 #include "boolean/surface_intersection.h"
@@ -67,6 +68,9 @@ class BooleanEngine {
  public:
   BooleanEngine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options)
       : a_(a), b_(b), op_(op), options_(options), model_(options.tolerance) {}
+
+  /// Per face of the last result (child-map order): the input faces it comes from.
+  std::vector<std::vector<FaceOrigin>> take_origins() { return std::move(origins_); }
 
   Result<Shape> run() {
     if (auto s = import_operand(model_, a_, 0); !s.ok()) return s.error();
@@ -764,6 +768,7 @@ class BooleanEngine {
   BooleanOptions options_;
   BModel model_;
   std::size_t first_b_face_ = 0;
+  std::vector<std::vector<FaceOrigin>> origins_;  // set by build()
   std::vector<FacePolygon> polygons_;
   std::vector<std::pair<std::size_t, std::size_t>> coincident_;
   std::vector<PendingPartial> pending_partials_;
@@ -780,7 +785,16 @@ struct RFace {
   bool reversed;
   std::vector<BLoop> loops;
   bool alive = true;
+  std::vector<FaceOrigin> origins;  // the input faces this face comes from (merges add)
 };
+
+// Joins the origins of a merged face into the surviving one, sorted and unique.
+void absorb_origins(RFace& into, RFace& from) {
+  into.origins.insert(into.origins.end(), from.origins.begin(), from.origins.end());
+  from.origins.clear();
+  std::sort(into.origins.begin(), into.origins.end());
+  into.origins.erase(std::unique(into.origins.begin(), into.origins.end()), into.origins.end());
+}
 
 // Positions of a use of `edge` in a face: (loop, index).
 std::optional<std::pair<std::size_t, std::size_t>> find_use(const RFace& f, int edge, bool forward) {
@@ -842,7 +856,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   for (const Piece& p : pieces) {
     if (!p.keep) continue;
     const BFace& f = model_.faces[static_cast<std::size_t>(p.face)];
-    faces.push_back({p.face, f.surface, f.reversed != p.flip, p.region.loops});
+    faces.push_back({p.face, f.surface, f.reversed != p.flip, p.region.loops, true,
+                     {FaceOrigin{f.operand, f.source}}});
   }
   // 1. Pieces of one periodic face that meet across its seam become one face.
   for (std::size_t i = 0; i < faces.size(); ++i) {
@@ -882,6 +897,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
             for (BLoop& loop : faces[j].loops) faces[i].loops.push_back(std::move(loop));
             faces[j].loops.clear();
             faces[j].alive = false;
+            absorb_origins(faces[i], faces[j]);
             splice(faces[i], l, k, base + other->first, other->second);
             merged = true;
           }
@@ -917,6 +933,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
         for (BLoop& loop : faces[j].loops) faces[i].loops.push_back(std::move(loop));
         faces[j].loops.clear();
         faces[j].alive = false;
+        absorb_origins(faces[i], faces[j]);
       }
       auto a = find_use(faces[i], edge, list[0].second);
       auto b = find_use(faces[i], edge, !list[0].second);
@@ -1116,6 +1133,13 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   }
   auto result = ShapeFactory::compound(std::move(solids));
   if (!result.ok()) return result;
+  // Face history: each face of the result (child-map order) with the input faces it holds.
+  const ShapeIndex result_faces = map_child_shapes(result.value(), ShapeKind::Face);
+  origins_.assign(result_faces.size(), {});
+  for (std::size_t k = 0; k < face_shapes.size(); ++k) {
+    const std::size_t at = result_faces.find(face_shapes[k]);
+    if (at != ShapeIndex::npos) origins_[at] = faces[face_of_shape[k]].origins;
+  }
   if (options_.check_result) {
     const CheckReport report = check_shape(result.value());
     if (!report.valid()) {
@@ -1133,12 +1157,23 @@ Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
   return BooleanEngine(a, b, op, options).run();
 }
 
-Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options) {
+Result<BooleanResult> boolean_operation_with_history(const Shape& a, const Shape& b, BooleanOp op,
+                                                     const BooleanOptions& options) {
+  BooleanEngine engine(a, b, op, options);
+  auto shape = engine.run();
+  if (!shape.ok()) return shape.error();
+  return BooleanResult{shape.value(), engine.take_origins()};
+}
+
+namespace detail {
+
+std::vector<std::vector<std::size_t>> fuse_groups(const std::vector<Shape>& shapes,
+                                                  double tolerance) {
   const std::size_t n = shapes.size();
   std::vector<BoundingBox> boxes(n);
   for (std::size_t i = 0; i < n; ++i) {
     boxes[i] = bounding_box(shapes[i]);
-    boxes[i].enlarge(options.tolerance);
+    boxes[i].enlarge(tolerance);
   }
   // Sweep along x: candidate pairs are boxes whose x-intervals overlap.
   std::vector<std::size_t> order(n);
@@ -1161,8 +1196,17 @@ Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOp
   }
   std::map<std::size_t, std::vector<std::size_t>> groups;  // keyed by smallest member: input order
   for (std::size_t i = 0; i < n; ++i) groups[root(i)].push_back(i);
+  std::vector<std::vector<std::size_t>> out;
+  out.reserve(groups.size());
+  for (auto& [r, members] : groups) out.push_back(std::move(members));
+  return out;
+}
+
+}  // namespace detail
+
+Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options) {
   std::vector<Shape> out;
-  for (const auto& [r, members] : groups) {
+  for (const auto& members : detail::fuse_groups(shapes, options.tolerance)) {
     std::vector<Shape> group;
     for (std::size_t i : members) group.push_back(shapes[i]);
     if (group.size() == 1) {

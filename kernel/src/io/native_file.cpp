@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "csgtile/kernel/native_format.h"
+#include "io/native_layout.h"
 
 namespace csgtile::kernel {
 
@@ -77,11 +78,10 @@ Status write_and_sync(const std::filesystem::path& temporary, std::string_view b
 
 }  // namespace
 
-Status write_native_file(const std::filesystem::path& path, const Shape& shape) {
+Status detail::write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
   if (path.filename().empty()) {
     return Error{ErrorCode::IoError, "cannot write " + path.string() + ": not a file name"};
   }
-  const std::string bytes = write_native(shape);
   const std::filesystem::path temporary = temporary_path(path);
   if (Status s = write_and_sync(temporary, bytes); !s.ok()) {
     ::unlink(temporary.c_str());
@@ -103,7 +103,11 @@ Status write_native_file(const std::filesystem::path& path, const Shape& shape) 
   return {};
 }
 
-Result<Shape> read_native_file(const std::filesystem::path& path) {
+Status write_native_file(const std::filesystem::path& path, const Shape& shape) {
+  return detail::write_file_atomically(path, write_native(shape));
+}
+
+Result<std::string> detail::read_whole_file(const std::filesystem::path& path) {
   FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
   if (fd.get() < 0) return io_error("cannot open", path, errno);
   std::string bytes;
@@ -117,7 +121,13 @@ Result<Shape> read_native_file(const std::filesystem::path& path) {
     if (n == 0) break;
     bytes.append(buffer, static_cast<std::size_t>(n));
   }
-  auto shape = read_native(bytes);
+  return bytes;
+}
+
+Result<Shape> read_native_file(const std::filesystem::path& path) {
+  auto bytes = detail::read_whole_file(path);
+  if (!bytes.ok()) return bytes.error();
+  auto shape = read_native(bytes.value());
   if (!shape.ok()) {
     return Error{shape.error().code, path.string() + ": " + shape.error().message};
   }

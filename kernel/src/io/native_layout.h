@@ -8,8 +8,15 @@
 /// `crc` is the CRC-32C of every byte before it. Sections appear in strictly increasing tag
 /// order, each at most once. Tag bit 0 set = optional: a reader skips an optional tag it does
 /// not know and refuses an unknown required (even) tag. Absent tables are empty; only the
-/// body section is mandatory. Version 1 writes no optional section; the CSG history (a tree
-/// of Booleans over PrimitiveSpec leaves, per-face provenance) is planned as one.
+/// body section is mandatory. The CSG history (csg.h: a tree of Booleans over PrimitiveSpec
+/// leaves, per-face sources) is the optional section 13, written by write_native_model:
+///   csg       (tag 13): node count, nodes (post-order) × { kind:u8, label (length + UTF-8),
+///                       Primitive: type:u8, placement (rotation 9 f64, scale f64, translation
+///                       3 f64), size 3 f64, radius, radius2, height, angle f64, profile
+///                       (count, 2 f64 each), holes (count, each a profile); operations:
+///                       child count, child deltas (this index − child ≥ 1) },
+///                       face count (= faces of the root shape), per face { count, count ×
+///                       { node, face } }. f64 = IEEE double, 8 bytes little-endian.
 ///
 /// Payloads (num = varint code << 1 | sign, the number being a table entry with its sign bit
 /// set when `sign` is 1: code p < 16 is the entry at position p of the section's
@@ -55,6 +62,12 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "csgtile/kernel/result.h"
+#include "csgtile/kernel/shape.h"
 
 namespace csgtile::kernel::detail {
 
@@ -68,7 +81,28 @@ enum class SectionTag : std::uint32_t {
   Surfaces = 8,
   Pcurves = 10,
   Bodies = 12,
+  Csg = 13,  ///< optional: CSG tree and face history (kernel/src/csg/csg_codec.cpp)
 };
+
+/// write_native with an extra optional section (tag, payload) after the body section.
+std::string write_native_with(const Shape& shape, SectionTag extra_tag, std::string_view extra);
+
+/// read_native that also hands out the payload (and its file offset) of one optional
+/// section, left empty when the file has none.
+struct NativeExtra {
+  std::uint64_t tag = 0;
+  std::string_view payload;
+  std::size_t offset = 0;
+  bool present = false;
+};
+/// Writes bytes to `path` atomically (temporary in the same directory, fsync, rename,
+/// directory fsync); the temporary is removed on failure. Error: IoError.
+Status write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+/// A whole file's bytes. Error: IoError.
+Result<std::string> read_whole_file(const std::filesystem::path& path);
+
+/// read_native, filling `extra` when the file holds the optional section extra.tag.
+Result<Shape> read_native_with(std::string_view bytes, NativeExtra& extra);
 
 inline constexpr std::uint64_t kSignBit = std::uint64_t{1} << 63;
 

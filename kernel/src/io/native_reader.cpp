@@ -601,6 +601,11 @@ Result<Shape> Decoder::bodies(const Sections::Payload& s) {
 }  // namespace
 
 Result<Shape> read_native(std::string_view bytes) {
+  detail::NativeExtra none;
+  return detail::read_native_with(bytes, none);
+}
+
+Result<Shape> detail::read_native_with(std::string_view bytes, NativeExtra& extra) {
   constexpr std::size_t kMagicSize = sizeof detail::kNativeMagic;
   if (bytes.size() < kMagicSize ||
       bytes.substr(0, kMagicSize) != std::string_view(detail::kNativeMagic, kMagicSize)) {
@@ -652,6 +657,10 @@ Result<Shape> read_native(std::string_view bytes) {
     previous_tag = tag;
     if (Sections::Payload* known = sections.find(tag)) {
       *known = {payload, payload_offset, true};
+    } else if (extra.tag != 0 && tag == extra.tag) {
+      extra.payload = payload;
+      extra.offset = payload_offset;
+      extra.present = true;
     } else if (!detail::is_optional_tag(tag)) {
       return Error{ErrorCode::UnsupportedVersion,
                    "native format: required section " + std::to_string(tag) + " (at byte " +

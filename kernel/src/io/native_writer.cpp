@@ -453,7 +453,8 @@ void write_section(ByteWriter& out, SectionTag tag, std::string_view payload) {
 
 }  // namespace
 
-std::string write_native(const Shape& shape) {
+std::string detail::write_native_with(const Shape& shape, SectionTag extra_tag,
+                                      std::string_view extra) {
   const ModelTables tables(shape);
   NumberPool pool;
   (void)encode_payloads(tables, shape, pool, /*counting=*/true);
@@ -487,8 +488,13 @@ std::string write_native(const Shape& shape) {
   if (!tables.surfaces.empty()) write_section(out, SectionTag::Surfaces, p.surfaces);
   if (!tables.pcurves.empty()) write_section(out, SectionTag::Pcurves, p.pcurves);
   write_section(out, SectionTag::Bodies, p.bodies);
+  if (!extra.empty()) write_section(out, extra_tag, extra);
   out.u32le(crc32c(out.str()));
   return out.take();
+}
+
+std::string write_native(const Shape& shape) {
+  return detail::write_native_with(shape, SectionTag::Csg, {});
 }
 
 }  // namespace csgtile::kernel

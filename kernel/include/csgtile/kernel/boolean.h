@@ -12,6 +12,7 @@
 /// bounding nothing are merged. Every result is checked; an operation that cannot produce a
 /// valid solid returns a named error and never a silently wrong shape.
 
+#include <compare>
 #include <vector>
 
 #include "csgtile/kernel/shape.h"
@@ -33,6 +34,27 @@ struct BooleanOptions {
 /// failed the checker — a bug to report).
 Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
                                 const BooleanOptions& options = {});
+
+/// Where a face of a Boolean result comes from: face `face` (its index in
+/// map_child_shapes(argument, ShapeKind::Face)) of argument `operand` (0 = a, 1 = b).
+struct FaceOrigin {
+  int operand = 0;
+  int face = 0;
+  friend bool operator==(const FaceOrigin&, const FaceOrigin&) = default;
+  friend auto operator<=>(const FaceOrigin&, const FaceOrigin&) = default;
+};
+
+/// A Boolean result with its face history: origins[i] lists, sorted, the argument faces that
+/// face i of map_child_shapes(shape, ShapeKind::Face) comes from — one for a split or kept
+/// face, several where faces on one surface were merged (the top of two fused boxes).
+struct BooleanResult {
+  Shape shape;
+  std::vector<std::vector<FaceOrigin>> origins;
+};
+
+/// boolean_operation, with the history of every result face.
+Result<BooleanResult> boolean_operation_with_history(const Shape& a, const Shape& b, BooleanOp op,
+                                                     const BooleanOptions& options = {});
 
 /// The union of many solids in one call: a sweep over their bounding boxes finds the groups
 /// of solids that can touch (connected components of the box-overlap graph); each group is

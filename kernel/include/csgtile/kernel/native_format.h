@@ -9,7 +9,7 @@
 /// A section is tag (varint) + payload length (varint) + payload. Tag bit 0 marks an optional
 /// section: readers skip optional sections they do not know and refuse unknown required
 /// ones (UnsupportedVersion), so later versions add sections (e.g. CSG history) without
-/// breaking older readers. Numbers are IEEE doubles, written once in a number table (short
+/// breaking older readers; the CSG history is such a section (write_native_model). Numbers are IEEE doubles, written once in a number table (short
 /// mantissas shortened) and referenced by index or by position in a window of recently used
 /// numbers; counts and indices are LEB128 varints; geometry is shared by pointer identity.
 
@@ -18,6 +18,7 @@
 #include <string>
 #include <string_view>
 
+#include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/result.h"
 #include "csgtile/kernel/shape.h"
 
@@ -52,6 +53,21 @@ Status write_native_file(const std::filesystem::path& path, const Shape& shape);
 
 /// Reads a whole file and parses it with read_native. Errors: IoError, and read_native's.
 Result<Shape> read_native_file(const std::filesystem::path& path);
+
+/// A shape with its CSG history (csg.h): write_native of the shape plus the optional CSG
+/// section (tag 13; readers that know only shapes skip it). Deterministic and lossless:
+/// read_native_model gives back the same nodes (bit-identical numbers), face sources, and a
+/// structurally_equal shape.
+std::string write_native_model(const CsgModel& model);
+
+/// Parses write_native_model's bytes (or write_native's: the model then has no history). The
+/// history is checked against the shape with check_csg. Errors: read_native's, and
+/// CorruptData for a malformed or inconsistent CSG section.
+Result<CsgModel> read_native_model(std::string_view bytes);
+
+/// File forms, atomic as write_native_file. Errors: IoError, and the parsers'.
+Status write_native_model_file(const std::filesystem::path& path, const CsgModel& model);
+Result<CsgModel> read_native_model_file(const std::filesystem::path& path);
 
 /// Structural equality (the round-trip check): the same topology graph with the same
 /// sharing — a body used twice in `a` corresponds to one body used twice in `b`, and
