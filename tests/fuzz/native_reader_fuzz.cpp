@@ -4,6 +4,7 @@
 // with a correct checksum, so that mutations reach the section and record parsers. Besides
 // "no crash, no sanitizer report", whatever parses must survive a round trip:
 // write → read gives a structurally equal shape and writing that again gives the same bytes.
+// The same holds for models with a CSG history section (read_native_model / write_native_model).
 //
 // Built a second time with CSGTILE_NATIVE_SEED_GENERATOR defined, the same file is a small
 // program that writes a seed corpus of valid files (ctest runs it before the fuzzer).
@@ -20,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/primitives.h"
 
@@ -42,6 +44,23 @@ void check_round_trip(std::string_view bytes) {
   }
 }
 
+void check_model_round_trip(std::string_view bytes) {
+  auto model = read_native_model(bytes);
+  if (!model.ok()) return;
+  const std::string written = write_native_model(model.value());
+  auto again = read_native_model(written);
+  if (!again.ok()) {
+    std::fprintf(stderr, "model re-read failed: %s\n", again.error().message.c_str());
+    __builtin_trap();
+  }
+  if (!structurally_equal(model->shape, again->shape) ||
+      model->face_sources != again->face_sources || model->nodes.size() != again->nodes.size() ||
+      write_native_model(again.value()) != written) {
+    std::fprintf(stderr, "round trip of an accepted model is not lossless\n");
+    __builtin_trap();
+  }
+}
+
 }  // namespace
 
 #ifndef CSGTILE_NATIVE_SEED_GENERATOR
@@ -49,11 +68,13 @@ void check_round_trip(std::string_view bytes) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view bytes(reinterpret_cast<const char*>(data), size);
   check_round_trip(bytes);
+  check_model_round_trip(bytes);
   if (size >= 4) {
     std::string sealed(bytes);
     const std::uint32_t crc = crc32c(std::string_view(sealed).substr(0, size - 4));
     for (int i = 0; i < 4; ++i) sealed[size - 4 + i] = static_cast<char>(crc >> (8 * i));
     check_round_trip(sealed);
+    check_model_round_trip(sealed);
   }
   return 0;
 }
@@ -128,7 +149,34 @@ int main(int argc, char** argv) {
     out << write_native(seed.shape);
     check_round_trip(write_native(seed.shape));
   }
-  std::printf("wrote %zu seeds to %s\n", std::size(seeds), dir.c_str());
+  // Models with a CSG history: a fused pair and a drilled block.
+  PrimitiveSpec a, b, drill;
+  a.size = {1, 1, 1};
+  b.size = {1, 1, 1};
+  b.placement = Location::translation({0.5, 0.25, 0});
+  drill.type = PrimitiveType::Cylinder;
+  drill.radius = 0.2;
+  drill.height = 3;
+  drill.placement = Location::translation({0.5, 0.5, -1});
+  auto leaf = [](const PrimitiveSpec& spec, const char* label) {
+    auto m = csg_primitive(spec, label);
+    if (!m.ok()) std::exit(1);
+    return m.value();
+  };
+  auto fused = csg_boolean(leaf(a, "a"), leaf(b, "b"), BooleanOp::Fuse);
+  auto drilled = fused.ok() ? csg_boolean(fused.value(), leaf(drill, "drill"), BooleanOp::Cut)
+                            : fused;
+  if (!drilled.ok()) {
+    std::fprintf(stderr, "seed model failed: %s\n", drilled.error().message.c_str());
+    return 1;
+  }
+  for (const auto& [name, model] : {std::pair{"csg_fused", fused.value()},
+                                    std::pair{"csg_drilled", drilled.value()}}) {
+    std::ofstream out(dir / (std::string(name) + ".csgt"), std::ios::binary);
+    out << write_native_model(model);
+    check_model_round_trip(write_native_model(model));
+  }
+  std::printf("wrote %zu seeds to %s\n", std::size(seeds) + 2, dir.c_str());
   return 0;
 }
 
