@@ -8,7 +8,9 @@
 // against BM_AffineBaseline, the same points through a plain 3×4 affine transform in the same
 // process. Each georeferencing record carries `affine_points_per_second` (the baseline, timed
 // in the same process just before) and `ratio_to_affine` (georef rate / affine rate): the
-// figure to report. Single thread; to_local is const and thread-safe, so it scales per core.
+// figure to report. BM_TileMappingToLocal/<family> takes the same points through a
+// TileMapping fitted over the tile (verified within 1e-7 m of the exact path) and reports its
+// ratio to the exact path and to the affine baseline. Single thread; to_local is const and thread-safe, so it scales per core.
 
 #include <benchmark/benchmark.h>
 
@@ -19,6 +21,7 @@
 
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/georeference.h"
+#include "csgtile/geo/tile_mapping.h"
 
 namespace {
 
@@ -124,6 +127,66 @@ BENCHMARK(BM_ProjectedToLocal)
     ->Arg(2)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(2);
+
+// The same points through TileMapping fitted over the tile (1e-7 m bound): the bulk path a
+// point cloud takes. `ratio_to_exact` is measured against the exact path in this benchmark.
+void BM_TileMappingToLocal(benchmark::State& state) {
+  const Family f = family(static_cast<int>(state.range(0)));
+  const Crs crs = csgtile::geo::crs_from_epsg(f.epsg).value();
+  auto georef = Georeferencer::create_at(crs, f.origin);
+  if (!georef.ok()) {
+    state.SkipWithError(georef.error().message.c_str());
+    return;
+  }
+  const auto points = tile_points(f, crs.linear_unit.metres);
+  csgtile::kernel::BoundingBox box;
+  for (const Vec3& p : points) box.add(p);
+  const auto fit_start = std::chrono::steady_clock::now();
+  auto mapping = csgtile::geo::TileMapping::fit(georef.value(), box);
+  const double fit_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
+  if (!mapping.ok()) {
+    state.SkipWithError(mapping.error().message.c_str());
+    return;
+  }
+  std::vector<Vec3> out(points.size());
+  const double baseline = affine_rate(points, out);
+  const std::size_t sample = points.size() / 10;  // exact path on a tenth, for the ratio
+  const auto exact_start = std::chrono::steady_clock::now();
+  (void)georef.value().to_local(std::span(points).first(sample), std::span(out).first(sample));
+  const double exact_rate =
+      static_cast<double>(sample) /
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - exact_start).count();
+  double seconds = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    auto status = mapping.value().to_local(points, out);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!status.ok()) {
+      state.SkipWithError(status.error().message.c_str());
+      return;
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+  const double processed =
+      static_cast<double>(state.iterations()) * static_cast<double>(points.size());
+  state.SetItemsProcessed(static_cast<std::int64_t>(processed));
+  state.counters["affine_points_per_second"] = baseline;
+  state.counters["ratio_to_affine"] = (processed / seconds) / baseline;
+  state.counters["ratio_to_exact"] = (processed / seconds) / exact_rate;
+  state.counters["degree"] = mapping.value().degree();
+  state.counters["verified_error_nm"] = mapping.value().verified_error_m() * 1e9;
+  state.counters["fit_ms"] = fit_seconds * 1e3;
+  state.SetLabel(state.range(0) == 0   ? "utm EPSG:32631"
+                 : state.range(0) == 1 ? "rd EPSG:28992"
+                                       : "lccft EPSG:2263");
+}
+BENCHMARK(BM_TileMappingToLocal)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
 
 }  // namespace
 
