@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <functional>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -14,14 +15,17 @@
 #include "boolean/classifier.h"
 #include "boolean/face_split.h"
 #include "boolean/fuse_groups.h"
+#include "boolean/marching.h"
 #include "boolean/model.h"
 #include "boolean/pcurve_fit.h"
 #include "boolean/surface_intersection.h"
+#include "boolean/tolerance.h"
 #include "boolean/uv_geometry.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "mesh/polygon_triangulation.h"
+#include "predicates/predicates.h"
 
 namespace csgtile::kernel {
 
@@ -131,7 +135,7 @@ class BooleanEngine {
           const bool same_direction = from.v0 == to.v0;
           const double mid = 0.5 * (from.t0 + from.t1);
           auto pc = aligned_fit(to, *f.surface, from.curve->point(mid), u.pcurve->point(mid),
-                                options_.tolerance * 1e-2);
+                                fit_tolerance(options_.tolerance));
           if (!pc) continue;  // keep the separate edge (the checker speaks if it matters)
           u.edge = it->second;
           u.forward = same_direction ? u.forward : !u.forward;
@@ -177,7 +181,9 @@ class BooleanEngine {
         switch (other.kind()) {
           case SurfaceKind::Plane: {
             const Frame& pf = static_cast<const PlaneSurface&>(other).frame();
-            planes.emplace_back(pf.z, std::abs((center - pf.origin).dot(pf.z)) <= tol);
+            const double distance = std::abs((center - pf.origin).dot(pf.z));
+            if (distance >= r - tol) break;  // misses the sphere or touches it at a point
+            planes.emplace_back(pf.z, distance <= tol);
             break;
           }
           case SurfaceKind::Sphere: {
@@ -200,14 +206,19 @@ class BooleanEngine {
             impossible = true;
         }
       }
-      if (impossible) continue;
+      if (impossible) {
+        reframe_for_tracing(face, lo, hi);
+        continue;
+      }
+      // Directions compared over the sphere (the tolerance model of the section code).
+      const ToleranceModel across{tol, std::max(2.0 * r, tol)};
       auto compatible = [&](const Vec3& z) {
         for (const Vec3& a : axes) {
-          if (a.cross(z).norm() > 1e-12) return false;
+          if (!across.parallel(a, z)) return false;
         }
         for (const auto& [n, through_center] : planes) {
-          const bool latitude = n.cross(z).norm() <= 1e-12;
-          const bool meridian = through_center && std::abs(n.dot(z)) <= 1e-12;
+          const bool latitude = across.parallel(n, z);
+          const bool meridian = through_center && across.perpendicular(n, z);
           if (!latitude && !meridian) return false;
         }
         return true;
@@ -222,7 +233,10 @@ class BooleanEngine {
           break;
         }
       }
-      if (!z) continue;
+      if (!z) {
+        reframe_for_tracing(face, lo, hi);
+        continue;
+      }
       // Seam direction: away from every meridian plane.
       const Frame base = Frame::from_z(center, *z, sphere.frame().x);
       double best_angle = 0, best_score = -1;
@@ -231,9 +245,9 @@ class BooleanEngine {
         const Vec3 x = std::cos(phi) * base.x + std::sin(phi) * base.y;
         double score = 1.0;
         for (const auto& [n, through_center] : planes) {
-          if (through_center && std::abs(n.dot(*z)) <= 1e-12) score = std::min(score, std::abs(x.dot(n)));
+          if (through_center && across.perpendicular(n, *z)) score = std::min(score, std::abs(x.dot(n)));
         }
-        if (score > best_score + 1e-9) {
+        if (score > best_score + kSeamPreference) {
           best_score = score;
           best_angle = phi;
         }
@@ -245,6 +259,41 @@ class BooleanEngine {
       frame.y = frame.z.cross(frame.x);
       rebuild_full_sphere(face, frame, r);
     }
+  }
+
+  // A full sphere whose sections will be traced (no common axis): its poles, where its
+  // (u, v) parameters are singular, are turned as far as possible from the other operand's
+  // faces it meets (measured to their bounding boxes), so that no traced section passes a pole.
+  void reframe_for_tracing(BFace& face, std::size_t lo, std::size_t hi) {
+    const auto& sphere = static_cast<const SphereSurface&>(*face.surface);
+    const Vec3 center = sphere.frame().origin;
+    const double r = sphere.radius();
+    BoundingBox box = face.box;
+    box.enlarge(options_.tolerance);
+    auto box_distance = [](const BoundingBox& b, const Vec3& p) {
+      return (p - p.cwiseMax(b.min).cwiseMin(b.max)).norm();
+    };
+    const Vec3 directions[] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1},  {1, -1, 1},
+                               {-1, 1, 1}, {1, 1, -1}, {1, 1, 0}, {1, -1, 0}, {1, 0, 1},
+                               {1, 0, -1}, {0, 1, 1},  {0, 1, -1}};
+    std::vector<Vec3> candidates{sphere.frame().z};  // the current frame wins ties
+    for (const Vec3& d : directions) candidates.push_back(d.normalized());
+    Vec3 best = sphere.frame().z;
+    double best_score = -1.0;
+    for (const Vec3& z : candidates) {
+      double score = std::numeric_limits<double>::infinity();
+      for (const Vec3& pole : {Vec3(center + r * z), Vec3(center - r * z)}) {
+        for (std::size_t g = lo; g < hi; ++g) {
+          if (!box.intersects(model_.faces[g].box)) continue;
+          score = std::min(score, box_distance(model_.faces[g].box, pole));
+        }
+      }
+      if (score > best_score) {
+        best_score = score;
+        best = z;
+      }
+    }
+    rebuild_full_sphere(face, Frame::from_z(center, best, sphere.frame().x), r);
   }
 
   void rebuild_full_sphere(BFace& face, const Frame& frame, double r) {
@@ -308,7 +357,7 @@ class BooleanEngine {
         if (!box.contains(p)) continue;
         const double t = e.curve->closest_parameter(p, e.t0, e.t1);
         if ((e.curve->point(t) - p).norm() > tol) continue;
-        const double span = 1e-9 * std::max(1.0, e.t1 - e.t0);
+        const double span = param_slack(e.t1 - e.t0);
         if (t <= e.t0 + span || t >= e.t1 - span) continue;
         e.splits.emplace_back(t, static_cast<int>(v));
       }
@@ -317,7 +366,7 @@ class BooleanEngine {
 
   double uv_margin(std::size_t face) const {
     const FacePolygon& p = polygons_[face];
-    return 1e-9 * std::max({1.0, p.max.x() - p.min.x(), p.max.y() - p.min.y()});
+    return uv_slack(std::max(p.max.x() - p.min.x(), p.max.y() - p.min.y()));
   }
 
   // Crossings of a curve (pcurve `pc` on face f) with f's boundary: (curve parameter, edge,
@@ -332,7 +381,7 @@ class BooleanEngine {
     const BFace& face = model_.faces[f];
     const double pu = face.surface->u_period(), pv = face.surface->v_period();
     const int ku = pu > 0 ? 2 : 0, kv = pv > 0 ? 1 : 0;
-    const double tol = uv_margin(f) * 10;
+    const double tol = uv_margin(f) * kCrossingUvSlacks;
     std::set<int> done;
     for (const BLoop& loop : face.loops) {
       for (const BUse& u : loop) {
@@ -352,11 +401,16 @@ class BooleanEngine {
 
   // Adds the part of a curve lying inside both faces (fa, fb) as section edges (or, with
   // `existing` >= 0, marks an existing edge of fb's boundary as lying in fa).
+  // Traced sections bring their pcurves (`hint_a` on fa, `hint_b` on fb) and the tolerance
+  // their edges need; closed-form ones get exact fitted pcurves and the model tolerance.
   Status add_section(std::size_t fa, std::size_t fb, const CurvePtr& curve, double t0, double t1,
-                     int existing) {
-    const double fit_tol = options_.tolerance * 1e-2;
-    Curve2dPtr pa = fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
-    Curve2dPtr pb = existing >= 0 ? nullptr : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
+                     int existing, const Curve2dPtr& hint_a = nullptr,
+                     const Curve2dPtr& hint_b = nullptr, double edge_tolerance = 0.0) {
+    const double fit_tol = fit_tolerance(options_.tolerance);
+    Curve2dPtr pa = hint_a ? hint_a : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
+    Curve2dPtr pb = existing >= 0 ? nullptr
+                    : hint_b      ? hint_b
+                                  : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
     if (!pa || (existing < 0 && !pb)) {
       // A great circle through a sphere's poles folds in v there: fit each half apart.
       std::vector<double> folds;
@@ -366,7 +420,7 @@ class BooleanEngine {
         for (double sign : {-1.0, 1.0}) {
           const Vec3 pole = sp.frame().origin + sign * sp.radius() * sp.frame().z;
           const double t = curve->closest_parameter(pole, t0, t1);
-          const double span = 1e-9 * std::max(1.0, t1 - t0);
+          const double span = param_slack(t1 - t0);
           if ((curve->point(t) - pole).norm() <= options_.tolerance && t > t0 + span && t < t1 - span) {
             folds.push_back(t);
           }
@@ -382,6 +436,20 @@ class BooleanEngine {
         }
         return {};
       }
+      // No exact pcurve (a sphere framed for tracing): the section as a traced polyline.
+      if (existing < 0 && curve->kind() != CurveKind::Polyline) {
+        const double size = std::max(model_.faces[fa].box.size().norm(), options_.tolerance);
+        const double sag = std::max(10.0 * options_.tolerance, 1e-6 * size);
+        if (auto traced = sample_section(*curve, t0, t1, *model_.faces[fa].surface,
+                                         *model_.faces[fb].surface, sag)) {
+          const double n = static_cast<double>(traced->points.size() - 1);
+          const double deviation = std::max(traced->deviation, options_.tolerance);
+          auto polyline = std::make_shared<PolylineCurve>(std::move(traced->points), deviation);
+          return add_section(fa, fb, polyline, 0.0, n, -1,
+                             std::make_shared<Polyline2d>(std::move(traced->uv_a)),
+                             std::make_shared<Polyline2d>(std::move(traced->uv_b)), deviation);
+        }
+      }
       return Status(ErrorCode::Unsupported,
                     std::string("the section of a ") + surface_name(model_.faces[fa].surface->kind()) +
                         " and a " + surface_name(model_.faces[fb].surface->kind()) +
@@ -393,14 +461,14 @@ class BooleanEngine {
     std::vector<double> cuts{t0, t1};
     for (const Hit& h : hits) cuts.push_back(h.t);
     std::sort(cuts.begin(), cuts.end());
-    const double min_span = 1e-9 * std::max(1.0, t1 - t0);
+    const double min_span = param_slack(t1 - t0);
     for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
       const double c0 = cuts[i], c1 = cuts[i + 1];
       if (c1 - c0 <= min_span) continue;
       const double mid = 0.5 * (c0 + c1);
-      auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * 1e3);
+      auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * kInsideUvSlacks);
       std::optional<Vec2> shift_b = Vec2::Zero();
-      if (existing < 0) shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * 1e3);
+      if (existing < 0) shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * kInsideUvSlacks);
       if (existing < 0 && shift_a.has_value() != shift_b.has_value()) {
         // The piece runs inside one face along an edge of the other (an edge lying in a
         // face): that edge, or the part of it the piece covers, splits the first face.
@@ -424,7 +492,7 @@ class BooleanEngine {
           e.t1 = c1;
           e.v0 = v0;
           e.v1 = v1;
-          e.tolerance = options_.tolerance;
+          e.tolerance = std::max(options_.tolerance, edge_tolerance);
           edge_id = model_.add_edge(std::move(e));
         }
       }
@@ -470,7 +538,7 @@ class BooleanEngine {
     const BEdge e = model_.edges[static_cast<std::size_t>(e_id)];
     double a = e.curve->closest_parameter(p0, e.t0, e.t1), b = e.curve->closest_parameter(p1, e.t0, e.t1);
     if (a > b) std::swap(a, b);
-    const double span = 1e-9 * std::max(1.0, e.t1 - e.t0);
+    const double span = param_slack(e.t1 - e.t0);
     if (b - a <= span) return;
     for (double t : {a, b}) {
       if (t > e.t0 + span && t < e.t1 - span) {
@@ -478,9 +546,9 @@ class BooleanEngine {
         if (v != e.v0 && v != e.v1) model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
       }
     }
-    auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface, options_.tolerance * 1e-2);
+    auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface, fit_tolerance(options_.tolerance));
     if (!pc) return;
-    auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * 1e3);
+    auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * kInsideUvSlacks);
     if (!shift) return;
     pc = shift_pcurve(pc, *shift);
     if (a <= e.t0 + span && b >= e.t1 - span) {
@@ -498,7 +566,7 @@ class BooleanEngine {
     const Vec3 mid = e.curve->point(0.5 * (e.t0 + e.t1));
     const double lo = curve->period() > 0 ? 0.0 : -1e300, hi = curve->period() > 0 ? curve->period() : 1e300;
     const Vec2 old_uv = pc->point(curve->closest_parameter(mid, lo, hi));
-    auto fitted = aligned_fit(e, *model_.faces[f].surface, mid, old_uv, options_.tolerance * 1e-2);
+    auto fitted = aligned_fit(e, *model_.faces[f].surface, mid, old_uv, fit_tolerance(options_.tolerance));
     return fitted ? fitted : pc;
   }
 
@@ -537,7 +605,7 @@ class BooleanEngine {
     const Vec3 p = curve.point(t);
     const int v = model_.vertex_at(p);
     for (const Hit& h : hits) {
-      if (std::abs(h.t - t) > 1e-9 * std::max(1.0, std::abs(t))) continue;
+      if (std::abs(h.t - t) > param_slack(std::abs(t))) continue;
       BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
       // A pole (degenerate edge) is split in its parameter where a meridian reaches it.
       if (!e.degenerate() && (v == e.v0 || v == e.v1)) continue;
@@ -564,7 +632,7 @@ class BooleanEngine {
           continue;
         }
         for (const SectionCurve& c : ssi.curves) {
-          if (auto s = add_section(fa, fb, c.curve, c.first, c.last, -1); !s.ok()) return s;
+          if (auto s = add_section(fa, fb, c.curve, c.first, c.last, -1, c.pcurve_a, c.pcurve_b, c.deviation); !s.ok()) return s;
         }
       }
     }
@@ -589,14 +657,14 @@ class BooleanEngine {
   void split_crossing_sections() {
     for (std::size_t f = 0; f < model_.faces.size(); ++f) {
       const std::vector<BUse> extra = model_.faces[f].extra;
-      const double tol = uv_margin(f) * 10;
+      const double tol = uv_margin(f) * kCrossingUvSlacks;
       for (std::size_t i = 0; i < extra.size(); ++i) {
         for (std::size_t j = i + 1; j < extra.size(); ++j) {
           const BEdge a = model_.edges[static_cast<std::size_t>(extra[i].edge)];
           const BEdge b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
           if (a.degenerate() || b.degenerate()) continue;
           for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol)) {
-            const double sa = 1e-9 * std::max(1.0, a.t1 - a.t0), sb = 1e-9 * std::max(1.0, b.t1 - b.t0);
+            const double sa = param_slack(a.t1 - a.t0), sb = param_slack(b.t1 - b.t0);
             const bool inner_a = c.t > a.t0 + sa && c.t < a.t1 - sa;
             const bool inner_b = c.s > b.t0 + sb && c.s < b.t1 - sb;
             if (!inner_a && !inner_b) continue;
@@ -620,7 +688,7 @@ class BooleanEngine {
       BEdge e = model_.edges[i];
       std::sort(e.splits.begin(), e.splits.end());
       std::vector<std::pair<double, int>> cuts{{e.t0, e.v0}};
-      const double eps = 1e-9 * std::max(1.0, e.t1 - e.t0);
+      const double eps = param_slack(e.t1 - e.t0);
       for (const auto& [t, v] : e.splits) {
         if (t <= e.t0 + eps || t >= e.t1 - eps) continue;
         if (e.degenerate() ? t - cuts.back().first <= eps : v == cuts.back().second) continue;
@@ -736,7 +804,7 @@ class BooleanEngine {
       if (c == Containment::OnBoundary) {
         auto n = other.boundary_normal(*p);
         if (!n) return Status(ErrorCode::InvalidShape, "a boundary point has no normal");
-        (outward_normal(piece, *p).dot(*n) > 0 ? on_same : on_opposite) = true;
+        (predicates::dot_sign(outward_normal(piece, *p), *n) > 0 ? on_same : on_opposite) = true;
       }
       switch (op_) {
         case BooleanOp::Fuse:
@@ -840,12 +908,14 @@ void splice(RFace& f, std::size_t la, std::size_t ia, std::size_t lb, std::size_
   if (!a.empty()) f.loops.push_back(std::move(a));
 }
 
-bool same_plane(const Surface& x, bool xr, const Surface& y, bool yr, double tol) {
+// One plane with one outward side: the sides agree exactly (sign of nx·ny), the planes
+// coincide within the tolerance model (parallel over its size, offset negligible).
+bool same_plane(const Surface& x, bool xr, const Surface& y, bool yr, const ToleranceModel& d) {
   if (x.kind() != SurfaceKind::Plane || y.kind() != SurfaceKind::Plane) return false;
   const Frame& fx = static_cast<const PlaneSurface&>(x).frame();
   const Frame& fy = static_cast<const PlaneSurface&>(y).frame();
   const Vec3 nx = xr ? Vec3(-fx.z) : fx.z, ny = yr ? Vec3(-fy.z) : fy.z;
-  return nx.dot(ny) > 1 - 1e-12 && std::abs((fy.origin - fx.origin).dot(fx.z)) <= tol;
+  return predicates::dot_sign(nx, ny) > 0 && d.parallel(nx, ny) && d.negligible((fy.origin - fx.origin).dot(fx.z));
 }
 
 }  // namespace
@@ -906,6 +976,9 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     }
   }
   // 2. Faces on one plane meeting along an edge are one face (the edge bounds nothing).
+  BoundingBox extent;
+  for (const BFace& f : model_.faces) extent.add(f.box);
+  const ToleranceModel planes{tol, std::max(extent.empty() ? 0.0 : extent.size().norm(), tol)};
   bool changed = true;
   while (changed) {
     changed = false;
@@ -919,14 +992,14 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     for (const auto& [edge, list] : uses) {
       if (list.size() != 2 || list[0].second == list[1].second) continue;
       const std::size_t i = list[0].first, j = list[1].first;
-      if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed, tol)) continue;
+      if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed, planes)) continue;
       if (i != j) {
         // Refit j's pcurves on i's plane, then join.
         for (BLoop& loop : faces[j].loops) {
           for (BUse& w : loop) {
             const BEdge& e = model_.edges[static_cast<std::size_t>(w.edge)];
             if (e.degenerate()) continue;
-            auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *faces[i].surface, tol * 1e-2);
+            auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *faces[i].surface, fit_tolerance(tol));
             if (pc) w.pcurve = pc;
           }
         }
@@ -996,7 +1069,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
             const BEdge& m = model_.edges[static_cast<std::size_t>(id)];
             const BEdge& old = model_.edges[static_cast<std::size_t>(u.edge)];
             const double old_mid = 0.5 * (old.t0 + old.t1);
-            auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid), u.pcurve->point(old_mid), tol * 1e-2);
+            auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid), u.pcurve->point(old_mid), fit_tolerance(tol));
             out.push_back({id, forward, pc ? pc : u.pcurve});
           }
           loop = std::move(out);

@@ -7,7 +7,9 @@
 #include <numbers>
 
 #include "boolean/line_surface.h"
+#include "boolean/tolerance.h"
 #include "csgtile/kernel/explorer.h"
+#include "predicates/predicates.h"
 
 namespace csgtile::kernel::detail {
 
@@ -20,8 +22,6 @@ constexpr double kInitialStep = std::numbers::pi / 8;
 // Refinement depth after which a parameter point still inside an arc's bulge is taken as on
 // the boundary (the bulge shrinks fourfold per level, so this is never reached in practice).
 constexpr int kMaxRefinement = 60;
-// Parameter-plane tolerance of point-in-face, relative to the domain's size.
-constexpr double kUvRelativeEpsilon = 1e-12;
 
 BoundingBox moved_box(const BoundingBox& local, const Location& location) {
   BoundingBox out;
@@ -292,7 +292,7 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
   }
   q.parameter_box_ = {u0, u1, v0, v1};
   q.uv_epsilon_ =
-      kUvRelativeEpsilon *
+      kFaceQueryUvRelative *
       (1.0 + std::max({u1 - u0, v1 - v0, std::abs(u0), std::abs(u1), std::abs(v0), std::abs(v1)}));
   // Loops open by a period close far outside the domain, all on the same side (low v for
   // loops around u, low u for loops around v): the even–odd rule then keeps the band between
@@ -309,7 +309,7 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
   }
 
   BoundingBox local = q.surface_->bounds(q.parameter_box_);
-  local.enlarge(1e-9 * (1.0 + local.size().norm() + local.max.cwiseAbs().maxCoeff() +
+  local.enlarge(kBoundsPadRelative * (1.0 + local.size().norm() + local.max.cwiseAbs().maxCoeff() +
                         local.min.cwiseAbs().maxCoeff()));
   q.local_bounds_ = local;
   q.world_bounds_ = moved_box(local, q.location_);
@@ -386,10 +386,8 @@ bool FaceQuery::cross(const Piece& piece, const Vec2& q, bool& inside) const {
     const bool settled = bulge <= eps || s.depth >= kMaxRefinement;
     if (settled && distance <= reach) return false;
     if (settled || distance > reach) {
-      if ((s.a.y() > q.y()) != (s.b.y() > q.y())) {
-        const double x = s.a.x() + (q.y() - s.a.y()) * (s.b.x() - s.a.x()) / (s.b.y() - s.a.y());
-        if (q.x() < x) inside = !inside;
-      }
+      // q is off the chord (and off the arc): the crossing with the ray is decided exactly.
+      if (predicates::crosses_ray(s.a, s.b, q)) inside = !inside;
       continue;
     }
     const double tm = 0.5 * (s.t0 + s.t1);
@@ -635,7 +633,7 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
     const Vec3 local_direction = face.location().rotation().transpose() * direction;
     if (!clip_ray(face.local_bounds(), origin, local_direction, lo, hi)) return;
     const ParamBox& box = face.parameter_box();
-    const double pad = 1e-9 * (1.0 + (box.u1 - box.u0) + (box.v1 - box.v0));
+    const double pad = kUvRelative * (1.0 + (box.u1 - box.u0) + (box.v1 - box.v0));
     const ParamBox range{box.u0 - pad, box.u1 + pad, box.v0 - pad, box.v1 + pad};
     intersect_line_surface(face.surface(), origin, local_direction, lo, hi, range,
                            tolerance_ / scale, intersection);
@@ -643,7 +641,7 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
     // A touching pair of roots comes back as one root somewhere between them (they are up to
     // about sqrt(eps) of the face's size apart): it is only harmless well inside or well
     // outside the face.
-    const double touching = 1e-6 * face.world_bounds().size().norm();
+    const double touching = kTouchingRelative * face.world_bounds().size().norm();
     for (const LineSurfaceHit& hit : intersection.hits) {
       const Containment where = face.locate_uv(hit.uv);
       if (where == Containment::OnBoundary || (hit.tangent && where == Containment::Inside)) {

@@ -43,8 +43,9 @@ class FaceQuery {
   /// Whether the parameter point (u, v) lies in the face's domain or on its boundary. Periodic
   /// parameters are tried in every period that overlaps the domain (u, u ± period, …).
   bool contains_uv(const Vec2& uv) const { return locate_uv(uv) != Containment::Outside; }
-  /// Inside / Outside, or OnBoundary when within about 1e-12 (relative to the domain's size)
-  /// of a boundary loop in the parameter plane.
+  /// Inside / Outside, or OnBoundary when within kFaceQueryUvRelative (boolean/tolerance.h;
+  /// relative to the domain's size) of a boundary loop in the parameter plane. Outside that
+  /// band the side of every chord is decided by the exact predicates.
   Containment locate_uv(const Vec2& uv) const;
 
   const Shape& face() const { return face_; }
@@ -195,12 +196,12 @@ struct ClassifyStats {
 /// with every face surface (closed forms, see boolean/line_surface.h) and the hits that lie
 /// inside their faces are counted per solid; odd means inside. A ray that passes within
 /// max(tolerance, edge tolerance) of a face boundary, runs along a surface or touches one
-/// inside a face (or within 1e-6 of the face's size from its boundary) is ambiguous and
-/// another direction is cast; after ClassifierOptions::max_rays
-/// ambiguous rays the majority of their parities decides. Faces with Internal or External
-/// orientation bound nothing and are skipped; faces not inside any solid form one extra
-/// region. Trees of face and edge boxes (slab tests) skip what a ray or a point cannot meet,
-/// so a query costs O(log n) plus the faces actually near it.
+/// inside a face (or within kTouchingRelative of the face's size from its boundary, see
+/// boolean/tolerance.h) is ambiguous and another direction is cast; after
+/// ClassifierOptions::max_rays ambiguous rays the majority of their parities decides. Faces
+/// with Internal or External orientation bound nothing and are skipped; faces not inside any
+/// solid form one extra region. Trees of face and edge boxes (slab tests) skip what a ray or
+/// a point cannot meet, so a query costs O(log n) plus the faces actually near it.
 /// Immutable after create(); const queries are thread-safe and deterministic.
 class SolidClassifier {
  public:

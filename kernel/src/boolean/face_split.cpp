@@ -3,21 +3,20 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numbers>
 
+#include "boolean/tolerance.h"
 #include "boolean/uv_geometry.h"
+#include "predicates/predicates.h"
 
 namespace csgtile::kernel::detail {
 
 namespace {
 
-constexpr double kTwoPi = 2 * std::numbers::pi;
-
 struct HalfEdge {
   BUse use;
-  int from = -1, to = -1;  // nodes
-  double out_angle = 0;    // direction leaving `from`
-  double in_angle = 0;     // direction of the reverse leaving `to`
+  int from = -1, to = -1;       // nodes
+  Vec2 out_dir = Vec2::Zero();  // direction leaving `from`
+  Vec2 in_dir = Vec2::Zero();   // direction of the reverse leaving `to`
   bool alive = true;
   bool boundary = false;
 };
@@ -26,27 +25,34 @@ double param_at(const BEdge& e, bool forward, bool at_start) {
   return (forward == at_start) ? e.t0 : e.t1;
 }
 
-// Direction (as an angle in (u, v)) of the use leaving its start, or of its reverse leaving
-// its end: a short chord, so that tangent curves are told apart by their curvature.
-double chord_angle(const BModel& m, const BUse& use, bool at_start) {
+// Direction in (u, v) of the use leaving its start, or of its reverse leaving its end: a
+// short chord, so that tangent curves are told apart by their curvature. Directions are
+// compared by angle with the exact predicates (predicates::clockwise_before).
+Vec2 chord_direction(const BModel& m, const BUse& use, bool at_start) {
   const BEdge& e = m.edges[static_cast<std::size_t>(use.edge)];
   const double span = e.t1 - e.t0;
   const double t = param_at(e, use.forward, at_start);
-  const double step = 1e-4 * span * (((use.forward == at_start)) ? 1.0 : -1.0);
+  const double step = kLeavingChordStep * span * (((use.forward == at_start)) ? 1.0 : -1.0);
   Vec2 d = use.pcurve->point(t + step) - use.pcurve->point(t);
   if (d.norm() == 0) d = use.pcurve->derivative(t) * (step > 0 ? 1.0 : -1.0);
-  return std::atan2(d.y(), d.x());
+  return d;
+}
+
+// The points of a loop's sampled pcurves (the polygon its area and orientation are taken on).
+std::vector<Vec2> loop_points(const BModel& m, const BLoop& loop) {
+  std::vector<Vec2> pts;
+  for (const BUse& u : loop) {
+    auto s = sample_use(m, u, 64);
+    pts.insert(pts.end(), s.begin(), s.end() - 1);
+  }
+  return pts;
 }
 
 }  // namespace
 
 double loop_area2(const BModel& m, const BLoop& loop) {
   double a = 0;
-  std::vector<Vec2> pts;
-  for (const BUse& u : loop) {
-    auto s = sample_use(m, u, 64);
-    pts.insert(pts.end(), s.begin(), s.end() - 1);
-  }
+  const std::vector<Vec2> pts = loop_points(m, loop);
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const Vec2& p = pts[i];
     const Vec2& q = pts[(i + 1) % pts.size()];
@@ -58,17 +64,18 @@ double loop_area2(const BModel& m, const BLoop& loop) {
 Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   std::vector<HalfEdge> half;
   for (const BLoop& loop : face.loops) {
-    for (const BUse& u : loop) half.push_back({u, -1, -1, 0, 0, true, true});
+    for (const BUse& u : loop) half.push_back({u, -1, -1, Vec2::Zero(), Vec2::Zero(), true, true});
   }
   for (const BUse& u : face.extra) {
-    half.push_back({u, -1, -1, 0, 0, true, false});
+    half.push_back({u, -1, -1, Vec2::Zero(), Vec2::Zero(), true, false});
     BUse r = u;
     r.forward = !u.forward;
-    half.push_back({r, -1, -1, 0, 0, true, false});
+    half.push_back({r, -1, -1, Vec2::Zero(), Vec2::Zero(), true, false});
   }
   // Nodes: one per (vertex, place in the (u, v) plane): a seam vertex is two nodes.
-  const Vec2 extent = (face_polygon(m, face).max - face_polygon(m, face).min).cwiseAbs();
-  const double node_tol = 1e-7 * std::max({1.0, extent.x(), extent.y()});
+  const FacePolygon polygon = face_polygon(m, face);
+  const Vec2 extent = (polygon.max - polygon.min).cwiseAbs();
+  const double node_tol = kNodeUvRelative * std::max({1.0, extent.x(), extent.y()});
   struct Node {
     int vertex;
     Vec2 uv;
@@ -84,8 +91,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   for (HalfEdge& h : half) {
     h.from = node_of(use_start(m, h.use), use_start_uv(m, h.use));
     h.to = node_of(use_end(m, h.use), use_end_uv(m, h.use));
-    h.out_angle = chord_angle(m, h.use, true);
-    h.in_angle = chord_angle(m, h.use, false);
+    h.out_dir = chord_direction(m, h.use, true);
+    h.in_dir = chord_direction(m, h.use, false);
   }
   // Section edges with a free end bound nothing: drop them (repeat: removal may free others).
   bool changed = true;
@@ -122,14 +129,13 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
       used[static_cast<std::size_t>(h)] = true;
       const HalfEdge& cur = half[static_cast<std::size_t>(h)];
       cycle.push_back(cur.use);
-      // Next: the first outgoing half-edge clockwise from the reverse of `cur`.
+      // Next: the first outgoing half-edge clockwise from the reverse of `cur` (one leaving
+      // in the reverse's own direction comes last).
       int best = -1;
-      double best_delta = 10.0;
       for (int o : outgoing[static_cast<std::size_t>(cur.to)]) {
-        double delta = std::fmod(cur.in_angle - half[static_cast<std::size_t>(o)].out_angle, kTwoPi);
-        if (delta <= 1e-12) delta += kTwoPi;
-        if (delta < best_delta) {
-          best_delta = delta;
+        const Vec2& d = half[static_cast<std::size_t>(o)].out_dir;
+        if (best < 0 ||
+            predicates::clockwise_before(cur.in_dir, d, half[static_cast<std::size_t>(best)].out_dir)) {
           best = o;
         }
       }
@@ -141,8 +147,9 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
     if (h != static_cast<int>(start)) {
       return Error{ErrorCode::InvalidShape, "face pieces' boundaries cross (open cycle)"};
     }
+    // Outer or hole: the exact orientation of the sampled loop (its area for ordering).
     const double area = loop_area2(m, cycle);
-    if (area > 0) {
+    if (predicates::polygon_orientation(loop_points(m, cycle)) > 0) {
       outers.push_back(std::move(cycle));
       outer_areas.push_back(area);
     } else {
@@ -159,12 +166,7 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
     int best = -1;
     for (std::size_t i = 0; i < outers.size(); ++i) {
       FacePolygon poly;
-      std::vector<Vec2> loop;
-      for (const BUse& u : outers[i]) {
-        auto s = sample_use(m, u, 64);
-        loop.insert(loop.end(), s.begin(), s.end() - 1);
-      }
-      poly.loops.push_back(loop);
+      poly.loops.push_back(loop_points(m, outers[i]));
       auto in = poly.inside(probe, 0.0);
       if (in && *in && (best < 0 || outer_areas[i] < outer_areas[static_cast<std::size_t>(best)])) {
         best = static_cast<int>(i);

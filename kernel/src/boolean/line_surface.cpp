@@ -8,6 +8,9 @@
 
 #include <Eigen/LU>
 
+#include "boolean/tolerance.h"
+#include "predicates/predicates.h"
+
 namespace csgtile::kernel::detail {
 
 namespace {
@@ -25,6 +28,19 @@ constexpr double kTrigDouble = 1e-12;
 // Relative distance to a polyline breakpoint at which a root is flagged (it could be counted
 // on both segments or on neither).
 constexpr double kBreakpointSlack = 1e-10;
+// Rounding-noise level of products of unit vectors and of the vectors they project: a
+// projection this small relative to what was projected is zero (a perpendicular pair).
+constexpr double kRelativeNoise = 1e-14;
+// The cone equation's quadratic and linear coefficients (of order 1 and |q| for a unit
+// direction) below this: the line runs along a ruling through the apex.
+constexpr double kConeRulingNoise = 1e-20;
+// A Newton polish step stops at a Jacobian whose determinant is this small relative to its
+// columns' lengths (the line touches the surface there).
+constexpr double kSingularJacobian = 1e-12;
+// Roots of neighbouring chunks closer than this (relative) are one root found twice.
+constexpr double kRootMergeRelative = 1e-12;
+// Keeps "0 <= 0" from holding in relative tests of exactly zero quantities.
+constexpr double kTiny = 1e-300;
 
 double wrap(double a) {
   double r = std::fmod(a, kTwoPi);
@@ -220,11 +236,16 @@ void intersect_plane(const PlaneSurface& s, const Vec3& o, const Vec3& d, double
   const Frame& f = s.frame();
   const double along = d.dot(f.z);
   const double height = (o - f.origin).dot(f.z);
-  if (std::abs(along) <= 1e-14) {
+  // Whether the line is parallel to the plane, and whether the plane lies ahead of its
+  // origin, are decided exactly on the stored doubles; "in the plane" is a tolerance question.
+  const int heading = predicates::dot_sign(d, f.z);
+  if (heading == 0) {
     if (std::abs(height) <= tolerance) out.degenerate = true;
     return;
   }
-  const double t = -height / along;
+  const int side = predicates::orient_plane(o, f.origin, f.z);
+  if (side == heading && t0 >= 0.0) return;  // heading away: the plane is behind the origin
+  const double t = side == 0 ? 0.0 : -side * heading * std::abs(height / along);
   if (t < t0 || t > t1) return;
   const Vec3 q = o + t * d - f.origin;
   push_hit(out, t, Vec2(q.dot(f.x), q.dot(f.y)), false);
@@ -237,8 +258,10 @@ void intersect_cylinder(const CylinderSurface& s, const Vec3& o, const Vec3& d, 
   const Vec3 e = direction_in_frame(s.frame(), d);
   const double r = s.radius();
   const double a = e.x() * e.x() + e.y() * e.y();
-  if (a <= 1e-20) {
-    // Parallel to the axis: on the surface along its whole length, or never meets it.
+  // Parallel to the axis within tolerance over the window (its distance to the axis changes
+  // by at most sin·(window / 2) from the one at the middle): on the surface along the whole
+  // window, or it never meets it there.
+  if (std::sqrt(a) * (line.hi - line.lo) <= tolerance) {
     if (std::abs(std::hypot(q.x(), q.y()) - r) <= tolerance) out.degenerate = true;
     return;
   }
@@ -271,7 +294,8 @@ void intersect_cone(const ConeSurface& s, const Vec3& o, const Vec3& d, double t
   const double hb = q.x() * e.x() + q.y() * e.y() - k * e.z() * rho_q;
   const double planar2 = q.x() * q.x() + q.y() * q.y();
   const double c = planar2 - rho_q * rho_q;
-  if (std::abs(a) <= 1e-20 && std::abs(hb) <= 1e-20 * (1.0 + std::sqrt(planar2))) {
+  if (std::abs(a) <= kConeRulingNoise &&
+      std::abs(hb) <= kConeRulingNoise * (1.0 + std::sqrt(planar2))) {
     // Along a ruling through the apex.
     if (std::abs(c) <= 2.0 * tolerance * (std::sqrt(planar2) + std::abs(rho_q))) {
       out.degenerate = true;
@@ -332,7 +356,7 @@ void intersect_torus(const TorusSurface& s, const Vec3& o, const Vec3& d, double
   // Restrict τ to the torus's bounding sphere as well as the window.
   const double closest = -q.dot(e);
   const double miss2 = (q + closest * e).squaredNorm();
-  const double outer = (big + small) * (1.0 + 1e-9);
+  const double outer = (big + small) * (1.0 + kBoundsPadRelative);
   if (miss2 > outer * outer) return;
   const double half = std::sqrt(outer * outer - miss2);
   const double lo = std::max(line.lo, closest - half);
@@ -450,7 +474,8 @@ void polish(const Surface& s, const Vec3& o, const Vec3& d, double& t, Vec2& uv)
     jacobian.col(1) = s.dv(uv.x(), uv.y());
     jacobian.col(2) = -d;
     const double det = jacobian.determinant();
-    if (!(std::abs(det) > 1e-12 * jacobian.col(0).norm() * jacobian.col(1).norm())) return;
+    const double scale = jacobian.col(0).norm() * jacobian.col(1).norm();
+    if (!(std::abs(det) > kSingularJacobian * scale)) return;
     const Vec3 step = jacobian.inverse() * residual;
     uv -= Vec2(step.x(), step.y());
     t -= step.z();
@@ -485,7 +510,7 @@ void intersect_extrusion(const ExtrusionSurface& s, const Vec3& o, const Vec3& d
     const double alpha = (c - o).dot(n);
     const double beta = a.dot(n);
     const double gamma = b.dot(n);
-    if (std::hypot(beta, gamma) <= 1e-14 * (a.norm() + b.norm())) {
+    if (std::hypot(beta, gamma) <= kRelativeNoise * (a.norm() + b.norm())) {
       if (std::abs(alpha) <= tolerance) out.degenerate = true;
       return;
     }
@@ -495,7 +520,7 @@ void intersect_extrusion(const ExtrusionSurface& s, const Vec3& o, const Vec3& d
   for (const AffinePiece& piece : affine_pieces(basis, range.u0, range.u1)) {
     const double slope = piece.e.dot(n);
     const double value = (piece.m - o).dot(n);
-    if (std::abs(slope) <= 1e-14 * piece.e.norm()) {
+    if (std::abs(slope) <= kRelativeNoise * piece.e.norm()) {
       // A ruling plane parallel to the line.
       if (std::abs(value) <= tolerance) out.degenerate = true;
       continue;
@@ -557,7 +582,7 @@ void trig_quadratic_roots(const TrigQuadratic& h, double v0, double v1,
     for (const PolynomialRoot& r : roots) {
       const double v = mid + 2.0 * std::atan(r.x);
       // Chunks share their ends: a root there is found twice.
-      if (!out.empty() && std::abs(v - out.back().x) <= 1e-12 * (1.0 + std::abs(v))) {
+      if (!out.empty() && std::abs(v - out.back().x) <= kRootMergeRelative * (1.0 + std::abs(v))) {
         out.back().multiple = out.back().multiple || r.multiple;
         continue;
       }
@@ -614,9 +639,10 @@ void intersect_revolution(const RevolutionSurface& s, const Vec3& o, const Vec3&
     const double hb = a0.dot(a1) - dz2 * m_perp.dot(e_perp);
     const double qc = a0.squaredNorm() - dz2 * m_perp.squaredNorm();
     const double size = a0.squaredNorm() + dz2 * m_perp.squaredNorm();
-    if (std::abs(qa) <= 1e-14 * (a1.squaredNorm() + dz2 * e_perp.squaredNorm() + 1e-300) &&
+    if (std::abs(qa) <= kRelativeNoise * (a1.squaredNorm() + dz2 * e_perp.squaredNorm() + kTiny) &&
         std::abs(hb) <=
-            1e-14 * (std::sqrt(size) * (a1.norm() + std::abs(dz) * e_perp.norm()) + 1e-300)) {
+            kRelativeNoise *
+                (std::sqrt(size) * (a1.norm() + std::abs(dz) * e_perp.norm()) + kTiny)) {
       // The line lies on the cone (or cylinder) this segment sweeps, or never meets it.
       if (std::abs(qc) <= 2.0 * tolerance * std::sqrt(size)) out.degenerate = true;
       continue;

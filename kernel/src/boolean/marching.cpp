@@ -20,7 +20,7 @@ constexpr int kLatticeCells = 16;        // lattice spacing = region diagonal / 
 constexpr int kMaxLattice = 17;          // points per axis at most
 constexpr int kPullIterations = 40;      // minimum-norm Newton steps for a seed
 constexpr int kCorrectIterations = 12;   // corrector steps per march step
-constexpr int kMaxSteps = 200000;        // per branch direction
+constexpr int kMaxSteps = 50000;         // per branch direction
 constexpr double kMaxTurn = 0.9659;      // cos 15°: largest tangent turn in one step
 constexpr double kNewtonFraction = 1e-3; // Newton stops at this fraction of the tolerance
 constexpr double kTangentSine = 1e-7;    // |n_a × n_b| below this: tangent surfaces
@@ -213,6 +213,13 @@ class Tracer {
         for (int k = 0; k < 4; ++k) closing[k] = nearest_periodic(start[k], next[k], period(k));
         const double closing_deviation = chord_deviation(w, closing, x, x_start);
         if (closing_deviation > sag_) {
+          // Back at the start in space but not in parameters: the branch crossed a point where
+          // a surface's parameters are singular (a sphere's pole, a cone's apex).
+          const double jump = (closing - next).norm(), step_size = (next - w).norm();
+          if (jump > 10.0 * step_size || (x_start - x).norm() <= 4 * h_min_) {
+            reason = "the intersection passes a singular point of a surface's parameters (pole or apex)";
+            return false;
+          }
           // Approach the start in shorter steps.
           h = std::max(0.5 * (x_start - x).norm(), 2 * h_min_);
           continue;
@@ -291,6 +298,9 @@ MarchResult march_intersection(const Surface& a, const Surface& b, const Boundin
   for (int k = 0; k < 3; ++k) {
     n[k] = std::clamp(static_cast<int>(std::ceil(extent[k] / cell)) + 1, 2, kMaxLattice);
   }
+  double spacing_max = 0.0;
+  for (int k = 0; k < 3; ++k) spacing_max = std::max(spacing_max, extent[k] / (n[k] - 1));
+  const double reach = 0.5 * std::sqrt(3.0) * spacing_max * 1.01;
   PointHash traced(diag / kLatticeCells);
   double spacing = diag / 20.0;  // largest chord of the traced branches (for dropping seeds)
   for (int i = 0; i < n[0]; ++i) {
@@ -299,7 +309,17 @@ MarchResult march_intersection(const Surface& a, const Surface& b, const Boundin
         const Vec3 p = region.min + Vec3(extent.x() * i / (n[0] - 1), extent.y() * j / (n[1] - 1),
                                          extent.z() * k / (n[2] - 1));
         const Vec2 ua = a.closest_parameters(p), ub = b.closest_parameters(p);
+        // Every point of the region is within half a lattice diagonal of a lattice point, so
+        // a lattice point farther than that from either surface seeds nothing new.
+        if ((a.point(ua.x(), ua.y()) - p).norm() > reach || (b.point(ub.x(), ub.y()) - p).norm() > reach) {
+          continue;
+        }
         Vector4d w(ua.x(), ua.y(), ub.x(), ub.y());
+        if (!pair.pull(w, eps)) continue;
+        // Canonical parameters (Newton may land on an equivalent pair, e.g. a sphere's v past
+        // a pole with u turned by π): marching then stays continuous from them.
+        const Vec2 ca = a.closest_parameters(pair.pa(w)), cb = b.closest_parameters(pair.pb(w));
+        w = Vector4d(ca.x(), ca.y(), cb.x(), cb.y());
         if (!pair.pull(w, eps)) continue;
         const Vec3 x = pair.pa(w);
         if (!region.contains(x)) continue;
@@ -334,6 +354,58 @@ MarchResult march_intersection(const Surface& a, const Surface& b, const Boundin
     }
   }
   return result;
+}
+
+std::optional<MarchedCurve> sample_section(const Curve& c, double t0, double t1, const Surface& a,
+                                           const Surface& b, double sag) {
+  constexpr std::size_t kMaxPoints = 100000;
+  constexpr int kInitialSegments = 32;
+  std::vector<double> ts;
+  for (int i = 0; i <= kInitialSegments; ++i) ts.push_back(t0 + (t1 - t0) * i / kInitialSegments);
+  MarchedCurve out;
+  auto parameters = [&](const Surface& s, std::vector<Vec2>& uv) {
+    uv.clear();
+    for (std::size_t i = 0; i < ts.size(); ++i) {
+      Vec2 q = s.closest_parameters(c.point(ts[i]));
+      if (i > 0) {
+        q.x() = nearest_periodic(q.x(), uv.back().x(), s.u_period());
+        q.y() = nearest_periodic(q.y(), uv.back().y(), s.v_period());
+      }
+      uv.push_back(q);
+    }
+  };
+  for (;;) {
+    parameters(a, out.uv_a);
+    parameters(b, out.uv_b);
+    std::vector<double> refined{ts.front()};
+    double worst = 0.0;
+    bool split = false;
+    for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
+      const Vec3 p0 = c.point(ts[i]), p1 = c.point(ts[i + 1]);
+      const Vec3 chord = 0.5 * (p0 + p1);
+      const Vec2 ma = 0.5 * (out.uv_a[i] + out.uv_a[i + 1]), mb = 0.5 * (out.uv_b[i] + out.uv_b[i + 1]);
+      const double d = std::max({(c.point(0.5 * (ts[i] + ts[i + 1])) - chord).norm(),
+                                 (a.point(ma.x(), ma.y()) - chord).norm(),
+                                 (b.point(mb.x(), mb.y()) - chord).norm()});
+      if (d > sag) {
+        refined.push_back(0.5 * (ts[i] + ts[i + 1]));
+        split = true;
+      } else {
+        worst = std::max(worst, d);
+      }
+      refined.push_back(ts[i + 1]);
+    }
+    ts = std::move(refined);
+    if (!split) {
+      out.deviation = worst;
+      break;
+    }
+    if (ts.size() > kMaxPoints) return std::nullopt;
+  }
+  for (double t : ts) out.points.push_back(c.point(t));
+  out.closed = (out.points.front() - out.points.back()).norm() <= sag;
+  if (out.closed) out.points.back() = out.points.front();
+  return out;
 }
 
 }  // namespace csgtile::kernel::detail

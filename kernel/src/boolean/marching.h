@@ -16,10 +16,12 @@
 // dropped. Components smaller than the lattice spacing (region diagonal / 16) can be missed
 // when no lattice point lies in their basin; tangent contacts are reported, not traced.
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "csgtile/kernel/bounding_box.h"
+#include "csgtile/kernel/curve.h"
 #include "csgtile/kernel/surface.h"
 
 namespace csgtile::kernel::detail {
@@ -43,5 +45,12 @@ struct MarchResult {
 /// deviation. Deterministic.
 MarchResult march_intersection(const Surface& a, const Surface& b, const BoundingBox& region,
                                double tolerance, double sag);
+
+/// A known section curve c over [t0, t1] (closed form) turned into a traced one, for faces
+/// on which its pcurve has no exact form (a circle on a sphere whose poles were turned away
+/// from it): points of c, refined until every chord and both pcurve segments' images stay
+/// within `sag` of c. Null when that needs more than 100 000 points (a pole on the way).
+std::optional<MarchedCurve> sample_section(const Curve& c, double t0, double t1, const Surface& a,
+                                           const Surface& b, double sag);
 
 }  // namespace csgtile::kernel::detail

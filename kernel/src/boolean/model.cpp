@@ -37,6 +37,30 @@ int BModel::vertex_at(const Vec3& p) {
   return id;
 }
 
+namespace {
+
+// A face's polyline pcurve carried into the world frame of its transformed surface: angle
+// parameters stay, length parameters scale with the location (surface.h: plane u and v,
+// cylinder and cone v). Null for other pcurves or surfaces.
+Curve2dPtr carried_pcurve(const Curve2dPtr& pcurve, SurfaceKind kind, double scale) {
+  if (!pcurve || pcurve->kind() != Curve2dKind::Polyline) return nullptr;
+  if (scale == 1.0) return pcurve;
+  double su = 1.0, sv = 1.0;
+  switch (kind) {
+    case SurfaceKind::Plane: su = sv = scale; break;
+    case SurfaceKind::Cylinder:
+    case SurfaceKind::Cone: sv = scale; break;
+    case SurfaceKind::Sphere:
+    case SurfaceKind::Torus: break;
+    default: return nullptr;
+  }
+  std::vector<Vec2> points = static_cast<const Polyline2d&>(*pcurve).points();
+  for (Vec2& p : points) p = Vec2(p.x() * su, p.y() * sv);
+  return std::make_shared<Polyline2d>(std::move(points));
+}
+
+}  // namespace
+
 Status import_operand(BModel& model, const Shape& shape, int operand) {
   if (shape.is_null()) return Status(ErrorCode::InvalidArgument, "a Boolean argument is null");
   if (map_child_shapes(shape, ShapeKind::Solid).size() == 0) {
@@ -99,6 +123,14 @@ Status import_operand(BModel& model, const Shape& shape, int operand) {
         } else {
           use.pcurve = fit_pcurve(*e.curve, e.t0, e.t1, *bf.surface, fit_tolerance);
           if (!use.pcurve) {
+            // A traced section edge (polyline) keeps the face's own pcurve, carried into the
+            // world frame and accepted within the edge's tolerance.
+            Curve2dPtr own = carried_pcurve(fd.pcurves[w][k], bf.surface->kind(), face.location().scale());
+            if (own && pcurve_deviation(*e.curve, *own, e.t0, e.t1, *bf.surface) <= e.tolerance) {
+              use.pcurve = std::move(own);
+              loop.push_back(std::move(use));
+              continue;
+            }
             return Status(ErrorCode::Unsupported, "an edge of an argument has no exact pcurve on its face");
           }
           // Keep the face's own (u, v) window (a seam is used at u = 0 and at u = 2π): shift

@@ -9,6 +9,12 @@ namespace csgtile::kernel::detail {
 
 namespace {
 
+// |∂S/∂u| below this (relative to the point's distance from the origin, plus one) marks a
+// point where u is undefined (a pole, an apex): it does not constrain the fit in u.
+constexpr double kDegenerateDerivative = 1e-9;
+// Fitted coefficients below this fraction of the largest one are rounding noise, set to zero
+// so that exact curves stay exact (a line stays a line).
+constexpr double kCoefficientNoise = 1e-13;
 
 bool is_angular_curve(const Curve& c) { return c.period() > 0; }
 
@@ -108,7 +114,7 @@ Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& s
       const double du = surface.du(uv.x(), uv.y()).norm();
       ts.push_back(t);
       uvs.push_back(uv);
-      u_defined.push_back(du > 1e-9 * (1.0 + p.norm()));
+      u_defined.push_back(du > kDegenerateDerivative * (1.0 + p.norm()));
     }
     // Unwrap periodic parameters along the curve.
     for (std::size_t i = 1; i < uvs.size(); ++i) {
@@ -147,7 +153,7 @@ Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& s
       // Clean coefficients that are rounding noise so that exact curves stay exact.
       const double scale = std::max(1.0, out.cwiseAbs().maxCoeff());
       for (int k = 0; k < 4; ++k) {
-        if (std::abs(out(k)) < 1e-13 * scale) out(k) = 0.0;
+        if (std::abs(out(k)) < kCoefficientNoise * scale) out(k) = 0.0;
       }
       return out;
     };

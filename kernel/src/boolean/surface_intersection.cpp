@@ -1,14 +1,18 @@
 #include "boolean/surface_intersection.h"
 
+#include "boolean/marching.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "boolean/tolerance.h"
 #include "geometry/geometry_internal.h"
 
 namespace csgtile::kernel::detail {
@@ -22,24 +26,11 @@ constexpr double kClipMargin = 0.05;
 
 // ---- Tolerance decisions ------------------------------------------------------------------
 
-/// Every geometric decision of this unit, each in one place. `length` is the world
-/// tolerance; `size` the extent over which directions are compared, so that two directions
-/// are "the same" when lines along them drift apart by less than `length` over `size`.
-struct Decisions {
-  double length;
-  double size;
-
-  /// A distance (or difference of distances) that is zero within tolerance.
-  bool negligible(double distance) const { return std::abs(distance) <= length; }
-  /// The sine of an angle that moves points less than the tolerance over the size.
-  bool negligible_angle(double sine) const { return std::abs(sine) * size <= length; }
-  /// Unit directions parallel or opposite.
-  bool parallel(const Vec3& d1, const Vec3& d2) const {
-    return negligible_angle(d1.cross(d2).norm());
-  }
-  /// Unit directions at a right angle.
-  bool perpendicular(const Vec3& d1, const Vec3& d2) const { return negligible_angle(d1.dot(d2)); }
-};
+/// Every geometric decision of this unit goes through the engine's tolerance model
+/// (boolean/tolerance.h): `length` is the world tolerance; `size` the extent over which
+/// directions are compared (the clip box's diagonal, or the largest radius when bigger).
+/// Parallelism and coplanarity are coincidence questions, decided there within tolerance.
+using Decisions = ToleranceModel;
 
 // ---- Surfaces as analytic descriptions ----------------------------------------------------
 
@@ -223,14 +214,14 @@ class Sections {
     }
     if (!(t_max - t_min > decide_.length)) return;
     curves_.push_back(
-        {std::make_shared<LineCurve>(origin, direction), t_min, t_max, false, tangent});
+        {std::make_shared<LineCurve>(origin, direction), t_min, t_max, false, tangent, {}, {}, 0.0});
   }
 
   /// The closed curve center + cos t·a + sin t·b, unless its exact bounds miss the region.
   void add_closed(const Vec3& center, const Vec3& a, const Vec3& b, bool tangent) {
     auto curve = std::make_shared<TrigCurve>(center, a, b);
     if (!curve->bounds(0.0, kTwoPi).intersects(region_)) return;
-    curves_.push_back({std::move(curve), 0.0, kTwoPi, true, tangent});
+    curves_.push_back({std::move(curve), 0.0, kTwoPi, true, tangent, {}, {}, 0.0});
   }
 
   const BoundingBox& region() const { return region_; }
@@ -742,6 +733,50 @@ SsiResult dispatch(const Analytic& a, const Analytic& b, const Decisions& d, Sec
   return unsupported(first, second, "axes not common: general quartic, not supported yet");
 }
 
+// Sections without a closed form, traced (marching.h): polylines with their pcurves, chords
+// within max(10·tolerance, 1e-6·size) of the exact curve.
+SsiResult traced_sections(const Surface& a, const Surface& b, const BoundingBox& region,
+                          double tolerance, double size) {
+  const double sag = std::max(10.0 * tolerance, 1e-6 * size);
+  MarchResult marched = march_intersection(a, b, region, tolerance, sag);
+  if (!marched.ok) {
+    return {SsiKind::Unsupported,
+            {},
+            std::string(surface_kind_name(a.kind())) + "–" + surface_kind_name(b.kind()) +
+                ": no closed form, and tracing stopped: " + marched.reason};
+  }
+  // A sphere's v stays within its poles; a branch beyond them went through a pole, where its
+  // pcurve would have to jump (the Boolean turns a sphere's poles away from the other
+  // operand's faces so that this does not happen).
+  for (const auto& [surface, which] : {std::pair{&a, 0}, std::pair{&b, 1}}) {
+    if (surface->kind() != SurfaceKind::Sphere) continue;
+    for (const MarchedCurve& m : marched.curves) {
+      for (const Vec2& uv : which == 0 ? m.uv_a : m.uv_b) {
+        if (std::abs(uv.y()) > 0.5 * std::numbers::pi + 1e-9) {
+          return {SsiKind::Unsupported,
+                  {},
+                  std::string(surface_kind_name(a.kind())) + "–" + surface_kind_name(b.kind()) +
+                      ": no closed form, and the traced section passes a pole of the sphere"};
+        }
+      }
+    }
+  }
+  SsiResult result;
+  for (MarchedCurve& m : marched.curves) {
+    SectionCurve c;
+    const double deviation = std::max(m.deviation, tolerance);
+    c.first = 0.0;
+    c.last = static_cast<double>(m.points.size() - 1);
+    c.closed = m.closed;
+    c.curve = std::make_shared<PolylineCurve>(std::move(m.points), deviation);
+    c.pcurve_a = std::make_shared<Polyline2d>(std::move(m.uv_a));
+    c.pcurve_b = std::make_shared<Polyline2d>(std::move(m.uv_b));
+    c.deviation = deviation;
+    result.curves.push_back(std::move(c));
+  }
+  return result;
+}
+
 }  // namespace
 
 SsiResult intersect_surfaces(const Surface& a, const Surface& b, const BoundingBox& clip,
@@ -749,11 +784,11 @@ SsiResult intersect_surfaces(const Surface& a, const Surface& b, const BoundingB
   std::optional<Analytic> da = describe(a);
   std::optional<Analytic> db = describe(b);
   if (!da || !db) {
-    const SurfaceKind odd = da ? b.kind() : a.kind();
-    return {SsiKind::Unsupported,
-            {},
-            std::string(surface_kind_name(a.kind())) + "–" + surface_kind_name(b.kind()) + ": " +
-                surface_kind_name(odd) + " surfaces not supported yet"};
+    if (clip.empty()) return no_curves();
+    const double size = std::max(clip.size().norm(), tolerance);
+    BoundingBox region = clip;
+    region.enlarge(kClipMargin * size + tolerance);
+    return traced_sections(a, b, region, tolerance, size);
   }
   const double size = std::max({clip.empty() ? 0.0 : clip.size().norm(), characteristic_radius(*da),
                                 characteristic_radius(*db), tolerance});
@@ -769,7 +804,9 @@ SsiResult intersect_surfaces(const Surface& a, const Surface& b, const BoundingB
   region.enlarge(kClipMargin * size + tolerance);
   if (misses(a, region, decide) || misses(b, region, decide)) return no_curves();
   Sections out(region, decide);
-  return dispatch(*da, *db, decide, out);
+  SsiResult result = dispatch(*da, *db, decide, out);
+  if (result.kind == SsiKind::Unsupported) result = traced_sections(a, b, region, tolerance, size);
+  return result;
 }
 
 }  // namespace csgtile::kernel::detail

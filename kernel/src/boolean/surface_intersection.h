@@ -25,6 +25,7 @@
 
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/curve.h"
+#include "csgtile/kernel/curve2d.h"
 #include "csgtile/kernel/surface.h"
 
 namespace csgtile::kernel::detail {
@@ -40,6 +41,12 @@ struct SectionCurve {
   bool closed = false;
   /// The surfaces touch along the curve without crossing (their normals are parallel there).
   bool tangent = false;
+  /// Traced sections (no closed form): `curve` is a PolylineCurve through points on both
+  /// surfaces, these are its pcurves on a and b (vertex i at t = i), and `deviation` the
+  /// largest distance of its chords and pcurve images from the exact curve. Null / 0 for
+  /// closed-form sections, whose pcurves the Boolean fits exactly.
+  Curve2dPtr pcurve_a, pcurve_b;
+  double deviation = 0.0;
 };
 
 enum class SsiKind {
@@ -70,12 +77,15 @@ struct SsiResult {
 /// reported). Surfaces that miss the grown box entirely give no curves, even for pairs that
 /// are otherwise Unsupported.
 ///
-/// Supported (everything else is SsiKind::Unsupported with a reason): plane–plane; plane with
+/// Closed forms: plane–plane; plane with
 /// cylinder (lines, circle, ellipse), cone (plane through the apex: generatrices; plane ⊥
 /// axis: circle), sphere, torus (plane ⊥ axis or through the axis); cylinder–cylinder with
 /// parallel axes, or equal radii and crossing axes (two ellipses); sphere–sphere; every pair
 /// of cylinder, cone, sphere, torus turning about one common axis (a sphere counts when its
-/// centre is on the other's axis); and pairs proven disjoint by a distance bound.
+/// centre is on the other's axis); and pairs proven disjoint by a distance bound. Every other
+/// pair is traced by marching (marching.h) with chords within max(10·tolerance, 1e-6·size) of
+/// the exact curve; SsiKind::Unsupported remains for what the tracer refuses (tangent
+/// contacts, singular points of the intersection), with its reason.
 /// Deterministic; thread-safe (no shared state).
 SsiResult intersect_surfaces(const Surface& a, const Surface& b, const BoundingBox& clip,
                              double tolerance);

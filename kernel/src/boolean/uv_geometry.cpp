@@ -4,11 +4,18 @@
 #include <cmath>
 #include <limits>
 
+#include "boolean/tolerance.h"
+#include "predicates/predicates.h"
+
 namespace csgtile::kernel::detail {
 
 std::vector<Vec2> sample_use(const BModel& m, const BUse& use, int samples) {
   const BEdge& e = m.edges[static_cast<std::size_t>(use.edge)];
-  const int n = use.pcurve->kind() == Curve2dKind::Line ? 1 : samples;
+  // Lines need their ends only; polylines (traced sections) at least one sample per segment.
+  const int n = use.pcurve->kind() == Curve2dKind::Line ? 1
+                : use.pcurve->kind() == Curve2dKind::Polyline
+                    ? std::max(samples, static_cast<int>(std::ceil(std::abs(e.t1 - e.t0))))
+                    : samples;
   std::vector<Vec2> out;
   out.reserve(static_cast<std::size_t>(n) + 1);
   for (int i = 0; i <= n; ++i) {
@@ -60,19 +67,17 @@ double FacePolygon::boundary_distance(const Vec2& uv) const {
 }
 
 std::optional<bool> FacePolygon::inside(const Vec2& uv, double margin) const {
-  if (boundary_distance(uv) <= margin) return std::nullopt;
-  bool in = false;
-  for (const auto& loop : loops) {
-    for (std::size_t i = 0, n = loop.size(), j = n - 1; i < n; j = i++) {
-      const Vec2& a = loop[i];
-      const Vec2& b = loop[j];
-      if ((a.y() > uv.y()) != (b.y() > uv.y()) &&
-          uv.x() < (b.x() - a.x()) * (uv.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-        in = !in;
-      }
-    }
+  // Within the margin is a coincidence (tolerance); outside it the side is decided exactly.
+  if (margin > 0.0 && boundary_distance(uv) <= margin) return std::nullopt;
+  switch (predicates::locate_in_polygon(uv, loops)) {
+    case predicates::PolygonLocation::Inside:
+      return true;
+    case predicates::PolygonLocation::Outside:
+      return false;
+    case predicates::PolygonLocation::OnBoundary:
+      break;
   }
-  return in;
+  return std::nullopt;
 }
 
 std::optional<Vec2> FacePolygon::shift_inside(const Vec2& uv, double margin) const {
@@ -94,19 +99,82 @@ std::optional<Vec2> FacePolygon::shift_inside(const Vec2& uv, double margin) con
 
 std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1, const Curve2d& b,
                                         double s0, double s1, double tolerance) {
-  auto samples_of = [](const Curve2d& c) { return c.kind() == Curve2dKind::Line ? 1 : 96; };
-  const int na = samples_of(a), nb = samples_of(b);
+  // Below this a Newton determinant is singular (a division by it could overflow).
+  constexpr double kSingular = 1e-300;
+  constexpr int kNewtonIterations = 40;
+  // Polylines (traced sections) are sampled at least once per segment.
+  auto samples_of = [](const Curve2d& c, double span) {
+    if (c.kind() == Curve2dKind::Line) return 1;
+    if (c.kind() == Curve2dKind::Polyline) {
+      return std::max(kCrossingSamples, static_cast<int>(std::ceil(std::abs(span))));
+    }
+    return kCrossingSamples;
+  };
+  const int na = samples_of(a, t1 - t0), nb = samples_of(b, s1 - s0);
   std::vector<Vec2> pa, pb;
   for (int i = 0; i <= na; ++i) pa.push_back(a.point(t0 + (t1 - t0) * i / na));
   for (int i = 0; i <= nb; ++i) pb.push_back(b.point(s0 + (s1 - s0) * i / nb));
   std::vector<Crossing> found;
+  const double pad_t = param_slack(std::abs(t1 - t0)), pad_s = param_slack(std::abs(s1 - s0));
+  // Keeps the meeting point (t, s) unless it lies outside the ranges (by more than the
+  // parameter slack; `exact`: known to be on both), is where the curves run along each
+  // other, or was found already.
+  auto accept = [&](double t, double s, bool exact) {
+    if (!exact && (t < t0 - pad_t || t > t1 + pad_t || s < s0 - pad_s || s > s1 + pad_s)) return;
+    t = std::clamp(t, t0, t1);
+    s = std::clamp(s, s0, s1);
+    // Curves that run along each other (overlapping boundaries of coincident faces) do
+    // not cross: their shared stretch is handled by vertex splits, not crossings.
+    const Vec2 ta = a.derivative(t), tb = b.derivative(s);
+    const double cross = std::abs(ta.x() * tb.y() - ta.y() * tb.x());
+    if (cross <= kPcurveTangentSine * ta.norm() * tb.norm()) {
+      const double step = kAlongProbeStep * (t1 - t0);
+      auto near_b = [&](const Vec2& q) {
+        double best = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < nb; ++k) best = std::min(best, segment_distance(q, pb[k], pb[k + 1]));
+        return best;
+      };
+      const double limit = kAlongUvRelative * std::max(1.0, (pa.back() - pa.front()).norm());
+      const bool before = t - step >= t0 && near_b(a.point(t - step)) <= limit;
+      const bool after = t + step <= t1 && near_b(a.point(t + step)) <= limit;
+      if (before || after) return;
+    }
+    for (const Crossing& c : found) {
+      if (std::abs(c.t - t) < kCrossingMergeRelative * std::max(1.0, t1 - t0) &&
+          std::abs(c.s - s) < kCrossingMergeRelative * std::max(1.0, s1 - s0)) {
+        return;
+      }
+    }
+    found.push_back({t, s});
+  };
+  if (a.kind() == Curve2dKind::Line && b.kind() == Curve2dKind::Line) {
+    // Two straight pieces: the exact segment predicates decide whether they meet; only a
+    // near miss at an end (the pieces of one boundary do not quite join) is left to the
+    // parameter slack.
+    const Vec2 a0 = a.point(t0), a1 = a.point(t1), b0 = b.point(s0), b1 = b.point(s1);
+    // Parallel pieces never cross (a shared stretch is handled by vertex splits).
+    if (predicates::cross_sign(a0, a1, b0, b1) == 0) return found;
+    const Vec2 da = a1 - a0, db = b1 - b0, w = b0 - a0;
+    const double den = da.x() * db.y() - da.y() * db.x();
+    if (den == 0.0) return found;
+    double fa = (w.x() * db.y() - w.y() * db.x()) / den;
+    double fb = (w.x() * da.y() - w.y() * da.x()) / den;
+    const bool meet =
+        predicates::classify_segments(a0, a1, b0, b1) != predicates::SegmentRelation::Disjoint;
+    if (meet) {
+      fa = std::clamp(fa, 0.0, 1.0);
+      fb = std::clamp(fb, 0.0, 1.0);
+    }
+    accept(t0 + (t1 - t0) * fa, s0 + (s1 - s0) * fb, meet);
+    return found;
+  }
   // Candidate pairs: segments whose boxes meet (grown by a margin for curvature).
   for (int i = 0; i < na; ++i) {
     const Vec2 amin = pa[i].cwiseMin(pa[i + 1]), amax = pa[i].cwiseMax(pa[i + 1]);
-    const double grow_a = 0.05 * (pa[i + 1] - pa[i]).norm() + tolerance;
+    const double grow_a = kCrossingBoxGrowth * (pa[i + 1] - pa[i]).norm() + tolerance;
     for (int j = 0; j < nb; ++j) {
       const Vec2 bmin = pb[j].cwiseMin(pb[j + 1]), bmax = pb[j].cwiseMax(pb[j + 1]);
-      const double grow = grow_a + 0.05 * (pb[j + 1] - pb[j]).norm();
+      const double grow = grow_a + kCrossingBoxGrowth * (pb[j + 1] - pb[j]).norm();
       if ((amin.array() - grow > bmax.array()).any() || (bmin.array() - grow > amax.array()).any()) {
         continue;
       }
@@ -114,7 +182,7 @@ std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1, 
       const Vec2 da = pa[i + 1] - pa[i], db = pb[j + 1] - pb[j];
       const double den = da.x() * db.y() - da.y() * db.x();
       double fa = 0.5, fb = 0.5;
-      if (std::abs(den) > 1e-300) {
+      if (den != 0.0) {
         const Vec2 w = pb[j] - pa[i];
         fa = std::clamp((w.x() * db.y() - w.y() * db.x()) / den, 0.0, 1.0);
         fb = std::clamp((w.x() * da.y() - w.y() * da.x()) / den, 0.0, 1.0);
@@ -122,60 +190,30 @@ std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1, 
       double t = t0 + (t1 - t0) * (i + fa) / na;
       double s = s0 + (s1 - s0) * (j + fb) / nb;
       bool converged = false;
-      for (int it = 0; it < 40; ++it) {
+      for (int it = 0; it < kNewtonIterations; ++it) {
         const Vec2 f = a.point(t) - b.point(s);
-        if (f.norm() <= tolerance * 1e-3) {
+        if (f.norm() <= tolerance * kNewtonConvergedFraction) {
           converged = true;
           break;
         }
         const Vec2 ja = a.derivative(t), jb = -b.derivative(s);
         const double det = ja.x() * jb.y() - ja.y() * jb.x();
-        if (std::abs(det) < 1e-300) break;
+        if (std::abs(det) < kSingular) break;
         const double dt = (f.x() * jb.y() - f.y() * jb.x()) / det;
         const double ds = (ja.x() * f.y() - ja.y() * f.x()) / det;
         t -= dt;
         s -= ds;
-        if (std::abs(dt) + std::abs(ds) < 1e-15 * (1 + std::abs(t) + std::abs(s))) {
+        if (std::abs(dt) + std::abs(ds) < kNewtonStall * (1 + std::abs(t) + std::abs(s))) {
           converged = (a.point(t) - b.point(s)).norm() <= tolerance;
           break;
         }
       }
+      if (!std::isfinite(t) || !std::isfinite(s)) continue;
       if (!converged) {
         // Tangential contact converges slowly: accept a close approach.
-        if ((a.point(t) - b.point(s)).norm() > tolerance) continue;
+        if (!((a.point(t) - b.point(s)).norm() <= tolerance)) continue;
       }
-      const double pt = 1e-9 * std::max(1.0, std::abs(t1 - t0)), ps = 1e-9 * std::max(1.0, std::abs(s1 - s0));
-      if (t < t0 - pt || t > t1 + pt || s < s0 - ps || s > s1 + ps) continue;
-      t = std::clamp(t, t0, t1);
-      s = std::clamp(s, s0, s1);
-      // Curves that run along each other (overlapping boundaries of coincident faces) do
-      // not cross: their shared stretch is handled by vertex splits, not crossings.
-      {
-        const Vec2 ta = a.derivative(t), tb = b.derivative(s);
-        const double cross = std::abs(ta.x() * tb.y() - ta.y() * tb.x());
-        if (cross <= 1e-7 * ta.norm() * tb.norm()) {
-          const double step = 1e-3 * (t1 - t0);
-          auto near_b = [&](const Vec2& q) {
-            double best = std::numeric_limits<double>::infinity();
-            for (int k = 0; k < nb; ++k) {
-              const Vec2 d = pb[k + 1] - pb[k];
-              const double l2 = d.squaredNorm();
-              const double f = l2 > 0 ? std::clamp((q - pb[k]).dot(d) / l2, 0.0, 1.0) : 0.0;
-              best = std::min(best, (q - (pb[k] + f * d)).norm());
-            }
-            return best;
-          };
-          const double limit = 1e-6 * std::max(1.0, (pa.back() - pa.front()).norm());
-          const bool before = t - step >= t0 && near_b(a.point(t - step)) <= limit;
-          const bool after = t + step <= t1 && near_b(a.point(t + step)) <= limit;
-          if (before || after) continue;
-        }
-      }
-      bool dup = false;
-      for (const Crossing& c : found) {
-        if (std::abs(c.t - t) < 1e-7 * std::max(1.0, t1 - t0) && std::abs(c.s - s) < 1e-7 * std::max(1.0, s1 - s0)) dup = true;
-      }
-      if (!dup) found.push_back({t, s});
+      accept(t, s, false);
     }
   }
   std::sort(found.begin(), found.end(), [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
