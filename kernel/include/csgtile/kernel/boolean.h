@@ -58,7 +58,10 @@ Result<BooleanResult> boolean_operation_with_history(const Shape& a, const Shape
 
 /// The union of many solids in one call: a sweep over their bounding boxes finds the groups
 /// of solids that can touch (connected components of the box-overlap graph); each group is
-/// fused pairwise in input order and the groups are gathered in one compound. Solids that
+/// fused as a balanced tree of pairwise fuses (neighbours in input order first, so each solid
+/// takes part in about log2(n) operations; where the fuse of two partial results fails, the
+/// second one's halves are fused into the first one in turn, down to single solids) and the
+/// groups are gathered in one compound. Solids that
 /// touch nothing pass through unchanged. Deterministic. Errors as boolean_operation.
 Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options = {});
 
