@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -12,6 +13,13 @@ std::filesystem::path shared_dir() {
   return std::filesystem::weakly_canonical(std::filesystem::path(CSGTILE_SHARED_DIR));
 }
 std::filesystem::path csgtile_binary() { return CSGTILE_BINARY; }
+
+int property_scale() {
+  const char* text = std::getenv("CSGTILE_PROPERTY_SCALE");
+  if (text == nullptr) return 1;
+  const int scale = std::atoi(text);
+  return scale > 0 ? scale : 1;
+}
 
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -16,6 +16,10 @@ std::filesystem::path csgtile_binary();
 /// Reads a whole file; empty string when missing.
 std::string read_file(const std::filesystem::path& path);
 
+/// How many times the seeded property tests multiply their case counts: the environment's
+/// CSGTILE_PROPERTY_SCALE (a positive integer; the optimised CI stage sets 10), else 1.
+int property_scale();
+
 /// A temporary directory `<tmp>/<prefix><pid>`, created on construction and removed with
 /// everything in it on destruction.
 class TempDir {

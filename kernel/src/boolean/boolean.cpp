@@ -439,7 +439,7 @@ class BooleanEngine {
       // No exact pcurve (a sphere framed for tracing): the section as a traced polyline.
       if (existing < 0 && curve->kind() != CurveKind::Polyline) {
         const double size = std::max(model_.faces[fa].box.size().norm(), options_.tolerance);
-        const double sag = std::max(10.0 * options_.tolerance, 1e-6 * size);
+        const double sag = traced_sag(options_.tolerance, size);
         if (auto traced = sample_section(*curve, t0, t1, *model_.faces[fa].surface,
                                          *model_.faces[fb].surface, sag)) {
           const double n = static_cast<double>(traced->points.size() - 1);

@@ -734,10 +734,10 @@ SsiResult dispatch(const Analytic& a, const Analytic& b, const Decisions& d, Sec
 }
 
 // Sections without a closed form, traced (marching.h): polylines with their pcurves, chords
-// within max(10·tolerance, 1e-6·size) of the exact curve.
+// within traced_sag(tolerance, size) of the exact curve (boolean/tolerance.h).
 SsiResult traced_sections(const Surface& a, const Surface& b, const BoundingBox& region,
                           double tolerance, double size) {
-  const double sag = std::max(10.0 * tolerance, 1e-6 * size);
+  const double sag = traced_sag(tolerance, size);
   MarchResult marched = march_intersection(a, b, region, tolerance, sag);
   if (!marched.ok) {
     return {SsiKind::Unsupported,
@@ -752,7 +752,7 @@ SsiResult traced_sections(const Surface& a, const Surface& b, const BoundingBox&
     if (surface->kind() != SurfaceKind::Sphere) continue;
     for (const MarchedCurve& m : marched.curves) {
       for (const Vec2& uv : which == 0 ? m.uv_a : m.uv_b) {
-        if (std::abs(uv.y()) > 0.5 * std::numbers::pi + 1e-9) {
+        if (std::abs(uv.y()) > 0.5 * std::numbers::pi + kParamRelative) {
           return {SsiKind::Unsupported,
                   {},
                   std::string(surface_kind_name(a.kind())) + "–" + surface_kind_name(b.kind()) +

@@ -122,6 +122,15 @@ inline constexpr double kAlongProbeStep = 1e-3;
 /// span) are one crossing found twice.
 inline constexpr double kCrossingMergeRelative = 1e-7;
 
+/// Traced (marched) sections: their chords stay within max(kTracedSagTolerances · linear
+/// tolerance, kTracedSagRelative · problem size) of the exact curve — the edge tolerance such
+/// a polyline edge then carries (finer chains would only cost time).
+inline constexpr double kTracedSagTolerances = 10.0;
+inline constexpr double kTracedSagRelative = 1e-6;
+inline double traced_sag(double linear, double size) {
+  return std::max(kTracedSagTolerances * linear, kTracedSagRelative * size);
+}
+
 // ---- Numerical constants (not tolerances) ------------------------------------------------------
 
 /// Newton refinement of a pcurve crossing stops when the two points are this fraction of the

@@ -16,6 +16,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "random_shapes.h"
+#include "test_support.h"
 
 namespace csgtile::kernel {
 namespace {
@@ -41,7 +42,10 @@ TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
   std::uniform_int_distribution<int> grid(0, 4);
   std::uniform_int_distribution<int> turn(0, 7);
   int checked = 0;
-  for (int i = 0; i < 400; ++i) {
+  // Fixed at 400: at 4 000 (this generator, seed 7) nine cases meet known engine failures
+  // (named errors on touching boxes turned by π/4; see the issue notes).
+  const int cases = 400;
+  for (int i = 0; i < cases; ++i) {
     // Drawn one by one: argument evaluation order is unspecified, the sequence must not be.
     double v[13];
     for (int k = 0; k < 12; ++k) v[k] = grid(rng);
@@ -66,7 +70,7 @@ TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
     EXPECT_NEAR(volume(d), va - volume(c), 1e-9 * va) << tag;
     ++checked;
   }
-  EXPECT_EQ(checked, 400);
+  EXPECT_EQ(checked, cases);
 }
 
 TEST(BooleanProperty, SelfOperationsOfEveryPrimitive) {
@@ -237,7 +241,7 @@ TEST(BooleanTraced, UnequalCrossingCylinders) {
 TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
   std::mt19937_64 rng(7);
   int succeeded = 0, named = 0;
-  constexpr int kPairs = 40;
+  const int kPairs = 40 * test::property_scale();
   for (int i = 0; i < kPairs; ++i) {
     PrimitiveSpec sa = test::random_primitive(rng, static_cast<PrimitiveType>(rng() % kPrimitiveTypeCount));
     PrimitiveSpec sb = test::random_primitive(rng, static_cast<PrimitiveType>(rng() % kPrimitiveTypeCount));
