@@ -6,6 +6,8 @@
 # Set CSGTILE_SKIP_SANITIZE=1 or CSGTILE_SKIP_FUZZ=1 to leave out step 2 or 3 locally.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# setup.sh installs GDAL: its validators must then run, not skip.
+export CSGTILE_REQUIRE_GDAL="${CSGTILE_REQUIRE_GDAL:-1}"
 deploy/setup.sh
 jobs="$(nproc)"
 

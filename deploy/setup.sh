@@ -18,6 +18,8 @@ packages=(
   libcli11-dev libsqlite3-dev libssl-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev googletest libbenchmark-dev python3
+  # topology index checks: ogrinfo and GDAL's GeoPackage validator (validate_gpkg.py)
+  gdal-bin python3-gdal
 )
 
 missing=()

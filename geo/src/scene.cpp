@@ -200,6 +200,33 @@ Result<Scene> parse_scene(std::string_view text) {
     else if (op == "cut") scene.op = BooleanOp::Cut;
     else return Error{ErrorCode::InvalidArgument, "key \"op\": \"" + op + "\" is not fuse, common or cut"};
   }
+  if (j.contains("crs") || j.contains("origin")) {
+    SceneFrame frame;
+    if (j.contains("crs")) {
+      if (!j["crs"].is_string())
+        return Error{ErrorCode::InvalidArgument, "key \"crs\" must be a string"};
+      frame.crs = j["crs"].get<std::string>();
+    }
+    if (j.contains("origin")) {
+      const json& o = j["origin"];
+      if (!o.is_array() || o.size() != 3) {
+        return Error{ErrorCode::InvalidArgument, "key \"origin\" must be [x, y, z]"};
+      }
+      for (std::size_t i = 0; i < 3; ++i) {
+        if (!o[i].is_number() || !std::isfinite(o[i].get<double>())) {
+          return Error{ErrorCode::InvalidArgument, "key \"origin\" must hold three finite numbers"};
+        }
+        frame.origin[i] = o[i].get<double>();
+      }
+    }
+    scene.frame = frame;
+  }
+  if (j.contains("seed")) {
+    if (!j["seed"].is_number_unsigned()) {
+      return Error{ErrorCode::InvalidArgument, "key \"seed\" must be an integer >= 0"};
+    }
+    scene.seed = j["seed"].get<std::uint64_t>();
+  }
   if (!j.contains("primitives") || !j["primitives"].is_array()) {
     return Error{ErrorCode::InvalidArgument, "key \"primitives\" is missing or not an array"};
   }
@@ -229,6 +256,115 @@ Result<Scene> parse_scene(std::string_view text) {
     scene.expected = ex;
   }
   return scene;
+}
+
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;
+
+// + 0.0 turns -0 into 0: the same scene prints the same bytes whichever sign a zero got.
+double clean(double v) { return v + 0.0; }
+
+OrderedJson ring_json(const std::vector<Vec2>& ring) {
+  OrderedJson out = OrderedJson::array();
+  for (const Vec2& p : ring) out.push_back({clean(p.x()), clean(p.y())});
+  return out;
+}
+
+OrderedJson primitive_json(const ScenePrimitive& p) {
+  const kernel::PrimitiveSpec& s = p.spec;
+  OrderedJson j;
+  j["type"] = kernel::primitive_type_name(s.type);
+  if (!p.id.empty()) j["id"] = p.id;
+  switch (s.type) {
+    case PrimitiveType::Box:
+      j["size"] = {clean(s.size.x()), clean(s.size.y()), clean(s.size.z())};
+      break;
+    case PrimitiveType::Cylinder:
+      j["r"] = s.radius;
+      j["h"] = s.height;
+      break;
+    case PrimitiveType::Cone:
+      j["r1"] = clean(s.radius);
+      j["r2"] = clean(s.radius2);
+      j["h"] = s.height;
+      break;
+    case PrimitiveType::Sphere:
+      j["r"] = s.radius;
+      break;
+    case PrimitiveType::Torus:
+      j["R"] = s.radius;
+      j["r"] = s.radius2;
+      break;
+    case PrimitiveType::Extrusion:
+      j["profile"] = ring_json(s.profile);
+      if (!s.holes.empty()) {
+        OrderedJson holes = OrderedJson::array();
+        for (const auto& h : s.holes) holes.push_back(ring_json(h));
+        j["holes"] = std::move(holes);
+      }
+      j["h"] = s.height;
+      break;
+    case PrimitiveType::Revolution:
+      j["profile"] = ring_json(s.profile);
+      // The default (a full turn) is left implicit, as hand-written scenes do.
+      if (s.angle < 2 * std::numbers::pi) j["angle"] = s.angle;
+      break;
+  }
+  const kernel::Matrix34 m = s.placement.matrix();
+  OrderedJson rows = OrderedJson::array();
+  for (int r = 0; r < 3; ++r) {
+    rows.push_back({clean(m(r, 0)), clean(m(r, 1)), clean(m(r, 2)), clean(m(r, 3))});
+  }
+  j["placement"] = std::move(rows);
+  if (p.quality) {
+    j["quality"] = {{"inliers", p.quality->inliers},
+                    {"rms", p.quality->rms},
+                    {"coverage", p.quality->coverage}};
+  }
+  return j;
+}
+
+}  // namespace
+
+std::string scene_to_json(const Scene& scene) {
+  // Top-level keys one per line and one primitive per line: diffable, still compact.
+  std::string out = "{\"name\": " + OrderedJson(scene.name).dump();
+  if (scene.op != BooleanOp::None) {
+    out += ",\n \"op\": " + OrderedJson(boolean_op_name(scene.op)).dump();
+  }
+  if (scene.frame) {
+    out += ",\n \"crs\": " + OrderedJson(scene.frame->crs).dump();
+    const auto& o = scene.frame->origin;
+    out += ",\n \"origin\": " + OrderedJson{clean(o[0]), clean(o[1]), clean(o[2])}.dump();
+  }
+  if (scene.seed) out += ",\n \"seed\": " + std::to_string(*scene.seed);
+  out += ",\n \"primitives\": [";
+  for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
+    out += (i == 0 ? "\n  " : ",\n  ") + primitive_json(scene.primitives[i]).dump();
+  }
+  out += scene.primitives.empty() ? "]" : "\n ]";
+  if (scene.expected) {
+    OrderedJson e = OrderedJson::object();
+    if (scene.expected->volume) e["volume"] = *scene.expected->volume;
+    if (scene.expected->area) e["area"] = *scene.expected->area;
+    if (scene.expected->topology) {
+      const TopologyCounts& t = *scene.expected->topology;
+      OrderedJson counts = OrderedJson::object();
+      auto put = [&](const char* key, long long v) {
+        if (v >= 0) counts[key] = v;
+      };
+      put("solids", t.solids);
+      put("shells", t.shells);
+      put("faces", t.faces);
+      put("edges", t.edges);
+      put("vertices", t.vertices);
+      e["topology"] = std::move(counts);
+    }
+    out += ",\n \"expected\": " + e.dump();
+  }
+  out += "}\n";
+  return out;
 }
 
 Result<Scene> read_scene(const std::filesystem::path& path) {

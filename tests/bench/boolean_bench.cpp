@@ -1,7 +1,8 @@
 // Boolean benchmark: n-ary fuse of a synthetic city block (boxes and columns on a grid,
-// about 30% overlapping a neighbour) for n = 10, 100, 1000 (and 5000 with --big), against
-// the pairwise fold of the same primitives in the same process (up to --fold-max), plus the
-// volumes (equal for both methods). Prints one JSON object.
+// about 30% overlapping a neighbour) for n = 10, 100, 1000 (and 5000 with --big), and of the
+// timber gate of `csgtile synth` (81 columns, 148 beams), against the pairwise fold of the
+// same primitives in the same process (up to --fold-max), plus the volumes (equal for both
+// methods). Prints one JSON object.
 // Run: build/tests/bench/boolean_bench [--big] [--fold-max N]
 
 #include <sys/resource.h>
@@ -12,6 +13,7 @@
 #include <random>
 #include <string>
 
+#include "csgtile/geo/synth.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -62,10 +64,24 @@ int main(int argc, char** argv) {
   }
   std::vector<int> sizes{10, 100, 1000};
   if (big) sizes.push_back(5000);
+  sizes.push_back(0);  // 0: the gate
   std::printf("{\"benchmark\": \"city_block_fuse\", \"runs\": [\n");
   bool first = true;
-  for (int n : sizes) {
-    const std::vector<Shape> prims = city_block(n, 42);
+  for (const int size : sizes) {
+    int n = size;
+    const bool is_gate = size == 0;
+    std::vector<Shape> prims;
+    if (!is_gate) {
+      prims = city_block(n, 42);
+    } else {
+      auto gate = csgtile::geo::make_synth_scene("gate", 1);
+      if (!gate.ok()) {
+        std::fprintf(stderr, "gate: %s\n", gate.error().message.c_str());
+        return 1;
+      }
+      for (const auto& p : gate.value().scene.primitives) prims.push_back(build_primitive(p.spec).value());
+      n = static_cast<int>(prims.size());
+    }
     auto t0 = std::chrono::steady_clock::now();
     auto nary = boolean_fuse_all(prims);
     const double nary_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -81,9 +97,9 @@ int main(int argc, char** argv) {
       fold_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (fold.ok()) fold_volume = mass_properties(fold.value()).volume;
     }
-    std::printf("%s  {\"n\": %d, \"nary_seconds\": %.4f, \"fold_seconds\": %.4f, \"fold_over_nary\": %.2f, "
+    std::printf("%s  {\"scene\": \"%s\", \"n\": %d, \"nary_seconds\": %.4f, \"fold_seconds\": %.4f, \"fold_over_nary\": %.2f, "
                 "\"solids\": %zu, \"faces\": %zu, \"volume\": %.6f, \"fold_volume\": %.6f, \"peak_rss_mb\": %.1f}",
-                first ? "" : ",\n", n, nary_s, fold_s, fold_s > 0 ? fold_s / nary_s : -1.0,
+                first ? "" : ",\n", is_gate ? "gate" : "city_block", n, nary_s, fold_s, fold_s > 0 ? fold_s / nary_s : -1.0,
                 counts[static_cast<int>(ShapeKind::Solid)], counts[static_cast<int>(ShapeKind::Face)],
                 mass_properties(nary.value()).volume, fold_volume, peak_rss_kb() / 1024.0);
     std::fflush(stdout);

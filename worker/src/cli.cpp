@@ -18,6 +18,8 @@ int run_cli(int argc, char** argv) {
   detail::register_bool(app, action);
   detail::register_run(app, action);
   detail::register_info(app, action);
+  detail::register_synth(app, action);
+  detail::register_query(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

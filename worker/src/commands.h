@@ -19,5 +19,7 @@ void register_config(CLI::App& app, Action& action);
 void register_bool(CLI::App& app, Action& action);
 void register_run(CLI::App& app, Action& action);
 void register_info(CLI::App& app, Action& action);
+void register_synth(CLI::App& app, Action& action);
+void register_query(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

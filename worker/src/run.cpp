@@ -14,6 +14,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
+#include "export/run_index.h"
 
 namespace csgtile::worker {
 
@@ -174,6 +175,15 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   summary.dead = queue->dead_jobs(failure);
   const auto results = queue->results(failure);
   if (!failure.ok()) return failure;
+  // The run's topology index (export/run_index.h), published before the manifest names it.
+  RunIndexReport index;
+  if (Failure f = write_run_index(config, results, summary.run_dir, index); !f.ok()) return f;
+  log.info("index", "written",
+           {{"key", index.key},
+            {"objects", std::to_string(index.stats.objects)},
+            {"bytes", std::to_string(index.bytes)},
+            {"seconds", std::to_string(index.seconds)}});
+  for (const std::string& w : index.stats.warnings) log.info("index", w);
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["csgtile_version"] = CSGTILE_VERSION;
@@ -187,6 +197,15 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   for (const DeadJob& d : summary.dead) {
     manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
   }
+  manifest["index"] = {{"key", index.key},
+                       {"sha256", index.sha256},
+                       {"bytes", index.bytes},
+                       {"srs_id", index.srs_id},
+                       {"objects", index.stats.objects},
+                       {"shapes", index.stats.shapes},
+                       {"relations", index.stats.relations},
+                       {"unknown_relations", index.stats.unknown_relations},
+                       {"warnings", index.stats.warnings}};
   summary.manifest = summary.run_dir / "manifest.json";
   return write_file_atomic(summary.manifest, manifest.dump(2) + "\n");
 }

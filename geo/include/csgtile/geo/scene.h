@@ -4,6 +4,7 @@
 /// an optional Boolean operation, and expected results.
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -42,16 +43,33 @@ struct SceneExpectation {
   std::optional<TopologyCounts> topology;
 };
 
+/// Where a scene's coordinates sit in the world: p_crs = origin + p_local. Written and read as
+/// the top-level keys "crs" and "origin", a csgtile extension that other readers of the
+/// format ignore (unknown keys are ignored).
+struct SceneFrame {
+  std::string crs;                 ///< as crs_from_config reads it, e.g. "EPSG:28992+5709"
+  std::array<double, 3> origin{};  ///< in the CRS's units
+};
+
 struct Scene {
   std::string name;
   BooleanOp op = BooleanOp::None;
   std::vector<ScenePrimitive> primitives;
   std::optional<SceneExpectation> expected;
+  std::optional<SceneFrame> frame;    ///< keys "crs" and "origin" (extension, see SceneFrame)
+  std::optional<std::uint64_t> seed;  ///< key "seed": the seed of a generated scene (extension)
 };
 
 /// Parses scene JSON. Unknown keys are ignored; a missing or invalid required key is an
 /// InvalidArgument error naming the primitive (index, type and id) and the key.
 kernel::Result<Scene> parse_scene(std::string_view json);
+
+/// Scene JSON that parse_scene reads back to an equal scene: numbers in their shortest
+/// round-trip form, keys in a fixed order (name, op, crs, origin, seed, primitives, expected;
+/// per primitive: type, id, parameters, placement, quality), one primitive per line. Same
+/// scene, same bytes. Placements are written as 3×4 matrices [s·R | t]; parse_scene
+/// re-orthonormalises R, so a general rotation may move in its last bits when read back.
+std::string scene_to_json(const Scene& scene);
 
 /// Reads and parses a scene file. Errors: IoError (cannot read), then as parse_scene.
 kernel::Result<Scene> read_scene(const std::filesystem::path& path);

@@ -1,0 +1,41 @@
+# Runs `csgtile synth SCENE` small, then `csgtile info --scan` on the LAS it wrote: the file
+# is LAS 1.4 point format 7 with a WKT CRS, every point reads, and the truth is scene JSON.
+set(dir ${WORK}/synth_${SCENE}_${MODE})
+file(REMOVE_RECURSE ${dir})
+file(MAKE_DIRECTORY ${dir})
+execute_process(COMMAND ${BIN} synth ${SCENE} --mode ${MODE} --points 20000 --seed 7
+                        --out ${dir}/scan.las --truth ${dir}/truth.json --json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "synth failed (${rc}):\n${out}${err}")
+endif()
+foreach(expected "\"scene\":\"${SCENE}\"" "\"classes\":{" "\"2\":" "\"6\":" "\"error\":null")
+  string(FIND "${out}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected '${expected}' in the synth summary:\n${out}")
+  endif()
+endforeach()
+execute_process(COMMAND ${BIN} info ${dir}/scan.las --json --scan
+                RESULT_VARIABLE rc OUTPUT_VARIABLE info ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "info failed (${rc}):\n${info}${err}")
+endif()
+string(REGEX MATCH "\"points\":([0-9]+)" _ "${out}")
+set(points ${CMAKE_MATCH_1})
+foreach(expected "\"version\":\"1.4\"" "\"point_format\":7" "\"points_read\":${points}"
+                 "\"wkt_flag\":true" "Amersfoort / RD New" "\"generating_software\":\"csgtile synth\""
+                 "\"warnings\":[]")
+  string(FIND "${info}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected '${expected}' in csgtile info:\n${info}")
+  endif()
+endforeach()
+file(READ ${dir}/truth.json truth)
+foreach(expected "\"name\": \"${SCENE}\"" "\"crs\": \"EPSG:28992+5709\"" "\"seed\": 7")
+  string(FIND "${truth}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected '${expected}' in the truth file")
+  endif()
+endforeach()
+file(REMOVE_RECURSE ${dir})
+message(STATUS "synth ${SCENE} ${MODE}: ${points} points; info read them all")

@@ -1,0 +1,569 @@
+// The GeoPackage container of the topology index (OGC GeoPackage 1.3): core tables, the
+// objects feature layer with GeoPackage binary geometries and its R-tree, and the topology
+// tables registered as attribute tables.
+//
+// Determinism: SQLite writes the same bytes for the same statements in the same order, so
+// everything is inserted in row order and gpkg_contents.last_change comes from the options.
+
+#include <bit>
+#include <cstdio>
+#include <cstring>
+
+#include "export/index_rows.h"
+#include "export/sqlite_util.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+// Core tables as the GeoPackage 1.3 specification defines them (Annex C / tables 18–21);
+// validators compare column types, nullability and defaults.
+constexpr const char* kCoreSchema = R"sql(
+CREATE TABLE gpkg_spatial_ref_sys (
+  srs_name TEXT NOT NULL,
+  srs_id INTEGER NOT NULL PRIMARY KEY,
+  organization TEXT NOT NULL,
+  organization_coordsys_id INTEGER NOT NULL,
+  definition TEXT NOT NULL,
+  description TEXT
+);
+CREATE TABLE gpkg_contents (
+  table_name TEXT NOT NULL PRIMARY KEY,
+  data_type TEXT NOT NULL,
+  identifier TEXT UNIQUE,
+  description TEXT DEFAULT '',
+  last_change DATETIME NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now')),
+  min_x DOUBLE,
+  min_y DOUBLE,
+  max_x DOUBLE,
+  max_y DOUBLE,
+  srs_id INTEGER,
+  CONSTRAINT fk_gc_r_srs_id FOREIGN KEY (srs_id) REFERENCES gpkg_spatial_ref_sys(srs_id)
+);
+CREATE TABLE gpkg_geometry_columns (
+  table_name TEXT NOT NULL,
+  column_name TEXT NOT NULL,
+  geometry_type_name TEXT NOT NULL,
+  srs_id INTEGER NOT NULL,
+  z TINYINT NOT NULL,
+  m TINYINT NOT NULL,
+  CONSTRAINT pk_geom_cols PRIMARY KEY (table_name, column_name),
+  CONSTRAINT uk_gc_table_name UNIQUE (table_name),
+  CONSTRAINT fk_gc_tn FOREIGN KEY (table_name) REFERENCES gpkg_contents(table_name),
+  CONSTRAINT fk_gc_srs FOREIGN KEY (srs_id) REFERENCES gpkg_spatial_ref_sys (srs_id)
+);
+CREATE TABLE gpkg_extensions (
+  table_name TEXT,
+  column_name TEXT,
+  extension_name TEXT NOT NULL,
+  definition TEXT NOT NULL,
+  scope TEXT NOT NULL,
+  CONSTRAINT ge_tce UNIQUE (table_name, column_name, extension_name)
+);
+)sql";
+
+// The index's own tables (README "Topology index"). Column types are GeoPackage data types.
+constexpr const char* kIndexSchema = R"sql(
+CREATE TABLE objects (
+  fid INTEGER PRIMARY KEY AUTOINCREMENT,
+  geom MULTIPOLYGON,
+  object_id TEXT NOT NULL UNIQUE,
+  cell TEXT NOT NULL,
+  shape_id INTEGER NOT NULL,
+  primitive_count INTEGER NOT NULL,
+  primitive_types TEXT NOT NULL,
+  volume REAL NOT NULL,
+  area REAL NOT NULL,
+  min_x REAL, min_y REAL, min_z REAL,
+  max_x REAL, max_y REAL, max_z REAL,
+  valid BOOLEAN NOT NULL,
+  fit_rms REAL,
+  fit_coverage REAL
+);
+CREATE TABLE shapes (
+  id INTEGER PRIMARY KEY,
+  key TEXT NOT NULL UNIQUE,
+  object_id TEXT NOT NULL,
+  kind TEXT NOT NULL,
+  kind_index INTEGER NOT NULL,
+  orientation TEXT NOT NULL,
+  tolerance REAL,
+  geometry TEXT,
+  x REAL, y REAL, z REAL
+);
+CREATE TABLE shape_children (
+  id INTEGER PRIMARY KEY,
+  parent_id INTEGER NOT NULL,
+  child_id INTEGER NOT NULL,
+  position INTEGER NOT NULL,
+  orientation TEXT NOT NULL,
+  location TEXT
+);
+CREATE TABLE shape_ancestors (
+  id INTEGER PRIMARY KEY,
+  shape_id INTEGER NOT NULL,
+  ancestor_kind TEXT NOT NULL,
+  ancestor_id INTEGER NOT NULL,
+  position INTEGER NOT NULL
+);
+CREATE TABLE object_relations (
+  id INTEGER PRIMARY KEY,
+  object_id TEXT NOT NULL,
+  other_id TEXT NOT NULL,
+  relation TEXT NOT NULL,
+  shared_area REAL,
+  common_volume REAL,
+  reason TEXT
+);
+CREATE TABLE csg_nodes (
+  id INTEGER PRIMARY KEY,
+  object_id TEXT NOT NULL,
+  node INTEGER NOT NULL,
+  kind TEXT NOT NULL,
+  label TEXT,
+  parent INTEGER,
+  children TEXT NOT NULL,
+  primitive_type TEXT,
+  parameters TEXT
+);
+CREATE TABLE face_sources (
+  id INTEGER PRIMARY KEY,
+  face_id INTEGER NOT NULL,
+  object_id TEXT NOT NULL,
+  node INTEGER NOT NULL,
+  primitive_face INTEGER NOT NULL
+);
+CREATE TABLE primitives (
+  id INTEGER PRIMARY KEY,
+  object_id TEXT NOT NULL,
+  node INTEGER,
+  primitive_id TEXT,
+  type TEXT NOT NULL,
+  inliers INTEGER,
+  fit_rms REAL,
+  fit_coverage REAL
+);
+CREATE TABLE index_metadata (
+  id INTEGER PRIMARY KEY,
+  key TEXT NOT NULL UNIQUE,
+  value TEXT NOT NULL
+);
+)sql";
+
+// Created after the rows are in (a bulk load is faster without them): every recipe of the
+// README is an index lookup.
+constexpr const char* kIndexIndexes = R"sql(
+CREATE UNIQUE INDEX shapes_object_kind ON shapes (object_id, kind, kind_index);
+CREATE UNIQUE INDEX shape_children_parent ON shape_children (parent_id, position);
+CREATE INDEX shape_children_child ON shape_children (child_id);
+CREATE UNIQUE INDEX shape_ancestors_shape ON shape_ancestors (shape_id, ancestor_kind, position);
+CREATE INDEX shape_ancestors_ancestor ON shape_ancestors (ancestor_id, ancestor_kind, shape_id);
+CREATE UNIQUE INDEX object_relations_object ON object_relations (object_id, relation, other_id);
+CREATE UNIQUE INDEX csg_nodes_object ON csg_nodes (object_id, node);
+CREATE INDEX face_sources_face ON face_sources (face_id);
+CREATE INDEX face_sources_node ON face_sources (object_id, node);
+CREATE INDEX primitives_object ON primitives (object_id);
+)sql";
+
+// The R-tree of objects.geom and the triggers GeoPackage 1.3 (extension F.3) lists to keep it
+// in step with later edits. They call ST_* functions that GeoPackage readers provide, so
+// they are created after the R-tree has been filled here.
+constexpr const char* kRtree = R"sql(
+CREATE VIRTUAL TABLE rtree_objects_geom USING rtree(id, minx, maxx, miny, maxy);
+)sql";
+constexpr const char* kRtreeTriggers = R"sql(
+CREATE TRIGGER rtree_objects_geom_insert AFTER INSERT ON objects
+  WHEN (new.geom NOT NULL AND NOT ST_IsEmpty(NEW.geom))
+BEGIN
+  INSERT OR REPLACE INTO rtree_objects_geom VALUES (
+    NEW.fid, ST_MinX(NEW.geom), ST_MaxX(NEW.geom), ST_MinY(NEW.geom), ST_MaxY(NEW.geom));
+END;
+CREATE TRIGGER rtree_objects_geom_update1 AFTER UPDATE OF geom ON objects
+  WHEN OLD.fid = NEW.fid AND (NEW.geom NOTNULL AND NOT ST_IsEmpty(NEW.geom))
+BEGIN
+  INSERT OR REPLACE INTO rtree_objects_geom VALUES (
+    NEW.fid, ST_MinX(NEW.geom), ST_MaxX(NEW.geom), ST_MinY(NEW.geom), ST_MaxY(NEW.geom));
+END;
+CREATE TRIGGER rtree_objects_geom_update2 AFTER UPDATE OF geom ON objects
+  WHEN OLD.fid = NEW.fid AND (NEW.geom ISNULL OR ST_IsEmpty(NEW.geom))
+BEGIN
+  DELETE FROM rtree_objects_geom WHERE id = OLD.fid;
+END;
+CREATE TRIGGER rtree_objects_geom_update3 AFTER UPDATE ON objects
+  WHEN OLD.fid != NEW.fid AND (NEW.geom NOTNULL AND NOT ST_IsEmpty(NEW.geom))
+BEGIN
+  DELETE FROM rtree_objects_geom WHERE id = OLD.fid;
+  INSERT OR REPLACE INTO rtree_objects_geom VALUES (
+    NEW.fid, ST_MinX(NEW.geom), ST_MaxX(NEW.geom), ST_MinY(NEW.geom), ST_MaxY(NEW.geom));
+END;
+CREATE TRIGGER rtree_objects_geom_update4 AFTER UPDATE ON objects
+  WHEN OLD.fid != NEW.fid AND (NEW.geom ISNULL OR ST_IsEmpty(NEW.geom))
+BEGIN
+  DELETE FROM rtree_objects_geom WHERE id IN (OLD.fid, NEW.fid);
+END;
+CREATE TRIGGER rtree_objects_geom_delete AFTER DELETE ON objects
+  WHEN old.geom NOT NULL
+BEGIN
+  DELETE FROM rtree_objects_geom WHERE id = OLD.fid;
+END;
+)sql";
+
+constexpr const char* kWgs84Wkt =
+    "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563,"
+    "AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\",\"6326\"]],PRIMEM[\"Greenwich\",0,"
+    "AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\","
+    "\"9122\"]],AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],AUTHORITY[\"EPSG\",\"4326\"]]";
+
+// Attribute tables and their gpkg_contents descriptions.
+constexpr std::pair<const char*, const char*> kAttributeTables[] = {
+    {"shapes", "csgtile: distinct sub-shapes of every object (id, key, kind, tolerance)"},
+    {"shape_children",
+     "csgtile: sub-shape references (parent, child, position, orientation, location)"},
+    {"shape_ancestors", "csgtile: ancestor maps vertex>edge, edge>face, face>shell, face>solid"},
+    {"object_relations",
+     "csgtile: touches / overlaps / contains / within / equals between objects"},
+    {"csg_nodes", "csgtile: CSG trees (post-order nodes: operations and primitives)"},
+    {"face_sources", "csgtile: CSG history, the primitive faces each face comes from"},
+    {"primitives", "csgtile: primitives of each object with their fit quality"},
+    {"index_metadata", "csgtile: format, version and parameters of this index"},
+};
+
+// ---- GeoPackage binary geometry ---------------------------------------------------------------
+
+class LittleEndian {
+ public:
+  void byte(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) byte(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void f64(double v) {
+    const auto bits = std::bit_cast<std::uint64_t>(v);
+    for (int i = 0; i < 8; ++i) byte(static_cast<std::uint8_t>(bits >> (8 * i)));
+  }
+  std::string take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
+// "GP", version 0, flags (little-endian, XYZ envelope, not empty, standard binary), srs_id,
+// envelope [minx, maxx, miny, maxy, minz, maxz], then ISO WKB MultiPolygon Z (type 1006) of
+// Polygon Z (1003), little-endian throughout.
+std::string geopackage_multipolygon_z(const std::vector<Polygon3>& polygons, int srs_id) {
+  kernel::BoundingBox box;
+  for (const Polygon3& p : polygons) {
+    for (const auto& ring : p.rings) {
+      for (const kernel::Vec3& v : ring) box.add(v);
+    }
+  }
+  LittleEndian w;
+  w.byte('G');
+  w.byte('P');
+  w.byte(0);
+  w.byte(0x01 | (2 << 1));
+  w.u32(static_cast<std::uint32_t>(srs_id));
+  for (int axis = 0; axis < 3; ++axis) {
+    w.f64(box.min[axis]);
+    w.f64(box.max[axis]);
+  }
+  w.byte(1);
+  w.u32(1006);
+  w.u32(static_cast<std::uint32_t>(polygons.size()));
+  for (const Polygon3& p : polygons) {
+    w.byte(1);
+    w.u32(1003);
+    w.u32(static_cast<std::uint32_t>(p.rings.size()));
+    for (const auto& ring : p.rings) {
+      w.u32(static_cast<std::uint32_t>(ring.size()));
+      for (const kernel::Vec3& v : ring) {
+        w.f64(v.x());
+        w.f64(v.y());
+        w.f64(v.z());
+      }
+    }
+  }
+  return w.take();
+}
+
+kernel::BoundingBox boundary_box(const ObjectRecord& o) {
+  kernel::BoundingBox box;
+  for (const Polygon3& p : o.boundary) {
+    for (const auto& ring : p.rings) {
+      for (const kernel::Vec3& v : ring) box.add(v);
+    }
+  }
+  return box;
+}
+
+// ---- table writers ------------------------------------------------------------------------------
+
+#define CSGTILE_TRY(expr)                                   \
+  do {                                                      \
+    if (kernel::Status st_ = (expr); !st_.ok()) return st_; \
+  } while (false)
+
+kernel::Status insert_srs(SqliteDb& db, const IndexSrs& srs) {
+  SqliteStatement st(
+      db,
+      "INSERT INTO gpkg_spatial_ref_sys (srs_name, srs_id, organization, "
+      "organization_coordsys_id, definition, description) VALUES (?1,?2,?3,?4,?5,?6)");
+  CSGTILE_TRY(st.status());
+  auto row = [&](const std::string& name, std::int64_t id, const std::string& org,
+                 std::int64_t code, const std::string& definition, const std::string& description) {
+    st.bind(1, name)
+        .bind(2, id)
+        .bind(3, org)
+        .bind(4, code)
+        .bind(5, definition)
+        .bind(6, description);
+    return st.run();
+  };
+  CSGTILE_TRY(row("Undefined Cartesian SRS", -1, "NONE", -1, "undefined",
+                  "undefined Cartesian coordinate reference system"));
+  CSGTILE_TRY(row("Undefined geographic SRS", 0, "NONE", 0, "undefined",
+                  "undefined geographic coordinate reference system"));
+  CSGTILE_TRY(row("WGS 84 geodetic", 4326, "EPSG", 4326, kWgs84Wkt,
+                  "longitude/latitude coordinates in decimal degrees on the WGS 84 spheroid"));
+  if (srs.srs_id != -1 && srs.srs_id != 0 && srs.srs_id != 4326) {
+    CSGTILE_TRY(row(srs.name, srs.srs_id, srs.organization, srs.organization_coordsys_id,
+                    srs.definition_wkt, srs.name));
+  }
+  return {};
+}
+
+kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
+  SqliteStatement st(
+      db,
+      "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
+      "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
+      "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,"
+      "?15,?16,?17,?18)");
+  SqliteStatement rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)");
+  CSGTILE_TRY(st.status());
+  CSGTILE_TRY(rtree.status());
+  for (std::size_t i = 0; i < rows.objects.size(); ++i) {
+    const ObjectRecord& o = rows.objects[i];
+    const auto fid = static_cast<std::int64_t>(i + 1);
+    st.bind(1, fid);
+    if (o.has_geometry) {
+      st.bind_blob(2, geopackage_multipolygon_z(o.boundary, srs_id));
+    } else {
+      st.bind_null(2);
+    }
+    st.bind(3, o.object_id).bind(4, o.cell).bind(5, o.shape_id).bind(6, o.primitive_count);
+    st.bind(7, o.primitive_types).bind(8, o.volume).bind(9, o.area);
+    if (o.bounds.empty()) {
+      for (int c = 10; c <= 15; ++c) st.bind_null(c);
+    } else {
+      for (int a = 0; a < 3; ++a) {
+        st.bind(10 + a, o.bounds.min[a]);
+        st.bind(13 + a, o.bounds.max[a]);
+      }
+    }
+    st.bind(16, static_cast<std::int64_t>(o.valid ? 1 : 0))
+        .bind(17, o.fit_rms)
+        .bind(18, o.fit_coverage);
+    CSGTILE_TRY(st.run());
+    if (o.has_geometry) {
+      // SQLite's R-tree stores 32-bit floats, rounded outwards.
+      const kernel::BoundingBox b = boundary_box(o);
+      rtree.bind(1, fid)
+          .bind(2, b.min.x())
+          .bind(3, b.max.x())
+          .bind(4, b.min.y())
+          .bind(5, b.max.y());
+      CSGTILE_TRY(rtree.run());
+    }
+  }
+  return {};
+}
+
+kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
+                       "tolerance, geometry, x, y, z) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)");
+    CSGTILE_TRY(st.status());
+    for (const ShapeRecord& r : rows.shapes) {
+      st.bind(1, r.id).bind(2, r.key).bind(3, r.object_id).bind(4, r.kind).bind(5, r.kind_index);
+      st.bind(6, r.orientation).bind(7, r.tolerance).bind_text_or_null(8, r.geometry);
+      for (int a = 0; a < 3; ++a) {
+        if (r.point) {
+          st.bind(9 + a, (*r.point)[a]);
+        } else {
+          st.bind_null(9 + a);
+        }
+      }
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO shape_children (parent_id, child_id, position, orientation, "
+                       "location) VALUES (?1,?2,?3,?4,?5)");
+    CSGTILE_TRY(st.status());
+    for (const ChildRecord& r : rows.children) {
+      st.bind(1, r.parent_id).bind(2, r.child_id).bind(3, r.position).bind(4, r.orientation);
+      st.bind_text_or_null(5, r.location);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(
+        db,
+        "INSERT INTO shape_ancestors (shape_id, ancestor_kind, ancestor_id, position) "
+        "VALUES (?1,?2,?3,?4)");
+    CSGTILE_TRY(st.status());
+    for (const AncestorRecord& r : rows.ancestors) {
+      st.bind(1, r.shape_id).bind(2, r.ancestor_kind).bind(3, r.ancestor_id).bind(4, r.position);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
+                       "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)");
+    CSGTILE_TRY(st.status());
+    for (const RelationRecord& r : rows.relations) {
+      st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
+      st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
+                       "primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)");
+    CSGTILE_TRY(st.status());
+    for (const CsgNodeRecord& r : rows.csg_nodes) {
+      st.bind(1, r.object_id).bind(2, r.node).bind(3, r.kind).bind_text_or_null(4, r.label);
+      st.bind(5, r.parent).bind(6, r.children).bind_text_or_null(7, r.primitive_type);
+      st.bind_text_or_null(8, r.parameters);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO face_sources (face_id, object_id, node, primitive_face) "
+                       "VALUES (?1,?2,?3,?4)");
+    CSGTILE_TRY(st.status());
+    for (const FaceSourceRecord& r : rows.face_sources) {
+      st.bind(1, r.face_id).bind(2, r.object_id).bind(3, r.node).bind(4, r.primitive_face);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db,
+                       "INSERT INTO primitives (object_id, node, primitive_id, type, inliers, "
+                       "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7)");
+    CSGTILE_TRY(st.status());
+    for (const PrimitiveRecord& r : rows.primitives) {
+      st.bind(1, r.object_id).bind(2, r.node).bind_text_or_null(3, r.primitive_id).bind(4, r.type);
+      st.bind(5, r.inliers).bind(6, r.fit_rms).bind(7, r.fit_coverage);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  {
+    SqliteStatement st(db, "INSERT INTO index_metadata (key, value) VALUES (?1, ?2)");
+    CSGTILE_TRY(st.status());
+    std::string pairs;
+    for (const auto& [child, ancestor] : kAncestorPairs) {
+      pairs += std::string(pairs.empty() ? "" : ",") + kernel::shape_kind_name(child) + ">" +
+               kernel::shape_kind_name(ancestor);
+    }
+    char chordal[32];
+    std::snprintf(chordal, sizeof chordal, "%.17g", options.chordal_tolerance);
+    const std::pair<std::string, std::string> entries[] = {
+        {"format", "csgtile-topology-index"},
+        {"format_version", "1"},
+        {"csgtile_version", CSGTILE_VERSION},
+        {"shape_ids",
+         "(object order, kind compound..vertex, map_child_shapes order) from 1; "
+         "key <object>/<kind>/<index>"},
+        {"ancestor_pairs", pairs},
+        {"chordal_tolerance", chordal},
+    };
+    for (const auto& [key, value] : entries) {
+      st.bind(1, key).bind(2, value);
+      CSGTILE_TRY(st.run());
+    }
+  }
+  return {};
+}
+
+kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+  kernel::BoundingBox all;
+  for (const ObjectRecord& o : rows.objects) {
+    if (o.has_geometry) all.add(boundary_box(o));
+  }
+  SqliteStatement st(
+      db,
+      "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, "
+      "last_change, min_x, min_y, max_x, max_y, srs_id) VALUES (?1,?2,?3,?4,?5,?6,?7,"
+      "?8,?9,?10)");
+  CSGTILE_TRY(st.status());
+  st.bind(1, std::string_view("objects")).bind(2, std::string_view("features"));
+  st.bind(3, std::string_view("objects"));
+  st.bind(4, std::string_view("csgtile: one feature per object, its boundary as MULTIPOLYGON Z"));
+  st.bind(5, options.last_change);
+  if (all.empty()) {
+    for (int c = 6; c <= 9; ++c) st.bind_null(c);
+  } else {
+    st.bind(6, all.min.x()).bind(7, all.min.y()).bind(8, all.max.x()).bind(9, all.max.y());
+  }
+  st.bind(10, static_cast<std::int64_t>(options.srs.srs_id));
+  CSGTILE_TRY(st.run());
+  for (const auto& [table, description] : kAttributeTables) {
+    st.bind(1, std::string_view(table)).bind(2, std::string_view("attributes"));
+    st.bind(3, std::string_view(table)).bind(4, std::string_view(description));
+    st.bind(5, options.last_change);
+    for (int c = 6; c <= 10; ++c) st.bind_null(c);
+    CSGTILE_TRY(st.run());
+  }
+  SqliteStatement geometry(db,
+                           "INSERT INTO gpkg_geometry_columns (table_name, column_name, "
+                           "geometry_type_name, srs_id, z, m) VALUES ('objects', 'geom', "
+                           "'MULTIPOLYGON', ?1, 1, 0)");
+  CSGTILE_TRY(geometry.status());
+  geometry.bind(1, static_cast<std::int64_t>(options.srs.srs_id));
+  CSGTILE_TRY(geometry.run());
+  return db.exec(
+      "INSERT INTO gpkg_extensions (table_name, column_name, extension_name, definition, scope) "
+      "VALUES ('objects', 'geom', 'gpkg_rtree_index', "
+      "'http://www.geopackage.org/spec120/#extension_rtree', 'write-only');");
+}
+
+kernel::Status write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+  // application_id 'GPKG' and user_version 10300 (GeoPackage 1.3). The file is a temporary
+  // that is deleted on failure and fsync'ed by the caller: no journal file, no syncs here.
+  CSGTILE_TRY(
+      db.exec("PRAGMA application_id = 1196444487; PRAGMA user_version = 10300;"
+              "PRAGMA journal_mode = MEMORY; PRAGMA synchronous = OFF;"));
+  CSGTILE_TRY(db.exec("BEGIN;"));
+  CSGTILE_TRY(db.exec(kCoreSchema));
+  CSGTILE_TRY(insert_srs(db, options.srs));
+  CSGTILE_TRY(db.exec(kIndexSchema));
+  CSGTILE_TRY(db.exec(kRtree));
+  CSGTILE_TRY(insert_objects(db, rows, options.srs.srs_id));
+  CSGTILE_TRY(insert_rows(db, rows, options));
+  CSGTILE_TRY(db.exec(kIndexIndexes));
+  CSGTILE_TRY(db.exec(kRtreeTriggers));
+  CSGTILE_TRY(register_contents(db, rows, options));
+  return db.exec("COMMIT;");
+}
+
+#undef CSGTILE_TRY
+
+}  // namespace
+
+kernel::Status write_gpkg(const std::string& path, const IndexRows& rows,
+                          const IndexOptions& options) {
+  SqliteDb db;
+  if (kernel::Status st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok())
+    return st;
+  kernel::Status st = write_all(db, rows, options);
+  if (!db.close() && st.ok()) st = db.failure("cannot close");
+  return st;
+}
+
+}  // namespace csgtile::worker::detail

@@ -1,0 +1,113 @@
+#pragma once
+// The rows of a topology index, built from objects (topology_index.cpp) and written into a
+// GeoPackage (gpkg_writer.cpp). Split so that the kernel side (ids, maps, geometry) and the
+// container side (SQLite, GeoPackage binary geometry) can be read and tested apart.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "csgtile/kernel/bounding_box.h"
+#include "export/topology_index.h"
+
+namespace csgtile::worker::detail {
+
+/// A polygon with closed rings (first point repeated last); the first ring is the exterior,
+/// counter-clockwise seen from outside the solid.
+struct Polygon3 {
+  std::vector<std::vector<kernel::Vec3>> rings;
+};
+
+struct ObjectRecord {
+  std::string object_id, cell;
+  std::int64_t shape_id = 0;  ///< the object's root shape
+  std::int64_t primitive_count = 0;
+  std::string primitive_types;  ///< sorted, distinct, comma-separated
+  double volume = 0.0, area = 0.0;
+  kernel::BoundingBox bounds;  ///< in the SRS
+  bool valid = false;
+  std::optional<double> fit_rms, fit_coverage;
+  bool has_geometry = false;       ///< false: NULL geometry (tessellation failed)
+  std::vector<Polygon3> boundary;  ///< in the SRS
+};
+
+struct ShapeRecord {
+  std::int64_t id = 0;
+  std::string key, object_id, kind;
+  std::int64_t kind_index = 0;
+  std::string orientation;  ///< of the first use seen from the object's root
+  std::optional<double> tolerance;
+  std::string geometry;               ///< surface or curve kind; "degenerate"; empty otherwise
+  std::optional<kernel::Vec3> point;  ///< vertices, in the SRS
+};
+
+struct ChildRecord {
+  std::int64_t parent_id = 0, child_id = 0, position = 0;
+  std::string orientation, location;  ///< of the reference stored in the parent's body
+};
+
+struct AncestorRecord {
+  std::int64_t shape_id = 0;
+  std::string ancestor_kind;
+  std::int64_t ancestor_id = 0, position = 0;
+};
+
+struct RelationRecord {
+  std::string object_id, other_id, relation;
+  std::optional<double> shared_area, common_volume;
+  std::string reason;
+};
+
+struct CsgNodeRecord {
+  std::string object_id;
+  std::int64_t node = 0;
+  std::string kind, label;
+  std::optional<std::int64_t> parent;
+  std::string children;                    ///< JSON array of node indices
+  std::string primitive_type, parameters;  ///< empty for operations
+};
+
+struct FaceSourceRecord {
+  std::int64_t face_id = 0;
+  std::string object_id;
+  std::int64_t node = 0, primitive_face = 0;
+};
+
+struct PrimitiveRecord {
+  std::string object_id;
+  std::optional<std::int64_t> node;
+  std::string primitive_id, type;
+  std::optional<std::int64_t> inliers;
+  std::optional<double> fit_rms, fit_coverage;
+};
+
+struct IndexRows {
+  std::vector<ObjectRecord> objects;
+  std::vector<ShapeRecord> shapes;
+  std::vector<ChildRecord> children;
+  std::vector<AncestorRecord> ancestors;
+  std::vector<RelationRecord> relations;
+  std::vector<CsgNodeRecord> csg_nodes;
+  std::vector<FaceSourceRecord> face_sources;
+  std::vector<PrimitiveRecord> primitives;
+};
+
+/// The (child kind, ancestor kind) pairs materialised in shape_ancestors.
+inline constexpr std::pair<kernel::ShapeKind, kernel::ShapeKind> kAncestorPairs[] = {
+    {kernel::ShapeKind::Vertex, kernel::ShapeKind::Edge},
+    {kernel::ShapeKind::Edge, kernel::ShapeKind::Face},
+    {kernel::ShapeKind::Face, kernel::ShapeKind::Shell},
+    {kernel::ShapeKind::Face, kernel::ShapeKind::Solid},
+};
+
+/// Builds every row. Errors: InvalidArgument (see write_topology_index).
+kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
+                                           const IndexOptions& options, IndexStats& stats);
+
+/// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it).
+/// Error: IoError naming the path and SQLite's message.
+kernel::Status write_gpkg(const std::string& path, const IndexRows& rows,
+                          const IndexOptions& options);
+
+}  // namespace csgtile::worker::detail

@@ -1,0 +1,176 @@
+// Relations between objects: candidate pairs from bounding boxes, then exact classification
+// with the kernel's Booleans (a ∩ b for overlap and containment, a ∪ b for the shared area of
+// touching objects).
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <numeric>
+#include <system_error>
+#include <thread>
+
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "export/topology_index.h"
+
+namespace csgtile::worker {
+
+const char* relation_kind_name(RelationKind kind) {
+  switch (kind) {
+    case RelationKind::Touches:
+      return "touches";
+    case RelationKind::Overlaps:
+      return "overlaps";
+    case RelationKind::Contains:
+      return "contains";
+    case RelationKind::Within:
+      return "within";
+    case RelationKind::Equals:
+      return "equals";
+    case RelationKind::Unknown:
+      return "unknown";
+  }
+  return "unknown";
+}
+
+RelationKind converse(RelationKind kind) {
+  switch (kind) {
+    case RelationKind::Contains:
+      return RelationKind::Within;
+    case RelationKind::Within:
+      return RelationKind::Contains;
+    default:
+      return kind;
+  }
+}
+
+namespace {
+
+// Volumes and areas of Boolean results are exact to rounding (README "Booleans"); this
+// relative margin only absorbs that rounding.
+constexpr double kRelative = 1e-8;
+
+struct Measured {
+  double volume = 0.0, area = 0.0;
+  kernel::BoundingBox box;
+};
+
+std::string boolean_error(const char* op, const kernel::Error& e) {
+  return std::string(op) + ": " + kernel::error_code_name(e.code) + ": " + e.message;
+}
+
+// Classifies one candidate pair. Returns false when the pair has no relation.
+bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma,
+              const Measured& mb, const kernel::BooleanOptions& options, ObjectRelation& out) {
+  auto common = kernel::boolean_operation(a, b, kernel::BooleanOp::Common, options);
+  if (!common.ok()) {
+    out.kind = RelationKind::Unknown;
+    out.reason = boolean_error("common", common.error());
+    return true;
+  }
+  const double vc = kernel::mass_properties(common.value()).volume;
+  const double scale = std::max(ma.volume, mb.volume);
+  if (vc > kRelative * scale) {
+    const bool a_inside = std::abs(ma.volume - vc) <= kRelative * scale;
+    const bool b_inside = std::abs(mb.volume - vc) <= kRelative * scale;
+    out.kind = a_inside && b_inside ? RelationKind::Equals
+               : a_inside           ? RelationKind::Within
+               : b_inside           ? RelationKind::Contains
+                                    : RelationKind::Overlaps;
+    out.common_volume = vc;
+    return true;
+  }
+  auto fused = kernel::boolean_operation(a, b, kernel::BooleanOp::Fuse, options);
+  if (!fused.ok()) {
+    out.kind = RelationKind::Unknown;
+    out.reason = boolean_error("fuse", fused.error());
+    return true;
+  }
+  // Faces in contact disappear from the union, once from each side.
+  const double shared = (ma.area + mb.area - kernel::mass_properties(fused.value()).area) / 2.0;
+  if (shared > kRelative * (ma.area + mb.area)) {
+    out.kind = RelationKind::Touches;
+    out.shared_area = shared;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& solids,
+                                              double linear_tolerance, int threads) {
+  std::vector<Measured> measured(solids.size());
+  for (std::size_t i = 0; i < solids.size(); ++i) {
+    const kernel::MassProperties mp = kernel::mass_properties(solids[i]);
+    measured[i] = {mp.volume, mp.area, mp.bounds};
+    measured[i].box.enlarge(linear_tolerance);
+  }
+  // Sweep along x: after sorting by min.x, the candidates of i are the following solids whose
+  // min.x is not beyond i's max.x.
+  std::vector<std::size_t> order(solids.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) {
+    return measured[p].box.min.x() < measured[q].box.min.x();
+  });
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t oi = 0; oi < order.size(); ++oi) {
+    const std::size_t i = order[oi];
+    if (measured[i].box.empty()) continue;
+    for (std::size_t oj = oi + 1; oj < order.size(); ++oj) {
+      const std::size_t j = order[oj];
+      if (measured[j].box.min.x() > measured[i].box.max.x()) break;
+      if (measured[i].box.intersects(measured[j].box))
+        pairs.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+
+  kernel::BooleanOptions options;
+  options.tolerance = linear_tolerance;
+  // Pairs are independent (shapes are immutable and shared safely between threads): workers
+  // take them in turn and each result lands in its pair's slot, so the output does not
+  // depend on the number of threads or on scheduling.
+  std::vector<ObjectRelation> slots(pairs.size());
+  std::vector<char> related(pairs.size(), 0);
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t k = next++; k < pairs.size(); k = next++) {
+      const auto [i, j] = pairs[k];
+      ObjectRelation& r = slots[k];
+      r.a = i;
+      r.b = j;
+      try {
+        related[k] = classify(solids[i], solids[j], measured[i], measured[j], options, r) ? 1 : 0;
+      } catch (const std::exception& e) {
+        // The kernel does not throw across its API; an allocation failure still might.
+        r.kind = RelationKind::Unknown;
+        r.reason = std::string("exception: ") + e.what();
+        related[k] = 1;
+      }
+    }
+  };
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t count =
+      std::min<std::size_t>(threads > 0 ? static_cast<std::size_t>(threads) : hardware,
+                            std::max<std::size_t>(pairs.size(), 1));
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < count; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads: the ones running (and this one) take every pair
+    }
+  }
+  work();
+  for (std::thread& t : pool) t.join();
+
+  std::vector<ObjectRelation> out;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (related[k]) out.push_back(std::move(slots[k]));
+  }
+  return out;
+}
+
+}  // namespace csgtile::worker

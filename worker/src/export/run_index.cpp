@@ -1,0 +1,207 @@
+// The run's topology index from its published models (see run_index.h).
+
+#include "export/run_index.h"
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+
+#include "csgtile/geo/crs.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/publish.h"
+
+namespace csgtile::worker {
+
+namespace {
+
+using kernel::ShapeKind;
+
+// Scene primitives by the label their CSG leaf carries (the run labels leaves with the
+// primitive's id, or "p<index>" when it has none).
+std::map<std::string, const geo::ScenePrimitive*> primitives_by_label(const geo::Scene* scene) {
+  std::map<std::string, const geo::ScenePrimitive*> out;
+  if (scene == nullptr) return out;
+  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+    const auto& p = scene->primitives[i];
+    out.emplace(p.id.empty() ? "p" + std::to_string(i) : p.id, &p);
+  }
+  return out;
+}
+
+PrimitiveInfo primitive_info(int node, const kernel::CsgNode& leaf,
+                             const std::map<std::string, const geo::ScenePrimitive*>& scene) {
+  PrimitiveInfo info;
+  info.node = node;
+  info.id = leaf.label;
+  info.type = kernel::primitive_type_name(leaf.primitive.type);
+  if (auto it = scene.find(leaf.label); it != scene.end() && it->second->quality) {
+    info.inliers = it->second->quality->inliers;
+    info.rms = it->second->quality->rms;
+    info.coverage = it->second->quality->coverage;
+  }
+  return info;
+}
+
+}  // namespace
+
+std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel::CsgModel& model,
+                                           const geo::Scene* scene) {
+  std::vector<IndexObject> out;
+  if (model.shape.is_null()) return out;
+  const auto labels = primitives_by_label(scene);
+  const kernel::ShapeIndex solids = kernel::map_child_shapes(model.shape, ShapeKind::Solid);
+  const kernel::ShapeIndex model_faces = kernel::map_child_shapes(model.shape, ShapeKind::Face);
+  // A set of primitives is published without history; its i-th solid is the i-th primitive
+  // as built (same faces in the same order), so its leaf history is exact.
+  const bool set_of_primitives = model.nodes.empty() && scene != nullptr &&
+                                 scene->op == geo::BooleanOp::None &&
+                                 solids.size() == scene->primitives.size();
+  for (std::size_t s = 0; s < solids.size(); ++s) {
+    IndexObject object;
+    object.id = std::to_string(input_index) + "-" + std::to_string(s);
+    object.model.shape = solids[s];
+    const kernel::ShapeIndex faces = kernel::map_child_shapes(solids[s], ShapeKind::Face);
+    if (set_of_primitives) {
+      const geo::ScenePrimitive& p = scene->primitives[s];
+      kernel::CsgNode leaf;
+      leaf.kind = kernel::CsgNodeKind::Primitive;
+      leaf.primitive = p.spec;
+      leaf.label = p.id.empty() ? "p" + std::to_string(s) : p.id;
+      object.model.nodes.push_back(leaf);
+      for (std::size_t f = 0; f < faces.size(); ++f) {
+        object.model.face_sources.push_back({kernel::FaceSource{0, static_cast<int>(f)}});
+      }
+      object.primitives.push_back(primitive_info(0, leaf, labels));
+    } else if (!model.nodes.empty() && model.face_sources.size() == model_faces.size()) {
+      object.model.nodes = model.nodes;
+      std::set<int> contributing;
+      for (std::size_t f = 0; f < faces.size(); ++f) {
+        const std::size_t m = model_faces.find(faces[f]);
+        object.model.face_sources.push_back(m == kernel::ShapeIndex::npos
+                                                ? std::vector<kernel::FaceSource>{}
+                                                : model.face_sources[m]);
+        for (const kernel::FaceSource& src : object.model.face_sources.back())
+          contributing.insert(src.node);
+      }
+      for (std::size_t n = 0; n < model.nodes.size(); ++n) {
+        if (model.nodes[n].kind != kernel::CsgNodeKind::Primitive) continue;
+        if (solids.size() > 1 && !contributing.count(static_cast<int>(n))) continue;
+        object.primitives.push_back(primitive_info(static_cast<int>(n), model.nodes[n], labels));
+      }
+    }
+    out.push_back(std::move(object));
+  }
+  return out;
+}
+
+Failure write_run_index(const config::Config& config,
+                        const std::vector<std::pair<std::string, std::string>>& results,
+                        const std::filesystem::path& run_dir, RunIndexReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  std::map<std::string, std::string> by_key(results.begin(), results.end());
+  struct Job {
+    std::size_t input_index;
+    kernel::CsgModel model;
+    std::optional<geo::Scene> scene;
+  };
+  std::vector<Job> jobs;
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
+    const std::string& input = config.run.inputs[i];
+    if (!seen.insert(input).second) continue;  // one job per distinct input
+    const auto it = by_key.find("build:" + config.run.name + ":" + input);
+    if (it == by_key.end()) continue;  // dead or not run: reported in the manifest
+    const auto record = nlohmann::json::parse(it->second, nullptr, false);
+    if (record.is_discarded() || !record.contains("model") || !record["model"].contains("key") ||
+        !record["model"]["key"].is_string()) {
+      return {ErrorCode::Internal, "job " + it->first + " has a malformed result record"};
+    }
+    const std::string key = record["model"]["key"].get<std::string>();
+    if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe model key " + key};
+    auto model = kernel::read_native_model_file(run_dir / key);
+    if (!model.ok()) {
+      return {from_kernel(model.error().code),
+              (run_dir / key).string() + ": " + model.error().message};
+    }
+    Job job{i, std::move(model).value(), std::nullopt};
+    // The scene gives fit quality and the frame; an input that went away since its job ran
+    // still has its model indexed.
+    if (auto scene = geo::read_scene(input); scene.ok()) job.scene = std::move(scene).value();
+    jobs.push_back(std::move(job));
+  }
+
+  // One frame for all objects: the first job's origin in the common CRS.
+  IndexOptions options;
+  options.chordal_tolerance = config.kernel.chordal_tolerance;
+  options.linear_tolerance = config.kernel.linear_tolerance;
+  options.threads = config.run.threads;
+  bool common_crs = !jobs.empty();
+  for (const Job& job : jobs) {
+    common_crs &=
+        job.scene && job.scene->frame && job.scene->frame->crs == jobs[0].scene->frame->crs;
+  }
+  const bool any_frame =
+      std::any_of(jobs.begin(), jobs.end(), [](const Job& j) { return j.scene && j.scene->frame; });
+  std::string frame_warning;
+  kernel::Vec3 reference = kernel::Vec3::Zero();
+  if (common_crs) {
+    auto crs = geo::crs_from_config(jobs[0].scene->frame->crs);
+    if (crs.ok() && crs->epsg > 0) {
+      geo::Crs horizontal = crs.value();
+      horizontal.vertical.reset();  // srs_id names the horizontal EPSG code
+      options.srs.srs_id = horizontal.epsg;
+      options.srs.organization = "EPSG";
+      options.srs.organization_coordsys_id = horizontal.epsg;
+      options.srs.name = horizontal.name;
+      options.srs.definition_wkt = geo::crs_to_wkt1(horizontal);
+      const auto& o = jobs[0].scene->frame->origin;
+      reference = kernel::Vec3(o[0], o[1], o[2]);
+      options.to_srs = [reference](const kernel::Vec3& p) { return kernel::Vec3(p + reference); };
+    } else {
+      common_crs = false;
+    }
+  }
+  if (any_frame && !common_crs) {
+    frame_warning =
+        "the inputs do not share one EPSG CRS: the objects layer uses the undefined "
+        "Cartesian SRS and each scene's local coordinates";
+  }
+
+  std::vector<IndexObject> objects;
+  for (const Job& job : jobs) {
+    std::vector<IndexObject> mine =
+        job_index_objects(job.input_index, job.model, job.scene ? &*job.scene : nullptr);
+    if (common_crs) {
+      const auto& o = job.scene->frame->origin;
+      const kernel::Vec3 offset = kernel::Vec3(o[0], o[1], o[2]) - reference;
+      if (!offset.isZero(0.0)) {
+        for (IndexObject& object : mine) {
+          object.model.shape = object.model.shape.moved(kernel::Location::translation(offset));
+        }
+      }
+    }
+    for (IndexObject& object : mine) objects.push_back(std::move(object));
+  }
+
+  const std::filesystem::path path = run_dir / report.key;
+  if (kernel::Status st = write_topology_index(path, objects, options, &report.stats); !st.ok()) {
+    return {from_kernel(st.error().code), path.string() + ": " + st.error().message};
+  }
+  if (!frame_warning.empty()) report.stats.warnings.push_back(frame_warning);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) return {ErrorCode::Io, "cannot read back " + path.string()};
+  report.sha256 = sha256_hex(bytes);
+  report.bytes = bytes.size();
+  report.srs_id = options.srs.srs_id;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {};
+}
+
+}  // namespace csgtile::worker

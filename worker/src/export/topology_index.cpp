@@ -1,0 +1,526 @@
+// Rows of the topology index from objects: stable ids, the child and ancestor maps, the
+// objects layer's boundary polygons, CSG nodes, face sources, primitives and relations.
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/tessellation.h"
+#include "export/index_rows.h"
+
+namespace csgtile::worker {
+
+namespace detail {
+namespace {
+
+using kernel::Shape;
+using kernel::ShapeKind;
+using kernel::Vec3;
+using Json = nlohmann::ordered_json;
+
+const char* surface_kind_name(kernel::SurfaceKind kind) {
+  switch (kind) {
+    case kernel::SurfaceKind::Plane:
+      return "plane";
+    case kernel::SurfaceKind::Cylinder:
+      return "cylinder";
+    case kernel::SurfaceKind::Cone:
+      return "cone";
+    case kernel::SurfaceKind::Sphere:
+      return "sphere";
+    case kernel::SurfaceKind::Torus:
+      return "torus";
+    case kernel::SurfaceKind::Extrusion:
+      return "extrusion";
+    case kernel::SurfaceKind::Revolution:
+      return "revolution";
+  }
+  return "surface";
+}
+
+const char* curve_kind_name(kernel::CurveKind kind) {
+  switch (kind) {
+    case kernel::CurveKind::Line:
+      return "line";
+    case kernel::CurveKind::Circle:
+      return "circle";
+    case kernel::CurveKind::Ellipse:
+      return "ellipse";
+    case kernel::CurveKind::Polyline:
+      return "polyline";
+    case kernel::CurveKind::Trig:
+      return "trig";
+  }
+  return "curve";
+}
+
+Json matrix_json(const kernel::Location& location) {
+  const kernel::Matrix34 m = location.matrix();
+  Json rows = Json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+  return rows;
+}
+
+Json points_json(const std::vector<kernel::Vec2>& points) {
+  Json out = Json::array();
+  for (const auto& p : points) out.push_back({p.x(), p.y()});
+  return out;
+}
+
+// The parameters of a primitive, keyed as the scene format names them.
+std::string primitive_parameters(const kernel::PrimitiveSpec& spec) {
+  Json j;
+  switch (spec.type) {
+    case kernel::PrimitiveType::Box:
+      j["size"] = {spec.size.x(), spec.size.y(), spec.size.z()};
+      break;
+    case kernel::PrimitiveType::Cylinder:
+      j["r"] = spec.radius;
+      j["h"] = spec.height;
+      break;
+    case kernel::PrimitiveType::Cone:
+      j["r1"] = spec.radius;
+      j["r2"] = spec.radius2;
+      j["h"] = spec.height;
+      break;
+    case kernel::PrimitiveType::Sphere:
+      j["r"] = spec.radius;
+      break;
+    case kernel::PrimitiveType::Torus:
+      j["R"] = spec.radius;
+      j["r"] = spec.radius2;
+      break;
+    case kernel::PrimitiveType::Extrusion: {
+      j["profile"] = points_json(spec.profile);
+      Json holes = Json::array();
+      for (const auto& h : spec.holes) holes.push_back(points_json(h));
+      j["holes"] = std::move(holes);
+      j["h"] = spec.height;
+      break;
+    }
+    case kernel::PrimitiveType::Revolution:
+      j["profile"] = points_json(spec.profile);
+      j["angle"] = spec.angle;
+      break;
+  }
+  j["placement"] = matrix_json(spec.placement);
+  return j.dump();
+}
+
+Vec3 map_point(const IndexOptions& options, const Vec3& p) {
+  return options.to_srs ? options.to_srs(p) : p;
+}
+
+// Points along an edge from the start to the end of its curve's parameter range (empty for
+// a degenerate edge).
+using EdgePoints = std::function<std::vector<Vec3>(const Shape& edge)>;
+
+// Rings of a planar face from its wires, exterior first, counter-clockwise seen from the
+// side the face's use marks as outward. Wires are read through the face used Forward (so
+// that "the face lies left of each edge, seen from the surface normal" holds) and reversed
+// at the end when the solid uses the face Reversed.
+std::optional<Polygon3> planar_face_polygon(const Shape& face, const EdgePoints& edge_points) {
+  Polygon3 polygon;
+  const Shape forward = face.oriented(kernel::Orientation::Forward);
+  for (const Shape& wire : forward.children()) {
+    std::vector<Shape> edges = wire.children();
+    // Children of a Reversed wire are reversed one by one; their sequence must be too.
+    if (wire.orientation() == kernel::Orientation::Reversed)
+      std::reverse(edges.begin(), edges.end());
+    std::vector<Vec3> ring;
+    for (const Shape& edge : edges) {
+      std::vector<Vec3> points = edge_points(edge);
+      if (edge.orientation() == kernel::Orientation::Reversed)
+        std::reverse(points.begin(), points.end());
+      // Without its logical end: the next edge of the wire starts there.
+      if (!points.empty()) ring.insert(ring.end(), points.begin(), points.end() - 1);
+    }
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
+    if (ring.size() < 3) {
+      if (polygon.rings.empty()) return std::nullopt;  // no exterior: nothing to draw
+      continue;
+    }
+    if (face.orientation() == kernel::Orientation::Reversed) std::reverse(ring.begin(), ring.end());
+    ring.push_back(ring.front());
+    polygon.rings.push_back(std::move(ring));
+  }
+  if (polygon.rings.empty()) return std::nullopt;
+  return polygon;
+}
+
+// The object's boundary: planar faces as polygons with holes, curved faces as the triangles
+// of the tessellation. Planar faces of a solid with curved faces take their edges' points
+// from the same tessellation, so the boundary has no cracks; a solid with planar faces only
+// has straight edges and its polygons are exactly its faces. Faces used Internal or External
+// bound nothing and are left out.
+kernel::Result<std::vector<Polygon3>> boundary_polygons(const Shape& root,
+                                                        const kernel::ShapeIndex& faces,
+                                                        const kernel::ShapeIndex& edges,
+                                                        const IndexOptions& options) {
+  std::vector<Polygon3> out;
+  bool any_curved = false;
+  for (const Shape& f : faces.shapes()) {
+    any_curved |= f.body().face()->surface->kind() != kernel::SurfaceKind::Plane;
+  }
+  kernel::Mesh mesh;
+  if (any_curved) {
+    kernel::TessellationOptions t;
+    t.chordal_tolerance = options.chordal_tolerance;
+    auto meshed = kernel::tessellate(root, t);
+    if (!meshed.ok()) return meshed.error();
+    mesh = std::move(meshed).value();
+  }
+  const EdgePoints edge_points = [&](const Shape& edge) {
+    std::vector<Vec3> points;
+    const kernel::EdgeData* data = edge.body().edge();
+    if (data == nullptr || data->degenerate()) return points;
+    if (any_curved) {
+      const std::size_t e = edges.find(edge);
+      if (e < mesh.edge_vertices.size()) {
+        for (std::uint32_t v : mesh.edge_vertices[e]) points.push_back(mesh.vertices[v]);
+      }
+      return points;
+    }
+    for (double t : kernel::discretize_edge(edge, options.chordal_tolerance, 0.5)) {
+      points.push_back(edge.location().apply_point(data->curve->point(t)));
+    }
+    // The ends are the edge's vertices (a curve end is only within tolerance of them), so
+    // that the rings of neighbouring faces meet exactly. Read through the edge used Forward:
+    // its start vertex is then the Forward child.
+    for (const Shape& v : edge.oriented(kernel::Orientation::Forward).children()) {
+      if (points.empty()) break;
+      if (v.orientation() == kernel::Orientation::Forward) points.front() = kernel::vertex_point(v);
+      if (v.orientation() == kernel::Orientation::Reversed) points.back() = kernel::vertex_point(v);
+    }
+    return points;
+  };
+  // Triangles grouped by face, in mesh order.
+  std::vector<std::vector<std::size_t>> triangles_of(faces.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (mesh.triangle_face[t] < faces.size()) triangles_of[mesh.triangle_face[t]].push_back(t);
+  }
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const Shape& face = faces[i];
+    if (face.orientation() != kernel::Orientation::Forward &&
+        face.orientation() != kernel::Orientation::Reversed) {
+      continue;
+    }
+    if (face.body().face()->surface->kind() == kernel::SurfaceKind::Plane) {
+      if (auto p = planar_face_polygon(face, edge_points)) out.push_back(std::move(*p));
+      continue;
+    }
+    for (std::size_t t : triangles_of[i]) {
+      const auto& tri = mesh.triangles[t];
+      out.push_back(Polygon3{{{mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]],
+                               mesh.vertices[tri[0]]}}});
+    }
+  }
+  for (Polygon3& p : out) {
+    for (auto& ring : p.rings) {
+      for (Vec3& v : ring) v = map_point(options, v);
+    }
+  }
+  return out;
+}
+
+kernel::BoundingBox map_box(const kernel::BoundingBox& box, const IndexOptions& options) {
+  if (box.empty() || !options.to_srs) return box;
+  kernel::BoundingBox out;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? box.max.x() : box.min.x(), (c & 2) ? box.max.y() : box.min.y(),
+                      (c & 4) ? box.max.z() : box.min.z());
+    out.add(options.to_srs(corner));
+  }
+  return out;
+}
+
+// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
+// inlier counts (equal weights when no counts are known). Unset when none was fitted.
+void aggregate_fit(const std::vector<PrimitiveInfo>& primitives, ObjectRecord& record) {
+  double weight = 0.0, squares = 0.0, coverage = 0.0;
+  bool any = false;
+  bool counted = std::any_of(primitives.begin(), primitives.end(), [](const PrimitiveInfo& p) {
+    return p.rms && p.inliers && *p.inliers > 0;
+  });
+  for (const PrimitiveInfo& p : primitives) {
+    if (!p.rms) continue;
+    const double w = counted ? static_cast<double>(p.inliers.value_or(0)) : 1.0;
+    any = true;
+    weight += w;
+    squares += w * *p.rms * *p.rms;
+    coverage += w * p.coverage.value_or(0.0);
+  }
+  if (!any || weight <= 0.0) return;
+  record.fit_rms = std::sqrt(squares / weight);
+  record.fit_coverage = coverage / weight;
+}
+
+kernel::Status check_objects(const std::vector<IndexObject>& objects, const IndexOptions& options) {
+  if (!(options.chordal_tolerance > 0.0) || !(options.linear_tolerance > 0.0)) {
+    return {kernel::ErrorCode::InvalidArgument, "topology index: tolerances must be > 0"};
+  }
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const IndexObject& o = objects[i];
+    const std::string where = "topology index: object " + std::to_string(i);
+    if (o.id.empty()) return {kernel::ErrorCode::InvalidArgument, where + " has an empty id"};
+    if (!seen.insert(o.id).second) {
+      return {kernel::ErrorCode::InvalidArgument, where + ": duplicate id \"" + o.id + "\""};
+    }
+    const Shape& s = o.model.shape;
+    if (s.is_null() || (s.kind() != ShapeKind::Solid &&
+                        kernel::map_child_shapes(s, ShapeKind::Solid).size() == 0)) {
+      return {kernel::ErrorCode::InvalidArgument,
+              where + " (\"" + o.id + "\") is not a solid or a compound of solids"};
+    }
+    if (!o.model.face_sources.empty() &&
+        o.model.face_sources.size() != kernel::map_child_shapes(s, ShapeKind::Face).size()) {
+      return {kernel::ErrorCode::InvalidArgument,
+              where + " (\"" + o.id + "\"): face_sources do not match the faces"};
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
+                                           const IndexOptions& options, IndexStats& stats) {
+  if (kernel::Status st = check_objects(objects, options); !st.ok()) return st.error();
+  IndexRows rows;
+  std::int64_t next_id = 1;
+  for (const IndexObject& object : objects) {
+    const Shape& root = object.model.shape;
+    // Ids: every distinct sub-shape of each kind, kinds from compound to vertex, each in
+    // map_child_shapes order. base[k] is the id of the first shape of kind k.
+    std::array<kernel::ShapeIndex, kernel::kShapeKindCount> maps;
+    std::array<std::int64_t, kernel::kShapeKindCount> base{};
+    for (int k = 0; k < kernel::kShapeKindCount; ++k) {
+      maps[k] = kernel::map_child_shapes(root, static_cast<ShapeKind>(k));
+      base[k] = next_id;
+      next_id += static_cast<std::int64_t>(maps[k].size());
+    }
+    auto id_of = [&](const Shape& s) -> std::int64_t {
+      const int k = static_cast<int>(s.kind());
+      const std::size_t i = maps[k].find(s);
+      return i == kernel::ShapeIndex::npos ? 0 : base[k] + static_cast<std::int64_t>(i);
+    };
+
+    for (int k = 0; k < kernel::kShapeKindCount; ++k) {
+      const auto kind = static_cast<ShapeKind>(k);
+      for (std::size_t i = 0; i < maps[k].size(); ++i) {
+        const Shape& s = maps[k][i];
+        ShapeRecord r;
+        r.id = base[k] + static_cast<std::int64_t>(i);
+        r.object_id = object.id;
+        r.kind = kernel::shape_kind_name(kind);
+        r.kind_index = static_cast<std::int64_t>(i);
+        r.key = object.id + "/" + r.kind + "/" + std::to_string(i);
+        r.orientation = kernel::orientation_name(s.orientation());
+        if (kind == ShapeKind::Vertex) {
+          r.tolerance = kernel::tolerance(s);
+          r.point = map_point(options, kernel::vertex_point(s));
+        } else if (kind == ShapeKind::Edge) {
+          r.tolerance = kernel::tolerance(s);
+          const kernel::EdgeData* e = s.body().edge();
+          r.geometry = e->degenerate() ? "degenerate" : curve_kind_name(e->curve->kind());
+        } else if (kind == ShapeKind::Face) {
+          r.tolerance = kernel::tolerance(s);
+          r.geometry = surface_kind_name(s.body().face()->surface->kind());
+        }
+        rows.shapes.push_back(std::move(r));
+        // Sub-shape references: the parent's body children, with their own location and
+        // orientation; the child id is the child as seen through this (located) parent.
+        const auto& refs = s.body().children();
+        for (std::size_t c = 0; c < refs.size(); ++c) {
+          ChildRecord ref;
+          ref.parent_id = base[k] + static_cast<std::int64_t>(i);
+          ref.child_id = id_of(s.child(c));
+          ref.position = static_cast<std::int64_t>(c);
+          ref.orientation = kernel::orientation_name(refs[c].orientation());
+          if (!refs[c].location().is_identity())
+            ref.location = matrix_json(refs[c].location()).dump();
+          rows.children.push_back(std::move(ref));
+        }
+      }
+    }
+
+    for (const auto& [child_kind, ancestor_kind] : kAncestorPairs) {
+      const kernel::AncestorIndex index(root, child_kind, ancestor_kind);
+      for (std::size_t i = 0; i < index.size(); ++i) {
+        const std::int64_t key_id = id_of(index.keys()[i]);
+        const auto& ancestors = index.ancestors(i);
+        for (std::size_t a = 0; a < ancestors.size(); ++a) {
+          rows.ancestors.push_back({key_id, kernel::shape_kind_name(ancestor_kind),
+                                    id_of(ancestors[a]), static_cast<std::int64_t>(a)});
+        }
+      }
+    }
+
+    const auto& nodes = object.model.nodes;
+    std::vector<std::optional<std::int64_t>> parent(nodes.size());
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      for (int c : nodes[n].children) {
+        if (c >= 0 && static_cast<std::size_t>(c) < nodes.size())
+          parent[c] = static_cast<std::int64_t>(n);
+      }
+    }
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      CsgNodeRecord r;
+      r.object_id = object.id;
+      r.node = static_cast<std::int64_t>(n);
+      r.kind = kernel::csg_node_kind_name(nodes[n].kind);
+      r.label = nodes[n].label;
+      r.parent = parent[n];
+      r.children = Json(nodes[n].children).dump();
+      if (nodes[n].kind == kernel::CsgNodeKind::Primitive) {
+        r.primitive_type = kernel::primitive_type_name(nodes[n].primitive.type);
+        r.parameters = primitive_parameters(nodes[n].primitive);
+      }
+      rows.csg_nodes.push_back(std::move(r));
+    }
+    const std::int64_t face_base = base[static_cast<int>(ShapeKind::Face)];
+    for (std::size_t f = 0; f < object.model.face_sources.size(); ++f) {
+      for (const kernel::FaceSource& s : object.model.face_sources[f]) {
+        rows.face_sources.push_back(
+            {face_base + static_cast<std::int64_t>(f), object.id, s.node, s.face});
+      }
+    }
+    std::set<std::string> types;
+    for (const PrimitiveInfo& p : object.primitives) {
+      PrimitiveRecord r;
+      r.object_id = object.id;
+      if (p.node >= 0) r.node = p.node;
+      r.primitive_id = p.id;
+      r.type = p.type;
+      r.inliers = p.inliers;
+      r.fit_rms = p.rms;
+      r.fit_coverage = p.coverage;
+      rows.primitives.push_back(std::move(r));
+      types.insert(p.type);
+    }
+
+    ObjectRecord o;
+    o.object_id = object.id;
+    o.cell = object.cell;
+    o.shape_id = base[static_cast<int>(root.kind())];
+    o.primitive_count = static_cast<std::int64_t>(object.primitives.size());
+    for (const std::string& t : types)
+      o.primitive_types += (o.primitive_types.empty() ? "" : ",") + t;
+    const kernel::MassProperties mp = kernel::mass_properties(root);
+    o.volume = mp.volume;
+    o.area = mp.area;
+    o.bounds = map_box(mp.bounds, options);
+    o.valid = kernel::check_shape(root).valid();
+    aggregate_fit(object.primitives, o);
+    auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
+                                      maps[static_cast<int>(ShapeKind::Edge)], options);
+    if (boundary.ok()) {
+      o.boundary = std::move(boundary).value();
+      o.has_geometry = !o.boundary.empty();
+    } else {
+      stats.warnings.push_back("object " + object.id + ": no boundary geometry: " +
+                               kernel::error_code_name(boundary.error().code) + ": " +
+                               boundary.error().message);
+    }
+    rows.objects.push_back(std::move(o));
+  }
+
+  if (options.relations) {
+    std::vector<Shape> solids;
+    for (const IndexObject& o : objects) solids.push_back(o.model.shape);
+    for (const ObjectRelation& r :
+         compute_relations(solids, options.linear_tolerance, options.threads)) {
+      // Both directions, so that "relations of O" is one index lookup.
+      for (int side = 0; side < 2; ++side) {
+        RelationRecord rec;
+        rec.object_id = objects[side == 0 ? r.a : r.b].id;
+        rec.other_id = objects[side == 0 ? r.b : r.a].id;
+        rec.relation = relation_kind_name(side == 0 ? r.kind : converse(r.kind));
+        if (r.kind == RelationKind::Touches) rec.shared_area = r.shared_area;
+        if (r.kind != RelationKind::Touches && r.kind != RelationKind::Unknown) {
+          rec.common_volume = r.common_volume;
+        }
+        rec.reason = r.reason;
+        rows.relations.push_back(std::move(rec));
+      }
+      if (r.kind == RelationKind::Unknown) ++stats.unknown_relations;
+    }
+  }
+  return rows;
+}
+
+}  // namespace detail
+
+kernel::Status write_topology_index(const std::filesystem::path& path,
+                                    const std::vector<IndexObject>& objects,
+                                    const IndexOptions& options, IndexStats* stats) {
+  IndexStats local;
+  IndexStats& s = stats != nullptr ? *stats : local;
+  s = IndexStats{};
+  auto rows = detail::build_index_rows(objects, options, s);
+  if (!rows.ok()) return rows.error();
+  const detail::IndexRows& r = rows.value();
+
+  std::error_code ec;
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    return {kernel::ErrorCode::IoError,
+            "cannot create directory " + dir.string() + ": " + ec.message()};
+  // A temporary beside the target (same file system, so the rename is atomic); pid and a
+  // counter keep concurrent writers apart.
+  static std::atomic<unsigned> counter{0};
+  const std::filesystem::path tmp =
+      dir / ("." + path.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
+             std::to_string(counter++));
+  std::filesystem::remove(tmp, ec);
+  kernel::Status written = detail::write_gpkg(tmp.string(), r, options);
+  if (written.ok()) {
+    // The database is closed; flush its bytes before the rename makes them visible.
+    std::FILE* f = std::fopen(tmp.c_str(), "rb+");
+    if (f == nullptr || ::fsync(::fileno(f)) != 0) {
+      written = kernel::Status(kernel::ErrorCode::IoError, "cannot flush " + tmp.string());
+    }
+    if (f != nullptr) std::fclose(f);
+  }
+  if (written.ok() && std::rename(tmp.c_str(), path.c_str()) != 0) {
+    written = kernel::Status(kernel::ErrorCode::IoError,
+                             "cannot rename into " + path.string() + ": " + std::strerror(errno));
+  }
+  if (!written.ok()) {
+    std::filesystem::remove(tmp, ec);
+    return written;
+  }
+  // The rename itself is durable once the directory is.
+  if (const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+  s.objects = r.objects.size();
+  s.shapes = r.shapes.size();
+  s.children = r.children.size();
+  s.ancestors = r.ancestors.size();
+  s.relations = r.relations.size() / 2;  // rows come in both directions
+  s.csg_nodes = r.csg_nodes.size();
+  s.primitives = r.primitives.size();
+  s.bytes = std::filesystem::file_size(path, ec);
+  return {};
+}
+
+}  // namespace csgtile::worker

@@ -1,0 +1,191 @@
+#pragma once
+/// \file
+/// The topology index (DESIGN.md §6, README "Topology index"): a GeoPackage 1.3 file with
+///   - `objects`, a feature layer (MULTIPOLYGON Z boundary, R-tree indexed) with one feature
+///     per object: id, cell, primitives, volume, area, 3D bounds, validity, fit quality;
+///   - attribute tables `shapes`, `shape_children` (sub-shape references), `shape_ancestors`
+///     (the paper's MapCsgFatherShape: vertex→edge, edge→face, face→shell, face→solid),
+///     `object_relations`, `csg_nodes`, `face_sources` and `primitives`.
+///
+/// Ids are stable: objects keep the caller's ids and order; shapes are numbered 1, 2, … in
+/// (object order, kind order compound → vertex, kernel::map_child_shapes order) and also carry
+/// the text key "<object id>/<kind>/<index in map_child_shapes(object, kind)>". The same
+/// objects give the same ids and the same file bytes.
+///
+/// Internal API of the worker (exporters); not installed.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/result.h"
+#include "csgtile/kernel/shape.h"
+
+namespace csgtile::worker {
+
+// ---- input ----------------------------------------------------------------------------------
+
+/// A primitive of an object: the CSG leaf it is and, when it was fitted, its fit quality.
+struct PrimitiveInfo {
+  int node = -1;     ///< its Primitive node in the object's CsgModel; -1 when there is none
+  std::string id;    ///< scene or fit id (may be empty)
+  std::string type;  ///< kernel::primitive_type_name, e.g. "cylinder"
+  std::optional<long long> inliers;
+  std::optional<double> rms;       ///< fit RMS error (model units)
+  std::optional<double> coverage;  ///< fit coverage in [0, 1]
+};
+
+/// One object of the index: a solid (or a compound of solids) with its CSG history.
+struct IndexObject {
+  std::string id;          ///< unique in the index; becomes objects.object_id
+  std::string cell = "0";  ///< output cell the object belongs to
+  kernel::CsgModel model;  ///< nodes and face_sources may be empty (no history)
+  std::vector<PrimitiveInfo> primitives;
+};
+
+/// The spatial reference system of the objects layer (a gpkg_spatial_ref_sys row).
+struct IndexSrs {
+  int srs_id = -1;
+  std::string organization = "NONE";
+  int organization_coordsys_id = -1;
+  std::string name = "Undefined Cartesian SRS";
+  std::string definition_wkt = "undefined";
+  /// srs_id -1: the GeoPackage's "undefined Cartesian" row (models without a CRS).
+  static IndexSrs undefined_cartesian() { return {}; }
+};
+
+struct IndexOptions {
+  IndexSrs srs;
+  /// Maps model coordinates to the SRS (e.g. adds a tile origin); null = identity. Applied to
+  /// geometries, bounds and vertex coordinates; volumes and areas stay in model units.
+  std::function<kernel::Vec3(const kernel::Vec3&)> to_srs;
+  /// Chordal tolerance of curved faces in the objects layer (model units, > 0).
+  double chordal_tolerance = 0.01;
+  /// Linear tolerance of the Booleans that classify relations.
+  double linear_tolerance = 1e-7;
+  /// Compute object_relations (Booleans over candidate pairs); off leaves the table empty.
+  bool relations = true;
+  /// Threads for the relations' Booleans (0: one per core). The output does not depend on it.
+  int threads = 0;
+  /// gpkg_contents.last_change of every table. Fixed by default so that the same objects give
+  /// the same bytes; a caller that wants the wall clock passes it (format %Y-%m-%dT%H:%M:%fZ).
+  std::string last_change = "1970-01-01T00:00:00.000Z";
+};
+
+/// What a write produced.
+struct IndexStats {
+  /// Row counts; `relations` counts related object pairs (each has a row per direction).
+  std::size_t objects = 0, shapes = 0, children = 0, ancestors = 0, relations = 0, csg_nodes = 0,
+              primitives = 0;
+  std::size_t unknown_relations = 0;  ///< pairs whose Booleans failed (kind "unknown")
+  std::uint64_t bytes = 0;
+  /// Objects whose boundary could not be tessellated (written with a NULL geometry), etc.
+  std::vector<std::string> warnings;
+};
+
+/// Writes the index to `path` atomically: the GeoPackage is built in a temporary file beside
+/// `path` and renamed over it, so `path` is either the old file or the complete new one; the
+/// temporary is removed on failure. The output is a rollback-journal database (no WAL).
+/// Errors: InvalidArgument (duplicate or empty object ids, a non-solid object, bad options),
+/// IoError (the file cannot be written, naming the path). Deterministic; O(model size) plus
+/// two Booleans per object pair whose bounding boxes meet.
+kernel::Status write_topology_index(const std::filesystem::path& path,
+                                    const std::vector<IndexObject>& objects,
+                                    const IndexOptions& options = {}, IndexStats* stats = nullptr);
+
+// ---- relations ------------------------------------------------------------------------------
+
+enum class RelationKind { Touches, Overlaps, Contains, Within, Equals, Unknown };
+/// "touches", "overlaps", "contains", "within", "equals", "unknown".
+const char* relation_kind_name(RelationKind kind);
+/// The relation seen from the other object (contains ↔ within; the others are symmetric).
+RelationKind converse(RelationKind kind);
+
+/// The relation of object a to object b (a < b).
+struct ObjectRelation {
+  std::size_t a = 0, b = 0;
+  RelationKind kind = RelationKind::Unknown;
+  double shared_area = 0.0;    ///< touches: area of the common boundary
+  double common_volume = 0.0;  ///< overlaps, contains, within, equals: volume of a ∩ b
+  std::string reason;          ///< unknown: the Boolean error that stopped the classification
+};
+
+/// Relations between solids (or compounds of solids) in one frame. Candidate pairs are those
+/// whose bounding boxes, grown by `linear_tolerance`, meet; each is classified exactly:
+/// vol(a ∩ b) > 0 → overlaps, or contains / within / equals when a ∩ b is one of them (equal
+/// volumes, relative 1e-8); otherwise touches when the shared boundary area
+/// (area(a) + area(b) − area(a ∪ b)) / 2 is positive. Disjoint pairs and pairs that meet only
+/// along edges or at points give no row. A Boolean error gives kind Unknown with the error as
+/// the reason. Rows are sorted by (a, b). Pairs are classified on `threads` threads (0: one per
+/// core); the result does not depend on it. Deterministic; never throws.
+std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& solids,
+                                              double linear_tolerance, int threads = 0);
+
+// ---- reading ---------------------------------------------------------------------------------
+
+/// A row of `shapes`.
+struct ShapeRow {
+  std::int64_t id = 0;
+  std::string key;  ///< "<object>/<kind>/<index>"
+  std::string object_id;
+  std::string kind;  ///< shape_kind_name
+  std::int64_t kind_index = 0;
+};
+
+/// A row of `shape_children` joined with the child's shape row.
+struct ChildRow {
+  std::int64_t position = 0;
+  std::string orientation;  ///< of the reference in the parent body
+  std::string location;     ///< JSON 3×4 matrix of the reference, empty for the identity
+  ShapeRow child;
+};
+
+/// A row of `object_relations`.
+struct RelationRow {
+  std::string object_id, other_id, relation;
+  std::optional<double> shared_area, common_volume;
+  std::string reason;
+};
+
+/// Read-only access to a topology index (what `csgtile query` answers from).
+class TopologyIndexReader {
+ public:
+  /// Opens read-only and checks that the file is a GeoPackage with the index tables.
+  /// Errors: IoError (missing or unreadable file), CorruptData (not a GeoPackage or no
+  /// topology tables).
+  static kernel::Result<std::unique_ptr<TopologyIndexReader>> open(
+      const std::filesystem::path& path);
+  ~TopologyIndexReader();
+  TopologyIndexReader(const TopologyIndexReader&) = delete;
+  TopologyIndexReader& operator=(const TopologyIndexReader&) = delete;
+
+  /// A shape by numeric id ("42") or key ("3-0/edge/7"). Error: InvalidArgument naming the id.
+  kernel::Result<ShapeRow> shape(std::string_view id_or_key) const;
+  /// Sub-shape references of a shape, in child order.
+  kernel::Result<std::vector<ChildRow>> children(std::int64_t shape_id) const;
+  /// Ancestors of `kind` (e.g. "edge") of a shape, each once, in the kernel's AncestorIndex
+  /// order: from shape_ancestors when the pair is materialised, otherwise by walking
+  /// shape_children upwards. Error: InvalidArgument for an unknown kind.
+  kernel::Result<std::vector<ShapeRow>> ancestors(std::int64_t shape_id,
+                                                  std::string_view kind) const;
+  /// Relations of an object, ordered by the other object's id. Error: InvalidArgument when
+  /// the object is not in the index.
+  kernel::Result<std::vector<RelationRow>> relations(std::string_view object_id) const;
+  /// Runs one SQL statement with text parameters (?1, ?2, …) and returns every row with each
+  /// value as text (NULL as "NULL"): for tests and the README's recipes.
+  kernel::Result<std::vector<std::vector<std::string>>> sql(
+      std::string_view statement, const std::vector<std::string>& parameters = {}) const;
+
+ private:
+  struct Impl;
+  explicit TopologyIndexReader(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace csgtile::worker
