@@ -15,6 +15,7 @@
 #include "boolean/classifier.h"
 #include "boolean/face_split.h"
 #include "boolean/fuse_groups.h"
+#include "boolean/fuse_tree.h"
 #include "boolean/marching.h"
 #include "boolean/model.h"
 #include "boolean/pcurve_fit.h"
@@ -1277,55 +1278,6 @@ std::vector<std::vector<std::size_t>> fuse_groups(const std::vector<Shape>& shap
 
 }  // namespace detail
 
-namespace {
-
-// Fuses `shapes` as a balanced tree. Where the fuse of two partial results fails, the right
-// one is taken apart along its own tree and its halves are fused into the left one in turn
-// (other operands, other configurations), down to single solids; an error there stops all.
-class FuseTree {
- public:
-  FuseTree(const std::vector<Shape>& shapes, const BooleanOptions& options) : options_(options) {
-    for (const Shape& s : shapes) nodes_.push_back({s, -1, -1});
-  }
-
-  Result<Shape> run() {
-    std::vector<int> level(nodes_.size());
-    std::iota(level.begin(), level.end(), 0);
-    while (level.size() > 1) {
-      std::vector<int> next;
-      for (std::size_t i = 0; i + 1 < level.size(); i += 2) {
-        auto fused = fuse_into(nodes_[static_cast<std::size_t>(level[i])].shape, level[i + 1]);
-        if (!fused.ok()) return fused;
-        nodes_.push_back({std::move(fused).value(), level[i], level[i + 1]});
-        next.push_back(static_cast<int>(nodes_.size()) - 1);
-      }
-      if (level.size() % 2 == 1) next.push_back(level.back());
-      level = std::move(next);
-    }
-    return nodes_[static_cast<std::size_t>(level.front())].shape;
-  }
-
- private:
-  struct Node {
-    Shape shape;
-    int left, right;  // the parts it was fused from; -1 for an input solid
-  };
-
-  Result<Shape> fuse_into(const Shape& acc, int part) {
-    const Node node = nodes_[static_cast<std::size_t>(part)];
-    auto fused = boolean_operation(acc, node.shape, BooleanOp::Fuse, options_);
-    if (fused.ok() || node.left < 0) return fused;
-    auto first = fuse_into(acc, node.left);
-    if (!first.ok()) return first;
-    return fuse_into(first.value(), node.right);
-  }
-
-  const BooleanOptions& options_;
-  std::vector<Node> nodes_;
-};
-
-}  // namespace
-
 Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options) {
   std::vector<Shape> out;
   for (const auto& members : detail::fuse_groups(shapes, options.tolerance)) {
@@ -1335,9 +1287,10 @@ Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOp
       for (const Shape& s : Explorer(group[0], ShapeKind::Solid)) out.push_back(s);
       continue;
     }
-    // A balanced tree of fuses: every solid takes part in about log2(n) operations instead
-    // of a growing accumulator taking part in n − 1.
-    auto fused = FuseTree(group, options).run();
+    // A balanced tree of fuses (boolean/fuse_tree.h).
+    auto fused = detail::fuse_tree(group, [&](const Shape& x, const Shape& y) {
+      return boolean_operation(x, y, BooleanOp::Fuse, options);
+    });
     if (!fused.ok()) return fused;
     for (const Shape& s : Explorer(fused.value(), ShapeKind::Solid)) out.push_back(s);
   }

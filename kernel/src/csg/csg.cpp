@@ -7,6 +7,7 @@
 #include <set>
 
 #include "boolean/fuse_groups.h"
+#include "boolean/fuse_tree.h"
 #include "csgtile/kernel/explorer.h"
 
 namespace csgtile::kernel {
@@ -104,51 +105,6 @@ Result<Tracked> tracked_fold(std::vector<Tracked> items, BooleanOp op,
   return acc;
 }
 
-/// Fuse as a balanced tree, with boolean_fuse_all's fallback: where the fuse of two partial
-/// results fails, the right one's halves are fused into the left one in turn.
-class TrackedFuseTree {
- public:
-  TrackedFuseTree(const std::vector<Tracked>& items, const BooleanOptions& options)
-      : options_(options) {
-    for (const Tracked& t : items) nodes_.push_back({t, -1, -1});
-  }
-
-  Result<Tracked> run() {
-    std::vector<int> level(nodes_.size());
-    for (std::size_t i = 0; i < level.size(); ++i) level[i] = static_cast<int>(i);
-    while (level.size() > 1) {
-      std::vector<int> next;
-      for (std::size_t i = 0; i + 1 < level.size(); i += 2) {
-        auto fused = fuse_into(nodes_[static_cast<std::size_t>(level[i])].tracked, level[i + 1]);
-        if (!fused.ok()) return fused;
-        nodes_.push_back({std::move(fused).value(), level[i], level[i + 1]});
-        next.push_back(static_cast<int>(nodes_.size()) - 1);
-      }
-      if (level.size() % 2 == 1) next.push_back(level.back());
-      level = std::move(next);
-    }
-    return nodes_[static_cast<std::size_t>(level.front())].tracked;
-  }
-
- private:
-  struct Node {
-    Tracked tracked;
-    int left, right;
-  };
-
-  Result<Tracked> fuse_into(const Tracked& acc, int part) {
-    const Node node = nodes_[static_cast<std::size_t>(part)];
-    auto fused = tracked_boolean(acc, node.tracked, BooleanOp::Fuse, options_);
-    if (fused.ok() || node.left < 0) return fused;
-    auto first = fuse_into(acc, node.left);
-    if (!first.ok()) return first;
-    return fuse_into(first.value(), node.right);
-  }
-
-  const BooleanOptions& options_;
-  std::vector<Node> nodes_;
-};
-
 }  // namespace
 
 const char* csg_node_kind_name(CsgNodeKind kind) {
@@ -219,7 +175,9 @@ Result<CsgModel> csg_combine(const std::vector<CsgModel>& models, BooleanOp op,
     for (const auto& group : detail::fuse_groups(shapes, options.tolerance)) {
       std::vector<Tracked> members;
       for (std::size_t i : group) members.push_back(items[i]);
-      auto r = TrackedFuseTree(members, options).run();
+      auto r = detail::fuse_tree(members, [&](const Tracked& x, const Tracked& y) {
+        return tracked_boolean(x, y, BooleanOp::Fuse, options);
+      });
       if (!r.ok()) return r.error();
       for (const Shape& s : Explorer(r.value().shape, ShapeKind::Solid)) solids.push_back(s);
       pieces.push_back(std::move(r).value());
