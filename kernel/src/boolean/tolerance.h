@@ -89,7 +89,7 @@ inline double uv_slack(double domain_size) { return kUvRelative * std::max(1.0, 
 inline constexpr double kCrossingUvSlacks = 10.0;
 /// A section piece counts as inside a face when its middle lies this many uv slacks inside
 /// the face's sampled boundary (closer is ambiguous: the piece runs along the boundary).
-inline constexpr double kInsideUvSlacks = 1e3;
+inline constexpr double kInsideUvSlacks = 10;
 /// Ends of uses at one vertex are one node of a face's arrangement when their (u, v) are this
 /// close relative to max(1, domain size) (a seam vertex gives two nodes, a period apart).
 inline constexpr double kNodeUvRelative = 1e-7;

@@ -202,6 +202,37 @@ TEST(BooleanErrors, NonSolidArgumentsAreNamed) {
   EXPECT_EQ(face_only.error().code, ErrorCode::InvalidArgument);
 }
 
+// Thin slivers: boxes overlapping by far less than their size but far more than the
+// tolerance. Section pieces a few micrometres inside a face were once taken for pieces
+// running along its boundary (a margin relative to the face's size) and dropped.
+TEST(BooleanDegenerate, ThinSliverOverlaps) {
+  for (const double overlap : {1e-5, 1e-6}) {
+    const Shape a = make_box(1, 1, 1).value();
+    const Shape b = make_box(1, 2, 0.5).value().moved(Location::translation(Vec3(1 - overlap, -0.5, 0)));
+    const std::string tag = "overlap " + std::to_string(overlap);
+    const Shape common = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
+    const Shape fused = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
+    const Shape cut = valid(boolean_operation(a, b, BooleanOp::Cut), tag + " cut");
+    if (common.is_null() || fused.is_null() || cut.is_null()) continue;
+    EXPECT_NEAR(volume(common), overlap * 0.5, 1e-9) << tag;
+    EXPECT_NEAR(volume(fused), 1 + 1 - overlap * 0.5, 1e-9) << tag;
+    EXPECT_NEAR(volume(cut), 1 - overlap * 0.5, 1e-9) << tag;
+  }
+  // The pair that stopped the 5 000-primitive city block: a wing reaching 1.47e-5 m into
+  // the next lot's building.
+  const Shape wing = make_box(6.6292096027534084, 3.6506327375602359, 6.9238456727485289)
+                         .value()
+                         .moved(Location::translation(Vec3(137.37080510626652, 193.1226471622326, 0)));
+  const Shape next = make_box(8.5239486272709151, 6.1964382036476851, 5.2537412253205069)
+                         .value()
+                         .moved(Location::translation(Vec3(144, 192, 0)));
+  const Shape common = valid(boolean_operation(wing, next, BooleanOp::Common), "city block common");
+  const Shape fused = valid(boolean_operation(wing, next, BooleanOp::Fuse), "city block fuse");
+  if (!common.is_null() && !fused.is_null()) {
+    EXPECT_NEAR(volume(fused) + volume(common), volume(wing) + volume(next), 1e-9 * volume(fused));
+  }
+}
+
 // Two cylinders of different radii crossing at right angles: a quartic section with no
 // closed form, traced. Volumes against the integral V(A ∩ B) = ∫ 4·√(1 − y²)·√(r² − y²) dy.
 TEST(BooleanTraced, UnequalCrossingCylinders) {
