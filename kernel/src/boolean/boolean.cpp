@@ -754,7 +754,10 @@ class BooleanEngine {
   }
 
   // A point well inside a piece: the centroid of the largest triangle of its (u, v) polygon.
-  std::optional<Vec3> interior_point(const Piece& piece) {
+  // Points inside a piece: in its largest triangles (up to `count`), at uneven barycentric
+  // weights so that they do not fall on the lines and corners other geometry is built on
+  // (a centroid of a split face can be exactly the end of the other operand's edge).
+  std::vector<Vec3> interior_points(const Piece& piece, std::size_t count) {
     std::vector<std::vector<Vec2>> loops;
     for (const BLoop& loop : piece.region.loops) {
       std::vector<Vec2> pts;
@@ -767,19 +770,20 @@ class BooleanEngine {
     const PolygonTriangulation tri = triangulate_polygon(loops);
     std::vector<Vec2> flat;
     for (const auto& l : loops) flat.insert(flat.end(), l.begin(), l.end());
-    double best = -1;
-    Vec2 at;
+    std::vector<std::pair<double, Vec2>> by_area;
     for (const auto& t : tri.triangles) {
       const Vec2 &p = flat[t[0]], &q = flat[t[1]], &r = flat[t[2]];
       const double area = std::abs((q - p).x() * (r - p).y() - (q - p).y() * (r - p).x());
-      if (area > best) {
-        best = area;
-        at = (p + q + r) / 3.0;
-      }
+      if (area > 0) by_area.emplace_back(area, 0.29 * p + 0.33 * q + 0.38 * r);
     }
-    if (best <= 0) return std::nullopt;
+    std::stable_sort(by_area.begin(), by_area.end(),
+                     [](const auto& x, const auto& y) { return x.first > y.first; });
     const Surface& s = *model_.faces[static_cast<std::size_t>(piece.face)].surface;
-    return s.point(at.x(), at.y());
+    std::vector<Vec3> out;
+    for (std::size_t i = 0; i < by_area.size() && i < count; ++i) {
+      out.push_back(s.point(by_area[i].second.x(), by_area[i].second.y()));
+    }
+    return out;
   }
 
   Vec3 outward_normal(const Piece& piece, const Vec3& p) {
@@ -797,9 +801,18 @@ class BooleanEngine {
     for (Piece& piece : pieces) {
       const bool from_a = static_cast<std::size_t>(piece.face) < first_b_face_;
       const SolidClassifier& other = from_a ? cb.value() : ca.value();
-      auto p = interior_point(piece);
-      if (!p) continue;  // a degenerate sliver bounds nothing
-      const Containment c = other.classify(*p);
+      const std::vector<Vec3> candidates = interior_points(piece, 3);
+      if (candidates.empty()) continue;  // a degenerate sliver bounds nothing
+      // The first point off the other solid's boundary decides; a piece whose points are all
+      // on it lies on one of its faces.
+      std::optional<Vec3> p;
+      Containment c = Containment::OnBoundary;
+      for (const Vec3& q : candidates) {
+        c = other.classify(q);
+        p = q;
+        if (c != Containment::OnBoundary) break;
+      }
+      if (c == Containment::OnBoundary) p = candidates.front();
       bool in = c == Containment::Inside, out = c == Containment::Outside;
       bool on_same = false, on_opposite = false;
       if (c == Containment::OnBoundary) {
