@@ -747,13 +747,19 @@ class BooleanEngine {
   Status split_faces(std::vector<Piece>& pieces) {
     for (std::size_t f = 0; f < model_.faces.size(); ++f) {
       auto regions = split_face(model_, model_.faces[f]);
-      if (!regions.ok()) return regions.error();
+      if (!regions.ok()) {
+        // Name the face: which argument, which of its faces, on what surface.
+        const BFace& face = model_.faces[f];
+        return Error{regions.error().code,
+                     regions.error().message + " in face " + std::to_string(face.source) +
+                         " (" + surface_name(face.surface->kind()) + ") of the " +
+                         (face.operand == 0 ? "first" : "second") + " argument"};
+      }
       for (Region& r : regions.value()) pieces.push_back({static_cast<int>(f), std::move(r)});
     }
     return {};
   }
 
-  // A point well inside a piece: the centroid of the largest triangle of its (u, v) polygon.
   // Points inside a piece: in its largest triangles (up to `count`), at uneven barycentric
   // weights so that they do not fall on the lines and corners other geometry is built on
   // (a centroid of a split face can be exactly the end of the other operand's edge).
