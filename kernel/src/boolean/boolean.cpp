@@ -475,7 +475,7 @@ class BooleanEngine {
         // face): that edge, or the part of it the piece covers, splits the first face.
         const std::size_t inside = shift_a ? fa : fb, along = shift_a ? fb : fa;
         const int e = boundary_edge_through(along, curve->point(mid));
-        if (e >= 0) add_edge_part(inside, e, curve->point(c0), curve->point(c1));
+        if (e >= 0) add_edge_part(inside, e, curve->point(c0), curve->point(c1), curve->point(mid));
         continue;
       }
       if (!shift_a || !shift_b) continue;
@@ -535,10 +535,33 @@ class BooleanEngine {
 
   // Adds the part of edge `e` between the points p0 and p1 to face f as a section edge,
   // splitting `e` at p0 and p1 when they are inside it.
-  void add_edge_part(std::size_t f, int e_id, const Vec3& p0, const Vec3& p1) {
-    const BEdge e = model_.edges[static_cast<std::size_t>(e_id)];
+  // `through` is a point of the part: on a closed edge (a circle from its vertex round to
+  // it) it tells which of the two arcs between p0 and p1 is meant; an arc across the edge's
+  // start vertex is added as its two pieces.
+  void add_edge_part(std::size_t f, int e_id, const Vec3& p0, const Vec3& p1, const Vec3& through) {
+    const BEdge& e = model_.edges[static_cast<std::size_t>(e_id)];
     double a = e.curve->closest_parameter(p0, e.t0, e.t1), b = e.curve->closest_parameter(p1, e.t0, e.t1);
     if (a > b) std::swap(a, b);
+    const double span = param_slack(e.t1 - e.t0);
+    if (e.v0 == e.v1 && !e.degenerate()) {
+      const double t = e.curve->closest_parameter(through, e.t0, e.t1);
+      if (b - a <= span) {
+        if (std::abs(t - a) <= span) return;  // a piece of no length
+        a = e.t0;  // both ends at the vertex, its middle elsewhere: the whole loop
+        b = e.t1;
+      } else if (t < a - span || t > b + span) {
+        const double t0 = e.t0, t1 = e.t1;
+        add_edge_range(f, e_id, b, t1);
+        add_edge_range(f, e_id, t0, a);
+        return;
+      }
+    }
+    add_edge_range(f, e_id, a, b);
+  }
+
+  // The part [a, b] of edge `e_id` as a section edge of face f (see add_edge_part).
+  void add_edge_range(std::size_t f, int e_id, double a, double b) {
+    const BEdge e = model_.edges[static_cast<std::size_t>(e_id)];
     const double span = param_slack(e.t1 - e.t0);
     if (b - a <= span) return;
     for (double t : {a, b}) {

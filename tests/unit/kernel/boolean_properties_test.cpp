@@ -234,6 +234,20 @@ TEST(BooleanDegenerate, ThinSliverOverlaps) {
   }
 }
 
+// A column flush with the top of a narrower beam that it passes through in the middle (the
+// timber gate's joint): the column's top circle runs along the beam's top face across the
+// circle's own start vertex. The part of a closed edge lying in a face was once taken as the
+// complementary arc.
+TEST(BooleanDegenerate, ClosedEdgePartAcrossItsVertex) {
+  const Shape column = make_cylinder(0.15, 4).value();
+  const Shape beam = make_box(6, 0.2, 0.3).value().moved(Location::translation(Vec3(-3, -0.1, 3.7)));
+  const Shape fused = valid(boolean_operation(column, beam, BooleanOp::Fuse), "fuse");
+  const Shape common = valid(boolean_operation(column, beam, BooleanOp::Common), "common");
+  if (!fused.is_null() && !common.is_null()) {
+    EXPECT_NEAR(volume(fused) + volume(common), volume(column) + volume(beam), 1e-9 * volume(fused));
+  }
+}
+
 // Two cylinders of different radii crossing at right angles: a quartic section with no
 // closed form, traced. Volumes against the integral V(A ∩ B) = ∫ 4·√(1 − y²)·√(r² − y²) dy.
 TEST(BooleanTraced, UnequalCrossingCylinders) {
