@@ -378,91 +378,84 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
   return {};
 }
 
+// Inserts every row of `rows` with one prepared statement; `bind` binds one row.
+template <class Row, class Bind>
+kernel::Status insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows,
+                           const Bind& bind) {
+  SqliteStatement st(db, sql);
+  CSGTILE_TRY(st.status());
+  for (const Row& r : rows) {
+    bind(st, r);
+    CSGTILE_TRY(st.run());
+  }
+  return {};
+}
+
 kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
-                       "tolerance, geometry, x, y, z) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)");
-    CSGTILE_TRY(st.status());
-    for (const ShapeRecord& r : rows.shapes) {
-      st.bind(1, r.id).bind(2, r.key).bind(3, r.object_id).bind(4, r.kind).bind(5, r.kind_index);
-      st.bind(6, r.orientation).bind(7, r.tolerance).bind_text_or_null(8, r.geometry);
-      for (int a = 0; a < 3; ++a) {
-        if (r.point) {
-          st.bind(9 + a, (*r.point)[a]);
-        } else {
-          st.bind_null(9 + a);
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
+      "tolerance, geometry, x, y, z) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)",
+      rows.shapes, [](SqliteStatement& st, const ShapeRecord& r) {
+        st.bind(1, r.id).bind(2, r.key).bind(3, r.object_id).bind(4, r.kind).bind(5, r.kind_index);
+        st.bind(6, r.orientation).bind(7, r.tolerance).bind_text_or_null(8, r.geometry);
+        for (int a = 0; a < 3; ++a) {
+          if (r.point) {
+            st.bind(9 + a, (*r.point)[a]);
+          } else {
+            st.bind_null(9 + a);
+          }
         }
-      }
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO shape_children (parent_id, child_id, position, orientation, "
-                       "location) VALUES (?1,?2,?3,?4,?5)");
-    CSGTILE_TRY(st.status());
-    for (const ChildRecord& r : rows.children) {
-      st.bind(1, r.parent_id).bind(2, r.child_id).bind(3, r.position).bind(4, r.orientation);
-      st.bind_text_or_null(5, r.location);
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(
-        db,
-        "INSERT INTO shape_ancestors (shape_id, ancestor_kind, ancestor_id, position) "
-        "VALUES (?1,?2,?3,?4)");
-    CSGTILE_TRY(st.status());
-    for (const AncestorRecord& r : rows.ancestors) {
-      st.bind(1, r.shape_id).bind(2, r.ancestor_kind).bind(3, r.ancestor_id).bind(4, r.position);
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
-                       "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)");
-    CSGTILE_TRY(st.status());
-    for (const RelationRecord& r : rows.relations) {
-      st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
-      st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
-                       "primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)");
-    CSGTILE_TRY(st.status());
-    for (const CsgNodeRecord& r : rows.csg_nodes) {
-      st.bind(1, r.object_id).bind(2, r.node).bind(3, r.kind).bind_text_or_null(4, r.label);
-      st.bind(5, r.parent).bind(6, r.children).bind_text_or_null(7, r.primitive_type);
-      st.bind_text_or_null(8, r.parameters);
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO face_sources (face_id, object_id, node, primitive_face) "
-                       "VALUES (?1,?2,?3,?4)");
-    CSGTILE_TRY(st.status());
-    for (const FaceSourceRecord& r : rows.face_sources) {
-      st.bind(1, r.face_id).bind(2, r.object_id).bind(3, r.node).bind(4, r.primitive_face);
-      CSGTILE_TRY(st.run());
-    }
-  }
-  {
-    SqliteStatement st(db,
-                       "INSERT INTO primitives (object_id, node, primitive_id, type, inliers, "
-                       "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7)");
-    CSGTILE_TRY(st.status());
-    for (const PrimitiveRecord& r : rows.primitives) {
-      st.bind(1, r.object_id).bind(2, r.node).bind_text_or_null(3, r.primitive_id).bind(4, r.type);
-      st.bind(5, r.inliers).bind(6, r.fit_rms).bind(7, r.fit_coverage);
-      CSGTILE_TRY(st.run());
-    }
-  }
+      }));
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO shape_children (parent_id, child_id, position, orientation, "
+      "location) VALUES (?1,?2,?3,?4,?5)",
+      rows.children, [](SqliteStatement& st, const ChildRecord& r) {
+        st.bind(1, r.parent_id).bind(2, r.child_id).bind(3, r.position).bind(4, r.orientation);
+        st.bind_text_or_null(5, r.location);
+      }));
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO shape_ancestors (shape_id, ancestor_kind, ancestor_id, position) "
+      "VALUES (?1,?2,?3,?4)",
+      rows.ancestors, [](SqliteStatement& st, const AncestorRecord& r) {
+        st.bind(1, r.shape_id).bind(2, r.ancestor_kind).bind(3, r.ancestor_id).bind(4, r.position);
+      }));
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
+      "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)",
+      rows.relations, [](SqliteStatement& st, const RelationRecord& r) {
+        st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
+        st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
+      }));
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
+      "primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)",
+      rows.csg_nodes, [](SqliteStatement& st, const CsgNodeRecord& r) {
+        st.bind(1, r.object_id).bind(2, r.node).bind(3, r.kind).bind_text_or_null(4, r.label);
+        st.bind(5, r.parent).bind(6, r.children).bind_text_or_null(7, r.primitive_type);
+        st.bind_text_or_null(8, r.parameters);
+      }));
+  CSGTILE_TRY(insert_each(
+      db,
+      "INSERT INTO face_sources (face_id, object_id, node, primitive_face) "
+      "VALUES (?1,?2,?3,?4)",
+      rows.face_sources, [](SqliteStatement& st, const FaceSourceRecord& r) {
+        st.bind(1, r.face_id).bind(2, r.object_id).bind(3, r.node).bind(4, r.primitive_face);
+      }));
+  CSGTILE_TRY(insert_each(db,
+                          "INSERT INTO primitives (object_id, node, primitive_id, type, inliers, "
+                          "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7)",
+                          rows.primitives, [](SqliteStatement& st, const PrimitiveRecord& r) {
+                            st.bind(1, r.object_id)
+                                .bind(2, r.node)
+                                .bind_text_or_null(3, r.primitive_id)
+                                .bind(4, r.type);
+                            st.bind(5, r.inliers).bind(6, r.fit_rms).bind(7, r.fit_coverage);
+                          }));
   {
     SqliteStatement st(db, "INSERT INTO index_metadata (key, value) VALUES (?1, ?2)");
     CSGTILE_TRY(st.status());
