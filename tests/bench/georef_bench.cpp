@@ -75,6 +75,32 @@ double affine_rate(const std::vector<Vec3>& in, std::vector<Vec3>& out) {
   return best;
 }
 
+// Times `mapper.to_local(points, out)` over the benchmark's iterations; records the items
+// processed and returns points per second (0 after reporting an error).
+template <class Mapper>
+double time_bulk(benchmark::State& state, const Mapper& mapper, const std::vector<Vec3>& points,
+                 std::vector<Vec3>& out) {
+  double seconds = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    auto status = mapper.to_local(points, out);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!status.ok()) {
+      state.SkipWithError(status.error().message.c_str());
+      return 0;
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+  const double processed =
+      static_cast<double>(state.iterations()) * static_cast<double>(points.size());
+  state.SetItemsProcessed(static_cast<std::int64_t>(processed));
+  return processed / seconds;
+}
+
+const char* family_label(std::int64_t index) {
+  return index == 0 ? "utm EPSG:32631" : index == 1 ? "rd EPSG:28992" : "lccft EPSG:2263";
+}
+
 void BM_AffineBaseline(benchmark::State& state) {
   const Family f = family(0);
   const auto points = tile_points(f, 1.0);
@@ -101,25 +127,11 @@ void BM_ProjectedToLocal(benchmark::State& state) {
   const auto points = tile_points(f, crs.linear_unit.metres);
   std::vector<Vec3> out(points.size());
   const double baseline = affine_rate(points, out);
-  double seconds = 0;
-  for (auto _ : state) {
-    const auto start = std::chrono::steady_clock::now();
-    auto status = georef.value().to_local(points, out);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!status.ok()) {
-      state.SkipWithError(status.error().message.c_str());
-      return;
-    }
-    benchmark::DoNotOptimize(out.data());
-  }
-  const double processed =
-      static_cast<double>(state.iterations()) * static_cast<double>(points.size());
-  state.SetItemsProcessed(static_cast<std::int64_t>(processed));
+  const double rate = time_bulk(state, georef.value(), points, out);
+  if (rate <= 0) return;
   state.counters["affine_points_per_second"] = baseline;
-  state.counters["ratio_to_affine"] = (processed / seconds) / baseline;
-  state.SetLabel(state.range(0) == 0   ? "utm EPSG:32631"
-                 : state.range(0) == 1 ? "rd EPSG:28992"
-                                       : "lccft EPSG:2263");
+  state.counters["ratio_to_affine"] = rate / baseline;
+  state.SetLabel(family_label(state.range(0)));
 }
 BENCHMARK(BM_ProjectedToLocal)
     ->Arg(0)
@@ -157,29 +169,15 @@ void BM_TileMappingToLocal(benchmark::State& state) {
   const double exact_rate =
       static_cast<double>(sample) /
       std::chrono::duration<double>(std::chrono::steady_clock::now() - exact_start).count();
-  double seconds = 0;
-  for (auto _ : state) {
-    const auto start = std::chrono::steady_clock::now();
-    auto status = mapping.value().to_local(points, out);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!status.ok()) {
-      state.SkipWithError(status.error().message.c_str());
-      return;
-    }
-    benchmark::DoNotOptimize(out.data());
-  }
-  const double processed =
-      static_cast<double>(state.iterations()) * static_cast<double>(points.size());
-  state.SetItemsProcessed(static_cast<std::int64_t>(processed));
+  const double rate = time_bulk(state, mapping.value(), points, out);
+  if (rate <= 0) return;
   state.counters["affine_points_per_second"] = baseline;
-  state.counters["ratio_to_affine"] = (processed / seconds) / baseline;
-  state.counters["ratio_to_exact"] = (processed / seconds) / exact_rate;
+  state.counters["ratio_to_affine"] = rate / baseline;
+  state.counters["ratio_to_exact"] = rate / exact_rate;
   state.counters["degree"] = mapping.value().degree();
   state.counters["verified_error_nm"] = mapping.value().verified_error_m() * 1e9;
   state.counters["fit_ms"] = fit_seconds * 1e3;
-  state.SetLabel(state.range(0) == 0   ? "utm EPSG:32631"
-                 : state.range(0) == 1 ? "rd EPSG:28992"
-                                       : "lccft EPSG:2263");
+  state.SetLabel(family_label(state.range(0)));
 }
 BENCHMARK(BM_TileMappingToLocal)
     ->Arg(0)

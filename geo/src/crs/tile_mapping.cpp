@@ -22,8 +22,6 @@ constexpr int kMinDegree = 3;
 constexpr int kMaxDegree = 12;
 constexpr int kComponents = 6;  // local(x, y, z) = P(x, y) + z·Q(x, y)
 
-bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
-
 // T_0(s) … T_d(s).
 void chebyshev(double s, int degree, double* t) {
   t[0] = 1.0;
@@ -35,7 +33,7 @@ void chebyshev(double s, int degree, double* t) {
 
 Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const BoundingBox& box,
                                      double max_error_m) {
-  if (box.empty() || !finite(box.min) || !finite(box.max)) {
+  if (box.empty() || !box.min.allFinite() || !box.max.allFinite()) {
     return Error{ErrorCode::InvalidArgument, "tile mapping: the box is empty or not finite"};
   }
   if (!(max_error_m > 0.0)) {
@@ -159,7 +157,7 @@ Status TileMapping::to_local(std::span<const Vec3> in, std::span<Vec3> out) cons
   }
   for (std::size_t i = 0; i < in.size(); ++i) {
     out[i] = to_local(in[i]);
-    if (!finite(out[i])) {
+    if (!out[i].allFinite()) {
       auto checked = georeferencer_.to_local_checked(in[i]);
       return Status(ErrorCode::InvalidArgument,
                     "point " + std::to_string(i) + ": " +

@@ -3,6 +3,8 @@
 
 #include "boolean/marching.h"
 
+#include "boolean/pcurve_fit.h"
+
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
@@ -106,11 +108,6 @@ class Pair {
   const Surface& a_;
   const Surface& b_;
 };
-
-double nearest_periodic(double value, double reference, double period) {
-  if (period <= 0) return value;
-  return value + period * std::round((reference - value) / period);
-}
 
 /// Traced points of all branches so far, hashed by cell, to drop seeds on known branches.
 class PointHash {

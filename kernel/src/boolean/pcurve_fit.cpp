@@ -54,12 +54,13 @@ Curve2dPtr project_on_plane(const Curve& curve, const PlaneSurface& plane) {
   return nullptr;
 }
 
+}  // namespace
+
 double nearest_periodic(double value, double reference, double period) {
   if (period <= 0) return value;
   return value + period * std::round((reference - value) / period);
 }
 
-}  // namespace
 
 double pcurve_deviation(const Curve& curve, const Curve2d& pcurve, double t0, double t1,
                         const Surface& surface, int samples) {

@@ -16,6 +16,10 @@ namespace csgtile::kernel::detail {
 Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& surface,
                       double tolerance);
 
+/// `value` moved by whole periods to the one nearest `reference` (unchanged when period <= 0):
+/// unwrapping periodic parameters along a curve.
+double nearest_periodic(double value, double reference, double period);
+
 /// The same pcurve moved by `offset` in the parameter plane (periodic shifts).
 Curve2dPtr shift_pcurve(const Curve2dPtr& pcurve, const Vec2& offset);
 
