@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Quick start, command 2 (and what CI runs): installs what is missing, then
 #   1. an optimised build with warnings as errors, and every test (ctest);
-#   2. an ASan+UBSan build, and the kernel, geo, config and CLI tests under it;
+#   2. an ASan+UBSan build, and the kernel, assembly, geo, config and CLI tests under it;
 #   3. a libFuzzer build (clang) and a short bounded run of each fuzz target.
 # Set CSGTILE_SKIP_SANITIZE=1 or CSGTILE_SKIP_FUZZ=1 to leave out step 2 or 3 locally.
 set -euo pipefail
@@ -20,12 +20,12 @@ cmake --build build -j"$jobs"
 CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --output-on-failure -j"$jobs"
 
 if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then
-  echo "== ASan+UBSan build: kernel, geo, config and CLI tests"
+  echo "== ASan+UBSan build: kernel, assembly, geo, config and CLI tests"
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCSGTILE_WERROR=ON \
         -DCSGTILE_SANITIZE=ON -DCSGTILE_BUILD_TESTS=ON >/dev/null
   cmake --build build-asan -j"$jobs"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan --output-on-failure -j"$jobs" -L 'kernel|geo|config|cli|boundaries'
+    ctest --test-dir build-asan --output-on-failure -j"$jobs" -L 'kernel|assembly|geo|config|cli|boundaries'
 fi
 
 if [ "${CSGTILE_SKIP_FUZZ:-0}" != 1 ]; then

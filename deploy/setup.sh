@@ -10,6 +10,8 @@ packages=(
   libclang-rt-14-dev
   # kernel
   libeigen3-dev libgmp-dev
+  # kernel/assembly: OpenVDB voxel culling and TBB (OpenVDB's headers need Boost's)
+  libopenvdb-dev libtbb-dev libboost-dev
   # geo: georeferencing (GeographicLib); PROJ's cs2cs is the tests' independent oracle
   libgeographiclib-dev proj-bin
   # config

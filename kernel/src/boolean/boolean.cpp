@@ -96,6 +96,45 @@ class BooleanEngine {
     return build(pieces);
   }
 
+  Result<Interference> interference() {
+    if (auto s = import_operand(model_, a_, 0); !s.ok()) return s.error();
+    first_b_face_ = model_.faces.size();
+    if (auto s = import_operand(model_, b_, 1); !s.ok()) return s.error();
+    if (first_b_face_ == 0 || first_b_face_ == model_.faces.size()) return Interference::Disjoint;
+    // Vertices within tolerance of each other are one model vertex: one used by both
+    // operands is a contact point.
+    std::vector<int> operand_of_vertex(model_.vertices.size(), -1);
+    for (const BFace& f : model_.faces) {
+      for (const BLoop& loop : f.loops) {
+        for (const BUse& u : loop) {
+          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          for (int v : {e.v0, e.v1}) {
+            int& o = operand_of_vertex[static_cast<std::size_t>(v)];
+            if (o != -1 && o != f.operand) return Interference::BoundariesMeet;
+            o = f.operand;
+          }
+        }
+      }
+    }
+    reframe_spheres();
+    polygons_.resize(model_.faces.size());
+    for (std::size_t i = 0; i < model_.faces.size(); ++i) polygons_[i] = face_polygon(model_, model_.faces[i]);
+    split_at_touching_vertices();
+    if (auto s = intersect_faces(); !s.ok()) return s.error();
+    for (const BFace& f : model_.faces) {
+      if (!f.extra.empty()) return Interference::BoundariesMeet;
+    }
+    // No boundary contact: nested or apart. One boundary point of each decides.
+    for (const auto& [inner, outer] : {std::pair{&a_, &b_}, std::pair{&b_, &a_}}) {
+      Explorer vertices(*inner, ShapeKind::Vertex);
+      if (vertices.begin() == vertices.end()) continue;
+      auto classifier = SolidClassifier::create(*outer, options_.tolerance);
+      if (!classifier.ok()) return classifier.error();
+      if (classifier->classify(vertex_point(*vertices.begin())) != Containment::Outside) return Interference::Nested;
+    }
+    return Interference::Disjoint;
+  }
+
  private:
   // Edges of the two operands that coincide (touching solids) become one edge, so the
   // result shares them.
@@ -1266,6 +1305,23 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     }
   }
   return result;
+}
+
+const char* interference_name(Interference i) {
+  switch (i) {
+    case Interference::Disjoint: return "disjoint";
+    case Interference::BoundariesMeet: return "boundaries_meet";
+    case Interference::Nested: return "nested";
+  }
+  return "?";
+}
+
+Result<Interference> solid_interference(const Shape& a, const Shape& b, const BooleanOptions& options) {
+  if (a.is_null() || b.is_null()) return Error{ErrorCode::InvalidArgument, "solid_interference: null shape"};
+  BoundingBox ba = bounding_box(a), bb = bounding_box(b);
+  ba.enlarge(options.tolerance);
+  if (!ba.intersects(bb)) return Interference::Disjoint;
+  return BooleanEngine(a, b, BooleanOp::Common, options).interference();
 }
 
 Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,

@@ -56,6 +56,23 @@ struct BooleanResult {
 Result<BooleanResult> boolean_operation_with_history(const Shape& a, const Shape& b, BooleanOp op,
                                                      const BooleanOptions& options = {});
 
+/// How two solids' point sets relate, decided with the operation's own intersection stage
+/// (exact section curves and shared vertices, then exact ray casting).
+enum class Interference {
+  Disjoint,        ///< no common point (beyond the tolerance)
+  BoundariesMeet,  ///< the boundaries share points: the solids overlap or touch
+  Nested,          ///< one solid lies inside the other, their boundaries apart
+};
+const char* interference_name(Interference i);  ///< "disjoint", "boundaries_meet", "nested"
+
+/// Whether solids a and b (solids or compounds of solids) overlap or touch: the first half
+/// of boolean_operation (face–face sections, touching vertices and edges), stopped at the
+/// first contact, then a containment test of one vertex of each in the other. Point contact
+/// between two smooth faces (a sphere on a plane) reads as Disjoint. Errors as
+/// boolean_operation (Unsupported for a surface pair without a section).
+Result<Interference> solid_interference(const Shape& a, const Shape& b,
+                                        const BooleanOptions& options = {});
+
 /// The union of many solids in one call: a sweep over their bounding boxes finds the groups
 /// of solids that can touch (connected components of the box-overlap graph); each group is
 /// fused as a balanced tree of pairwise fuses (neighbours in input order first, so each solid

@@ -1,0 +1,107 @@
+#pragma once
+/// \file
+/// City-scale assembly (paper §4: topological relations between models become relations
+/// inside one model). Primitives → solids; a bounding-box sweep finds candidate pairs;
+/// OpenVDB masks of the dilated interiors cull the pairs that cannot meet; the exact kernel
+/// test (solid_interference) decides the rest; connected components of the contact graph
+/// are the objects, each unified by the kernel's n-ary fuse with its CSG tree and face
+/// history. Components are fused in parallel (TBB); the output does not depend on the
+/// thread count. With a cell, only the primitives near the cell are read and only the
+/// objects anchored in the cell are kept (DESIGN.md §1, cells and halos).
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "csgtile/kernel/bounding_box.h"
+#include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/primitives.h"
+
+namespace csgtile::assembly {
+
+/// One input primitive; `label` names it in the CSG tree and in object ids (unique).
+struct AssemblyPrimitive {
+  kernel::PrimitiveSpec spec;
+  std::string label;
+};
+
+/// A square cell (i, j) of a grid in the XY plane: [ox + i·size, ox + (i+1)·size) × the
+/// same in y. Its halo is the band of width `halo` around it: primitives meeting the cell
+/// or its halo are read; an object belongs to the cell holding its anchor, the minimum
+/// (x, y) corner of its bounding box.
+struct CellSpec {
+  double origin_x = 0, origin_y = 0;
+  double size = 0;  ///< > 0
+  long long i = 0, j = 0;
+  double halo = 0;  ///< ≥ 0; objects larger than the halo are reported
+};
+
+/// The cell (i, j) of the grid holding point (x, y).
+std::pair<long long, long long> cell_of(const CellSpec& grid, double x, double y);
+
+struct AssemblyOptions {
+  double tolerance = kernel::kDefaultTolerance;  ///< contact tolerance, world units
+  double voxel_size = 0.5;    ///< OpenVDB voxel edge, world units
+  bool voxel_culling = true;  ///< false: every candidate pair gets the exact test
+  bool broad_phase = true;    ///< false: every pair of solids is a candidate
+  int threads = 0;            ///< worker threads; 0 = all cores
+  std::optional<CellSpec> cell;
+};
+
+struct AssemblyStats {
+  long long primitives = 0;           ///< in the input
+  long long primitives_read = 0;      ///< in the cell and its halo (all without a cell)
+  long long primitives_failed = 0;    ///< that could not be built (see Assembly::problems)
+  long long candidate_pairs = 0;      ///< from the broad phase (all pairs without it)
+  long long culled_pairs = 0;         ///< of those, dropped by the OpenVDB masks
+  long long exact_tests = 0;          ///< pairs given the exact test
+  long long interacting_pairs = 0;    ///< of those, overlapping or touching
+  long long objects = 0;              ///< published (anchored in the cell)
+  long long objects_failed = 0;       ///< whose fuse failed (kept unfused, with the reason)
+  long long objects_past_halo = 0;    ///< reaching past the halo (reported, see problems)
+  long long active_voxels = 0;        ///< in all masks
+  double seconds_build = 0, seconds_broad = 0, seconds_voxel = 0, seconds_exact = 0,
+         seconds_fuse = 0, seconds_total = 0;
+};
+
+/// A contact between two primitives (indices into the input), as the exact test saw it.
+struct Contact {
+  int a = 0, b = 0;  ///< a < b
+  kernel::Interference kind = kernel::Interference::BoundariesMeet;
+};
+
+/// A topologically unified object.
+struct AssembledObject {
+  std::string id;               ///< "obj-" + the label of its first primitive (stable)
+  std::vector<int> primitives;  ///< input indices, ascending
+  /// The fused solid(s) with the CSG tree (one n-ary fuse over the primitives, or the
+  /// primitive alone) and face sources. When the fuse failed: the compound of the unfused
+  /// primitive solids under the same tree, and `error` says why.
+  kernel::CsgModel model;
+  bool fused = true;
+  std::string error;
+  double volume = 0;
+  kernel::BoundingBox box;
+  bool reaches_past_halo = false;
+};
+
+struct Assembly {
+  std::vector<AssembledObject> objects;  ///< ordered by their first primitive
+  std::vector<Contact> contacts;         ///< between primitives of published objects, sorted
+  std::vector<std::string> problems;     ///< primitives not built, objects past the halo
+  AssemblyStats stats;
+};
+
+/// Assembles the primitives. Errors: InvalidArgument (bad options: voxel size or cell).
+/// Primitives that cannot be built and objects whose fuse fails do not fail the call: they
+/// are counted and named in `problems` / `error`.
+kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitives,
+                                  const AssemblyOptions& options = {});
+
+/// The city model: a compound of the objects' shapes, its CSG tree one n-ary fuse over the
+/// objects' trees (objects do not meet, so their union is their compound), face sources
+/// carried over. Checked with check_csg.
+kernel::Result<kernel::CsgModel> city_model(const std::vector<AssembledObject>& objects);
+
+}  // namespace csgtile::assembly

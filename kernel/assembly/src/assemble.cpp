@@ -1,0 +1,310 @@
+// City-scale assembly pipeline (see csgtile/assembly/assembly.h).
+
+#include "csgtile/assembly/assembly.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
+#include <numeric>
+
+#include "broad_phase.h"
+#include "csgtile/assembly/voxel_cull.h"
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "stacked_model.h"
+
+namespace csgtile::assembly {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using kernel::ErrorCode;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// Union–find over input indices; the root of a set is its smallest member.
+struct Components {
+  explicit Components(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int root(int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) {
+      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      x = parent[static_cast<std::size_t>(x)];
+    }
+    return x;
+  }
+  void join(int a, int b) {
+    const int ra = root(a), rb = root(b);
+    parent[static_cast<std::size_t>(std::max(ra, rb))] = std::min(ra, rb);
+  }
+  std::vector<int> parent;
+};
+
+kernel::Status check_options(const AssemblyOptions& o) {
+  if (!(o.voxel_size > 0) || !std::isfinite(o.voxel_size)) {
+    return kernel::Status(ErrorCode::InvalidArgument, "assembly: voxel size must be finite and > 0");
+  }
+  if (!(o.tolerance > 0) || !std::isfinite(o.tolerance)) {
+    return kernel::Status(ErrorCode::InvalidArgument, "assembly: tolerance must be finite and > 0");
+  }
+  if (o.cell) {
+    if (!(o.cell->size > 0) || !std::isfinite(o.cell->size)) {
+      return kernel::Status(ErrorCode::InvalidArgument, "assembly: cell size must be finite and > 0");
+    }
+    if (!(o.cell->halo >= 0) || !std::isfinite(o.cell->halo)) {
+      return kernel::Status(ErrorCode::InvalidArgument, "assembly: halo must be finite and >= 0");
+    }
+  }
+  return {};
+}
+
+bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& outer) {
+  return inner.min.x() >= outer.min.x() && inner.min.y() >= outer.min.y() &&
+         inner.max.x() <= outer.max.x() && inner.max.y() <= outer.max.y();
+}
+
+}  // namespace
+
+std::pair<long long, long long> cell_of(const CellSpec& grid, double x, double y) {
+  return {static_cast<long long>(std::floor((x - grid.origin_x) / grid.size)),
+          static_cast<long long>(std::floor((y - grid.origin_y) / grid.size))};
+}
+
+kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitives,
+                                  const AssemblyOptions& options) {
+  if (auto s = check_options(options); !s.ok()) return s.error();
+  const auto t_start = Clock::now();
+  std::unique_ptr<tbb::global_control> threads;
+  if (options.threads > 0) {
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    static_cast<std::size_t>(options.threads));
+  }
+  Assembly out;
+  AssemblyStats& st = out.stats;
+  st.primitives = static_cast<long long>(primitives.size());
+  kernel::BooleanOptions bopt;
+  bopt.tolerance = options.tolerance;
+
+  // 1. Solids (in parallel; a primitive that cannot be built is reported and left out).
+  auto t0 = Clock::now();
+  const std::size_t n = primitives.size();
+  std::vector<kernel::CsgModel> leaves(n);
+  std::vector<std::string> leaf_error(n);
+  std::vector<kernel::BoundingBox> boxes(n);  // enlarged by the tolerance
+  std::vector<kernel::BoundingBox> exact_boxes(n);
+  // Cell region: the cell grown by its halo (XY); a primitive is read when its box meets it.
+  std::optional<kernel::BoundingBox> region;
+  if (options.cell) {
+    const CellSpec& c = *options.cell;
+    kernel::BoundingBox r;
+    r.min = kernel::Vec3(c.origin_x + static_cast<double>(c.i) * c.size - c.halo,
+                         c.origin_y + static_cast<double>(c.j) * c.size - c.halo, -HUGE_VAL);
+    r.max = kernel::Vec3(c.origin_x + static_cast<double>(c.i + 1) * c.size + c.halo,
+                         c.origin_y + static_cast<double>(c.j + 1) * c.size + c.halo, HUGE_VAL);
+    region = r;
+  }
+  std::vector<char> read(n, 0);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    auto m = kernel::csg_primitive(primitives[i].spec, primitives[i].label, options.tolerance);
+    if (!m.ok()) {
+      leaf_error[i] = m.error().message;
+      return;
+    }
+    const kernel::BoundingBox exact = kernel::bounding_box(m->shape);
+    kernel::BoundingBox box = exact;
+    box.enlarge(options.tolerance);
+    if (region && !region->intersects(box)) return;
+    boxes[i] = box;
+    exact_boxes[i] = exact;
+    leaves[i] = std::move(m).value();
+    read[i] = 1;
+  });
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!leaf_error[i].empty()) {
+      ++st.primitives_failed;
+      out.problems.push_back("primitive " + std::to_string(i) + " (" + primitives[i].label +
+                             ") not built: " + leaf_error[i]);
+    }
+    st.primitives_read += read[i];
+  }
+  st.seconds_build = seconds_since(t0);
+
+  // 2. Broad phase: candidate pairs.
+  t0 = Clock::now();
+  std::vector<std::pair<int, int>> candidates;
+  if (options.broad_phase) {
+    std::vector<kernel::BoundingBox> live(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (read[i]) live[i] = boxes[i];
+    }
+    candidates = detail::overlapping_boxes(live);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i + 1; j < n; ++j) {
+        if (read[i] && read[j]) candidates.emplace_back(static_cast<int>(i), static_cast<int>(j));
+      }
+    }
+  }
+  st.candidate_pairs = static_cast<long long>(candidates.size());
+  st.seconds_broad = seconds_since(t0);
+
+  // 3. OpenVDB culling of the candidates.
+  t0 = Clock::now();
+  std::vector<kernel::Shape> shapes(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (read[i]) shapes[i] = leaves[i].shape;
+  }
+  std::vector<std::pair<int, int>> survivors;
+  if (options.voxel_culling && !candidates.empty()) {
+    std::vector<bool> needed(n, false);
+    for (const auto& [a, b] : candidates) needed[static_cast<std::size_t>(a)] = needed[static_cast<std::size_t>(b)] = true;
+    VoxelCuller culler(options.voxel_size, options.tolerance);
+    culler.build(shapes, needed);
+    for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
+    std::vector<char> keep(candidates.size(), 0);
+    tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
+      keep[k] = culler.may_meet(static_cast<std::size_t>(candidates[k].first),
+                                static_cast<std::size_t>(candidates[k].second));
+    });
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      if (keep[k]) survivors.push_back(candidates[k]);
+    }
+  } else {
+    survivors = candidates;
+  }
+  st.culled_pairs = st.candidate_pairs - static_cast<long long>(survivors.size());
+  st.seconds_voxel = seconds_since(t0);
+
+  // 4. Exact test of the survivors; components of the contact graph are the objects.
+  t0 = Clock::now();
+  st.exact_tests = static_cast<long long>(survivors.size());
+  std::vector<std::optional<kernel::Interference>> verdict(survivors.size());
+  std::vector<std::string> verdict_error(survivors.size());
+  tbb::parallel_for(std::size_t{0}, survivors.size(), [&](std::size_t k) {
+    const auto [a, b] = survivors[k];
+    auto r = kernel::solid_interference(shapes[static_cast<std::size_t>(a)], shapes[static_cast<std::size_t>(b)], bopt);
+    if (r.ok()) {
+      verdict[k] = r.value();
+    } else {
+      verdict_error[k] = r.error().message;
+    }
+  });
+  Components comps(n);
+  std::vector<Contact> contacts;
+  for (std::size_t k = 0; k < survivors.size(); ++k) {
+    const auto [a, b] = survivors[k];
+    if (!verdict[k]) {
+      // The exact test could not decide: keep the pair together (the fuse decides or fails
+      // with a reason) rather than publish two objects that may overlap.
+      comps.join(a, b);
+      contacts.push_back({a, b, kernel::Interference::BoundariesMeet});
+      out.problems.push_back("pair " + primitives[static_cast<std::size_t>(a)].label + " / " +
+                             primitives[static_cast<std::size_t>(b)].label +
+                             ": exact test failed, assumed in contact: " + verdict_error[k]);
+      continue;
+    }
+    if (*verdict[k] == kernel::Interference::Disjoint) continue;
+    comps.join(a, b);
+    contacts.push_back({a, b, *verdict[k]});
+  }
+  st.interacting_pairs = static_cast<long long>(contacts.size());
+  std::map<int, std::vector<int>> members;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (read[i]) members[comps.root(static_cast<int>(i))].push_back(static_cast<int>(i));
+  }
+  st.seconds_exact = seconds_since(t0);
+
+  // 5. Anchor rule, then one n-ary fuse per kept object (in parallel).
+  t0 = Clock::now();
+  std::vector<std::vector<int>> groups;
+  std::vector<kernel::BoundingBox> group_boxes;
+  std::vector<char> past_halo;
+  for (auto& [root, list] : members) {
+    kernel::BoundingBox box;
+    for (int i : list) box.add(exact_boxes[static_cast<std::size_t>(i)]);
+    if (options.cell) {
+      const auto [ci, cj] = cell_of(*options.cell, box.min.x(), box.min.y());
+      if (ci != options.cell->i || cj != options.cell->j) continue;
+    }
+    groups.push_back(list);
+    group_boxes.push_back(box);
+    past_halo.push_back(region && !within_xy(box, *region));
+  }
+  out.objects.resize(groups.size());
+  tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
+    AssembledObject& o = out.objects[g];
+    o.primitives = groups[g];
+    o.id = "obj-" + primitives[static_cast<std::size_t>(groups[g].front())].label;
+    o.reaches_past_halo = past_halo[g] != 0;
+    if (groups[g].size() == 1) {
+      // A single primitive: its own tree; its solid in a compound like every object's (the
+      // compound lists the solid's faces in the same order, so the sources carry over).
+      o.model = leaves[static_cast<std::size_t>(groups[g].front())];
+      auto compound = kernel::ShapeFactory::compound({o.model.shape});
+      if (compound.ok()) o.model.shape = compound.value();
+    } else {
+      std::vector<kernel::CsgModel> parts;
+      for (int i : groups[g]) parts.push_back(leaves[static_cast<std::size_t>(i)]);
+      auto fused = kernel::csg_combine(parts, kernel::BooleanOp::Fuse, bopt);
+      if (fused.ok()) {
+        o.model = std::move(fused).value();
+      } else {
+        o.fused = false;
+        o.error = fused.error().message;
+        std::vector<const kernel::CsgModel*> ptrs;
+        for (const auto& p : parts) ptrs.push_back(&p);
+        auto stacked = detail::stacked_model(ptrs);
+        if (stacked.ok()) o.model = std::move(stacked).value();
+      }
+    }
+    o.box = kernel::bounding_box(o.model.shape);
+    o.volume = kernel::mass_properties(o.model.shape).volume;
+  });
+  std::vector<char> published(n, 0);
+  for (const AssembledObject& o : out.objects) {
+    for (int i : o.primitives) published[static_cast<std::size_t>(i)] = 1;
+    if (!o.fused) {
+      ++st.objects_failed;
+      out.problems.push_back("object " + o.id + " not fused: " + o.error);
+    }
+    if (o.reaches_past_halo) {
+      ++st.objects_past_halo;
+      out.problems.push_back("object " + o.id + " reaches past the halo: widen the halo or the cell");
+    }
+  }
+  for (const Contact& c : contacts) {
+    if (published[static_cast<std::size_t>(c.a)]) out.contacts.push_back(c);
+  }
+  std::sort(out.contacts.begin(), out.contacts.end(),
+            [](const Contact& x, const Contact& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+  st.objects = static_cast<long long>(out.objects.size());
+  st.seconds_fuse = seconds_since(t0);
+  st.seconds_total = seconds_since(t_start);
+  return out;
+}
+
+kernel::Result<kernel::CsgModel> city_model(const std::vector<AssembledObject>& objects) {
+  std::vector<const kernel::CsgModel*> models;
+  for (const AssembledObject& o : objects) models.push_back(&o.model);
+  if (models.empty()) {
+    kernel::CsgModel empty;
+    auto compound = kernel::ShapeFactory::compound({});
+    if (!compound.ok()) return compound.error();
+    empty.shape = compound.value();
+    return empty;
+  }
+  auto model = detail::stacked_model(models);
+  if (!model.ok()) return model;
+  if (auto s = kernel::check_csg(model.value()); !s.ok()) return s.error();
+  return model;
+}
+
+}  // namespace csgtile::assembly

@@ -1,0 +1,411 @@
+// City-scale assembly: broad phase, OpenVDB culling (never misses a contact), objects and
+// their volumes against independent computations, thread and tiling independence.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+
+#include "broad_phase.h"
+#include "csgtile/assembly/assembly.h"
+#include "csgtile/assembly/voxel_cull.h"
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
+#include "random_city.h"
+#include "random_shapes.h"
+#include "test_support.h"
+
+namespace csgtile::assembly {
+namespace {
+
+using kernel::BoundingBox;
+using kernel::Interference;
+using kernel::PrimitiveSpec;
+using kernel::PrimitiveType;
+using kernel::Vec2;
+using kernel::Vec3;
+
+std::vector<AssemblyPrimitive> labelled(const std::vector<PrimitiveSpec>& specs) {
+  std::vector<AssemblyPrimitive> out;
+  for (std::size_t i = 0; i < specs.size(); ++i) out.push_back({specs[i], "p" + std::to_string(i)});
+  return out;
+}
+
+TEST(BroadPhase, FindsExactlyTheOverlappingBoxes) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 100), s(0, 8);
+  std::vector<BoundingBox> boxes(400);
+  for (auto& b : boxes) {
+    const Vec3 p(u(rng), u(rng), u(rng) / 10);
+    b.add(p);
+    b.add(p + Vec3(s(rng), s(rng), s(rng)));
+  }
+  std::set<std::pair<int, int>> brute;
+  for (int i = 0; i < 400; ++i) {
+    for (int j = i + 1; j < 400; ++j) {
+      if (boxes[static_cast<std::size_t>(i)].intersects(boxes[static_cast<std::size_t>(j)])) brute.insert({i, j});
+    }
+  }
+  const auto pairs = detail::overlapping_boxes(boxes);
+  const std::set<std::pair<int, int>> found(pairs.begin(), pairs.end());
+  EXPECT_EQ(found, brute);
+  EXPECT_TRUE(std::is_sorted(pairs.begin(), pairs.end()));
+  EXPECT_GT(brute.size(), 50u);
+}
+
+// A random primitive of a type whose sections with the others the kernel computes, in a
+// random rotation (sizes 0.5–3).
+PrimitiveSpec random_part(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  static const PrimitiveType types[] = {PrimitiveType::Box, PrimitiveType::Cylinder, PrimitiveType::Sphere,
+                                        PrimitiveType::Extrusion, PrimitiveType::Cone};
+  PrimitiveSpec s;
+  s.type = types[std::uniform_int_distribution<int>(0, 4)(rng)];
+  s.size = Vec3(0.5 + 2.5 * u(rng), 0.5 + 2.5 * u(rng), 0.5 + 2.5 * u(rng));
+  s.radius = 0.3 + 1.2 * u(rng);
+  s.radius2 = s.radius * u(rng) * 0.9;
+  s.height = 0.5 + 2.5 * u(rng);
+  s.profile = {Vec2(0, 0), Vec2(2, 0), Vec2(2, 1), Vec2(1, 1), Vec2(1, 2), Vec2(0, 2)};
+  const Vec3 axis(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+  s.placement = kernel::Location::rotation(Vec3::Zero(), axis, 6.3 * u(rng));
+  return s;
+}
+
+// Property: pairs brought to the edge of contact (bisection on the exact test along a random
+// direction, then a random offset of up to ±15% of a voxel) are never culled when the exact
+// test finds them in contact; pairs well apart are culled.
+TEST(VoxelCulling, NeverCullsAPairInContact) {
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int pairs = 100 * test::property_scale();
+  int in_contact = 0, apart = 0, apart_culled = 0, skipped = 0;
+  kernel::BooleanOptions bopt;
+  for (int k = 0; k < pairs; ++k) {
+    const double voxel = 0.1 + 0.5 * u(rng);
+    const PrimitiveSpec a = random_part(rng);
+    PrimitiveSpec b = random_part(rng);
+    const auto sa = kernel::build_primitive(a), sb0 = kernel::build_primitive(b);
+    ASSERT_TRUE(sa.ok() && sb0.ok());
+    Vec3 dir(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+    dir.normalize();
+    // b moved by t·dir: in contact at t = 0 (centres together), apart at t = 20.
+    auto at = [&](double t) {
+      return sb0.value().moved(kernel::Location::translation(dir * t));
+    };
+    double lo = 0, hi = 20;
+    bool ok = true;
+    for (int it = 0; it < 18 && ok; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      auto r = kernel::solid_interference(sa.value(), at(mid), bopt);
+      if (!r.ok()) ok = false;
+      else (r.value() == Interference::Disjoint ? hi : lo) = mid;
+    }
+    if (!ok) {
+      ++skipped;
+      continue;
+    }
+    const double t = lo + (2 * u(rng) - 1) * 0.15 * voxel;
+    const kernel::Shape moved = at(t);
+    auto verdict = kernel::solid_interference(sa.value(), moved, bopt);
+    if (!verdict.ok()) {
+      ++skipped;
+      continue;
+    }
+    const kernel::Shape far = at(lo + 2 * std::sqrt(3.0) * voxel + 0.6 * voxel + 0.01);
+    VoxelCuller culler(voxel, bopt.tolerance);
+    culler.build({sa.value(), moved, far});
+    if (verdict.value() != Interference::Disjoint) {
+      ++in_contact;
+      EXPECT_TRUE(culler.may_meet(0, 1)) << "pair " << k << " in contact (" << kernel::interference_name(verdict.value())
+                                         << ") was culled at voxel " << voxel;
+    }
+    ++apart;
+    apart_culled += culler.may_meet(0, 2) ? 0 : 1;
+  }
+  EXPECT_GT(in_contact, pairs / 4);
+  EXPECT_LT(skipped, pairs / 4);
+  // Moved on by more than both margins along the direction, most pairs are culled (only
+  // most: the gap grows by less than the move where the direction is oblique to it). A
+  // measure of usefulness, not of safety.
+  EXPECT_GT(apart_culled, apart * 9 / 10);
+}
+
+// Union of axis-aligned boxes by coordinate compression: an exact, independent volume.
+double union_volume(const std::vector<PrimitiveSpec>& boxes) {
+  std::vector<double> xs, ys, zs;
+  std::vector<BoundingBox> bb;
+  for (const auto& s : boxes) {
+    BoundingBox b;
+    b.add(s.placement.apply_point(Vec3::Zero()));
+    b.add(s.placement.apply_point(s.size));
+    bb.push_back(b);
+    xs.insert(xs.end(), {b.min.x(), b.max.x()});
+    ys.insert(ys.end(), {b.min.y(), b.max.y()});
+    zs.insert(zs.end(), {b.min.z(), b.max.z()});
+  }
+  for (auto* v : {&xs, &ys, &zs}) {
+    std::sort(v->begin(), v->end());
+    v->erase(std::unique(v->begin(), v->end()), v->end());
+  }
+  double volume = 0;
+  for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
+    for (std::size_t j = 0; j + 1 < ys.size(); ++j) {
+      for (std::size_t k = 0; k + 1 < zs.size(); ++k) {
+        const Vec3 c(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]), 0.5 * (zs[k] + zs[k + 1]));
+        for (const auto& b : bb) {
+          if (b.contains(c)) {
+            volume += (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]) * (zs[k + 1] - zs[k]);
+            break;
+          }
+        }
+      }
+    }
+  }
+  return volume;
+}
+
+TEST(Assembly, BoxCityVolumeEqualsExactUnion) {
+  test::CityOptions o;
+  o.axis_aligned_boxes_only = true;
+  const auto specs = test::random_city(120, 5, o);
+  auto a = assemble(labelled(specs));
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  double volume = 0;
+  for (const auto& obj : a->objects) {
+    EXPECT_TRUE(obj.fused) << obj.id << ": " << obj.error;
+    volume += obj.volume;
+  }
+  const double exact = union_volume(specs);
+  EXPECT_NEAR(volume, exact, 1e-9 * exact);
+  EXPECT_GT(a->stats.interacting_pairs, 5);
+  EXPECT_LT(a->stats.objects, 120);
+}
+
+// Point in a primitive from its parameters alone (no kernel geometry): the Monte-Carlo
+// oracle for mixed cities (boxes, L extrusions, columns).
+bool inside(const PrimitiveSpec& s, const Vec3& world) {
+  const Vec3 p = s.placement.inverse().apply_point(world);
+  switch (s.type) {
+    case PrimitiveType::Box:
+      return (p.array() >= 0).all() && (p.array() <= s.size.array()).all();
+    case PrimitiveType::Cylinder:
+      return p.z() >= 0 && p.z() <= s.height && p.head<2>().norm() <= s.radius;
+    case PrimitiveType::Extrusion: {
+      if (p.z() < 0 || p.z() > s.height) return false;
+      bool in = false;
+      const auto& poly = s.profile;
+      for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+        if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
+            p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x()) {
+          in = !in;
+        }
+      }
+      return in;
+    }
+    default:
+      ADD_FAILURE() << "no oracle for this type";
+      return false;
+  }
+}
+
+TEST(Assembly, MixedCityVolumeMatchesMonteCarlo) {
+  const auto specs = test::random_city(80, 9);
+  auto a = assemble(labelled(specs));
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  std::mt19937_64 rng(3);
+  double estimate = 0, variance = 0, volume = 0;
+  int multi = 0;
+  for (const auto& obj : a->objects) {
+    ASSERT_TRUE(obj.fused) << obj.id << ": " << obj.error;
+    volume += obj.volume;
+    if (obj.primitives.size() == 1) {
+      estimate += obj.volume;  // a lone primitive: the kernel's closed-form volume
+      continue;
+    }
+    ++multi;
+    // Samples in the object's box: the share inside any of its primitives.
+    const BoundingBox& b = obj.box;
+    std::uniform_real_distribution<double> ux(b.min.x(), b.max.x()), uy(b.min.y(), b.max.y()), uz(b.min.z(), b.max.z());
+    const int samples = 40000;
+    int hits = 0;
+    for (int k = 0; k < samples; ++k) {
+      const Vec3 p(ux(rng), uy(rng), uz(rng));
+      for (int i : obj.primitives) {
+        if (inside(specs[static_cast<std::size_t>(i)], p)) {
+          ++hits;
+          break;
+        }
+      }
+    }
+    const double box_volume = b.size().prod(), share = static_cast<double>(hits) / samples;
+    estimate += box_volume * share;
+    variance += box_volume * box_volume * share * (1 - share) / samples;
+  }
+  ASSERT_GT(multi, 3);
+  EXPECT_NEAR(volume, estimate, 4 * std::sqrt(variance)) << "σ = " << std::sqrt(variance);
+}
+
+std::string model_bytes(const std::vector<AssembledObject>& objects) {
+  auto m = city_model(objects);
+  EXPECT_TRUE(m.ok()) << m.error().message;
+  return m.ok() ? kernel::write_native_model(m.value()) : std::string();
+}
+
+TEST(Assembly, OutputDoesNotDependOnThreadsOrCulling) {
+  const auto prims = labelled(test::random_city(150, 21));
+  AssemblyOptions one, two, nocull, nobroad;
+  one.threads = 1;
+  two.threads = 2;
+  nocull.voxel_culling = false;
+  nobroad.broad_phase = false;
+  auto a1 = assemble(prims, one), a2 = assemble(prims, two), a3 = assemble(prims, nocull), a4 = assemble(prims, nobroad);
+  ASSERT_TRUE(a1.ok() && a2.ok() && a3.ok() && a4.ok());
+  const std::string bytes = model_bytes(a1->objects);
+  EXPECT_EQ(bytes, model_bytes(a2->objects));
+  EXPECT_EQ(bytes, model_bytes(a3->objects));
+  EXPECT_EQ(bytes, model_bytes(a4->objects));
+  // Culling only removed pairs that the exact test would have called disjoint.
+  EXPECT_EQ(a1->stats.interacting_pairs, a3->stats.interacting_pairs);
+  EXPECT_GT(a1->stats.culled_pairs, 0);
+  EXPECT_EQ(a3->stats.culled_pairs, 0);
+  EXPECT_EQ(a4->stats.candidate_pairs, 150 * 149 / 2);
+  EXPECT_LE(a1->stats.exact_tests, a3->stats.exact_tests);
+}
+
+// Object identity for comparing assemblies: id, primitives, volume bits.
+std::map<std::string, std::pair<std::vector<int>, double>> by_id(const std::vector<AssembledObject>& objects) {
+  std::map<std::string, std::pair<std::vector<int>, double>> out;
+  for (const auto& o : objects) out[o.id] = {o.primitives, o.volume};
+  return out;
+}
+
+TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
+  const auto prims = labelled(test::random_city(200, 77));
+  auto whole = assemble(prims);
+  ASSERT_TRUE(whole.ok());
+  const auto expected = by_id(whole->objects);
+  double max_extent = 0;
+  for (const auto& o : whole->objects) max_extent = std::max({max_extent, o.box.size().x(), o.box.size().y()});
+  for (double size : {25.0, 40.0, 95.0}) {
+    CellSpec grid;
+    grid.size = size;
+    grid.halo = max_extent + 1;
+    BoundingBox all;
+    for (const auto& o : whole->objects) all.add(o.box);
+    const auto [i0, j0] = cell_of(grid, all.min.x(), all.min.y());
+    const auto [i1, j1] = cell_of(grid, all.max.x(), all.max.y());
+    std::map<std::string, std::pair<std::vector<int>, double>> got;
+    int published = 0;
+    for (long long i = i0; i <= i1; ++i) {
+      for (long long j = j0; j <= j1; ++j) {
+        grid.i = i;
+        grid.j = j;
+        AssemblyOptions options;
+        options.cell = grid;
+        auto cell = assemble(prims, options);
+        ASSERT_TRUE(cell.ok());
+        EXPECT_EQ(cell->stats.objects_past_halo, 0);
+        for (const auto& o : cell->objects) {
+          ++published;
+          EXPECT_TRUE(got.emplace(o.id, std::make_pair(o.primitives, o.volume)).second) << o.id << " published twice";
+          const auto [ci, cj] = cell_of(grid, o.box.min.x(), o.box.min.y());
+          EXPECT_EQ(ci, i);
+          EXPECT_EQ(cj, j);
+        }
+      }
+    }
+    EXPECT_EQ(got, expected) << "cell size " << size;
+    EXPECT_EQ(published, static_cast<int>(expected.size()));
+  }
+}
+
+TEST(Assembly, ObjectPastTheHaloIsReported) {
+  // A 60 m wall of three overlapping boxes across cells of 10 m with a 5 m halo.
+  std::vector<PrimitiveSpec> specs;
+  for (int k = 0; k < 3; ++k) {
+    PrimitiveSpec s;
+    s.size = Vec3(22, 1, 3);
+    s.placement = kernel::Location::translation(Vec3(20.0 * k, 0.5, 0));
+    specs.push_back(s);
+  }
+  AssemblyOptions options;
+  options.cell = CellSpec{0, 0, 10, 0, 0, 5};
+  auto a = assemble(labelled(specs), options);
+  ASSERT_TRUE(a.ok());
+  ASSERT_EQ(a->objects.size(), 1u);
+  EXPECT_TRUE(a->objects[0].reaches_past_halo);
+  EXPECT_EQ(a->stats.objects_past_halo, 1);
+  ASSERT_FALSE(a->problems.empty());
+  EXPECT_NE(a->problems.back().find("reaches past the halo"), std::string::npos);
+}
+
+TEST(Assembly, BadPrimitiveIsReportedAndTheRestAssembled) {
+  auto specs = test::random_city(10, 1);
+  specs[3].size = Vec3(-1, 2, 2);
+  specs[3].type = PrimitiveType::Box;
+  auto a = assemble(labelled(specs));
+  ASSERT_TRUE(a.ok());
+  EXPECT_EQ(a->stats.primitives_failed, 1);
+  ASSERT_FALSE(a->problems.empty());
+  EXPECT_NE(a->problems.front().find("p3"), std::string::npos);
+  for (const auto& o : a->objects) {
+    EXPECT_EQ(std::count(o.primitives.begin(), o.primitives.end(), 3), 0);
+  }
+}
+
+TEST(Assembly, BadOptionsAreNamed) {
+  AssemblyOptions o;
+  o.voxel_size = 0;
+  auto a = assemble({}, o);
+  ASSERT_FALSE(a.ok());
+  EXPECT_NE(a.error().message.find("voxel size"), std::string::npos);
+  o = {};
+  o.cell = CellSpec{0, 0, -5, 0, 0, 1};
+  a = assemble({}, o);
+  ASSERT_FALSE(a.ok());
+  EXPECT_NE(a.error().message.find("cell size"), std::string::npos);
+}
+
+TEST(Assembly, CityModelKeepsEveryObjectsTree) {
+  const auto prims = labelled(test::random_city(40, 4));
+  auto a = assemble(prims);
+  ASSERT_TRUE(a.ok());
+  auto m = city_model(a->objects);
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_TRUE(kernel::check_csg(m.value()).ok());
+  // One leaf per primitive, one n-ary fuse per multi-primitive object, one root.
+  std::size_t leaves = 0;
+  for (const auto& node : m->nodes) leaves += node.kind == kernel::CsgNodeKind::Primitive;
+  EXPECT_EQ(leaves, prims.size());
+  EXPECT_EQ(m->shape.child_count(), a->objects.size());  // a compound of objects
+  auto back = kernel::read_native_model(kernel::write_native_model(m.value()));
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->nodes.size(), m->nodes.size());
+}
+
+TEST(Interference, NamesDisjointTouchingOverlappingAndNested) {
+  auto box = [](double x, double s) {
+    return kernel::make_box(s, s, s).value().moved(kernel::Location::translation(Vec3(x, x < 2 ? x : 0, x < 2 ? x : 0)));
+  };
+  auto check = [&](double x, double s, Interference want) {
+    auto r = kernel::solid_interference(box(0, 2), box(x, s));
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r.value(), want) << x << " " << s;
+  };
+  check(3, 1, Interference::Disjoint);
+  check(2, 1, Interference::BoundariesMeet);  // face contact
+  check(1.5, 1, Interference::BoundariesMeet);  // overlap
+  check(0.5, 0.5, Interference::Nested);      // strictly inside
+  auto sphere = kernel::make_sphere(0.5).value().moved(kernel::Location::translation(Vec3(1, 1, 1)));
+  auto r = kernel::solid_interference(box(0, 2), sphere);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r.value(), Interference::Nested);
+}
+
+}  // namespace
+}  // namespace csgtile::assembly
