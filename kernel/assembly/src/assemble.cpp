@@ -164,10 +164,8 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   }
   std::vector<std::pair<int, int>> survivors;
   if (options.voxel_culling && !candidates.empty()) {
-    std::vector<bool> needed(n, false);
-    for (const auto& [a, b] : candidates) needed[static_cast<std::size_t>(a)] = needed[static_cast<std::size_t>(b)] = true;
     VoxelCuller culler(options.voxel_size, options.tolerance);
-    culler.build(shapes, needed);
+    culler.build(shapes, candidates);
     for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
     std::vector<char> keep(candidates.size(), 0);
     tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {

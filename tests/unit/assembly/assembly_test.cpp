@@ -83,7 +83,7 @@ TEST(VoxelCulling, NeverCullsAPairInContact) {
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const int pairs = 100 * test::property_scale();
-  int in_contact = 0, apart = 0, apart_culled = 0, skipped = 0;
+  int in_contact = 0, apart = 0, apart_culled = 0, skipped = 0, nested_pairs = 0;
   kernel::BooleanOptions bopt;
   for (int k = 0; k < pairs; ++k) {
     const double voxel = 0.1 + 0.5 * u(rng);
@@ -117,8 +117,16 @@ TEST(VoxelCulling, NeverCullsAPairInContact) {
       continue;
     }
     const kernel::Shape far = at(lo + 2 * std::sqrt(3.0) * voxel + 0.6 * voxel + 0.01);
+    // A small ball at a's centroid: nested in a when the centroid is inside (boundaries apart).
+    const kernel::Shape ball = kernel::make_sphere(0.05).value().moved(
+        kernel::Location::translation(kernel::mass_properties(sa.value()).centroid));
+    auto nested = kernel::solid_interference(sa.value(), ball, bopt);
     VoxelCuller culler(voxel, bopt.tolerance);
-    culler.build({sa.value(), moved, far});
+    culler.build({sa.value(), moved, far, ball}, {{0, 1}, {0, 2}, {0, 3}});
+    if (nested.ok() && nested.value() == Interference::Nested) {
+      ++nested_pairs;
+      EXPECT_TRUE(culler.may_meet(0, 3)) << "pair " << k << ": nested ball culled";
+    }
     if (verdict.value() != Interference::Disjoint) {
       ++in_contact;
       EXPECT_TRUE(culler.may_meet(0, 1)) << "pair " << k << " in contact (" << kernel::interference_name(verdict.value())
@@ -128,6 +136,7 @@ TEST(VoxelCulling, NeverCullsAPairInContact) {
     apart_culled += culler.may_meet(0, 2) ? 0 : 1;
   }
   EXPECT_GT(in_contact, pairs / 4);
+  EXPECT_GT(nested_pairs, pairs / 4);
   EXPECT_LT(skipped, pairs / 4);
   // Moved on by more than both margins along the direction, most pairs are culled (only
   // most: the gap grows by less than the move where the direction is oblique to it). A

@@ -1,13 +1,17 @@
 #pragma once
 /// \file
-/// OpenVDB overlap culling: each solid's interior, dilated by a margin that covers the voxel
-/// size, the tessellation error and the tolerance, as a sparse voxel mask on one grid shared
-/// by all solids. Two solids whose masks share no voxel cannot meet: culling is conservative
-/// by construction (a point common to both lies in a voxel whose centre is within half a
-/// voxel diagonal of both solids, and both masks hold every voxel centre that close).
+/// OpenVDB overlap culling. Two solids are in contact only if their boundaries meet or one
+/// lies inside the other — and then its bounding box lies inside the other's. So each solid
+/// is voxelised as a shell: the voxels whose centres lie within a margin of its boundary
+/// (of its tessellation, by exact point–triangle distances), kept in a sparse OpenVDB mask
+/// and only where candidate partners' boxes are; the margin covers half a voxel diagonal, the tessellation error and
+/// the contact tolerance. A pair may meet when the shells share a voxel or one box holds
+/// the other. Culling is conservative by construction: a point common to both boundaries
+/// lies in a voxel whose centre is within half a diagonal of both, so both shells hold it.
 
 #include <cstddef>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "csgtile/kernel/shape.h"
@@ -22,16 +26,17 @@ class VoxelCuller {
   VoxelCuller(VoxelCuller&&) noexcept;
   VoxelCuller& operator=(VoxelCuller&&) noexcept;
 
-  /// Voxelises shapes[i] wherever needed[i] (all when `needed` is empty), in parallel.
-  /// A shape that cannot be tessellated is kept whole (it may meet anything its box meets).
-  void build(const std::vector<kernel::Shape>& shapes, const std::vector<bool>& needed = {});
+  /// Voxelises, in parallel, each shape that takes part in a candidate pair (indices into
+  /// `shapes`), where its partners' boxes are. A shape that cannot be tessellated is kept
+  /// whole (it may meet anything).
+  void build(const std::vector<kernel::Shape>& shapes, const std::vector<std::pair<int, int>>& pairs);
 
-  /// False only when the dilated interiors of shapes i and j share no voxel.
+  /// False only when shapes i and j cannot be in contact (see the file comment).
   bool may_meet(std::size_t i, std::size_t j) const;
 
-  /// Active voxels of shape i's mask (0 when not voxelised or kept whole).
+  /// Active voxels of shape i's shell (0 when not voxelised).
   long long active_voxels(std::size_t i) const;
-  /// The dilation margin every mask carries (world units).
+  /// The margin of the shells (world units).
   double margin() const;
   /// Shapes kept whole because they could not be voxelised.
   std::size_t unvoxelised() const;
