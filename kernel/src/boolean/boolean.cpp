@@ -446,6 +446,18 @@ class BooleanEngine {
   Status add_section(std::size_t fa, std::size_t fb, const CurvePtr& curve, double t0, double t1,
                      int existing, const Curve2dPtr& hint_a = nullptr,
                      const Curve2dPtr& hint_b = nullptr, double edge_tolerance = 0.0) {
+    // A closed section lying along a closed boundary edge of one face (a dome's equator on
+    // its drum's rim): that edge lies in the other face. Matched here because the two
+    // circles' vertices need not coincide, so find_edge cannot see they are one.
+    if (existing < 0) {
+      for (auto [own, other] : {std::pair{fa, fb}, std::pair{fb, fa}}) {
+        const int e = closed_boundary_edge_along(own, *curve, t0, t1);
+        if (e >= 0) {
+          const BEdge be = model_.edges[static_cast<std::size_t>(e)];
+          return add_section(other, own, be.curve, be.t0, be.t1, e);
+        }
+      }
+    }
     const double fit_tol = fit_tolerance(options_.tolerance);
     Curve2dPtr pa = hint_a ? hint_a : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
     Curve2dPtr pb = existing >= 0 ? nullptr
@@ -647,6 +659,28 @@ class BooleanEngine {
   }
 
   // An existing edge between v0 and v1 through all of `probes`, or -1.
+  // A closed boundary edge of face f that runs along the whole closed curve(t0..t1) (each
+  // within tolerance of the other at 8 samples), or -1.
+  int closed_boundary_edge_along(std::size_t f, const Curve& curve, double t0, double t1) {
+    const double tol = options_.tolerance;
+    if ((curve.point(t0) - curve.point(t1)).norm() > tol) return -1;
+    for (const BLoop& loop : model_.faces[f].loops) {
+      for (const BUse& u : loop) {
+        const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+        if (e.degenerate() || e.v0 != e.v1) continue;
+        bool along = true;
+        for (int k = 0; k < 8 && along; ++k) {
+          const Vec3 p = curve.point(t0 + (t1 - t0) * (k + 0.5) / 8);
+          const Vec3 q = e.curve->point(e.t0 + (e.t1 - e.t0) * (k + 0.5) / 8);
+          along = (e.curve->point(e.curve->closest_parameter(p, e.t0, e.t1)) - p).norm() <= tol &&
+                  (curve.point(curve.closest_parameter(q, t0, t1)) - q).norm() <= tol;
+        }
+        if (along) return u.edge;
+      }
+    }
+    return -1;
+  }
+
   int find_edge(int v0, int v1, const std::vector<Vec3>& probes) {
     for (std::size_t i = 0; i < model_.edges.size(); ++i) {
       const BEdge& e = model_.edges[i];

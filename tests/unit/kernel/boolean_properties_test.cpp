@@ -248,6 +248,29 @@ TEST(BooleanDegenerate, ClosedEdgePartAcrossItsVertex) {
   }
 }
 
+// A dome on its drum: the sphere's equator is the cylinder's top rim (a closed section along
+// a closed boundary edge, whose vertices need not coincide), the drum's side tangent to the
+// sphere there. Regression: csgtile synth city-block's hall (free edges before). Volumes in
+// closed form, with the sphere poking below the drum's base (h < r) and not (h > r).
+TEST(BooleanDegenerate, DomeOnItsDrumSharesTheRim) {
+  for (const auto& [r, h] : {std::pair{1.0, 2.0}, std::pair{9.0, 8.216579051747157}}) {
+    SCOPED_TRACE("r " + std::to_string(r) + " h " + std::to_string(h));
+    const Location at = Location::translation(Vec3(-30, -28, 0));
+    const Shape drum = make_cylinder(r, h).value().moved(at);
+    const Shape dome = make_sphere(r).value().moved(at * Location::translation(Vec3(0, 0, h)));
+    const double pi = std::numbers::pi, hemisphere = 2.0 / 3.0 * pi * r * r * r;
+    const double below = h < r ? pi * (r - h) * (r - h) * (3 * r - (r - h)) / 3 : 0.0;  // cap under z = 0
+    const std::tuple<BooleanOp, double> expected[] = {{BooleanOp::Fuse, pi * r * r * h + hemisphere + below},
+                                                      {BooleanOp::Common, hemisphere - below},
+                                                      {BooleanOp::Cut, pi * r * r * h - hemisphere + below}};
+    for (const auto& [op, want] : expected) {
+      const Shape result = valid(boolean_operation(drum, dome, op), boolean_op_name(op));
+      ASSERT_FALSE(result.is_null());
+      EXPECT_NEAR(volume(result), want, 1e-9 * want) << boolean_op_name(op);
+    }
+  }
+}
+
 // Two cylinders of different radii crossing at right angles: a quartic section with no
 // closed form, traced. Volumes against the integral V(A ∩ B) = ∫ 4·√(1 − y²)·√(r² − y²) dy.
 TEST(BooleanTraced, UnequalCrossingCylinders) {
