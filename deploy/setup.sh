@@ -18,11 +18,21 @@ packages=(
   libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev
   # worker and command line
   libcli11-dev libsqlite3-dev libssl-dev
+  # PostgreSQL job queue: libpq; its tests start a real server (and make TLS certificates)
+  libpq-dev postgresql-15 openssl
   # tests and benchmarks
   libgtest-dev libgmock-dev googletest libbenchmark-dev python3
   # topology index checks: ogrinfo and GDAL's GeoPackage validator (validate_gpkg.py)
   gdal-bin python3-gdal
 )
+
+# CityJSON schema and glTF checks: ajv-cli and gltf-validator from npm (deploy/run-tests.sh
+# installs them into build/npm).
+# Node.js and npm come from Debian unless both are on the PATH already: Debian's npm package
+# conflicts with other builds of nodejs (e.g. NodeSource's, which bundles npm).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -62,6 +62,8 @@ Config from_document(const json& document) {
   read(document, "queue", "postgres_dsn", config.queue.postgres_dsn);
   read(document, "queue", "max_attempts", config.queue.max_attempts);
   read(document, "queue", "lease_seconds", config.queue.lease_seconds);
+  read(document, "queue", "postgres_sslmode", config.queue.postgres_sslmode);
+  read(document, "queue", "postgres_sslrootcert", config.queue.postgres_sslrootcert);
   read_enum(document, "log", "level", kLevelNames, config.log.level);
   read_enum(document, "log", "format", kFormatNames, config.log.format);
   return config;
@@ -140,7 +142,9 @@ std::string to_json(const Config& config) {
                   {"sqlite_path", config.queue.sqlite_path},
                   {"postgres_dsn", config.queue.postgres_dsn},
                   {"max_attempts", config.queue.max_attempts},
-                  {"lease_seconds", config.queue.lease_seconds}};
+                  {"lease_seconds", config.queue.lease_seconds},
+                  {"postgres_sslmode", config.queue.postgres_sslmode},
+                  {"postgres_sslrootcert", config.queue.postgres_sslrootcert}};
   out["log"] = {{"level", std::string(to_string(config.log.level))},
                 {"format", std::string(to_string(config.log.format))}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so

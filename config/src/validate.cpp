@@ -71,7 +71,9 @@ std::string join_strings(const json& values) {
   std::string out;
   for (const json& value : values) {
     if (!out.empty()) out += ", ";
-    out += value.is_string() ? value.get<std::string>() : value.dump();
+    // An empty name is shown quoted, as "".
+    const bool plain = value.is_string() && !value.get<std::string>().empty();
+    out += plain ? value.get<std::string>() : value.dump();
   }
   return out;
 }

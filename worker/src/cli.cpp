@@ -21,6 +21,7 @@ int run_cli(int argc, char** argv) {
   detail::register_synth(app, action);
   detail::register_query(app, action);
   detail::register_assemble(app, action);
+  detail::register_inspect(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "csgtile/worker/run.h"
+#include "stop_signal.h"
 
 namespace csgtile::worker::detail {
 
@@ -25,10 +26,22 @@ void register_run(CLI::App& app, Action& action) {
       const config::Config& cfg = *loaded.config;
       Logger log(cfg.log.level, cfg.log.format);
       RunSummary summary;
+      install_stop_signals();
       const Failure failure = run_embedded(cfg, log, summary);
       if (!failure.ok()) {
         log.error("run", failure.message, {{"error", error_info(failure.code).name}});
         return error_info(failure.code).exit_code;
+      }
+      if (summary.stopped) {
+        if (*json) {
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
+                                              {"done", summary.counts.done},
+                                              {"unfinished", summary.counts.unfinished()}}.dump() << "\n";
+        } else {
+          std::cout << "run " << cfg.run.name << " stopped: " << summary.counts.done << " job(s) done, "
+                    << summary.counts.unfinished() << " left in the queue; run again to resume\n";
+        }
+        return 0;
       }
       if (*json) {
         nlohmann::ordered_json out;

@@ -14,7 +14,11 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
+#include "export/cityjson_seq.h"
 #include "export/run_index.h"
+#include "export/tileset.h"
+#include "queue/heartbeat.h"
+#include "stop_signal.h"
 
 namespace csgtile::worker {
 
@@ -115,21 +119,10 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
 }
 
 Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
-  if (config.queue.backend != config::QueueBackend::Sqlite) {
-    return {ErrorCode::Unsupported,
-            "queue.backend \"" + std::string(config::to_string(config.queue.backend)) +
-                "\" is not available in this build; `csgtile run` uses the embedded sqlite queue"};
-  }
   const std::filesystem::path output = config.run.output;
   summary.run_dir = output / "runs" / config.run.name;
-  const std::filesystem::path queue_path =
-      config.queue.sqlite_path.empty() ? output / "queue.sqlite" : std::filesystem::path(config.queue.sqlite_path);
-  QueuePolicy policy;
-  policy.max_attempts = config.queue.max_attempts;
-  policy.lease = std::chrono::seconds(config.queue.lease_seconds);
-  policy.seed = config.run.seed;
   Failure failure;
-  auto queue = open_sqlite_queue(queue_path, policy, failure);
+  auto queue = open_queue(config, failure);
   if (!queue) return failure;
 
   std::size_t added = 0;
@@ -140,10 +133,18 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
     if (!failure.ok()) return failure;
   }
   log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
-                               {"queue", queue_path.string()}});
+                               {"queue", describe_queue(config)}});
 
   const std::string worker_id = "local-" + std::to_string(getpid());
   while (true) {
+    if (stop_requested()) {
+      // Drain: nothing more is claimed; the queue keeps the rest for the next run.
+      summary.counts = queue->counts(failure);
+      summary.stopped = true;
+      log.info("run", "stopped by signal", {{"done", std::to_string(summary.counts.done)},
+                                            {"unfinished", std::to_string(summary.counts.unfinished())}});
+      return failure;
+    }
     auto job = queue->claim(worker_id, failure);
     if (!failure.ok()) return failure;
     if (!job) {
@@ -156,8 +157,16 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
     }
     const auto start = std::chrono::steady_clock::now();
     std::string result;
+    // The lease is renewed every third of its length while the job runs.
+    LeaseHeartbeat heartbeat(*queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
     Failure job_failure = run_build_job(*job, summary.run_dir, config, result);
+    heartbeat.stop();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (heartbeat.lost()) {
+      // Another worker holds the job now (fencing): this attempt's outcome is not recorded.
+      log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+      continue;
+    }
     if (job_failure.ok()) {
       queue->complete(*job, result, failure);
       log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
@@ -175,15 +184,39 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   summary.dead = queue->dead_jobs(failure);
   const auto results = queue->results(failure);
   if (!failure.ok()) return failure;
-  // The run's topology index (export/run_index.h), published before the manifest names it.
+  // The run's exports (export/), published before the manifest names them.
+  RunObjects objects;
+  if (Failure f = collect_run_objects(config, results, summary.run_dir, objects); !f.ok())
+    return f;
   RunIndexReport index;
-  if (Failure f = write_run_index(config, results, summary.run_dir, index); !f.ok()) return f;
+  if (Failure f = write_run_index(config, objects, summary.run_dir, index); !f.ok()) return f;
   log.info("index", "written",
            {{"key", index.key},
             {"objects", std::to_string(index.stats.objects)},
             {"bytes", std::to_string(index.bytes)},
             {"seconds", std::to_string(index.seconds)}});
   for (const std::string& w : index.stats.warnings) log.info("index", w);
+  CityJsonReport cityjson;
+  if (Failure f = write_run_cityjson(config, objects, summary.run_dir, cityjson); !f.ok())
+    return f;
+  log.info("cityjson", "written",
+           {{"key", cityjson.key},
+            {"features", std::to_string(cityjson.stats.features)},
+            {"bytes", std::to_string(cityjson.bytes)}});
+  for (const std::string& w : cityjson.stats.warnings) {
+    log.log(config::LogLevel::Warn, "cityjson", w);
+  }
+  TilesReport tiles;
+  if (Failure f = write_run_tiles(config, objects, summary.run_dir, tiles); !f.ok()) return f;
+  if (tiles.written) {
+    log.info("tiles", "written",
+             {{"key", tiles.key},
+              {"objects", std::to_string(tiles.objects)},
+              {"bytes", std::to_string(tiles.content_bytes)}});
+  } else {
+    log.info("tiles", "not written", {{"reason", tiles.skipped}});
+  }
+  for (const std::string& w : tiles.warnings) log.log(config::LogLevel::Warn, "tiles", w);
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["csgtile_version"] = CSGTILE_VERSION;
@@ -206,6 +239,27 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
                        {"relations", index.stats.relations},
                        {"unknown_relations", index.stats.unknown_relations},
                        {"warnings", index.stats.warnings}};
+  manifest["cityjson"] = {{"key", cityjson.key},
+                          {"sha256", cityjson.sha256},
+                          {"bytes", cityjson.bytes},
+                          {"features", cityjson.stats.features},
+                          {"collapsed_triangles", cityjson.stats.collapsed_triangles},
+                          {"open_objects", cityjson.stats.open_objects},
+                          {"warnings", cityjson.stats.warnings}};
+  if (tiles.written) {
+    manifest["tiles"] = {{"key", tiles.key},
+                         {"sha256", tiles.sha256},
+                         {"bytes", tiles.bytes},
+                         {"content", tiles.content},
+                         {"content_sha256", tiles.content_sha256},
+                         {"content_bytes", tiles.content_bytes},
+                         {"objects", tiles.objects},
+                         {"triangles", tiles.triangles},
+                         {"warnings", tiles.warnings}};
+  } else {
+    manifest["tiles"] = nullptr;
+    manifest["tiles_skipped"] = tiles.skipped;
+  }
   summary.manifest = summary.run_dir / "manifest.json";
   return write_file_atomic(summary.manifest, manifest.dump(2) + "\n");
 }

@@ -54,7 +54,8 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   Config expected;
   expected.run = {"demo", {"scenes/block_a.json", "scenes/block_b.json"}, "out/demo", 42, 4};
   expected.kernel = {1.0e-7, 0.005};
-  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120};
+  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120,
+                    "verify-full", "/etc/ssl/certs/csgtile-db-ca.pem"};
   expected.log = {LogLevel::Debug, LogFormat::Json};
   EXPECT_EQ(*result.config, expected);
 }
@@ -203,6 +204,28 @@ TEST(ConfigProblems, BadEnumValueFarFromAny) {
               ElementsAre(Problem{"log.level", 2,
                                   "must be one of trace, debug, info, warn, error (got string "
                                   "\"3\")"}));
+}
+
+TEST(ConfigProblems, BadSslModeListsTheEmptyChoiceQuoted) {
+  EXPECT_THAT(problems_of("queue:\n  postgres_sslmode: verify_full\n"),
+              ElementsAre(Problem{"queue.postgres_sslmode", 2,
+                                  "must be one of \"\", disable, allow, prefer, require, "
+                                  "verify-ca, verify-full (got string \"verify_full\"; did you "
+                                  "mean verify-full?)"}));
+}
+
+TEST(ConfigLoad, PostgresTlsOptions) {
+  const Config config = config_of(
+      "queue:\n  backend: postgres\n  postgres_dsn: postgresql://db.example/csgtile\n"
+      "  postgres_sslrootcert: /etc/ca.pem\n",
+      {{"CSGTILE_QUEUE__POSTGRES_SSLMODE", "verify-ca"}});
+  EXPECT_EQ(config.queue.backend, QueueBackend::Postgres);
+  EXPECT_EQ(config.queue.postgres_sslmode, "verify-ca");
+  EXPECT_EQ(config.queue.postgres_sslrootcert, "/etc/ca.pem");
+  // The password is read from the environment by the worker, not by the config.
+  EXPECT_THAT(problems_of("queue:\n  postgres_password: x\n"),
+              ElementsAre(testing::Field(&Problem::path, "queue.postgres_password")));
+  EXPECT_EQ(config_of("", {{"CSGTILE_PG_PASSWORD", "secret"}}), Config{});
 }
 
 TEST(ConfigProblems, NameOutsideItsPattern) {
@@ -449,7 +472,8 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"({"kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
             R"("log":{"format":"auto","level":"info"},)"
             R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
-            R"("postgres_dsn":"","sqlite_path":""},)"
+            R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
+            R"("sqlite_path":""},)"
             R"("run":{"inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
 }
 

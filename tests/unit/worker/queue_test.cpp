@@ -1,103 +1,156 @@
-// The SQLite job queue: states, unique keys, leases, fencing, retries and dead jobs.
+// The job queue's behaviour, the same for every backend (SQLite, PostgreSQL): states, unique
+// keys, leases, fencing, retries with seeded backoff, dead jobs, result order.
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
+#include <algorithm>
 #include <thread>
+#include <type_traits>
 
 #include "csgtile/worker/queue.h"
+#include "queue/heartbeat.h"
+#include "queue/queue_random.h"
+#include "queue_backends.h"
 
 namespace csgtile::worker {
 namespace {
 
-class SqliteQueueTest : public ::testing::Test {
+template <typename Backend>
+class JobQueueTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("csgtile-queue-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::remove_all(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void SetUp() override { CSGTILE_PREPARE_QUEUE_BACKEND(backend_); }
 
   std::unique_ptr<JobQueue> open(QueuePolicy policy = {}) {
     Failure f;
-    auto q = open_sqlite_queue(dir_ / "queue.sqlite", policy, f);
+    auto q = backend_.open(policy, f);
     EXPECT_TRUE(f.ok()) << f.message;
     return q;
   }
-  std::filesystem::path dir_;
+  Backend backend_;
 };
 
-TEST_F(SqliteQueueTest, EnqueueIsIdempotentPerKey) {
-  auto q = open();
+struct BackendNames {
+  template <typename Backend>
+  static std::string GetName(int) {
+    return std::is_same_v<Backend, test::SqliteBackend> ? "Sqlite" : "Postgres";
+  }
+};
+using Backends = ::testing::Types<test::SqliteBackend, test::PostgresBackend>;
+TYPED_TEST_SUITE(JobQueueTest, Backends, BackendNames);
+
+/// Claims a job, waiting up to a second for a retry's backoff to pass.
+std::optional<Job> claim_within_a_second(JobQueue& q, const std::string& worker, Failure& f) {
+  std::optional<Job> job;
+  for (int wait = 0; wait < 200 && !job && f.ok(); ++wait) {
+    job = q.claim(worker, f);
+    if (!job) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return job;
+}
+
+TYPED_TEST(JobQueueTest, EnqueueIsIdempotentPerKey) {
+  auto q = this->open();
   Failure f;
   EXPECT_TRUE(q->enqueue("a", "build", "{}", f));
   EXPECT_FALSE(q->enqueue("a", "build", "{}", f));
   EXPECT_TRUE(q->enqueue("b", "build", "{}", f));
   EXPECT_EQ(q->counts(f).queued, 2);
+  EXPECT_TRUE(f.ok()) << f.message;
 }
 
-TEST_F(SqliteQueueTest, ClaimCompleteAndFencing) {
-  auto q = open();
+TYPED_TEST(JobQueueTest, ClaimCompleteAndFencing) {
+  auto q = this->open();
   Failure f;
   q->enqueue("a", "build", "{\"x\":1}", f);
   auto job = q->claim("w1", f);
-  ASSERT_TRUE(job.has_value());
+  ASSERT_TRUE(job.has_value()) << f.message;
   EXPECT_EQ(job->key, "a");
+  EXPECT_EQ(job->kind, "build");
+  EXPECT_EQ(job->payload, "{\"x\":1}");
   EXPECT_EQ(job->attempts, 1);
   EXPECT_FALSE(q->claim("w2", f).has_value());  // leased
   Job stale = *job;
   stale.lease_token = "someone-else";
-  EXPECT_FALSE(q->complete(stale, "{}", f));    // a wrong token cannot complete
+  EXPECT_FALSE(q->complete(stale, "{}", f));       // a wrong token cannot complete
+  EXPECT_FALSE(q->fail(stale, "io: x", true, f));  // nor fail
   EXPECT_TRUE(q->complete(*job, "{\"ok\":true}", f));
-  EXPECT_FALSE(q->complete(*job, "{}", f));     // done once
+  EXPECT_FALSE(q->complete(*job, "{}", f));  // done once
   EXPECT_EQ(q->counts(f).done, 1);
   auto results = q->results(f);
   ASSERT_EQ(results.size(), 1u);
   EXPECT_EQ(results[0].second, "{\"ok\":true}");
+  EXPECT_TRUE(f.ok()) << f.message;
 }
 
-TEST_F(SqliteQueueTest, RetriesWithBackoffThenDies) {
+TYPED_TEST(JobQueueTest, OldestJobFirst) {
+  auto q = this->open();
+  Failure f;
+  for (const char* key : {"c", "a", "b"}) q->enqueue(key, "build", "{}", f);
+  for (const char* key : {"c", "a", "b"}) {
+    auto job = q->claim("w", f);
+    ASSERT_TRUE(job);
+    EXPECT_EQ(job->key, key);
+  }
+  EXPECT_FALSE(q->claim("w", f));
+  EXPECT_EQ(q->counts(f).running, 3);
+}
+
+TYPED_TEST(JobQueueTest, RetriesWithBackoffThenDies) {
   QueuePolicy policy;
   policy.max_attempts = 3;
   policy.backoff_base = std::chrono::milliseconds(1);
-  auto q = open(policy);
+  auto q = this->open(policy);
   Failure f;
   q->enqueue("a", "build", "{}", f);
   for (int attempt = 1; attempt <= 3; ++attempt) {
-    std::optional<Job> job;
-    for (int wait = 0; wait < 200 && !job; ++wait) {
-      job = q->claim("w", f);
-      if (!job) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ASSERT_TRUE(job.has_value()) << "attempt " << attempt;
+    const std::optional<Job> job = claim_within_a_second(*q, "w", f);
+    ASSERT_TRUE(job.has_value()) << "attempt " << attempt << " " << f.message;
     EXPECT_EQ(job->attempts, attempt);
     EXPECT_TRUE(q->fail(*job, "io: flaky", true, f));
+    if (attempt < 3) {
+      EXPECT_EQ(q->counts(f).retry, 1);
+    }
   }
   const QueueCounts c = q->counts(f);
   EXPECT_EQ(c.dead, 1);
   EXPECT_EQ(c.unfinished(), 0);
   auto dead = q->dead_jobs(f);
   ASSERT_EQ(dead.size(), 1u);
+  EXPECT_EQ(dead[0].key, "a");
   EXPECT_EQ(dead[0].last_error, "io: flaky");
   EXPECT_EQ(dead[0].attempts, 3);
+  EXPECT_TRUE(f.ok()) << f.message;
 }
 
-TEST_F(SqliteQueueTest, PermanentErrorsDieAtOnce) {
-  auto q = open();
+TYPED_TEST(JobQueueTest, RetryWaitsForItsBackoff) {
+  QueuePolicy policy;
+  policy.backoff_base = std::chrono::milliseconds(60'000);
+  auto q = this->open(policy);
+  Failure f;
+  q->enqueue("a", "build", "{}", f);
+  auto job = q->claim("w", f);
+  ASSERT_TRUE(job);
+  EXPECT_TRUE(q->fail(*job, "io: flaky", true, f));
+  EXPECT_FALSE(q->claim("w", f));  // 30 to 90 seconds away
+  EXPECT_EQ(q->counts(f).retry, 1);
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+TYPED_TEST(JobQueueTest, PermanentErrorsDieAtOnce) {
+  auto q = this->open();
   Failure f;
   q->enqueue("a", "build", "{}", f);
   auto job = q->claim("w", f);
   ASSERT_TRUE(job);
   EXPECT_TRUE(q->fail(*job, "input_invalid: bad scene", false, f));
   EXPECT_EQ(q->counts(f).dead, 1);
+  EXPECT_EQ(q->dead_jobs(f).at(0).attempts, 1);
 }
 
-TEST_F(SqliteQueueTest, ExpiredLeaseIsReclaimedAndTheOldHolderIsFenced) {
+TYPED_TEST(JobQueueTest, ExpiredLeaseIsReclaimedAndTheOldHolderIsFenced) {
   QueuePolicy policy;
   policy.lease = std::chrono::seconds(0);
-  auto q = open(policy);
+  auto q = this->open(policy);
   Failure f;
   q->enqueue("a", "build", "{}", f);
   auto first = q->claim("w1", f);
@@ -106,13 +159,68 @@ TEST_F(SqliteQueueTest, ExpiredLeaseIsReclaimedAndTheOldHolderIsFenced) {
   auto second = q->claim("w2", f);  // w1's lease has expired
   ASSERT_TRUE(second);
   EXPECT_EQ(second->attempts, 2);
+  EXPECT_NE(second->lease_token, first->lease_token);
   EXPECT_FALSE(q->complete(*first, "{}", f));  // fenced
+  EXPECT_FALSE(q->fail(*first, "io: late", true, f));
   EXPECT_TRUE(q->complete(*second, "{}", f));
+  EXPECT_TRUE(f.ok()) << f.message;
 }
 
-TEST_F(SqliteQueueTest, TwoHandlesOnOneFileNeverClaimTheSameJob) {
-  auto a = open();
-  auto b = open();
+// Heartbeat: renewing keeps a job leased past its original expiry (no one else can claim
+// it); a stale token cannot renew, nor can the holder once the job is done.
+TYPED_TEST(JobQueueTest, RenewedLeaseIsKeptAndStaleTokensCannotRenew) {
+  QueuePolicy policy;
+  policy.lease = std::chrono::seconds(1);
+  auto q = this->open(policy);
+  Failure f;
+  q->enqueue("a", "build", "{}", f);
+  auto job = q->claim("w1", f);
+  ASSERT_TRUE(job);
+  for (int beat = 0; beat < 3; ++beat) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    EXPECT_TRUE(q->renew(*job, f)) << "beat " << beat;
+  }
+  // 1.5 s after the claim, the 1 s lease still holds thanks to the renewals.
+  EXPECT_FALSE(q->claim("w2", f));
+  Job stale = *job;
+  stale.lease_token = "not-the-token";
+  EXPECT_FALSE(q->renew(stale, f));
+  EXPECT_TRUE(q->complete(*job, "{}", f));
+  EXPECT_FALSE(q->renew(*job, f));  // done: nothing to renew
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+// The heartbeat thread keeps a short lease alive across a long job, and notices a lease
+// that is gone.
+TYPED_TEST(JobQueueTest, HeartbeatKeepsALongJobLeasedAndNoticesALostLease) {
+  QueuePolicy policy;
+  policy.lease = std::chrono::seconds(1);
+  auto q = this->open(policy);
+  auto other = this->open(policy);
+  Failure f;
+  q->enqueue("a", "build", "{}", f);
+  auto job = q->claim("w1", f);
+  ASSERT_TRUE(job);
+  {
+    LeaseHeartbeat beat(*q, *job, std::chrono::milliseconds(250));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1600));  // longer than the lease
+    EXPECT_FALSE(other->claim("w2", f));
+    beat.stop();
+    EXPECT_FALSE(beat.lost());
+    EXPECT_GE(beat.beats(), 3);
+  }
+  Job stale = *job;
+  stale.lease_token = "taken-over";
+  LeaseHeartbeat lost(*q, stale, std::chrono::milliseconds(20));
+  for (int wait = 0; wait < 100 && !lost.lost(); ++wait) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(lost.lost());
+  EXPECT_TRUE(q->complete(*job, "{}", f));
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+TYPED_TEST(JobQueueTest, TwoHandlesNeverClaimTheSameJob) {
+  auto a = this->open();
+  auto b = this->open();
   Failure f;
   for (int i = 0; i < 50; ++i) a->enqueue("job-" + std::to_string(i), "build", "{}", f);
   std::vector<std::string> got_a, got_b;
@@ -128,6 +236,62 @@ TEST_F(SqliteQueueTest, TwoHandlesOnOneFileNeverClaimTheSameJob) {
   tb.join();
   EXPECT_EQ(got_a.size() + got_b.size(), 50u);
   for (const auto& k : got_a) EXPECT_EQ(std::count(got_b.begin(), got_b.end(), k), 0);
+}
+
+// Byte order, whatever the database's collation (the PostgreSQL test databases use ICU
+// en-US, which sorts these keys differently): manifests list keys the same everywhere.
+TYPED_TEST(JobQueueTest, ResultsAndDeadJobsAreInByteOrderOfKeys) {
+  auto q = this->open();
+  Failure f;
+  const std::vector<std::string> keys{"b", "B", "a_b", "aB", "\xC3\xA9", "a b", "10", "9"};
+  for (const auto& key : keys) q->enqueue(key, "build", "{}", f);
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    auto job = q->claim("w", f);
+    ASSERT_TRUE(job) << f.message;
+    if (i % 2 == 0)
+      q->complete(*job, "{}", f);
+    else
+      q->fail(*job, "input_invalid: bad", false, f);
+  }
+  std::vector<std::string> done, dead;
+  for (const auto& [key, result] : q->results(f)) done.push_back(key);
+  for (const DeadJob& job : q->dead_jobs(f)) dead.push_back(job.key);
+  EXPECT_EQ(done, (std::vector<std::string>{"10", "a_b", "b", "\xC3\xA9"}));
+  EXPECT_EQ(dead, (std::vector<std::string>{"9", "B", "a b", "aB"}));
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+// Lease tokens and retry delays come from one generator seeded with policy.seed, drawn in
+// the same order by every backend: one draw per successful claim, one per fail (dead or not).
+TYPED_TEST(JobQueueTest, SeededDrawsAreTheSameOnEveryBackend) {
+  QueuePolicy policy;
+  policy.seed = 7;
+  policy.backoff_base = std::chrono::milliseconds(1000);
+  auto q = this->open(policy);
+  const auto draw_of = [](const std::string& token) { return token.substr(token.rfind('-') + 1); };
+  Failure f;
+  q->enqueue("a", "build", "{}", f);
+  q->enqueue("b", "build", "{}", f);
+  const auto a = q->claim("w", f);
+  const auto b = q->claim("w", f);
+  ASSERT_TRUE(a && b) << f.message;
+  EXPECT_FALSE(q->claim("w", f));  // nothing to claim: no draw
+  EXPECT_TRUE(q->fail(*b, "io: flaky", true, f));
+  EXPECT_TRUE(q->fail(*a, "input_invalid: bad", false, f));
+
+  detail::QueueRandom reference(policy.seed);
+  EXPECT_EQ(draw_of(a->lease_token), draw_of(reference.lease_token("w", 0)));
+  EXPECT_EQ(draw_of(b->lease_token), draw_of(reference.lease_token("w", 0)));
+  const std::int64_t delay_b = reference.retry_delay_ms(policy, 1);
+  const std::int64_t delay_a = reference.retry_delay_ms(policy, 1);
+  EXPECT_NE(delay_a, delay_b);
+  for (const std::int64_t delay : {delay_a, delay_b}) {
+    EXPECT_GE(delay, 500);
+    EXPECT_LE(delay, 1500);
+  }
+  EXPECT_EQ(this->backend_.stored_retry_delay_ms("b"), delay_b);
+  EXPECT_EQ(this->backend_.stored_retry_delay_ms("a"), delay_a);
+  EXPECT_TRUE(f.ok()) << f.message;
 }
 
 }  // namespace

@@ -100,10 +100,10 @@ std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel
   return out;
 }
 
-Failure write_run_index(const config::Config& config,
-                        const std::vector<std::pair<std::string, std::string>>& results,
-                        const std::filesystem::path& run_dir, RunIndexReport& report) {
-  const auto start = std::chrono::steady_clock::now();
+Failure collect_run_objects(const config::Config& config,
+                            const std::vector<std::pair<std::string, std::string>>& results,
+                            const std::filesystem::path& run_dir, RunObjects& out) {
+  out = RunObjects{};
   std::map<std::string, std::string> by_key(results.begin(), results.end());
   struct Job {
     std::size_t input_index;
@@ -137,10 +137,6 @@ Failure write_run_index(const config::Config& config,
   }
 
   // One frame for all objects: the first job's origin in the common CRS.
-  IndexOptions options;
-  options.chordal_tolerance = config.kernel.chordal_tolerance;
-  options.linear_tolerance = config.kernel.linear_tolerance;
-  options.threads = config.run.threads;
   bool common_crs = !jobs.empty();
   for (const Job& job : jobs) {
     common_crs &=
@@ -148,52 +144,64 @@ Failure write_run_index(const config::Config& config,
   }
   const bool any_frame =
       std::any_of(jobs.begin(), jobs.end(), [](const Job& j) { return j.scene && j.scene->frame; });
-  std::string frame_warning;
-  kernel::Vec3 reference = kernel::Vec3::Zero();
   if (common_crs) {
     auto crs = geo::crs_from_config(jobs[0].scene->frame->crs);
     if (crs.ok() && crs->epsg > 0) {
-      geo::Crs horizontal = crs.value();
-      horizontal.vertical.reset();  // srs_id names the horizontal EPSG code
-      options.srs.srs_id = horizontal.epsg;
-      options.srs.organization = "EPSG";
-      options.srs.organization_coordsys_id = horizontal.epsg;
-      options.srs.name = horizontal.name;
-      options.srs.definition_wkt = geo::crs_to_wkt1(horizontal);
+      out.crs = std::move(crs).value();
       const auto& o = jobs[0].scene->frame->origin;
-      reference = kernel::Vec3(o[0], o[1], o[2]);
-      options.to_srs = [reference](const kernel::Vec3& p) { return kernel::Vec3(p + reference); };
+      out.origin = kernel::Vec3(o[0], o[1], o[2]);
     } else {
       common_crs = false;
     }
   }
   if (any_frame && !common_crs) {
-    frame_warning =
-        "the inputs do not share one EPSG CRS: the objects layer uses the undefined "
-        "Cartesian SRS and each scene's local coordinates";
+    out.warnings.push_back(
+        "the inputs do not share one EPSG CRS: the exports use each scene's local coordinates "
+        "without a CRS");
   }
 
-  std::vector<IndexObject> objects;
   for (const Job& job : jobs) {
     std::vector<IndexObject> mine =
         job_index_objects(job.input_index, job.model, job.scene ? &*job.scene : nullptr);
     if (common_crs) {
       const auto& o = job.scene->frame->origin;
-      const kernel::Vec3 offset = kernel::Vec3(o[0], o[1], o[2]) - reference;
+      const kernel::Vec3 offset = kernel::Vec3(o[0], o[1], o[2]) - out.origin;
       if (!offset.isZero(0.0)) {
         for (IndexObject& object : mine) {
           object.model.shape = object.model.shape.moved(kernel::Location::translation(offset));
         }
       }
     }
-    for (IndexObject& object : mine) objects.push_back(std::move(object));
+    for (IndexObject& object : mine) out.objects.push_back(std::move(object));
+  }
+  return {};
+}
+
+Failure write_run_index(const config::Config& config, const RunObjects& run,
+                        const std::filesystem::path& run_dir, RunIndexReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  IndexOptions options;
+  options.chordal_tolerance = config.kernel.chordal_tolerance;
+  options.linear_tolerance = config.kernel.linear_tolerance;
+  options.threads = config.run.threads;
+  if (run.crs) {
+    geo::Crs horizontal = *run.crs;
+    horizontal.vertical.reset();  // srs_id names the horizontal EPSG code
+    options.srs.srs_id = horizontal.epsg;
+    options.srs.organization = "EPSG";
+    options.srs.organization_coordsys_id = horizontal.epsg;
+    options.srs.name = horizontal.name;
+    options.srs.definition_wkt = geo::crs_to_wkt1(horizontal);
+    const kernel::Vec3 origin = run.origin;
+    options.to_srs = [origin](const kernel::Vec3& p) { return kernel::Vec3(p + origin); };
   }
 
   const std::filesystem::path path = run_dir / report.key;
-  if (kernel::Status st = write_topology_index(path, objects, options, &report.stats); !st.ok()) {
+  if (kernel::Status st = write_topology_index(path, run.objects, options, &report.stats);
+      !st.ok()) {
     return {from_kernel(st.error().code), path.string() + ": " + st.error().message};
   }
-  if (!frame_warning.empty()) report.stats.warnings.push_back(frame_warning);
+  for (const std::string& w : run.warnings) report.stats.warnings.push_back(w);
   std::ifstream in(path, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) return {ErrorCode::Io, "cannot read back " + path.string()};

@@ -4,11 +4,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "csgtile/config/config.h"
+#include "csgtile/geo/crs.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/worker/errors.h"
 #include "export/topology_index.h"
@@ -33,15 +35,31 @@ struct RunIndexReport {
 std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel::CsgModel& model,
                                            const geo::Scene* scene);
 
-/// Writes run_dir/index.gpkg from the done jobs among `results` (queue key → job record),
-/// in run.inputs order: models read back from their published keys, scenes re-read for fit
-/// quality and frames. When every job's scene has the same CRS ("crs"/"origin" keys), the
-/// objects layer is in that CRS (EPSG code as srs_id) with all objects placed relative to the
-/// first job's origin; otherwise it uses the undefined Cartesian SRS and model coordinates.
-/// Errors: Io (cannot read a model or write the index), InputInvalid (a model that does not
-/// parse), Internal (a malformed job record).
-Failure write_run_index(const config::Config& config,
-                        const std::vector<std::pair<std::string, std::string>>& results,
+/// The objects of a run's done jobs in one frame, shared by the run's exports.
+struct RunObjects {
+  std::vector<IndexObject> objects;  ///< run.inputs order, then job_index_objects order
+  /// The scenes' common CRS (an EPSG code); unset when the jobs do not share one, and then
+  /// each object is in its scene's local coordinates.
+  std::optional<geo::Crs> crs;
+  /// CRS coordinates of the objects' origin: p_crs = origin + p (zero without a CRS).
+  kernel::Vec3 origin = kernel::Vec3::Zero();
+  std::vector<std::string> warnings;  ///< e.g. inputs that do not share one CRS
+};
+
+/// Collects the done jobs among `results` (queue key → job record), in run.inputs order:
+/// models read back from their published keys, scenes re-read for fit quality and frames.
+/// When every job's scene has the same CRS ("crs"/"origin" keys) and it has an EPSG code, all
+/// objects are placed relative to the first job's origin, which becomes `origin`; otherwise
+/// they stay in model coordinates. Errors: Io (cannot read a model), InputInvalid (a model
+/// that does not parse), Internal (a malformed job record).
+Failure collect_run_objects(const config::Config& config,
+                            const std::vector<std::pair<std::string, std::string>>& results,
+                            const std::filesystem::path& run_dir, RunObjects& out);
+
+/// Writes run_dir/index.gpkg from the run's objects: the objects layer is in their common CRS
+/// (EPSG code as srs_id) when they have one, else in the undefined Cartesian SRS.
+/// Errors: Io (cannot write the index), as write_topology_index otherwise.
+Failure write_run_index(const config::Config& config, const RunObjects& run,
                         const std::filesystem::path& run_dir, RunIndexReport& report);
 
 }  // namespace csgtile::worker

@@ -20,6 +20,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/tessellation.h"
+#include "export/face_rings.h"
 #include "export/index_rows.h"
 
 namespace csgtile::worker {
@@ -125,41 +126,12 @@ Vec3 map_point(const IndexOptions& options, const Vec3& p) {
   return options.to_srs ? options.to_srs(p) : p;
 }
 
-// Points along an edge from the start to the end of its curve's parameter range (empty for
-// a degenerate edge).
-using EdgePoints = std::function<std::vector<Vec3>(const Shape& edge)>;
-
-// Rings of a planar face from its wires, exterior first, counter-clockwise seen from the
-// side the face's use marks as outward. Wires are read through the face used Forward (so
-// that "the face lies left of each edge, seen from the surface normal" holds) and reversed
-// at the end when the solid uses the face Reversed.
+// The rings of a planar face as a polygon with closed rings (face_rings.h).
 std::optional<Polygon3> planar_face_polygon(const Shape& face, const EdgePoints& edge_points) {
-  Polygon3 polygon;
-  const Shape forward = face.oriented(kernel::Orientation::Forward);
-  for (const Shape& wire : forward.children()) {
-    std::vector<Shape> edges = wire.children();
-    // Children of a Reversed wire are reversed one by one; their sequence must be too.
-    if (wire.orientation() == kernel::Orientation::Reversed)
-      std::reverse(edges.begin(), edges.end());
-    std::vector<Vec3> ring;
-    for (const Shape& edge : edges) {
-      std::vector<Vec3> points = edge_points(edge);
-      if (edge.orientation() == kernel::Orientation::Reversed)
-        std::reverse(points.begin(), points.end());
-      // Without its logical end: the next edge of the wire starts there.
-      if (!points.empty()) ring.insert(ring.end(), points.begin(), points.end() - 1);
-    }
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
-    if (ring.size() < 3) {
-      if (polygon.rings.empty()) return std::nullopt;  // no exterior: nothing to draw
-      continue;
-    }
-    if (face.orientation() == kernel::Orientation::Reversed) std::reverse(ring.begin(), ring.end());
-    ring.push_back(ring.front());
-    polygon.rings.push_back(std::move(ring));
-  }
-  if (polygon.rings.empty()) return std::nullopt;
+  auto rings = planar_face_rings(face, edge_points);
+  if (!rings) return std::nullopt;
+  Polygon3 polygon{std::move(*rings)};
+  for (auto& ring : polygon.rings) ring.push_back(ring.front());
   return polygon;
 }
 
@@ -247,27 +219,6 @@ kernel::BoundingBox map_box(const kernel::BoundingBox& box, const IndexOptions& 
     out.add(options.to_srs(corner));
   }
   return out;
-}
-
-// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
-// inlier counts (equal weights when no counts are known). Unset when none was fitted.
-void aggregate_fit(const std::vector<PrimitiveInfo>& primitives, ObjectRecord& record) {
-  double weight = 0.0, squares = 0.0, coverage = 0.0;
-  bool any = false;
-  bool counted = std::any_of(primitives.begin(), primitives.end(), [](const PrimitiveInfo& p) {
-    return p.rms && p.inliers && *p.inliers > 0;
-  });
-  for (const PrimitiveInfo& p : primitives) {
-    if (!p.rms) continue;
-    const double w = counted ? static_cast<double>(p.inliers.value_or(0)) : 1.0;
-    any = true;
-    weight += w;
-    squares += w * *p.rms * *p.rms;
-    coverage += w * p.coverage.value_or(0.0);
-  }
-  if (!any || weight <= 0.0) return;
-  record.fit_rms = std::sqrt(squares / weight);
-  record.fit_coverage = coverage / weight;
 }
 
 kernel::Status check_objects(const std::vector<IndexObject>& objects, const IndexOptions& options) {
@@ -427,7 +378,9 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
     o.area = mp.area;
     o.bounds = map_box(mp.bounds, options);
     o.valid = kernel::check_shape(root).valid();
-    aggregate_fit(object.primitives, o);
+    const FitSummary fit = fit_summary(object.primitives);
+    o.fit_rms = fit.rms;
+    o.fit_coverage = fit.coverage;
     auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
                                       maps[static_cast<int>(ShapeKind::Edge)], options);
     if (boundary.ok()) {
@@ -466,6 +419,28 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
 }
 
 }  // namespace detail
+
+// Weights: inlier counts when any fitted primitive has them, else equal.
+FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {
+  double weight = 0.0, squares = 0.0, coverage = 0.0;
+  bool any = false;
+  bool counted = std::any_of(primitives.begin(), primitives.end(), [](const PrimitiveInfo& p) {
+    return p.rms && p.inliers && *p.inliers > 0;
+  });
+  for (const PrimitiveInfo& p : primitives) {
+    if (!p.rms) continue;
+    const double w = counted ? static_cast<double>(p.inliers.value_or(0)) : 1.0;
+    any = true;
+    weight += w;
+    squares += w * *p.rms * *p.rms;
+    coverage += w * p.coverage.value_or(0.0);
+  }
+  FitSummary out;
+  if (!any || weight <= 0.0) return out;
+  out.rms = std::sqrt(squares / weight);
+  out.coverage = coverage / weight;
+  return out;
+}
 
 kernel::Status write_topology_index(const std::filesystem::path& path,
                                     const std::vector<IndexObject>& objects,

@@ -49,6 +49,13 @@ struct IndexObject {
   std::vector<PrimitiveInfo> primitives;
 };
 
+/// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
+/// inlier counts (equal weights when no counts are known); both unset when none was fitted.
+struct FitSummary {
+  std::optional<double> rms, coverage;
+};
+FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives);
+
 /// The spatial reference system of the objects layer (a gpkg_spatial_ref_sys row).
 struct IndexSrs {
   int srs_id = -1;

@@ -1,9 +1,8 @@
 #include <sqlite3.h>
 #include <sys/vfs.h>
 
-#include <random>
-
 #include "csgtile/worker/queue.h"
+#include "queue/queue_random.h"
 
 namespace csgtile::worker {
 
@@ -95,7 +94,7 @@ class Statement {
 
 class SqliteQueue final : public JobQueue {
  public:
-  SqliteQueue(sqlite3* db, const QueuePolicy& policy) : db_(db), policy_(policy), rng_(policy.seed) {}
+  SqliteQueue(sqlite3* db, const QueuePolicy& policy) : db_(db), policy_(policy), random_(policy.seed) {}
   ~SqliteQueue() override { sqlite3_close(db_); }
 
   bool exec(const char* sql, Failure& failure) {
@@ -141,7 +140,7 @@ class SqliteQueue final : public JobQueue {
     job.kind = pick.text(2);
     job.payload = pick.text(3);
     job.attempts = static_cast<int>(pick.int64(4)) + 1;
-    job.lease_token = worker_id + "-" + std::to_string(now) + "-" + std::to_string(rng_());
+    job.lease_token = random_.lease_token(worker_id, now);
     Statement lease(db_,
                     "UPDATE jobs SET state='running', attempts=?2, lease_token=?3, "
                     "lease_expires_ms=?4, worker=?5, updated_ms=?6 WHERE id=?1");
@@ -167,19 +166,27 @@ class SqliteQueue final : public JobQueue {
     return sqlite3_changes(db_) > 0;
   }
 
+  bool renew(const Job& job, Failure& failure) override {
+    const std::int64_t now = now_ms();
+    Statement st(db_, "UPDATE jobs SET lease_expires_ms=?3, updated_ms=?4 "
+                      "WHERE id=?1 AND state='running' AND lease_token=?2");
+    st.bind(1, job.id).bind(2, job.lease_token)
+        .bind(3, now + std::chrono::duration_cast<std::chrono::milliseconds>(policy_.lease).count())
+        .bind(4, now);
+    if (st.step() != SQLITE_DONE) return error(failure);
+    return sqlite3_changes(db_) > 0;
+  }
+
   bool fail(const Job& job, const std::string& message, bool retryable, Failure& failure) override {
     const bool dead = !retryable || job.attempts >= policy_.max_attempts;
-    // Exponential backoff with ±50% jitter (seeded), capped at an hour.
-    const double factor = std::uniform_real_distribution<double>(0.5, 1.5)(rng_);
-    const double delay = std::min(3.6e6, static_cast<double>(policy_.backoff_base.count()) *
-                                             std::ldexp(1.0, std::min(job.attempts - 1, 20)) * factor);
+    const std::int64_t delay = random_.retry_delay_ms(policy_, job.attempts);
     Statement st(db_,
                  "UPDATE jobs SET state=?3, last_error=?4, run_after_ms=?5, lease_token=NULL, "
                  "lease_expires_ms=NULL, updated_ms=?6 "
                  "WHERE id=?1 AND state='running' AND lease_token=?2");
     const std::int64_t now = now_ms();
     st.bind(1, job.id).bind(2, job.lease_token).bind(3, std::string(dead ? "dead" : "retry"))
-        .bind(4, message).bind(5, now + static_cast<std::int64_t>(delay)).bind(6, now);
+        .bind(4, message).bind(5, now + delay).bind(6, now);
     if (st.step() != SQLITE_DONE) return error(failure);
     return sqlite3_changes(db_) > 0;
   }
@@ -229,7 +236,7 @@ class SqliteQueue final : public JobQueue {
 
   sqlite3* db_;
   QueuePolicy policy_;
-  std::mt19937_64 rng_;
+  detail::QueueRandom random_;
 };
 
 }  // namespace

@@ -42,6 +42,9 @@ struct QueueConfig {
   std::string postgres_dsn;  ///< used when backend is Postgres
   int max_attempts = 5;      ///< 1..100
   int lease_seconds = 60;    ///< 1..86400
+  /// libpq sslmode (disable … verify-full); empty keeps the DSN's (libpq default: prefer).
+  std::string postgres_sslmode;
+  std::string postgres_sslrootcert;  ///< CA file for verify-ca/verify-full; empty keeps the DSN's
   bool operator==(const QueueConfig&) const = default;
 };
 

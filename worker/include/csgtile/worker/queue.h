@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "csgtile/config/config.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker {
@@ -60,6 +61,10 @@ class JobQueue {
   virtual std::optional<Job> claim(const std::string& worker_id, Failure& failure) = 0;
   /// Marks the job done with its result, only if `job.lease_token` still holds the lease.
   virtual bool complete(const Job& job, const std::string& result, Failure& failure) = 0;
+  /// Heartbeat: extends a running job's lease to the policy's lease from now, only while
+  /// `job.lease_token` still holds it. False when the lease was lost (taken over or the job
+  /// is no longer running): the caller must then neither complete nor publish it.
+  virtual bool renew(const Job& job, Failure& failure) = 0;
   /// Records a failure: retry after a backoff if `retryable` and attempts remain, else dead.
   virtual bool fail(const Job& job, const std::string& error, bool retryable, Failure& failure) = 0;
   virtual QueueCounts counts(Failure& failure) = 0;
@@ -72,5 +77,39 @@ class JobQueue {
 /// processes on one machine may share it. Errors: Io (cannot open, or a network file system).
 std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
                                             const QueuePolicy& policy, Failure& failure);
+
+/// PostgreSQL settings beyond the connection string; a non-empty field overrides the string's.
+struct PostgresOptions {
+  std::string sslmode;      ///< disable, allow, prefer, require, verify-ca or verify-full
+  std::string sslrootcert;  ///< CA certificate file checked by verify-ca and verify-full
+  std::string password;     ///< never logged; empty: the string's, then PGPASSWORD, ~/.pgpass
+};
+
+/// Opens a queue in a PostgreSQL database (`conninfo`: libpq keyword/value text or a
+/// postgresql:// URI), creating or migrating its tables (version in csgtile_schema_version) in
+/// one transaction under an advisory lock, so workers may start together. Claims use
+/// FOR UPDATE SKIP LOCKED; lease expiry is server time. A lost connection is reopened on the
+/// next call. A handle holds one connection and serialises its calls.
+/// Errors: ConfigInvalid (malformed conninfo), Io (cannot connect: names host and port, never
+/// the password; connection lost), Unsupported (a schema newer than this build).
+std::unique_ptr<JobQueue> open_postgres_queue(const std::string& conninfo,
+                                              const QueuePolicy& policy, Failure& failure,
+                                              const PostgresOptions& options = {});
+
+/// The policy of `config`: queue.max_attempts, queue.lease_seconds, seeded by run.seed.
+QueuePolicy queue_policy(const config::Config& config);
+
+/// Opens the queue `config.queue` selects: the SQLite file (default <run.output>/queue.sqlite)
+/// or the PostgreSQL database of queue.postgres_dsn with queue.postgres_sslmode and
+/// queue.postgres_sslrootcert; its password is `env`'s CSGTILE_PG_PASSWORD, else libpq's own
+/// PGPASSWORD or ~/.pgpass. Errors as the backend's opener; ConfigInvalid for postgres without
+/// a postgres_dsn.
+std::unique_ptr<JobQueue> open_queue(
+    const config::Config& config, Failure& failure,
+    const config::Environment& env = config::from_process_environment());
+
+/// Where `config`'s queue is, for logs: the SQLite path, or "postgres HOST:PORT/DATABASE"
+/// (never user or password).
+std::string describe_queue(const config::Config& config);
 
 }  // namespace csgtile::worker

@@ -21,6 +21,9 @@ struct RunSummary {
   std::filesystem::path run_dir;    ///< <run.output>/runs/<run.name>
   std::filesystem::path manifest;   ///< run_dir/manifest.json
   std::vector<DeadJob> dead;
+  /// A stop signal ended the run early (after its running job): no index or manifest yet;
+  /// running the same config again resumes.
+  bool stopped = false;
 };
 
 /// Runs `config` to completion on its SQLite queue. Jobs that fail are retried or end dead

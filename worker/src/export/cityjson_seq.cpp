@@ -1,0 +1,552 @@
+// CityJSONSeq from objects (cityjson_seq.h): surfaces from the faces, quantisation, closure
+// and semantics per feature, then the text.
+
+#include "export/cityjson_seq.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/tessellation.h"
+#include "csgtile/worker/publish.h"
+#include "export/face_rings.h"
+
+namespace csgtile::worker {
+
+namespace {
+
+using Json = nlohmann::ordered_json;
+using kernel::Shape;
+using kernel::ShapeKind;
+using kernel::Vec3;
+
+/// A vertex in units of the scale (x, y, z), as the file stores it relative to translate.
+using Point = std::array<std::int64_t, 3>;
+using Ring = std::vector<Point>;
+
+// In the order of a geometry's semantics.surfaces (those used).
+enum class Semantic { Roof, Wall, Ground };
+constexpr std::array<const char*, 3> kSemanticNames = {"RoofSurface", "WallSurface",
+                                                       "GroundSurface"};
+
+struct Surface {
+  std::vector<Ring> rings;  ///< exterior first; open rings
+  Semantic semantic = Semantic::Wall;
+};
+using ShellSurfaces = std::vector<Surface>;
+using SolidShells = std::vector<ShellSurfaces>;  ///< exterior shell first
+
+struct ObjectGeometry {
+  std::vector<SolidShells> solids;
+  bool closed = true;  ///< every shell closed and outward after quantisation
+  std::size_t collapsed_triangles = 0, flat_surfaces = 0;
+};
+
+// Units beyond 2^53 lose integers in the doubles they come from.
+constexpr double kMaxUnits = 9.0e15;
+
+std::optional<Point> quantise(const Vec3& p, double scale) {
+  Point q{};
+  for (int i = 0; i < 3; ++i) {
+    const double v = p[i] / scale;
+    if (!std::isfinite(v) || std::abs(v) > kMaxUnits) return std::nullopt;
+    q[i] = std::llround(v);
+  }
+  return q;
+}
+
+// Consecutive repeats removed, the ring read cyclically.
+Ring without_repeats(Ring ring) {
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
+  return ring;
+}
+
+std::array<std::int64_t, 3> minus(const Point& a, const Point& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+
+// Exact in 64-bit integers for differences below 2^31 units (2000 km at 1 mm).
+bool collinear(const Ring& ring) {
+  if (ring.size() < 3) return true;
+  const Point& o = ring[0];
+  std::size_t k = 1;
+  while (k < ring.size() && ring[k] == o) ++k;
+  if (k == ring.size()) return true;
+  const auto d = minus(ring[k], o);
+  for (std::size_t i = k + 1; i < ring.size(); ++i) {
+    const auto e = minus(ring[i], o);
+    if (d[1] * e[2] - d[2] * e[1] != 0 || d[2] * e[0] - d[0] * e[2] != 0 ||
+        d[0] * e[1] - d[1] * e[0] != 0) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Newell's normal of a ring (twice its area vector), about its first point.
+Vec3 ring_normal(const Ring& ring) {
+  Vec3 n = Vec3::Zero();
+  if (ring.empty()) return n;
+  const Point& o = ring[0];
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const auto a = minus(ring[i], o);
+    const auto b = minus(ring[(i + 1) % ring.size()], o);
+    const Vec3 va(static_cast<double>(a[0]), static_cast<double>(a[1]), static_cast<double>(a[2]));
+    const Vec3 vb(static_cast<double>(b[0]), static_cast<double>(b[1]), static_cast<double>(b[2]));
+    n += va.cross(vb);
+  }
+  return n;
+}
+
+// A quantised planar polygon is kept as one surface when its rings are still simple enough
+// to be valid: at least three points each, no point used twice, an exterior with an area.
+bool clean_polygon(const std::vector<Ring>& rings) {
+  std::set<Point> seen;
+  for (const Ring& ring : rings) {
+    if (ring.size() < 3) return false;
+    for (const Point& p : ring) {
+      if (!seen.insert(p).second) return false;
+    }
+  }
+  return !rings.empty() && !collinear(rings[0]);
+}
+
+// Every directed edge of the shell's rings used once, and its reverse once: closed, and
+// consistently oriented.
+bool shell_closed(const ShellSurfaces& shell) {
+  std::vector<std::pair<Point, Point>> edges;
+  for (const Surface& s : shell) {
+    for (const Ring& ring : s.rings) {
+      for (std::size_t i = 0; i < ring.size(); ++i)
+        edges.emplace_back(ring[i], ring[(i + 1) % ring.size()]);
+    }
+  }
+  if (edges.empty()) return false;
+  std::sort(edges.begin(), edges.end());
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return false;
+  return std::all_of(edges.begin(), edges.end(), [&](const auto& e) {
+    return std::binary_search(edges.begin(), edges.end(), std::make_pair(e.second, e.first));
+  });
+}
+
+// Signed volume enclosed by the shell in units³ (positive when its surfaces face outwards
+// from what they enclose), as cones from the shell's first point over each ring's fan.
+double shell_volume(const ShellSurfaces& shell) {
+  const Point* origin = nullptr;
+  double six_volume = 0.0;
+  for (const Surface& s : shell) {
+    for (const Ring& ring : s.rings) {
+      if (origin == nullptr && !ring.empty()) origin = &ring[0];
+      for (std::size_t i = 1; i + 1 < ring.size(); ++i) {
+        auto to_vec = [&](const Point& p) {
+          const auto d = minus(p, *origin);
+          return Vec3(static_cast<double>(d[0]), static_cast<double>(d[1]),
+                      static_cast<double>(d[2]));
+        };
+        six_volume += to_vec(ring[0]).dot(to_vec(ring[i]).cross(to_vec(ring[i + 1])));
+      }
+    }
+  }
+  return six_volume / 6.0;
+}
+
+// The semantic rule of the header: from the exterior ring's normal and the surface's top.
+Semantic classify(const Surface& s, std::int64_t object_min_z, double ground_units) {
+  const Vec3 n = ring_normal(s.rings[0]);
+  const double length = n.norm();
+  if (!(length > 0.0)) return Semantic::Wall;
+  const double nz = n.z() / length;
+  std::int64_t top = std::numeric_limits<std::int64_t>::min();
+  for (const Point& p : s.rings[0]) top = std::max(top, p[2]);
+  const bool at_ground = static_cast<double>(top - object_min_z) <= ground_units;
+  if (nz < -0.9 && at_ground) return Semantic::Ground;
+  if (nz > 0.2 && !at_ground) return Semantic::Roof;
+  return Semantic::Wall;
+}
+
+// The surfaces of each solid of `root`, shell by shell, quantised. Planar faces are polygons
+// from their wires, curved faces (and planar ones whose polygon does not survive
+// quantisation) triangles of one tessellation, whose edge points the polygons share.
+kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options) {
+  kernel::TessellationOptions t;
+  t.chordal_tolerance = options.chordal_tolerance;
+  auto meshed = kernel::tessellate(root, t);
+  if (!meshed.ok()) return meshed.error();
+  const kernel::Mesh& mesh = meshed.value();
+  const kernel::ShapeIndex faces = kernel::map_child_shapes(root, ShapeKind::Face);
+  const kernel::ShapeIndex edges = kernel::map_child_shapes(root, ShapeKind::Edge);
+
+  std::vector<Point> points;
+  points.reserve(mesh.vertices.size());
+  for (const Vec3& v : mesh.vertices) {
+    const auto q = quantise(v, options.scale);
+    if (!q) {
+      return kernel::Error{kernel::ErrorCode::InvalidArgument,
+                           "a vertex is not finite or too far from the origin for the scale"};
+    }
+    points.push_back(*q);
+  }
+  std::vector<std::vector<std::size_t>> triangles_of(faces.size());
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    if (mesh.triangle_face[i] < faces.size()) triangles_of[mesh.triangle_face[i]].push_back(i);
+  }
+  const detail::EdgePoints edge_points = [&](const Shape& edge) {
+    std::vector<Vec3> out;
+    const std::size_t e = edges.find(edge);
+    if (e < mesh.edge_vertices.size()) {
+      for (std::uint32_t v : mesh.edge_vertices[e]) out.push_back(mesh.vertices[v]);
+    }
+    return out;
+  };
+
+  ObjectGeometry geometry;
+  auto add_face = [&](std::size_t f, ShellSurfaces& shell) {
+    const Shape& face = faces[f];
+    if (face.orientation() != kernel::Orientation::Forward &&
+        face.orientation() != kernel::Orientation::Reversed) {
+      return;  // Internal and External faces bound nothing
+    }
+    if (face.body().face()->surface->kind() == kernel::SurfaceKind::Plane) {
+      if (auto rings = detail::planar_face_rings(face, edge_points)) {
+        Surface s;
+        for (const auto& ring : *rings) {
+          Ring q;
+          for (const Vec3& p : ring) q.push_back(*quantise(p, options.scale));
+          s.rings.push_back(without_repeats(std::move(q)));
+        }
+        if (clean_polygon(s.rings)) {
+          shell.push_back(std::move(s));
+          return;
+        }
+      }
+    }
+    for (std::size_t i : triangles_of[f]) {
+      const auto& tri = mesh.triangles[i];
+      Ring q = {points[tri[0]], points[tri[1]], points[tri[2]]};
+      if (q[0] == q[1] || q[1] == q[2] || q[2] == q[0]) {
+        ++geometry.collapsed_triangles;  // its edges pair up among its neighbours
+        continue;
+      }
+      if (collinear(q)) ++geometry.flat_surfaces;
+      shell.push_back(Surface{{std::move(q)}, Semantic::Wall});
+    }
+  };
+
+  const kernel::ShapeIndex solids = kernel::map_child_shapes(root, ShapeKind::Solid);
+  for (const Shape& solid : solids.shapes()) {
+    std::vector<ShellSurfaces> shells;
+    std::vector<double> volumes;
+    const kernel::ShapeIndex solid_shells = kernel::map_child_shapes(solid, ShapeKind::Shell);
+    for (const Shape& shell : solid_shells.shapes()) {
+      ShellSurfaces surfaces;
+      const kernel::ShapeIndex shell_faces = kernel::map_child_shapes(shell, ShapeKind::Face);
+      for (const Shape& face : shell_faces.shapes()) {
+        if (const std::size_t f = faces.find(face); f != kernel::ShapeIndex::npos)
+          add_face(f, surfaces);
+      }
+      if (surfaces.empty()) continue;
+      geometry.closed &= shell_closed(surfaces);
+      volumes.push_back(shell_volume(surfaces));
+      shells.push_back(std::move(surfaces));
+    }
+    if (shells.empty()) continue;
+    // The exterior shell encloses the most; cavities face into the voids they bound.
+    const std::size_t exterior = static_cast<std::size_t>(
+        std::max_element(volumes.begin(), volumes.end()) - volumes.begin());
+    for (std::size_t i = 0; i < volumes.size(); ++i) {
+      geometry.closed &= i == exterior ? volumes[i] > 0.0 : volumes[i] < 0.0;
+    }
+    std::rotate(shells.begin(), shells.begin() + static_cast<std::ptrdiff_t>(exterior),
+                shells.begin() + static_cast<std::ptrdiff_t>(exterior) + 1);
+    geometry.solids.push_back(std::move(shells));
+  }
+
+  if (geometry.solids.empty()) {
+    return kernel::Error{kernel::ErrorCode::DegenerateGeometry, "no face bounds the object"};
+  }
+  std::int64_t min_z = std::numeric_limits<std::int64_t>::max();
+  for (const SolidShells& solid : geometry.solids) {
+    for (const ShellSurfaces& shell : solid) {
+      for (const Surface& s : shell) {
+        for (const Ring& ring : s.rings) {
+          for (const Point& p : ring) min_z = std::min(min_z, p[2]);
+        }
+      }
+    }
+  }
+  const double ground_units = options.ground_tolerance / options.scale;
+  for (SolidShells& solid : geometry.solids) {
+    for (ShellSurfaces& shell : solid) {
+      for (Surface& s : shell) s.semantic = classify(s, min_z, ground_units);
+    }
+  }
+  return geometry;
+}
+
+// Vertices of one feature: distinct points in first-use order.
+class FeatureVertices {
+ public:
+  std::size_t id(const Point& p) {
+    const auto [it, added] = ids_.emplace(p, points_.size());
+    if (added) points_.push_back(p);
+    return it->second;
+  }
+  const std::vector<Point>& points() const { return points_; }
+
+ private:
+  std::map<Point, std::size_t> ids_;
+  std::vector<Point> points_;
+};
+
+Json surface_json(const Surface& s, FeatureVertices& vertices) {
+  Json rings = Json::array();
+  for (const Ring& ring : s.rings) {
+    Json ids = Json::array();
+    for (const Point& p : ring) ids.push_back(vertices.id(p));
+    rings.push_back(std::move(ids));
+  }
+  return rings;
+}
+
+// Solid (one solid), MultiSolid (several) or, when a shell is open, MultiSurface; semantic
+// surfaces listed in Semantic order, those used only.
+Json geometry_json(const ObjectGeometry& g, FeatureVertices& vertices) {
+  std::array<bool, kSemanticNames.size()> used{};
+  for (const SolidShells& solid : g.solids) {
+    for (const ShellSurfaces& shell : solid) {
+      for (const Surface& s : shell) used[static_cast<std::size_t>(s.semantic)] = true;
+    }
+  }
+  std::array<int, kSemanticNames.size()> position{};
+  Json surfaces = Json::array();
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    if (!used[k]) continue;
+    position[k] = static_cast<int>(surfaces.size());
+    surfaces.push_back(Json{{"type", kSemanticNames[k]}});
+  }
+  auto shell_json = [&](const ShellSurfaces& shell, Json& boundaries, Json& values) {
+    for (const Surface& s : shell) {
+      boundaries.push_back(surface_json(s, vertices));
+      values.push_back(position[static_cast<std::size_t>(s.semantic)]);
+    }
+  };
+  Json boundaries = Json::array(), values = Json::array();
+  std::string type;
+  if (!g.closed) {
+    type = "MultiSurface";
+    for (const SolidShells& solid : g.solids) {
+      for (const ShellSurfaces& shell : solid) shell_json(shell, boundaries, values);
+    }
+  } else {
+    for (const SolidShells& solid : g.solids) {
+      Json solid_boundaries = Json::array(), solid_values = Json::array();
+      for (const ShellSurfaces& shell : solid) {
+        Json b = Json::array(), v = Json::array();
+        shell_json(shell, b, v);
+        solid_boundaries.push_back(std::move(b));
+        solid_values.push_back(std::move(v));
+      }
+      boundaries.push_back(std::move(solid_boundaries));
+      values.push_back(std::move(solid_values));
+    }
+    type = g.solids.size() == 1 ? "Solid" : "MultiSolid";
+    if (g.solids.size() == 1) {
+      boundaries = std::move(boundaries[0]);
+      values = std::move(values[0]);
+    }
+  }
+  Json out;
+  out["type"] = type;
+  out["lod"] = "2";
+  out["boundaries"] = std::move(boundaries);
+  out["semantics"] = {{"surfaces", std::move(surfaces)}, {"values", std::move(values)}};
+  return out;
+}
+
+Json attributes_json(const IndexObject& object, const std::optional<ObjectGeometry>& geometry) {
+  std::set<std::string> types;
+  for (const PrimitiveInfo& p : object.primitives) types.insert(p.type);
+  const kernel::MassProperties mp = kernel::mass_properties(object.model.shape);
+  Json a;
+  a["primitive_types"] = Json(std::vector<std::string>(types.begin(), types.end()));
+  a["primitive_count"] = object.primitives.size();
+  a["csg_nodes"] = object.model.nodes.size();
+  a["volume"] = mp.volume;
+  a["area"] = mp.area;
+  a["valid"] = kernel::check_shape(object.model.shape).valid();
+  const FitSummary fit = fit_summary(object.primitives);
+  if (fit.rms) a["fit_rms"] = *fit.rms;
+  if (fit.coverage) a["fit_coverage"] = *fit.coverage;
+  if (geometry) {
+    a["closed"] = geometry->closed;
+    if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;
+  }
+  return a;
+}
+
+kernel::Status check_input(const std::vector<IndexObject>& objects,
+                           const CityJsonOptions& options) {
+  if (!(options.scale > 0.0) || !std::isfinite(options.scale) ||
+      !(options.chordal_tolerance > 0.0) || !(options.ground_tolerance >= 0.0) ||
+      !options.origin.allFinite()) {
+    return {kernel::ErrorCode::InvalidArgument,
+            "CityJSON: scale and chordal tolerance must be > 0, the ground tolerance >= 0 and "
+            "the origin finite"};
+  }
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const IndexObject& o = objects[i];
+    const std::string where = "CityJSON: object " + std::to_string(i);
+    if (o.id.empty()) return {kernel::ErrorCode::InvalidArgument, where + " has an empty id"};
+    if (!seen.insert(o.id).second) {
+      return {kernel::ErrorCode::InvalidArgument, where + ": duplicate id \"" + o.id + "\""};
+    }
+    const Shape& s = o.model.shape;
+    if (s.is_null() || kernel::map_child_shapes(s, ShapeKind::Solid).size() == 0) {
+      return {kernel::ErrorCode::InvalidArgument,
+              where + " (\"" + o.id + "\") is not a solid or a compound of solids"};
+    }
+  }
+  return {};
+}
+
+// Coordinates in the metadata are rounded to 1e-6 so that they print as short decimals
+// (the vertices themselves are exact integers).
+double rounded(double v) { return std::round(v * 1e6) / 1e6; }
+
+std::string dump_line(const Json& j) {
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+}  // namespace
+
+std::string cityjson_reference_system(const geo::Crs& crs, std::vector<std::string>* warnings) {
+  // Compound CRSs EPSG defines for a horizontal + vertical pair this build knows.
+  struct Compound {
+    int horizontal, vertical, code;
+  };
+  constexpr Compound kCompounds[] = {{28992, 5709, 7415}, {27700, 5701, 7405}};
+  if (crs.epsg <= 0) return {};
+  int code = crs.epsg;
+  if (crs.vertical && crs.vertical->epsg > 0) {
+    const auto it = std::find_if(std::begin(kCompounds), std::end(kCompounds), [&](const auto& c) {
+      return c.horizontal == crs.epsg && c.vertical == crs.vertical->epsg;
+    });
+    if (it != std::end(kCompounds)) {
+      code = it->code;
+    } else if (warnings != nullptr) {
+      warnings->push_back("CityJSON: EPSG:" + std::to_string(crs.epsg) + "+" +
+                          std::to_string(crs.vertical->epsg) +
+                          " has no compound EPSG code here; referenceSystem names the "
+                          "horizontal CRS only");
+    }
+  }
+  return "https://www.opengis.net/def/crs/EPSG/0/" + std::to_string(code);
+}
+
+kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
+                                         const CityJsonOptions& options, CityJsonStats* stats) {
+  CityJsonStats local;
+  CityJsonStats& st = stats != nullptr ? *stats : local;
+  st = CityJsonStats{};
+  if (kernel::Status s = check_input(objects, options); !s.ok()) return s.error();
+
+  std::string features;
+  Point low{}, high{};
+  bool any_vertex = false;
+  for (const IndexObject& object : objects) {
+    auto geometry = object_geometry(object.model.shape, options);
+    std::optional<ObjectGeometry> g;
+    if (geometry.ok()) {
+      g = std::move(geometry).value();
+    } else {
+      st.warnings.push_back("CityJSON: object " + object.id +
+                            ": no geometry: " + kernel::error_code_name(geometry.error().code) +
+                            ": " + geometry.error().message);
+    }
+    FeatureVertices vertices;
+    Json city_object;
+    city_object["type"] = "Building";
+    city_object["attributes"] = attributes_json(object, g);
+    if (g) {
+      city_object["geometry"] = Json::array({geometry_json(*g, vertices)});
+      st.collapsed_triangles += g->collapsed_triangles;
+      st.flat_surfaces += g->flat_surfaces;
+      for (const SolidShells& solid : g->solids) {
+        for (const ShellSurfaces& shell : solid) st.surfaces += shell.size();
+      }
+      if (!g->closed) {
+        ++st.open_objects;
+        st.warnings.push_back("CityJSON: object " + object.id +
+                              ": a shell is not closed and outward after quantisation; "
+                              "written as MultiSurface");
+      }
+    }
+    Json vertex_list = Json::array();
+    for (const Point& p : vertices.points()) {
+      vertex_list.push_back(Json::array({p[0], p[1], p[2]}));
+      if (!any_vertex) low = high = p;
+      any_vertex = true;
+      for (int i = 0; i < 3; ++i) {
+        low[i] = std::min(low[i], p[i]);
+        high[i] = std::max(high[i], p[i]);
+      }
+    }
+    Json feature;
+    feature["type"] = "CityJSONFeature";
+    feature["id"] = object.id;
+    feature["CityObjects"] = {{object.id, std::move(city_object)}};
+    feature["vertices"] = std::move(vertex_list);
+    features += dump_line(feature);
+    ++st.features;
+  }
+
+  Json header;
+  header["type"] = "CityJSON";
+  header["version"] = "2.0";
+  header["transform"] = {
+      {"scale", {options.scale, options.scale, options.scale}},
+      {"translate", {options.origin.x(), options.origin.y(), options.origin.z()}}};
+  header["CityObjects"] = Json::object();
+  header["vertices"] = Json::array();
+  Json metadata = Json::object();
+  if (options.crs) {
+    const std::string url = cityjson_reference_system(*options.crs, &st.warnings);
+    if (!url.empty()) metadata["referenceSystem"] = url;
+  }
+  if (any_vertex) {
+    Json extent = Json::array();
+    for (const Point* p : {&low, &high}) {
+      for (int i = 0; i < 3; ++i)
+        extent.push_back(rounded(options.origin[i] + static_cast<double>((*p)[i]) * options.scale));
+    }
+    metadata["geographicalExtent"] = std::move(extent);
+  }
+  header["metadata"] = std::move(metadata);
+  return dump_line(header) + features;
+}
+
+Failure write_run_cityjson(const config::Config& config, const RunObjects& run,
+                           const std::filesystem::path& run_dir, CityJsonReport& report) {
+  CityJsonOptions options;
+  options.crs = run.crs;
+  options.origin = run.origin;
+  options.chordal_tolerance = config.kernel.chordal_tolerance;
+  auto text = cityjson_seq(run.objects, options, &report.stats);
+  if (!text.ok()) return {ErrorCode::Internal, text.error().message};
+  if (Failure f = write_file_atomic(run_dir / report.key, text.value()); !f.ok()) return f;
+  report.sha256 = sha256_hex(text.value());
+  report.bytes = text.value().size();
+  return {};
+}
+
+}  // namespace csgtile::worker
