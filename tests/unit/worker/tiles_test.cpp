@@ -29,6 +29,9 @@
 #include "export/tile_content.h"
 #include "export/tileset.h"
 #include "export/topology_index.h"
+#include "index_object_builder.h"
+#include "model_builders.h"
+#include "test_commands.h"
 #include "test_support.h"
 
 namespace csgtile::worker {
@@ -40,43 +43,12 @@ using kernel::Vec3;
 
 // ---- objects ---------------------------------------------------------------------------------
 
-kernel::PrimitiveSpec box(Vec3 at, Vec3 size) {
-  kernel::PrimitiveSpec s;
-  s.type = kernel::PrimitiveType::Box;
-  s.size = size;
-  s.placement = kernel::Location::translation(at);
-  return s;
-}
-
-kernel::PrimitiveSpec cylinder(Vec3 at, double r, double h) {
-  kernel::PrimitiveSpec s;
-  s.type = kernel::PrimitiveType::Cylinder;
-  s.radius = r;
-  s.height = h;
-  s.placement = kernel::Location::translation(at);
-  return s;
-}
-
-kernel::CsgModel leaf(const kernel::PrimitiveSpec& spec, const std::string& label) {
-  auto m = kernel::csg_primitive(spec, label);
-  EXPECT_TRUE(m.ok()) << m.error().message;
-  return std::move(m).value();
-}
+kernel::PrimitiveSpec box(Vec3 at, Vec3 size) { return test::box_at(at, size); }
+kernel::PrimitiveSpec cylinder(Vec3 at, double r, double h) { return test::cylinder_at(at, r, h); }
+using test::leaf;
 
 IndexObject object(const std::string& id, kernel::CsgModel model) {
-  IndexObject o;
-  o.id = id;
-  o.model = std::move(model);
-  for (std::size_t n = 0; n < o.model.nodes.size(); ++n) {
-    const kernel::CsgNode& node = o.model.nodes[n];
-    if (node.kind != kernel::CsgNodeKind::Primitive) continue;
-    PrimitiveInfo p;
-    p.node = static_cast<int>(n);
-    p.id = node.label;
-    p.type = kernel::primitive_type_name(node.primitive.type);
-    o.primitives.push_back(p);
-  }
-  return o;
+  return test::index_object(id, std::move(model));
 }
 
 // A box, a cylinder, and a box fused with a cylinder standing on it.
@@ -652,24 +624,9 @@ TEST(Tileset, JsonHasVersionRegionTransformAndContent) {
 
 // ---- the Khronos glTF validator --------------------------------------------------------------
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string out;
-};
-
-CommandResult run_command(const std::string& command) {
-  CommandResult r;
-  std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using test::CommandResult;
+using test::quoted;
+CommandResult run_command(const std::string& command) { return test::run_command(command, true); }
 
 // npm's gltf-validator package: $CSGTILE_GLTF_VALIDATOR_DIR, else the build directory's npm
 // install (deploy/run-tests.sh: `npm install --prefix build/npm gltf-validator@2.0.0-dev.3.10`).
