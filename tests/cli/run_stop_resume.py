@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Graceful stop of `csgtile run`: SIGTERM while a job runs → that job finishes, nothing more
 is claimed, exit 0 with the count left; running the same config again resumes and completes
-the run with every job done once (the queue keeps the state). Jobs are fuses of the timber
+the run with every job done once (the queue keeps the state); `csgtile status` shows both. Jobs are fuses of the timber
 gate (`csgtile synth gate` truth, 229 primitives, a few seconds each).
 Usage: run_stop_resume.py CSGTILE WORKDIR"""
 import json
@@ -41,6 +41,10 @@ summary = json.loads(out.strip().splitlines()[-1])
 assert summary["stopped"] is True and summary["done"] >= 1 and summary["unfinished"] >= 1, summary
 assert not os.path.exists(f"{work}/out/runs/stopping/manifest.json"), "a stopped run has no manifest"
 print(f"stopped after {time.time() - start:.1f} s: {summary}")
+status = json.loads(subprocess.run([binary, "status", f"{work}/run.yaml", "--json"], check=True,
+                                   capture_output=True, text=True).stdout)
+assert not status["finished"] and status["jobs"]["done"] == summary["done"], status
+assert status["jobs"]["queued"] + status["jobs"]["retry"] == summary["unfinished"], status
 
 again = subprocess.run([binary, "run", f"{work}/run.yaml", "--json"], capture_output=True, text=True)
 assert again.returncode == 0, (again.returncode, again.stdout, again.stderr)
@@ -48,4 +52,7 @@ final = json.loads(again.stdout.strip().splitlines()[-1])
 assert final["done"] == 3 and final["dead"] == 0, final
 manifest = json.load(open(f"{work}/out/runs/stopping/manifest.json"))
 assert len(manifest["jobs"]) == 3, manifest["jobs"]
+status = json.loads(subprocess.run([binary, "status", f"{work}/run.yaml", "--json"], check=True,
+                                   capture_output=True, text=True).stdout)
+assert status["finished"] and status["jobs"]["done"] == 3 and status["dead"] == [], status
 print("resumed:", final)

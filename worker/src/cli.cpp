@@ -22,6 +22,7 @@ int run_cli(int argc, char** argv) {
   detail::register_query(app, action);
   detail::register_assemble(app, action);
   detail::register_inspect(app, action);
+  detail::register_status(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

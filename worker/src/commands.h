@@ -23,5 +23,6 @@ void register_synth(CLI::App& app, Action& action);
 void register_query(CLI::App& app, Action& action);
 void register_assemble(CLI::App& app, Action& action);
 void register_inspect(CLI::App& app, Action& action);
+void register_status(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

@@ -1,0 +1,71 @@
+// `csgtile status CONFIG [--json]`: the state of a run's queue (SQLite or PostgreSQL, as the
+// config says): jobs per state, dead jobs with their last error, and progress. Read-only: an
+// embedded queue that does not exist yet is reported, not created.
+
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/config/config.h"
+#include "csgtile/worker/queue.h"
+
+namespace csgtile::worker::detail {
+
+void register_status(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand("status", "Show a run's queue: jobs per state, dead jobs with "
+                                           "their reasons, progress");
+  auto file = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("CONFIG", *file, "YAML config file")->required();
+  cmd->add_flag("--json", *json, "Print one JSON object");
+  cmd->callback([&action, file, json] {
+    action = [file, json] {
+      const auto loaded = config::load_file(*file, config::from_process_environment());
+      if (!loaded.ok()) {
+        for (const auto& p : loaded.problems) std::cerr << config::format_problem(*file, p) << "\n";
+        return error_info(ErrorCode::ConfigInvalid).exit_code;
+      }
+      const config::Config& cfg = *loaded.config;
+      const std::string where = describe_queue(cfg);
+      if (cfg.queue.backend == config::QueueBackend::Sqlite && !std::filesystem::exists(where)) {
+        std::cerr << "csgtile status: no queue at " << where << " (nothing enqueued yet)\n";
+        return error_info(ErrorCode::InputInvalid).exit_code;
+      }
+      Failure failure;
+      auto queue = open_queue(cfg, failure);
+      QueueCounts c;
+      std::vector<DeadJob> dead;
+      if (queue) c = queue->counts(failure);
+      if (queue && failure.ok()) dead = queue->dead_jobs(failure);
+      if (!queue || !failure.ok()) {
+        std::cerr << "csgtile status: " << failure.message << "\n";
+        return error_info(failure.code).exit_code;
+      }
+      const std::int64_t total = c.queued + c.running + c.done + c.retry + c.dead;
+      if (*json) {
+        nlohmann::ordered_json out;
+        out["run"] = cfg.run.name;
+        out["queue"] = where;
+        out["jobs"] = {{"queued", c.queued}, {"running", c.running}, {"retry", c.retry},
+                       {"done", c.done}, {"dead", c.dead}, {"total", total}};
+        out["finished"] = c.unfinished() == 0;
+        out["dead"] = nlohmann::ordered_json::array();
+        for (const DeadJob& d : dead) {
+          out["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
+        }
+        std::cout << out.dump() << "\n";
+      } else {
+        std::cout << "run " << cfg.run.name << " (" << where << "): " << c.done + c.dead << " of " << total
+                  << " job(s) finished — queued " << c.queued << ", running " << c.running << ", retry "
+                  << c.retry << ", done " << c.done << ", dead " << c.dead << "\n";
+        for (const DeadJob& d : dead) {
+          std::cout << "  dead " << d.key << " after " << d.attempts << " attempt(s): " << d.last_error << "\n";
+        }
+      }
+      return 0;
+    };
+  });
+}
+
+}  // namespace csgtile::worker::detail
