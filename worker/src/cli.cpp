@@ -23,6 +23,8 @@ int run_cli(int argc, char** argv) {
   detail::register_assemble(app, action);
   detail::register_inspect(app, action);
   detail::register_status(app, action);
+  detail::register_enqueue(app, action);
+  detail::register_worker(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -24,5 +24,7 @@ void register_query(CLI::App& app, Action& action);
 void register_assemble(CLI::App& app, Action& action);
 void register_inspect(CLI::App& app, Action& action);
 void register_status(CLI::App& app, Action& action);
+void register_enqueue(CLI::App& app, Action& action);
+void register_worker(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

@@ -118,68 +118,97 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   return {};
 }
 
-Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
-  const std::filesystem::path output = config.run.output;
-  summary.run_dir = output / "runs" / config.run.name;
+Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log, std::size_t& added) {
   Failure failure;
-  auto queue = open_queue(config, failure);
-  if (!queue) return failure;
-
-  std::size_t added = 0;
+  added = 0;
   for (const std::string& input : config.run.inputs) {
     const std::string key = "build:" + config.run.name + ":" + input;
     const std::string payload = nlohmann::json({{"input", input}}).dump();
-    if (queue->enqueue(key, "build", payload, failure)) ++added;
+    if (queue.enqueue(key, "build", payload, failure)) ++added;
     if (!failure.ok()) return failure;
   }
   log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
                                {"queue", describe_queue(config)}});
+  return failure;
+}
 
-  const std::string worker_id = "local-" + std::to_string(getpid());
+Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& log,
+                   const WorkOptions& options, WorkSummary& work) {
+  const std::filesystem::path run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
+  const std::string worker_id = options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
+  Failure failure;
   while (true) {
     if (stop_requested()) {
-      // Drain: nothing more is claimed; the queue keeps the rest for the next run.
-      summary.counts = queue->counts(failure);
-      summary.stopped = true;
-      log.info("run", "stopped by signal", {{"done", std::to_string(summary.counts.done)},
-                                            {"unfinished", std::to_string(summary.counts.unfinished())}});
+      // Drain: nothing more is claimed; the queue keeps the rest.
+      work.stopped = true;
+      log.info("worker", "stopped by signal", {{"jobs", std::to_string(work.jobs)}});
       return failure;
     }
-    auto job = queue->claim(worker_id, failure);
+    auto job = queue.claim(worker_id, failure);
     if (!failure.ok()) return failure;
     if (!job) {
-      const QueueCounts c = queue->counts(failure);
+      const QueueCounts c = queue.counts(failure);
       if (!failure.ok()) return failure;
-      if (c.retry == 0 && c.queued == 0 && c.running == 0) break;
+      if (c.unfinished() == 0) {
+        work.finished = true;
+        if (options.exit_when_idle) return failure;
+      } else {
+        work.finished = false;
+      }
       // Retries wait for their backoff; a running job of another process holds its lease.
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      std::this_thread::sleep_for(options.poll);
       continue;
     }
     const auto start = std::chrono::steady_clock::now();
     std::string result;
     // The lease is renewed every third of its length while the job runs.
-    LeaseHeartbeat heartbeat(*queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
-    Failure job_failure = run_build_job(*job, summary.run_dir, config, result);
+    LeaseHeartbeat heartbeat(queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
+    Failure job_failure = run_build_job(*job, run_dir, config, result);
     heartbeat.stop();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++work.jobs;
     if (heartbeat.lost()) {
       // Another worker holds the job now (fencing): this attempt's outcome is not recorded.
       log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
       continue;
     }
     if (job_failure.ok()) {
-      queue->complete(*job, result, failure);
+      queue.complete(*job, result, failure);
       log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
     } else {
       const ErrorInfo& info = error_info(job_failure.code);
-      queue->fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable, failure);
+      queue.fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable, failure);
       log.error("job", "failed", {{"job", job->key}, {"error", info.name},
                                   {"reason", job_failure.message},
                                   {"attempt", std::to_string(job->attempts)}});
     }
     if (!failure.ok()) return failure;
   }
+}
 
+Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
+  summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
+  Failure failure;
+  auto queue = open_queue(config, failure);
+  if (!queue) return failure;
+  std::size_t added = 0;
+  if (Failure f = enqueue_run(config, *queue, log, added); !f.ok()) return f;
+  WorkOptions options;
+  options.exit_when_idle = true;
+  WorkSummary work;
+  if (Failure f = work_queue(config, *queue, log, options, work); !f.ok()) return f;
+  if (work.stopped) {
+    summary.counts = queue->counts(failure);
+    summary.stopped = true;
+    return failure;
+  }
+  return publish_run(config, *queue, log, summary);
+}
+
+Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Logger& log, RunSummary& summary) {
+  summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
+  JobQueue* queue = &queue_ref;
+  Failure failure;
   summary.counts = queue->counts(failure);
   summary.dead = queue->dead_jobs(failure);
   const auto results = queue->results(failure);

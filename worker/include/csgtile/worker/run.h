@@ -1,12 +1,13 @@
 #pragma once
 /// \file
-/// A whole run on the embedded (SQLite) queue: enqueue one job per input, work the queue
-/// until nothing is runnable, publish the run manifest.
+/// A run on a job queue (SQLite or PostgreSQL): enqueue one job per input, work the queue
+/// (one process, or many workers sharing it), publish the run's outputs and manifest.
 ///
 /// Stages that exist today: read scene (primitives in the scene format) → build solids →
 /// check validity → mass properties → publish the native model (content-addressed) and the
 /// job's record. LIDAR reading, fitting and assembly join as their issues land.
 
+#include <chrono>
 #include <filesystem>
 #include <vector>
 
@@ -30,6 +31,31 @@ struct RunSummary {
 /// (their reasons in the summary and the manifest); the run itself fails only when the
 /// queue or the output directory cannot be used.
 Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary);
+
+/// Adds one build job per input of `config` (a no-op for jobs already in the queue);
+/// `added` counts the new ones.
+Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log, std::size_t& added);
+
+struct WorkOptions {
+  bool exit_when_idle = false;  ///< return once the queue has no unfinished job
+  std::chrono::milliseconds poll{100};  ///< wait between claims when nothing is runnable
+  std::string worker_id;        ///< default "local-<pid>"
+};
+
+struct WorkSummary {
+  long long jobs = 0;     ///< jobs this worker ran (any outcome)
+  bool finished = false;  ///< the queue had no unfinished job when last looked at
+  bool stopped = false;   ///< a stop signal ended the loop
+};
+
+/// Claims and runs jobs (lease heartbeat, fencing, retries) until a stop signal, or — with
+/// exit_when_idle — until the queue has no unfinished job.
+Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& log,
+                   const WorkOptions& options, WorkSummary& work);
+
+/// Publishes the run from the queue's done jobs: topology index, CityJSONSeq, 3D Tiles, then
+/// the manifest naming them. Deterministic, so publishing twice writes the same bytes.
+Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log, RunSummary& summary);
 
 /// Executes one "build" job: its payload names a scene input. On success `result` is the
 /// job's JSON record (deterministic: no timings, no absolute paths).

@@ -1,0 +1,128 @@
+// `csgtile enqueue CONFIG` and `csgtile worker CONFIG [--exit-when-idle]`: the two halves of
+// `csgtile run` for queue-driven clusters. Any number of workers (processes, machines) share
+// the config's queue; when one finds the queue finished it publishes the run (index,
+// CityJSONSeq, 3D Tiles, manifest) — deterministic bytes, so several publishing is harmless.
+
+#include <chrono>
+#include <iostream>
+#include <thread>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/worker/run.h"
+#include "stop_signal.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+struct Loaded {
+  std::optional<config::Config> config;
+  int exit_code = 0;
+};
+
+Loaded load(const std::string& file) {
+  const auto loaded = config::load_file(file, config::from_process_environment());
+  if (!loaded.ok()) {
+    for (const auto& p : loaded.problems) std::cerr << config::format_problem(file, p) << "\n";
+    return {std::nullopt, error_info(ErrorCode::ConfigInvalid).exit_code};
+  }
+  return {*loaded.config, 0};
+}
+
+}  // namespace
+
+void register_enqueue(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand("enqueue", "Add a run's jobs (one per input) to the config's queue; "
+                                            "jobs already there are left as they are");
+  auto file = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("CONFIG", *file, "YAML config file")->required();
+  cmd->add_flag("--json", *json, "Print one JSON object");
+  cmd->callback([&action, file, json] {
+    action = [file, json] {
+      const Loaded l = load(*file);
+      if (!l.config) return l.exit_code;
+      Logger log(l.config->log.level, l.config->log.format);
+      Failure failure;
+      auto queue = open_queue(*l.config, failure);
+      std::size_t added = 0;
+      if (queue) failure = enqueue_run(*l.config, *queue, log, added);
+      if (!queue || !failure.ok()) {
+        log.error("enqueue", failure.message, {{"error", error_info(failure.code).name}});
+        return error_info(failure.code).exit_code;
+      }
+      if (*json) {
+        std::cout << nlohmann::ordered_json{{"run", l.config->run.name}, {"added", added},
+                                            {"inputs", l.config->run.inputs.size()}}.dump() << "\n";
+      } else {
+        std::cout << "run " << l.config->run.name << ": " << added << " job(s) added ("
+                  << l.config->run.inputs.size() - added << " already queued)\n";
+      }
+      return 0;
+    };
+  });
+}
+
+void register_worker(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand("worker", "Work the config's queue: claim, run and complete jobs until "
+                                           "SIGTERM (or, with --exit-when-idle, until the queue is finished); "
+                                           "publish the run when the queue is finished");
+  auto file = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto idle = std::make_shared<bool>(false);
+  cmd->add_option("CONFIG", *file, "YAML config file")->required();
+  cmd->add_flag("--exit-when-idle", *idle, "Exit once no job is unfinished (after publishing the run)");
+  cmd->add_flag("--json", *json, "Print one JSON summary object at exit");
+  cmd->callback([&action, file, json, idle] {
+    action = [file, json, idle] {
+      const Loaded l = load(*file);
+      if (!l.config) return l.exit_code;
+      const config::Config& cfg = *l.config;
+      Logger log(cfg.log.level, cfg.log.format);
+      install_stop_signals();
+      Failure failure;
+      auto queue = open_queue(cfg, failure);
+      if (!queue) {
+        log.error("worker", failure.message, {{"error", error_info(failure.code).name}});
+        return error_info(failure.code).exit_code;
+      }
+      WorkOptions options;
+      options.exit_when_idle = true;  // work_queue returns whenever the queue is finished
+      WorkSummary work;
+      RunSummary summary;
+      bool published = false;
+      // The queue finished: publish (again only after more work), then exit or wait for more.
+      while (true) {
+        failure = work_queue(cfg, *queue, log, options, work);
+        if (!failure.ok() || work.stopped) break;
+        if (!published || work.jobs > 0) {
+          failure = publish_run(cfg, *queue, log, summary);
+          if (!failure.ok()) break;
+          published = true;
+          work.jobs = 0;
+        }
+        if (*idle) break;
+        std::this_thread::sleep_for(std::chrono::seconds(1));
+      }
+      if (!failure.ok()) {
+        log.error("worker", failure.message, {{"error", error_info(failure.code).name}});
+        return error_info(failure.code).exit_code;
+      }
+      const QueueCounts c = queue->counts(failure);
+      if (*json) {
+        nlohmann::ordered_json out{{"run", cfg.run.name}, {"stopped", work.stopped}, {"published", published},
+                                   {"done", c.done}, {"dead", c.dead}, {"unfinished", c.unfinished()}};
+        if (published) out["manifest"] = summary.manifest.string();
+        std::cout << out.dump() << "\n";
+      } else {
+        std::cout << "worker " << (work.stopped ? "stopped" : "finished") << ": run " << cfg.run.name << " "
+                  << c.done << " done, " << c.dead << " dead, " << c.unfinished() << " unfinished"
+                  << (published ? "; published " + summary.manifest.string() : std::string()) << "\n";
+      }
+      return 0;
+    };
+  });
+}
+
+}  // namespace csgtile::worker::detail
