@@ -10,6 +10,15 @@
 
 namespace csgtile::worker::detail {
 
+std::optional<config::Config> load_run_config(const std::string& file) {
+  const auto loaded = config::load_file(file, config::from_process_environment());
+  if (!loaded.ok()) {
+    for (const auto& p : loaded.problems) std::cerr << config::format_problem(file, p) << "\n";
+    return std::nullopt;
+  }
+  return *loaded.config;
+}
+
 void register_validate_config(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand("validate-config",
                                  "Check a config file (and CSGTILE_* overrides); list every "

@@ -18,12 +18,9 @@ void register_run(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print the run summary as one JSON object");
   cmd->callback([&action, file, json] {
     action = [file, json] {
-      const auto loaded = config::load_file(*file, config::from_process_environment());
-      if (!loaded.ok()) {
-        for (const auto& p : loaded.problems) std::cerr << config::format_problem(*file, p) << "\n";
-        return error_info(ErrorCode::ConfigInvalid).exit_code;
-      }
-      const config::Config& cfg = *loaded.config;
+      const auto loaded = load_run_config(*file);
+      if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
+      const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
       RunSummary summary;
       install_stop_signals();

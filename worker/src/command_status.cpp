@@ -21,12 +21,9 @@ void register_status(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print one JSON object");
   cmd->callback([&action, file, json] {
     action = [file, json] {
-      const auto loaded = config::load_file(*file, config::from_process_environment());
-      if (!loaded.ok()) {
-        for (const auto& p : loaded.problems) std::cerr << config::format_problem(*file, p) << "\n";
-        return error_info(ErrorCode::ConfigInvalid).exit_code;
-      }
-      const config::Config& cfg = *loaded.config;
+      const auto loaded = load_run_config(*file);
+      if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
+      const config::Config& cfg = *loaded;
       const std::string where = describe_queue(cfg);
       if (cfg.queue.backend == config::QueueBackend::Sqlite && !std::filesystem::exists(where)) {
         std::cerr << "csgtile status: no queue at " << where << " (nothing enqueued yet)\n";

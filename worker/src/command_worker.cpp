@@ -14,24 +14,6 @@
 
 namespace csgtile::worker::detail {
 
-namespace {
-
-struct Loaded {
-  std::optional<config::Config> config;
-  int exit_code = 0;
-};
-
-Loaded load(const std::string& file) {
-  const auto loaded = config::load_file(file, config::from_process_environment());
-  if (!loaded.ok()) {
-    for (const auto& p : loaded.problems) std::cerr << config::format_problem(file, p) << "\n";
-    return {std::nullopt, error_info(ErrorCode::ConfigInvalid).exit_code};
-  }
-  return {*loaded.config, 0};
-}
-
-}  // namespace
-
 void register_enqueue(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand("enqueue", "Add a run's jobs (one per input) to the config's queue; "
                                             "jobs already there are left as they are");
@@ -41,23 +23,23 @@ void register_enqueue(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print one JSON object");
   cmd->callback([&action, file, json] {
     action = [file, json] {
-      const Loaded l = load(*file);
-      if (!l.config) return l.exit_code;
-      Logger log(l.config->log.level, l.config->log.format);
+      const auto cfg = load_run_config(*file);
+      if (!cfg) return error_info(ErrorCode::ConfigInvalid).exit_code;
+      Logger log(cfg->log.level, cfg->log.format);
       Failure failure;
-      auto queue = open_queue(*l.config, failure);
+      auto queue = open_queue(*cfg, failure);
       std::size_t added = 0;
-      if (queue) failure = enqueue_run(*l.config, *queue, log, added);
+      if (queue) failure = enqueue_run(*cfg, *queue, log, added);
       if (!queue || !failure.ok()) {
         log.error("enqueue", failure.message, {{"error", error_info(failure.code).name}});
         return error_info(failure.code).exit_code;
       }
       if (*json) {
-        std::cout << nlohmann::ordered_json{{"run", l.config->run.name}, {"added", added},
-                                            {"inputs", l.config->run.inputs.size()}}.dump() << "\n";
+        std::cout << nlohmann::ordered_json{{"run", cfg->run.name}, {"added", added},
+                                            {"inputs", cfg->run.inputs.size()}}.dump() << "\n";
       } else {
-        std::cout << "run " << l.config->run.name << ": " << added << " job(s) added ("
-                  << l.config->run.inputs.size() - added << " already queued)\n";
+        std::cout << "run " << cfg->run.name << ": " << added << " job(s) added ("
+                  << cfg->run.inputs.size() - added << " already queued)\n";
       }
       return 0;
     };
@@ -76,9 +58,9 @@ void register_worker(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print one JSON summary object at exit");
   cmd->callback([&action, file, json, idle] {
     action = [file, json, idle] {
-      const Loaded l = load(*file);
-      if (!l.config) return l.exit_code;
-      const config::Config& cfg = *l.config;
+      const auto loaded = load_run_config(*file);
+      if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
+      const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
       install_stop_signals();
       Failure failure;

@@ -3,6 +3,10 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <optional>
+#include <string>
+
+#include "csgtile/config/config.h"
 
 namespace csgtile::worker::detail {
 
@@ -10,6 +14,10 @@ namespace csgtile::worker::detail {
 struct GlobalOptions {
   bool json = false;
 };
+
+/// Loads a run config with its CSGTILE_* overrides for a command; on problems prints each
+/// (file:line: key: message) to stderr and returns nullopt (exit with config_invalid).
+std::optional<config::Config> load_run_config(const std::string& file);
 
 /// A registered subcommand's action, returning the exit code.
 using Action = std::function<int()>;
