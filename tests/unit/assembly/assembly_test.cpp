@@ -82,7 +82,7 @@ PrimitiveSpec random_part(std::mt19937_64& rng) {
 TEST(VoxelCulling, NeverCullsAPairInContact) {
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const int pairs = 100 * test::property_scale();
+  const int pairs = 200 * test::property_scale();
   int in_contact = 0, apart = 0, apart_culled = 0, skipped = 0, nested_pairs = 0;
   kernel::BooleanOptions bopt;
   for (int k = 0; k < pairs; ++k) {
