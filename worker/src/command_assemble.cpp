@@ -12,6 +12,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "commands.h"
 #include "csgtile/assembly/assembly.h"
@@ -160,18 +161,17 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   if (args.cell.size() == 2) {
     cells.emplace_back(args.cell[0], args.cell[1]);
   } else {
-    std::map<std::pair<long long, long long>, int> any;
+    std::set<std::pair<long long, long long>> any;
     for (const auto& p : prims) {
       auto solid = kernel::build_primitive(p.spec, args.tolerance);
       if (!solid.ok()) continue;
       const kernel::BoundingBox b = kernel::bounding_box(solid.value());
-      any[assembly::cell_of(grid, b.min.x(), b.min.y())] = 1;
+      any.insert(assembly::cell_of(grid, b.min.x(), b.min.y()));
     }
-    for (const auto& [c, unused] : any) cells.push_back(c);
+    cells.assign(any.begin(), any.end());
   }
   double volume = 0;
   ordered_json list = ordered_json::array();
-  assembly::AssemblyStats total;
   for (const auto& [i, j] : cells) {
     grid.i = i;
     grid.j = j;

@@ -103,18 +103,9 @@ class BooleanEngine {
     if (first_b_face_ == 0 || first_b_face_ == model_.faces.size()) return Interference::Disjoint;
     // Vertices within tolerance of each other are one model vertex: one used by both
     // operands is a contact point.
-    std::vector<int> operand_of_vertex(model_.vertices.size(), -1);
-    for (const BFace& f : model_.faces) {
-      for (const BLoop& loop : f.loops) {
-        for (const BUse& u : loop) {
-          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
-          for (int v : {e.v0, e.v1}) {
-            int& o = operand_of_vertex[static_cast<std::size_t>(v)];
-            if (o != -1 && o != f.operand) return Interference::BoundariesMeet;
-            o = f.operand;
-          }
-        }
-      }
+    const std::vector<int> operand_of_vertex = operand_of_vertices();
+    if (std::find(operand_of_vertex.begin(), operand_of_vertex.end(), 2) != operand_of_vertex.end()) {
+      return Interference::BoundariesMeet;
     }
     reframe_spheres();
     polygons_.resize(model_.faces.size());
@@ -367,22 +358,33 @@ class BooleanEngine {
                    {es, false, std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))}}};
   }
 
-  // A vertex of one operand lying inside an edge of the other (touching or overlapping
-  // boundaries) splits that edge there.
-  void split_at_touching_vertices() {
-    const double tol = options_.tolerance;
-    std::vector<int> operand_of_vertex(model_.vertices.size(), -1);
-    std::vector<int> operand_of_edge(model_.edges.size(), -1);
+  // Per model vertex: the operand whose boundary edges use it (0 or 1), 2 when both do (a
+  // contact point), -1 when none does.
+  std::vector<int> operand_of_vertices() const {
+    std::vector<int> operand(model_.vertices.size(), -1);
     for (const BFace& f : model_.faces) {
       for (const BLoop& loop : f.loops) {
         for (const BUse& u : loop) {
           const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
           for (int v : {e.v0, e.v1}) {
-            int& o = operand_of_vertex[static_cast<std::size_t>(v)];
-            o = (o == -1 || o == f.operand) ? f.operand : 2;  // 2: shared by both
+            int& o = operand[static_cast<std::size_t>(v)];
+            o = (o == -1 || o == f.operand) ? f.operand : 2;
           }
-          operand_of_edge[static_cast<std::size_t>(u.edge)] = f.operand;
         }
+      }
+    }
+    return operand;
+  }
+
+  // A vertex of one operand lying inside an edge of the other (touching or overlapping
+  // boundaries) splits that edge there.
+  void split_at_touching_vertices() {
+    const double tol = options_.tolerance;
+    const std::vector<int> operand_of_vertex = operand_of_vertices();
+    std::vector<int> operand_of_edge(model_.edges.size(), -1);
+    for (const BFace& f : model_.faces) {
+      for (const BLoop& loop : f.loops) {
+        for (const BUse& u : loop) operand_of_edge[static_cast<std::size_t>(u.edge)] = f.operand;
       }
     }
     for (std::size_t ei = 0; ei < model_.edges.size(); ++ei) {
