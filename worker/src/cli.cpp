@@ -25,6 +25,7 @@ int run_cli(int argc, char** argv) {
   detail::register_status(app, action);
   detail::register_enqueue(app, action);
   detail::register_worker(app, action);
+  detail::register_fit(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

@@ -34,5 +34,6 @@ void register_inspect(CLI::App& app, Action& action);
 void register_status(CLI::App& app, Action& action);
 void register_enqueue(CLI::App& app, Action& action);
 void register_worker(CLI::App& app, Action& action);
+void register_fit(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

@@ -1,0 +1,139 @@
+#pragma once
+/// \file
+/// Primitive fitting: an efficient RANSAC (after Schnabel, Wahl and Klein 2007) that finds
+/// planes, spheres, cylinders, cones and tori in a point cloud with normals, and the step that
+/// turns those shapes into scene primitives (boxes from orthogonal planes, bounded cylinders,
+/// cones, spheres, tori) built and checked as kernel solids.
+///
+/// Determinism. Every random choice comes from one seeded generator with our own transforms;
+/// the detection is single-threaded and iterates in index order, so the same points, options
+/// and seed give the same shapes, bit for bit.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "csgtile/geo/scene.h"
+#include "csgtile/kernel/location.h"
+
+namespace csgtile::geo {
+
+/// The surfaces the RANSAC detects.
+enum class ShapeType : std::uint8_t { Plane, Sphere, Cylinder, Cone, Torus };
+inline constexpr int kShapeTypeCount = 5;
+/// "plane", "sphere", "cylinder", "cone", "torus".
+const char* shape_type_name(ShapeType type);
+
+/// An unbounded surface. `axis` is a unit vector.
+///  - plane: `point` on it, `axis` its normal;
+///  - sphere: `point` the centre, `radius`;
+///  - cylinder: `point` on the axis, `axis`, `radius`;
+///  - cone: `point` the apex, `axis` pointing into the cone, `angle` the half-angle (radians);
+///  - torus: `point` the centre, `axis`, `radius` major R, `radius2` minor r.
+struct Surface {
+  ShapeType type = ShapeType::Plane;
+  kernel::Vec3 point = kernel::Vec3::Zero();
+  kernel::Vec3 axis = kernel::Vec3::UnitZ();
+  double radius = 0.0;
+  double radius2 = 0.0;
+  double angle = 0.0;
+};
+
+/// Signed distance from `p` to the surface (positive outside / along the normal).
+double surface_distance(const Surface& s, const kernel::Vec3& p);
+/// Unit normal of the surface at the foot of `p` (unoriented for a plane: its axis).
+kernel::Vec3 surface_normal(const Surface& s, const kernel::Vec3& p);
+
+/// Options of the RANSAC. Lengths in metres.
+struct RansacOptions {
+  double epsilon = 0.02;               ///< inlier distance
+  double normal_deviation_deg = 25.0;  ///< largest angle between a point's normal and the surface's
+  double cluster_epsilon = 0.0;        ///< connectivity (grid cell) size; 0: from the spacing
+  long long min_points = 40;           ///< smallest shape
+  double probability = 0.99;           ///< of not having missed a shape of min_points
+  double max_radius = 30.0;            ///< larger radii are treated as planes
+  std::uint64_t seed = 1;
+  std::array<bool, kShapeTypeCount> shapes{true, true, true, true, true};  ///< by ShapeType
+  std::uint64_t max_candidates = 2000000;  ///< hard cap on minimal samples drawn
+};
+
+/// One detected shape: the refitted surface and its inliers (a connected component).
+struct DetectedShape {
+  Surface surface;
+  std::vector<std::uint32_t> inliers;  ///< indices into the input, ascending
+  double rms = 0.0;                    ///< of the inliers' distances
+};
+
+struct RansacResult {
+  std::vector<DetectedShape> shapes;  ///< in the order they were extracted
+  std::vector<int> assignment;        ///< per point: index into shapes, -1 unassigned
+  std::uint64_t candidates = 0;       ///< minimal samples drawn
+  double spacing = 0.0;               ///< median of 1/sqrt(local density)
+  double cluster_epsilon = 0.0;       ///< connectivity size used
+  std::string reason;                 ///< why nothing was found (empty when shapes were)
+};
+
+/// Detects shapes in `points` with unit `normals` (same size; a zero normal marks a point
+/// without one, which can only join shapes, never seed them). Non-finite points are ignored.
+/// Errors: InvalidArgument for mismatched sizes or bad options. An input with too few usable
+/// points is not an error: the result has no shapes and a reason.
+kernel::Result<RansacResult> detect_shapes(std::span<const kernel::Vec3> points,
+                                           std::span<const kernel::Vec3> normals,
+                                           const RansacOptions& options);
+
+/// Terrain heights on a grid (cells without ground are NaN): lets a roof seen from the air,
+/// whose walls the scan barely sees, reach down to the ground as a box.
+struct GroundGrid {
+  double x0 = 0.0, y0 = 0.0, cell = 1.0;
+  int nx = 0, ny = 0;
+  std::vector<double> z;  ///< row-major by y, nx × ny
+  /// The lowest height within `radius` metres of (x, y); NaN when there is none.
+  double lowest_near(double x, double y, double radius) const;
+};
+
+/// Options of the step from shapes to primitives.
+struct PrimitiveOptions {
+  bool boxes = true;            ///< build boxes from orthogonal/parallel planes
+  double max_box_depth = 40.0;  ///< farthest a box face may lie from its seed plane
+  double min_box_thickness = 0.04;
+  double min_seed_coverage = 0.6;  ///< share of a seed plane's rectangle its points cover
+  double angle_tolerance_deg = 5.0;
+  /// Cylinders, cones and tori whose inliers span a smaller angle around the axis (or, for
+  /// cylinders and cones, are shorter than two connectivity cells) are rejected as spurious.
+  double min_angular_span_deg = 90.0;
+  /// When set, a horizontal seed plane with no depth of its own at least min_building_height
+  /// above the ground becomes a box from the ground up to it.
+  const GroundGrid* ground = nullptr;
+  double min_building_height = 2.0;
+  double linear_tolerance = 1e-7;  ///< of the kernel solids built to check primitives
+};
+
+/// Why a shape or primitive was dropped.
+struct Rejection {
+  std::string what;    ///< e.g. "plane 12", "box beam candidate 3"
+  std::string reason;  ///< e.g. "no parallel or orthogonal partner plane"
+  long long points = 0;
+};
+
+struct FittedPrimitives {
+  std::vector<ScenePrimitive> primitives;  ///< ids "r<region>-<n>", quality filled
+  std::vector<Rejection> rejected;
+  std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
+  long long assigned_points = 0;  ///< points explained by an output primitive
+};
+
+/// Turns detected shapes into primitives: boxes from planes (a seed plane well covered by
+/// its points, with the points of parallel and orthogonal planes within its rectangle and a
+/// contiguous depth), cylinders and cones bounded by their inliers along the axis, spheres
+/// and tori as they are. Each primitive is built as a kernel solid and checked; invalid ones
+/// are rejected with the kernel's reason. `region` becomes part of the ids. `normals` are
+/// those given to detect_shapes (not used today; kept so that callers need not change when
+/// box faces are oriented by them).
+FittedPrimitives primitives_from_shapes(std::span<const kernel::Vec3> points,
+                                        std::span<const kernel::Vec3> normals,
+                                        const RansacResult& shapes, const PrimitiveOptions& options,
+                                        const RansacOptions& ransac, int region);
+
+}  // namespace csgtile::geo

@@ -1,0 +1,122 @@
+#pragma once
+/// \file
+/// Cleaning and segmentation of a point cloud before fitting, each stage a separate call with
+/// a plain options struct (statistical outliers, voxel downsampling, normals, ground,
+/// Euclidean clusters), and the whole fit pipeline that chains them with fit.h.
+///
+/// Points are tile-local coordinates in metres. Outputs are index lists in ascending order or
+/// per-point vectors in input order; clusters are ordered by size (largest first), ties by
+/// their smallest point index. Every stage is single-threaded and deterministic.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "csgtile/geo/fit.h"
+
+namespace csgtile::geo {
+
+/// Statistical outlier removal: a point whose mean distance to its `neighbours` nearest
+/// points exceeds the cloud's mean by `std_ratio` standard deviations is an outlier.
+struct OutlierOptions {
+  bool enabled = true;
+  int neighbours = 12;
+  double std_ratio = 3.0;
+};
+/// Indices of the points kept (finite and not outliers), ascending.
+std::vector<std::uint32_t> remove_statistical_outliers(std::span<const kernel::Vec3> points,
+                                                       const OutlierOptions& options);
+
+/// Voxel downsampling: one point (the centroid) per occupied cube of `size` metres; 0 keeps
+/// every point. Output order: by voxel (x, then y, then z).
+struct VoxelOptions {
+  double size = 0.0;
+};
+std::vector<kernel::Vec3> voxel_downsample(std::span<const kernel::Vec3> points,
+                                           const VoxelOptions& options);
+
+/// Normals by principal components of each point's `neighbours` nearest points (PCL
+/// NormalEstimation). Unit vectors, unoriented; zero where the neighbourhood is degenerate
+/// (collinear or duplicated points).
+struct NormalOptions {
+  int neighbours = 16;
+};
+std::vector<kernel::Vec3> estimate_normals(std::span<const kernel::Vec3> points,
+                                           const NormalOptions& options);
+
+/// Ground separation: LAS class 2 when the cloud has classes and any point carries it, else a
+/// morphological filter (the grid of lowest points opened by a `window`-wide square; a point
+/// within `height` of the opened surface is ground).
+struct GroundOptions {
+  bool enabled = true;
+  bool use_classification = true;
+  double cell = 1.0;
+  double window = 30.0;
+  double height = 0.3;
+};
+/// Per point: 1 ground, 0 not. `classes` may be empty (no classification).
+std::vector<char> ground_mask(std::span<const kernel::Vec3> points,
+                              std::span<const std::uint8_t> classes, const GroundOptions& options);
+
+/// Euclidean clustering: points closer than `tolerance` (0: 1.5 × the 90th percentile of the
+/// distance to the 16th neighbour) join;
+/// clusters below `min_points` are dropped.
+struct ClusterOptions {
+  double tolerance = 0.0;
+  long long min_points = 40;
+};
+/// `tolerance_used` (optional) receives the distance used.
+std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const kernel::Vec3> points,
+                                                           const ClusterOptions& options,
+                                                           double* tolerance_used = nullptr);
+
+/// Every option of the fit pipeline.
+struct FitPipelineOptions {
+  OutlierOptions outliers;
+  VoxelOptions voxel;
+  NormalOptions normals;
+  GroundOptions ground;
+  ClusterOptions clusters;
+  RansacOptions ransac;
+  PrimitiveOptions primitives;
+};
+
+/// One region (Euclidean cluster) as the RANSAC saw it.
+struct FitRegion {
+  long long points = 0;
+  double spacing = 0.0;          ///< estimated point spacing
+  double cluster_epsilon = 0.0;  ///< connectivity size used
+  int shapes = 0;                ///< surfaces detected
+  int primitives = 0;            ///< primitives kept
+  std::uint64_t candidates = 0;
+};
+
+/// What the pipeline found and how long each stage took.
+struct FitOutput {
+  std::vector<ScenePrimitive> primitives;  ///< ids "r<region>-<n>"
+  std::vector<Rejection> rejected;
+  std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
+  long long input_points = 0;
+  long long ground_points = 0;
+  long long outlier_points = 0;
+  long long fitted_points = 0;         ///< points given to the RANSAC (after downsampling)
+  long long assigned_points = 0;       ///< of those, explained by an output primitive
+  long long unassigned_points = 0;     ///< fitted_points - assigned_points
+  long long small_cluster_points = 0;  ///< in clusters below min_points
+  int regions = 0;
+  std::vector<FitRegion> region_stats;  ///< per region, in region order
+  double cluster_tolerance = 0.0;       ///< Euclidean clustering distance used
+  std::uint64_t candidates = 0;
+  std::vector<std::pair<std::string, double>> seconds;  ///< per stage, in order
+};
+
+/// Ground → outliers → voxels → clusters → per cluster: normals, RANSAC, primitives.
+/// `classes` may be empty. Errors: InvalidArgument for bad options (naming the option).
+kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
+                                          std::span<const std::uint8_t> classes,
+                                          const FitPipelineOptions& options);
+
+}  // namespace csgtile::geo

@@ -1,0 +1,99 @@
+#pragma once
+// Internals of the fitting module shared by its .cpp files: the spatial grid used for
+// localised sampling and connected components, minimal-sample candidates and least-squares
+// refits of the surfaces.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include "csgtile/geo/fit.h"
+
+namespace csgtile::geo::detail {
+
+using kernel::Vec3;
+
+/// floor(v / cell) as an integer, clamped to ±1e15 (and 0 for NaN) so that hostile
+/// coordinates never overflow the conversion.
+inline long long cell_index(double v, double cell) {
+  const double f = std::floor(v / cell);
+  if (!(f == f)) return 0;
+  return static_cast<long long>(std::clamp(f, -1e15, 1e15));
+}
+
+/// A uniform grid of cubes of size `cell` over a subset of the points. Points of a cell are
+/// stored contiguously, in an order shuffled by `seed` so that the first k of a cell are a
+/// random sample of it. Cells are numbered in ascending key order (deterministic).
+class PointGrid {
+ public:
+  PointGrid(std::span<const Vec3> points, std::span<const std::uint32_t> members, double cell,
+            std::uint64_t seed);
+
+  double cell() const { return cell_; }
+  std::size_t cell_count() const { return begin_.size() - 1; }
+  /// The cell holding point `i`, or -1 when the point is not a member.
+  int cell_of(std::uint32_t i) const { return cell_of_[i]; }
+  /// The cell at integer coordinates, or -1.
+  int find(std::int64_t x, std::int64_t y, std::int64_t z) const;
+  std::span<const std::uint32_t> points(int cell) const {
+    return {order_.data() + begin_[static_cast<std::size_t>(cell)],
+            order_.data() + begin_[static_cast<std::size_t>(cell) + 1]};
+  }
+  const std::array<std::int64_t, 3>& coords(int cell) const {
+    return coords_[static_cast<std::size_t>(cell)];
+  }
+
+ private:
+  double cell_;
+  std::vector<int> cell_of_;
+  std::vector<std::uint32_t> order_;
+  std::vector<std::uint32_t> begin_;
+  std::vector<std::array<std::int64_t, 3>> coords_;
+  std::unordered_map<std::uint64_t, int> lookup_;
+};
+
+/// The `quantile` (0.5: median) of the local point spacing 1/sqrt(density), measured from the
+/// distance r to the 16th neighbour (r·sqrt(π/16)) over a deterministic sample of the members;
+/// 0 for fewer than 17 points.
+double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                        double quantile = 0.5);
+/// The `quantile` of the distance to the 16th neighbour itself: the gap a neighbourhood
+/// bridges, larger than the spacing where sampling is anisotropic (airborne scan lines are
+/// close along a line and far apart across).
+double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                       double quantile);
+
+/// Candidates from samples with unit normals (index 0 is the seed). Each returns nullopt when
+/// the samples are degenerate for the type; the caller verifies the candidate on the samples.
+std::optional<Surface> plane_from_samples(std::span<const Vec3> p, std::span<const Vec3> n);
+std::optional<Surface> sphere_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
+                                           double max_radius);
+std::optional<Surface> cylinder_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
+                                             double max_radius);
+std::optional<Surface> cone_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
+                                         double max_radius);
+/// Needs at least 6 samples: the axis is the line meeting every normal line.
+std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
+                                          double max_radius);
+
+/// Least-squares plane through the points (centroid and smallest principal direction).
+std::optional<Surface> fit_plane(std::span<const Vec3> points,
+                                 std::span<const std::uint32_t> subset);
+/// Levenberg-Marquardt on the distances of `subset` from `start` (its type kept); at most
+/// `max_points` of the subset are used (an even stride). nullopt when the fit degenerates.
+std::optional<Surface> refine_surface(const Surface& start, std::span<const Vec3> points,
+                                      std::span<const std::uint32_t> subset,
+                                      std::size_t max_points = 4000);
+
+/// `axis` or its opposite, whichever has its first non-zero component of (z, y, x) positive,
+/// so that equal lines print equally.
+Vec3 canonical_axis(const Vec3& axis);
+
+/// Two unit vectors completing `axis` to a right-handed orthonormal frame.
+void orthonormal_basis(const Vec3& axis, Vec3& e1, Vec3& e2);
+
+}  // namespace csgtile::geo::detail

@@ -1,0 +1,152 @@
+// The spatial grid of the RANSAC and the spacing estimate.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include "fit/fit_internal.h"
+
+namespace csgtile::geo::detail {
+
+namespace {
+
+constexpr std::int64_t kBias = std::int64_t{1} << 20;  // 21 bits per coordinate
+
+std::uint64_t pack(std::int64_t x, std::int64_t y, std::int64_t z) {
+  const auto c = [](std::int64_t v) {
+    return static_cast<std::uint64_t>(std::clamp<std::int64_t>(v + kBias, 0, 2 * kBias - 1));
+  };
+  return (c(x) << 42) | (c(y) << 21) | c(z);
+}
+
+// A well-mixed 64-bit hash (splitmix64's finaliser): shuffles points inside a cell.
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+PointGrid::PointGrid(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                     double cell, std::uint64_t seed)
+    : cell_(cell), cell_of_(points.size(), -1) {
+  struct Entry {
+    std::uint64_t key;
+    std::uint64_t shuffle;
+    std::uint32_t index;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(members.size());
+  for (auto i : members) {
+    const Vec3& p = points[i];
+    const std::int64_t x = cell_index(p.x(), cell);
+    const std::int64_t y = cell_index(p.y(), cell);
+    const std::int64_t z = cell_index(p.z(), cell);
+    entries.push_back({pack(x, y, z), mix(seed ^ (std::uint64_t{i} * 0x100000001b3ULL)), i});
+  }
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    if (a.key != b.key) return a.key < b.key;
+    if (a.shuffle != b.shuffle) return a.shuffle < b.shuffle;
+    return a.index < b.index;
+  });
+  order_.reserve(entries.size());
+  begin_.push_back(0);
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    if (k > 0 && entries[k].key != entries[k - 1].key)
+      begin_.push_back(static_cast<std::uint32_t>(k));
+    if (k == 0 || entries[k].key != entries[k - 1].key) {
+      const std::uint64_t key = entries[k].key;
+      const auto mask = static_cast<std::uint64_t>(2 * kBias - 1);
+      coords_.push_back({static_cast<std::int64_t>((key >> 42) & mask) - kBias,
+                         static_cast<std::int64_t>((key >> 21) & mask) - kBias,
+                         static_cast<std::int64_t>(key & mask) - kBias});
+      lookup_.emplace(key, static_cast<int>(coords_.size() - 1));
+    }
+    order_.push_back(entries[k].index);
+    cell_of_[entries[k].index] = static_cast<int>(coords_.size() - 1);
+  }
+  begin_.push_back(static_cast<std::uint32_t>(entries.size()));
+  if (entries.empty()) begin_ = {0};
+}
+
+int PointGrid::find(std::int64_t x, std::int64_t y, std::int64_t z) const {
+  if (std::abs(x) >= kBias || std::abs(y) >= kBias || std::abs(z) >= kBias) return -1;
+  const auto it = lookup_.find(pack(x, y, z));
+  return it == lookup_.end() ? -1 : it->second;
+}
+
+namespace {
+
+// Distances to the k-th neighbour over a deterministic sample of the members (at least half of
+// the sample; empty when the points are too few or all duplicates).
+constexpr std::size_t kNeighbours = 16;
+
+std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
+                                            std::span<const std::uint32_t> members) {
+  if (members.size() <= kNeighbours) return {};
+  Vec3 lo = points[members[0]], hi = lo;
+  for (auto i : members) {
+    lo = lo.cwiseMin(points[i]);
+    hi = hi.cwiseMax(points[i]);
+  }
+  // Start from the spacing of points spread over a surface filling the bounding box.
+  double cell = std::max((hi - lo).norm() / std::sqrt(static_cast<double>(members.size())), 1e-6);
+  const std::size_t samples = std::min<std::size_t>(members.size(), 2000);
+  const std::size_t stride = members.size() / samples;
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const PointGrid grid(points, members, cell, 0);
+    std::vector<double> found;
+    std::array<double, kNeighbours> best{};
+    for (std::size_t k = 0; k < samples; ++k) {
+      const std::uint32_t i = members[k * stride];
+      const auto& c = grid.coords(grid.cell_of(i));
+      best.fill(INFINITY);
+      for (int dx = -1; dx <= 1; ++dx) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dz = -1; dz <= 1; ++dz) {
+            const int cc = grid.find(c[0] + dx, c[1] + dy, c[2] + dz);
+            if (cc < 0) continue;
+            for (auto j : grid.points(cc)) {
+              if (j == i) continue;
+              const double d = (points[j] - points[i]).norm();
+              if (!(d > 0.0) || d >= best.back()) continue;
+              best.back() = d;
+              std::sort(best.begin(), best.end());
+            }
+          }
+        }
+      }
+      if (best.back() <= cell) found.push_back(best.back());
+    }
+    if (found.size() * 2 >= samples) return found;
+    cell *= 2.0;
+  }
+  return {};
+}
+
+double quantile_of(std::vector<double> values, double quantile) {
+  if (values.empty()) return 0.0;
+  const auto k = std::min(values.size() - 1,
+                          static_cast<std::size_t>(quantile * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                        double quantile) {
+  // Density spacing 1/sqrt(points per unit area) = r_k·sqrt(π/k).
+  return quantile_of(kth_neighbour_distances(points, members), quantile) *
+         std::sqrt(std::numbers::pi / static_cast<double>(kNeighbours));
+}
+
+double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                       double quantile) {
+  return quantile_of(kth_neighbour_distances(points, members), quantile);
+}
+
+}  // namespace csgtile::geo::detail

@@ -1,0 +1,250 @@
+// The ground filter and the fit pipeline: ground → outliers → voxels → normals → clusters →
+// per cluster RANSAC and primitives.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "csgtile/geo/segment.h"
+#include "fit/fit_internal.h"
+
+namespace csgtile::geo {
+
+namespace {
+
+using kernel::Vec3;
+
+// Sliding minimum (or maximum) of a row of values over a window of 2·half + 1, ignoring
+// infinities that mark empty cells.
+void sliding(std::vector<double>& row, int half, bool minimum) {
+  const std::vector<double> in = row;
+  const int n = static_cast<int>(in.size());
+  for (int i = 0; i < n; ++i) {
+    double best = minimum ? INFINITY : -INFINITY;
+    for (int k = std::max(0, i - half); k <= std::min(n - 1, i + half); ++k) {
+      if (!std::isfinite(in[static_cast<std::size_t>(k)])) continue;
+      best = minimum ? std::min(best, in[static_cast<std::size_t>(k)])
+                     : std::max(best, in[static_cast<std::size_t>(k)]);
+    }
+    row[static_cast<std::size_t>(i)] = best;
+  }
+}
+
+// Separable filter of a grid (nx × ny, row-major by y).
+void filter2d(std::vector<double>& grid, int nx, int ny, int half, bool minimum) {
+  std::vector<double> row;
+  for (int y = 0; y < ny; ++y) {
+    row.assign(grid.begin() + static_cast<std::ptrdiff_t>(y) * nx,
+               grid.begin() + static_cast<std::ptrdiff_t>(y + 1) * nx);
+    sliding(row, half, minimum);
+    std::copy(row.begin(), row.end(), grid.begin() + static_cast<std::ptrdiff_t>(y) * nx);
+  }
+  for (int x = 0; x < nx; ++x) {
+    row.resize(static_cast<std::size_t>(ny));
+    for (int y = 0; y < ny; ++y)
+      row[static_cast<std::size_t>(y)] =
+          grid[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) +
+               static_cast<std::size_t>(x)];
+    sliding(row, half, minimum);
+    for (int y = 0; y < ny; ++y)
+      grid[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) +
+           static_cast<std::size_t>(x)] = row[static_cast<std::size_t>(y)];
+  }
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std::uint8_t> classes,
+                              const GroundOptions& options) {
+  std::vector<char> mask(points.size(), 0);
+  if (!options.enabled || points.empty()) return mask;
+  if (options.use_classification && classes.size() == points.size()) {
+    bool any = false;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      mask[i] = classes[i] == 2 ? 1 : 0;
+      any = any || mask[i] != 0;
+    }
+    if (any) return mask;
+  }
+  // Morphological opening of the lowest-point grid: structures narrower than the window
+  // disappear, what remains is the terrain.
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    x0 = std::min(x0, p.x());
+    y0 = std::min(y0, p.y());
+    x1 = std::max(x1, p.x());
+    y1 = std::max(y1, p.y());
+  }
+  if (!(x0 <= x1)) return mask;
+  const double cell = options.cell;
+  const double cells_x = std::floor((x1 - x0) / cell) + 1;
+  const double cells_y = std::floor((y1 - y0) / cell) + 1;
+  if (cells_x * cells_y > 5e7) return mask;  // a grid that large means a wrong cell size
+  const int nx = static_cast<int>(cells_x), ny = static_cast<int>(cells_y);
+  auto cell_of = [&](const Vec3& p) {
+    const int x = std::min(nx - 1, static_cast<int>((p.x() - x0) / cell));
+    const int y = std::min(ny - 1, static_cast<int>((p.y() - y0) / cell));
+    return static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x);
+  };
+  std::vector<double> lowest(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), INFINITY);
+  for (const auto& p : points) {
+    if (p.allFinite()) lowest[cell_of(p)] = std::min(lowest[cell_of(p)], p.z());
+  }
+  const int half = std::max(1, static_cast<int>(std::ceil(options.window / cell / 2.0)));
+  std::vector<double> opened = lowest;
+  filter2d(opened, nx, ny, half, true);
+  filter2d(opened, nx, ny, half, false);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    const double g = opened[cell_of(points[i])];
+    mask[i] = (std::isfinite(g) && points[i].z() - g <= options.height) ? 1 : 0;
+  }
+  return mask;
+}
+
+kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
+                                          std::span<const std::uint8_t> classes,
+                                          const FitPipelineOptions& options) {
+  using kernel::ErrorCode;
+  auto bad = [](const std::string& what) {
+    return kernel::Error{ErrorCode::InvalidArgument, "fit option " + what};
+  };
+  if (!classes.empty() && classes.size() != points.size())
+    return bad("classes: size differs from points");
+  if (options.outliers.neighbours < 2) return bad("outliers.neighbours must be >= 2");
+  if (!(options.outliers.std_ratio > 0.0)) return bad("outliers.std_ratio must be > 0");
+  if (!(options.voxel.size >= 0.0) || !std::isfinite(options.voxel.size))
+    return bad("voxel.size must be >= 0");
+  if (options.normals.neighbours < 3) return bad("normals.neighbours must be >= 3");
+  if (!(options.ground.cell > 0.0) || !(options.ground.window > 0.0) ||
+      !(options.ground.height >= 0.0)) {
+    return bad("ground.cell and ground.window must be > 0, ground.height >= 0");
+  }
+  if (!(options.clusters.tolerance >= 0.0)) return bad("clusters.tolerance must be >= 0");
+
+  FitOutput out;
+  out.input_points = static_cast<long long>(points.size());
+  auto start = std::chrono::steady_clock::now();
+
+  const auto ground = ground_mask(points, classes, options.ground);
+  std::vector<Vec3> above;
+  above.reserve(points.size());
+  // Terrain heights (lowest ground point per cell) for roofs seen from the air.
+  GroundGrid terrain;
+  {
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!ground[i] || !points[i].allFinite()) continue;
+      x0 = std::min(x0, points[i].x());
+      y0 = std::min(y0, points[i].y());
+      x1 = std::max(x1, points[i].x());
+      y1 = std::max(y1, points[i].y());
+    }
+    terrain.cell = 2.0 * options.ground.cell;
+    const double cells_x = (x1 - x0) / terrain.cell + 1.0, cells_y = (y1 - y0) / terrain.cell + 1.0;
+    if (x0 <= x1 && cells_x * cells_y < 5e7) {
+      terrain.x0 = x0;
+      terrain.y0 = y0;
+      terrain.nx = static_cast<int>((x1 - x0) / terrain.cell) + 1;
+      terrain.ny = static_cast<int>((y1 - y0) / terrain.cell) + 1;
+      terrain.z.assign(static_cast<std::size_t>(terrain.nx) * static_cast<std::size_t>(terrain.ny),
+                       NAN);
+    }
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    if (ground[i]) {
+      ++out.ground_points;
+      if (terrain.nx > 0) {
+        const auto x = static_cast<std::size_t>((points[i].x() - terrain.x0) / terrain.cell);
+        const auto y = static_cast<std::size_t>((points[i].y() - terrain.y0) / terrain.cell);
+        double& h = terrain.z[y * static_cast<std::size_t>(terrain.nx) + x];
+        if (!(h <= points[i].z())) h = points[i].z();
+      }
+    } else {
+      above.push_back(points[i]);
+    }
+  }
+  PrimitiveOptions primitive_options = options.primitives;
+  if (primitive_options.ground == nullptr && terrain.nx > 0) primitive_options.ground = &terrain;
+  out.seconds.emplace_back("ground", seconds_since(start));
+
+  start = std::chrono::steady_clock::now();
+  std::vector<Vec3> clean;
+  {
+    const auto kept = remove_statistical_outliers(above, options.outliers);
+    clean.reserve(kept.size());
+    for (auto i : kept) clean.push_back(above[i]);
+    out.outlier_points = static_cast<long long>(above.size() - kept.size());
+  }
+  out.seconds.emplace_back("outliers", seconds_since(start));
+
+  start = std::chrono::steady_clock::now();
+  const std::vector<Vec3> cloud = voxel_downsample(clean, options.voxel);
+  out.fitted_points = static_cast<long long>(cloud.size());
+  out.seconds.emplace_back("voxels", seconds_since(start));
+
+  start = std::chrono::steady_clock::now();
+  const std::vector<Vec3> normals = estimate_normals(cloud, options.normals);
+  out.seconds.emplace_back("normals", seconds_since(start));
+
+  start = std::chrono::steady_clock::now();
+  const auto clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+  long long clustered = 0;
+  for (const auto& c : clusters) clustered += static_cast<long long>(c.size());
+  out.small_cluster_points = out.fitted_points - clustered;
+  out.regions = static_cast<int>(clusters.size());
+  out.seconds.emplace_back("clusters", seconds_since(start));
+
+  start = std::chrono::steady_clock::now();
+  double primitives_seconds = 0.0;
+  for (std::size_t r = 0; r < clusters.size(); ++r) {
+    std::vector<Vec3> p, n;
+    p.reserve(clusters[r].size());
+    n.reserve(clusters[r].size());
+    for (auto i : clusters[r]) {
+      p.push_back(cloud[i]);
+      n.push_back(normals[i]);
+    }
+    RansacOptions ransac = options.ransac;
+    ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
+    auto detected = detect_shapes(p, n, ransac);
+    if (!detected.ok()) return detected.error();
+    out.candidates += detected.value().candidates;
+    FitRegion stats;
+    stats.points = static_cast<long long>(p.size());
+    stats.spacing = detected.value().spacing;
+    stats.cluster_epsilon = detected.value().cluster_epsilon;
+    stats.shapes = static_cast<int>(detected.value().shapes.size());
+    stats.candidates = detected.value().candidates;
+    out.region_stats.push_back(stats);
+    if (detected.value().shapes.empty()) {
+      out.rejected.push_back({"region " + std::to_string(r), detected.value().reason,
+                              static_cast<long long>(p.size())});
+      continue;
+    }
+    const auto t = std::chrono::steady_clock::now();
+    auto fitted = primitives_from_shapes(p, n, detected.value(), primitive_options, ransac,
+                                         static_cast<int>(r));
+    primitives_seconds += seconds_since(t);
+    out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
+    for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));
+    for (auto& rej : fitted.rejected) {
+      rej.what = "region " + std::to_string(r) + " " + rej.what;
+      out.rejected.push_back(std::move(rej));
+    }
+    for (std::size_t k = 0; k < out.per_type.size(); ++k) out.per_type[k] += fitted.per_type[k];
+    out.assigned_points += fitted.assigned_points;
+  }
+  out.unassigned_points = out.fitted_points - out.assigned_points;
+  out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);
+  out.seconds.emplace_back("primitives", primitives_seconds);
+  return out;
+}
+
+}  // namespace csgtile::geo

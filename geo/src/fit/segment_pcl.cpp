@@ -1,0 +1,156 @@
+// The segmentation stages that PCL does for us: statistical outlier removal, voxel grid,
+// neighbourhoods for normals and Euclidean clustering. PCL's headers stay in this file; its types
+// never leave it. PCL works in float: the points are tile-local, so float keeps them to a few
+// micrometres.
+
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "csgtile/geo/segment.h"
+#include "fit/fit_internal.h"
+
+namespace csgtile::geo {
+
+namespace {
+
+using kernel::Vec3;
+
+// The finite points as a PCL cloud, with their input indices.
+pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
+                                             std::vector<std::uint32_t>& index) {
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  cloud->reserve(points.size());
+  index.clear();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    // PCL works in float: coordinates beyond its range are as unusable as NaN.
+    if (!points[i].allFinite() || points[i].cwiseAbs().maxCoeff() > 1e30) continue;
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(points[i].x()),
+                                   static_cast<float>(points[i].y()),
+                                   static_cast<float>(points[i].z())));
+    index.push_back(static_cast<std::uint32_t>(i));
+  }
+  cloud->width = static_cast<std::uint32_t>(cloud->size());
+  cloud->height = 1;
+  cloud->is_dense = true;
+  return cloud;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
+                                                       const OutlierOptions& options) {
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(points, index);
+  if (!options.enabled || cloud->size() <= static_cast<std::size_t>(options.neighbours) + 1) {
+    return index;
+  }
+  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> filter;
+  filter.setInputCloud(cloud);
+  filter.setMeanK(options.neighbours);
+  filter.setStddevMulThresh(options.std_ratio);
+  pcl::Indices kept;
+  filter.filter(kept);
+  std::vector<std::uint32_t> out;
+  out.reserve(kept.size());
+  for (auto k : kept) out.push_back(index[static_cast<std::size_t>(k)]);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<Vec3> voxel_downsample(std::span<const Vec3> points, const VoxelOptions& options) {
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(points, index);
+  std::vector<Vec3> out;
+  if (!(options.size > 0.0) || cloud->empty()) {
+    for (auto i : index) out.push_back(points[i]);
+    return out;
+  }
+  pcl::VoxelGrid<pcl::PointXYZ> grid;
+  grid.setInputCloud(cloud);
+  const auto leaf = static_cast<float>(options.size);
+  grid.setLeafSize(leaf, leaf, leaf);
+  pcl::PointCloud<pcl::PointXYZ> filtered;
+  grid.filter(filtered);
+  out.reserve(filtered.size());
+  for (const auto& p : filtered) out.emplace_back(p.x, p.y, p.z);
+  return out;
+}
+
+std::vector<Vec3> estimate_normals(std::span<const Vec3> points, const NormalOptions& options) {
+  std::vector<Vec3> normals(points.size(), Vec3::Zero());
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(points, index);
+  if (cloud->size() < 3 || options.neighbours < 3) return normals;
+  // PCL finds the neighbours; the principal components are ours, so that collinear and
+  // duplicated neighbourhoods (two vanishing spreads) give no normal instead of an arbitrary one.
+  pcl::search::KdTree<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  const int k = std::min<int>(options.neighbours, static_cast<int>(cloud->size()));
+  pcl::Indices found;
+  std::vector<float> distances;
+  for (std::size_t q = 0; q < cloud->size(); ++q) {
+    if (tree.nearestKSearch(static_cast<pcl::index_t>(q), k, found, distances) < 3) continue;
+    const Vec3& centre = points[index[q]];
+    Vec3 mean = Vec3::Zero();
+    for (auto f : found) mean += points[index[static_cast<std::size_t>(f)]] - centre;
+    mean /= static_cast<double>(found.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (auto f : found) {
+      const Vec3 d = points[index[static_cast<std::size_t>(f)]] - centre - mean;
+      cov += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    if (eig.info() != Eigen::Success) continue;
+    const auto& values = eig.eigenvalues();
+    if (!(values(2) > 0.0) || !(values(1) > 1e-4 * values(2))) continue;
+    const Vec3 n = eig.eigenvectors().col(0);
+    if (n.allFinite()) normals[index[q]] = n.normalized();
+  }
+  return normals;
+}
+
+std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3> points,
+                                                           const ClusterOptions& options,
+                                                           double* tolerance_used) {
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(points, index);
+  std::vector<std::vector<std::uint32_t>> out;
+  if (cloud->empty()) return out;
+  double tolerance = options.tolerance;
+  if (!(tolerance > 0.0)) tolerance = 1.5 * detail::neighbour_reach(points, index, 0.9);
+  if (!(tolerance > 0.0)) tolerance = 1e-3;
+  if (tolerance_used != nullptr) *tolerance_used = tolerance;
+  // Unsorted radius searches: the clusters do not depend on the order of neighbours.
+  auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>(false);
+  tree->setInputCloud(cloud);
+  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+  extraction.setClusterTolerance(tolerance);
+  extraction.setMinClusterSize(static_cast<int>(std::max<long long>(1, options.min_points)));
+  extraction.setMaxClusterSize(std::numeric_limits<int>::max());
+  extraction.setSearchMethod(tree);
+  extraction.setInputCloud(cloud);
+  std::vector<pcl::PointIndices> clusters;
+  extraction.extract(clusters);
+  for (const auto& c : clusters) {
+    std::vector<std::uint32_t> members;
+    members.reserve(c.indices.size());
+    for (auto k : c.indices) members.push_back(index[static_cast<std::size_t>(k)]);
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() > b.size();
+    return a.front() < b.front();
+  });
+  return out;
+}
+
+}  // namespace csgtile::geo

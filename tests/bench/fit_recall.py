@@ -1,0 +1,241 @@
+#!/usr/bin/env python3
+"""Recall and precision of fitted primitives against a `csgtile synth` truth file.
+
+Usage: fit_recall.py --truth T.json --fit F.json [--las SCAN.las --min-points 50]
+                     [--radius 0.02 --angle 5 --position 0.02]
+                     [--min-recall R --min-precision P]   (exit 1 below them: CLI tests)
+
+A truth primitive and a fitted one match when their types are equal and
+  - cylinder: radii within `radius`, axes within `angle` degrees, the fitted axis line within
+    `position` of the truth axis's midpoint;
+  - cone: axes within `angle`, axis line within `position`, radius at the truth's mid-height
+    within `radius`;
+  - sphere: centres within `position`, radii within `radius`;
+  - torus: centres within `position`, axes within `angle`, both radii within `radius`;
+  - box: centres within `position` and each truth edge direction within `angle` of a fitted one.
+Matching is one-to-one, greedy by position error. With --las, only truth primitives hit by at
+least --min-points points (the scan's "truth_index" extra dimension) count as visible, and
+recall is given over the visible ones as well. Prints one JSON object.
+"""
+import argparse
+import json
+import math
+import struct
+
+
+def mat(p):
+    m = p["placement"]
+    rot = [[m[r][c] for c in range(3)] for r in range(3)]
+    t = [m[r][3] for r in range(3)]
+    return rot, t
+
+
+def apply(rot, t, v):
+    return [sum(rot[r][c] * v[c] for c in range(3)) + t[r] for r in range(3)]
+
+
+def col(rot, c):
+    v = [rot[r][c] for r in range(3)]
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def sub(a, b):
+    return [a[i] - b[i] for i in range(3)]
+
+
+def dot(a, b):
+    return sum(a[i] * b[i] for i in range(3))
+
+
+def norm(a):
+    return math.sqrt(dot(a, a))
+
+
+def angle_deg(a, b):
+    c = min(1.0, abs(dot(a, b)) / (norm(a) * norm(b)))
+    return math.degrees(math.acos(c))
+
+
+def line_distance(p, q, a):
+    v = sub(p, q)
+    h = dot(v, a)
+    return norm([v[i] - h * a[i] for i in range(3)])
+
+
+def scale(p):
+    rot, _ = mat(p)
+    return norm([rot[r][0] for r in range(3)])
+
+
+def describe(p):
+    """Centre, axis and radii in world coordinates."""
+    rot, t = mat(p)
+    s = scale(p)
+    kind = p["type"]
+    out = {"type": kind, "axis": col(rot, 2)}
+    if kind == "box":
+        size = p["size"]
+        out["centre"] = apply(rot, t, [size[0] / 2, size[1] / 2, size[2] / 2])
+        out["axes"] = [col(rot, c) for c in range(3)]
+        out["size"] = sorted(x * s for x in size)
+    elif kind == "cylinder":
+        out["centre"] = apply(rot, t, [0, 0, p["h"] / 2])
+        out["base"] = apply(rot, t, [0, 0, 0])
+        out["r"] = p["r"] * s
+        out["h"] = p["h"] * s
+    elif kind == "cone":
+        out["centre"] = apply(rot, t, [0, 0, p["h"] / 2])
+        out["base"] = apply(rot, t, [0, 0, 0])
+        out["r1"], out["r2"], out["h"] = p["r1"] * s, p["r2"] * s, p["h"] * s
+    elif kind == "sphere":
+        out["centre"] = apply(rot, t, [0, 0, 0])
+        out["r"] = p["r"] * s
+    elif kind == "torus":
+        out["centre"] = apply(rot, t, [0, 0, 0])
+        out["R"], out["r"] = p["R"] * s, p["r"] * s
+    else:
+        out["centre"] = apply(rot, t, [0, 0, 0])
+    return out
+
+
+def cone_radius_at(c, point):
+    """Radius of cone description c at the axial position of `point`."""
+    h = dot(sub(point, c["base"]), c["axis"])
+    return c["r1"] + (c["r2"] - c["r1"]) * h / c["h"]
+
+
+def match_error(t, f, tol):
+    """Position error when f matches t within the tolerances, else None."""
+    if t["type"] != f["type"]:
+        return None
+    kind = t["type"]
+    if kind == "cylinder":
+        if abs(t["r"] - f["r"]) > tol.radius or angle_deg(t["axis"], f["axis"]) > tol.angle:
+            return None
+        e = line_distance(t["centre"], f["base"], f["axis"])
+    elif kind == "cone":
+        if angle_deg(t["axis"], f["axis"]) > tol.angle:
+            return None
+        e = line_distance(t["centre"], f["base"], f["axis"])
+        if abs(cone_radius_at(t, t["centre"]) - cone_radius_at(f, t["centre"])) > tol.radius:
+            return None
+    elif kind == "sphere":
+        if abs(t["r"] - f["r"]) > tol.radius:
+            return None
+        e = norm(sub(t["centre"], f["centre"]))
+    elif kind == "torus":
+        if (abs(t["R"] - f["R"]) > tol.radius or abs(t["r"] - f["r"]) > tol.radius or
+                angle_deg(t["axis"], f["axis"]) > tol.angle):
+            return None
+        e = norm(sub(t["centre"], f["centre"]))
+    elif kind == "box":
+        for a in t["axes"]:
+            if min(angle_deg(a, b) for b in f["axes"]) > tol.angle:
+                return None
+        e = norm(sub(t["centre"], f["centre"]))
+    else:
+        return None
+    return e if e <= tol.position else None
+
+
+def visible_counts(las_path, count):
+    """Points per truth index from the scan's 'truth_index' extra dimension (int32, the last
+    4 bytes of each record as csgtile synth writes them)."""
+    with open(las_path, "rb") as fh:
+        data = fh.read()
+    offset = struct.unpack_from("<I", data, 96)[0]
+    record = struct.unpack_from("<H", data, 105)[0]
+    n = struct.unpack_from("<Q", data, 247)[0]
+    hits = [0] * count
+    for k in range(n):
+        idx = struct.unpack_from("<i", data, offset + k * record + record - 4)[0]
+        if 0 <= idx < count:
+            hits[idx] += 1
+    return hits
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--truth", required=True)
+    ap.add_argument("--fit", required=True)
+    ap.add_argument("--las")
+    ap.add_argument("--min-points", type=int, default=50)
+    ap.add_argument("--radius", type=float, default=0.02)
+    ap.add_argument("--angle", type=float, default=5.0)
+    ap.add_argument("--position", type=float, default=0.02)
+    ap.add_argument("--min-recall", type=float, help="exit 1 when visible recall is lower")
+    ap.add_argument("--min-precision", type=float, help="exit 1 when precision is lower")
+    tol = ap.parse_args()
+    truth = json.load(open(tol.truth))["primitives"]
+    fitted = json.load(open(tol.fit))["primitives"]
+    td = [describe(p) for p in truth]
+    fd = [describe(p) for p in fitted]
+    pairs = []
+    for i, t in enumerate(td):
+        for j, f in enumerate(fd):
+            e = match_error(t, f, tol)
+            if e is not None:
+                pairs.append((e, i, j))
+    pairs.sort()
+    t_used, f_used, matches = {}, set(), []
+    for e, i, j in pairs:
+        if i in t_used or j in f_used:
+            continue
+        t_used[i] = j
+        f_used.add(j)
+        matches.append((i, j, e))
+    hits = visible_counts(tol.las, len(truth)) if tol.las else None
+    visible = [i for i in range(len(truth)) if hits is None or hits[i] >= tol.min_points]
+    by_type = {}
+    for i, t in enumerate(td):
+        row = by_type.setdefault(t["type"], {"truth": 0, "visible": 0, "matched": 0, "fitted": 0})
+        row["truth"] += 1
+        row["visible"] += 1 if i in visible else 0
+        row["matched"] += 1 if i in t_used else 0
+    for f in fd:
+        by_type.setdefault(f["type"], {"truth": 0, "visible": 0, "matched": 0, "fitted": 0})
+        by_type[f["type"]]["fitted"] += 1
+    errors = {"position": [], "radius": [], "angle": [], "box_size": []}
+    for i, j, e in matches:
+        t, f = td[i], fd[j]
+        errors["position"].append(e)
+        if "r" in t and t["type"] in ("cylinder", "sphere", "torus"):
+            errors["radius"].append(abs(t["r"] - f["r"]))
+        if t["type"] in ("cylinder", "cone", "torus"):
+            errors["angle"].append(angle_deg(t["axis"], f["axis"]))
+        if t["type"] == "box":
+            errors["box_size"].append(max(abs(a - b) for a, b in zip(t["size"], f["size"])))
+
+    def stats(v):
+        if not v:
+            return None
+        v = sorted(v)
+        return {"mean": sum(v) / len(v), "median": v[len(v) // 2], "max": v[-1]}
+
+    matched_visible = sum(1 for i in visible if i in t_used)
+    out = {
+        "truth": len(truth),
+        "visible": len(visible),
+        "fitted": len(fitted),
+        "matched": len(matches),
+        "recall": len(matches) / len(truth) if truth else None,
+        "recall_visible": matched_visible / len(visible) if visible else None,
+        "precision": len(matches) / len(fitted) if fitted else None,
+        "by_type": by_type,
+        "errors": {k: stats(v) for k, v in errors.items()},
+        "unmatched_visible": [truth[i].get("id", str(i)) for i in visible if i not in t_used][:40],
+    }
+    print(json.dumps(out))
+    failed = []
+    if tol.min_recall is not None and (out["recall_visible"] or 0.0) < tol.min_recall:
+        failed.append("recall_visible %.3f < %.3f" % (out["recall_visible"] or 0.0, tol.min_recall))
+    if tol.min_precision is not None and (out["precision"] or 0.0) < tol.min_precision:
+        failed.append("precision %.3f < %.3f" % (out["precision"] or 0.0, tol.min_precision))
+    if failed:
+        print("FAILED: " + "; ".join(failed))
+        raise SystemExit(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""`csgtile fit` end to end: a small terrestrial scan of the gate from `csgtile synth`, fitted
+twice with the same seed (byte-identical primitives.json), then matched against the truth by
+tests/bench/fit_recall.py (type, radius ±2 cm, axis ±5°, position ±2 cm) with thresholds the
+current code meets. Also: a missing input and a config with an unknown key exit non-zero with
+a message naming the problem.
+
+Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISION
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+
+def run(*args, check=True):
+    p = subprocess.run(list(args), capture_output=True, text=True)
+    if check and p.returncode != 0:
+        sys.exit("command failed (%d): %s\n%s%s" % (p.returncode, " ".join(args), p.stdout, p.stderr))
+    return p
+
+
+def main():
+    bin_, work, recall, min_recall, min_precision = sys.argv[1:6]
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    las, truth = os.path.join(work, "gate.las"), os.path.join(work, "gate.json")
+    run(bin_, "synth", "gate", "--mode", "terrestrial", "--points", "400000", "--seed", "3",
+        "--out", las, "--truth", truth)
+    outs = []
+    for k in range(2):
+        out = os.path.join(work, "fit%d.json" % k)
+        p = run(bin_, "fit", las, "--out", out, "--seed", "5", "--json")
+        summary = json.loads(p.stdout)
+        if summary["error"] is not None or summary["primitives"] == 0:
+            sys.exit("fit found nothing: %s" % p.stdout)
+        outs.append(open(out, "rb").read())
+    if outs[0] != outs[1]:
+        sys.exit("primitives.json differs between two runs with the same seed")
+    if b"seconds" in outs[0]:
+        sys.exit("primitives.json holds timings")
+    print("fit summary:", json.dumps({k: summary[k] for k in ("primitives", "per_type", "unassigned_points", "seconds")}))
+    p = run(sys.executable, recall, "--truth", truth, "--fit", os.path.join(work, "fit0.json"),
+            "--las", las, "--min-recall", min_recall, "--min-precision", min_precision, check=False)
+    print(p.stdout, p.stderr)
+    if p.returncode != 0:
+        sys.exit("recall below the threshold")
+
+    p = run(bin_, "fit", os.path.join(work, "missing.las"), "--out", os.path.join(work, "x.json"), check=False)
+    if p.returncode == 0 or "missing.las" not in p.stderr:
+        sys.exit("a missing input must fail naming the file: %d %s" % (p.returncode, p.stderr))
+    config = os.path.join(work, "bad.json")
+    with open(config, "w") as fh:
+        fh.write('{"ransac": {"epsilom": 0.02}}')
+    p = run(bin_, "fit", las, "--config", config, "--out", os.path.join(work, "x.json"), check=False)
+    if p.returncode == 0 or "ransac.epsilom" not in p.stderr:
+        sys.exit("an unknown config key must fail naming it: %d %s" % (p.returncode, p.stderr))
+    shutil.rmtree(work, ignore_errors=True)
+    print("ok")
+
+
+if __name__ == "__main__":
+    main()

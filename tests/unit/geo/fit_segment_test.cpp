@@ -1,0 +1,137 @@
+// The segmentation stages one by one (outliers, voxels, normals, ground, clusters) and the
+// whole fit pipeline: primitives found, counts kept, and the same bytes for the same seed.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "csgtile/geo/scene.h"
+#include "csgtile/geo/segment.h"
+#include "fit_clouds.h"
+
+namespace csgtile::geo {
+namespace {
+
+using kernel::PrimitiveType;
+using kernel::Vec3;
+using testing::Cloud;
+
+TEST(FitSegment, StatisticalOutliersAreRemoved) {
+  Cloud c = testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.02, 0.001, 1);
+  const std::size_t surface = c.points.size();
+  c.points.emplace_back(1.0, 1.0, 3.0);
+  c.points.emplace_back(-4.0, 1.0, 0.0);
+  const auto kept = remove_statistical_outliers(c.points, {});
+  EXPECT_GE(kept.size(), surface * 98 / 100);
+  EXPECT_EQ(std::count(kept.begin(), kept.end(), static_cast<std::uint32_t>(surface)), 0);
+  EXPECT_EQ(std::count(kept.begin(), kept.end(), static_cast<std::uint32_t>(surface + 1)), 0);
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+}
+
+TEST(FitSegment, VoxelDownsamplingKeepsOnePointPerVoxel) {
+  const Cloud c =
+      testing::rectangle_cloud(Vec3::Zero(), Vec3(1, 0, 0), Vec3(0, 1, 0), 0.005, 0.0, 2);
+  const auto down = voxel_downsample(c.points, {0.1});
+  EXPECT_LE(down.size(), 121U);
+  EXPECT_GE(down.size(), 100U);
+  EXPECT_EQ(voxel_downsample(c.points, {0.0}).size(), c.points.size());
+}
+
+TEST(FitSegment, NormalsOfAPlaneAreItsNormal) {
+  const Cloud c =
+      testing::rectangle_cloud(Vec3::Zero(), Vec3(1, 0, 0), Vec3(0, 0.6, 0.8), 0.02, 0.0005, 3);
+  const auto normals = estimate_normals(c.points, {});
+  ASSERT_EQ(normals.size(), c.points.size());
+  for (const auto& n : normals) EXPECT_GT(std::abs(n.dot(Vec3(0, -0.8, 0.6))), 0.99);
+}
+
+TEST(FitSegment, GroundFromClassesOrFromTheMorphologicalFilter) {
+  Cloud c =
+      testing::rectangle_cloud(Vec3(-20, -20, 0), Vec3(40, 0, 0), Vec3(0, 40, 0), 0.5, 0.01, 4);
+  const std::size_t ground = c.points.size();
+  c.append(testing::rectangle_cloud(Vec3(-3, -3, 6), Vec3(6, 0, 0), Vec3(0, 6, 0), 0.2, 0.01, 5));
+  std::vector<std::uint8_t> classes(c.points.size(), 6);
+  for (std::size_t i = 0; i < ground; ++i) classes[i] = 2;
+  const auto by_class = ground_mask(c.points, classes, {});
+  for (std::size_t i = 0; i < c.points.size(); ++i) ASSERT_EQ(by_class[i], i < ground ? 1 : 0);
+  const auto by_filter = ground_mask(c.points, {}, {});
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < c.points.size(); ++i) wrong += (by_filter[i] != (i < ground ? 1 : 0));
+  EXPECT_EQ(wrong, 0U);
+}
+
+TEST(FitSegment, ClustersAreSeparatedAndOrderedBySize) {
+  Cloud c = testing::rectangle_cloud(Vec3(5, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 0.02, 0.0, 6);
+  const std::size_t first = c.points.size();
+  c.append(testing::rectangle_cloud(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 1, 0), 0.02, 0.0, 7));
+  const auto clusters = euclidean_clusters(c.points, {});
+  ASSERT_EQ(clusters.size(), 2U);
+  EXPECT_EQ(clusters[0].size(), c.points.size() - first);  // the larger one first
+  EXPECT_EQ(clusters[1].size(), first);  // random points, but none farther than the tolerance
+  EXPECT_EQ(clusters[1].front(), 0U);
+}
+
+Cloud small_scene() {
+  // A column under a beam seen from three sides, a sphere, and a ground plane.
+  Cloud c =
+      testing::rectangle_cloud(Vec3(-5, -5, 0), Vec3(10, 0, 0), Vec3(0, 10, 0), 0.1, 0.003, 10);
+  c.append(testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.15, 3.7, 0.0,
+                                   2.0 * std::numbers::pi, 6000, 0.003, 11));
+  const Vec3 corner(0.2, -0.1, 3.7);
+  c.append(testing::rectangle_cloud(corner, Vec3(0, 0, 0.3), Vec3(2.5, 0, 0), 0.015, 0.003, 12));
+  c.append(testing::rectangle_cloud(corner + Vec3(0, 0.2, 0), Vec3(2.5, 0, 0), Vec3(0, 0, 0.3),
+                                    0.015, 0.003, 13));
+  c.append(testing::rectangle_cloud(corner, Vec3(2.5, 0, 0), Vec3(0, 0.2, 0), 0.015, 0.003, 14));
+  c.append(testing::sphere_cloud(Vec3(-3, 2, 1.5), 1.0, -0.5, 5000, 0.003, 15));
+  return c;
+}
+
+TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  const auto out = fit_point_cloud(c.points, {}, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Box)], 1);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
+  EXPECT_GT(out->ground_points, 9000);
+  EXPECT_EQ(out->unassigned_points, out->fitted_points - out->assigned_points);
+  EXPECT_LT(out->unassigned_points, out->fitted_points / 10);
+}
+
+TEST(FitSegment, PipelineOutputIsTheSameBytesForTheSameSeed) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ransac.seed = 42;
+  auto text = [&] {
+    const auto out = fit_point_cloud(c.points, {}, o);
+    EXPECT_TRUE(out.ok());
+    Scene s;
+    s.name = "determinism";
+    s.primitives = out->primitives;
+    return scene_to_json(s);
+  };
+  const std::string a = text();
+  EXPECT_EQ(a, text());
+  EXPECT_NE(a.find("\"quality\""), std::string::npos);
+}
+
+TEST(FitSegment, PipelineOptionsAreChecked) {
+  FitPipelineOptions o;
+  o.normals.neighbours = 1;
+  const std::vector<Vec3> p(10, Vec3::Zero());
+  const auto out = fit_point_cloud(p, {}, o);
+  ASSERT_FALSE(out.ok());
+  EXPECT_NE(out.error().message.find("normals.neighbours"), std::string::npos);
+  const auto empty = fit_point_cloud(std::vector<Vec3>{}, {}, FitPipelineOptions{});
+  ASSERT_TRUE(empty.ok());
+  EXPECT_TRUE(empty->primitives.empty());
+}
+
+}  // namespace
+}  // namespace csgtile::geo
