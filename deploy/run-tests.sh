@@ -17,22 +17,25 @@ echo "== optimised build and full test suite"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSGTILE_WERROR=ON \
       -DCSGTILE_BUILD_TESTS=ON -DCSGTILE_BUILD_BENCH=ON >/dev/null
 cmake --build build -j"$jobs"
-# ajv-cli for the CityJSON schema checks and the Khronos glTF validator for the 3D Tiles
-# checks, in build/npm; npm runs only when a package is missing or has another major version
+# ajv-cli for the CityJSON schema checks, the Khronos glTF validator for the 3D Tiles checks
+# and @20minutes/s3rver for the S3 fetch tests, in build/npm; npm runs only when a package is missing or has another major version
 # (gltf-validator: another version). The checks must then run, not skip.
 if ! node -e '
   for (const [name, want] of [["ajv", "8"], ["ajv-formats", "3"], ["ajv-cli", "5"],
-                              ["gltf-validator", "2.0.0-dev.3.10"]]) {
+                              ["gltf-validator", "2.0.0-dev.3.10"], ["@20minutes/s3rver", "5"]]) {
     const v = require(process.argv[1] + "/node_modules/" + name + "/package.json").version;
     if (v !== want && v.split(".")[0] !== want) process.exit(1);
   }' "$PWD/build/npm" 2>/dev/null; then
   npm install --no-audit --no-fund --prefix build/npm ajv@8 ajv-formats@3 ajv-cli@5 \
-      gltf-validator@2.0.0-dev.3.10
+      gltf-validator@2.0.0-dev.3.10 @20minutes/s3rver@5
 fi
 export CSGTILE_AJV="$PWD/build/npm/node_modules/.bin/ajv"
 export CSGTILE_REQUIRE_AJV="${CSGTILE_REQUIRE_AJV:-1}"
 export CSGTILE_GLTF_VALIDATOR_DIR="$PWD/build/npm/node_modules/gltf-validator"
 export CSGTILE_REQUIRE_GLTF_VALIDATOR="${CSGTILE_REQUIRE_GLTF_VALIDATOR:-1}"
+# S3 fetch tests: @20minutes/s3rver (verifies SigV4 signatures), same install.
+export CSGTILE_S3RVER_DIR="$PWD/build/npm/node_modules/@20minutes/s3rver"
+export CSGTILE_REQUIRE_S3RVER="${CSGTILE_REQUIRE_S3RVER:-1}"
 # The random mixed-primitive Boolean property test runs ten times its default case count
 # here (400 pairs); the sanitizer stage keeps the default.
 CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --output-on-failure -j"$jobs"

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Installs every Debian package csgtile needs to build, test and run.
 # Idempotent: when everything is present it only checks (a second or two) and exits.
-# Usage: deploy/setup.sh            (as root, or with sudo available)
+# Usage: deploy/setup.sh                (as root, or with sudo available)
+#        deploy/setup.sh --build-only   only what building the csgtile binary needs (the
+#                                       container image's build stage, deploy/container/)
 set -euo pipefail
+build_only=0
+[ "${1:-}" = "--build-only" ] && build_only=1
 
 packages=(
   # toolchain
@@ -14,23 +18,41 @@ packages=(
   libopenvdb-dev libtbb-dev libboost-dev
   # geo: georeferencing (GeographicLib); PROJ's cs2cs is the tests' independent oracle
   libgeographiclib-dev proj-bin
+  # geo fitting: PCL 1.13 (outlier removal, voxel grid, kd-tree neighbourhoods, Euclidean
+  # clustering; only common/search/kdtree/filters/segmentation are linked, with FLANN)
+  libpcl-dev
   # config
   libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev
   # worker and command line
   libcli11-dev libsqlite3-dev libssl-dev
+  # fetch: libcurl (file://, http(s)://, s3:// with our own SigV4 signing)
+  libcurl4-openssl-dev
   # PostgreSQL job queue: libpq; its tests start a real server (and make TLS certificates)
   libpq-dev postgresql-15 openssl
   # tests and benchmarks
   libgtest-dev libgmock-dev googletest libbenchmark-dev python3
   # topology index checks: ogrinfo and GDAL's GeoPackage validator (validate_gpkg.py)
   gdal-bin python3-gdal
+  # deploy/k8s checks: YAML lint of the Kubernetes manifests (tests/deploy)
+  yamllint
 )
+# Tools, tests and linters that building the binary does not need (left out by --build-only).
+test_only=(clang clang-format clang-tidy libclang-rt-14-dev git proj-bin postgresql-15 openssl
+           libgtest-dev libgmock-dev googletest libbenchmark-dev python3 gdal-bin python3-gdal
+           yamllint)
+if [ "$build_only" = 1 ]; then
+  kept=()
+  for p in "${packages[@]}"; do
+    [[ " ${test_only[*]} " == *" $p "* ]] || kept+=("$p")
+  done
+  packages=("${kept[@]}")
+fi
 
 # CityJSON schema and glTF checks: ajv-cli and gltf-validator from npm (deploy/run-tests.sh
 # installs them into build/npm).
 # Node.js and npm come from Debian unless both are on the PATH already: Debian's npm package
 # conflicts with other builds of nodejs (e.g. NodeSource's, which bundles npm).
-if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+if [ "$build_only" = 0 ] && { ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; }; then
   packages+=(nodejs npm)
 fi
 

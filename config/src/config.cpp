@@ -66,6 +66,19 @@ Config from_document(const json& document) {
   read(document, "queue", "postgres_sslrootcert", config.queue.postgres_sslrootcert);
   read_enum(document, "log", "level", kLevelNames, config.log.level);
   read_enum(document, "log", "format", kFormatNames, config.log.format);
+  read(document, "metrics", "listen", config.metrics.listen);
+  read(document, "fetch", "schemes", config.fetch.schemes);
+  read(document, "fetch", "connect_timeout_seconds", config.fetch.connect_timeout_seconds);
+  read(document, "fetch", "timeout_seconds", config.fetch.timeout_seconds);
+  read(document, "fetch", "low_speed_bytes_per_second", config.fetch.low_speed_bytes_per_second);
+  read(document, "fetch", "low_speed_seconds", config.fetch.low_speed_seconds);
+  read(document, "fetch", "max_bytes", config.fetch.max_bytes);
+  read(document, "fetch", "max_redirects", config.fetch.max_redirects);
+  read(document, "fetch", "attempts", config.fetch.attempts);
+  read(document, "fetch", "ca_bundle", config.fetch.ca_bundle);
+  read(document, "fetch", "cache_dir", config.fetch.cache_dir);
+  read(document, "fetch", "s3_endpoint", config.fetch.s3_endpoint);
+  read(document, "fetch", "s3_region", config.fetch.s3_region);
   return config;
 }
 
@@ -147,6 +160,19 @@ std::string to_json(const Config& config) {
                   {"postgres_sslrootcert", config.queue.postgres_sslrootcert}};
   out["log"] = {{"level", std::string(to_string(config.log.level))},
                 {"format", std::string(to_string(config.log.format))}};
+  out["metrics"] = {{"listen", config.metrics.listen}};
+  out["fetch"] = {{"schemes", config.fetch.schemes},
+                  {"connect_timeout_seconds", config.fetch.connect_timeout_seconds},
+                  {"timeout_seconds", config.fetch.timeout_seconds},
+                  {"low_speed_bytes_per_second", config.fetch.low_speed_bytes_per_second},
+                  {"low_speed_seconds", config.fetch.low_speed_seconds},
+                  {"max_bytes", config.fetch.max_bytes},
+                  {"max_redirects", config.fetch.max_redirects},
+                  {"attempts", config.fetch.attempts},
+                  {"ca_bundle", config.fetch.ca_bundle},
+                  {"cache_dir", config.fetch.cache_dir},
+                  {"s3_endpoint", config.fetch.s3_endpoint},
+                  {"s3_region", config.fetch.s3_region}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so
   // the bytes depend on the values only. Invalid UTF-8 (possible only through the
   // environment) is replaced rather than thrown on.

@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "csgtile/worker/run.h"
+#include "ops/worker_endpoint.h"
 #include "stop_signal.h"
 
 namespace csgtile::worker::detail {
@@ -16,14 +17,27 @@ void register_run(CLI::App& app, Action& action) {
   auto json = std::make_shared<bool>(false);
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
   cmd->add_flag("--json", *json, "Print the run summary as one JSON object");
-  cmd->callback([&action, file, json] {
-    action = [file, json] {
+  auto listen = std::make_shared<std::string>();
+  auto* listen_option = cmd->add_option(
+      "--metrics-listen", *listen,
+      "Serve /healthz, /readyz and /metrics on ADDR:PORT (e.g. 127.0.0.1:9464; \"off\" disables); "
+      "overrides metrics.listen");
+  cmd->callback([&action, file, json, listen, listen_option] {
+    action = [file, json, listen, listen_option] {
       const auto loaded = load_run_config(*file);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
       const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
       RunSummary summary;
       install_stop_signals();
+      Failure started;
+      const auto endpoint = ops::start_worker_endpoint(
+          cfg, listen_option->count() > 0 ? std::optional<std::string>(*listen) : std::nullopt, log,
+          started);
+      if (!started.ok()) {
+        log.error("run", started.message, {{"error", error_info(started.code).name}});
+        return error_info(started.code).exit_code;
+      }
       const Failure failure = run_embedded(cfg, log, summary);
       if (!failure.ok()) {
         log.error("run", failure.message, {{"error", error_info(failure.code).name}});

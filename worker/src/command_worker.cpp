@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "csgtile/worker/run.h"
+#include "ops/worker_endpoint.h"
 #include "stop_signal.h"
 
 namespace csgtile::worker::detail {
@@ -56,14 +57,27 @@ void register_worker(CLI::App& app, Action& action) {
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
   cmd->add_flag("--exit-when-idle", *idle, "Exit once no job is unfinished (after publishing the run)");
   cmd->add_flag("--json", *json, "Print one JSON summary object at exit");
-  cmd->callback([&action, file, json, idle] {
-    action = [file, json, idle] {
+  auto listen = std::make_shared<std::string>();
+  auto* listen_option = cmd->add_option(
+      "--metrics-listen", *listen,
+      "Serve /healthz, /readyz and /metrics on ADDR:PORT (e.g. 127.0.0.1:9464; \"off\" disables); "
+      "overrides metrics.listen");
+  cmd->callback([&action, file, json, idle, listen, listen_option] {
+    action = [file, json, idle, listen, listen_option] {
       const auto loaded = load_run_config(*file);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
       const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
       install_stop_signals();
       Failure failure;
+      // Before the queue: a bad address or a port in use fails at once, not after a claim.
+      const auto endpoint = ops::start_worker_endpoint(
+          cfg, listen_option->count() > 0 ? std::optional<std::string>(*listen) : std::nullopt, log,
+          failure);
+      if (!failure.ok()) {
+        log.error("worker", failure.message, {{"error", error_info(failure.code).name}});
+        return error_info(failure.code).exit_code;
+      }
       auto queue = open_queue(cfg, failure);
       if (!queue) {
         log.error("worker", failure.message, {{"error", error_info(failure.code).name}});

@@ -7,7 +7,7 @@ namespace csgtile::worker {
 namespace {
 // Exit codes follow sysexits(3) where one fits; 1 and 3 report a command that ran but whose
 // result is not clean (an invalid solid, dead jobs) — see README "Exit codes".
-constexpr std::array<ErrorInfo, 10> kTable{{
+constexpr std::array<ErrorInfo, 12> kTable{{
     {ErrorCode::Ok, "ok", "success", false, 0},
     {ErrorCode::Usage, "usage", "bad command line", false, 64},
     {ErrorCode::ConfigInvalid, "config_invalid", "the configuration is invalid", false, 78},
@@ -19,6 +19,9 @@ constexpr std::array<ErrorInfo, 10> kTable{{
     {ErrorCode::Internal, "internal", "internal error (a bug in csgtile)", false, 70},
     {ErrorCode::ResultInvalid, "result_invalid", "the result fails validation", false, 1},
     {ErrorCode::JobsFailed, "jobs_failed", "the run finished with dead jobs", false, 3},
+    {ErrorCode::Network, "network", "a transfer failed (timeout, reset, server error)", true, 75},
+    {ErrorCode::FetchRefused, "fetch_refused", "a fetch was refused (policy, size, HTTP 4xx)",
+     false, 77},
 }};
 }  // namespace
 

@@ -17,6 +17,15 @@ Logger::Logger(config::LogLevel level, config::LogFormat format, std::FILE* out)
 }
 
 namespace {
+
+/// The job this thread is running (LogJobScope); empty job: none.
+struct JobContext {
+  std::string run;
+  std::string job;
+  int attempt = 0;
+};
+thread_local JobContext t_job_context;
+
 std::string utc_now() {
   const auto now = std::chrono::system_clock::now();
   const std::time_t t = std::chrono::system_clock::to_time_t(now);
@@ -30,6 +39,17 @@ std::string utc_now() {
 }
 }  // namespace
 
+LogJobScope::LogJobScope(std::string run, std::string job, int attempt)
+    : previous_run_(std::move(t_job_context.run)),
+      previous_job_(std::move(t_job_context.job)),
+      previous_attempt_(t_job_context.attempt) {
+  t_job_context = {std::move(run), std::move(job), attempt};
+}
+
+LogJobScope::~LogJobScope() {
+  t_job_context = {std::move(previous_run_), std::move(previous_job_), previous_attempt_};
+}
+
 void Logger::log(config::LogLevel level, std::string_view component, std::string_view message,
                  const std::map<std::string, std::string>& fields) const {
   if (static_cast<int>(level) < static_cast<int>(level_)) return;
@@ -39,6 +59,11 @@ void Logger::log(config::LogLevel level, std::string_view component, std::string
     j["time"] = utc_now();
     j["level"] = log_level_name(level);
     j["component"] = component;
+    if (!t_job_context.job.empty()) {
+      j["run"] = t_job_context.run;
+      j["job"] = t_job_context.job;
+      j["attempt"] = t_job_context.attempt;
+    }
     if (!job_id_.empty()) j["job"] = job_id_;
     j["message"] = message;
     for (const auto& [k, v] : fields) j[k] = v;
@@ -48,6 +73,10 @@ void Logger::log(config::LogLevel level, std::string_view component, std::string
     // append() rather than operator+ chains: GCC 12 at -O3 warns falsely (-Wrestrict) on those.
     line.append(utc_now()).append(" ").append(log_level_name(level)).append(" [");
     line.append(component).append("]");
+    if (!t_job_context.job.empty() && job_id_.empty()) {
+      line.append(" run=").append(t_job_context.run).append(" job=").append(t_job_context.job);
+      line.append(" attempt=").append(std::to_string(t_job_context.attempt));
+    }
     if (!job_id_.empty()) line.append(" job=").append(job_id_);
     line.append(" ").append(message);
     for (const auto& [k, v] : fields) line.append(" ").append(k).append("=").append(v);

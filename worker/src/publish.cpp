@@ -8,6 +8,8 @@
 #include <cstring>
 #include <random>
 
+#include "ops/metrics.h"
+
 namespace csgtile::worker {
 
 std::string sha256_hex(std::string_view bytes) {
@@ -68,6 +70,7 @@ Failure write_file_atomic(const std::filesystem::path& path, std::string_view by
     ::fsync(dfd);
     ::close(dfd);
   }
+  ops::metrics().add_bytes_published(bytes.size());
   return {};
 }
 

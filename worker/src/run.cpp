@@ -17,6 +17,9 @@
 #include "export/cityjson_seq.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
+#include "fetch/input.h"
+#include "ops/metrics.h"
+#include "ops/stage_clock.h"
 #include "queue/heartbeat.h"
 #include "stop_signal.h"
 
@@ -24,6 +27,22 @@ namespace csgtile::worker {
 
 namespace {
 using nlohmann::ordered_json;
+
+/// Key of a done job's timings inside its queue record (see with_timings).
+constexpr const char* kTimingsKey = "timings";
+
+/// The queue's record of a done job: its deterministic result plus "timings" (stage seconds,
+/// total, worker, attempt), which publish_run moves out of manifest.json into timings.json.
+std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
+                         const std::string& worker_id, int attempt) {
+  ordered_json record = ordered_json::parse(result, nullptr, false);
+  if (!record.is_object()) return result;
+  ordered_json stages = ordered_json::object();
+  for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
+  record[kTimingsKey] = {{"stages", stages}, {"seconds", seconds}, {"worker", worker_id},
+                         {"attempt", attempt}};
+  return record.dump();
+}
 
 ordered_json topology_json(const kernel::Shape& s) {
   const auto c = kernel::count_shapes(s);
@@ -35,19 +54,27 @@ ordered_json topology_json(const kernel::Shape& s) {
 }  // namespace
 
 Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
-                      const config::Config& config, std::string& result) {
+                      const config::Config& config, std::string& result, StageTimings* timings) {
+  ops::StageClock clock(timings);
+  clock.enter("fetch");
   const auto payload = nlohmann::json::parse(job.payload, nullptr, false);
   if (payload.is_discarded() || !payload.contains("input") || !payload["input"].is_string()) {
     return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
   }
   const std::string input = payload["input"].get<std::string>();
-  auto scene = geo::read_scene(input);
+  fetch::LocalInput local;
+  if (Failure f = fetch::resolve_input(input, config, local); !f.ok()) return f;
+  if (local.fetched && !local.from_cache) ops::metrics().add_bytes_fetched(local.bytes);
+  clock.enter("read");
+  auto scene = geo::read_scene(local.path.string());
   if (!scene.ok()) {
+    const std::string where = local.fetched ? input + " (fetched to " + local.path.string() + "): " : "";
     return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
-            scene.error().message};
+            where + scene.error().message};
   }
   ordered_json record;
   record["input"] = input;
+  record["input_sha256"] = local.sha256;
   record["scene"] = scene->name;
   record["op"] = geo::boolean_op_name(scene->op);
   ordered_json objects = ordered_json::array();
@@ -55,12 +82,14 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
     const auto& p = scene->primitives[i];
     const std::string id = p.id.empty() ? "p" + std::to_string(i) : p.id;
+    clock.enter("build");
     auto leaf = kernel::csg_primitive(p.spec, id, config.kernel.linear_tolerance);
     auto solid = leaf.ok() ? kernel::Result<kernel::Shape>(leaf.value().shape)
                            : kernel::Result<kernel::Shape>(leaf.error());
     const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
                               kernel::primitive_type_name(p.spec.type) + ")";
     if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
+    clock.enter("check");
     const kernel::CheckReport check = kernel::check_shape(solid.value());
     if (!check.valid()) {
       return {ErrorCode::GeometryInvalid,
@@ -78,6 +107,8 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
     objects.push_back(std::move(o));
     leaves.push_back(std::move(leaf).value());
   }
+  ops::metrics().add_primitives_built(leaves.size());
+  clock.enter(scene->op == geo::BooleanOp::None ? "build" : "boolean");
   // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
   kernel::BooleanOptions boolean_options;
   boolean_options.tolerance = config.kernel.linear_tolerance;
@@ -97,6 +128,7 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
                                 boolean_options);
   }
   if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
+  clock.enter("publish");
   // Content-addressed: the same model always lands under the same key, so a job that runs
   // twice (after a crash) rewrites identical bytes and publishes nothing new.
   const std::string bytes = kernel::write_native_model(model.value());
@@ -138,6 +170,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
   const std::string worker_id = options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
   Failure failure;
   while (true) {
+    ops::metrics().mark_progress();  // liveness (/healthz): the loop turns
     if (stop_requested()) {
       // Drain: nothing more is claimed; the queue keeps the rest.
       work.stopped = true;
@@ -160,27 +193,42 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       continue;
     }
     const auto start = std::chrono::steady_clock::now();
+    ops::metrics().job_claimed(job->attempts);
+    const LogJobScope log_scope(config.run.name, job->key, job->attempts);  // run/job in logs
     std::string result;
+    StageTimings timings;
     // The lease is renewed every third of its length while the job runs.
     LeaseHeartbeat heartbeat(queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
-    Failure job_failure = run_build_job(*job, run_dir, config, result);
+    Failure job_failure = run_build_job(*job, run_dir, config, result, &timings);
     heartbeat.stop();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
     if (heartbeat.lost()) {
       // Another worker holds the job now (fencing): this attempt's outcome is not recorded.
+      ops::metrics().job_finished(ops::JobOutcome::LeaseLost, seconds);
       log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
       continue;
     }
     if (job_failure.ok()) {
-      queue.complete(*job, result, failure);
-      log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+      const std::string record = with_timings(result, timings, seconds, worker_id, job->attempts);
+      const bool completed = queue.complete(*job, record, failure);
+      if (failure.ok()) {
+        ops::metrics().job_finished(completed ? ops::JobOutcome::Done : ops::JobOutcome::LeaseLost,
+                                    seconds);
+      }
+      if (completed) {
+        log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+      } else if (failure.ok()) {
+        // The lease expired between the last renewal and the completion (fencing).
+        log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+      }
     } else {
       const ErrorInfo& info = error_info(job_failure.code);
       queue.fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable, failure);
+      const bool dead = !info.retryable || job->attempts >= config.queue.max_attempts;
+      ops::metrics().job_finished(dead ? ops::JobOutcome::Dead : ops::JobOutcome::Retry, seconds);
       log.error("job", "failed", {{"job", job->key}, {"error", info.name},
-                                  {"reason", job_failure.message},
-                                  {"attempt", std::to_string(job->attempts)}});
+                                  {"reason", job_failure.message}});  // attempt: LogJobScope
     }
     if (!failure.ok()) return failure;
   }
@@ -207,11 +255,26 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
 
 Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Logger& log, RunSummary& summary) {
   summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
+  const ops::LongStepScope long_step(ops::metrics(), "publish");  // live while publishing
   JobQueue* queue = &queue_ref;
   Failure failure;
   summary.counts = queue->counts(failure);
-  summary.dead = queue->dead_jobs(failure);
-  const auto results = queue->results(failure);
+  // A queue may hold several runs (one PostgreSQL database for a cluster, or one SQLite file
+  // for runs sharing an output folder): a run publishes only its own jobs, whose keys are
+  // "<kind>:<run name>:..." (run names have no ':').
+  const std::string own = ":" + config.run.name + ":";
+  auto of_this_run = [&own](const std::string& key) {
+    const std::size_t colon = key.find(':');
+    return colon != std::string::npos && key.compare(colon, own.size(), own) == 0;
+  };
+  summary.dead.clear();
+  for (DeadJob& d : queue->dead_jobs(failure)) {
+    if (of_this_run(d.key)) summary.dead.push_back(std::move(d));
+  }
+  std::vector<std::pair<std::string, std::string>> results;
+  for (auto& entry : queue->results(failure)) {
+    if (of_this_run(entry.first)) results.push_back(std::move(entry));
+  }
   if (!failure.ok()) return failure;
   // The run's exports (export/), published before the manifest names them.
   RunObjects objects;
@@ -249,16 +312,43 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["csgtile_version"] = CSGTILE_VERSION;
-  manifest["config_sha256"] = sha256_hex(config::to_json(config));
+  // Settings that shape no output are left out of the hash, so workers that differ only in
+  // them publish the same manifest: the metrics endpoint's address, logging, and how inputs
+  // are fetched (the inputs themselves are identified by their SHA-256 in each job record).
+  config::Config hashed = config;
+  hashed.metrics = {};
+  hashed.log = {};
+  hashed.fetch = {};
+  manifest["config_sha256"] = sha256_hex(config::to_json(hashed));
   manifest["seed"] = config.run.seed;
   manifest["jobs"] = ordered_json::array();
+  // Stage timings differ from run to run: they go to timings.json, which the manifest names
+  // but does not hash, so manifest.json stays byte-identical.
+  ordered_json timing_jobs = ordered_json::array();
   for (const auto& [key, result] : results) {
-    manifest["jobs"].push_back({{"key", key}, {"result", ordered_json::parse(result)}});
+    ordered_json record = ordered_json::parse(result);
+    if (const auto t = record.find(kTimingsKey); t != record.end()) {
+      ordered_json entry = {{"key", key}};
+      entry.update(*t);
+      timing_jobs.push_back(std::move(entry));
+      record.erase(t);
+    }
+    manifest["jobs"].push_back({{"key", key}, {"result", std::move(record)}});
   }
   manifest["dead"] = ordered_json::array();
   for (const DeadJob& d : summary.dead) {
     manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
   }
+  const ordered_json timings_file = {
+      {"run", config.run.name},
+      {"note", "wall-clock seconds of the attempt that produced each job's result; not "
+               "deterministic, unlike manifest.json"},
+      {"jobs", std::move(timing_jobs)}};
+  if (Failure f = write_file_atomic(summary.run_dir / "timings.json", timings_file.dump(2) + "\n");
+      !f.ok()) {
+    return f;
+  }
+  manifest["timings"] = "timings.json";
   manifest["index"] = {{"key", index.key},
                        {"sha256", index.sha256},
                        {"bytes", index.bytes},

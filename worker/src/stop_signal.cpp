@@ -1,16 +1,20 @@
 #include "stop_signal.h"
 
+#include <atomic>
 #include <csignal>
 
 namespace csgtile::worker {
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
+// A lock-free atomic rather than volatile sig_atomic_t: besides the handler and the main
+// thread, the ops endpoint's threads read it (readiness), and only atomics are race-free there.
+std::atomic<int> g_stop{0};
+static_assert(std::atomic<int>::is_always_lock_free, "signal handlers need lock-free atomics");
 
 extern "C" void on_stop_signal(int signal) {
-  if (g_stop) std::signal(signal, SIG_DFL);  // asked twice: the next one is not caught
-  g_stop = 1;
+  if (g_stop.load() != 0) std::signal(signal, SIG_DFL);  // asked twice: the next one is not caught
+  g_stop.store(1);
 }
 
 }  // namespace
@@ -24,6 +28,6 @@ void install_stop_signals() {
   sigaction(SIGINT, &action, nullptr);
 }
 
-bool stop_requested() { return g_stop != 0; }
+bool stop_requested() { return g_stop.load() != 0; }
 
 }  // namespace csgtile::worker

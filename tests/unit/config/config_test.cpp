@@ -57,6 +57,9 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120,
                     "verify-full", "/etc/ssl/certs/csgtile-db-ca.pem"};
   expected.log = {LogLevel::Debug, LogFormat::Json};
+  expected.metrics = {"127.0.0.1:9464"};
+  expected.fetch = {{"https", "s3"}, 10, 900, 1024, 30, 4294967296ull, 3, 3, "", "/var/cache/csgtile",
+                    "", "eu-west-1"};
   EXPECT_EQ(*result.config, expected);
 }
 
@@ -276,8 +279,8 @@ TEST(ConfigProblems, BadIndentationIsASyntaxError) {
 TEST(ConfigProblems, TopLevelMustBeAMapping) {
   EXPECT_THAT(problems_of("- run\n- log\n"),
               ElementsAre(Problem{"", 1,
-                                  "the top level must be a mapping of sections (kernel, log, "
-                                  "queue, run), got a list"}));
+                                  "the top level must be a mapping of sections (fetch, kernel, log, "
+                                  "metrics, queue, run), got a list"}));
   EXPECT_THAT(problems_of("just text\n"), ElementsAre(testing::Field(&Problem::line, 1)));
 }
 
@@ -364,6 +367,35 @@ TEST(ConfigEnvironment, StringValuesAreTakenAsWritten) {
       "", {{"CSGTILE_RUN__NAME", "007"}, {"CSGTILE_QUEUE__POSTGRES_DSN", "postgres://u@h/db"}});
   EXPECT_EQ(config.run.name, "007");
   EXPECT_EQ(config.queue.postgres_dsn, "postgres://u@h/db");
+}
+
+TEST(ConfigMetrics, ListenAddressFormsAndOverride) {
+  EXPECT_EQ(config_of("").metrics.listen, "");  // off by default
+  for (const char* ok : {"off", "127.0.0.1:9464", "0.0.0.0:9464", ":9464", "9464", "[::1]:9464",
+                         "localhost:0"}) {
+    EXPECT_EQ(config_of(std::string("metrics:\n  listen: \"") + ok + "\"\n").metrics.listen, ok);
+  }
+  EXPECT_EQ(config_of("", {{"CSGTILE_METRICS__LISTEN", "127.0.0.1:9500"}}).metrics.listen,
+            "127.0.0.1:9500");
+  EXPECT_THAT(problems_of("metrics:\n  listen: \"db.example:9464\"\n"),
+              ElementsAre(testing::Field(&Problem::path, "metrics.listen")));
+  EXPECT_EQ(config_of("metrics:\n  listen: 9464\n").metrics.listen, "9464");  // text as written
+  EXPECT_THAT(problems_of("metrics:\n  port: 9464\n"),
+              ElementsAre(testing::Field(&Problem::path, "metrics.port")));
+}
+
+TEST(ConfigFetch, SchemesAreCheckedAndOverridable) {
+  EXPECT_EQ(config_of("").fetch.schemes, (std::vector<std::string>{"file", "http", "https", "s3"}));
+  EXPECT_EQ(config_of("fetch:\n  schemes: [https]\n").fetch.schemes, std::vector<std::string>{"https"});
+  EXPECT_THAT(problems_of("fetch:\n  schemes: [https, gopher]\n"),
+              ElementsAre(testing::Field(&Problem::path, "fetch.schemes[1]")));
+  EXPECT_THAT(problems_of("fetch:\n  schemes: [s3, s3]\n"),
+              ElementsAre(testing::Field(&Problem::path, "fetch.schemes")));
+  EXPECT_EQ(config_of("", {{"CSGTILE_FETCH__SCHEMES", "s3, https"}}).fetch.schemes,
+            (std::vector<std::string>{"s3", "https"}));
+  EXPECT_THAT(problems_of("fetch:\n  max_redirects: 21\n  attempts: 0\n"),
+              ElementsAre(testing::Field(&Problem::path, "fetch.max_redirects"),
+                          testing::Field(&Problem::path, "fetch.attempts")));
 }
 
 TEST(ConfigEnvironment, BadValueNamesTheVariable) {
@@ -469,8 +501,12 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 
 TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(to_json(Config{}),
-            R"({"kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
-            R"("log":{"format":"auto","level":"info"},)"
+            R"({"fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
+            R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
+            R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
+            R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
+            R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
+            R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
             R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
             R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
             R"("sqlite_path":""},)"

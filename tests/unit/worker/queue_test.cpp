@@ -166,6 +166,36 @@ TYPED_TEST(JobQueueTest, ExpiredLeaseIsReclaimedAndTheOldHolderIsFenced) {
   EXPECT_TRUE(f.ok()) << f.message;
 }
 
+// A job that kills its worker on every attempt (the lease expires unrenewed each time) ends
+// dead after max_attempts claims, with a reason, instead of being claimed forever.
+TYPED_TEST(JobQueueTest, AJobThatKillsItsWorkerEveryTimeEndsDead) {
+  QueuePolicy policy;
+  policy.lease = std::chrono::seconds(0);
+  policy.max_attempts = 3;
+  auto q = this->open(policy);
+  Failure f;
+  q->enqueue("poison", "build", "{}", f);
+  q->enqueue("later", "build", "{}", f);
+  for (int attempt = 1; attempt <= 3; ++attempt) {
+    auto job = q->claim("w" + std::to_string(attempt), f);
+    ASSERT_TRUE(job) << attempt;
+    EXPECT_EQ(job->key, "poison");
+    EXPECT_EQ(job->attempts, attempt);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));  // "crash": never renewed
+  }
+  auto next = q->claim("w4", f);
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->key, "later");
+  EXPECT_TRUE(q->complete(*next, "{}", f));
+  const auto dead = q->dead_jobs(f);
+  ASSERT_EQ(dead.size(), 1u);
+  EXPECT_EQ(dead[0].key, "poison");
+  EXPECT_EQ(dead[0].attempts, 3);
+  EXPECT_EQ(dead[0].last_error, kLeaseLost);
+  EXPECT_EQ(q->counts(f).unfinished(), 0);
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
 // Heartbeat: renewing keeps a job leased past its original expiry (no one else can claim
 // it); a stale token cannot renew, nor can the holder once the job is done.
 TYPED_TEST(JobQueueTest, RenewedLeaseIsKeptAndStaleTokensCannotRenew) {

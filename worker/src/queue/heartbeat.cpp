@@ -1,5 +1,7 @@
 #include "queue/heartbeat.h"
 
+#include "ops/metrics.h"
+
 namespace csgtile::worker {
 
 LeaseHeartbeat::LeaseHeartbeat(JobQueue& queue, Job job, std::chrono::milliseconds period)
@@ -38,6 +40,7 @@ void LeaseHeartbeat::run() {
     lock.lock();
     if (held) {
       ++beats_;
+      ops::metrics().mark_progress();  // a long job keeps the worker live (/healthz)
     } else if (failure.ok()) {
       lost_ = true;  // the row said no: taken over, or no longer running
     }

@@ -59,6 +59,16 @@ class PostgresQueue final : public JobQueue {
         !connection_->exec_script("claim: begin", "BEGIN", failure)) {
       return std::nullopt;
     }
+    // A job whose last allowed attempt lost its lease (the worker crashed, was killed or hung)
+    // ends dead here instead of being claimed again: a job that kills its worker every time
+    // must not loop.
+    const PgResult bury = connection_->exec(
+        "claim: bury",
+        "UPDATE csgtile_jobs SET state = 'dead', last_error = $2, lease_token = NULL, "
+        "lease_expires = NULL, updated_at = now() "
+        "WHERE state = 'running' AND lease_expires < now() AND attempts >= $1::integer",
+        {std::to_string(policy_.max_attempts), std::string(kLeaseLost)}, failure);
+    if (!bury) return abandon();
     // now() is the transaction's start on the server: one clock for every worker.
     const PgResult pick = connection_->exec(
         "claim",

@@ -122,6 +122,19 @@ class SqliteQueue final : public JobQueue {
     // BEGIN IMMEDIATE takes the write lock up front, so two processes never claim one job.
     if (!exec("BEGIN IMMEDIATE", failure)) return std::nullopt;
     const std::int64_t now = now_ms();
+    // A job whose last allowed attempt lost its lease (the worker crashed, was killed or hung)
+    // ends dead here instead of being claimed again: a job that kills its worker every time
+    // must not loop.
+    Statement bury(db_,
+                   "UPDATE jobs SET state='dead', last_error=?3, lease_token=NULL, "
+                   "lease_expires_ms=NULL, updated_ms=?1 "
+                   "WHERE state='running' AND lease_expires_ms < ?1 AND attempts >= ?2");
+    bury.bind(1, now).bind(2, static_cast<std::int64_t>(policy_.max_attempts)).bind(3, std::string(kLeaseLost));
+    if (bury.step() != SQLITE_DONE) {
+      error(failure);
+      exec("ROLLBACK", failure);
+      return std::nullopt;
+    }
     Statement pick(db_,
                    "SELECT id, key, kind, payload, attempts FROM jobs "
                    "WHERE (state IN ('queued','retry') AND run_after_ms <= ?1) "

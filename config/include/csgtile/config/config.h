@@ -59,12 +59,39 @@ struct LogConfig {
   bool operator==(const LogConfig&) const = default;
 };
 
+/// `metrics:` — the worker's HTTP endpoint (/healthz, /readyz, /metrics).
+struct MetricsConfig {
+  /// "HOST:PORT" (e.g. "127.0.0.1:9464"; "[::1]:PORT"; ":PORT" is loopback); "" or "off"
+  /// disables it. Checked when the worker starts; `--metrics-listen` overrides it.
+  std::string listen;
+  bool operator==(const MetricsConfig&) const = default;
+};
+
+/// `fetch:` — how inputs named by URL (file://, http(s)://, s3://) are downloaded.
+struct FetchConfig {
+  std::vector<std::string> schemes{"file", "http", "https", "s3"};  ///< allowed URL schemes
+  int connect_timeout_seconds = 10;       ///< 1..600
+  int timeout_seconds = 600;              ///< whole transfer; 1..86400
+  int low_speed_bytes_per_second = 1024;  ///< abort when slower than this ... (0 = never)
+  int low_speed_seconds = 30;             ///< ... for this long; 1..3600
+  std::uint64_t max_bytes = 8589934592;   ///< size cap of one download; 1..2^53
+  int max_redirects = 5;                  ///< 0..20
+  int attempts = 3;                       ///< tries of a transient failure within one job; 1..10
+  std::string ca_bundle;                  ///< CA file for https; empty = the system's
+  std::string cache_dir;                  ///< empty means <run.output>/cache
+  std::string s3_endpoint;                ///< empty = https://s3.<region>.amazonaws.com
+  std::string s3_region = "us-east-1";
+  bool operator==(const FetchConfig&) const = default;
+};
+
 /// A whole configuration. A default-constructed Config is what an empty file gives.
 struct Config {
   RunConfig run;
   KernelConfig kernel;
   QueueConfig queue;
   LogConfig log;
+  MetricsConfig metrics;
+  FetchConfig fetch;
   bool operator==(const Config&) const = default;
 };
 

@@ -21,6 +21,8 @@ enum class ErrorCode {
   Internal,            ///< a bug: an invariant of csgtile itself failed
   ResultInvalid,       ///< the command ran, but its result fails validation
   JobsFailed,          ///< a run finished with some jobs dead
+  Network,             ///< a transfer failed in a way that may pass (timeout, reset, HTTP 5xx)
+  FetchRefused,        ///< a fetch the policy or the server refuses (scheme, address, size, 4xx)
 };
 
 struct ErrorInfo {

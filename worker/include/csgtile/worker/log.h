@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// Structured logging: one JSON object per line on stderr (level, time, component, job id,
-/// message, fields), or a readable line when stderr is a terminal (format "auto").
+/// Structured logging: one JSON object per line on stderr (level, time, component, run and job
+/// ids while a job runs, message, fields), or a readable line when stderr is a terminal
+/// (format "auto").
 
 #include <cstdio>
 #include <map>
@@ -40,5 +41,22 @@ class Logger {
 
 /// "trace", "debug", "info", "warn", "error".
 const char* log_level_name(config::LogLevel level);
+
+/// While alive, every line any Logger writes on this thread carries the running job's
+/// context: JSON fields `run` (the run's name), `job` (the job's key) and `attempt`; text
+/// `run=… job=… attempt=…`. The worker opens one around each job it runs. Scopes nest (the
+/// innermost wins) and are per thread, so lines of other threads are unaffected.
+class LogJobScope {
+ public:
+  LogJobScope(std::string run, std::string job, int attempt);
+  ~LogJobScope();
+  LogJobScope(const LogJobScope&) = delete;
+  LogJobScope& operator=(const LogJobScope&) = delete;
+
+ private:
+  std::string previous_run_;
+  std::string previous_job_;
+  int previous_attempt_ = 0;
+};
 
 }  // namespace csgtile::worker

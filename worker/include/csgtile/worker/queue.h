@@ -37,6 +37,11 @@ struct QueueCounts {
   std::int64_t unfinished() const { return queued + running + retry; }
 };
 
+/// last_error of a job buried by claim(): its last allowed attempt's lease expired unrenewed.
+inline constexpr const char* kLeaseLost =
+    "lease_lost: the worker of the last allowed attempt stopped renewing its lease "
+    "(it crashed, was killed or hung)";
+
 struct DeadJob {
   std::string key;
   std::string last_error;

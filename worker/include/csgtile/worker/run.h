@@ -9,6 +9,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "csgtile/config/config.h"
@@ -57,9 +59,18 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
 /// the manifest naming them. Deterministic, so publishing twice writes the same bytes.
 Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log, RunSummary& summary);
 
+/// Wall time of each stage of one job ("fetch", "read", "build", "check", "boolean",
+/// "publish"), in the order the stages first ran. Not deterministic: kept out of the run's
+/// manifest.json and published in timings.json beside it.
+struct StageTimings {
+  std::vector<std::pair<std::string, double>> seconds;
+};
+
 /// Executes one "build" job: its payload names a scene input. On success `result` is the
-/// job's JSON record (deterministic: no timings, no absolute paths).
+/// job's JSON record (deterministic: no timings, no absolute paths); `timings`, when given,
+/// receives the seconds of each stage that ran (also on failure).
 Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
-                      const config::Config& config, std::string& result);
+                      const config::Config& config, std::string& result,
+                      StageTimings* timings = nullptr);
 
 }  // namespace csgtile::worker
