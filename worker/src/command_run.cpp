@@ -1,5 +1,6 @@
 // `csgtile run CONFIG`: a whole run on the embedded SQLite queue.
 
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -22,10 +23,30 @@ void register_run(CLI::App& app, Action& action) {
       "--metrics-listen", *listen,
       "Serve /healthz, /readyz and /metrics on ADDR:PORT (e.g. 127.0.0.1:9464; \"off\" disables); "
       "overrides metrics.listen");
-  cmd->callback([&action, file, json, listen, listen_option] {
-    action = [file, json, listen, listen_option] {
-      const auto loaded = load_run_config(*file);
+  auto index = std::make_shared<long long>(-1);
+  auto* index_option = cmd->add_option(
+      "--index", *index,
+      "Run only input N (0-based) of run.inputs, without a shared queue: the run is named "
+      "<run.name>-<N> and its private SQLite queue lives in the temporary directory (for a "
+      "Kubernetes Indexed Job: --index $JOB_COMPLETION_INDEX)");
+  cmd->callback([&action, file, json, listen, listen_option, index, index_option] {
+    action = [file, json, listen, listen_option, index, index_option] {
+      auto loaded = load_run_config(*file);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
+      if (index_option->count() > 0) {
+        const auto n = static_cast<long long>(loaded->run.inputs.size());
+        if (*index < 0 || *index >= n) {
+          std::cerr << "csgtile run: --index " << *index << " is outside run.inputs (" << n
+                    << " input(s): 0.." << n - 1 << ")\n";
+          return error_info(ErrorCode::Usage).exit_code;
+        }
+        config::Config& c = *loaded;
+        c.run.inputs = {c.run.inputs[static_cast<std::size_t>(*index)]};
+        c.run.name += "-" + std::to_string(*index);
+        c.queue.backend = config::QueueBackend::Sqlite;
+        c.queue.sqlite_path = (std::filesystem::temp_directory_path() /
+                               ("csgtile-" + c.run.name + ".sqlite")).string();
+      }
       const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
       RunSummary summary;
