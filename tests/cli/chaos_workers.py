@@ -28,23 +28,10 @@ rng = random.Random(7)
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(f"{work}/scenes")
 
-# Healthy jobs of a fraction of a second: a row of boxes and posts fused, 40 m apart (no
-# relations between jobs, so publishing stays linear).
-inputs = []
-for k in range(jobs):
-    x0 = 40.0 * (k % 25)
-    y0 = 40.0 * (k // 25)
-    prims = []
-    for i in range(4):
-        s = 1.0 + ((k + i) % 7) * 0.1
-        prims.append({"type": "box", "size": [s, s, 2.0],
-                      "placement": [[1, 0, 0, x0 + 0.8 * i], [0, 1, 0, y0], [0, 0, 1, 0]]})
-        prims.append({"type": "cylinder", "r": 0.3, "h": 3.0,
-                      "placement": [[1, 0, 0, x0 + 0.8 * i + s / 2], [0, 1, 0, y0 + s / 2], [0, 0, 1, 0]]})
-    scene = {"name": f"job-{k}", "op": "fuse", "primitives": prims}
-    path = f"{work}/scenes/job-{k:04d}.json"
-    json.dump(scene, open(path, "w"))
-    inputs.append(path)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from worker_jobs import write_jobs  # noqa: E402
+
+inputs = write_jobs(f"{work}/scenes", jobs)
 
 pg = None
 queue_yaml = "queue:\n  lease_seconds: 2\n  max_attempts: 20\n"

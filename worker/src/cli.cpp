@@ -5,10 +5,14 @@
 
 #include "commands.h"
 #include "csgtile/worker/errors.h"
+#include "stop_signal.h"
 
 namespace csgtile::worker {
 
 int run_cli(int argc, char** argv) {
+  // A SIGTERM while a worker starts up must drain it, not kill it: hold the stop signals
+  // until `run`/`worker` install their handlers (other commands get the default action back).
+  hold_stop_signals();
   CLI::App app{"csgtile: LIDAR tiles to CSG-BRep city models and topology indexes"};
   app.set_version_flag("--version", std::string("csgtile ") + CSGTILE_VERSION);
   app.require_subcommand(1);
@@ -33,6 +37,11 @@ int run_cli(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return error_info(ErrorCode::Usage).exit_code;
+  }
+  if (app.got_subcommand("run") || app.got_subcommand("worker")) {
+    install_stop_signals();
+  } else {
+    release_stop_signals();
   }
   try {
     return action ? action() : error_info(ErrorCode::Usage).exit_code;

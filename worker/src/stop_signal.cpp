@@ -1,6 +1,8 @@
 #include "stop_signal.h"
 
 #include <atomic>
+#include <pthread.h>
+
 #include <csignal>
 
 namespace csgtile::worker {
@@ -26,6 +28,27 @@ void install_stop_signals() {
   action.sa_flags = 0;  // no SA_RESTART: a sleep in the claim loop ends early
   sigaction(SIGTERM, &action, nullptr);
   sigaction(SIGINT, &action, nullptr);
+  release_stop_signals();
+}
+
+namespace {
+sigset_t stop_set() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  return set;
+}
+}  // namespace
+
+void hold_stop_signals() {
+  const sigset_t set = stop_set();
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
+void release_stop_signals() {
+  const sigset_t set = stop_set();
+  pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
 }
 
 bool stop_requested() { return g_stop.load() != 0; }

@@ -5,7 +5,14 @@
 
 namespace csgtile::worker {
 
-/// Installs the handlers (idempotent). A second signal of either kind restores the default
+/// Blocks SIGTERM and SIGINT in the calling thread (the first thing the command line does), so
+/// that a stop asked for while a worker starts up waits for the handlers instead of killing it.
+void hold_stop_signals();
+/// Unblocks them: a signal held meanwhile is delivered now, with the default action unless
+/// install_stop_signals() ran (commands other than run and worker).
+void release_stop_signals();
+
+/// Installs the handlers (idempotent), then releases held signals. A second signal of either kind restores the default
 /// action, so a third one ends the process at once.
 void install_stop_signals();
 
