@@ -218,6 +218,23 @@ bool transient_curl(CURLcode code) {
   }
 }
 
+// Options every transfer shares: no redirects followed by libcurl, the path as given (it is
+// what S3 signed), timeouts, TLS verification, the address policy and the error text.
+void set_common_options(CURL* c, const Policy& policy, Sink& sink, char* error_text) {
+  curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 0L);
+  curl_easy_setopt(c, CURLOPT_PATH_AS_IS, 1L);
+  curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
+  curl_easy_setopt(c, CURLOPT_CONNECTTIMEOUT_MS, policy.connect_timeout_ms);
+  curl_easy_setopt(c, CURLOPT_TIMEOUT_MS, policy.transfer_timeout_ms);
+  curl_easy_setopt(c, CURLOPT_SSL_VERIFYPEER, 1L);
+  curl_easy_setopt(c, CURLOPT_SSL_VERIFYHOST, 2L);
+  if (!policy.ca_bundle.empty()) curl_easy_setopt(c, CURLOPT_CAINFO, policy.ca_bundle.c_str());
+  curl_easy_setopt(c, CURLOPT_USERAGENT, "csgtile/" CSGTILE_VERSION);
+  curl_easy_setopt(c, CURLOPT_ERRORBUFFER, error_text);
+  curl_easy_setopt(c, CURLOPT_OPENSOCKETFUNCTION, on_open_socket);
+  curl_easy_setopt(c, CURLOPT_OPENSOCKETDATA, &sink);
+}
+
 Attempt transfer_once(const std::string& url, const std::vector<std::string>& headers,
                       const Policy& policy, const std::string& allowed_protocols, Sink& sink) {
   Attempt attempt;
@@ -238,25 +255,14 @@ Attempt transfer_once(const std::string& url, const std::vector<std::string>& he
     list.release();
     list.reset(grown);
   }
+  set_common_options(c, policy, sink, error_text);
   curl_easy_setopt(c, CURLOPT_URL, url.c_str());
   curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, allowed_protocols.c_str());
-  curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 0L);
-  curl_easy_setopt(c, CURLOPT_PATH_AS_IS, 1L);
-  curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
-  curl_easy_setopt(c, CURLOPT_CONNECTTIMEOUT_MS, policy.connect_timeout_ms);
-  curl_easy_setopt(c, CURLOPT_TIMEOUT_MS, policy.transfer_timeout_ms);
   curl_easy_setopt(c, CURLOPT_LOW_SPEED_LIMIT, policy.low_speed_bytes_per_second);
   curl_easy_setopt(c, CURLOPT_LOW_SPEED_TIME, policy.low_speed_seconds);
   curl_easy_setopt(c, CURLOPT_MAXFILESIZE_LARGE, static_cast<curl_off_t>(policy.max_bytes));
-  curl_easy_setopt(c, CURLOPT_SSL_VERIFYPEER, 1L);
-  curl_easy_setopt(c, CURLOPT_SSL_VERIFYHOST, 2L);
-  if (!policy.ca_bundle.empty()) curl_easy_setopt(c, CURLOPT_CAINFO, policy.ca_bundle.c_str());
-  curl_easy_setopt(c, CURLOPT_USERAGENT, "csgtile/" CSGTILE_VERSION);
-  curl_easy_setopt(c, CURLOPT_ERRORBUFFER, error_text);
   curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_write);
   curl_easy_setopt(c, CURLOPT_WRITEDATA, &sink);
-  curl_easy_setopt(c, CURLOPT_OPENSOCKETFUNCTION, on_open_socket);
-  curl_easy_setopt(c, CURLOPT_OPENSOCKETDATA, &sink);
   if (list) curl_easy_setopt(c, CURLOPT_HTTPHEADER, list.get());
 
   const CURLcode code = curl_easy_perform(c);
@@ -694,6 +700,7 @@ Failure s3_put(const std::string& url, std::string_view bytes, const Policy& pol
   Sink sink;  // only for the address policy
   char error_text[CURL_ERROR_SIZE] = "";
   CURL* c = curl.get();
+  set_common_options(c, policy, sink, error_text);
   curl_easy_setopt(c, CURLOPT_URL, target.url.c_str());
   curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, "http,https");
   curl_easy_setopt(c, CURLOPT_UPLOAD, 1L);
@@ -702,16 +709,6 @@ Failure s3_put(const std::string& url, std::string_view bytes, const Policy& pol
   curl_easy_setopt(c, CURLOPT_INFILESIZE_LARGE, static_cast<curl_off_t>(bytes.size()));
   curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_discard);
   curl_easy_setopt(c, CURLOPT_HTTPHEADER, list.get());
-  curl_easy_setopt(c, CURLOPT_PATH_AS_IS, 1L);
-  curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
-  curl_easy_setopt(c, CURLOPT_CONNECTTIMEOUT_MS, policy.connect_timeout_ms);
-  curl_easy_setopt(c, CURLOPT_TIMEOUT_MS, policy.transfer_timeout_ms);
-  curl_easy_setopt(c, CURLOPT_SSL_VERIFYPEER, 1L);
-  curl_easy_setopt(c, CURLOPT_SSL_VERIFYHOST, 2L);
-  if (!policy.ca_bundle.empty()) curl_easy_setopt(c, CURLOPT_CAINFO, policy.ca_bundle.c_str());
-  curl_easy_setopt(c, CURLOPT_OPENSOCKETFUNCTION, on_open_socket);
-  curl_easy_setopt(c, CURLOPT_OPENSOCKETDATA, &sink);
-  curl_easy_setopt(c, CURLOPT_ERRORBUFFER, error_text);
   const CURLcode code = curl_easy_perform(c);
   if (!sink.refused_address.empty()) {
     return {ErrorCode::FetchRefused, where + ": connection to " + sink.refused_address + " refused"};
