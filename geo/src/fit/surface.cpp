@@ -33,6 +33,14 @@ using kernel::Vec3;
 // Radial part of v about the axis: v minus its axial component.
 Vec3 radial(const Vec3& v, const Vec3& axis) { return v - v.dot(axis) * axis; }
 
+// Unit direction of the radial part `w` (of length `len`); on the axis, any direction across it.
+Vec3 outward(const Vec3& w, double len, const Vec3& axis) {
+  if (len > 0.0) return w / len;
+  Vec3 e1, e2;
+  detail::orthonormal_basis(axis, e1, e2);
+  return e1;
+}
+
 }  // namespace
 
 double surface_distance(const Surface& s, const Vec3& p) {
@@ -79,26 +87,14 @@ Vec3 surface_normal(const Surface& s, const Vec3& p) {
     case ShapeType::Cone: {
       const Vec3 w = radial(v, s.axis);
       const double len = w.norm();
-      Vec3 out_dir;
-      if (len > 0.0) {
-        out_dir = w / len;
-      } else {
-        Vec3 e2;
-        detail::orthonormal_basis(s.axis, out_dir, e2);
-      }
+      const Vec3 out_dir = outward(w, len, s.axis);
       return std::cos(s.angle) * out_dir - std::sin(s.angle) * s.axis;
     }
     case ShapeType::Torus: {
       const double h = v.dot(s.axis);
       const Vec3 w = radial(v, s.axis);
       const double rho = w.norm();
-      Vec3 out_dir;
-      if (rho > 0.0) {
-        out_dir = w / rho;
-      } else {
-        Vec3 e2;
-        detail::orthonormal_basis(s.axis, out_dir, e2);
-      }
+      const Vec3 out_dir = outward(w, rho, s.axis);
       const Vec3 q = (rho - s.radius) * out_dir + h * s.axis;
       const double len = q.norm();
       return len > 0.0 ? Vec3(q / len) : out_dir;

@@ -409,6 +409,9 @@ std::string finish_hex(EVP_MD_CTX* ctx) {
   return hex;
 }
 
+
+}  // namespace
+
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
@@ -425,8 +428,6 @@ Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::ui
   hex = finish_hex(ctx.get());
   return {};
 }
-
-}  // namespace
 
 bool is_url(const std::string& text) {
   const std::size_t colon = text.find("://");

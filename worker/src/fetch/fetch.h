@@ -72,6 +72,9 @@ struct Result {
 Failure fetch(const Request& request, const Policy& policy, const std::filesystem::path& cache_dir,
               Result& result);
 
+/// Streams `path` through SHA-256 (lower-case hex) and counts its bytes; Io when unreadable.
+Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes);
+
 /// Uploads `bytes` to `s3://bucket/key` with a signed PUT (the payload's SHA-256 signed
 /// too). Errors as for fetch.
 Failure s3_put(const std::string& url, std::string_view bytes, const Policy& policy);

@@ -1,9 +1,5 @@
 #include "fetch/input.h"
 
-#include <fstream>
-
-#include "csgtile/worker/publish.h"
-
 namespace csgtile::worker::fetch {
 
 Policy policy_of(const config::FetchConfig& fetch) {
@@ -27,11 +23,7 @@ Failure resolve_input(const std::string& input, const config::Config& config, Lo
   if (!is_url(input)) {
     // An unreadable path is left to the reader, whose message names the file and the cause.
     local.path = input;
-    std::ifstream in(input, std::ios::binary);
-    if (!in) return {};
-    const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    local.sha256 = sha256_hex(bytes);
-    local.bytes = bytes.size();
+    if (!file_sha256(local.path, local.sha256, local.bytes).ok()) local.sha256.clear();
     return {};
   }
   Request request;
