@@ -14,21 +14,25 @@ deploy/setup.sh
 jobs="$(nproc)"
 
 echo "== optimised build and full test suite"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSGTILE_WERROR=ON \
-      -DCSGTILE_BUILD_TESTS=ON -DCSGTILE_BUILD_BENCH=ON >/dev/null
-cmake --build build -j"$jobs"
 # ajv-cli for the CityJSON schema checks, the Khronos glTF validator for the 3D Tiles checks
 # and @20minutes/s3rver for the S3 fetch tests, in build/npm; npm runs only when a package is missing or has another major version
-# (gltf-validator: another version). The checks must then run, not skip.
+# (gltf-validator, three, esbuild: another version). The checks must then run, not skip.
+# The run report's 3D view: three (bundled with its GLTFLoader and OrbitControls by esbuild
+# when CMake configures, so npm runs before it) and puppeteer-core to drive Debian's chromium.
 if ! node -e '
   for (const [name, want] of [["ajv", "8"], ["ajv-formats", "3"], ["ajv-cli", "5"],
-                              ["gltf-validator", "2.0.0-dev.3.10"], ["@20minutes/s3rver", "5"]]) {
+                              ["gltf-validator", "2.0.0-dev.3.10"], ["@20minutes/s3rver", "5"],
+                              ["three", "0.187.0"], ["esbuild", "0.28.2"], ["puppeteer-core", "24"]]) {
     const v = require(process.argv[1] + "/node_modules/" + name + "/package.json").version;
     if (v !== want && v.split(".")[0] !== want) process.exit(1);
   }' "$PWD/build/npm" 2>/dev/null; then
   npm install --no-audit --no-fund --prefix build/npm ajv@8 ajv-formats@3 ajv-cli@5 \
-      gltf-validator@2.0.0-dev.3.10 @20minutes/s3rver@5
+      gltf-validator@2.0.0-dev.3.10 @20minutes/s3rver@5 three@0.187.0 esbuild@0.28.2 \
+      puppeteer-core@24
 fi
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSGTILE_WERROR=ON \
+      -DCSGTILE_BUILD_TESTS=ON -DCSGTILE_BUILD_BENCH=ON >/dev/null
+cmake --build build -j"$jobs"
 export CSGTILE_AJV="$PWD/build/npm/node_modules/.bin/ajv"
 export CSGTILE_REQUIRE_AJV="${CSGTILE_REQUIRE_AJV:-1}"
 export CSGTILE_GLTF_VALIDATOR_DIR="$PWD/build/npm/node_modules/gltf-validator"
@@ -36,6 +40,10 @@ export CSGTILE_REQUIRE_GLTF_VALIDATOR="${CSGTILE_REQUIRE_GLTF_VALIDATOR:-1}"
 # S3 fetch tests: @20minutes/s3rver (verifies SigV4 signatures), same install.
 export CSGTILE_S3RVER_DIR="$PWD/build/npm/node_modules/@20minutes/s3rver"
 export CSGTILE_REQUIRE_S3RVER="${CSGTILE_REQUIRE_S3RVER:-1}"
+# The run report in headless Chromium (tests/cli/report_chromium.py): chromium from setup.sh,
+# puppeteer-core and the 3D view compiled in (three, esbuild) from the same install.
+export CSGTILE_PUPPETEER_DIR="$PWD/build/npm/node_modules/puppeteer-core"
+export CSGTILE_REQUIRE_REPORT_VIEWER="${CSGTILE_REQUIRE_REPORT_VIEWER:-1}"
 # The random mixed-primitive Boolean property test runs ten times its default case count
 # here (400 pairs); the sanitizer stage keeps the default.
 CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --output-on-failure -j"$jobs"
@@ -43,7 +51,8 @@ CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --
 if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "== ASan+UBSan build: kernel, assembly, geo, config and CLI tests"
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCSGTILE_WERROR=ON \
-        -DCSGTILE_SANITIZE=ON -DCSGTILE_BUILD_TESTS=ON >/dev/null
+        -DCSGTILE_SANITIZE=ON -DCSGTILE_BUILD_TESTS=ON \
+        -DCSGTILE_REPORT_NPM_DIR="$PWD/build/npm/node_modules" >/dev/null
   cmake --build build-asan -j"$jobs"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$jobs" -L 'kernel|assembly|geo|config|cli|boundaries'

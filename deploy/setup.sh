@@ -35,11 +35,13 @@ packages=(
   gdal-bin python3-gdal
   # deploy/k8s checks: YAML lint of the Kubernetes manifests (tests/deploy)
   yamllint
+  # run report check: headless Chromium opens report/index.html (tests/cli/report_chromium.py)
+  chromium
 )
 # Tools, tests and linters that building the binary does not need (left out by --build-only).
 test_only=(clang clang-format clang-tidy libclang-rt-14-dev git proj-bin postgresql-15 openssl
            libgtest-dev libgmock-dev googletest libbenchmark-dev python3 gdal-bin python3-gdal
-           yamllint)
+           yamllint chromium)
 if [ "$build_only" = 1 ]; then
   kept=()
   for p in "${packages[@]}"; do

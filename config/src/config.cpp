@@ -79,6 +79,11 @@ Config from_document(const json& document) {
   read(document, "fetch", "cache_dir", config.fetch.cache_dir);
   read(document, "fetch", "s3_endpoint", config.fetch.s3_endpoint);
   read(document, "fetch", "s3_region", config.fetch.s3_region);
+  read(document, "city", "cell_size", config.city.cell_size);
+  read(document, "city", "halo", config.city.halo);
+  read(document, "city", "voxel_size", config.city.voxel_size);
+  read(document, "city", "fit_config", config.city.fit_config);
+  read(document, "publish", "url", config.publish.url);
   return config;
 }
 
@@ -103,7 +108,18 @@ LoadResult load_string(std::string_view yaml, std::string_view source, const Env
     detail::apply_environment(env, document, result.problems);
     detail::validate(document, result.problems);
     sort_problems(result.problems);
-    if (result.problems.empty()) result.config = from_document(document.json);
+    if (result.problems.empty()) {
+      Config config = from_document(document.json);
+      // Rules between keys, which the schema cannot state.
+      if (config.city.halo >= config.city.cell_size) {
+        result.problems.push_back(
+            {"city.halo", 0,
+             "must be smaller than city.cell_size (" + json(config.city.cell_size).dump() +
+                 "), got " + json(config.city.halo).dump()});
+      } else {
+        result.config = std::move(config);
+      }
+    }
   } catch (const std::exception& error) {
     // Nothing above should throw on any input; if it does, the caller still gets data.
     result.config.reset();
@@ -173,6 +189,11 @@ std::string to_json(const Config& config) {
                   {"cache_dir", config.fetch.cache_dir},
                   {"s3_endpoint", config.fetch.s3_endpoint},
                   {"s3_region", config.fetch.s3_region}};
+  out["city"] = {{"cell_size", config.city.cell_size},
+                 {"halo", config.city.halo},
+                 {"voxel_size", config.city.voxel_size},
+                 {"fit_config", config.city.fit_config}};
+  out["publish"] = {{"url", config.publish.url}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so
   // the bytes depend on the values only. Invalid UTF-8 (possible only through the
   // environment) is replaced rather than thrown on.

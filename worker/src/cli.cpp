@@ -30,6 +30,7 @@ int run_cli(int argc, char** argv) {
   detail::register_enqueue(app, action);
   detail::register_worker(app, action);
   detail::register_fit(app, action);
+  detail::register_tile(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

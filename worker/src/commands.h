@@ -35,5 +35,6 @@ void register_status(CLI::App& app, Action& action);
 void register_enqueue(CLI::App& app, Action& action);
 void register_worker(CLI::App& app, Action& action);
 void register_fit(CLI::App& app, Action& action);
+void register_tile(CLI::App& app, Action& action);
 
 }  // namespace csgtile::worker::detail

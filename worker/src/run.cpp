@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 #include <nlohmann/json.hpp>
@@ -14,10 +15,12 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
+#include "city/city_jobs.h"
 #include "export/cityjson_seq.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
 #include "fetch/input.h"
+#include "job_records.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
 #include "queue/heartbeat.h"
@@ -27,22 +30,6 @@ namespace csgtile::worker {
 
 namespace {
 using nlohmann::ordered_json;
-
-/// Key of a done job's timings inside its queue record (see with_timings).
-constexpr const char* kTimingsKey = "timings";
-
-/// The queue's record of a done job: its deterministic result plus "timings" (stage seconds,
-/// total, worker, attempt), which publish_run moves out of manifest.json into timings.json.
-std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
-                         const std::string& worker_id, int attempt) {
-  ordered_json record = ordered_json::parse(result, nullptr, false);
-  if (!record.is_object()) return result;
-  ordered_json stages = ordered_json::object();
-  for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
-  record[kTimingsKey] = {{"stages", stages}, {"seconds", seconds}, {"worker", worker_id},
-                         {"attempt", attempt}};
-  return record.dump();
-}
 
 ordered_json topology_json(const kernel::Shape& s) {
   const auto c = kernel::count_shapes(s);
@@ -57,14 +44,9 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, std::string& result, StageTimings* timings) {
   ops::StageClock clock(timings);
   clock.enter("fetch");
-  const auto payload = nlohmann::json::parse(job.payload, nullptr, false);
-  if (payload.is_discarded() || !payload.contains("input") || !payload["input"].is_string()) {
-    return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
-  }
-  const std::string input = payload["input"].get<std::string>();
+  std::string input;
   fetch::LocalInput local;
-  if (Failure f = fetch::resolve_input(input, config, local); !f.ok()) return f;
-  if (local.fetched && !local.from_cache) ops::metrics().add_bytes_fetched(local.bytes);
+  if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
   clock.enter("read");
   auto scene = geo::read_scene(local.path.string());
   if (!scene.ok()) {
@@ -150,9 +132,44 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   return {};
 }
 
+namespace {
+/// A run of LIDAR tiles is a city run (city/city_jobs.h); a run of scenes builds each scene.
+bool is_city_run(const config::Config& config) {
+  return std::any_of(config.run.inputs.begin(), config.run.inputs.end(), city::is_tile_input);
+}
+}  // namespace
+
+std::string output_config_sha256(const config::Config& config) {
+  config::Config hashed = config;
+  hashed.run.output.clear();
+  hashed.run.threads = 0;
+  hashed.queue = {};
+  hashed.log = {};
+  hashed.metrics = {};
+  hashed.fetch = {};
+  hashed.publish = {};
+  return sha256_hex(config::to_json(hashed));
+}
+
 Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log, std::size_t& added) {
   Failure failure;
   added = 0;
+  if (is_city_run(config)) {
+    for (const std::string& input : config.run.inputs) {
+      if (!city::is_tile_input(input)) {
+        return {ErrorCode::ConfigInvalid,
+                "run.inputs mixes point-cloud tiles and scene files (" + input +
+                    "): a run is either a city of tiles or a set of scenes; use two runs"};
+      }
+    }
+    if (Failure f = city::enqueue_fits(config, queue, added); !f.ok()) return f;
+    std::size_t next = 0;  // a run enqueued again after its fits finished goes on
+    if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
+    added += next;
+    log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
+                                 {"queue", describe_queue(config)}});
+    return failure;
+  }
   for (const std::string& input : config.run.inputs) {
     const std::string key = "build:" + config.run.name + ":" + input;
     const std::string payload = nlohmann::json({{"input", input}}).dump();
@@ -183,6 +200,13 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       const QueueCounts c = queue.counts(failure);
       if (!failure.ok()) return failure;
       if (c.unfinished() == 0) {
+        // The next stage of a city run may be due (its enqueue lost to a crash, or not yet
+        // made): enqueueing is idempotent, so every idle worker may try.
+        std::size_t next = 0;
+        if (is_city_run(config)) {
+          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
+        }
+        if (next > 0) continue;
         work.finished = true;
         if (options.exit_when_idle) return failure;
       } else {
@@ -199,7 +223,9 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     StageTimings timings;
     // The lease is renewed every third of its length while the job runs.
     LeaseHeartbeat heartbeat(queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
-    Failure job_failure = run_build_job(*job, run_dir, config, result, &timings);
+    Failure job_failure = job->kind == "build"
+                              ? run_build_job(*job, run_dir, config, result, &timings)
+                              : city::run_city_job(*job, run_dir, config, queue, log, result, &timings);
     heartbeat.stop();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
@@ -218,6 +244,10 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       }
       if (completed) {
         log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+        if (job->kind == "fit" || job->kind == "assemble") {
+          std::size_t next = 0;
+          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
+        }
       } else if (failure.ok()) {
         // The lease expired between the last renewal and the completion (fencing).
         log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
@@ -271,6 +301,11 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   for (DeadJob& d : queue->dead_jobs(failure)) {
     if (of_this_run(d.key)) summary.dead.push_back(std::move(d));
   }
+  if (is_city_run(config)) {
+    // The run's index job published it (city/index_job.cpp); nothing is written here.
+    summary.manifest = summary.run_dir / "manifest.json";
+    return failure;
+  }
   std::vector<std::pair<std::string, std::string>> results;
   for (auto& entry : queue->results(failure)) {
     if (of_this_run(entry.first)) results.push_back(std::move(entry));
@@ -312,42 +347,18 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["csgtile_version"] = CSGTILE_VERSION;
-  // Settings that shape no output are left out of the hash, so workers that differ only in
-  // them publish the same manifest: the metrics endpoint's address, logging, and how inputs
-  // are fetched (the inputs themselves are identified by their SHA-256 in each job record).
-  config::Config hashed = config;
-  hashed.metrics = {};
-  hashed.log = {};
-  hashed.fetch = {};
-  manifest["config_sha256"] = sha256_hex(config::to_json(hashed));
+  manifest["config_sha256"] = output_config_sha256(config);
   manifest["seed"] = config.run.seed;
-  manifest["jobs"] = ordered_json::array();
   // Stage timings differ from run to run: they go to timings.json, which the manifest names
   // but does not hash, so manifest.json stays byte-identical.
-  ordered_json timing_jobs = ordered_json::array();
-  for (const auto& [key, result] : results) {
-    ordered_json record = ordered_json::parse(result);
-    if (const auto t = record.find(kTimingsKey); t != record.end()) {
-      ordered_json entry = {{"key", key}};
-      entry.update(*t);
-      timing_jobs.push_back(std::move(entry));
-      record.erase(t);
-    }
-    manifest["jobs"].push_back({{"key", key}, {"result", std::move(record)}});
-  }
+  JobRecords records;
+  for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
+  manifest["jobs"] = std::move(records.jobs);
   manifest["dead"] = ordered_json::array();
   for (const DeadJob& d : summary.dead) {
     manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
   }
-  const ordered_json timings_file = {
-      {"run", config.run.name},
-      {"note", "wall-clock seconds of the attempt that produced each job's result; not "
-               "deterministic, unlike manifest.json"},
-      {"jobs", std::move(timing_jobs)}};
-  if (Failure f = write_file_atomic(summary.run_dir / "timings.json", timings_file.dump(2) + "\n");
-      !f.ok()) {
-    return f;
-  }
+  if (Failure f = write_timings(summary.run_dir, config.run.name, records); !f.ok()) return f;
   manifest["timings"] = "timings.json";
   manifest["index"] = {{"key", index.key},
                        {"sha256", index.sha256},

@@ -60,6 +60,8 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   expected.metrics = {"127.0.0.1:9464"};
   expected.fetch = {{"https", "s3"}, 10, 900, 1024, 30, 4294967296ull, 3, 3, "", "/var/cache/csgtile",
                     "", "eu-west-1"};
+  expected.city = {250.0, 50.0, 0.5, ""};
+  expected.publish = {""};
   EXPECT_EQ(*result.config, expected);
 }
 
@@ -279,9 +281,20 @@ TEST(ConfigProblems, BadIndentationIsASyntaxError) {
 TEST(ConfigProblems, TopLevelMustBeAMapping) {
   EXPECT_THAT(problems_of("- run\n- log\n"),
               ElementsAre(Problem{"", 1,
-                                  "the top level must be a mapping of sections (fetch, kernel, log, "
-                                  "metrics, queue, run), got a list"}));
+                                  "the top level must be a mapping of sections (city, fetch, kernel, "
+                                  "log, metrics, publish, queue, run), got a list"}));
   EXPECT_THAT(problems_of("just text\n"), ElementsAre(testing::Field(&Problem::line, 1)));
+}
+
+TEST(ConfigProblems, CityHaloMustBeSmallerThanTheCell) {
+  EXPECT_THAT(problems_of("city:\n  cell_size: 100\n  halo: 100\n"),
+              ElementsAre(Problem{"city.halo", 0, "must be smaller than city.cell_size (100.0), got 100.0"}));
+  EXPECT_EQ(config_of("city:\n  cell_size: 100\n  halo: 20\n").city.halo, 20.0);
+}
+
+TEST(ConfigProblems, PublishUrlMustBeAnS3Prefix) {
+  EXPECT_EQ(config_of("publish:\n  url: s3://city-bucket/runs\n").publish.url, "s3://city-bucket/runs");
+  EXPECT_EQ(problems_of("publish:\n  url: http://example.org/x\n").size(), 1u);
 }
 
 TEST(ConfigProblems, MoreThanOneDocument) {
@@ -501,13 +514,14 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 
 TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(to_json(Config{}),
-            R"({"fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
+            R"({"city":{"cell_size":250.0,"fit_config":"","halo":50.0,"voxel_size":0.5},)"
+            R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
             R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
             R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
             R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
             R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
             R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
-            R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
+            R"("publish":{"url":""},)" R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
             R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
             R"("sqlite_path":""},)"
             R"("run":{"inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");

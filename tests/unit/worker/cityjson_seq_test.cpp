@@ -440,6 +440,25 @@ TEST(CityJsonSeq, OpenShellIsWrittenAsMultiSurfaceAndReported) {
   EXPECT_EQ(s.header["transform"]["translate"], Json::array({0.0, 0.0, 0.0}));
 }
 
+TEST(CityJsonSeq, ObjectOfSeveralSolidsIsAGenericCityObjectWithAMultiSolid) {
+  // An unfused group (its fuse failed) is a compound of solids; CityJSON's Building admits no
+  // MultiSolid, so the object becomes a GenericCityObject.
+  const auto a = kernel::csg_primitive(box({0, 0, 0}, {1, 1, 1}));
+  const auto b = kernel::csg_primitive(box({3, 0, 0}, {1, 1, 2}));
+  ASSERT_TRUE(a.ok() && b.ok());
+  auto both = kernel::ShapeFactory::compound({a->shape, b->shape});
+  ASSERT_TRUE(both.ok()) << both.error().message;
+  IndexObject group;
+  group.id = "group";
+  group.model.shape = both.value();
+  const auto text = cityjson_seq({group});
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  const Json& co = city_object(parse(text.value()).features.at(0));
+  EXPECT_EQ(co["type"], "GenericCityObject");
+  EXPECT_EQ(co["geometry"][0]["type"], "MultiSolid");
+  EXPECT_EQ(co["geometry"][0]["boundaries"].size(), 2u);
+}
+
 // ---- determinism, CRS, errors ----------------------------------------------------------------
 
 TEST_F(CityJsonSeqTest, SameObjectsGiveTheSameBytes) {

@@ -475,7 +475,9 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
     }
     FeatureVertices vertices;
     Json city_object;
-    city_object["type"] = "Building";
+    // CityJSON's Building admits no MultiSolid: an object of several solids (a group whose
+    // fuse failed, or a result in pieces) is a GenericCityObject.
+    city_object["type"] = g && g->solids.size() > 1 ? "GenericCityObject" : "Building";
     city_object["attributes"] = attributes_json(object, g);
     if (g) {
       city_object["geometry"] = Json::array({geometry_json(*g, vertices)});

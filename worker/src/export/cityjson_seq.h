@@ -4,7 +4,8 @@
 /// the transform and the metadata and no objects, then one CityJSONFeature per object, each
 /// with its own integer vertices (scale × v + translate gives CRS coordinates).
 ///
-/// Each object is a Building with one lod-2 Solid (a MultiSolid for a compound): planar faces
+/// Each object is a Building with one lod-2 Solid (a compound of several solids is a
+/// GenericCityObject with a MultiSolid, which Building does not admit): planar faces
 /// become one surface each (exterior ring and holes), curved faces the triangles of their
 /// tessellation. Every surface gets a semantic surface from its outward normal n and height:
 /// GroundSurface when n_z < -0.9 and it lies within the ground tolerance of the object's

@@ -34,21 +34,39 @@ std::map<std::string, const geo::ScenePrimitive*> primitives_by_label(const geo:
   return out;
 }
 
+PrimitiveInfo scene_primitive_info(int node, const kernel::CsgNode& leaf,
+                                   const std::map<std::string, const geo::ScenePrimitive*>& scene) {
+  const auto it = scene.find(leaf.label);
+  return primitive_info(node, leaf, it == scene.end() ? std::nullopt : it->second->quality);
+}
+
+}  // namespace
+
 PrimitiveInfo primitive_info(int node, const kernel::CsgNode& leaf,
-                             const std::map<std::string, const geo::ScenePrimitive*>& scene) {
+                             const std::optional<geo::FitQuality>& quality) {
   PrimitiveInfo info;
   info.node = node;
   info.id = leaf.label;
   info.type = kernel::primitive_type_name(leaf.primitive.type);
-  if (auto it = scene.find(leaf.label); it != scene.end() && it->second->quality) {
-    info.inliers = it->second->quality->inliers;
-    info.rms = it->second->quality->rms;
-    info.coverage = it->second->quality->coverage;
+  if (quality) {
+    info.inliers = quality->inliers;
+    info.rms = quality->rms;
+    info.coverage = quality->coverage;
   }
   return info;
 }
 
-}  // namespace
+std::vector<PrimitiveInfo> model_primitives(
+    const kernel::CsgModel& model,
+    const std::function<std::optional<geo::FitQuality>(const std::string&)>& quality) {
+  std::vector<PrimitiveInfo> out;
+  for (std::size_t n = 0; n < model.nodes.size(); ++n) {
+    const kernel::CsgNode& node = model.nodes[n];
+    if (node.kind != kernel::CsgNodeKind::Primitive) continue;
+    out.push_back(primitive_info(static_cast<int>(n), node, quality(node.label)));
+  }
+  return out;
+}
 
 std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel::CsgModel& model,
                                            const geo::Scene* scene) {
@@ -77,7 +95,7 @@ std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel
       for (std::size_t f = 0; f < faces.size(); ++f) {
         object.model.face_sources.push_back({kernel::FaceSource{0, static_cast<int>(f)}});
       }
-      object.primitives.push_back(primitive_info(0, leaf, labels));
+      object.primitives.push_back(scene_primitive_info(0, leaf, labels));
     } else if (!model.nodes.empty() && model.face_sources.size() == model_faces.size()) {
       object.model.nodes = model.nodes;
       std::set<int> contributing;
@@ -92,7 +110,7 @@ std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel
       for (std::size_t n = 0; n < model.nodes.size(); ++n) {
         if (model.nodes[n].kind != kernel::CsgNodeKind::Primitive) continue;
         if (solids.size() > 1 && !contributing.count(static_cast<int>(n))) continue;
-        object.primitives.push_back(primitive_info(static_cast<int>(n), model.nodes[n], labels));
+        object.primitives.push_back(scene_primitive_info(static_cast<int>(n), model.nodes[n], labels));
       }
     }
     out.push_back(std::move(object));

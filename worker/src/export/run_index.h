@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -34,6 +35,15 @@ struct RunIndexReport {
 /// (matched by id). `scene` may be null (no quality, ids from the CSG labels).
 std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel::CsgModel& model,
                                            const geo::Scene* scene);
+
+/// The PrimitiveInfo of a model's Primitive node `node` (`leaf`), with its fit quality.
+PrimitiveInfo primitive_info(int node, const kernel::CsgNode& leaf,
+                             const std::optional<geo::FitQuality>& quality);
+/// One PrimitiveInfo per Primitive node of `model`, in node order; `quality` gives a leaf's
+/// fit quality by its label.
+std::vector<PrimitiveInfo> model_primitives(
+    const kernel::CsgModel& model,
+    const std::function<std::optional<geo::FitQuality>(const std::string&)>& quality);
 
 /// The objects of a run's done jobs in one frame, shared by the run's exports.
 struct RunObjects {

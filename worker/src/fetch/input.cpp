@@ -1,5 +1,9 @@
 #include "fetch/input.h"
 
+#include <nlohmann/json.hpp>
+
+#include "ops/metrics.h"
+
 namespace csgtile::worker::fetch {
 
 Policy policy_of(const config::FetchConfig& fetch) {
@@ -38,6 +42,18 @@ Failure resolve_input(const std::string& input, const config::Config& config, Lo
   local.bytes = result.bytes;
   local.fetched = true;
   local.from_cache = result.from_cache;
+  return {};
+}
+
+Failure resolve_job_input(const Job& job, const config::Config& config, std::string& input,
+                          LocalInput& local) {
+  const auto payload = nlohmann::json::parse(job.payload, nullptr, false);
+  if (payload.is_discarded() || !payload.contains("input") || !payload["input"].is_string()) {
+    return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
+  }
+  input = payload["input"].get<std::string>();
+  if (Failure f = resolve_input(input, config, local); !f.ok()) return f;
+  if (local.fetched && !local.from_cache) ops::metrics().add_bytes_fetched(local.bytes);
   return {};
 }
 

@@ -9,6 +9,7 @@
 
 #include "csgtile/config/config.h"
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/queue.h"
 #include "fetch/fetch.h"
 
 namespace csgtile::worker::fetch {
@@ -26,5 +27,11 @@ Policy policy_of(const config::FetchConfig& fetch);
 
 /// Resolves `input` (a path or a URL with an optional #sha256=..&size=.. fragment).
 Failure resolve_input(const std::string& input, const config::Config& config, LocalInput& local);
+
+/// The input a job's payload names ({"input": "<path or URL>", ...}) in `input`, resolved as
+/// resolve_input does; bytes downloaded are counted in the metrics. Errors: Internal for a
+/// malformed payload; as resolve_input.
+Failure resolve_job_input(const Job& job, const config::Config& config, std::string& input,
+                          LocalInput& local);
 
 }  // namespace csgtile::worker::fetch

@@ -84,6 +84,27 @@ struct FetchConfig {
   bool operator==(const FetchConfig&) const = default;
 };
 
+/// `city:` — how a run of LIDAR tiles becomes a city (DESIGN.md §1): one `fit` job per tile,
+/// one `assemble` job per output cell (its primitives plus a halo), one `index` job per run.
+struct CityConfig {
+  double cell_size = 250.0;  ///< output cell edge, CRS units; (0, 1e6]
+  /// Band around a cell whose primitives are read with it; an object reaching past it is
+  /// reported. [0, cell_size)
+  double halo = 50.0;
+  double voxel_size = 0.5;   ///< OpenVDB culling voxel edge (m); (0, 100]
+  /// Fit options as JSON (the file `csgtile fit --config` reads); "" = the built-in defaults.
+  /// Its content is hashed into every fit job's record.
+  std::string fit_config;
+  bool operator==(const CityConfig&) const = default;
+};
+
+/// `publish:` — where a finished run is published besides the local output directory.
+struct PublishConfig {
+  /// "s3://bucket/prefix": objects, then create-only manifests, then a pointer; "" = local only.
+  std::string url;
+  bool operator==(const PublishConfig&) const = default;
+};
+
 /// A whole configuration. A default-constructed Config is what an empty file gives.
 struct Config {
   RunConfig run;
@@ -92,6 +113,8 @@ struct Config {
   LogConfig log;
   MetricsConfig metrics;
   FetchConfig fetch;
+  CityConfig city;
+  PublishConfig publish;
   bool operator==(const Config&) const = default;
 };
 

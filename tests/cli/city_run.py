@@ -1,0 +1,226 @@
+#!/usr/bin/env python3
+"""A city run end to end: `csgtile synth` scans the city block, `csgtile tile` cuts the scan
+into 50 m tiles, and `csgtile run` fits every tile, assembles every 100 m cell (with a 45 m
+halo) and indexes the run. One extra input is a truncated tile. Checked:
+  * the truncated tile's fit job is dead with a reason naming the file; every other job done;
+    the run exits 3 (jobs_failed) and still publishes everything else;
+  * every cell's manifest names its files with matching SHA-256 and sizes; every object is
+    published in exactly one cell; the run index holds them all;
+  * validators on every cell: ogrinfo + GDAL's validate_gpkg.py on each GeoPackage, ajv with
+    the CityJSON 2.0.2 schemas on each CityJSONSeq, the Khronos glTF validator on each glb;
+    the root tileset names every cell's tileset;
+  * `csgtile query` answers from the run index;
+  * byte-identical outputs for 1 and 2 threads, and — when PostgreSQL 15 is installed — for
+    the same run on PostgreSQL worked by three `csgtile worker` processes at once.
+Validators and PostgreSQL are skipped with a message when missing, unless CSGTILE_REQUIRE_GDAL,
+CSGTILE_REQUIRE_AJV, CSGTILE_REQUIRE_GLTF_VALIDATOR or CSGTILE_REQUIRE_POSTGRES is 1.
+Prints one JSON line of figures.
+Usage: city_run.py CSGTILE SOURCE_DIR WORKDIR AJV GLTF_VALIDATOR_DIR"""
+import glob
+import hashlib
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+
+binary, source, work, ajv, gltf_dir = sys.argv[1:6]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+
+def required(name):
+    return os.environ.get(f"CSGTILE_REQUIRE_{name}") == "1"
+
+
+def missing(name, what):
+    if required(name):
+        sys.exit(f"{what} is required (CSGTILE_REQUIRE_{name}=1) but missing")
+    print(f"skip: {what} missing")
+
+
+def run(*args, ok=(0,), **kw):
+    p = subprocess.run([binary, *args], capture_output=True, text=True, **kw)
+    assert p.returncode in ok, f"{args}: exit {p.returncode}\n{p.stdout}\n{p.stderr}"
+    return p
+
+
+# --- inputs: a scanned city block cut into tiles, plus a truncated tile -----------------------
+run("synth", "city-block", "--out", f"{work}/block.las", "--truth", f"{work}/truth.json",
+    "--points", "200000", "--seed", "3")
+tiled = json.loads(run("tile", f"{work}/block.las", "--size", "50", "--out", f"{work}/tiles",
+                       "--json").stdout)
+tiles = [t["file"] for t in tiled["tiles"]]
+assert len(tiles) >= 9, tiled
+assert sum(t["points"] for t in tiled["tiles"]) == tiled["points"]
+with open(tiles[len(tiles) // 2], "rb") as f:
+    whole = f.read()
+corrupt = f"{work}/tiles/zz_truncated.las"
+with open(corrupt, "wb") as f:
+    f.write(whole[: len(whole) // 2])
+inputs = tiles + [corrupt]
+
+
+def write_config(name, output, threads, queue=""):
+    path = f"{work}/{name}.yaml"
+    with open(path, "w") as f:
+        f.write("run:\n  name: city\n  inputs:\n" + "".join(f"    - {p}\n" for p in inputs) +
+                f"  output: {output}\n  threads: {threads}\ncity:\n  cell_size: 100\n"
+                f"  halo: 45\nlog:\n  level: warn\n  format: json\n{queue}")
+    return path
+
+
+# --- the embedded run ------------------------------------------------------------------------
+p = run("run", write_config("a", f"{work}/a", 2), "--json", ok=(3,))
+summary = json.loads(p.stdout.strip().splitlines()[-1])
+rundir = f"{work}/a/runs/city"
+manifest = json.load(open(f"{rundir}/manifest.json"))
+assert manifest["kind"] == "city"
+dead = manifest["dead"]
+assert [d["key"] for d in dead] == [f"fit:city:{corrupt}"], dead
+assert "input_invalid" in dead[0]["error"] and "zz_truncated.las" in dead[0]["error"], dead
+assert dead[0]["attempts"] == 1, dead  # a corrupt tile is not retried
+kinds = {}
+for job in manifest["jobs"]:
+    kinds[job["key"].split(":")[0]] = kinds.get(job["key"].split(":")[0], 0) + 1
+assert kinds["fit"] == len(tiles), kinds
+totals = manifest["totals"]
+assert totals["cells"] >= 2 and kinds["assemble"] == totals["cells"], (totals, kinds)
+assert totals["objects"] >= 5 and totals["primitives"] >= totals["objects"], totals
+
+
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+objects_seen = {}
+cells = []
+for cell in manifest["cells"]:
+    key = cell["manifest"]["key"]
+    assert sha256(f"{rundir}/{key}") == cell["manifest"]["sha256"], key
+    cm = json.load(open(f"{rundir}/{key}"))
+    cdir = os.path.dirname(f"{rundir}/{key}")
+    for entry in cm["files"]:
+        path = f"{cdir}/{entry['key']}"
+        assert sha256(path) == entry["sha256"] and os.path.getsize(path) == entry["bytes"], entry
+    for o in cm["objects"]:
+        assert o["id"] not in objects_seen, f"{o['id']} in {objects_seen.get(o['id'])} and {cm['cell']}"
+        objects_seen[o["id"]] = cm["cell"]
+        assert sha256(f"{rundir}/{o['key']}") == o["sha256"], o
+    cells.append((cm["cell"], cdir, cm))
+assert len(objects_seen) == totals["objects"], (len(objects_seen), totals)
+
+# --- validators ------------------------------------------------------------------------------
+figures = {"tiles": len(tiles), "cells": len(cells), "objects": totals["objects"],
+           "primitives": totals["primitives"], "validated": []}
+validate_gpkg = "/usr/lib/python3/dist-packages/osgeo_utils/samples/validate_gpkg.py"
+if shutil.which("ogrinfo") and os.path.exists(validate_gpkg):
+    for path, count in [(f"{rundir}/index.gpkg", totals["objects"])] + [
+            (f"{cdir}/index.gpkg", len(cm["objects"])) for _, cdir, cm in cells]:
+        info = subprocess.run(["ogrinfo", "-ro", "-so", path, "objects"], capture_output=True,
+                              text=True, check=True).stdout
+        assert f"Feature Count: {count}\n" in info, (path, info)
+        assert "EPSG" in info and "28992" in info, info
+        subprocess.run(["/usr/bin/python3", validate_gpkg, path], check=True)
+    figures["validated"].append("gpkg")
+else:
+    missing("GDAL", "ogrinfo or validate_gpkg.py (gdal-bin, python3-gdal)")
+
+schemas = f"{source}/../shared/schemas/cityjson-2.0.2"
+if os.access(ajv, os.X_OK) and os.path.exists(f"{schemas}/cityjson.min.schema.json"):
+    for name, cdir, cm in cells:
+        lines = open(f"{cdir}/model.city.jsonl").read().splitlines()
+        assert len(lines) == 1 + len(cm["objects"]), (name, len(lines))
+        parts = f"{work}/cityjson-{name}"
+        os.makedirs(parts)
+        for i, line in enumerate(lines):
+            with open(f"{parts}/{i:04d}.json", "w") as f:
+                f.write(line)
+        check = [ajv, "validate", "--spec=draft7", "-c", "ajv-formats", "--strict=false"]
+        subprocess.run(check + ["-s", f"{schemas}/cityjson.min.schema.json", "-d",
+                                f"{parts}/0000.json"], check=True, capture_output=True)
+        features = sorted(glob.glob(f"{parts}/0*.json"))[1:]
+        if features:
+            args = [a for fpath in features for a in ("-d", fpath)]
+            subprocess.run(check + ["-s", f"{schemas}/cityjsonfeature.min.schema.json"] + args,
+                           check=True, capture_output=True)
+    figures["validated"].append("cityjson")
+else:
+    missing("AJV", "ajv or the CityJSON 2.0.2 schemas")
+
+root = json.load(open(f"{rundir}/tiles/tileset.json"))
+children = root["root"]["children"]
+assert len(children) == sum(1 for _, _, cm in cells if "objects" in cm["tiles"]), children
+for child in children:
+    path = os.path.normpath(f"{rundir}/tiles/{child['content']['uri']}")
+    assert os.path.exists(path), path
+if shutil.which("node") and os.path.exists(f"{gltf_dir}/package.json"):
+    for name, cdir, cm in cells:
+        glb = f"{cdir}/tiles/model.glb"
+        if not os.path.exists(glb):
+            continue
+        report = subprocess.run(["node", f"{source}/tests/support/validate_gltf.cjs", gltf_dir, glb],
+                                capture_output=True, text=True, check=True).stdout
+        assert '"numErrors":0,' in report, (name, report)
+    figures["validated"].append("gltf")
+else:
+    missing("GLTF_VALIDATOR", "node or gltf-validator")
+
+some = sorted(objects_seen)[0]
+q = run("query", f"{rundir}/index.gpkg", "--ancestors", f"{some}/vertex/0", "--kind", "edge", "--json")
+assert f'"key":"{some}/edge/' in q.stdout, q.stdout
+
+
+# --- determinism -----------------------------------------------------------------------------
+def outputs(output):
+    base = f"{output}/runs/city"
+    files = {}
+    for path in glob.glob(f"{base}/**", recursive=True):
+        rel = os.path.relpath(path, base)
+        if os.path.isfile(path) and rel != "timings.json":
+            files[rel] = sha256(path)
+    return files
+
+
+reference = outputs(f"{work}/a")
+run("run", write_config("b", f"{work}/b", 1), ok=(3,))
+other = outputs(f"{work}/b")
+assert other == reference, sorted(set(other.items()) ^ set(reference.items()))[:6]
+figures["identical"] = ["threads 1 vs 2"]
+
+pg_bin = "/usr/lib/postgresql/15/bin"
+if os.path.exists(f"{pg_bin}/initdb"):
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    pg = f"{work}/pg"
+    os.makedirs(pg)
+    as_pg = ["runuser", "-u", "postgres", "--"] if os.geteuid() == 0 else []
+    if as_pg:
+        shutil.chown(pg, "postgres")
+    subprocess.run(as_pg + [f"{pg_bin}/initdb", "-D", f"{pg}/data", "-A", "trust", "-U", "csgtile"],
+                   check=True, capture_output=True)
+    ctl = as_pg + [f"{pg_bin}/pg_ctl", "-D", f"{pg}/data"]
+    subprocess.run(ctl + ["-o", f"-p {port} -k {pg} -c listen_addresses=127.0.0.1", "-l",
+                          f"{pg}/log", "-w", "start"], check=True, capture_output=True)
+    try:
+        queue = (f"queue:\n  backend: postgres\n  postgres_dsn: \"host=127.0.0.1 port={port} "
+                 f"dbname=postgres user=csgtile connect_timeout=5\"\n")
+        config = write_config("c", f"{work}/c", 1, queue)
+        run("enqueue", config)
+        workers = [subprocess.Popen([binary, "worker", config, "--exit-when-idle"],
+                                    stdout=subprocess.DEVNULL, stderr=open(f"{work}/worker-{i}.log", "w"))
+                   for i in range(3)]
+        codes = [w.wait(timeout=600) for w in workers]
+        assert all(c in (0, 3) for c in codes), codes
+        pg_outputs = outputs(f"{work}/c")
+        assert pg_outputs == reference, sorted(set(pg_outputs.items()) ^ set(reference.items()))[:6]
+        figures["identical"].append("postgres, 3 workers")
+    finally:
+        subprocess.run(ctl + ["-m", "fast", "stop"], capture_output=True)
+else:
+    missing("POSTGRES", "PostgreSQL 15")
+
+print(json.dumps(figures))

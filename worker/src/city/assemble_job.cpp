@@ -1,0 +1,256 @@
+// The `assemble` job of a city run: the primitives of a cell and its halo → unified objects
+// (kernel/assembly) anchored in the cell → the cell's native model, topology index,
+// CityJSONSeq, 3D Tiles and manifest (city_jobs.h).
+
+#include <map>
+
+#include "city/city_internal.h"
+#include "csgtile/assembly/assembly.h"
+#include "csgtile/geo/crs.h"
+#include "csgtile/geo/scene.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/kernel/primitives.h"
+#include "csgtile/worker/publish.h"
+#include "export/cityjson_seq.h"
+#include "export/run_index.h"
+#include "export/tileset.h"
+#include "ops/stage_clock.h"
+
+namespace csgtile::worker::city::detail {
+
+namespace {
+
+/// A primitive read for the cell: its spec in the cell frame, label, fit quality and its box
+/// in CRS coordinates (computed in the tile frame, as the fit job computed its anchor).
+struct CellPrimitive {
+  assembly::AssemblyPrimitive primitive;
+  std::optional<geo::FitQuality> quality;
+  kernel::BoundingBox crs_box;
+};
+
+ordered_json quality_json(const std::optional<geo::FitQuality>& q) {
+  if (!q) return nullptr;
+  return {{"inliers", q->inliers}, {"rms", q->rms}, {"coverage", q->coverage}};
+}
+
+}  // namespace
+
+Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
+                         const config::Config& config, std::string& result,
+                         StageTimings* timings) {
+  ops::StageClock clock(timings);
+  clock.enter("read");
+  const auto payload = ordered_json::parse(job.payload, nullptr, false);
+  if (payload.is_discarded() || !payload.contains("cell") || !payload.contains("fits")) {
+    return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
+  }
+  const Cell cell{payload.at("column").get<std::int64_t>(), payload.at("row").get<std::int64_t>()};
+  const std::string name = cell.name();
+  const double size = config.city.cell_size, halo = config.city.halo;
+  const auto corner = cell_origin(cell, size);
+  const kernel::Vec3 cell_origin3(corner[0], corner[1], 0.0);
+
+  // Primitives of every tile near the cell, in tile order, those meeting the halo.
+  std::vector<CellPrimitive> prims;
+  for (const auto& fit : payload.at("fits")) {
+    const std::string key = fit.at("scene").at("key").get<std::string>();
+    if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe scene key " + key};
+    std::string text;
+    if (Failure f = read_file(run_dir / key, text); !f.ok()) return f;
+    if (sha256_hex(text) != fit.at("scene").at("sha256").get<std::string>()) {
+      return {ErrorCode::InputInvalid, (run_dir / key).string() + ": does not match its SHA-256"};
+    }
+    auto scene = geo::parse_scene(text);
+    if (!scene.ok()) return {ErrorCode::InputInvalid, key + ": " + scene.error().message};
+    const auto& o = fit.at("origin");
+    const kernel::Vec3 tile_origin(o[0].get<double>(), o[1].get<double>(), o[2].get<double>());
+    const std::string tile = "t" + std::to_string(fit.at("tile").get<long long>());
+    for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+      const geo::ScenePrimitive& p = scene->primitives[i];
+      auto solid = kernel::build_primitive(p.spec, config.kernel.linear_tolerance);
+      if (!solid.ok()) continue;  // the fit job left out invalid primitives already
+      kernel::BoundingBox box = kernel::bounding_box(solid.value());
+      box.min += tile_origin;
+      box.max += tile_origin;
+      if (!meets_halo(box, cell, size, halo)) continue;
+      CellPrimitive cp;
+      cp.primitive.spec = p.spec;
+      cp.primitive.spec.placement =
+          kernel::Location::translation(tile_origin - cell_origin3) * p.spec.placement;
+      cp.primitive.label = tile + "-" + (p.id.empty() ? "p" + std::to_string(i) : p.id);
+      cp.quality = p.quality;
+      cp.crs_box = box;
+      prims.push_back(std::move(cp));
+    }
+  }
+
+  clock.enter("assemble");
+  std::vector<assembly::AssemblyPrimitive> input;
+  input.reserve(prims.size());
+  for (const CellPrimitive& p : prims) input.push_back(p.primitive);
+  assembly::AssemblyOptions options;
+  options.tolerance = config.kernel.linear_tolerance;
+  options.voxel_size = config.city.voxel_size;
+  options.threads = config.run.threads;
+  auto assembled = assembly::assemble(input, options);
+  if (!assembled.ok()) {
+    return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
+  }
+  const assembly::Assembly& a = assembled.value();
+
+  // Keep the objects anchored in this cell: the smallest corner of their primitives' boxes in
+  // CRS coordinates (the numbers the fit jobs used).
+  clock.enter("publish");
+  // Problems of the objects this cell keeps (the assembly also names objects of the halo,
+  // which their own cells report) and of primitives that could not be built.
+  ordered_json problems = ordered_json::array();
+  for (const std::string& p : a.problems) {
+    if (p.rfind("object ", 0) != 0) problems.push_back(p);
+  }
+  std::vector<const assembly::AssembledObject*> kept;
+  for (const assembly::AssembledObject& object : a.objects) {
+    kernel::BoundingBox box;
+    for (int i : object.primitives) box.add(prims[static_cast<std::size_t>(i)].crs_box);
+    if (box.empty()) continue;
+    const Cell anchor = cell_of(box.min.x(), box.min.y(), size);
+    if (anchor.column != cell.column || anchor.row != cell.row) continue;
+    if (!within_halo(box, cell, size, halo)) {
+      problems.push_back("object " + object.id + " reaches past the halo of cell " + name +
+                         " (city.halo " + ordered_json(halo).dump() +
+                         "): it may be cut; raise city.halo");
+    }
+    if (!object.fused) problems.push_back("object " + object.id + " not fused: " + object.error);
+    kept.push_back(&object);
+  }
+
+  RunObjects objects;
+  ordered_json object_records = ordered_json::array();
+  std::vector<assembly::AssembledObject> kept_objects;
+  long long invalid = 0;
+  for (const assembly::AssembledObject* object : kept) {
+    IndexObject io;
+    io.id = object->id;
+    io.cell = name;
+    io.model = object->model;
+    ordered_json prim_records = ordered_json::array();
+    std::map<std::string, const CellPrimitive*> by_label;
+    for (int i : object->primitives) {
+      const CellPrimitive& p = prims[static_cast<std::size_t>(i)];
+      by_label[p.primitive.label] = &p;
+      prim_records.push_back({{"label", p.primitive.label},
+                              {"type", kernel::primitive_type_name(p.primitive.spec.type)},
+                              {"quality", quality_json(p.quality)}});
+    }
+    io.primitives = model_primitives(object->model, [&by_label](const std::string& label) -> std::optional<geo::FitQuality> {
+      const auto it = by_label.find(label);
+      return it == by_label.end() ? std::nullopt : it->second->quality;
+    });
+    const std::string bytes = kernel::write_native_model(object->model);
+    const std::string sha = sha256_hex(bytes);
+    const std::string key = "objects/" + sha + ".csgt";
+    if (Failure f = publish_object(run_dir, key, bytes); !f.ok()) return f;
+    if (!object->fused) ++invalid;
+    object_records.push_back({{"id", object->id},
+                              {"key", key},
+                              {"sha256", sha},
+                              {"bytes", bytes.size()},
+                              {"fused", object->fused},
+                              {"error", object->fused ? ordered_json() : ordered_json(object->error)},
+                              {"volume", object->volume},
+                              {"primitives", prim_records}});
+    objects.objects.push_back(std::move(io));
+    kept_objects.push_back(*object);
+  }
+
+  // The cell's files, in the cell frame (origin: the cell's corner).
+  const std::string crs_text = payload.value("crs", "");
+  if (!crs_text.empty()) {
+    auto crs = geo::crs_from_config(crs_text);
+    if (crs.ok() && crs->epsg > 0) {
+      objects.crs = std::move(crs).value();
+      objects.origin = cell_origin3;
+    } else {
+      problems.push_back("the tiles' CRS " + crs_text +
+                         " has no EPSG code: the cell's exports are in cell coordinates");
+    }
+  }
+  const std::string dir_key = "cells/" + name;
+  const std::filesystem::path cell_dir = run_dir / dir_key;
+  auto city = assembly::city_model(kept_objects);
+  if (!city.ok()) return {from_kernel(city.error().code), name + ": " + city.error().message};
+  if (Failure f = write_file_atomic(cell_dir / "model.csgt", kernel::write_native_model(city.value()));
+      !f.ok()) {
+    return f;
+  }
+  RunIndexReport index;
+  if (Failure f = write_run_index(config, objects, cell_dir, index); !f.ok()) return f;
+  CityJsonReport cityjson;
+  if (Failure f = write_run_cityjson(config, objects, cell_dir, cityjson); !f.ok()) return f;
+  TilesReport tiles;
+  if (Failure f = write_run_tiles(config, objects, cell_dir, tiles); !f.ok()) return f;
+  for (const std::string& w : index.stats.warnings) problems.push_back("index: " + w);
+  for (const std::string& w : cityjson.stats.warnings) problems.push_back("cityjson: " + w);
+  for (const std::string& w : tiles.warnings) problems.push_back("tiles: " + w);
+
+  // The cell manifest names every file of the cell with its hash; written last.
+  ordered_json files = ordered_json::array();
+  std::vector<std::string> keys = {"model.csgt", index.key, cityjson.key};
+  if (tiles.written) {
+    keys.push_back(tiles.content);
+    keys.push_back(tiles.key);
+  }
+  for (const std::string& key : keys) {
+    ordered_json entry;
+    if (Failure f = describe_file(cell_dir, key, entry); !f.ok()) return f;
+    files.push_back(std::move(entry));
+  }
+  const assembly::AssemblyStats& s = a.stats;
+  ordered_json stats = {{"primitives_read", s.primitives_read},
+                        {"primitives_failed", s.primitives_failed},
+                        {"candidate_pairs", s.candidate_pairs},
+                        {"culled_pairs", s.culled_pairs},
+                        {"exact_tests", s.exact_tests},
+                        {"interacting_pairs", s.interacting_pairs},
+                        {"objects_in_halo", s.objects},
+                        {"objects", kept.size()},
+                        {"objects_unfused", invalid}};
+  ordered_json manifest;
+  manifest["run"] = config.run.name;
+  manifest["cell"] = name;
+  manifest["origin"] = {corner[0], corner[1], 0.0};
+  manifest["crs"] = crs_text;
+  manifest["csgtile_version"] = CSGTILE_VERSION;
+  manifest["config_sha256"] = output_config_sha256(config);
+  manifest["seed"] = config.run.seed;
+  manifest["files"] = files;
+  manifest["objects"] = object_records;
+  manifest["stats"] = stats;
+  manifest["index"] = {{"objects", index.stats.objects}, {"shapes", index.stats.shapes},
+                       {"relations", index.stats.relations}};
+  manifest["cityjson"] = {{"features", cityjson.stats.features},
+                          {"open_objects", cityjson.stats.open_objects}};
+  manifest["tiles"] = tiles.written ? ordered_json({{"objects", tiles.objects},
+                                                    {"triangles", tiles.triangles}})
+                                    : ordered_json({{"skipped", tiles.skipped}});
+  manifest["problems"] = problems;
+  const std::string manifest_text = manifest.dump(2) + "\n";
+  if (Failure f = write_file_atomic(cell_dir / "manifest.json", manifest_text); !f.ok()) return f;
+
+  ordered_json record;
+  record["cell"] = name;
+  record["column"] = cell.column;
+  record["row"] = cell.row;
+  record["origin"] = {corner[0], corner[1], 0.0};
+  record["manifest"] = {{"key", dir_key + "/manifest.json"},
+                        {"sha256", sha256_hex(manifest_text)},
+                        {"bytes", manifest_text.size()}};
+  record["tiles"] = tiles.written ? ordered_json(dir_key + "/" + tiles.key) : ordered_json();
+  record["objects"] = object_records;
+  record["stats"] = stats;
+  record["problems"] = problems;
+  result = record.dump();
+  return {};
+}
+
+}  // namespace csgtile::worker::city::detail

@@ -1,0 +1,58 @@
+#pragma once
+// Shared pieces of the city jobs (city_jobs.h): the cell grid, files and records.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "csgtile/config/config.h"
+#include "csgtile/kernel/bounding_box.h"
+#include "csgtile/worker/errors.h"
+#include "csgtile/worker/queue.h"
+#include "csgtile/worker/run.h"
+
+namespace csgtile::worker::city::detail {
+
+using nlohmann::ordered_json;
+
+/// A cell of the run's grid: squares of city.cell_size aligned to multiples of it.
+struct Cell {
+  std::int64_t column = 0, row = 0;
+  std::string name() const;  ///< "c<column>_r<row>"
+};
+
+/// The cell holding (x, y): floor(x / size), floor(y / size). Every decision about which cell
+/// an anchor is in goes through here, so that all jobs agree bit for bit.
+Cell cell_of(double x, double y, double size);
+/// Minimum corner of the cell's core.
+std::array<double, 2> cell_origin(const Cell& cell, double size);
+/// Whether the xy extent of `box` meets the cell grown by `halo` (closed).
+bool meets_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
+/// Whether the xy extent of `box` lies within the cell grown by `halo`.
+bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
+
+/// Reads a whole file. Error: Io naming the path.
+Failure read_file(const std::filesystem::path& path, std::string& bytes);
+/// Writes a content-addressed file unless it exists (its name is its hash, so an existing
+/// file holds these bytes). Error: Io.
+Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
+                       const std::string& bytes);
+/// {"key", "sha256", "bytes"} of a file written under `dir` (read back and hashed).
+Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out);
+
+/// Records of done jobs of `config`'s run whose key starts with "<kind>:<run>:", by key.
+std::vector<std::pair<std::string, ordered_json>> done_records(
+    const std::vector<std::pair<std::string, std::string>>& results, const std::string& kind,
+    const std::string& run);
+
+Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
+                    const config::Config& config, std::string& result, StageTimings* timings);
+Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
+                         const config::Config& config, std::string& result, StageTimings* timings);
+Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
+                      const config::Config& config, JobQueue& queue, const Logger& log,
+                      std::string& result, StageTimings* timings);
+
+}  // namespace csgtile::worker::city::detail

@@ -1,0 +1,228 @@
+// The city run's job graph: keys, enqueueing, advancing and dispatch (see city_jobs.h).
+
+#include "city/city_jobs.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+
+#include "city/city_internal.h"
+#include "csgtile/worker/publish.h"
+
+namespace csgtile::worker::city {
+
+namespace detail {
+
+std::string Cell::name() const {
+  return "c" + std::to_string(column) + "_r" + std::to_string(row);
+}
+
+Cell cell_of(double x, double y, double size) {
+  return {static_cast<std::int64_t>(std::floor(x / size)),
+          static_cast<std::int64_t>(std::floor(y / size))};
+}
+
+std::array<double, 2> cell_origin(const Cell& cell, double size) {
+  return {static_cast<double>(cell.column) * size, static_cast<double>(cell.row) * size};
+}
+
+bool meets_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo) {
+  if (box.empty()) return false;
+  const auto o = cell_origin(cell, size);
+  return box.max.x() >= o[0] - halo && box.min.x() <= o[0] + size + halo &&
+         box.max.y() >= o[1] - halo && box.min.y() <= o[1] + size + halo;
+}
+
+bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo) {
+  if (box.empty()) return true;
+  const auto o = cell_origin(cell, size);
+  return box.min.x() >= o[0] - halo && box.max.x() <= o[0] + size + halo &&
+         box.min.y() >= o[1] - halo && box.max.y() <= o[1] + size + halo;
+}
+
+Failure read_file(const std::filesystem::path& path, std::string& bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
+  bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
+  return {};
+}
+
+Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
+                       const std::string& bytes) {
+  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
+  std::error_code ec;
+  if (std::filesystem::exists(run_dir / key, ec)) return {};
+  return write_file_atomic(run_dir / key, bytes);
+}
+
+Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out) {
+  std::string bytes;
+  if (Failure f = read_file(dir / key, bytes); !f.ok()) return f;
+  out = {{"key", key}, {"sha256", sha256_hex(bytes)}, {"bytes", bytes.size()}};
+  return {};
+}
+
+std::vector<std::pair<std::string, ordered_json>> done_records(
+    const std::vector<std::pair<std::string, std::string>>& results, const std::string& kind,
+    const std::string& run) {
+  const std::string prefix = kind + ":" + run + ":";
+  std::vector<std::pair<std::string, ordered_json>> out;
+  for (const auto& [key, text] : results) {
+    if (key.compare(0, prefix.size(), prefix) != 0) continue;
+    ordered_json record = ordered_json::parse(text, nullptr, false);
+    if (record.is_discarded()) continue;
+    out.emplace_back(key, std::move(record));
+  }
+  return out;
+}
+
+}  // namespace detail
+
+using detail::ordered_json;
+
+bool is_tile_input(const std::string& input) {
+  std::string path = input.substr(0, input.find_first_of("?#"));
+  const std::size_t dot = path.rfind('.');
+  if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return false;
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == "las" || ext == "laz" || ext == "ply" || ext == "pcd" || ext == "xyz" ||
+         ext == "txt";
+}
+
+std::string fit_key(const std::string& run, const std::string& input) {
+  return "fit:" + run + ":" + input;
+}
+std::string assemble_key(const std::string& run, const std::string& cell) {
+  return "assemble:" + run + ":" + cell;
+}
+std::string index_key(const std::string& run) { return "index:" + run + ":run"; }
+
+namespace {
+
+/// Distinct tile inputs of the run, each with its position in run.inputs (first occurrence).
+std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Config& config) {
+  std::vector<std::pair<std::string, std::size_t>> out;
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
+    const std::string& input = config.run.inputs[i];
+    if (is_tile_input(input) && seen.insert(input).second) out.emplace_back(input, i);
+  }
+  return out;
+}
+
+}  // namespace
+
+Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t& added) {
+  added = 0;
+  Failure failure;
+  for (const auto& [input, index] : tile_inputs(config)) {
+    const std::string payload = nlohmann::json({{"input", input}, {"tile", index}}).dump();
+    if (queue.enqueue(fit_key(config.run.name, input), "fit", payload, failure)) ++added;
+    if (!failure.ok()) return failure;
+  }
+  return failure;
+}
+
+Failure advance_city_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                         std::size_t& enqueued) {
+  enqueued = 0;
+  const std::string& run = config.run.name;
+  const auto tiles = tile_inputs(config);
+  if (tiles.empty()) return {};
+  Failure failure;
+  const auto results = queue.results(failure);
+  if (!failure.ok()) return failure;
+  std::set<std::string> dead;
+  for (const DeadJob& d : queue.dead_jobs(failure)) dead.insert(d.key);
+  if (!failure.ok()) return failure;
+
+  std::set<std::string> done;
+  for (const auto& r : results) done.insert(r.first);
+  std::map<std::string, ordered_json> fits;
+  for (auto& [key, record] : detail::done_records(results, "fit", run)) fits[key] = std::move(record);
+  std::size_t finished = 0;
+  for (const auto& [input, index] : tiles) {
+    const std::string key = fit_key(run, input);
+    if (fits.count(key) || dead.count(key)) ++finished;
+  }
+  if (finished < tiles.size()) return {};  // fits still running
+
+  // The run's CRS is the first done tile's (in run.inputs order); tiles in another CRS are
+  // left out of every cell (the index job names them).
+  std::optional<std::string> crs;
+  std::map<std::string, std::vector<ordered_json>> cell_fits;  // cell name → fits meeting its halo
+  std::map<std::string, detail::Cell> cells;
+  const double size = config.city.cell_size, halo = config.city.halo;
+  for (const auto& [input, index] : tiles) {
+    const auto it = fits.find(fit_key(run, input));
+    if (it == fits.end()) continue;
+    const ordered_json& record = it->second;
+    const std::string tile_crs = record.value("crs", "");
+    if (!crs) crs = tile_crs;
+    if (tile_crs != *crs) continue;
+    for (const auto& name : record.at("anchor_cells")) {
+      const auto& c = name;
+      cells.emplace(c.at("name").get<std::string>(),
+                    detail::Cell{c.at("column").get<std::int64_t>(), c.at("row").get<std::int64_t>()});
+    }
+  }
+  for (const auto& [name, cell] : cells) {
+    std::vector<ordered_json> near;
+    for (const auto& [input, index] : tiles) {
+      const auto it = fits.find(fit_key(run, input));
+      if (it == fits.end() || it->second.value("crs", "") != *crs) continue;
+      const ordered_json& b = it->second.at("bounds");
+      if (b.is_null()) continue;
+      kernel::BoundingBox box;
+      box.add(kernel::Vec3(b[0].get<double>(), b[1].get<double>(), b[2].get<double>()));
+      box.add(kernel::Vec3(b[3].get<double>(), b[4].get<double>(), b[5].get<double>()));
+      if (!detail::meets_halo(box, cell, size, halo)) continue;
+      near.push_back({{"fit", it->first},
+                      {"tile", index},
+                      {"scene", it->second.at("scene")},
+                      {"origin", it->second.at("origin")}});
+    }
+    cell_fits[name] = std::move(near);
+  }
+  std::size_t assembled = 0;
+  for (const auto& [name, cell] : cells) {
+    const std::string key = assemble_key(run, name);
+    const ordered_json payload = {{"cell", name},
+                                  {"column", cell.column},
+                                  {"row", cell.row},
+                                  {"crs", *crs},
+                                  {"fits", cell_fits[name]}};
+    if (queue.enqueue(key, "assemble", payload.dump(), failure)) ++enqueued;
+    if (!failure.ok()) return failure;
+    if (dead.count(key) || done.count(key)) ++assembled;
+  }
+  if (enqueued > 0) {
+    log.info("run", "fits finished; cells enqueued",
+             {{"run", run}, {"cells", std::to_string(cells.size())}});
+  }
+  if (assembled < cells.size()) return {};
+  if (queue.enqueue(index_key(run), "index", ordered_json({{"cells", cells.size()}}).dump(), failure)) {
+    ++enqueued;
+    log.info("run", "cells finished; index enqueued", {{"run", run}});
+  }
+  return failure;
+}
+
+Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
+                     const config::Config& config, JobQueue& queue, const Logger& log,
+                     std::string& result, StageTimings* timings) {
+  if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings);
+  if (job.kind == "assemble") return detail::run_assemble_job(job, run_dir, config, result, timings);
+  if (job.kind == "index") {
+    return detail::run_index_job(job, run_dir, config, queue, log, result, timings);
+  }
+  return {ErrorCode::Internal, "job " + job.key + " has an unknown kind " + job.kind};
+}
+
+}  // namespace csgtile::worker::city

@@ -1,0 +1,64 @@
+#pragma once
+/// \file
+/// A city run as a job graph (DESIGN.md §1): `fit` per LIDAR tile → `assemble` per output
+/// cell (after every fit has finished) → `index` per run (after every assemble). Internal to
+/// the worker; run.cpp dispatches to these.
+///
+/// Cells are squares of `city.cell_size` aligned to multiples of it in the tiles' CRS
+/// (geo::CityGrid, origin 0, 0), named "c<column>_r<row>". A primitive's anchor is the
+/// minimum (x, y) corner of its bounding box in CRS coordinates; an object's anchor is the
+/// smallest of its primitives', and the object belongs to the cell holding it. A cell is
+/// assembled from the primitives whose boxes meet the cell grown by `city.halo`, in a frame
+/// whose origin is the cell's minimum corner (coordinates stay small); an object reaching
+/// past the halo is reported in the cell's problems.
+///
+/// Job graph without a coordinator: after each fit or assemble completes, and whenever a
+/// worker finds the run with no unfinished job, `advance_city_run` enqueues the next stage
+/// once its predecessors are all done or dead. Enqueueing is idempotent (unique keys), so
+/// concurrent or repeated calls are harmless and a crash between a completion and the
+/// enqueue is repaired by the next worker that looks.
+///
+/// Outputs (under <run.output>/runs/<name>/), all deterministic:
+///   fits/<sha256>.json                 fitted primitives of a tile (scene format, tile frame)
+///   objects/<sha256>.csgt              one native model per object (CSG tree, face history)
+///   cells/<cell>/model.csgt            the cell's objects as one native model
+///   cells/<cell>/index.gpkg            topology index of the cell
+///   cells/<cell>/model.city.jsonl      CityJSONSeq of the cell
+///   cells/<cell>/tiles/{tileset.json,model.glb}   3D Tiles of the cell
+///   cells/<cell>/manifest.json         every file of the cell with SHA-256 and size, written last
+///   index.gpkg, tiles/tileset.json (root, cells as external tilesets), manifest.json (last)
+
+#include <filesystem>
+#include <string>
+
+#include "csgtile/config/config.h"
+#include "csgtile/worker/log.h"
+#include "csgtile/worker/queue.h"
+#include "csgtile/worker/run.h"
+
+namespace csgtile::worker::city {
+
+/// True for inputs read as LIDAR tiles (LAS, PLY, PCD, XYZ/TXT by extension, ignoring a
+/// URL's query and fragment); scene JSON inputs are build jobs.
+bool is_tile_input(const std::string& input);
+
+/// Queue keys: "fit:<run>:<input>", "assemble:<run>:<cell>", "index:<run>:run".
+std::string fit_key(const std::string& run, const std::string& input);
+std::string assemble_key(const std::string& run, const std::string& cell);
+std::string index_key(const std::string& run);
+
+/// Enqueues one fit job per distinct tile input of the run; `added` counts new ones.
+Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t& added);
+
+/// Enqueues the run's assemble jobs once every fit is done or dead, and its index job once
+/// every assemble is. `enqueued` counts the jobs added by this call.
+Failure advance_city_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                         std::size_t& enqueued);
+
+/// Runs one job of the graph (kind "fit", "assemble" or "index"). On success `result` is its
+/// deterministic JSON record. The index job reads the run's other records from `queue`.
+Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
+                     const config::Config& config, JobQueue& queue, const Logger& log,
+                     std::string& result, StageTimings* timings);
+
+}  // namespace csgtile::worker::city

@@ -1,0 +1,238 @@
+// The `index` job of a city run: every cell's objects → the run's topology index, the root
+// tileset naming the cells' tilesets, and the run manifest, written last (city_jobs.h).
+
+#include <algorithm>
+#include <map>
+
+#include "city/city_internal.h"
+#include "csgtile/geo/crs.h"
+#include "csgtile/kernel/location.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/publish.h"
+#include "export/run_index.h"
+#include "job_records.h"
+#include "ops/stage_clock.h"
+
+namespace csgtile::worker::city::detail {
+
+namespace {
+
+/// The root tileset: one child per cell with tiles, each the cell's tileset as an external
+/// tileset, the root region the union of theirs (cities do not cross the antimeridian).
+Failure root_tileset(const std::filesystem::path& run_dir,
+                     const std::vector<std::pair<std::string, ordered_json>>& cells,
+                     std::string& text, std::size_t& children) {
+  ordered_json kids = ordered_json::array();
+  std::array<double, 6> region{INFINITY, INFINITY, -INFINITY, -INFINITY, INFINITY, -INFINITY};
+  double error = 0.0;
+  children = 0;
+  for (const auto& [key, record] : cells) {
+    if (!record.contains("tiles") || !record["tiles"].is_string()) continue;
+    const std::string tiles = record["tiles"].get<std::string>();
+    std::string body;
+    if (Failure f = read_file(run_dir / tiles, body); !f.ok()) return f;
+    const ordered_json cell = ordered_json::parse(body, nullptr, false);
+    if (cell.is_discarded() || !cell.contains("root")) {
+      return {ErrorCode::Internal, tiles + ": not a tileset"};
+    }
+    const ordered_json& r = cell["root"]["boundingVolume"]["region"];
+    for (int i : {0, 1, 4}) region[i] = std::min(region[i], r[i].get<double>());
+    for (int i : {2, 3, 5}) region[i] = std::max(region[i], r[i].get<double>());
+    const double e = cell["geometricError"].get<double>();
+    error = std::max(error, e);
+    kids.push_back({{"boundingVolume", {{"region", r}}},
+                    {"geometricError", e},
+                    {"content", {{"uri", "../" + tiles}}}});
+    ++children;
+  }
+  if (children == 0) return {};
+  ordered_json root;
+  root["boundingVolume"] = {{"region", region}};
+  root["geometricError"] = error;
+  root["refine"] = "ADD";
+  root["children"] = std::move(kids);
+  ordered_json tileset;
+  tileset["asset"] = {{"version", "1.1"}};
+  tileset["geometricError"] = error;
+  tileset["root"] = std::move(root);
+  text = tileset.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
+  return {};
+}
+
+}  // namespace
+
+Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
+                      const config::Config& config, JobQueue& queue, const Logger& log,
+                      std::string& result, StageTimings* timings) {
+  ops::StageClock clock(timings);
+  clock.enter("read");
+  const std::string& run = config.run.name;
+  Failure failure;
+  const auto results = queue.results(failure);
+  if (!failure.ok()) return failure;
+  std::vector<DeadJob> dead;
+  const std::string own = ":" + run + ":";
+  for (DeadJob& d : queue.dead_jobs(failure)) {
+    const std::size_t colon = d.key.find(':');
+    if (colon != std::string::npos && d.key.compare(colon, own.size(), own) == 0) {
+      dead.push_back(std::move(d));
+    }
+  }
+  if (!failure.ok()) return failure;
+  const auto fits = done_records(results, "fit", run);
+  const auto cells = done_records(results, "assemble", run);
+
+  // One frame for the run: its origin is the smallest cell corner.
+  kernel::Vec3 origin = kernel::Vec3::Zero();
+  bool first = true;
+  for (const auto& [key, record] : cells) {
+    const auto& o = record.at("origin");
+    const kernel::Vec3 corner(o[0].get<double>(), o[1].get<double>(), 0.0);
+    if (first) origin = corner;
+    origin = origin.cwiseMin(corner);
+    first = false;
+  }
+  std::string crs_text;
+  for (const auto& [key, record] : fits) {
+    crs_text = record.value("crs", "");
+    break;
+  }
+  RunObjects objects;
+  if (!crs_text.empty()) {
+    auto crs = geo::crs_from_config(crs_text);
+    if (crs.ok() && crs->epsg > 0) objects.crs = std::move(crs).value();
+  }
+  objects.origin = objects.crs ? origin : kernel::Vec3::Zero();
+  ordered_json tiles_left_out = ordered_json::array();
+  for (const auto& [key, record] : fits) {
+    if (record.value("crs", "") != crs_text) {
+      tiles_left_out.push_back(record.value("input", key) + ": CRS " + record.value("crs", "") +
+                               " differs from the run's " + crs_text);
+    }
+  }
+  clock.enter("index");
+  for (const auto& [key, record] : cells) {
+    const auto& o = record.at("origin");
+    const kernel::Vec3 offset =
+        kernel::Vec3(o[0].get<double>(), o[1].get<double>(), 0.0) - objects.origin;
+    for (const auto& entry : record.at("objects")) {
+      const std::string object_key = entry.at("key").get<std::string>();
+      if (!is_safe_key(object_key)) return {ErrorCode::Internal, "unsafe object key " + object_key};
+      auto model = kernel::read_native_model_file(run_dir / object_key);
+      if (!model.ok()) {
+        return {from_kernel(model.error().code),
+                (run_dir / object_key).string() + ": " + model.error().message};
+      }
+      IndexObject io;
+      io.id = entry.at("id").get<std::string>();
+      io.cell = record.at("cell").get<std::string>();
+      io.model = std::move(model).value();
+      if (!offset.isZero(0.0)) io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
+      std::map<std::string, geo::FitQuality> quality;
+      for (const auto& p : entry.at("primitives")) {
+        const ordered_json& q = p.at("quality");
+        if (!q.is_object()) continue;
+        quality[p.at("label").get<std::string>()] = {q.at("inliers").get<long long>(),
+                                                     q.at("rms").get<double>(),
+                                                     q.at("coverage").get<double>()};
+      }
+      io.primitives = model_primitives(io.model, [&quality](const std::string& label) -> std::optional<geo::FitQuality> {
+        const auto it = quality.find(label);
+        if (it == quality.end()) return std::nullopt;
+        return it->second;
+      });
+      objects.objects.push_back(std::move(io));
+    }
+  }
+  RunIndexReport index;
+  if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;
+  log.info("index", "written", {{"key", index.key}, {"objects", std::to_string(index.stats.objects)}});
+
+  clock.enter("publish");
+  std::string tileset;
+  std::size_t tile_children = 0;
+  if (Failure f = root_tileset(run_dir, cells, tileset, tile_children); !f.ok()) return f;
+  ordered_json tiles_entry = nullptr;
+  if (tile_children > 0) {
+    if (Failure f = write_file_atomic(run_dir / "tiles/tileset.json", tileset); !f.ok()) return f;
+    tiles_entry = {{"key", "tiles/tileset.json"},
+                   {"sha256", sha256_hex(tileset)},
+                   {"bytes", tileset.size()},
+                   {"cells", tile_children}};
+  }
+
+  // The manifest: every job's record (timings moved to timings.json), dead jobs, the cells'
+  // manifests and the run-level files. Written last: a reader who finds it finds the rest.
+  ordered_json manifest;
+  manifest["run"] = run;
+  manifest["kind"] = "city";
+  manifest["csgtile_version"] = CSGTILE_VERSION;
+  manifest["config_sha256"] = output_config_sha256(config);
+  manifest["seed"] = config.run.seed;
+  manifest["crs"] = crs_text;
+  manifest["origin"] = {objects.origin.x(), objects.origin.y(), objects.origin.z()};
+  manifest["cell_size"] = config.city.cell_size;
+  manifest["halo"] = config.city.halo;
+  JobRecords records;
+  for (const auto* group : {&fits, &cells}) {
+    for (const auto& [key, stored] : *group) records.add(key, stored);
+  }
+  long long primitives = 0, points = 0, assigned = 0;
+  std::map<std::string, long long> per_type;
+  for (const auto& [key, record] : fits) {
+    primitives += record.value("primitives", 0LL);
+    points += record.value("points", 0LL);
+    assigned += record.value("assigned_points", 0LL);
+    for (const auto& [type, n] : record.at("per_type").items()) per_type[type] += n.get<long long>();
+  }
+  ordered_json cell_list = ordered_json::array();
+  long long object_count = 0;
+  ordered_json problems = ordered_json::array();
+  for (const auto& [key, record] : cells) {
+    object_count += static_cast<long long>(record.at("objects").size());
+    cell_list.push_back({{"cell", record.at("cell")},
+                         {"manifest", record.at("manifest")},
+                         {"objects", record.at("objects").size()}});
+    for (const auto& p : record.at("problems")) {
+      problems.push_back(record.at("cell").get<std::string>() + ": " + p.get<std::string>());
+    }
+  }
+  for (const auto& t : tiles_left_out) problems.push_back(t);
+  manifest["totals"] = {{"tiles", fits.size()},   {"points", points},
+                        {"assigned_points", assigned}, {"primitives", primitives},
+                        {"per_type", per_type},   {"cells", cells.size()},
+                        {"objects", object_count}};
+  manifest["cells"] = cell_list;
+  manifest["index"] = {{"key", index.key},
+                       {"sha256", index.sha256},
+                       {"bytes", index.bytes},
+                       {"srs_id", index.srs_id},
+                       {"objects", index.stats.objects},
+                       {"shapes", index.stats.shapes},
+                       {"relations", index.stats.relations},
+                       {"warnings", index.stats.warnings}};
+  manifest["tiles"] = tiles_entry;
+  manifest["jobs"] = std::move(records.jobs);
+  manifest["dead"] = ordered_json::array();
+  for (const DeadJob& d : dead) {
+    manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
+  }
+  manifest["problems"] = problems;
+  manifest["timings"] = "timings.json";
+  if (Failure f = write_timings(run_dir, run, records); !f.ok()) return f;
+  const std::string manifest_text = manifest.dump(2) + "\n";
+  if (Failure f = write_file_atomic(run_dir / "manifest.json", manifest_text); !f.ok()) return f;
+
+  ordered_json record;
+  record["manifest"] = {{"key", "manifest.json"},
+                        {"sha256", sha256_hex(manifest_text)},
+                        {"bytes", manifest_text.size()}};
+  record["cells"] = cells.size();
+  record["objects"] = object_count;
+  record["dead"] = dead.size();
+  result = record.dump();
+  (void)job;
+  return {};
+}
+
+}  // namespace csgtile::worker::city::detail

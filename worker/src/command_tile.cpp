@@ -1,0 +1,145 @@
+// `csgtile tile INPUT.las --size S --out DIR [--json]`: cuts a LAS file into square tiles
+// aligned to multiples of S in its CRS, as city runs take them (one fit job per tile). Each
+// tile keeps the input's version, point format, scale, CRS records and extra bytes; its offset
+// is the tile's minimum corner. Files are named <stem>_c<column>_r<row>.las and written
+// through temporary files renamed at the end, so a failure leaves no partial tile.
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "csgtile/geo/las.h"
+#include "csgtile/worker/errors.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+struct TileCommand {
+  std::string input, out;
+  double size = 0;
+  bool json = false;
+};
+
+struct OpenTile {
+  std::unique_ptr<geo::LasWriter> writer;
+  std::filesystem::path temp, target;
+  geo::PointBatch batch;
+};
+
+int run_tile(const TileCommand& c) {
+  nlohmann::ordered_json out{{"input", c.input}, {"size", c.size}};
+  std::map<std::pair<std::int64_t, std::int64_t>, OpenTile> tiles;
+  auto fail = [&](ErrorCode code, const std::string& message) {
+    for (auto& [id, t] : tiles) {
+      t.writer.reset();
+      std::error_code ec;
+      std::filesystem::remove(t.temp, ec);
+    }
+    if (c.json) {
+      out["error"] = std::string(error_info(code).name) + ": " + message;
+      std::cout << out.dump() << "\n";
+    } else {
+      std::fprintf(stderr, "csgtile tile: %s\n", message.c_str());
+    }
+    return error_info(code).exit_code;
+  };
+  if (!(c.size > 0) || !std::isfinite(c.size)) return fail(ErrorCode::Usage, "--size must be > 0");
+  auto opened = geo::LasReader::open(c.input);
+  if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+  geo::LasReader& reader = *opened.value();
+  const geo::LasHeader& h = reader.header();
+  std::error_code ec;
+  std::filesystem::create_directories(c.out, ec);
+  if (ec) return fail(ErrorCode::Io, c.out + ": " + ec.message());
+  const std::string stem = std::filesystem::path(c.input).stem().string();
+
+  geo::LasWriteOptions options;
+  options.version_minor = h.version_minor;
+  options.point_format = h.point_format;
+  options.scale = h.scale;
+  const geo::LasCrsRecords& crs = reader.crs();
+  if (crs.wkt) options.wkt = crs.wkt;
+  if (crs.has_geotiff) options.geo_keys = crs.keys;
+  options.global_encoding = h.global_encoding;
+
+  geo::PointBatch batch;
+  std::uint64_t points = 0;
+  for (;;) {
+    auto n = reader.read(batch, 1 << 16);
+    if (!n.ok()) return fail(from_kernel(n.error().code), n.error().message);
+    if (n.value() == 0) break;
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      const geo::Point& p = batch.points[i];
+      const std::pair<std::int64_t, std::int64_t> id{
+          static_cast<std::int64_t>(std::floor(p.x / c.size)),
+          static_cast<std::int64_t>(std::floor(p.y / c.size))};
+      auto it = tiles.find(id);
+      if (it == tiles.end()) {
+        OpenTile t;
+        t.target = std::filesystem::path(c.out) / (stem + "_c" + std::to_string(id.first) + "_r" +
+                                                   std::to_string(id.second) + ".las");
+        t.temp = t.target.string() + ".tmp";
+        geo::LasWriteOptions o = options;
+        o.offset = {static_cast<double>(id.first) * c.size, static_cast<double>(id.second) * c.size,
+                    h.offset[2]};
+        if (batch.layout) o.extra = *batch.layout;
+        auto writer = geo::LasWriter::create(t.temp, o);
+        if (!writer.ok()) return fail(from_kernel(writer.error().code), writer.error().message);
+        t.writer = std::move(writer).value();
+        t.batch.layout = batch.layout;
+        it = tiles.emplace(id, std::move(t)).first;
+      }
+      it->second.batch.append(p, batch.extra(i));
+      ++points;
+    }
+    for (auto& [tid, t] : tiles) {
+      if (t.batch.empty()) continue;
+      if (auto st = t.writer->write(t.batch); !st.ok()) {
+        return fail(from_kernel(st.error().code), t.target.string() + ": " + st.error().message);
+      }
+      t.batch.clear();
+    }
+  }
+  nlohmann::ordered_json files = nlohmann::ordered_json::array();
+  for (auto& [id, t] : tiles) {
+    if (auto st = t.writer->close(); !st.ok()) {
+      return fail(from_kernel(st.error().code), t.target.string() + ": " + st.error().message);
+    }
+    files.push_back({{"file", t.target.string()}, {"points", t.writer->points_written()}});
+  }
+  for (auto& [id, t] : tiles) {
+    std::filesystem::rename(t.temp, t.target, ec);
+    if (ec) return fail(ErrorCode::Io, t.target.string() + ": " + ec.message());
+  }
+  out["points"] = points;
+  out["tiles"] = files;
+  out["error"] = nullptr;
+  if (c.json) {
+    std::cout << out.dump() << "\n";
+  } else {
+    for (const auto& f : files) {
+      std::printf("%s  %llu points\n", f["file"].get<std::string>().c_str(),
+                  static_cast<unsigned long long>(f["points"].get<std::uint64_t>()));
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_tile(CLI::App& app, Action& action) {
+  auto* cmd = app.add_subcommand(
+      "tile", "Cut a LAS file into square tiles aligned to multiples of --size in its CRS");
+  auto c = std::make_shared<TileCommand>();
+  cmd->add_option("INPUT", c->input, "LAS file")->required();
+  cmd->add_option("--size", c->size, "Tile edge in CRS units")->required();
+  cmd->add_option("--out", c->out, "Directory for <stem>_c<column>_r<row>.las")->required();
+  cmd->add_flag("--json", c->json, "Print one JSON object");
+  cmd->callback([&action, c] { action = [c] { return run_tile(*c); }; });
+}
+
+}  // namespace csgtile::worker::detail

@@ -1,0 +1,45 @@
+// Done jobs' records and their timings (see job_records.h).
+
+#include "job_records.h"
+
+#include "csgtile/worker/publish.h"
+
+namespace csgtile::worker {
+
+namespace {
+using nlohmann::ordered_json;
+constexpr const char* kTimingsKey = "timings";
+}  // namespace
+
+std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
+                         const std::string& worker_id, int attempt) {
+  ordered_json record = ordered_json::parse(result, nullptr, false);
+  if (!record.is_object()) return result;
+  ordered_json stages = ordered_json::object();
+  for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
+  record[kTimingsKey] = {{"stages", stages}, {"seconds", seconds}, {"worker", worker_id},
+                         {"attempt", attempt}};
+  return record.dump();
+}
+
+void JobRecords::add(const std::string& key, ordered_json record) {
+  if (const auto t = record.find(kTimingsKey); t != record.end()) {
+    ordered_json entry = {{"key", key}};
+    entry.update(*t);
+    timings.push_back(std::move(entry));
+    record.erase(t);
+  }
+  jobs.push_back({{"key", key}, {"result", std::move(record)}});
+}
+
+Failure write_timings(const std::filesystem::path& run_dir, const std::string& run,
+                      const JobRecords& records) {
+  const ordered_json file = {
+      {"run", run},
+      {"note", "wall-clock seconds of the attempt that produced each job's result; not "
+               "deterministic, unlike manifest.json"},
+      {"jobs", records.timings}};
+  return write_file_atomic(run_dir / "timings.json", file.dump(2) + "\n");
+}
+
+}  // namespace csgtile::worker

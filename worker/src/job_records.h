@@ -1,0 +1,31 @@
+#pragma once
+// A done job's record as the queue keeps it: its deterministic result plus "timings" (stage
+// seconds, total, worker, attempt). Manifests carry the result; the timings go to the run's
+// timings.json, so that manifest.json stays byte-identical from run to run.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "csgtile/worker/errors.h"
+#include "csgtile/worker/run.h"
+
+namespace csgtile::worker {
+
+/// `result` (a JSON object) with "timings" added; other text is returned unchanged.
+std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
+                         const std::string& worker_id, int attempt);
+
+/// Accumulates done jobs' records: manifest entries {"key", "result"} without timings, and
+/// timings.json entries {"key", "stages", "seconds", "worker", "attempt"}.
+struct JobRecords {
+  nlohmann::ordered_json jobs = nlohmann::ordered_json::array();
+  nlohmann::ordered_json timings = nlohmann::ordered_json::array();
+  void add(const std::string& key, nlohmann::ordered_json record);
+};
+
+/// Writes run_dir/timings.json (atomically) from the records' timings. Error: Io.
+Failure write_timings(const std::filesystem::path& run_dir, const std::string& run,
+                      const JobRecords& records);
+
+}  // namespace csgtile::worker
