@@ -9,11 +9,15 @@ halo) and indexes the run. One extra input is a truncated tile. Checked:
   * validators on every cell: ogrinfo + GDAL's validate_gpkg.py on each GeoPackage, ajv with
     the CityJSON 2.0.2 schemas on each CityJSONSeq, the Khronos glTF validator on each glb;
     the root tileset names every cell's tileset;
+  * the run report names its files with their hashes and renders in headless Chromium;
   * `csgtile query` answers from the run index;
+  * the 1-thread run also publishes to S3 (@20minutes/s3rver): the pointer names a manifest
+    whose every file is stored with its hash;
   * byte-identical outputs for 1 and 2 threads, and — when PostgreSQL 15 is installed — for
     the same run on PostgreSQL worked by three `csgtile worker` processes at once.
 Validators and PostgreSQL are skipped with a message when missing, unless CSGTILE_REQUIRE_GDAL,
-CSGTILE_REQUIRE_AJV, CSGTILE_REQUIRE_GLTF_VALIDATOR or CSGTILE_REQUIRE_POSTGRES is 1.
+CSGTILE_REQUIRE_AJV, CSGTILE_REQUIRE_GLTF_VALIDATOR, CSGTILE_REQUIRE_POSTGRES,
+CSGTILE_REQUIRE_S3RVER or CSGTILE_REQUIRE_REPORT_VIEWER is 1.
 Prints one JSON line of figures.
 Usage: city_run.py CSGTILE SOURCE_DIR WORKDIR AJV GLTF_VALIDATOR_DIR"""
 import glob
@@ -112,9 +116,32 @@ for cell in manifest["cells"]:
     cells.append((cm["cell"], cdir, cm))
 assert len(objects_seen) == totals["objects"], (len(objects_seen), totals)
 
-# --- validators ------------------------------------------------------------------------------
 figures = {"tiles": len(tiles), "cells": len(cells), "objects": totals["objects"],
            "primitives": totals["primitives"], "validated": []}
+
+# The run report: every deterministic file named with its hash; the timings beside them.
+report = manifest["report"]
+assert report["key"] == "report/index.html" and report["not_deterministic"] == ["report/timings.js"]
+assert [f["key"] for f in report["files"]][0] == "report/index.html", report
+for entry in report["files"]:
+    assert sha256(f"{rundir}/{entry['key']}") == entry["sha256"], entry
+html = open(f"{rundir}/report/index.html").read()
+for name, _, cm in cells:
+    assert name in html, name
+assert os.path.exists(f"{rundir}/report/timings.js")
+chromium = os.environ.get("CSGTILE_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
+puppeteer = os.path.abspath(os.environ.get("CSGTILE_PUPPETEER_DIR", f"{os.path.dirname(gltf_dir)}/puppeteer-core"))
+if (shutil.which("node") and os.access(chromium, os.X_OK) and os.path.exists(f"{puppeteer}/package.json")
+        and os.path.exists(f"{rundir}/report/viewer.js")):
+    seen = subprocess.run(["node", f"{source}/tests/cli/report_chromium.cjs", puppeteer, chromium,
+                           f"{rundir}/report/index.html", f"{work}/report.png"],
+                          capture_output=True, text=True, timeout=300)
+    assert seen.returncode == 0, (seen.stdout, seen.stderr[-2000:])
+    figures["validated"].append("report in chromium")
+else:
+    missing("REPORT_VIEWER", "node, chromium, puppeteer-core or the compiled-in 3D viewer")
+
+# --- validators ------------------------------------------------------------------------------
 validate_gpkg = "/usr/lib/python3/dist-packages/osgeo_utils/samples/validate_gpkg.py"
 if shutil.which("ogrinfo") and os.path.exists(validate_gpkg):
     for path, count in [(f"{rundir}/index.gpkg", totals["objects"])] + [
@@ -179,16 +206,51 @@ def outputs(output):
     files = {}
     for path in glob.glob(f"{base}/**", recursive=True):
         rel = os.path.relpath(path, base)
-        if os.path.isfile(path) and rel != "timings.json":
+        if os.path.isfile(path) and rel not in ("timings.json", "report/timings.js"):
             files[rel] = sha256(path)
     return files
 
 
 reference = outputs(f"{work}/a")
-run("run", write_config("b", f"{work}/b", 1), ok=(3,))
+# The second run (1 thread) also publishes to S3 (s3rver on loopback) when it is installed:
+# a reader following the pointer finds every file of the run with its hash.
+s3rver = os.path.abspath(os.environ.get("CSGTILE_S3RVER_DIR", f"{os.path.dirname(gltf_dir)}/@20minutes/s3rver"))
+s3 = None
+extra, env = "", dict(os.environ)
+if shutil.which("node") and os.path.exists(f"{s3rver}/package.json"):
+    os.makedirs(f"{work}/s3")
+    s3 = subprocess.Popen(["node", f"{source}/tests/support/s3_server.cjs", s3rver, f"{work}/s3",
+                           "runs"], stdout=subprocess.PIPE, text=True)
+    port = int(s3.stdout.readline())
+    extra = f"publish:\n  url: s3://runs/city-test\nfetch:\n  s3_endpoint: http://127.0.0.1:{port}\n"
+    env.update(AWS_ACCESS_KEY_ID="S3RVER", AWS_SECRET_ACCESS_KEY="S3RVER")
+else:
+    missing("S3RVER", "@20minutes/s3rver")
+try:
+    run("run", write_config("b", f"{work}/b", 1, extra), ok=(3,), env=env)
+finally:
+    if s3:
+        s3.terminate()
+        s3.wait()
 other = outputs(f"{work}/b")
 assert other == reference, sorted(set(other.items()) ^ set(reference.items()))[:6]
 figures["identical"] = ["threads 1 vs 2"]
+if s3:
+    stored = f"{work}/s3/runs/city-test"
+
+    def s3_object(key):
+        with open(f"{stored}/{key}._S3rver_object", "rb") as f:
+            return f.read()
+
+    pointer = json.loads(s3_object("runs/city/CURRENT"))
+    published = s3_object(pointer["manifest"])
+    assert hashlib.sha256(published).hexdigest() == pointer["sha256"], pointer
+    listed = json.loads(published)["files"]
+    local = outputs(f"{work}/b")
+    for rel, digest in local.items():
+        assert rel in listed and listed[rel]["sha256"] == digest, rel
+        assert hashlib.sha256(s3_object(listed[rel]["key"])).hexdigest() == digest, rel
+    figures["s3_published_files"] = len(listed)
 
 pg_bin = "/usr/lib/postgresql/15/bin"
 if os.path.exists(f"{pg_bin}/initdb"):

@@ -21,6 +21,7 @@
 #include "export/tileset.h"
 #include "fetch/input.h"
 #include "job_records.h"
+#include "publish/publish_run.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
 #include "queue/heartbeat.h"
@@ -391,7 +392,8 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     manifest["tiles_skipped"] = tiles.skipped;
   }
   summary.manifest = summary.run_dir / "manifest.json";
-  return write_file_atomic(summary.manifest, manifest.dump(2) + "\n");
+  if (Failure f = write_file_atomic(summary.manifest, manifest.dump(2) + "\n"); !f.ok()) return f;
+  return publish::publish_run_directory(config, summary.run_dir, log);
 }
 
 }  // namespace csgtile::worker

@@ -453,7 +453,8 @@ TEST(CityJsonSeq, ObjectOfSeveralSolidsIsAGenericCityObjectWithAMultiSolid) {
   group.model.shape = both.value();
   const auto text = cityjson_seq({group});
   ASSERT_TRUE(text.ok()) << text.error().message;
-  const Json& co = city_object(parse(text.value()).features.at(0));
+  const Sequence s = parse(text.value());
+  const Json& co = city_object(s.features.at(0));
   EXPECT_EQ(co["type"], "GenericCityObject");
   EXPECT_EQ(co["geometry"][0]["type"], "MultiSolid");
   EXPECT_EQ(co["geometry"][0]["boundaries"].size(), 2u);

@@ -13,6 +13,7 @@
 #include "csgtile/worker/publish.h"
 #include "fetch/fetch.h"
 #include "fetch/sigv4.h"
+#include "s3_test_server.h"
 #include "test_commands.h"
 #include "test_support.h"
 
@@ -20,6 +21,7 @@ namespace fs = std::filesystem;
 using namespace csgtile::worker;
 using csgtile::test::BackgroundProcess;
 using csgtile::test::quoted;
+using csgtile::test::ScopedEnv;
 
 namespace {
 
@@ -253,51 +255,13 @@ TEST_F(FetchHttp, SizeCapHoldsWithAndWithoutContentLength) {
 
 // ---- S3 against a server that verifies signatures -----------------------------------------
 
-namespace {
-
-std::string s3rver_dir() {
-  const char* env = std::getenv("CSGTILE_S3RVER_DIR");
-  return env != nullptr ? env : CSGTILE_S3RVER_DIR;
-}
-
-bool s3rver_required() {
-  const char* env = std::getenv("CSGTILE_REQUIRE_S3RVER");
-  return env != nullptr && std::string(env) == "1";
-}
-
-class ScopedEnv {
- public:
-  ScopedEnv(const std::map<std::string, std::string>& values) {
-    for (const auto& [name, value] : values) {
-      const char* old = std::getenv(name.c_str());
-      saved_[name] = old ? std::optional<std::string>(old) : std::nullopt;
-      setenv(name.c_str(), value.c_str(), 1);
-    }
-  }
-  ~ScopedEnv() {
-    for (const auto& [name, value] : saved_) {
-      if (value) setenv(name.c_str(), value->c_str(), 1);
-      else unsetenv(name.c_str());
-    }
-  }
-
- private:
-  std::map<std::string, std::optional<std::string>> saved_;
-};
-
-}  // namespace
-
 class FetchS3 : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!fs::exists(fs::path(s3rver_dir()) / "package.json")) {
-      if (s3rver_required()) FAIL() << "@20minutes/s3rver not found at " << s3rver_dir();
-      GTEST_SKIP() << "@20minutes/s3rver not installed (deploy/run-tests.sh installs it into build/npm)";
-    }
-    fs::create_directories(tmp.path() / "s3");
-    server = std::make_unique<BackgroundProcess>(
-        "exec node " + quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/s3_server.cjs") + " " +
-        quoted(fs::path(s3rver_dir())) + " " + quoted(tmp.path() / "s3") + " tiles");
+    std::string missing;
+    server = csgtile::test::start_s3rver(tmp.path() / "s3", "tiles", missing);
+    if (!server && csgtile::test::s3rver_required()) FAIL() << missing;
+    if (!server) GTEST_SKIP() << missing;
     ASSERT_TRUE(server->running()) << server->problem();
     policy.s3.endpoint = "http://127.0.0.1:" + server->first_line();
     policy.retry_delay_ms = 10;

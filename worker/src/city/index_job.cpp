@@ -9,8 +9,11 @@
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
+#include "csgtile/kernel/tessellation.h"
+#include "export/report.h"
 #include "export/run_index.h"
 #include "job_records.h"
+#include "publish/publish_run.h"
 #include "ops/stage_clock.h"
 
 namespace csgtile::worker::city::detail {
@@ -57,6 +60,35 @@ Failure root_tileset(const std::filesystem::path& run_dir,
   tileset["root"] = std::move(root);
   text = tileset.dump(2, ' ', false, ordered_json::error_handler_t::replace) + "\n";
   return {};
+}
+
+/// The convex hull (counter-clockwise) of the xy of `shape`'s tessellation: the footprint the
+/// report draws. Empty when the shape cannot be tessellated.
+std::vector<std::array<double, 2>> footprint_hull(const kernel::Shape& shape, double chordal) {
+  kernel::TessellationOptions options;
+  options.chordal_tolerance = chordal;
+  auto mesh = kernel::tessellate(shape, options);
+  if (!mesh.ok()) return {};
+  std::vector<std::array<double, 2>> p;
+  for (const kernel::Vec3& v : mesh->vertices) p.push_back({v.x(), v.y()});
+  std::sort(p.begin(), p.end());
+  p.erase(std::unique(p.begin(), p.end()), p.end());
+  if (p.size() < 3) return p;
+  auto cross = [](const auto& o, const auto& a, const auto& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  };
+  std::vector<std::array<double, 2>> hull(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {  // lower chain
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {  // upper chain
+    while (k >= t && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
+    hull[k++] = p[i];
+  }
+  hull.resize(k - 1);
+  return hull;
 }
 
 }  // namespace
@@ -220,8 +252,76 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   manifest["problems"] = problems;
   manifest["timings"] = "timings.json";
   if (Failure f = write_timings(run_dir, run, records); !f.ok()) return f;
+
+  // The report (report.h): figures of the run, the cells' footprints and 3D views.
+  ReportInput report;
+  report.run = run;
+  report.crs = crs_text;
+  report.primitives_per_type = per_type;
+  long long fused = 0, unfused = 0;
+  std::size_t next_object = 0;
+  for (const auto& [key, record] : cells) {
+    ReportCell rc;
+    rc.id = record.at("cell").get<std::string>();
+    const auto& o = record.at("origin");
+    const double x0 = o[0].get<double>() - objects.origin.x();
+    const double y0 = o[1].get<double>() - objects.origin.y();
+    rc.bounds = {x0, y0, x0 + config.city.cell_size, y0 + config.city.cell_size};
+    for (const auto& entry : record.at("objects")) {
+      ReportObject ro;
+      ro.id = entry.at("id").get<std::string>();
+      for (const auto& p : entry.at("primitives")) {
+        ro.primitive_types.push_back(p.at("type").get<std::string>());
+        const ordered_json& q = p.at("quality");
+        if (q.is_object()) report.fit_rms.push_back(q.at("rms").get<double>());
+      }
+      ro.volume = entry.at("volume").get<double>();
+      ro.valid = entry.at("fused").get<bool>();
+      (ro.valid ? fused : unfused) += 1;
+      if (next_object < objects.objects.size()) {
+        auto hull = footprint_hull(objects.objects[next_object].model.shape, 0.05);
+        if (!hull.empty()) ro.footprint.push_back(std::move(hull));
+      }
+      ++next_object;
+      rc.objects.push_back(std::move(ro));
+    }
+    if (record.contains("tiles") && record["tiles"].is_string()) {
+      const std::string tiles_key = record["tiles"].get<std::string>();
+      rc.glb_path = (run_dir / std::filesystem::path(tiles_key).parent_path() / "model.glb").string();
+    }
+    for (const auto& p : record.at("problems")) rc.validation.push_back(p.get<std::string>());
+    report.cells.push_back(std::move(rc));
+  }
+  report.validation_counts = {{"tiles fitted", static_cast<long long>(fits.size())},
+                              {"cells", static_cast<long long>(cells.size())},
+                              {"objects fused and valid", fused},
+                              {"objects left unfused (fuse failed)", unfused},
+                              {"run index objects", static_cast<long long>(index.stats.objects)},
+                              {"dead jobs", static_cast<long long>(dead.size())}};
+  for (const DeadJob& d : dead) report.dead_jobs.push_back(d.key + ": " + d.last_error);
+  std::map<std::string, double> stage_totals;
+  std::vector<std::string> stage_order;
+  for (const auto& t : records.timings) {
+    if (!t.contains("stages")) continue;
+    for (const auto& [stage, seconds] : t["stages"].items()) {
+      if (!stage_totals.count(stage)) stage_order.push_back(stage);
+      stage_totals[stage] += seconds.get<double>();
+    }
+  }
+  for (const std::string& stage : stage_order) report.stage_seconds.emplace_back(stage, stage_totals[stage]);
+  ReportFiles report_files;
+  if (Failure f = write_run_report(report, run_dir, report_files); !f.ok()) return f;
+  ordered_json report_entries = ordered_json::array();
+  for (const std::string& key : report_files.keys) {
+    ordered_json entry;
+    if (Failure f = describe_file(run_dir, key, entry); !f.ok()) return f;
+    report_entries.push_back(std::move(entry));
+  }
+  manifest["report"] = {{"key", "report/index.html"}, {"files", report_entries},
+                        {"not_deterministic", report_files.nondeterministic_keys}};
   const std::string manifest_text = manifest.dump(2) + "\n";
   if (Failure f = write_file_atomic(run_dir / "manifest.json", manifest_text); !f.ok()) return f;
+  if (Failure f = publish::publish_run_directory(config, run_dir, log); !f.ok()) return f;
 
   ordered_json record;
   record["manifest"] = {{"key", "manifest.json"},

@@ -666,63 +666,187 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   return {};
 }
 
-Failure s3_put(const std::string& url, std::string_view bytes, const Policy& policy) {
-  global_init();
-  const std::string where = redacted(url);
-  UrlParts parts;
-  if (has_control(url) || !split_url(url, parts) || parts.scheme != "s3") {
-    return {ErrorCode::InputInvalid, where + ": not an s3:// URL"};
-  }
-  S3Target target;
-  if (Failure f = s3_target(parts, url, policy, "PUT", sha256_hex(bytes), target); !f.ok()) return f;
-  target.headers.push_back("Content-Type: application/octet-stream");
-  target.headers.push_back("Expect:");  // no 100-continue round trip
+namespace {
 
+// ---- signed S3 requests: PUT, HEAD, GET into memory ---------------------------------------
+
+struct S3Exchange {
+  std::string method;                ///< "PUT", "HEAD" or "GET"
+  std::string_view upload;           ///< the PUT body
+  std::string* download = nullptr;   ///< where a GET body goes (capped by policy.max_bytes)
+};
+
+struct S3Reply {
+  long status = 0;
+  std::int64_t content_length = -1;  ///< as announced by the server; -1 when unknown
+};
+
+// One signed request (signed afresh, so a retry carries a current date). 2xx is Done, and
+// so is 404 for HEAD and GET (the caller reads a missing object from the status); transport
+// failures and 5xx/429/408 are Transient; other statuses Permanent refusals.
+Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3Exchange& exchange,
+                         const Policy& policy, S3Reply& reply) {
+  Attempt attempt;
+  const std::string where = redacted(url);
+  const std::string payload_sha256 = sha256_hex(exchange.upload);
+  S3Target target;
+  if (Failure f = s3_target(parts, url, policy, exchange.method, payload_sha256, target); !f.ok()) {
+    attempt.failure = f;
+    return attempt;
+  }
+  if (exchange.method == "PUT") {
+    target.headers.push_back("Content-Type: application/octet-stream");
+    target.headers.push_back("Expect:");  // no 100-continue round trip
+  }
   std::unique_ptr<CURL, CurlDeleter> curl(curl_easy_init());
   std::unique_ptr<curl_slist, SlistDeleter> list;
   for (const std::string& h : target.headers) {
     curl_slist* grown = curl_slist_append(list.get(), h.c_str());
-    if (grown == nullptr || !curl) return {ErrorCode::Internal, "libcurl could not build the request"};
+    if (grown == nullptr || !curl) {
+      attempt.failure = {ErrorCode::Internal, "libcurl could not build the request"};
+      return attempt;
+    }
     list.release();
     list.reset(grown);
   }
-  struct Source {
-    std::string_view data;
+  struct Body {
+    std::string_view upload;
     std::size_t offset = 0;
-  } source{bytes};
+    std::string* download = nullptr;
+    std::uint64_t cap = 0;
+    bool over_cap = false;
+  } body{exchange.upload, 0, exchange.download, policy.max_bytes, false};
+  if (body.download != nullptr) body.download->clear();
   auto on_read = +[](char* buffer, std::size_t size, std::size_t count, void* user) -> std::size_t {
-    auto* src = static_cast<Source*>(user);
-    const std::size_t n = std::min(size * count, src->data.size() - src->offset);
-    std::copy_n(src->data.data() + src->offset, n, buffer);
-    src->offset += n;
+    auto* b = static_cast<Body*>(user);
+    const std::size_t n = std::min(size * count, b->upload.size() - b->offset);
+    std::copy_n(b->upload.data() + b->offset, n, buffer);
+    b->offset += n;
     return n;
   };
-  auto on_discard = +[](char*, std::size_t size, std::size_t count, void*) -> std::size_t { return size * count; };
+  auto on_receive = +[](char* data, std::size_t size, std::size_t count, void* user) -> std::size_t {
+    auto* b = static_cast<Body*>(user);
+    const std::size_t n = size * count;
+    if (b->download == nullptr) return n;  // error documents and PUT answers are not kept
+    if (b->download->size() + n > b->cap) {
+      b->over_cap = true;
+      return 0;  // aborts the transfer
+    }
+    b->download->append(data, n);
+    return n;
+  };
   Sink sink;  // only for the address policy
   char error_text[CURL_ERROR_SIZE] = "";
   CURL* c = curl.get();
   set_common_options(c, policy, sink, error_text);
   curl_easy_setopt(c, CURLOPT_URL, target.url.c_str());
   curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, "http,https");
-  curl_easy_setopt(c, CURLOPT_UPLOAD, 1L);
-  curl_easy_setopt(c, CURLOPT_READFUNCTION, on_read);
-  curl_easy_setopt(c, CURLOPT_READDATA, &source);
-  curl_easy_setopt(c, CURLOPT_INFILESIZE_LARGE, static_cast<curl_off_t>(bytes.size()));
-  curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_discard);
+  curl_easy_setopt(c, CURLOPT_LOW_SPEED_LIMIT, policy.low_speed_bytes_per_second);
+  curl_easy_setopt(c, CURLOPT_LOW_SPEED_TIME, policy.low_speed_seconds);
+  if (exchange.method == "PUT") {
+    curl_easy_setopt(c, CURLOPT_UPLOAD, 1L);
+    curl_easy_setopt(c, CURLOPT_READFUNCTION, on_read);
+    curl_easy_setopt(c, CURLOPT_READDATA, &body);
+    curl_easy_setopt(c, CURLOPT_INFILESIZE_LARGE, static_cast<curl_off_t>(exchange.upload.size()));
+  } else if (exchange.method == "HEAD") {
+    curl_easy_setopt(c, CURLOPT_NOBODY, 1L);
+  }
+  curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_receive);
+  curl_easy_setopt(c, CURLOPT_WRITEDATA, &body);
   curl_easy_setopt(c, CURLOPT_HTTPHEADER, list.get());
   const CURLcode code = curl_easy_perform(c);
   if (!sink.refused_address.empty()) {
-    return {ErrorCode::FetchRefused, where + ": connection to " + sink.refused_address + " refused"};
+    attempt.failure = {ErrorCode::FetchRefused, where + ": connection to " + sink.refused_address + " refused"};
+    return attempt;
+  }
+  if (body.over_cap) {
+    attempt.failure = {ErrorCode::FetchRefused, where + ": larger than the size cap of " +
+                                                    std::to_string(policy.max_bytes) + " bytes"};
+    return attempt;
   }
   if (code != CURLE_OK) {
-    return {ErrorCode::Network, where + ": " + (error_text[0] != '\0' ? error_text : curl_easy_strerror(code))};
+    attempt.outcome = transient_curl(code) ? Outcome::Transient : Outcome::Permanent;
+    attempt.failure = {ErrorCode::Network, where + ": " + exchange.method + " failed: " +
+                                               (error_text[0] != '\0' ? error_text : curl_easy_strerror(code))};
+    return attempt;
   }
-  long status = 0;
-  curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &status);
-  if (status < 200 || status >= 300) {
-    const bool transient = status >= 500 || status == 429 || status == 408;
-    return {transient ? ErrorCode::Network : ErrorCode::FetchRefused, where + ": PUT answered HTTP " + std::to_string(status)};
+  curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &reply.status);
+  curl_off_t length = -1;
+  curl_easy_getinfo(c, CURLINFO_CONTENT_LENGTH_DOWNLOAD_T, &length);
+  reply.content_length = static_cast<std::int64_t>(length);
+  const long status = reply.status;
+  if ((status >= 200 && status < 300) || (status == 404 && exchange.method != "PUT")) {
+    attempt.outcome = Outcome::Done;
+    return attempt;
   }
+  const bool transient = status >= 500 || status == 429 || status == 408;
+  attempt.outcome = transient ? Outcome::Transient : Outcome::Permanent;
+  std::string text = where + ": " + exchange.method + " answered HTTP " + std::to_string(status);
+  if (status == 403) text += " (access denied: check the S3 credentials and the bucket's policy)";
+  if (status >= 300 && status < 400) text += " (a redirect: wrong region or endpoint?)";
+  attempt.failure = {transient ? ErrorCode::Network : ErrorCode::FetchRefused, text};
+  return attempt;
+}
+
+// Runs one signed S3 request with fetch's retry rule: transient outcomes are tried again up to
+// policy.attempts times with a doubling delay; the last failure names how many attempts ran.
+Failure s3_exchange(const std::string& url, const S3Exchange& exchange, const Policy& policy,
+                    S3Reply& reply) {
+  global_init();
+  const std::string where = redacted(url);
+  UrlParts parts;
+  if (has_control(url) || !split_url(url, parts) || parts.scheme != "s3") {
+    return {ErrorCode::InputInvalid, where + ": not an s3:// URL"};
+  }
+  if (std::find(policy.schemes.begin(), policy.schemes.end(), "s3") == policy.schemes.end()) {
+    return {ErrorCode::FetchRefused, where + ": scheme 's3' is not allowed by the policy"};
+  }
+  const int attempts = std::max(1, policy.attempts);
+  long delay = policy.retry_delay_ms;
+  for (int attempt = 1;; ++attempt) {
+    reply = {};
+    Attempt a = s3_exchange_once(parts, url, exchange, policy, reply);
+    if (a.outcome == Outcome::Done) return {};
+    if (a.outcome != Outcome::Transient) return a.failure;
+    if (attempt >= attempts) {
+      a.failure.message += " (after " + std::to_string(attempt) + " attempts)";
+      return a.failure;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+    delay *= 2;
+  }
+}
+
+}  // namespace
+
+Failure s3_put(const std::string& url, std::string_view bytes, const Policy& policy) {
+  S3Reply reply;
+  return s3_exchange(url, {"PUT", bytes, nullptr}, policy, reply);
+}
+
+Failure s3_head(const std::string& url, const Policy& policy, S3Object& object) {
+  object = {};
+  S3Reply reply;
+  if (Failure f = s3_exchange(url, {"HEAD", {}, nullptr}, policy, reply); !f.ok()) return f;
+  object.exists = reply.status != 404;
+  if (object.exists && reply.content_length < 0) {
+    return {ErrorCode::Network, redacted(url) + ": HEAD answered without a Content-Length"};
+  }
+  object.size = object.exists ? static_cast<std::uint64_t>(reply.content_length) : 0;
+  return {};
+}
+
+Failure s3_get(const std::string& url, const Policy& policy, S3Object& object, std::string& bytes) {
+  object = {};
+  bytes.clear();
+  S3Reply reply;
+  if (Failure f = s3_exchange(url, {"GET", {}, &bytes}, policy, reply); !f.ok()) {
+    bytes.clear();
+    return f;
+  }
+  object.exists = reply.status != 404;
+  if (!object.exists) bytes.clear();  // the 404's error document is not the object
+  object.size = bytes.size();
   return {};
 }
 

@@ -76,8 +76,25 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes);
 
 /// Uploads `bytes` to `s3://bucket/key` with a signed PUT (the payload's SHA-256 signed
-/// too). Errors as for fetch.
+/// too). Transient failures (resets, timeouts, 5xx, 429) are retried as fetch retries them
+/// (`policy.attempts`, doubling `policy.retry_delay_ms`) and end as Network; refusals (4xx,
+/// e.g. 403 for a wrong secret) are FetchRefused at once; a malformed URL or key InputInvalid.
 Failure s3_put(const std::string& url, std::string_view bytes, const Policy& policy);
+
+/// What a signed HEAD or GET found at `s3://bucket/key`.
+struct S3Object {
+  bool exists = false;     ///< false when S3 answered 404 (not an error)
+  std::uint64_t size = 0;  ///< the object's length in bytes when it exists
+};
+
+/// Signed HEAD of `s3://bucket/key`: whether the object exists and its size. A missing
+/// object is `exists == false`, not an error; other errors and retries as for s3_put.
+Failure s3_head(const std::string& url, const Policy& policy, S3Object& object);
+
+/// Signed GET of `s3://bucket/key` into memory (for small objects: manifests, pointers),
+/// at most `policy.max_bytes` (more is FetchRefused). A missing object is
+/// `exists == false` with `bytes` empty; other errors and retries as for s3_put.
+Failure s3_get(const std::string& url, const Policy& policy, S3Object& object, std::string& bytes);
 
 /// S3 credentials: AWS_ACCESS_KEY_ID / AWS_SECRET_ACCESS_KEY (/ AWS_SESSION_TOKEN) from
 /// the environment, else the [AWS_PROFILE or default] section of AWS_SHARED_CREDENTIALS_FILE

@@ -1,0 +1,31 @@
+// Publishing a finished run to config.publish.url (see publish_run.h).
+
+#include "publish/publish_run.h"
+
+#include "fetch/input.h"
+#include "publish/s3_publish.h"
+
+namespace csgtile::worker::publish {
+
+Failure publish_run_directory(const config::Config& config, const std::filesystem::path& run_dir,
+                              const Logger& log) {
+  if (config.publish.url.empty()) return {};
+  PublishPlan plan;
+  if (Failure f = plan_run_directory(run_dir, plan); !f.ok()) return f;
+  PublishReport report;
+  if (Failure f = publish_run_to_s3(plan, config.publish.url, config.run.name,
+                                    fetch::policy_of(config.fetch), report);
+      !f.ok()) {
+    return f;
+  }
+  log.info("publish", report.pointer_changed ? "published" : "already published",
+           {{"url", config.publish.url},
+            {"pointer", report.pointer_key},
+            {"manifest", report.manifest_key},
+            {"uploaded", std::to_string(report.uploaded)},
+            {"skipped_existing", std::to_string(report.skipped_existing)},
+            {"bytes", std::to_string(report.bytes)}});
+  return {};
+}
+
+}  // namespace csgtile::worker::publish

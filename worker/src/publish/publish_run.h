@@ -1,0 +1,18 @@
+#pragma once
+// Publishing a finished run beyond the local output directory (config `publish.url`).
+
+#include <filesystem>
+
+#include "csgtile/config/config.h"
+#include "csgtile/worker/errors.h"
+#include "csgtile/worker/log.h"
+
+namespace csgtile::worker::publish {
+
+/// When `config.publish.url` is set, uploads the finished run directory there
+/// (s3_publish.h: objects, then create-only manifests, then the pointer) and logs what was
+/// uploaded; a no-op otherwise. Errors: as publish_run_to_s3 (Network is retryable).
+Failure publish_run_directory(const config::Config& config, const std::filesystem::path& run_dir,
+                              const Logger& log);
+
+}  // namespace csgtile::worker::publish
