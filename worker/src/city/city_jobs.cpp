@@ -85,7 +85,16 @@ std::vector<std::pair<std::string, ordered_json>> done_records(
 
 using detail::ordered_json;
 
+namespace {
+bool is_local_directory(const std::string& input) {
+  if (input.find("://") != std::string::npos) return false;
+  std::error_code ec;
+  return std::filesystem::is_directory(input, ec);
+}
+}  // namespace
+
 bool is_tile_input(const std::string& input) {
+  if (is_local_directory(input)) return true;
   std::string path = input.substr(0, input.find_first_of("?#"));
   const std::size_t dot = path.rfind('.');
   if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return false;
@@ -105,13 +114,30 @@ std::string index_key(const std::string& run) { return "index:" + run + ":run"; 
 
 namespace {
 
-/// Distinct tile inputs of the run, each with its position in run.inputs (first occurrence).
+/// Distinct tile inputs of the run, each with its position (the tile's number in labels): a
+/// local directory stands for the tile files directly inside it, in name order.
 std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Config& config) {
+  std::vector<std::string> expanded;
+  for (const std::string& input : config.run.inputs) {
+    if (!is_local_directory(input)) {
+      expanded.push_back(input);
+      continue;
+    }
+    std::vector<std::string> files;
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator(input, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_regular_file(ec) && name[0] != '.' && is_tile_input(name)) {
+        files.push_back((std::filesystem::path(input) / name).lexically_normal().string());
+      }
+    }
+    std::sort(files.begin(), files.end());
+    expanded.insert(expanded.end(), files.begin(), files.end());
+  }
   std::vector<std::pair<std::string, std::size_t>> out;
   std::set<std::string> seen;
-  for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
-    const std::string& input = config.run.inputs[i];
-    if (is_tile_input(input) && seen.insert(input).second) out.emplace_back(input, i);
+  for (const std::string& input : expanded) {
+    if (is_tile_input(input) && seen.insert(input).second) out.emplace_back(input, out.size());
   }
   return out;
 }

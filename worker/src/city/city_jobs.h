@@ -39,7 +39,8 @@
 namespace csgtile::worker::city {
 
 /// True for inputs read as LIDAR tiles (LAS, PLY, PCD, XYZ/TXT by extension, ignoring a
-/// URL's query and fragment); scene JSON inputs are build jobs.
+/// URL's query and fragment) and for local directories (each stands for the tile files
+/// directly inside it, in name order); scene JSON inputs are build jobs.
 bool is_tile_input(const std::string& input);
 
 /// Queue keys: "fit:<run>:<input>", "assemble:<run>:<cell>", "index:<run>:run".

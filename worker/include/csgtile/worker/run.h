@@ -1,11 +1,12 @@
 #pragma once
 /// \file
-/// A run on a job queue (SQLite or PostgreSQL): enqueue one job per input, work the queue
-/// (one process, or many workers sharing it), publish the run's outputs and manifest.
+/// A run on a job queue (SQLite or PostgreSQL): enqueue its jobs, work the queue (one
+/// process, or many workers sharing it), publish the run's outputs and manifest.
 ///
-/// Stages that exist today: read scene (primitives in the scene format) → build solids →
-/// check validity → mass properties → publish the native model (content-addressed) and the
-/// job's record. LIDAR reading, fitting and assembly join as their issues land.
+/// Two kinds of run. A run of LIDAR tiles is a city: fit per tile → assemble per cell →
+/// index per run (worker/src/city/city_jobs.h; its index job publishes). A run of scene JSON
+/// inputs builds each scene (read → build solids → check → Booleans → native model) in a
+/// "build" job and publish_run writes its exports once the queue is drained.
 
 #include <chrono>
 #include <filesystem>
