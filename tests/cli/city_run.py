@@ -99,6 +99,11 @@ def sha256(path):
         return hashlib.sha256(f.read()).hexdigest()
 
 
+status = json.loads(run("status", f"{work}/a.yaml", "--json").stdout)["city"]
+assert status == {"tiles": len(inputs), "fits_done": len(tiles), "fits_dead": 1,
+                  "cells": totals["cells"], "cells_done": totals["cells"], "cells_dead": 0,
+                  "indexed": True, "index_dead": False}, status
+
 objects_seen = {}
 cells = []
 for cell in manifest["cells"]:

@@ -2,10 +2,13 @@
 // config says): jobs per state, dead jobs with their last error, and progress. Read-only: an
 // embedded queue that does not exist yet is reported, not created.
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "city/city_jobs.h"
 #include "commands.h"
 #include "csgtile/config/config.h"
 #include "csgtile/worker/queue.h"
@@ -40,6 +43,15 @@ void register_status(CLI::App& app, Action& action) {
         return error_info(failure.code).exit_code;
       }
       const std::int64_t total = c.queued + c.running + c.done + c.retry + c.dead;
+      // A city run's progress through its graph (fit per tile → assemble per cell → index).
+      std::optional<city::CityProgress> city;
+      if (std::any_of(cfg.run.inputs.begin(), cfg.run.inputs.end(), city::is_tile_input)) {
+        city.emplace();
+        if (Failure f = city::city_progress(cfg, *queue, *city); !f.ok()) {
+          std::cerr << "csgtile status: " << f.message << "\n";
+          return error_info(f.code).exit_code;
+        }
+      }
       if (*json) {
         nlohmann::ordered_json out;
         out["run"] = cfg.run.name;
@@ -47,6 +59,12 @@ void register_status(CLI::App& app, Action& action) {
         out["jobs"] = {{"queued", c.queued}, {"running", c.running}, {"retry", c.retry},
                        {"done", c.done}, {"dead", c.dead}, {"total", total}};
         out["finished"] = c.unfinished() == 0;
+        if (city) {
+          out["city"] = {{"tiles", city->tiles},       {"fits_done", city->fits_done},
+                         {"fits_dead", city->fits_dead}, {"cells", city->cells},
+                         {"cells_done", city->cells_done}, {"cells_dead", city->cells_dead},
+                         {"indexed", city->indexed},   {"index_dead", city->index_dead}};
+        }
         out["dead"] = nlohmann::ordered_json::array();
         for (const DeadJob& d : dead) {
           out["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
@@ -56,6 +74,19 @@ void register_status(CLI::App& app, Action& action) {
         std::cout << "run " << cfg.run.name << " (" << where << "): " << c.done + c.dead << " of " << total
                   << " job(s) finished — queued " << c.queued << ", running " << c.running << ", retry "
                   << c.retry << ", done " << c.done << ", dead " << c.dead << "\n";
+        if (city) {
+          std::cout << "  fit       " << city->fits_done << " of " << city->tiles << " tile(s) done, "
+                    << city->fits_dead << " dead\n";
+          std::cout << "  assemble  ";
+          if (city->fits_done + city->fits_dead < city->tiles) {
+            std::cout << "waiting for the fits\n";
+          } else {
+            std::cout << city->cells_done << " of " << city->cells << " cell(s) done, "
+                      << city->cells_dead << " dead\n";
+          }
+          std::cout << "  index     "
+                    << (city->indexed ? "done" : city->index_dead ? "dead" : "not yet") << "\n";
+        }
         for (const DeadJob& d : dead) {
           std::cout << "  dead " << d.key << " after " << d.attempts << " attempt(s): " << d.last_error << "\n";
         }

@@ -240,6 +240,40 @@ Failure advance_city_run(const config::Config& config, JobQueue& queue, const Lo
   return failure;
 }
 
+Failure city_progress(const config::Config& config, JobQueue& queue, CityProgress& progress) {
+  progress = CityProgress{};
+  const std::string& run = config.run.name;
+  const auto tiles = tile_inputs(config);
+  progress.tiles = tiles.size();
+  Failure failure;
+  const auto results = queue.results(failure);
+  if (!failure.ok()) return failure;
+  const auto dead = queue.dead_jobs(failure);
+  if (!failure.ok()) return failure;
+  auto has_prefix = [](const std::string& key, const std::string& prefix) {
+    return key.compare(0, prefix.size(), prefix) == 0;
+  };
+  const std::string fit = "fit:" + run + ":", cell = "assemble:" + run + ":";
+  for (const auto& [key, text] : results) {
+    if (has_prefix(key, fit)) ++progress.fits_done;
+    if (has_prefix(key, cell)) ++progress.cells_done;
+    if (key == index_key(run)) progress.indexed = true;
+  }
+  for (const DeadJob& d : dead) {
+    if (has_prefix(d.key, fit)) ++progress.fits_dead;
+    if (has_prefix(d.key, cell)) ++progress.cells_dead;
+    if (d.key == index_key(run)) progress.index_dead = true;
+  }
+  if (progress.fits_done + progress.fits_dead >= progress.tiles) {
+    std::set<std::string> cells;
+    for (const auto& [key, record] : detail::done_records(results, "fit", run)) {
+      for (const auto& c : record.at("anchor_cells")) cells.insert(c.at("name").get<std::string>());
+    }
+    progress.cells = cells.size();
+  }
+  return {};
+}
+
 Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
                      const config::Config& config, JobQueue& queue, const Logger& log,
                      std::string& result, StageTimings* timings) {

@@ -56,6 +56,15 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
 Failure advance_city_run(const config::Config& config, JobQueue& queue, const Logger& log,
                          std::size_t& enqueued);
 
+/// Progress of a city run through its graph, from the queue's done and dead jobs.
+struct CityProgress {
+  std::size_t tiles = 0, fits_done = 0, fits_dead = 0;
+  std::size_t cells = 0;  ///< known once every fit has finished (0 before)
+  std::size_t cells_done = 0, cells_dead = 0;
+  bool indexed = false, index_dead = false;
+};
+Failure city_progress(const config::Config& config, JobQueue& queue, CityProgress& progress);
+
 /// Runs one job of the graph (kind "fit", "assemble" or "index"). On success `result` is its
 /// deterministic JSON record. The index job reads the run's other records from `queue`.
 Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
