@@ -14,7 +14,8 @@ halo) and indexes the run. One extra input is a truncated tile. Checked:
   * the 1-thread run also publishes to S3 (@20minutes/s3rver): the pointer names a manifest
     whose every file is stored with its hash;
   * byte-identical outputs for 1 and 2 threads, and — when PostgreSQL 15 is installed — for
-    the same run on PostgreSQL worked by three `csgtile worker` processes at once.
+    the same run on PostgreSQL worked by three `csgtile worker` processes at once, one of them
+    killed (SIGKILL) and restarted every second or so, six times.
 Validators and PostgreSQL are skipped with a message when missing, unless CSGTILE_REQUIRE_GDAL,
 CSGTILE_REQUIRE_AJV, CSGTILE_REQUIRE_GLTF_VALIDATOR, CSGTILE_REQUIRE_POSTGRES,
 CSGTILE_REQUIRE_S3RVER or CSGTILE_REQUIRE_REPORT_VIEWER is 1.
@@ -24,10 +25,13 @@ import glob
 import hashlib
 import json
 import os
+import random
 import shutil
+import signal
 import socket
 import subprocess
 import sys
+import time
 
 binary, source, work, ajv, gltf_dir = sys.argv[1:6]
 shutil.rmtree(work, ignore_errors=True)
@@ -275,16 +279,41 @@ if os.path.exists(f"{pg_bin}/initdb"):
     try:
         queue = (f"queue:\n  backend: postgres\n  postgres_dsn: \"host=127.0.0.1 port={port} "
                  f"dbname=postgres user=csgtile connect_timeout=5\"\n")
+        # Short leases, and a worker killed (SIGKILL) every 0.7-1.5 s while the run lasts, then
+        # restarted as a supervisor would: jobs of killed workers are taken over.
+        queue += "  lease_seconds: 2\n  max_attempts: 20\n"
         config = write_config("c", f"{work}/c", 1, queue)
         run("enqueue", config)
-        workers = [subprocess.Popen([binary, "worker", config, "--exit-when-idle"],
-                                    stdout=subprocess.DEVNULL, stderr=open(f"{work}/worker-{i}.log", "w"))
-                   for i in range(3)]
-        codes = [w.wait(timeout=600) for w in workers]
+        rng = random.Random(5)
+        logs = []
+
+        def spawn():
+            log = open(f"{work}/worker-{len(logs)}.log", "w")
+            logs.append(log)
+            return subprocess.Popen([binary, "worker", config, "--exit-when-idle"],
+                                    stdout=subprocess.DEVNULL, stderr=log)
+
+        workers = [spawn() for _ in range(3)]
+        kills = 0
+        deadline = time.time() + 600
+        while any(w.poll() is None for w in workers):
+            assert time.time() < deadline, "the workers did not finish the city run"
+            time.sleep(rng.uniform(0.7, 1.5))
+            alive = [i for i, w in enumerate(workers) if w.poll() is None]
+            if alive and kills < 6:
+                i = rng.choice(alive)
+                workers[i].send_signal(signal.SIGKILL)
+                workers[i].wait()
+                kills += 1
+                workers[i] = spawn()
+        codes = [w.returncode for w in workers]
         assert all(c in (0, 3) for c in codes), codes
-        pg_outputs = outputs(f"{work}/c")
+        # Files a killed writer left half-written are dot-prefixed temporaries that no
+        # manifest names (publishing skips them); the outputs are the rest.
+        pg_outputs = {k: v for k, v in outputs(f"{work}/c").items()
+                      if not any(part.startswith(".") for part in k.split("/"))}
         assert pg_outputs == reference, sorted(set(pg_outputs.items()) ^ set(reference.items()))[:6]
-        figures["identical"].append("postgres, 3 workers")
+        figures["identical"].append(f"postgres, 3 workers, {kills} SIGKILLs")
     finally:
         subprocess.run(ctl + ["-m", "fast", "stop"], capture_output=True)
 else:
