@@ -155,8 +155,9 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   return failure;
 }
 
-Failure advance_city_run(const config::Config& config, JobQueue& queue, const Logger& log,
-                         std::size_t& enqueued) {
+namespace {
+Failure advance(const config::Config& config, JobQueue& queue, const Logger& log,
+                std::size_t& enqueued) {
   enqueued = 0;
   const std::string& run = config.run.name;
   const auto tiles = tile_inputs(config);
@@ -240,6 +241,20 @@ Failure advance_city_run(const config::Config& config, JobQueue& queue, const Lo
   return failure;
 }
 
+}  // namespace
+
+// Records and payloads are our own JSON; one that does not parse as expected is a bug or a
+// foreign writer, reported as an Internal failure rather than an exception that would end
+// the worker.
+Failure advance_city_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                         std::size_t& enqueued) {
+  try {
+    return advance(config, queue, log, enqueued);
+  } catch (const nlohmann::json::exception& e) {
+    return {ErrorCode::Internal, "run " + config.run.name + ": a fit record is malformed: " + e.what()};
+  }
+}
+
 Failure city_progress(const config::Config& config, JobQueue& queue, CityProgress& progress) {
   progress = CityProgress{};
   const std::string& run = config.run.name;
@@ -266,23 +281,39 @@ Failure city_progress(const config::Config& config, JobQueue& queue, CityProgres
   }
   if (progress.fits_done + progress.fits_dead >= progress.tiles) {
     std::set<std::string> cells;
-    for (const auto& [key, record] : detail::done_records(results, "fit", run)) {
-      for (const auto& c : record.at("anchor_cells")) cells.insert(c.at("name").get<std::string>());
+    try {
+      for (const auto& [key, record] : detail::done_records(results, "fit", run)) {
+        for (const auto& c : record.at("anchor_cells")) cells.insert(c.at("name").get<std::string>());
+      }
+    } catch (const nlohmann::json::exception& e) {
+      return {ErrorCode::Internal, "run " + run + ": a fit record is malformed: " + e.what()};
     }
     progress.cells = cells.size();
   }
   return {};
 }
 
-Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
-                     const config::Config& config, JobQueue& queue, const Logger& log,
-                     std::string& result, StageTimings* timings) {
+namespace {
+Failure run_job(const Job& job, const std::filesystem::path& run_dir, const config::Config& config,
+                JobQueue& queue, const Logger& log, std::string& result, StageTimings* timings) {
   if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings);
   if (job.kind == "assemble") return detail::run_assemble_job(job, run_dir, config, result, timings);
   if (job.kind == "index") {
     return detail::run_index_job(job, run_dir, config, queue, log, result, timings);
   }
   return {ErrorCode::Internal, "job " + job.key + " has an unknown kind " + job.kind};
+}
+
+}  // namespace
+
+Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
+                     const config::Config& config, JobQueue& queue, const Logger& log,
+                     std::string& result, StageTimings* timings) {
+  try {
+    return run_job(job, run_dir, config, queue, log, result, timings);
+  } catch (const nlohmann::json::exception& e) {
+    return {ErrorCode::Internal, "job " + job.key + ": a payload or record is malformed: " + e.what()};
+  }
 }
 
 }  // namespace csgtile::worker::city
