@@ -16,6 +16,7 @@
 #include "boolean/face_split.h"
 #include "boolean/fuse_groups.h"
 #include "boolean/fuse_tree.h"
+#include "boolean/line_surface.h"
 #include "boolean/marching.h"
 #include "boolean/model.h"
 #include "boolean/pcurve_fit.h"
@@ -445,7 +446,7 @@ class BooleanEngine {
   // `existing` >= 0, marks an existing edge of fb's boundary as lying in fa).
   // Traced sections bring their pcurves (`hint_a` on fa, `hint_b` on fb) and the tolerance
   // their edges need; closed-form ones get exact fitted pcurves and the model tolerance.
-  Status add_section(std::size_t fa, std::size_t fb, const CurvePtr& curve, double t0, double t1,
+  Status add_section(std::size_t fa, std::size_t fb, CurvePtr curve, double t0, double t1,
                      int existing, const Curve2dPtr& hint_a = nullptr,
                      const Curve2dPtr& hint_b = nullptr, double edge_tolerance = 0.0) {
     // A closed section lying along a closed boundary edge of one face (a dome's equator on
@@ -511,7 +512,12 @@ class BooleanEngine {
     }
     std::vector<Hit> hits;
     boundary_hits(fa, *pa, t0, t1, -1, hits);
+    const std::size_t hits_on_a = hits.size();
     if (existing < 0) boundary_hits(fb, *pb, t0, t1, -1, hits);
+    if (existing < 0 && curve->kind() == CurveKind::Polyline) {
+      snap_traced_crossings(fa, fb, curve, pa, pb, t0, t1, hits, hits_on_a,
+                            std::max(edge_tolerance, options_.tolerance));
+    }
     std::vector<double> cuts{t0, t1};
     for (const Hit& h : hits) cuts.push_back(h.t);
     std::sort(cuts.begin(), cuts.end());
@@ -571,6 +577,145 @@ class BooleanEngine {
       if (existing < 0) add_extra(fb, edge_id, refit_for(edge_id, fb, shift_pcurve(pb, *shift_b), curve));
     }
     return {};
+  }
+
+  // Where boundary edge `e` pierces `surface`, by Newton's method on the signed distance from
+  // e(s) to the surface, from s: the parameter, or nullopt when the edge grazes the surface
+  // there or the iteration does not settle.
+  std::optional<double> pierce_parameter(const BEdge& e, double s, const Surface& surface) const {
+    const double settled = kNewtonConvergedFraction * options_.tolerance;
+    for (int k = 0; k < kPierceIterations; ++k) {
+      const Vec3 x = e.curve->point(s);
+      const Vec2 uv = surface.closest_parameters(x);
+      const Vec3 n = surface.normal(uv.x(), uv.y());
+      const double distance = (x - surface.point(uv.x(), uv.y())).dot(n);
+      const Vec3 tangent = e.curve->derivative(s);
+      const double rate = tangent.dot(n);
+      if (!(std::abs(rate) > kGrazingCosine * tangent.norm())) return std::nullopt;
+      const double next = std::clamp(s - distance / rate, e.t0, e.t1);
+      if (std::abs(distance) <= settled) return next;  // one step past settling: at rounding level
+      s = next;
+    }
+    return std::nullopt;
+  }
+
+  // A traced section (a polyline whose chords stay within its deviation of the exact curve)
+  // crosses a face boundary where its chord does: up to the deviation away from the point
+  // where the boundary edge pierces the other face's surface, the point every other section
+  // ending on that edge there (a neighbouring face's, a closed-form one) ends at as well. The
+  // pieces would miss each other by micrometres and leave open ends and tiny edges. So each
+  // crossing moves to the pierce point, which becomes a vertex of the polyline and of both
+  // pcurves, and the boundary edge is split there. `reach` bounds the move (a pierce point
+  // farther than that is another crossing: the hit stays as found). Hits [0, hits_on_a) lie
+  // on fa's boundary (pierce fb's surface), the rest on fb's (pierce fa's).
+  void snap_traced_crossings(std::size_t fa, std::size_t fb, CurvePtr& curve, Curve2dPtr& pa,
+                             Curve2dPtr& pb, double& t0, double& t1, std::vector<Hit>& hits,
+                             std::size_t hits_on_a, double reach) {
+    if (pa->kind() != Curve2dKind::Polyline || pb->kind() != Curve2dKind::Polyline) return;
+    const std::vector<Vec3>& points = static_cast<const PolylineCurve&>(*curve).points();
+    const std::vector<Vec2>& uv_a = static_cast<const Polyline2d&>(*pa).points();
+    const std::vector<Vec2>& uv_b = static_cast<const Polyline2d&>(*pb).points();
+    if (uv_a.size() != points.size() || uv_b.size() != points.size()) return;
+    const Surface& sa = *model_.faces[fa].surface;
+    const Surface& sb = *model_.faces[fb].surface;
+    const double last = static_cast<double>(points.size() - 1);
+    const bool closed = points.front() == points.back();
+    const double slack = param_slack(last);
+    const ToleranceModel model{options_.tolerance, options_.tolerance};  // lengths only
+    auto on_surface = [&](const Surface& s, const Vec3& p, const Vec2& near) -> std::optional<Vec2> {
+      Vec2 uv = s.closest_parameters(p);
+      uv.x() = nearest_periodic(uv.x(), near.x(), s.u_period());
+      uv.y() = nearest_periodic(uv.y(), near.y(), s.v_period());
+      if (!model.negligible((s.point(uv.x(), uv.y()) - p).norm())) return std::nullopt;
+      return uv;
+    };
+    struct Snap {
+      double t;  // old parameter; then the new one
+      Vec3 point;
+      Vec2 uv_a, uv_b;
+    };
+    std::vector<Snap> snaps;
+    std::vector<int> snap_of_hit(hits.size(), -1);
+    std::vector<double> pierced(hits.size(), 0.0);
+    for (std::size_t k = 0; k < hits.size(); ++k) {
+      const Hit& h = hits[k];
+      const BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
+      if (e.degenerate()) continue;
+      if (closed && (h.t <= slack || h.t >= last - slack)) continue;  // the loop's own seam vertex
+      const auto s = pierce_parameter(e, h.s, k < hits_on_a ? sb : sa);
+      if (!s) continue;
+      const Vec3 p = e.curve->point(*s);
+      if ((p - curve->point(h.t)).norm() > kTracedSnapReach * reach) continue;
+      // One crossing found on two edges (at their common vertex) or twice: one snap.
+      int same = -1;
+      for (std::size_t j = 0; j < snaps.size() && same < 0; ++j) {
+        if (model.negligible((snaps[j].point - p).norm())) same = static_cast<int>(j);
+      }
+      if (same < 0) {
+        const auto qa = on_surface(sa, p, pa->point(h.t));
+        const auto qb = on_surface(sb, p, pb->point(h.t));
+        if (!qa || !qb) continue;
+        snaps.push_back({h.t, p, *qa, *qb});
+        same = static_cast<int>(snaps.size()) - 1;
+      }
+      snap_of_hit[k] = same;
+      pierced[k] = *s;
+    }
+    if (snaps.empty()) return;
+    std::vector<std::size_t> order(snaps.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return snaps[x].t < snaps[y].t; });
+    // The new polyline: old vertices, with each snap inserted in its chord, or in place of
+    // a vertex it falls on. `knots` maps old parameters to new ones (piecewise linear).
+    std::vector<Vec3> new_points;
+    std::vector<Vec2> new_a, new_b;
+    std::vector<std::pair<double, double>> knots;
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double at = static_cast<double>(i);
+      while (next < order.size() && snaps[order[next]].t < at - slack) {
+        Snap& sn = snaps[order[next++]];
+        knots.emplace_back(sn.t, static_cast<double>(new_points.size()));
+        sn.t = static_cast<double>(new_points.size());
+        new_points.push_back(sn.point);
+        new_a.push_back(sn.uv_a);
+        new_b.push_back(sn.uv_b);
+      }
+      knots.emplace_back(at, static_cast<double>(new_points.size()));
+      if (next < order.size() && snaps[order[next]].t <= at + slack) {
+        Snap& sn = snaps[order[next++]];
+        sn.t = static_cast<double>(new_points.size());
+        new_points.push_back(sn.point);
+        new_a.push_back(sn.uv_a);
+        new_b.push_back(sn.uv_b);
+      } else {
+        new_points.push_back(points[i]);
+        new_a.push_back(uv_a[i]);
+        new_b.push_back(uv_b[i]);
+      }
+    }
+    auto remap = [&](double t) {
+      auto it = std::upper_bound(knots.begin(), knots.end(), t,
+                                 [](double x, const std::pair<double, double>& k) { return x < k.first; });
+      if (it == knots.begin()) return knots.front().second;
+      if (it == knots.end()) return knots.back().second;
+      const auto& [x0, y0] = *(it - 1);
+      const auto& [x1, y1] = *it;
+      return y0 + (y1 - y0) * (t - x0) / (x1 - x0);
+    };
+    t0 = remap(t0);
+    t1 = remap(t1);
+    for (std::size_t k = 0; k < hits.size(); ++k) {
+      if (snap_of_hit[k] >= 0) {
+        hits[k].t = snaps[static_cast<std::size_t>(snap_of_hit[k])].t;
+        hits[k].s = pierced[k];
+      } else {
+        hits[k].t = remap(hits[k].t);
+      }
+    }
+    curve = std::make_shared<PolylineCurve>(std::move(new_points), static_cast<const PolylineCurve&>(*curve).tolerance());
+    pa = std::make_shared<Polyline2d>(std::move(new_a));
+    pb = std::make_shared<Polyline2d>(std::move(new_b));
   }
 
   // A boundary edge of face f passing through p (within tolerance), or -1.
@@ -1089,6 +1234,34 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
             splice(faces[i], l, k, base + other->first, other->second);
             merged = true;
           }
+        }
+      }
+    }
+  }
+  // A seam edge that one face now uses in both directions at one place of its (u, v) plane
+  // (its pieces met across the seam from both sides, or one piece reached round to itself)
+  // bounds nothing either: it is spliced out too. Used a whole period apart it is the seam of
+  // a band round the surface, and stays.
+  for (RFace& f : faces) {
+    if (!f.alive) continue;
+    const double pu = f.surface->u_period(), pv = f.surface->v_period();
+    if (pu <= 0 && pv <= 0) continue;
+    auto whole_periods = [](double offset, double period) { return period > 0 ? std::round(offset / period) : 0.0; };
+    bool spliced = true;
+    while (spliced) {
+      spliced = false;
+      for (std::size_t l = 0; l < f.loops.size() && !spliced; ++l) {
+        for (std::size_t k = 0; k < f.loops[l].size() && !spliced; ++k) {
+          const BUse u = f.loops[l][k];
+          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          if (!e.seam || e.degenerate()) continue;
+          const auto other = find_use(f, u.edge, !u.forward);
+          if (!other) continue;
+          const double tm = 0.5 * (e.t0 + e.t1);
+          const Vec2 offset = u.pcurve->point(tm) - f.loops[other->first][other->second].pcurve->point(tm);
+          if (whole_periods(offset.x(), pu) != 0 || whole_periods(offset.y(), pv) != 0) continue;
+          splice(f, l, k, other->first, other->second);
+          spliced = true;
         }
       }
     }

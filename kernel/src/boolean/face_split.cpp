@@ -160,11 +160,17 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   for (std::size_t i = 0; i < outers.size(); ++i) regions[i].loops.push_back(outers[i]);
   for (BLoop& hole : holes) {
     // The smallest piece around the hole (a point of the hole, nudged inside it by nothing:
-    // holes do not touch their outer loop in valid faces).
+    // holes do not touch their outer loop in valid faces). A piece whose outer loop uses an
+    // edge of the hole lies on the other side of that edge: the hole is the reverse of part
+    // of its boundary (a lens cut off by two section edges), the probe on its outline.
     const std::vector<Vec2> pts = sample_use(m, hole.front(), 8);
     const Vec2 probe = pts[pts.size() / 2];
     int best = -1;
     for (std::size_t i = 0; i < outers.size(); ++i) {
+      const bool shares_edge = std::any_of(hole.begin(), hole.end(), [&](const BUse& h) {
+        return std::any_of(outers[i].begin(), outers[i].end(), [&](const BUse& o) { return o.edge == h.edge; });
+      });
+      if (shares_edge) continue;
       FacePolygon poly;
       poly.loops.push_back(loop_points(m, outers[i]));
       auto in = poly.inside(probe, 0.0);

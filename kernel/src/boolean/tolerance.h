@@ -99,6 +99,11 @@ inline constexpr double kNodeUvRelative = 1e-7;
 /// chords' bulge bounds are rigorous, and the side is decided exactly outside the band.
 inline constexpr double kFaceQueryUvRelative = 1e-12;
 
+/// A face polygon's chord of a curved pcurve counts as bulging by this many times the largest
+/// distance seen at three points of its arc (the band where a point is checked against the
+/// arc itself).
+inline constexpr double kArcBulgeSafety = 2.0;
+
 /// Bounding volumes computed in floating point (face boxes, a torus' bounding sphere) are
 /// grown by this relative amount so that rounding never lets a ray miss what it touches.
 inline constexpr double kBoundsPadRelative = 1e-9;
@@ -131,12 +136,19 @@ inline double traced_sag(double linear, double size) {
   return std::max(kTracedSagTolerances * linear, kTracedSagRelative * size);
 }
 
+/// A traced section's crossing with a face boundary moves to where the boundary edge pierces
+/// the other surface when that point is within this many of the section's tolerances (its
+/// measured deviation) of the crossing found on the chords; farther, it is another crossing.
+inline constexpr double kTracedSnapReach = 100.0;
+
 // ---- Numerical constants (not tolerances) ------------------------------------------------------
 
 /// Newton refinement of a pcurve crossing stops when the two points are this fraction of the
 /// crossing tolerance apart, or when a step is this small relative to the parameters.
 inline constexpr double kNewtonConvergedFraction = 1e-3;
 inline constexpr double kNewtonStall = 1e-15;
+/// Newton steps allowed for the point where an edge pierces a surface.
+inline constexpr int kPierceIterations = 30;
 /// Pcurves are cut into this many chords to find crossing candidates, and a chord's box is
 /// grown by this fraction of its length for the arc's bulge.
 inline constexpr int kCrossingSamples = 96;

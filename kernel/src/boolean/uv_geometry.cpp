@@ -9,20 +9,74 @@
 
 namespace csgtile::kernel::detail {
 
-std::vector<Vec2> sample_use(const BModel& m, const BUse& use, int samples) {
+namespace {
+
+// Parameters of sample_use's points, in the use's direction.
+std::vector<double> sample_parameters(const BModel& m, const BUse& use, int samples) {
   const BEdge& e = m.edges[static_cast<std::size_t>(use.edge)];
   // Lines need their ends only; polylines (traced sections) at least one sample per segment.
   const int n = use.pcurve->kind() == Curve2dKind::Line ? 1
                 : use.pcurve->kind() == Curve2dKind::Polyline
                     ? std::max(samples, static_cast<int>(std::ceil(std::abs(e.t1 - e.t0))))
                     : samples;
-  std::vector<Vec2> out;
+  std::vector<double> out;
   out.reserve(static_cast<std::size_t>(n) + 1);
   for (int i = 0; i <= n; ++i) {
     const double f = static_cast<double>(i) / n;
-    const double t = use.forward ? e.t0 + (e.t1 - e.t0) * f : e.t1 - (e.t1 - e.t0) * f;
-    out.push_back(use.pcurve->point(t));
+    out.push_back(use.forward ? e.t0 + (e.t1 - e.t0) * f : e.t1 - (e.t1 - e.t0) * f);
   }
+  return out;
+}
+
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const double l2 = d.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * d)).norm();
+}
+
+// Side of `uv` with respect to the arc (walked t0 → t1): +1 left, −1 right, 0 within
+// `margin` of it; nullopt when the arc's nearest point is one of its ends (the point is then
+// not between the chord and the arc, whose every point projects inside the short arc). The
+// nearest point by golden-section search (the point is within the arc's bulge of its chord,
+// where the distance has one minimum on the arc).
+std::optional<int> arc_side(const FacePolygon::Arc& arc, const Vec2& uv, double margin) {
+  constexpr double kGolden = 0.6180339887498949;
+  constexpr int kSearchSteps = 80;
+  constexpr double kEndFraction = 1e-9;  // of the arc's span: the search ended at an end
+  double lo = std::min(arc.t0, arc.t1), hi = std::max(arc.t0, arc.t1);
+  const double first = lo, last = hi;
+  auto distance = [&](double t) { return (arc.curve->point(t) - uv).squaredNorm(); };
+  double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
+  double d1 = distance(x1), d2 = distance(x2);
+  for (int i = 0; i < kSearchSteps && hi - lo > 0; ++i) {
+    if (d1 <= d2) {
+      hi = x2;
+      x2 = x1;
+      d2 = d1;
+      x1 = hi - kGolden * (hi - lo);
+      d1 = distance(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      d1 = d2;
+      x2 = lo + kGolden * (hi - lo);
+      d2 = distance(x2);
+    }
+  }
+  const double t = 0.5 * (lo + hi);
+  if (t <= first + kEndFraction * (last - first) || t >= last - kEndFraction * (last - first)) return std::nullopt;
+  const Vec2 offset = uv - arc.curve->point(t);
+  if (offset.norm() <= margin) return 0;
+  const Vec2 tangent = arc.curve->derivative(t) * (arc.t1 >= arc.t0 ? 1.0 : -1.0);
+  return predicates::cross_sign(tangent, offset);
+}
+
+}  // namespace
+
+std::vector<Vec2> sample_use(const BModel& m, const BUse& use, int samples) {
+  std::vector<Vec2> out;
+  for (const double t : sample_parameters(m, use, samples)) out.push_back(use.pcurve->point(t));
   return out;
 }
 
@@ -34,27 +88,37 @@ FacePolygon face_polygon(const BModel& m, const BFace& face) {
   p.max = -p.min;
   for (const BLoop& loop : face.loops) {
     std::vector<Vec2> pts;
+    std::vector<FacePolygon::Arc> arcs;
     for (const BUse& use : loop) {
-      std::vector<Vec2> s = sample_use(m, use, 48);
-      pts.insert(pts.end(), s.begin(), s.end() - 1);
+      const std::vector<double> ts = sample_parameters(m, use, 48);
+      const bool straight = use.pcurve->kind() == Curve2dKind::Line || use.pcurve->kind() == Curve2dKind::Polyline;
+      for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
+        const Vec2 a = use.pcurve->point(ts[i]), b = use.pcurve->point(ts[i + 1]);
+        pts.push_back(a);
+        FacePolygon::Arc arc;
+        if (!straight) {
+          // The bulge seen at three points, doubled: the arcs are short stretches of smooth
+          // curves, whose distance from the chord is largest near the middle.
+          for (const double f : {0.25, 0.5, 0.75}) {
+            arc.bulge = std::max(arc.bulge, segment_distance(use.pcurve->point(ts[i] + f * (ts[i + 1] - ts[i])), a, b));
+          }
+          arc.bulge *= kArcBulgeSafety;
+          arc.curve = use.pcurve;
+          arc.t0 = ts[i];
+          arc.t1 = ts[i + 1];
+        }
+        arcs.push_back(std::move(arc));
+      }
     }
     for (const Vec2& q : pts) {
       p.min = p.min.cwiseMin(q);
       p.max = p.max.cwiseMax(q);
     }
     p.loops.push_back(std::move(pts));
+    p.arcs.push_back(std::move(arcs));
   }
   return p;
 }
-
-namespace {
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 d = b - a;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * d)).norm();
-}
-}  // namespace
 
 double FacePolygon::boundary_distance(const Vec2& uv) const {
   double best = std::numeric_limits<double>::infinity();
@@ -69,15 +133,33 @@ double FacePolygon::boundary_distance(const Vec2& uv) const {
 std::optional<bool> FacePolygon::inside(const Vec2& uv, double margin) const {
   // Within the margin is a coincidence (tolerance); outside it the side is decided exactly.
   if (margin > 0.0 && boundary_distance(uv) <= margin) return std::nullopt;
+  bool in = false;
   switch (predicates::locate_in_polygon(uv, loops)) {
     case predicates::PolygonLocation::Inside:
-      return true;
-    case predicates::PolygonLocation::Outside:
-      return false;
-    case predicates::PolygonLocation::OnBoundary:
+      in = true;
       break;
+    case predicates::PolygonLocation::Outside:
+      in = false;
+      break;
+    case predicates::PolygonLocation::OnBoundary:
+      return std::nullopt;
   }
-  return std::nullopt;
+  // The sides of curved pcurves are chords: between a chord and its arc the face and the
+  // polygon disagree (a section chord of a cap disc, shorter than the sampling, lies there).
+  for (std::size_t l = 0; l < arcs.size(); ++l) {
+    const std::vector<Vec2>& loop = loops[l];
+    for (std::size_t i = 0; i < arcs[l].size(); ++i) {
+      const Arc& arc = arcs[l][i];
+      if (arc.bulge <= 0) continue;
+      const Vec2 &a = loop[i], &b = loop[(i + 1) % loop.size()];
+      if (segment_distance(uv, a, b) > arc.bulge) continue;
+      const std::optional<int> curve_side = arc_side(arc, uv, margin);
+      if (!curve_side) continue;
+      if (*curve_side == 0) return std::nullopt;
+      if (*curve_side != predicates::orient2d(a, b, uv)) in = !in;
+    }
+  }
+  return in;
 }
 
 std::optional<Vec2> FacePolygon::shift_inside(const Vec2& uv, double margin) const {
@@ -217,7 +299,24 @@ std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1, 
     }
   }
   std::sort(found.begin(), found.end(), [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
-  return found;
+  // A tangential contact comes back as a cluster of crossings along the stretch where the
+  // curves stay within the tolerance of each other (Newton lands anywhere on it): within the
+  // tolerance that stretch is one contact point, at the middle of the cluster.
+  auto together = [&](const Crossing& x, const Crossing& y) {
+    for (const double f : {0.25, 0.5, 0.75}) {
+      const Vec2 p = a.point(x.t + f * (y.t - x.t)), q = b.point(x.s + f * (y.s - x.s));
+      if (!((p - q).norm() <= tolerance)) return false;
+    }
+    return true;
+  };
+  std::vector<Crossing> contacts;
+  for (std::size_t i = 0; i < found.size();) {
+    std::size_t j = i;
+    while (j + 1 < found.size() && together(found[i], found[j + 1])) ++j;
+    contacts.push_back({0.5 * (found[i].t + found[j].t), 0.5 * (found[i].s + found[j].s)});
+    i = j + 1;
+  }
+  return contacts;
 }
 
 }  // namespace csgtile::kernel::detail

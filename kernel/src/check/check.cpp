@@ -61,6 +61,40 @@ bool segments_cross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) 
   return o1 * o2 < 0 && o3 * o4 < 0;
 }
 
+// A side of a face's sampled boundary polygon: the chord of its pcurve over [t0, t1]
+// (walking direction), or an exactly straight piece (curve null).
+struct Chord {
+  Vec2 a, b;
+  const Curve2d* curve = nullptr;
+  double t0 = 0, t1 = 0;
+};
+
+// Refinements a face's crossing test may spend confirming crossings of chords.
+constexpr int kChordRefinements = 4096;
+// Halvings of a chord at most (its bulge then far below any tolerance).
+constexpr int kChordDepth = 40;
+
+// Whether the curves behind two chords properly cross. Chords of curved pcurves are halved
+// while they cross: a crossing of the sampled polygon that is only the bulge of an arc past a
+// nearby straight side (a box edge piercing a cap disc just inside its rim) disappears, a real
+// one persists down to the depth. Spending the budget counts as crossing.
+bool chords_cross(const Chord& x, const Chord& y, int depth, int& budget) {
+  if (!segments_cross(x.a, x.b, y.a, y.b)) return false;
+  if ((x.curve == nullptr && y.curve == nullptr) || depth == 0 || --budget < 0) return true;
+  auto halves = [](const Chord& c) -> std::vector<Chord> {
+    if (c.curve == nullptr) return {c};
+    const double tm = 0.5 * (c.t0 + c.t1);
+    const Vec2 m = c.curve->point(tm);
+    return {Chord{c.a, m, c.curve, c.t0, tm}, Chord{m, c.b, c.curve, tm, c.t1}};
+  };
+  for (const Chord& hx : halves(x)) {
+    for (const Chord& hy : halves(y)) {
+      if (chords_cross(hx, hy, depth - 1, budget)) return true;
+    }
+  }
+  return false;
+}
+
 class Checker {
  public:
   explicit Checker(CheckReport& report) : report_(report) {}
@@ -136,10 +170,10 @@ class Checker {
     const std::string name = "face " + std::to_string(index);
     const double ft = tolerance(face);
     const Shape body_face = face.oriented(Orientation::Forward);
-    std::vector<std::vector<Vec2>> loops;
+    std::vector<Chord> chords;
     for (std::size_t w = 0; w < body_face.child_count(); ++w) {
       const Shape wire = body_face.child(w);
-      std::vector<Vec2> loop;
+      const std::size_t first_chord = chords.size();
       const std::size_t n = wire.child_count();
       for (std::size_t e = 0; e < n; ++e) {
         const Shape edge = wire.child(e);
@@ -159,10 +193,12 @@ class Checker {
                                     ed.curve->kind() == CurveKind::Line ? 2 : 16;
         double worst = 0.0;
         std::vector<Vec2> pts;
+        std::vector<double> ts;
         for (int k = 0; k <= samples; ++k) {
           const double t = ed.first + (ed.last - ed.first) * k / samples;
           const Vec2 uv = pc.point(t);
           pts.push_back(uv);
+          ts.push_back(t);
           const Vec3 on_surface = face.location().apply_point(d.surface->point(uv.x(), uv.y()));
           const Vec3 on_curve = ed.degenerate() ? vertex_point(edge.child(0))
                                                 : edge.location().apply_point(ed.curve->point(t));
@@ -172,22 +208,31 @@ class Checker {
           add(CheckStatus::EdgeOffFace, name + ": an edge strays " + num(worst) +
                                             " from the surface (tolerance " + num(et) + ")");
         }
-        if (edge.orientation() == Orientation::Reversed) std::reverse(pts.begin(), pts.end());
-        loop.insert(loop.end(), pts.begin(), pts.end() - 1);
+        if (edge.orientation() == Orientation::Reversed) {
+          std::reverse(pts.begin(), pts.end());
+          std::reverse(ts.begin(), ts.end());
+        }
+        // Polylines are sampled at points that need not be their vertices: no straight chords.
+        const bool straight = pc.kind() == Curve2dKind::Line;
+        for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
+          chords.push_back({pts[k], pts[k + 1], straight ? nullptr : &pc, ts[k], ts[k + 1]});
+        }
       }
-      loops.push_back(std::move(loop));
+      // Each edge's last chord ends where the next edge's first one starts: consecutive sides
+      // share their point exactly, as the sampled polygon's do.
+      for (std::size_t k = first_chord; k < chords.size(); ++k) {
+        chords[k].b = chords[k + 1 < chords.size() ? k + 1 : first_chord].a;
+      }
     }
-    check_loops_cross(loops, name);
+    check_loops_cross(chords, name);
   }
 
-  void check_loops_cross(const std::vector<std::vector<Vec2>>& loops, const std::string& name) {
-    std::vector<std::pair<Vec2, Vec2>> segs;
-    for (const auto& loop : loops) {
-      for (std::size_t i = 0; i < loop.size(); ++i) segs.emplace_back(loop[i], loop[(i + 1) % loop.size()]);
-    }
-    for (std::size_t i = 0; i < segs.size(); ++i) {
-      for (std::size_t j = i + 1; j < segs.size(); ++j) {
-        if (segments_cross(segs[i].first, segs[i].second, segs[j].first, segs[j].second)) {
+  // The sampled loops' sides pairwise (O(k²)); crossings confirmed by chords_cross.
+  void check_loops_cross(const std::vector<Chord>& chords, const std::string& name) {
+    int budget = kChordRefinements;
+    for (std::size_t i = 0; i < chords.size(); ++i) {
+      for (std::size_t j = i + 1; j < chords.size(); ++j) {
+        if (chords_cross(chords[i], chords[j], kChordDepth, budget)) {
           add(CheckStatus::SelfIntersection, name + ": its boundary loops cross");
           return;
         }

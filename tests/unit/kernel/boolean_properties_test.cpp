@@ -304,27 +304,201 @@ TEST(BooleanTraced, UnequalCrossingCylinders) {
   }
 }
 
-// Random pairs of all seven primitive types in random similarity placements, overlapping:
-// every result is valid with V(A ∪ B) + V(A ∩ B) = V(A) + V(B), or the call returns a named
-// error; never a silently wrong solid. The share that succeeds is printed.
-TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
-  std::mt19937_64 rng(7);
-  int succeeded = 0, named = 0;
-  const int kPairs = 40 * test::property_scale();
-  for (int i = 0; i < kPairs; ++i) {
-    PrimitiveSpec sa = test::random_primitive(rng, static_cast<PrimitiveType>(rng() % kPrimitiveTypeCount));
-    PrimitiveSpec sb = test::random_primitive(rng, static_cast<PrimitiveType>(rng() % kPrimitiveTypeCount));
-    sa.placement = test::random_similarity(rng);
-    sb.placement = test::random_similarity(rng);
+// The random pairs of BooleanTraced.RandomPairsAreValidOrNamedErrors: two primitives of any
+// of the seven types in random similarity placements, B's box centre moved near A's.
+struct RandomPair {
+  Shape a, b;
+  std::string tag;
+};
+class RandomPairs {
+ public:
+  RandomPair next() {
+    PrimitiveSpec sa = test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
+    PrimitiveSpec sb = test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
+    sa.placement = test::random_similarity(rng_);
+    sb.placement = test::random_similarity(rng_);
     const Shape a = build_primitive(sa).value();
     Shape b = build_primitive(sb).value();
     const BoundingBox ba = bounding_box(a), bb = bounding_box(b);
     std::uniform_real_distribution<double> u(-0.3, 0.3);
     const Vec3 shift = 0.5 * (ba.min + ba.max) - 0.5 * (bb.min + bb.max) +
-                       Vec3(u(rng), u(rng), u(rng)).cwiseProduct(ba.max - ba.min);
+                       Vec3(u(rng_), u(rng_), u(rng_)).cwiseProduct(ba.max - ba.min);
     b = b.moved(Location::translation(shift));
     const std::string tag = std::string(primitive_type_name(sa.type)) + "–" +
-                            primitive_type_name(sb.type) + " pair " + std::to_string(i);
+                            primitive_type_name(sb.type) + " pair " + std::to_string(index_++);
+    return {a, b, tag};
+  }
+  /// Pair `index` of the sequence (seed 7), for the regressions named after one.
+  static RandomPair at(int index) {
+    RandomPairs pairs;
+    for (int i = 0; i < index; ++i) pairs.next();
+    return pairs.next();
+  }
+
+ private:
+  std::mt19937_64 rng_{7};
+  int index_ = 0;
+};
+
+// Fuse, common and cut of a and b are valid, with V(A ∪ B) + V(A ∩ B) = V(A) + V(B) and
+// V(A − B) = V(A) − V(A ∩ B) to `relative` of the volumes.
+void expect_valid_operations(const Shape& a, const Shape& b, double relative, const std::string& tag) {
+  const Shape fused = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
+  const Shape common = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
+  const Shape cut = valid(boolean_operation(a, b, BooleanOp::Cut), tag + " cut");
+  if (fused.is_null() || common.is_null() || cut.is_null()) return;
+  const double va = volume(a), vb = volume(b);
+  EXPECT_NEAR(volume(fused) + volume(common), va + vb, relative * (va + vb)) << tag;
+  EXPECT_NEAR(volume(cut), va - volume(common), relative * va) << tag;
+}
+
+// A box corner poking out of a sphere, turned so that no box face is a latitude or meridian
+// of the sphere: its three sections are traced, and each pair ends on the box edge between
+// their faces, where the edge pierces the sphere. The chords cross that edge up to their
+// deviation (micrometres) apart; the ends were once left apart (open section loops, the
+// sphere unsplit, free edges). Then the seeded pairs that failed so: box–sphere (80) and a
+// box cutting a frustum's cap circle, where traced and closed-form sections meet (68).
+TEST(BooleanTraced, TracedSectionsEndWhereTheBoundaryEdgePiercesTheSurface) {
+  const Shape ball = make_sphere(1).value();
+  for (const double angle : {0.7, 1.9}) {
+    const Shape corner = make_box(0.8, 0.8, 0.8).value().moved(
+        Location::translation(Vec3(0.1, 0.05, 0.2)) * Location::rotation(Vec3::Zero(), Vec3(1, 2, 3).normalized(), angle));
+    expect_valid_operations(ball, corner, 1e-6, "box corner turned " + std::to_string(angle));
+  }
+  for (const int index : {68, 80}) {
+    const RandomPair pair = RandomPairs::at(index);
+    expect_valid_operations(pair.a, pair.b, 1e-6, pair.tag);
+  }
+}
+
+// A plane cutting off a cylinder's rim: the plane's piece inside the cylinder is a lens
+// bounded by an ellipse arc (side) and a chord (cap). Splitting the plane's face gives the
+// lens and the face with the lens reversed as its hole; the hole was once given to the lens
+// itself when its probe point (on the lens' outline) happened to test inside the lens, so the
+// face lost its hole. Whether it did depended on rounding: the seeded pair that failed so
+// (extrusion–cylinder 256) is the regression, the plain scene the configuration.
+TEST(BooleanDegenerate, LensCutOffAFaceIsAHoleOfTheRest) {
+  const Shape column = make_cylinder(1, 1).value();
+  // Box face on the plane x + z = 1.8, reaching past the lens on every side.
+  const Vec3 up = Vec3(-1, 0, 1).normalized();
+  const Shape wedge = make_box(4, 4, 4).value().moved(
+      Location::translation(0.9 * Vec3(1, 0, 1) + Vec3(0, -2, 0) - 2 * up) *
+      Location::rotation(Vec3::Zero(), Vec3::UnitY(), -std::numbers::pi / 4));
+  expect_valid_operations(column, wedge, 1e-9, "rim cut off");
+  const RandomPair pair = RandomPairs::at(256);
+  expect_valid_operations(pair.a, pair.b, 1e-6, pair.tag);
+}
+
+// A box whose face shaves a cylinder's rim, a fraction of a millimetre deep: the face's
+// chords of the two cap circles are shorter than the caps' sampled boundary polygons are
+// coarse, so their middles lay outside the polygons (between a side and its arc) and the
+// chords were dropped as outside the caps (free edges). Volumes in closed form (the circular
+// segment of depth d, to 1e-9 of the operands' volumes). Then the seeded pair that failed so (box–cylinder 458).
+TEST(BooleanDegenerate, PlaneShavingACylinderRim) {
+  const Shape column = make_cylinder(1, 1).value();
+  for (const double depth : {1e-3, 1e-4}) {
+    for (const double turn : {std::numbers::pi / 48, 0.3}) {
+      SCOPED_TRACE("depth " + std::to_string(depth) + " turn " + std::to_string(turn));
+      const Shape slab = make_box(2, 4, 3).value().moved(Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) *
+                                                         Location::translation(Vec3(1 - depth, -2, -1)));
+      const double segment = std::acos(1 - depth) - (1 - depth) * std::sqrt(2 * depth - depth * depth);
+      const std::tuple<BooleanOp, double> expected[] = {{BooleanOp::Common, segment},
+                                                        {BooleanOp::Fuse, std::numbers::pi + 24 - segment},
+                                                        {BooleanOp::Cut, std::numbers::pi - segment}};
+      for (const auto& [op, want] : expected) {
+        const Shape result = valid(boolean_operation(column, slab, op), boolean_op_name(op));
+        // Relative to the operands: the sliver's own volume is too small to be a scale.
+        if (!result.is_null()) {
+          EXPECT_NEAR(volume(result), want, 1e-9 * (std::numbers::pi + 24)) << boolean_op_name(op);
+        }
+      }
+    }
+  }
+  const RandomPair pair = RandomPairs::at(458);
+  expect_valid_operations(pair.a, pair.b, 1e-6, pair.tag);
+}
+
+// A box's vertical edge piercing a cylinder's cap just inside its rim, the box's faces running
+// inward across the disc: the cap's piece outside the box is bounded by an arc passing the
+// pierce point a fraction of a millimetre away. The checker sampled that arc coarsely, its
+// chords passed on the far side of the point, and it reported the valid face's boundary as
+// self-intersecting (box–cylinder pairs, and cone–sphere 270 and torus–cylinder 255 of the
+// random pairs).
+TEST(BooleanDegenerate, BoxEdgePiercingACapJustInsideItsRim) {
+  const Shape column = make_cylinder(1, 1).value();
+  for (const double depth : {2e-3, 5e-4}) {
+    for (const double at : {-std::numbers::pi / 2, -1.3}) {
+      const Vec3 corner = (1 - depth) * Vec3(std::cos(at), std::sin(at), 0) + Vec3(0, 0, -1);
+      const Shape box = make_box(3, 3, 3).value().moved(
+          Location::translation(corner) * Location::rotation(Vec3::Zero(), Vec3::UnitZ(), at + 3 * std::numbers::pi / 4));
+      expect_valid_operations(column, box, 1e-9, "depth " + std::to_string(depth) + " at " + std::to_string(at));
+    }
+  }
+}
+
+// A box across a torus ring where the ring's u-seam runs (the box's side planes cut the ring
+// in traced sections that cross the seam): valid in every operation, with V(A ∪ B) + V(A ∩ B)
+// = V(A) + V(B). Then the seeded pair (torus–extrusion 245) whose common's torus piece,
+// joined from both sides of the seam, still used the seam edge twice at one place of its
+// (u, v) plane (a slit the checker saw as crossing loops): such a seam bounds nothing and is
+// spliced out like the seam between two pieces.
+TEST(BooleanTraced, BoxAcrossATorusRingAtItsSeam) {
+  const Shape ring = make_torus(2, 0.5).value();
+  for (const double width : {0.5, 1.0}) {
+    for (const double turn : {0.0, -0.3}) {
+      const Shape box = make_box(2, 2 * width, 2).value().moved(
+          Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) * Location::translation(Vec3(1, -width, -0.3)));
+      expect_valid_operations(ring, box, 1e-6, "width " + std::to_string(width) + " turn " + std::to_string(turn));
+    }
+  }
+  const RandomPair pair = RandomPairs::at(245);
+  expect_valid_operations(pair.a, pair.b, 1e-6, pair.tag);
+}
+
+// A row of boxes with posts (the worker tests' job scene, 10 posts): post 7 is tangent to
+// the plane x = 6.4 of box 8's left face, and its base circle on the boxes' common top touches
+// box 8's top edge there. Near the tangent point the crossing finder returned a cluster of
+// crossings micrometres apart (an open cycle in the top face); within the tolerance they
+// are one contact point.
+TEST(BooleanDegenerate, PostTangentToTheNextBoxInARow) {
+  auto box = [](int i) {
+    const double s = 1.0 + (i % 7) * 0.1;
+    return make_box(s, s, 2.0).value().moved(Location::translation(Vec3(0.8 * i, 0, 0)));
+  };
+  auto post = [](int i) {
+    const double s = 1.0 + (i % 7) * 0.1;
+    return make_cylinder(0.3, 3.0).value().moved(Location::translation(Vec3(0.8 * i + s / 2, s / 2, 0)));
+  };
+  auto row = boolean_fold({box(6), box(7), post(6), post(7)}, BooleanOp::Fuse);
+  ASSERT_TRUE(row.ok()) << row.error().message;
+  expect_valid_operations(row.value(), box(8), 1e-9, "boxes 6, 7 and posts 6, 7 with box 8");
+  std::vector<Shape> all;
+  for (int i = 0; i < 10; ++i) {
+    all.push_back(box(i));
+    all.push_back(post(i));
+  }
+  const Shape fused = valid(boolean_fuse_all(all), "row of 10");
+  const Shape folded = valid(boolean_fold(all, BooleanOp::Fuse), "row of 10 folded");
+  ASSERT_FALSE(fused.is_null());
+  ASSERT_FALSE(folded.is_null());
+  EXPECT_EQ(solids(fused), 1u);
+  EXPECT_NEAR(volume(fused), volume(folded), 1e-9 * volume(fused));
+}
+
+// Random pairs of all seven primitive types in random similarity placements, overlapping:
+// every result is valid with V(A ∪ B) + V(A ∩ B) = V(A) + V(B), or the call returns a named
+// error; never a silently wrong solid. The share that succeeds is printed, and must stay at
+// least 99 %: 399 of 400 at CSGTILE_PROPERTY_SCALE=10 (the CI run), 40 of 40 at scale 1 (was
+// 259 of 400 before traced sections ended on their boundary edges' pierce points, lens holes
+// went to the right piece, the checker stopped taking an arc's chords for the arc and seams
+// used twice at one place were spliced out). The one left: sphere–revolution 53 (a traced
+// section across the sphere's seam leaves the seam a free edge).
+TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
+  RandomPairs pairs;
+  int succeeded = 0, named = 0;
+  const int kPairs = 40 * test::property_scale();
+  for (int i = 0; i < kPairs; ++i) {
+    const auto [a, b, tag] = pairs.next();
     auto fused = boolean_operation(a, b, BooleanOp::Fuse);
     auto common = boolean_operation(a, b, BooleanOp::Common);
     if (!fused.ok() || !common.ok()) {
@@ -342,6 +516,7 @@ TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
   }
   std::cout << "[traced pairs] " << succeeded << " of " << kPairs << " random pairs valid, " << named
             << " named errors\n";
+  EXPECT_GE(100 * succeeded, 99 * kPairs) << "fewer random pairs valid than before: a regression";
 }
 
 }  // namespace

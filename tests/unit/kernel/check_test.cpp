@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
+
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/primitives.h"
@@ -103,6 +105,35 @@ TEST(Check, CrossingLoopsAreASelfIntersection) {
   auto [w2, p2] = loop(0.5, 0.5);
   Shape face = ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()), {w1, w2}, {p1, p2}, 1e-7).value();
   EXPECT_TRUE(check_shape(face).has(CheckStatus::SelfIntersection));
+}
+
+// A disc (one circle edge) with a triangular hole whose corner comes within 2 mm of the
+// circle, midway between two of the checker's samples of it: the circle's chords pass on the
+// far side of the corner, the circle does not. Moved 2 mm past the circle, the corner makes
+// the loops cross. (A Boolean result with a box edge piercing a cap near its rim was once
+// reported as self-intersecting.)
+TEST(Check, LoopsNearAnArcAreCheckedAgainstTheArcNotItsChords) {
+  auto disc_with_hole = [](double corner_radius) {
+    const Shape start = ShapeFactory::vertex(Vec3(1, 0, 0), 1e-7).value();
+    const Shape rim = ShapeFactory::edge(std::make_shared<CircleCurve>(Frame(), 1.0), 0, 2 * std::numbers::pi,
+                                         start, start, 1e-7).value();
+    const double a = std::numbers::pi / 16;  // between the samples at 0 and π/8
+    const Vec3 c[3] = {{corner_radius * std::cos(a), corner_radius * std::sin(a), 0}, {0, -0.3, 0}, {0, 0.3, 0}};
+    std::vector<Shape> vs, es;
+    std::vector<Curve2dPtr> pcs;
+    for (const Vec3& p : c) vs.push_back(ShapeFactory::vertex(p, 1e-7).value());
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 o = c[i], d = c[(i + 1) % 3] - c[i];
+      es.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(o, d), 0, d.norm(), vs[i], vs[(i + 1) % 3], 1e-7).value());
+      pcs.push_back(std::make_shared<Line2d>(Vec2(o.x(), o.y()), Vec2(d.x(), d.y()) / d.norm()));
+    }
+    return ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()),
+                              {ShapeFactory::wire({rim}).value(), ShapeFactory::wire(es).value()},
+                              {{std::make_shared<Circle2d>(Vec2::Zero(), 1.0)}, pcs}, 1e-7)
+        .value();
+  };
+  EXPECT_FALSE(check_shape(disc_with_hole(0.998)).has(CheckStatus::SelfIntersection));
+  EXPECT_TRUE(check_shape(disc_with_hole(1.002)).has(CheckStatus::SelfIntersection));
 }
 
 TEST(Check, EulerPoincareAcceptsGenusOneAndRejectsTwoComponentsInOneShell) {
