@@ -62,6 +62,7 @@ Config from_document(const json& document) {
   read(document, "queue", "postgres_dsn", config.queue.postgres_dsn);
   read(document, "queue", "max_attempts", config.queue.max_attempts);
   read(document, "queue", "lease_seconds", config.queue.lease_seconds);
+  read(document, "queue", "grace_seconds", config.queue.grace_seconds);
   read(document, "queue", "postgres_sslmode", config.queue.postgres_sslmode);
   read(document, "queue", "postgres_sslrootcert", config.queue.postgres_sslrootcert);
   read_enum(document, "log", "level", kLevelNames, config.log.level);
@@ -172,6 +173,7 @@ std::string to_json(const Config& config) {
                   {"postgres_dsn", config.queue.postgres_dsn},
                   {"max_attempts", config.queue.max_attempts},
                   {"lease_seconds", config.queue.lease_seconds},
+                  {"grace_seconds", config.queue.grace_seconds},
                   {"postgres_sslmode", config.queue.postgres_sslmode},
                   {"postgres_sslrootcert", config.queue.postgres_sslrootcert}};
   out["log"] = {{"level", std::string(to_string(config.log.level))},

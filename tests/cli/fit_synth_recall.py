@@ -2,10 +2,12 @@
 """`csgtile fit` end to end: a small terrestrial scan of the gate from `csgtile synth`, fitted
 twice with the same seed (byte-identical primitives.json), then matched against the truth by
 tests/bench/fit_recall.py (type, radius ±2 cm, axis ±5°, position ±2 cm) with thresholds the
-current code meets. Also: a missing input and a config with an unknown key exit non-zero with
-a message naming the problem.
+current code meets; and the boxes (beams) matched within ±5 cm, so that the box assembly
+cannot lose beams unnoticed while their position is still short of the ±2 cm of the main
+match. Also: a missing input and a config with an unknown key exit non-zero with a message
+naming the problem.
 
-Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISION
+Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISION [MIN_BOXES_5CM]
 """
 import json
 import os
@@ -23,6 +25,7 @@ def run(*args, check=True):
 
 def main():
     bin_, work, recall, min_recall, min_precision = sys.argv[1:6]
+    min_boxes = int(sys.argv[6]) if len(sys.argv) > 6 else 0
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     las, truth = os.path.join(work, "gate.las"), os.path.join(work, "gate.json")
@@ -46,6 +49,12 @@ def main():
     print(p.stdout, p.stderr)
     if p.returncode != 0:
         sys.exit("recall below the threshold")
+    p = run(sys.executable, recall, "--truth", truth, "--fit", os.path.join(work, "fit0.json"),
+            "--las", las, "--position", "0.05")
+    boxes = json.loads(p.stdout)["by_type"].get("box", {}).get("matched", 0)
+    print("boxes matched within 5 cm:", boxes)
+    if boxes < min_boxes:
+        sys.exit("boxes matched within 5 cm: %d < %d" % (boxes, min_boxes))
 
     p = run(bin_, "fit", os.path.join(work, "missing.las"), "--out", os.path.join(work, "x.json"), check=False)
     if p.returncode == 0 or "missing.las" not in p.stderr:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 #include <thread>
 #include <nlohmann/json.hpp>
 
@@ -182,6 +183,59 @@ Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger&
   return failure;
 }
 
+namespace {
+/// What one job's runner hands back to the work loop.
+struct RunOutcome {
+  Failure failure;
+  std::string result;
+  StageTimings timings;
+};
+
+/// Runs `job` on a thread of its own, so that the work loop can wait for it with a deadline.
+/// The returned thread must be joined once the future is ready, or left to the process's end.
+std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
+                      const config::Config& config, JobQueue& queue, const Logger& log,
+                      std::future<RunOutcome>& outcome) {
+  // packaged_task carries an exception of the job to the loop's future.get(), where it
+  // surfaces as it did when jobs ran on the loop's thread.
+  std::packaged_task<RunOutcome()> task([job, run_dir, &config, &queue, &log] {
+    hold_stop_signals();  // delivered to the loop's threads, never interrupting the job's I/O
+    const LogJobScope log_scope(config.run.name, job.key, job.attempts);  // thread-local
+    RunOutcome out;
+    out.failure = job.kind == "build"
+                      ? run_build_job(job, run_dir, config, out.result, &out.timings)
+                      : city::run_city_job(job, run_dir, config, queue, log, out.result,
+                                           &out.timings);
+    return out;
+  });
+  outcome = task.get_future();
+  return std::thread(std::move(task));
+}
+
+/// Waits until `outcome` is ready, or — once a stop signal came — until the grace period
+/// measured from the signal, less a margin to release the job and exit, has passed. Returns
+/// whether the job ended.
+bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seconds grace) {
+  using namespace std::chrono_literals;
+  // A signal handler cannot wake a waiting thread, so the flag is looked at this often.
+  constexpr auto kPoll = 50ms;
+  // Room to release the job and exit: a second, or a quarter of a short grace period.
+  const std::chrono::milliseconds margin =
+      std::min<std::chrono::milliseconds>(1s, std::chrono::milliseconds(grace) / 4);
+  while (true) {
+    auto until = std::chrono::steady_clock::now() + kPoll;
+    if (const auto signalled = stop_requested_at()) {
+      const auto deadline = *signalled + grace - margin;
+      if (std::chrono::steady_clock::now() >= deadline) {
+        return outcome.wait_for(0s) == std::future_status::ready;
+      }
+      until = std::min(until, deadline);
+    }
+    if (outcome.wait_until(until) == std::future_status::ready) return true;
+  }
+}
+}  // namespace
+
 Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& log,
                    const WorkOptions& options, WorkSummary& work) {
   const std::filesystem::path run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
@@ -220,14 +274,34 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     const auto start = std::chrono::steady_clock::now();
     ops::metrics().job_claimed(job->attempts);
     const LogJobScope log_scope(config.run.name, job->key, job->attempts);  // run/job in logs
-    std::string result;
-    StageTimings timings;
     // The lease is renewed every third of its length while the job runs.
     LeaseHeartbeat heartbeat(queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
-    Failure job_failure = job->kind == "build"
-                              ? run_build_job(*job, run_dir, config, result, &timings)
-                              : city::run_city_job(*job, run_dir, config, queue, log, result, &timings);
+    std::future<RunOutcome> outcome;
+    std::thread runner = start_job(*job, run_dir, config, queue, log, outcome);
+    if (!wait_within_grace(outcome, std::chrono::seconds(config.queue.grace_seconds))) {
+      // Stopped, and the job does not fit the grace period: it goes back to the queue without
+      // using an attempt, and the process ends now, its job's thread with it. The outputs
+      // it may have begun are temporary files renamed only when complete, so none is partial.
+      heartbeat.stop();
+      Failure released_failure;
+      const bool released = queue.release(*job, released_failure);
+      if (released) {
+        log.info("job", "released at shutdown",
+                 {{"job", job->key}, {"grace_seconds", std::to_string(config.queue.grace_seconds)}});
+      } else {
+        // Lost already, or the queue is unreachable: the lease expires and another worker
+        // takes the job over (this attempt then counts).
+        log.error("job", "release at shutdown failed; the lease will expire",
+                  {{"job", job->key},
+                   {"reason", released_failure.ok() ? "lease lost" : released_failure.message}});
+      }
+      log.info("worker", "stopped by signal", {{"jobs", std::to_string(work.jobs)}});
+      exit_leaving_threads(0);
+    }
+    runner.join();
     heartbeat.stop();
+    const RunOutcome ran = outcome.get();
+    const Failure& job_failure = ran.failure;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
     if (heartbeat.lost()) {
@@ -237,7 +311,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       continue;
     }
     if (job_failure.ok()) {
-      const std::string record = with_timings(result, timings, seconds, worker_id, job->attempts);
+      const std::string record = with_timings(ran.result, ran.timings, seconds, worker_id, job->attempts);
       const bool completed = queue.complete(*job, record, failure);
       if (failure.ok()) {
         ops::metrics().job_finished(completed ? ops::JobOutcome::Done : ops::JobOutcome::LeaseLost,

@@ -1,9 +1,14 @@
 #include "stop_signal.h"
 
-#include <atomic>
 #include <pthread.h>
+#include <time.h>
 
+#include <atomic>
 #include <csignal>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
 
 namespace csgtile::worker {
 
@@ -13,9 +18,19 @@ namespace {
 // thread, the ops endpoint's threads read it (readiness), and only atomics are race-free there.
 std::atomic<int> g_stop{0};
 static_assert(std::atomic<int>::is_always_lock_free, "signal handlers need lock-free atomics");
+// CLOCK_MONOTONIC nanoseconds of the first signal (std::chrono::steady_clock's clock on Linux;
+// clock_gettime is async-signal-safe, steady_clock::now() is not promised to be).
+std::atomic<std::int64_t> g_stop_ns{0};
+static_assert(std::atomic<std::int64_t>::is_always_lock_free, "signal handlers need lock-free atomics");
 
 extern "C" void on_stop_signal(int signal) {
-  if (g_stop.load() != 0) std::signal(signal, SIG_DFL);  // asked twice: the next one is not caught
+  if (g_stop.load() != 0) {
+    std::signal(signal, SIG_DFL);  // asked twice: the next one is not caught
+  } else {
+    timespec now{};
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    g_stop_ns.store(static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec);
+  }
   g_stop.store(1);
 }
 
@@ -52,5 +67,20 @@ void release_stop_signals() {
 }
 
 bool stop_requested() { return g_stop.load() != 0; }
+
+std::optional<std::chrono::steady_clock::time_point> stop_requested_at() {
+  if (g_stop.load() == 0) return std::nullopt;
+  const std::int64_t ns = g_stop_ns.load();
+  // The handler stores the time before the flag; 0 only if the clock itself failed.
+  if (ns == 0) return std::chrono::steady_clock::now();
+  return std::chrono::steady_clock::time_point(std::chrono::nanoseconds(ns));
+}
+
+void exit_leaving_threads(int status) {
+  std::cout.flush();
+  std::cerr.flush();
+  std::fflush(nullptr);
+  std::_Exit(status);
+}
 
 }  // namespace csgtile::worker

@@ -1,7 +1,11 @@
 #pragma once
 // Graceful stop: SIGTERM (Kubernetes, systemd) and SIGINT (Ctrl-C) ask the worker to stop
-// claiming jobs; the job running then finishes and the process exits 0. The queue keeps
+// claiming jobs; the job running then finishes if it can within queue.grace_seconds of the
+// signal, else it is released to the queue, and the process exits 0. The queue keeps
 // everything else, so running the same command again resumes.
+
+#include <chrono>
+#include <optional>
 
 namespace csgtile::worker {
 
@@ -18,5 +22,17 @@ void install_stop_signals();
 
 /// Whether a stop was asked for since install_stop_signals().
 bool stop_requested();
+
+/// When the first stop signal came (steady clock), or nullopt before one: grace periods are
+/// measured from it, not from when the work loop noticed.
+std::optional<std::chrono::steady_clock::time_point> stop_requested_at();
+
+/// Ends the process at once with `status`: flushes stdout and stderr, then _Exit, running no
+/// destructor and no atexit handler. For a worker that released its job at the end of the
+/// grace period while the job's thread still runs: that thread can be neither joined (it may
+/// run for a long time) nor outlived by the queue, config and logger it uses, which unwinding
+/// would destroy under it. Safe for outputs: they are written to temporary files and renamed,
+/// so an abandoned job leaves no partial result (a stray temporary file at worst).
+[[noreturn]] void exit_leaving_threads(int status);
 
 }  // namespace csgtile::worker

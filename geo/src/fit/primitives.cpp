@@ -33,6 +33,7 @@ struct PlanePatch {
   Vec3 origin, n, u, v;
   double umin = 0, umax = 0, vmin = 0, vmax = 0;
   double coverage = 0.0;
+  double sagitta = 0.0;  // how far its points bow out of the plane across its width
   bool used = false;
 };
 
@@ -165,6 +166,24 @@ PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, 
   const double rect_cells = std::max(1.0, std::ceil((patch.umax - patch.umin) / cell)) *
                             std::max(1.0, std::ceil((patch.vmax - patch.vmin) / cell));
   patch.coverage = std::min(1.0, static_cast<double>(cells.size()) / rect_cells);
+  // A strip of a column that the RANSAC took for a plane bows across its width: fit the
+  // offset from the plane as a parabola of the across coordinate (c = α + β·b + γ·b²) and
+  // keep how far it bows over the half-width, γ·(w/2)².
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  const double mid = 0.5 * (patch.vmin + patch.vmax);
+  for (auto i : patch.members) {
+    const Vec3 d = points[i] - patch.origin;
+    const double b = d.dot(patch.v) - mid;
+    const Eigen::Vector3d row(1.0, b, b * b);
+    normal_matrix += row * row.transpose();
+    rhs += row * d.dot(patch.n);
+  }
+  if (patch.members.size() >= 6) {
+    const Eigen::Vector3d coef = normal_matrix.ldlt().solve(rhs);
+    const double half = 0.5 * (patch.vmax - patch.vmin);
+    if (std::isfinite(coef.z())) patch.sagitta = std::abs(coef.z()) * half * half;
+  }
   return patch;
 }
 
@@ -203,9 +222,10 @@ std::optional<Location> placement(const Eigen::Matrix3d& rotation, const Vec3& o
 
 class Builder {
  public:
-  Builder(std::span<const Vec3> points, const RansacResult& shapes, const PrimitiveOptions& o,
-          const RansacOptions& ransac, int region)
+  Builder(std::span<const Vec3> points, std::span<const Vec3> normals, const RansacResult& shapes,
+          const PrimitiveOptions& o, const RansacOptions& ransac, int region)
       : points_(points),
+        normals_(normals),
         shapes_(shapes),
         o_(o),
         ransac_(ransac),
@@ -218,12 +238,31 @@ class Builder {
   FittedPrimitives run();
 
  private:
+  // How far a box reaches behind (c0 < 0) or before (c1 > 0) its seed plane, and the extent
+  // across (v) of the opposite face when one was seen.
+  struct Depth {
+    double c0 = 0.0, c1 = 0.0;
+    double v0 = INFINITY, v1 = -INFINITY;
+  };
+  // Which axis of the seed's frame a point's normal follows.
+  enum class Facing : std::uint8_t { Normal, Across, Along, Other };
+  struct Framed {
+    double a = 0.0, b = 0.0, c = 0.0;  // along u, v, n of the seed
+    Facing facing = Facing::Other;
+  };
+  std::vector<Framed> framed_near(const PlanePatch& seed, double across, double cos_normal) const;
+  Depth box_depth(const PlanePatch& seed, double margin, double cos_normal) const;
+  std::pair<double, double> box_length(const PlanePatch& seed, double c0, double c1, double v0,
+                                       double v1, double tight, double cos_normal) const;
+  bool round_section(const std::vector<std::uint32_t>& members, const PlanePatch& seed,
+                     const std::array<double, 4>& section) const;
   void boxes();
   void curved(int index);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what);
 
   std::span<const Vec3> points_;
+  std::span<const Vec3> normals_;
   const RansacResult& shapes_;
   PrimitiveOptions o_;
   RansacOptions ransac_;
@@ -273,6 +312,262 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   out_.primitives.push_back(std::move(p));
 }
 
+// The unused points over the seed's rectangle (grown by `across` on its long edges) within
+// max_box_depth of it, in its frame, with the axis their normals follow.
+std::vector<Builder::Framed> Builder::framed_near(const PlanePatch& seed, double across,
+                                                  double cos_normal) const {
+  std::vector<Framed> near;
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (used_[i] || !points_[i].allFinite()) continue;
+    const Vec3 d = points_[i] - seed.origin;
+    Framed f;
+    f.a = d.dot(seed.u);
+    f.b = d.dot(seed.v);
+    f.c = d.dot(seed.n);
+    if (f.a < seed.umin || f.a > seed.umax || f.b < seed.vmin - across ||
+        f.b > seed.vmax + across || std::abs(f.c) > o_.max_box_depth) {
+      continue;
+    }
+    const Vec3& n = normals_.empty() ? Vec3::Zero() : normals_[i];
+    if (std::abs(n.dot(seed.n)) >= cos_normal) {
+      f.facing = Facing::Normal;
+    } else if (std::abs(n.dot(seed.v)) >= cos_normal) {
+      f.facing = Facing::Across;
+    } else if (std::abs(n.dot(seed.u)) >= cos_normal) {
+      f.facing = Facing::Along;
+    }
+    near.push_back(f);
+  }
+  return near;
+}
+
+// The depth of the box behind or before a seed face, from the region's points rather than
+// from detected planes: a beam's far side or underside is often too sparse (a few dozen
+// points at a grazing angle) or too merged with its neighbours' (one plane under a whole
+// grid of beams) to be a plane of its own, but its points still say where the box ends.
+// On each side of the seed, within the middle of its length (its ends may touch crossing
+// members):
+//  - the opposite face: the nearest depth at which points facing like the seed gather, spread
+//    over a good part of the length;
+//  - the bridging faces: points facing across the seed (normal along v) on its long edges,
+//    whose contiguous run of depths from the seed says how deep the box reaches.
+// An opposite face counts when the bridging faces span half the gap to it, or, when none is
+// seen, when it is no farther than twice the seed's width. The side with more evidence wins.
+Builder::Depth Builder::box_depth(const PlanePatch& seed, double margin, double cos_normal) const {
+  const auto near = framed_near(seed, margin, cos_normal);
+  double inner0 = seed.umin + margin, inner1 = seed.umax - margin;
+  if (inner1 - inner0 < 0.5 * (seed.umax - seed.umin)) {
+    inner0 = seed.umin + 0.25 * (seed.umax - seed.umin);
+    inner1 = seed.umax - 0.25 * (seed.umax - seed.umin);
+  }
+  const double width = seed.vmax - seed.vmin;
+  const double window = 2.0 * ransac_.epsilon;
+  constexpr std::size_t kMinFacePoints = 8;
+  Depth best;
+  std::size_t best_score = 0;
+  for (const double side : {-1.0, 1.0}) {
+    std::vector<double> bridge;
+    std::vector<std::pair<double, std::size_t>> parallel;  // depth, index into near
+    for (std::size_t k = 0; k < near.size(); ++k) {
+      const Framed& f = near[k];
+      const double d = side * f.c;
+      if (d <= 0.0 || f.a < inner0 || f.a > inner1) continue;
+      if (f.facing == Facing::Across &&
+          (std::abs(f.b - seed.vmin) <= margin || std::abs(f.b - seed.vmax) <= margin)) {
+        bridge.push_back(d);
+      } else if (f.facing == Facing::Normal && d > window) {
+        parallel.emplace_back(d, k);
+      }
+    }
+    // Contiguous run of bridging depths from the seed.
+    std::sort(bridge.begin(), bridge.end());
+    double reach = 0.0;
+    std::size_t bridged = 0;
+    for (double d : bridge) {
+      if (d > reach + 3.0 * cell_) break;
+      reach = std::max(reach, d);
+      ++bridged;
+    }
+    if (bridged < kMinFacePoints) {
+      reach = 0.0;
+      bridged = 0;
+    }
+    // The nearest opposite face: a window of depths holding enough points spread along the
+    // seed's length.
+    std::sort(parallel.begin(), parallel.end());
+    double opposite = 0.0, opposite_v0 = INFINITY, opposite_v1 = -INFINITY;
+    std::size_t opposite_count = 0;
+    for (std::size_t j = 0, e = 0; j < parallel.size(); ++j) {
+      e = std::max(e, j);
+      while (e + 1 < parallel.size() && parallel[e + 1].first <= parallel[j].first + window) ++e;
+      const std::size_t count = e - j + 1;
+      if (count < kMinFacePoints) continue;
+      double a0 = INFINITY, a1 = -INFINITY, sum = 0.0, b0 = INFINITY, b1 = -INFINITY;
+      for (std::size_t k = j; k <= e; ++k) {
+        const Framed& f = near[parallel[k].second];
+        a0 = std::min(a0, f.a);
+        a1 = std::max(a1, f.a);
+        b0 = std::min(b0, f.b);
+        b1 = std::max(b1, f.b);
+        sum += parallel[k].first;
+      }
+      if (a1 - a0 < 0.3 * (inner1 - inner0)) continue;
+      opposite = sum / static_cast<double>(count);
+      opposite_count = count;
+      opposite_v0 = b0;
+      opposite_v1 = b1;
+      break;
+    }
+    double depth = reach;
+    std::size_t score = bridged;
+    bool has_opposite = false;
+    if (opposite_count > 0 && opposite >= o_.min_box_thickness) {
+      const bool supported =
+          bridged > 0 ? reach >= 0.5 * opposite - margin : opposite <= 2.0 * width;
+      if (supported) {
+        depth = opposite;
+        score += opposite_count;
+        has_opposite = true;
+      }
+    }
+    if (depth < o_.min_box_thickness || score <= best_score) continue;
+    best_score = score;
+    best = Depth{};
+    if (side < 0.0) {
+      best.c0 = -depth;
+    } else {
+      best.c1 = depth;
+    }
+    if (has_opposite) {
+      best.v0 = opposite_v0;
+      best.v1 = opposite_v1;
+    }
+  }
+  return best;
+}
+
+// The box's extent along the seed's length: from the seed's rectangle, grown at each end over
+// the points of the box's faces within its cross-section (long faces, and the edges between
+// them where normals straddle), so that a face shortened by a shadow or split by the RANSAC
+// is completed by the other faces' points. Points facing along the length (normal more than
+// 30° out of the section's plane) end it: inside the section, an end face or a member the
+// box runs into; just beside it (within the noise margin), a crossing member or a column at
+// a junction, after which only half the usual gap is crossed.
+std::pair<double, double> Builder::box_length(const PlanePatch& seed, double c0, double c1,
+                                              double v0, double v1, double tight,
+                                              double cos_normal) const {
+  const double length = seed.umax - seed.umin;
+  constexpr double kAlong = 0.5;  // |normal · u| of a point facing along the length
+  enum class Seen : std::uint8_t { Face, End, Beside };
+  std::vector<std::pair<double, Seen>> beyond_low, beyond_high;  // distance past the seed
+  std::size_t within = 0;  // face points along the seed's own length
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (used_[i] || !points_[i].allFinite() || normals_.empty()) continue;
+    const Vec3 d = points_[i] - seed.origin;
+    const double a = d.dot(seed.u), b = d.dot(seed.v), c = d.dot(seed.n);
+    if (a < seed.umin - 3.0 * length || a > seed.umax + 3.0 * length) continue;
+    if (b < v0 - tight || b > v1 + tight || c < c0 - tight || c > c1 + tight) continue;
+    const Vec3& n = normals_[i];
+    if (n.squaredNorm() < 0.5) continue;
+    const bool along = std::abs(n.dot(seed.u)) >= kAlong;
+    const bool near_c = std::abs(c - c0) <= tight || std::abs(c - c1) <= tight;
+    const bool near_b = std::abs(b - v0) <= tight || std::abs(b - v1) <= tight;
+    const bool on_face = (near_c && b >= v0 && b <= v1 && std::abs(n.dot(seed.n)) >= cos_normal) ||
+                         (near_b && c >= c0 && c <= c1 && std::abs(n.dot(seed.v)) >= cos_normal) ||
+                         (near_b && near_c && !along);
+    Seen seen = Seen::Face;
+    if (along) {
+      const bool inside = b >= v0 + tight && b <= v1 - tight && c >= c0 + tight && c <= c1 - tight;
+      seen = inside ? Seen::End : Seen::Beside;
+    } else if (!on_face) {
+      continue;  // near the box but on none of its faces: says nothing
+    }
+    if (a >= seed.umin && a <= seed.umax) {
+      within += seen == Seen::Face ? 1 : 0;
+    } else if (a < seed.umin) {
+      beyond_low.emplace_back(seed.umin - a, seen);
+    } else {
+      beyond_high.emplace_back(a - seed.umax, seen);
+    }
+  }
+  // Face points follow each other within a few times their mean distance along the seed
+  // (its own density: a sparse beam is not the dense column beside it).
+  const double mean_gap = length / static_cast<double>(std::max<std::size_t>(within, 1));
+  const double max_gap = std::max(8.0 * mean_gap, 2.0 * ransac_.epsilon);
+  auto grow = [&](std::vector<std::pair<double, Seen>>& beyond) {
+    std::sort(beyond.begin(), beyond.end());
+    constexpr int kEnding = 3;  // a few straddling normals mix in with a face's last points
+    double reach = 0.0;
+    int ends = 0;
+    bool beside = false;  // something beside the section faced along since the last face point
+    for (const auto& [distance, seen] : beyond) {
+      if (seen == Seen::End) {
+        if (++ends >= kEnding) break;
+        beside = true;
+        continue;
+      }
+      if (seen == Seen::Beside) {
+        beside = true;
+        continue;
+      }
+      if (distance - reach > (beside ? 0.5 * max_gap : max_gap)) break;
+      reach = distance;
+      ends = 0;
+      beside = false;
+    }
+    return reach;
+  };
+  const double lo = grow(beyond_low), hi = grow(beyond_high);
+  return {seed.umin - lo, seed.umax + hi};
+}
+
+// Model selection between a box and a cylinder along its length: the members' distances to
+// the box's section (a rectangle, v0..v1 × c0..c1 in the seed's frame) against their
+// distances to the circle fitted to them in that plane (algebraic least squares). A strip of
+// a column that the RANSAC took for a plane, with the column's curve beside it as "depth",
+// is round: the circle fits it clearly better than the rectangle, and the box is refused so
+// that the points stay for the cylinder.
+bool Builder::round_section(const std::vector<std::uint32_t>& members, const PlanePatch& seed,
+                            const std::array<double, 4>& section) const {
+  if (members.size() < 8) return false;
+  const auto [v0, v1, c0, c1] = section;
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  std::vector<Vec2> flat;
+  flat.reserve(members.size());
+  double box_sum = 0.0;
+  const Vec2 mid(0.5 * (v0 + v1), 0.5 * (c0 + c1));
+  for (auto i : members) {
+    const Vec3 d = points_[i] - seed.origin;
+    const Vec2 q(d.dot(seed.v) - mid.x(), d.dot(seed.n) - mid.y());
+    flat.push_back(q);
+    const double hx = 0.5 * (v1 - v0), hy = 0.5 * (c1 - c0);
+    const double ox = std::abs(q.x()) - hx, oy = std::abs(q.y()) - hy;
+    const double e = (ox > 0.0 || oy > 0.0) ? std::hypot(std::max(ox, 0.0), std::max(oy, 0.0))
+                                            : std::min(-ox, -oy);
+    box_sum += e * e;
+    const Eigen::Vector3d row(q.x(), q.y(), 1.0);
+    normal_matrix += row * row.transpose();
+    rhs -= row * q.squaredNorm();
+  }
+  const Eigen::Vector3d abc = normal_matrix.ldlt().solve(rhs);
+  const Vec2 centre(-0.5 * abc.x(), -0.5 * abc.y());
+  const double r2 = centre.squaredNorm() - abc.z();
+  if (!(r2 > 0.0) || !std::isfinite(r2)) return false;
+  const double radius = std::sqrt(r2);
+  if (radius > ransac_.max_radius) return false;
+  double circle_sum = 0.0;
+  for (const auto& q : flat) {
+    const double e = (q - centre).norm() - radius;
+    circle_sum += e * e;
+  }
+  // Clearly better: the circle's error well under the rectangle's and well within epsilon (a
+  // beam seen on two sides is an L that a circle follows only loosely).
+  const double n = static_cast<double>(members.size());
+  const double circle_rms = std::sqrt(circle_sum / n), box_rms = std::sqrt(box_sum / n);
+  return circle_rms < 0.75 * box_rms && circle_rms <= 0.6 * ransac_.epsilon;
+}
+
 void Builder::boxes() {
   std::vector<int> order;
   for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {
@@ -291,111 +586,20 @@ void Builder::boxes() {
            patches_[static_cast<std::size_t>(b)].members.size();
   });
   const double margin = std::max(2.0 * ransac_.epsilon, cell_);
+  // Points belong to a box face within this distance of it (noise, not connectivity).
+  const double tight = 2.0 * ransac_.epsilon;
+  const double cos_normal = std::cos(ransac_.normal_deviation_deg * std::numbers::pi / 180.0);
   for (int seed_index : order) {
     PlanePatch& seed = patches_[static_cast<std::size_t>(seed_index)];
     if (seed.used || seed.coverage < o_.min_seed_coverage) continue;
-    auto local = [&](const Vec3& p) {
-      const Vec3 d = p - seed.origin;
-      return Vec3(d.dot(seed.u), d.dot(seed.v), d.dot(seed.n));
-    };
-    auto inside_rect = [&](const Vec3& c, double m) {
-      return c.x() >= seed.umin - m && c.x() <= seed.umax + m && c.y() >= seed.vmin - m &&
-             c.y() <= seed.vmax + m;
-    };
-    // Points of the faces sharing the seed's long edge (normal along v, lying along u):
-    // within the long edge (shrunk, so that crossing boxes at its ends stay out), anywhere
-    // across the short side (grown: those faces lie on its boundary). Their depths (c) say
-    // how far the box reaches behind or before the seed.
-    std::vector<double> bridge;
-    for (const auto& other : patches_) {
-      if (other.used || &other == &seed) continue;
-      if (std::abs(other.n.dot(seed.v)) < cos_tol_) continue;
-      double a0 = INFINITY, a1 = -INFINITY;
-      for (auto i : other.members) {
-        const double a = (points_[i] - seed.origin).dot(seed.u);
-        a0 = std::min(a0, a);
-        a1 = std::max(a1, a);
-      }
-      const double overlap = std::min(a1, seed.umax) - std::max(a0, seed.umin);
-      if (overlap < 0.5 * std::min(a1 - a0, seed.umax - seed.umin)) continue;
-      for (auto i : other.members) {
-        const Vec3 c = local(points_[i]);
-        if (c.x() < seed.umin + margin || c.x() > seed.umax - margin ||
-            c.y() < seed.vmin - margin || c.y() > seed.vmax + margin ||
-            std::abs(c.z()) > o_.max_box_depth) {
-          continue;
-        }
-        bridge.push_back(c.z());
-      }
-    }
-    // Share of the depth interval [0, depth] that the bridging faces' points cover.
-    auto bridged = [&](double depth) {
-      const int bins = std::max(1, static_cast<int>(std::ceil(std::abs(depth) / cell_)));
-      std::vector<char> hit(static_cast<std::size_t>(bins), 0);
-      for (double c : bridge) {
-        if (c * depth < 0.0 || std::abs(c) > std::abs(depth)) continue;
-        const int k = std::min(bins - 1, static_cast<int>(std::abs(c) / cell_));
-        hit[static_cast<std::size_t>(k)] = 1;
-      }
-      return static_cast<double>(std::count(hit.begin(), hit.end(), 1)) / bins;
-    };
-    // The nearest parallel plane overlapping the seed's rectangle faces it across the box,
-    // when faces along the long edge bridge the gap (or none is seen and the gap is small).
-    int opposite = -1;
-    double opposite_depth = INFINITY;
-    for (std::size_t k = 0; k < patches_.size(); ++k) {
-      const PlanePatch& other = patches_[k];
-      if (static_cast<int>(k) == seed_index || other.used) continue;
-      if (std::abs(other.n.dot(seed.n)) < cos_tol_) continue;
-      const auto& inl = other.members;
-      std::size_t over = 0;
-      double depth = 0.0;
-      for (auto i : inl) {
-        const Vec3 c = local(points_[i]);
-        depth += c.z();
-        over += inside_rect(c, 0.0) ? 1 : 0;
-      }
-      depth /= static_cast<double>(inl.size());
-      if (std::abs(depth) < o_.min_box_thickness || std::abs(depth) > o_.max_box_depth) continue;
-      if (over * 2 < inl.size()) continue;
-      if (std::abs(depth) >= std::abs(opposite_depth)) continue;
-      const bool supported =
-          bridge.empty() ? std::abs(depth) <= 2.0 * (seed.vmax - seed.vmin) : bridged(depth) >= 0.5;
-      if (!supported) continue;
-      opposite_depth = depth;
-      opposite = static_cast<int>(k);
-    }
-    double c0 = 0.0, c1 = 0.0;
-    if (opposite >= 0) {
-      c0 = std::min(0.0, opposite_depth);
-      c1 = std::max(0.0, opposite_depth);
-    } else {
-      // No opposite face: the depth is the contiguous run of the bridging faces' points, on
-      // the side holding more of them.
-      std::vector<double> below, above;
-      for (double c : bridge) (c < 0.0 ? below : above).push_back(std::abs(c));
-      auto run = [&](std::vector<double>& depths) {
-        std::sort(depths.begin(), depths.end());
-        double reach = 0.0;
-        std::size_t count = 0;
-        for (double d : depths) {
-          if (d > reach + 3.0 * cell_) break;
-          reach = std::max(reach, d);
-          ++count;
-        }
-        return std::pair<double, std::size_t>(reach, count);
-      };
-      const auto [reach_below, n_below] = run(below);
-      const auto [reach_above, n_above] = run(above);
-      if (n_below >= n_above) {
-        c0 = -reach_below;
-      } else {
-        c1 = reach_above;
-      }
-    }
+    if (seed.sagitta > 0.5 * ransac_.epsilon) continue;
+    const Depth depth = box_depth(seed, margin, cos_normal);
+    double c0 = depth.c0, c1 = depth.c1;
     if (c1 - c0 < o_.min_box_thickness && o_.ground != nullptr &&
-        std::abs(seed.n.z()) >= cos_tol_) {
-      // A roof seen from above: down to the terrain under it.
+        std::abs(seed.n.z()) >= cos_tol_ &&
+        std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width) {
+      // A roof seen from above: down to the terrain under it. Only for roofs wide enough to
+      // be a building: a beam's underside seen from below has no depth of its own either.
       const Vec3 centre = seed.origin + 0.5 * (seed.umin + seed.umax) * seed.u +
                           0.5 * (seed.vmin + seed.vmax) * seed.v;
       const double radius =
@@ -408,37 +612,41 @@ void Builder::boxes() {
       }
     }
     if (c1 - c0 < o_.min_box_thickness) continue;
-    // Extents: the seed's rectangle, widened by the opposite plane's.
-    double u0 = seed.umin, u1 = seed.umax, v0 = seed.vmin, v1 = seed.vmax;
-    if (opposite >= 0) {
-      for (auto i : patches_[static_cast<std::size_t>(opposite)].members) {
-        const Vec3 c = local(points_[i]);
-        if (!inside_rect(c, margin)) continue;
-        u0 = std::min(u0, c.x());
-        u1 = std::max(u1, c.x());
-        v0 = std::min(v0, c.y());
-        v1 = std::max(v1, c.y());
-      }
-    }
-    // Members: every plane point inside the box (grown by the margin); planes mostly inside
-    // are used up.
+    // Extents: the seed's rectangle, widened across by the opposite face's points and along
+    // its length over the points of the box's long faces (a face partly shadowed by an
+    // obstacle in front of it, or cut by a column, is completed by the others).
+    double v0 = std::min(seed.vmin, depth.v0), v1 = std::max(seed.vmax, depth.v1);
+    const auto [u0, u1] = box_length(seed, c0, c1, v0, v1, tight, cos_normal);
+    auto local = [&](const Vec3& p) {
+      const Vec3 d = p - seed.origin;
+      return Vec3(d.dot(seed.u), d.dot(seed.v), d.dot(seed.n));
+    };
+    // Members: every unused point inside the box (grown by the noise margin), whatever
+    // surface the RANSAC gave it (edges of a beam are sometimes thin cylinders); planes
+    // mostly inside are used up.
     std::vector<std::uint32_t> members;
-    for (auto& other : patches_) {
-      if (other.used) continue;
-      const auto& inl = other.members;
-      std::size_t in = 0;
-      for (auto i : inl) {
-        if (used_[i]) continue;
-        const Vec3 c = local(points_[i]);
-        if (c.x() >= u0 - margin && c.x() <= u1 + margin && c.y() >= v0 - margin &&
-            c.y() <= v1 + margin && c.z() >= c0 - margin && c.z() <= c1 + margin) {
-          members.push_back(i);
-          ++in;
-        }
+    auto inside_box = [&](const Vec3& c) {
+      return c.x() >= u0 - tight && c.x() <= u1 + tight && c.y() >= v0 - tight &&
+             c.y() <= v1 + tight && c.z() >= c0 - tight && c.z() <= c1 + tight;
+    };
+    for (std::uint32_t i = 0; i < points_.size(); ++i) {
+      if (!used_[i] && points_[i].allFinite() && inside_box(local(points_[i]))) {
+        members.push_back(i);
       }
-      if (in * 10 >= inl.size() * 8) other.used = true;
     }
     seed.used = true;
+    if (round_section(members, seed, {v0, v1, c0, c1})) {
+      out_.rejected.push_back({"box from plane " + std::to_string(seed.shape),
+                               "a cylinder along its length fits its points better",
+                               static_cast<long long>(members.size())});
+      continue;
+    }
+    for (auto& other : patches_) {
+      if (other.used) continue;
+      std::size_t in = 0;
+      for (auto i : other.members) in += inside_box(local(points_[i])) ? 1 : 0;
+      if (in * 10 >= other.members.size() * 8) other.used = true;
+    }
     std::sort(members.begin(), members.end());
     const Eigen::Matrix3d rot = frame(seed.u, seed.v);
     const Vec3 corner = seed.origin + u0 * rot.col(0) + v0 * rot.col(1) + c0 * rot.col(2);
@@ -461,7 +669,9 @@ void Builder::boxes() {
     out_.rejected.push_back({"plane " + std::to_string(patch.shape),
                              patch.coverage < o_.min_seed_coverage
                                  ? "no box: points cover too little of its rectangle"
-                                 : "no box: no parallel or orthogonal plane gives it a depth",
+                             : patch.sagitta > 0.5 * ransac_.epsilon
+                                 ? "no box: its points bow across it (a strip of a curved surface)"
+                                 : "no box: no face of a box behind or before it is seen",
                              left});
   }
 }
@@ -600,11 +810,10 @@ double GroundGrid::lowest_near(double x, double y, double radius) const {
   return best;
 }
 
-FittedPrimitives primitives_from_shapes(std::span<const Vec3> points,
-                                        std::span<const Vec3> /*normals*/,
+FittedPrimitives primitives_from_shapes(std::span<const Vec3> points, std::span<const Vec3> normals,
                                         const RansacResult& shapes, const PrimitiveOptions& options,
                                         const RansacOptions& ransac, int region) {
-  Builder builder(points, shapes, options, ransac, region);
+  Builder builder(points, normals, shapes, options, ransac, region);
   return builder.run();
 }
 

@@ -54,7 +54,7 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   Config expected;
   expected.run = {"demo", {"scenes/block_a.json", "scenes/block_b.json"}, "out/demo", 42, 4};
   expected.kernel = {1.0e-7, 0.005};
-  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120,
+  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120, 20,
                     "verify-full", "/etc/ssl/certs/csgtile-db-ca.pem"};
   expected.log = {LogLevel::Debug, LogFormat::Json};
   expected.metrics = {"127.0.0.1:9464"};
@@ -521,7 +521,8 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
             R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
             R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
-            R"("publish":{"url":""},)" R"("queue":{"backend":"sqlite","lease_seconds":60,"max_attempts":5,)"
+            R"("publish":{"url":""},)"
+            R"("queue":{"backend":"sqlite","grace_seconds":25,"lease_seconds":60,"max_attempts":5,)"
             R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
             R"("sqlite_path":""},)"
             R"("run":{"inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");

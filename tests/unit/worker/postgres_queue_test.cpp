@@ -200,8 +200,9 @@ TEST_F(PostgresQueueTest, ConnectionDroppedMidJobIsARetryableIoError) {
 
 TEST_F(PostgresQueueTest, SchemaIsMigratedOnceAndItsVersionRecorded) {
   for (int i = 0; i < 3; ++i) open();
-  EXPECT_EQ(backend_.query("SELECT string_agg(version::text, ',') FROM csgtile_schema_version"),
-            "1");
+  EXPECT_EQ(backend_.query("SELECT string_agg(version::text, ',' ORDER BY version) "
+                           "FROM csgtile_schema_version"),
+            "1,2");
 
   // Workers starting together on an empty database: the advisory lock serialises them.
   const std::string database = another_database();
@@ -233,11 +234,66 @@ TEST_F(PostgresQueueTest, FailedMigrationLeavesNothingBehind) {
 
 TEST_F(PostgresQueueTest, NewerSchemaIsRefused) {
   open();
-  backend_.query("INSERT INTO csgtile_schema_version (version) VALUES (2)");
+  backend_.query("INSERT INTO csgtile_schema_version (version) VALUES (3)");
   Failure f;
   EXPECT_FALSE(backend_.open({}, f));
   EXPECT_EQ(f.code, ErrorCode::Unsupported);
-  EXPECT_NE(f.message.find("schema is version 2"), std::string::npos) << f.message;
+  EXPECT_NE(f.message.find("schema is version 3"), std::string::npos) << f.message;
+}
+
+// A database of schema version 1 (before priorities, as csgtile made it then, with jobs in
+// it) is migrated by the workers that open it, together: priority column and claim index
+// added, version 2 recorded, the jobs kept.
+TEST_F(PostgresQueueTest, AVersionOneDatabaseIsMigrated) {
+  const char* const version_one[] = {
+      "CREATE TABLE csgtile_schema_version ("
+      "  version integer PRIMARY KEY, applied_at timestamptz NOT NULL DEFAULT now())",
+      "INSERT INTO csgtile_schema_version (version) VALUES (1)",
+      "CREATE TABLE csgtile_jobs ("
+      "  id bigint GENERATED ALWAYS AS IDENTITY PRIMARY KEY, key text NOT NULL UNIQUE,"
+      "  kind text NOT NULL, payload text NOT NULL, state text NOT NULL DEFAULT 'queued'"
+      "  CHECK (state IN ('queued','running','done','retry','dead')),"
+      "  attempts integer NOT NULL DEFAULT 0, run_after timestamptz NOT NULL DEFAULT '-infinity',"
+      "  lease_token text, lease_expires timestamptz, worker text, last_error text, result text,"
+      "  created_at timestamptz NOT NULL DEFAULT now(),"
+      "  updated_at timestamptz NOT NULL DEFAULT now())",
+      "CREATE INDEX csgtile_jobs_runnable ON csgtile_jobs (state, run_after, id)",
+      "INSERT INTO csgtile_jobs (key, kind, payload, state, result)"
+      "  VALUES ('old-done', 'build', '{}', 'done', '{\"old\":true}')",
+      "INSERT INTO csgtile_jobs (key, kind, payload) VALUES ('old-queued', 'build', '{}')"};
+  for (const char* statement : version_one) ASSERT_EQ(backend_.query(statement), "<no row>");
+
+  std::vector<std::thread> starters;
+  std::vector<Failure> failures(4);
+  for (auto& failure : failures) {
+    starters.emplace_back([&] { auto q = backend_.open({}, failure); });
+  }
+  for (auto& starter : starters) starter.join();
+  for (const Failure& failure : failures) EXPECT_TRUE(failure.ok()) << failure.message;
+  EXPECT_EQ(backend_.query("SELECT string_agg(version::text, ',' ORDER BY version) "
+                           "FROM csgtile_schema_version"),
+            "1,2");
+  EXPECT_EQ(backend_.query("SELECT string_agg(key || '=' || priority, ',' ORDER BY id) "
+                           "FROM csgtile_jobs"),
+            "old-done=0,old-queued=0");
+  EXPECT_EQ(backend_.query("SELECT to_regclass('csgtile_jobs_claim') IS NOT NULL"), "t");
+  EXPECT_EQ(backend_.query("SELECT to_regclass('csgtile_jobs_runnable') IS NULL"), "t");
+
+  test::expect_old_jobs_kept_at_priority_zero(*open());
+}
+
+// not_before is timed by the server's clock: the stored runnable time is the server's now()
+// plus the delay asked for.
+TEST_F(PostgresQueueTest, NotBeforeIsServerTime) {
+  auto q = open();
+  Failure f;
+  q->enqueue("later", "build", "{}", f,
+             test::at_priority(0, std::chrono::system_clock::now() + std::chrono::minutes(10)));
+  ASSERT_TRUE(f.ok()) << f.message;
+  const std::string minutes = backend_.query(
+      "SELECT round(extract(epoch FROM run_after - now()) / 60) FROM csgtile_jobs");
+  EXPECT_EQ(minutes, "10");
+  EXPECT_FALSE(q->claim("w", f));
 }
 
 TEST_F(PostgresQueueTest, PasswordComesFromOptionsOrTheEnvironmentAndIsNeverShown) {

@@ -7,8 +7,10 @@
 #include <libpq-fe.h>
 #include <sqlite3.h>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "csgtile/worker/queue.h"
@@ -22,6 +24,30 @@ struct BackendStatus {
   enum Kind { Ready, Skip, Fail } kind = Ready;
   std::string message;
 };
+
+/// Enqueue options of a job at `priority`, not claimable before `not_before` when given.
+inline worker::EnqueueOptions at_priority(
+    int priority, std::optional<std::chrono::system_clock::time_point> not_before = {}) {
+  worker::EnqueueOptions options;
+  options.priority = priority;
+  options.not_before = not_before;
+  return options;
+}
+
+/// After a migration from version 1 of a store holding a done job ("old-done", result
+/// {"old":true}) and a queued one ("old-queued"): the old jobs are kept, at priority 0, so a
+/// new job at priority 2 is claimed first.
+inline void expect_old_jobs_kept_at_priority_zero(worker::JobQueue& queue) {
+  worker::Failure f;
+  EXPECT_TRUE(queue.enqueue("new-urgent", "build", "{}", f, at_priority(2)));
+  const auto urgent = queue.claim("w", f);
+  const auto old = queue.claim("w", f);
+  ASSERT_TRUE(urgent && old) << f.message;
+  EXPECT_EQ(urgent->key, "new-urgent");
+  EXPECT_EQ(old->key, "old-queued");
+  EXPECT_EQ(queue.results(f).at(0).second, "{\"old\":true}");
+  EXPECT_TRUE(f.ok()) << f.message;
+}
 
 /// A unique name for this process's next store: "<prefix><n>".
 inline std::string next_store_name(const std::string& prefix) {

@@ -324,5 +324,143 @@ TYPED_TEST(JobQueueTest, SeededDrawsAreTheSameOnEveryBackend) {
   EXPECT_TRUE(f.ok()) << f.message;
 }
 
+// Claim order: priority (higher first), then runnable time, then enqueue order.
+TYPED_TEST(JobQueueTest, HigherPriorityFirstThenOldest) {
+  auto q = this->open();
+  Failure f;
+  q->enqueue("low", "build", "{}", f);  // priority 0: the default
+  q->enqueue("high", "build", "{}", f, test::at_priority(5));
+  q->enqueue("negative", "build", "{}", f, test::at_priority(-3));
+  q->enqueue("mid", "build", "{}", f, test::at_priority(1));
+  q->enqueue("high-later", "build", "{}", f, test::at_priority(5));
+  EXPECT_FALSE(q->enqueue("low", "build", "{}", f, test::at_priority(100)));  // still a no-op
+  std::vector<std::string> order;
+  while (auto job = q->claim("w", f)) order.push_back(job->key);
+  EXPECT_EQ(order, (std::vector<std::string>{"high", "high-later", "mid", "low", "negative"}));
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+// not_before: the job is not claimable before it, whatever its priority; once it is, it
+// ranks by that time among jobs of its priority.
+TYPED_TEST(JobQueueTest, NotBeforeIsRespected) {
+  // Windows wide enough for a loaded machine: "later" becomes runnable 2 s after the enqueue,
+  // "urgent-later" (higher priority) only in an hour.
+  auto q = this->open();
+  Failure f;
+  const auto now = std::chrono::system_clock::now();
+  q->enqueue("urgent-later", "build", "{}", f, test::at_priority(10, now + std::chrono::hours(1)));
+  q->enqueue("past", "build", "{}", f, test::at_priority(0, now - std::chrono::hours(1)));
+  q->enqueue("later", "build", "{}", f, test::at_priority(0, now + std::chrono::seconds(2)));
+  auto first = q->claim("w", f);
+  ASSERT_TRUE(first) << f.message;
+  EXPECT_EQ(first->key, "past");  // a time gone by is runnable now
+  if (std::chrono::system_clock::now() < now + std::chrono::milliseconds(1500)) {
+    EXPECT_FALSE(q->claim("w", f));  // "later" is not due yet
+  }
+  EXPECT_EQ(q->counts(f).queued, 2);
+  std::optional<Job> second;
+  for (int wait = 0; wait < 100 && !second && f.ok(); ++wait) {  // up to 10 s
+    second = q->claim("w", f);
+    if (!second) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(second) << f.message;
+  EXPECT_EQ(second->key, "later");
+  EXPECT_GE(std::chrono::system_clock::now(), now + std::chrono::seconds(2));
+  EXPECT_FALSE(q->claim("w", f));  // the urgent job is an hour away
+  EXPECT_EQ(q->counts(f).queued, 1);
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+// A released job is queued again at once with its priority; the attempt it had does not
+// count (with one attempt allowed, it still completes); only the lease holder can release.
+TYPED_TEST(JobQueueTest, ReleasePutsTheJobBackWithoutUsingAnAttempt) {
+  QueuePolicy policy;
+  policy.max_attempts = 1;
+  auto q = this->open(policy);
+  Failure f;
+  q->enqueue("other", "build", "{}", f);
+  q->enqueue("urgent", "build", "{}", f, test::at_priority(3));
+  const auto job = q->claim("w1", f);
+  ASSERT_TRUE(job) << f.message;
+  EXPECT_EQ(job->key, "urgent");
+  EXPECT_EQ(job->attempts, 1);
+  Job stale = *job;
+  stale.lease_token = "not-the-token";
+  EXPECT_FALSE(q->release(stale, f));  // fenced
+  EXPECT_EQ(q->counts(f).running, 1);
+  EXPECT_TRUE(q->release(*job, f));
+  EXPECT_FALSE(q->release(*job, f));  // no longer running
+  const QueueCounts counts = q->counts(f);
+  EXPECT_EQ(counts.queued, 2);
+  EXPECT_EQ(counts.running, 0);
+  EXPECT_FALSE(q->renew(*job, f));  // the released lease is gone: the old holder is fenced
+  EXPECT_FALSE(q->complete(*job, "{}", f));
+  const auto again = q->claim("w2", f);
+  ASSERT_TRUE(again) << f.message;
+  EXPECT_EQ(again->key, "urgent");  // still first: its priority stayed
+  EXPECT_EQ(again->attempts, 1);    // the released attempt was not counted
+  EXPECT_NE(again->lease_token, job->lease_token);
+  EXPECT_FALSE(q->release(*job, f));  // a stale token cannot release the new lease
+  EXPECT_TRUE(q->complete(*again, "{}", f));
+  EXPECT_EQ(q->counts(f).done, 1);
+  EXPECT_TRUE(q->dead_jobs(f).empty());
+  EXPECT_TRUE(f.ok()) << f.message;
+}
+
+// A queue file made before priorities (schema version 1, as csgtile wrote it then) is
+// migrated when opened: its jobs keep their state and run at priority 0.
+TEST(SqliteQueueMigration, AVersionOneFileIsMigrated) {
+  const test::TempDir dir("csgtile-queue-migration-");
+  const auto path = dir.path() / "queue.sqlite";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, R"sql(
+CREATE TABLE schema_version (version INTEGER NOT NULL);
+INSERT INTO schema_version VALUES (1);
+CREATE TABLE jobs (
+  id INTEGER PRIMARY KEY AUTOINCREMENT, key TEXT NOT NULL UNIQUE, kind TEXT NOT NULL,
+  payload TEXT NOT NULL, state TEXT NOT NULL DEFAULT 'queued'
+  CHECK (state IN ('queued','running','done','retry','dead')),
+  attempts INTEGER NOT NULL DEFAULT 0, run_after_ms INTEGER NOT NULL DEFAULT 0,
+  lease_token TEXT, lease_expires_ms INTEGER, worker TEXT, last_error TEXT, result TEXT,
+  created_ms INTEGER NOT NULL, updated_ms INTEGER NOT NULL);
+CREATE INDEX jobs_runnable ON jobs (state, run_after_ms, id);
+INSERT INTO jobs (key, kind, payload, state, result, created_ms, updated_ms)
+  VALUES ('old-done', 'build', '{}', 'done', '{"old":true}', 1, 1);
+INSERT INTO jobs (key, kind, payload, created_ms, updated_ms) VALUES ('old-queued', 'build', '{}', 1, 1);
+)sql",
+                         nullptr, nullptr, nullptr),
+            SQLITE_OK)
+      << sqlite3_errmsg(db);
+  sqlite3_close(db);
+
+  Failure f;
+  {
+    // Opened by two workers starting together: one migrates, the other waits for its
+    // BEGIN IMMEDIATE and finds the file migrated.
+    std::unique_ptr<JobQueue> first, second;
+    Failure second_failure;
+    std::thread other([&] { second = open_sqlite_queue(path, {}, second_failure); });
+    first = open_sqlite_queue(path, {}, f);
+    other.join();
+    ASSERT_TRUE(first && second) << f.message << second_failure.message;
+    test::expect_old_jobs_kept_at_priority_zero(*first);
+    EXPECT_EQ(second->counts(f).running, 2);
+  }
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  sqlite3_prepare_v2(db, "SELECT group_concat(version) FROM schema_version", -1, &statement, nullptr);
+  ASSERT_EQ(sqlite3_step(statement), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(statement, 0)), "2");
+  sqlite3_finalize(statement);
+  // A file from a newer csgtile is refused, not misread.
+  sqlite3_exec(db, "UPDATE schema_version SET version = 3", nullptr, nullptr, nullptr);
+  sqlite3_close(db);
+  f = {};
+  EXPECT_FALSE(open_sqlite_queue(path, {}, f));
+  EXPECT_EQ(f.code, ErrorCode::Unsupported);
+  EXPECT_NE(f.message.find("schema is version 3"), std::string::npos) << f.message;
+}
+
 }  // namespace
 }  // namespace csgtile::worker

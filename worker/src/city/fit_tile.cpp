@@ -61,7 +61,8 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
        {"epsilon", "normal_deviation_deg", "cluster_epsilon", "min_points", "probability",
         "max_radius", "seed", "plane", "sphere", "cylinder", "cone", "torus", "max_candidates"}},
       {"primitives",
-       {"boxes", "max_box_depth", "min_box_thickness", "min_seed_coverage", "angle_tolerance_deg"}},
+       {"boxes", "max_box_depth", "min_box_thickness", "min_seed_coverage", "angle_tolerance_deg",
+        "min_building_width"}},
   };
   for (const auto& [name, value] : doc.items()) {
     const auto section =
@@ -116,6 +117,8 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
       take(sec("primitives"), "primitives", "min_seed_coverage", o.primitives.min_seed_coverage,
            error) &&
       take(sec("primitives"), "primitives", "angle_tolerance_deg", o.primitives.angle_tolerance_deg,
+           error) &&
+      take(sec("primitives"), "primitives", "min_building_width", o.primitives.min_building_width,
            error);
   const char* types[] = {"plane", "sphere", "cylinder", "cone", "torus"};
   for (std::size_t t = 0; ok && t < 5; ++t) {

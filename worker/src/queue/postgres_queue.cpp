@@ -1,6 +1,7 @@
 // The PostgreSQL job queue: the SQLite queue's semantics (sqlite_queue.cpp) for workers on
-// many machines. Claims take the oldest runnable row with FOR UPDATE SKIP LOCKED, so
-// concurrent claimers pass over each other's rows instead of waiting or colliding.
+// many machines. Claims take the first runnable row in claim order (priority, runnable time,
+// id) with FOR UPDATE SKIP LOCKED, so concurrent claimers pass over each other's rows instead
+// of waiting or colliding.
 
 #include <mutex>
 #include <string_view>
@@ -41,18 +42,6 @@ class PostgresQueue final : public JobQueue {
   PostgresQueue(std::unique_ptr<detail::PostgresConnection> connection, const QueuePolicy& policy)
       : connection_(std::move(connection)), policy_(policy), random_(policy.seed) {}
 
-  bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
-               Failure& failure) override {
-    const std::lock_guard lock(mutex_);
-    if (!connection_->ensure_open(failure)) return false;
-    const PgResult result =
-        connection_->exec("enqueue",
-                          "INSERT INTO csgtile_jobs (key, kind, payload) VALUES ($1, $2, $3) "
-                          "ON CONFLICT (key) DO NOTHING",
-                          {key, kind, payload}, failure);
-    return result && changed_one_row(result);
-  }
-
   std::optional<Job> claim(const std::string& worker_id, Failure& failure) override {
     const std::lock_guard lock(mutex_);
     if (!connection_->ensure_open(failure) ||
@@ -69,14 +58,17 @@ class PostgresQueue final : public JobQueue {
         "WHERE state = 'running' AND lease_expires < now() AND attempts >= $1::integer",
         {std::to_string(policy_.max_attempts), std::string(kLeaseLost)}, failure);
     if (!bury) return abandon();
-    // now() is the transaction's start on the server: one clock for every worker.
+    // now() is the transaction's start on the server: one clock for every worker. The first
+    // term repeats the claim index's predicate, so the planner can prove the partial index
+    // covers the query and read it in order.
     const PgResult pick = connection_->exec(
         "claim",
         "SELECT id, key, kind, payload, attempts, (extract(epoch FROM now()) * 1000)::bigint "
         "FROM csgtile_jobs "
-        "WHERE (state IN ('queued','retry') AND run_after <= now()) "
-        "   OR (state = 'running' AND lease_expires < now()) "
-        "ORDER BY id LIMIT 1 FOR UPDATE SKIP LOCKED",
+        "WHERE state IN ('queued','retry','running') "
+        "  AND ((state IN ('queued','retry') AND run_after <= now()) "
+        "    OR (state = 'running' AND lease_expires < now())) "
+        "ORDER BY priority DESC, run_after, id LIMIT 1 FOR UPDATE SKIP LOCKED",
         {}, failure);
     if (!pick) return abandon();
     if (PQntuples(pick.get()) == 0) {
@@ -148,6 +140,19 @@ class PostgresQueue final : public JobQueue {
     return update && changed_one_row(update);
   }
 
+  bool release(const Job& job, Failure& failure) override {
+    const std::lock_guard lock(mutex_);
+    if (!connection_->ensure_open(failure)) return false;
+    // attempts - 1: a stop is not the job's failure, so it costs no attempt.
+    const PgResult update = connection_->exec(
+        "release",
+        "UPDATE csgtile_jobs SET state = 'queued', attempts = greatest(attempts - 1, 0), "
+        "lease_token = NULL, lease_expires = NULL, worker = NULL, updated_at = now() "
+        "WHERE id = $1::bigint AND lease_token = $2 AND state = 'running'",
+        {std::to_string(job.id), job.lease_token}, failure);
+    return update && changed_one_row(update);
+  }
+
   QueueCounts counts(Failure& failure) override {
     const std::lock_guard lock(mutex_);
     QueueCounts counts;
@@ -194,6 +199,28 @@ class PostgresQueue final : public JobQueue {
       out.emplace_back(text(rows, row, 0), text(rows, row, 1));
     }
     return out;
+  }
+
+ protected:
+  // The runnable time is the server's now() plus the delay to not_before on the caller's
+  // clock: clock skew between machines does not matter, as for leases.
+  bool enqueue_job(const std::string& key, const std::string& kind, const std::string& payload,
+                   const EnqueueOptions& options, Failure& failure) override {
+    std::int64_t delay_ms = 0;
+    if (options.not_before) {
+      delay_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                     *options.not_before - std::chrono::system_clock::now())
+                     .count();
+    }
+    const std::lock_guard lock(mutex_);
+    if (!connection_->ensure_open(failure)) return false;
+    const PgResult result = connection_->exec(
+        "enqueue",
+        "INSERT INTO csgtile_jobs (key, kind, payload, priority, run_after) "
+        "VALUES ($1, $2, $3, $4::integer, now() + greatest($5::bigint, 0) * interval '1 millisecond') "
+        "ON CONFLICT (key) DO NOTHING",
+        {key, kind, payload, std::to_string(options.priority), std::to_string(delay_ms)}, failure);
+    return result && changed_one_row(result);
   }
 
  private:

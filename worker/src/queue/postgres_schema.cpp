@@ -16,7 +16,7 @@ struct Migration {
   const char* sql;
 };
 
-// Migration i brings the schema from version i to i + 1; never edit one that has shipped.
+// Migration v brings the schema from version v - 1 to v; never edit one that has shipped.
 // Columns mirror the SQLite queue's; times are the server's (timestamptz).
 constexpr Migration kMigrations[] = {
     {1, R"sql(
@@ -38,6 +38,17 @@ CREATE TABLE csgtile_jobs (
   updated_at    timestamptz NOT NULL DEFAULT now()
 );
 CREATE INDEX csgtile_jobs_runnable ON csgtile_jobs (state, run_after, id);
+)sql"},
+    // Priorities. ADD COLUMN with a constant default rewrites no row. The claim index holds
+    // only unfinished jobs, in claim order, so a claim reads the first rows of it however many
+    // jobs are queued or done; the lease index serves the burial of jobs whose last attempt
+    // lost its lease; the claim index replaces version 1's.
+    {2, R"sql(
+ALTER TABLE csgtile_jobs ADD COLUMN priority integer NOT NULL DEFAULT 0;
+DROP INDEX IF EXISTS csgtile_jobs_runnable;
+CREATE INDEX csgtile_jobs_claim ON csgtile_jobs (priority DESC, run_after, id)
+  WHERE state IN ('queued','retry','running');
+CREATE INDEX csgtile_jobs_leased ON csgtile_jobs (lease_expires) WHERE state = 'running';
 )sql"},
 };
 static_assert(std::size(kMigrations) == kPostgresSchemaVersion);

@@ -7,7 +7,7 @@
 namespace csgtile::worker::detail {
 
 /// The newest schema version this build knows (rows of csgtile_schema_version).
-constexpr int kPostgresSchemaVersion = 1;
+constexpr int kPostgresSchemaVersion = 2;
 
 /// Brings the database to kPostgresSchemaVersion: creates csgtile_schema_version, then applies
 /// each missing migration and records its version, all in one transaction that first takes an

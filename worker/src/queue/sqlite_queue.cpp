@@ -1,6 +1,9 @@
 #include <sqlite3.h>
 #include <sys/vfs.h>
 
+#include <algorithm>
+#include <iterator>
+
 #include "csgtile/worker/queue.h"
 #include "queue/queue_random.h"
 
@@ -19,8 +22,16 @@ const char* job_state_name(JobState state) {
 
 namespace {
 
-constexpr const char* kSchema = R"sql(
-CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
+struct Migration {
+  int version;
+  const char* sql;
+};
+
+// Migration v brings the schema from version v - 1 to v; never edit one that has shipped.
+// Version 1 is the schema of files made before versions were counted (every such file records
+// 1, so its CREATEs are skipped there).
+constexpr Migration kMigrations[] = {
+    {1, R"sql(
 CREATE TABLE IF NOT EXISTS jobs (
   id            INTEGER PRIMARY KEY AUTOINCREMENT,
   key           TEXT NOT NULL UNIQUE,
@@ -39,7 +50,20 @@ CREATE TABLE IF NOT EXISTS jobs (
   updated_ms    INTEGER NOT NULL
 );
 CREATE INDEX IF NOT EXISTS jobs_runnable ON jobs (state, run_after_ms, id);
-)sql";
+)sql"},
+    // Priorities. The claim index holds only unfinished jobs, in claim order, so a claim reads
+    // the first rows of it however many jobs are queued or done; the lease index serves the
+    // burial of jobs whose last attempt lost its lease. The old index goes: with it, SQLite
+    // preferred to gather every runnable job and sort them.
+    {2, R"sql(
+ALTER TABLE jobs ADD COLUMN priority INTEGER NOT NULL DEFAULT 0;
+DROP INDEX IF EXISTS jobs_runnable;
+CREATE INDEX jobs_claim ON jobs (priority DESC, run_after_ms, id)
+  WHERE state IN ('queued','retry','running');
+CREATE INDEX jobs_leased ON jobs (lease_expires_ms) WHERE state = 'running';
+)sql"},
+};
+constexpr int kSchemaVersion = static_cast<int>(std::size(kMigrations));
 
 std::int64_t now_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -107,13 +131,55 @@ class SqliteQueue final : public JobQueue {
     return true;
   }
 
-  bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
-               Failure& failure) override {
+  // Brings the file to kSchemaVersion in one BEGIN IMMEDIATE transaction: processes opening
+  // the same file at once migrate it once, the others find it done.
+  bool migrate(Failure& failure) {
+    if (!exec("BEGIN IMMEDIATE", failure)) return false;
+    const auto abandon = [&] {
+      Failure ignored;
+      exec("ROLLBACK", ignored);
+      return false;
+    };
+    if (!exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)", failure)) {
+      return abandon();
+    }
+    int version = 0;
+    {
+      Statement read(db_, "SELECT COALESCE(MAX(version), 0) FROM schema_version");
+      if (read.step() != SQLITE_ROW) {
+        error(failure);
+        return abandon();
+      }
+      version = static_cast<int>(read.int64(0));
+    }
+    if (version > kSchemaVersion) {
+      failure = {ErrorCode::Unsupported,
+                 "the SQLite queue's schema is version " + std::to_string(version) +
+                     "; this csgtile knows versions up to " + std::to_string(kSchemaVersion) +
+                     " (upgrade csgtile)"};
+      return abandon();
+    }
+    for (const Migration& migration : kMigrations) {
+      if (migration.version <= version) continue;
+      if (!exec(migration.sql, failure)) return abandon();
+    }
+    // One row, as files made before migrations hold.
+    if (version < kSchemaVersion &&
+        (!exec("DELETE FROM schema_version", failure) ||
+         !exec(("INSERT INTO schema_version VALUES (" + std::to_string(kSchemaVersion) + ")").c_str(),
+               failure))) {
+      return abandon();
+    }
+    return exec("COMMIT", failure) || abandon();
+  }
+
+  bool release(const Job& job, Failure& failure) override {
+    // attempts - 1: a stop is not the job's failure, so it costs no attempt.
     Statement st(db_,
-                 "INSERT OR IGNORE INTO jobs (key, kind, payload, created_ms, updated_ms) "
-                 "VALUES (?1, ?2, ?3, ?4, ?4)");
-    if (!st.ok()) return error(failure);
-    st.bind(1, key).bind(2, kind).bind(3, payload).bind(4, now_ms());
+                 "UPDATE jobs SET state='queued', attempts=MAX(attempts-1, 0), lease_token=NULL, "
+                 "lease_expires_ms=NULL, worker=NULL, updated_ms=?3 "
+                 "WHERE id=?1 AND state='running' AND lease_token=?2");
+    st.bind(1, job.id).bind(2, job.lease_token).bind(3, now_ms());
     if (st.step() != SQLITE_DONE) return error(failure);
     return sqlite3_changes(db_) > 0;
   }
@@ -135,11 +201,14 @@ class SqliteQueue final : public JobQueue {
       exec("ROLLBACK", failure);
       return std::nullopt;
     }
+    // The first term repeats the claim index's condition word for word: that is how SQLite
+    // knows the partial index covers the query.
     Statement pick(db_,
                    "SELECT id, key, kind, payload, attempts FROM jobs "
-                   "WHERE (state IN ('queued','retry') AND run_after_ms <= ?1) "
-                   "   OR (state = 'running' AND lease_expires_ms < ?1) "
-                   "ORDER BY id LIMIT 1");
+                   "WHERE state IN ('queued','retry','running') "
+                   "  AND ((state IN ('queued','retry') AND run_after_ms <= ?1) "
+                   "    OR (state = 'running' AND lease_expires_ms < ?1)) "
+                   "ORDER BY priority DESC, run_after_ms, id LIMIT 1");
     pick.bind(1, now);
     const int rc = pick.step();
     if (rc != SQLITE_ROW) {
@@ -241,6 +310,28 @@ class SqliteQueue final : public JobQueue {
     return out;
   }
 
+ protected:
+  // The runnable time is when the job may first run: now, or a later not_before. Claims
+  // order by it after priority.
+  bool enqueue_job(const std::string& key, const std::string& kind, const std::string& payload,
+                   const EnqueueOptions& options, Failure& failure) override {
+    const std::int64_t now = now_ms();
+    std::int64_t run_after = now;
+    if (options.not_before) {
+      run_after = std::max(now, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                    options.not_before->time_since_epoch())
+                                    .count());
+    }
+    Statement st(db_,
+                 "INSERT OR IGNORE INTO jobs (key, kind, payload, priority, run_after_ms, "
+                 "created_ms, updated_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?6)");
+    if (!st.ok()) return error(failure);
+    st.bind(1, key).bind(2, kind).bind(3, payload)
+        .bind(4, static_cast<std::int64_t>(options.priority)).bind(5, run_after).bind(6, now);
+    if (st.step() != SQLITE_DONE) return error(failure);
+    return sqlite3_changes(db_) > 0;
+  }
+
  private:
   bool error(Failure& failure) {
     failure = {ErrorCode::Io, std::string("sqlite: ") + sqlite3_errmsg(db_)};
@@ -280,9 +371,7 @@ std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
   sqlite3_busy_timeout(db, 10000);
   auto queue = std::make_unique<SqliteQueue>(db, policy);
   if (!queue->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", failure) ||
-      !queue->exec(kSchema, failure) ||
-      !queue->exec("INSERT INTO schema_version SELECT 1 WHERE NOT EXISTS (SELECT 1 FROM schema_version)",
-                   failure)) {
+      !queue->migrate(failure)) {
     return nullptr;
   }
   return queue;

@@ -42,6 +42,10 @@ struct QueueConfig {
   std::string postgres_dsn;  ///< used when backend is Postgres
   int max_attempts = 5;      ///< 1..100
   int lease_seconds = 60;    ///< 1..86400
+  /// 0..86400: after SIGTERM/SIGINT, how long the running job may go on; a job still running
+  /// then is released (queued again, no attempt used) and the worker exits 0. The default fits
+  /// Kubernetes' default terminationGracePeriodSeconds (30) with room to exit.
+  int grace_seconds = 25;
   /// libpq sslmode (disable … verify-full); empty keeps the DSN's (libpq default: prefer).
   std::string postgres_sslmode;
   std::string postgres_sslrootcert;  ///< CA file for verify-ca/verify-full; empty keeps the DSN's

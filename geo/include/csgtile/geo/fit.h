@@ -104,16 +104,18 @@ struct PrimitiveOptions {
   /// cylinders and cones, are shorter than two connectivity cells) are rejected as spurious.
   double min_angular_span_deg = 90.0;
   /// When set, a horizontal seed plane with no depth of its own at least min_building_height
-  /// above the ground becomes a box from the ground up to it.
+  /// above the ground, and at least min_building_width wide, becomes a box from the ground
+  /// up to it (a roof whose walls the airborne scan barely sees; not a beam's underside).
   const GroundGrid* ground = nullptr;
   double min_building_height = 2.0;
+  double min_building_width = 1.0;
   double linear_tolerance = 1e-7;  ///< of the kernel solids built to check primitives
 };
 
 /// Why a shape or primitive was dropped.
 struct Rejection {
   std::string what;    ///< e.g. "plane 12", "box beam candidate 3"
-  std::string reason;  ///< e.g. "no parallel or orthogonal partner plane"
+  std::string reason;  ///< e.g. "no box: no face of a box behind or before it is seen"
   long long points = 0;
 };
 
@@ -125,12 +127,13 @@ struct FittedPrimitives {
 };
 
 /// Turns detected shapes into primitives: boxes from planes (a seed plane well covered by
-/// its points, with the points of parallel and orthogonal planes within its rectangle and a
-/// contiguous depth), cylinders and cones bounded by their inliers along the axis, spheres
-/// and tori as they are. Each primitive is built as a kernel solid and checked; invalid ones
-/// are rejected with the kernel's reason. `region` becomes part of the ids. `normals` are
-/// those given to detect_shapes (not used today; kept so that callers need not change when
-/// box faces are oriented by them).
+/// its points; its depth from the region's points facing like it at the opposite face or
+/// across it on its long edges, whether or not the RANSAC made planes of them; its length
+/// grown over the points of its faces up to whatever else stands in its cross-section),
+/// cylinders and cones bounded by their inliers along the axis, spheres and tori as they are.
+/// Each primitive is built as a kernel solid and checked; invalid ones are rejected with the
+/// kernel's reason. `region` becomes part of the ids. `normals` are those given to
+/// detect_shapes (unit or zero; may be empty, then box faces are found without them).
 FittedPrimitives primitives_from_shapes(std::span<const kernel::Vec3> points,
                                         std::span<const kernel::Vec3> normals,
                                         const RansacResult& shapes, const PrimitiveOptions& options,

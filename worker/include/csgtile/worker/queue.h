@@ -5,7 +5,11 @@
 /// States: queued → running (lease: token + expiry, attempt counted) → done | retry (after
 /// a backoff) | dead (attempts exhausted or a permanent error, with the last error). A job
 /// whose lease expires is claimable again (its worker is presumed dead); a worker whose
-/// lease was taken over can no longer complete or fail the job (fencing by token).
+/// lease was taken over can no longer complete or fail the job (fencing by token). A worker
+/// stopping before its job ends releases it: queued again, the attempt not counted.
+///
+/// Claim order: higher priority first, then earlier runnable time (enqueue time, not_before,
+/// or the end of a retry's backoff), then enqueue order (id).
 
 #include <chrono>
 #include <cstdint>
@@ -48,6 +52,15 @@ struct DeadJob {
   int attempts = 0;
 };
 
+/// How a job is enqueued; the defaults make a job like every other: runnable now, priority 0.
+struct EnqueueOptions {
+  int priority = 0;  ///< higher is claimed first; any int
+  /// Not claimable before this time. SQLite compares it with the local clock; PostgreSQL turns
+  /// it into a delay from the caller's clock and adds that to the server's now(), as leases
+  /// are timed, so clock skew between machines does not matter. Unset or past: runnable now.
+  std::optional<std::chrono::system_clock::time_point> not_before;
+};
+
 struct QueuePolicy {
   int max_attempts = 5;
   std::chrono::seconds lease{60};
@@ -58,11 +71,14 @@ struct QueuePolicy {
 class JobQueue {
  public:
   virtual ~JobQueue() = default;
-  /// Adds a job unless one with the same key exists. Returns whether it was added.
-  virtual bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
-                       Failure& failure) = 0;
-  /// Claims the next runnable job (queued, retry whose time has come, or running with an
-  /// expired lease), oldest first; nullopt when there is none.
+  /// Adds a job unless one with the same key exists (whose priority and time stay as they
+  /// are). Returns whether it was added.
+  bool enqueue(const std::string& key, const std::string& kind, const std::string& payload,
+               Failure& failure, const EnqueueOptions& options = {}) {
+    return enqueue_job(key, kind, payload, options, failure);
+  }
+  /// Claims the next runnable job (queued or retry whose time has come, or running with an
+  /// expired lease) in claim order (above); nullopt when there is none.
   virtual std::optional<Job> claim(const std::string& worker_id, Failure& failure) = 0;
   /// Marks the job done with its result, only if `job.lease_token` still holds the lease.
   virtual bool complete(const Job& job, const std::string& result, Failure& failure) = 0;
@@ -72,14 +88,26 @@ class JobQueue {
   virtual bool renew(const Job& job, Failure& failure) = 0;
   /// Records a failure: retry after a backoff if `retryable` and attempts remain, else dead.
   virtual bool fail(const Job& job, const std::string& error, bool retryable, Failure& failure) = 0;
+  /// Gives a running job back (a worker stopping before the job ends): queued again with its
+  /// priority and runnable time, this attempt not counted against max_attempts, the lease
+  /// cleared. Only while `job.lease_token` still holds the lease; false otherwise.
+  virtual bool release(const Job& job, Failure& failure) = 0;
   virtual QueueCounts counts(Failure& failure) = 0;
   virtual std::vector<DeadJob> dead_jobs(Failure& failure) = 0;
   /// Results of done jobs, ordered by key (for manifests).
   virtual std::vector<std::pair<std::string, std::string>> results(Failure& failure) = 0;
+
+ protected:
+  /// The backend's enqueue (a non-virtual front keeps one default for `options`).
+  virtual bool enqueue_job(const std::string& key, const std::string& kind,
+                           const std::string& payload, const EnqueueOptions& options,
+                           Failure& failure) = 0;
 };
 
 /// Opens (creating if needed) a SQLite queue file on local disk, in WAL mode; several
-/// processes on one machine may share it. Errors: Io (cannot open, or a network file system).
+/// processes on one machine may share it. An older file is migrated (version in its
+/// schema_version table) in one BEGIN IMMEDIATE transaction. Errors: Io (cannot open, or a
+/// network file system), Unsupported (a schema newer than this build).
 std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
                                             const QueuePolicy& policy, Failure& failure);
 
