@@ -336,6 +336,13 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
                                   {"reason", job_failure.message}});  // attempt: LogJobScope
     }
     if (!failure.ok()) return failure;
+    // Progress of the whole queue after each job (the run's progress display in the logs).
+    const QueueCounts c = queue.counts(failure);
+    if (!failure.ok()) return failure;
+    log.info("run", "progress",
+             {{"finished", std::to_string(c.done + c.dead)},
+              {"of", std::to_string(c.done + c.dead + c.unfinished())},
+              {"dead", std::to_string(c.dead)}});
   }
 }
 

@@ -517,6 +517,7 @@ class BooleanEngine {
     if (existing < 0 && curve->kind() == CurveKind::Polyline) {
       snap_traced_crossings(fa, fb, curve, pa, pb, t0, t1, hits, hits_on_a,
                             std::max(edge_tolerance, options_.tolerance));
+      edge_tolerance = std::max(edge_tolerance, static_cast<const PolylineCurve&>(*curve).tolerance());
     }
     std::vector<double> cuts{t0, t1};
     for (const Hit& h : hits) cuts.push_back(h.t);
@@ -622,11 +623,15 @@ class BooleanEngine {
     const bool closed = points.front() == points.back();
     const double slack = param_slack(last);
     const ToleranceModel model{options_.tolerance, options_.tolerance};  // lengths only
-    auto on_surface = [&](const Surface& s, const Vec3& p, const Vec2& near) -> std::optional<Vec2> {
+    // A pierce point lies on both surfaces within the pierced edge's tolerance (an earlier
+    // traced section is that far off the surfaces it joins); the polyline's deviation then
+    // grows to cover it.
+    double deviation = static_cast<const PolylineCurve&>(*curve).tolerance();
+    auto on_surface = [&](const Surface& s, const Vec3& p, const Vec2& near, double allowed) -> std::optional<Vec2> {
       Vec2 uv = s.closest_parameters(p);
       uv.x() = nearest_periodic(uv.x(), near.x(), s.u_period());
       uv.y() = nearest_periodic(uv.y(), near.y(), s.v_period());
-      if (!model.negligible((s.point(uv.x(), uv.y()) - p).norm())) return std::nullopt;
+      if (!ToleranceModel{allowed, allowed}.negligible((s.point(uv.x(), uv.y()) - p).norm())) return std::nullopt;
       return uv;
     };
     struct Snap {
@@ -652,9 +657,11 @@ class BooleanEngine {
         if (model.negligible((snaps[j].point - p).norm())) same = static_cast<int>(j);
       }
       if (same < 0) {
-        const auto qa = on_surface(sa, p, pa->point(h.t));
-        const auto qb = on_surface(sb, p, pb->point(h.t));
+        const double allowed = std::max(options_.tolerance, e.tolerance);
+        const auto qa = on_surface(sa, p, pa->point(h.t), allowed);
+        const auto qb = on_surface(sb, p, pb->point(h.t), allowed);
         if (!qa || !qb) continue;
+        deviation = std::max(deviation, allowed);
         snaps.push_back({h.t, p, *qa, *qb});
         same = static_cast<int>(snaps.size()) - 1;
       }
@@ -713,7 +720,7 @@ class BooleanEngine {
         hits[k].t = remap(hits[k].t);
       }
     }
-    curve = std::make_shared<PolylineCurve>(std::move(new_points), static_cast<const PolylineCurve&>(*curve).tolerance());
+    curve = std::make_shared<PolylineCurve>(std::move(new_points), deviation);
     pa = std::make_shared<Polyline2d>(std::move(new_a));
     pb = std::make_shared<Polyline2d>(std::move(new_b));
   }
@@ -1005,33 +1012,49 @@ class BooleanEngine {
 
   // Points inside a piece: in its largest triangles (up to `count`), at uneven barycentric
   // weights so that they do not fall on the lines and corners other geometry is built on
-  // (a centroid of a split face can be exactly the end of the other operand's edge).
+  // (a centroid of a split face can be exactly the end of the other operand's edge). The
+  // triangles are those of the piece's sampled outline, whose chords of curved pcurves can
+  // cut across a thin piece (an annulus a few hundredths of its radius wide): each point is
+  // checked against the piece's arcs, and the outline is sampled finer until enough points
+  // pass (a point outside the piece would classify a neighbour instead).
   std::vector<Vec3> interior_points(const Piece& piece, std::size_t count) {
-    std::vector<std::vector<Vec2>> loops;
-    for (const BLoop& loop : piece.region.loops) {
-      std::vector<Vec2> pts;
-      for (const BUse& u : loop) {
-        auto s = sample_use(model_, u, 16);
-        pts.insert(pts.end(), s.begin(), s.end() - 1);
+    const BFace& face = model_.faces[static_cast<std::size_t>(piece.face)];
+    BFace outline;
+    outline.surface = face.surface;
+    outline.loops = piece.region.loops;
+    const FacePolygon exact = face_polygon(model_, outline);
+    const double margin = uv_slack(std::max(exact.max.x() - exact.min.x(), exact.max.y() - exact.min.y())) * kInsideUvSlacks;
+    std::vector<Vec2> found, unchecked;  // unchecked: the first outline's points (if none pass)
+    for (int samples = kInteriorSamples; found.size() < count && samples <= kInteriorSamplesMax; samples *= kInteriorRefine) {
+      std::vector<std::vector<Vec2>> loops;
+      for (const BLoop& loop : piece.region.loops) {
+        std::vector<Vec2> pts;
+        for (const BUse& u : loop) {
+          auto s = sample_use(model_, u, samples);
+          pts.insert(pts.end(), s.begin(), s.end() - 1);
+        }
+        loops.push_back(std::move(pts));
       }
-      loops.push_back(std::move(pts));
+      const PolygonTriangulation tri = triangulate_polygon(loops);
+      std::vector<Vec2> flat;
+      for (const auto& l : loops) flat.insert(flat.end(), l.begin(), l.end());
+      std::vector<std::pair<double, Vec2>> by_area;
+      for (const auto& t : tri.triangles) {
+        const Vec2 &p = flat[t[0]], &q = flat[t[1]], &r = flat[t[2]];
+        const double area = std::abs((q - p).x() * (r - p).y() - (q - p).y() * (r - p).x());
+        if (area > 0) by_area.emplace_back(area, 0.29 * p + 0.33 * q + 0.38 * r);
+      }
+      std::stable_sort(by_area.begin(), by_area.end(),
+                       [](const auto& x, const auto& y) { return x.first > y.first; });
+      found.clear();
+      for (std::size_t i = 0; i < by_area.size() && found.size() < count; ++i) {
+        if (samples == kInteriorSamples && unchecked.size() < count) unchecked.push_back(by_area[i].second);
+        if (exact.inside(by_area[i].second, margin).value_or(false)) found.push_back(by_area[i].second);
+      }
     }
-    const PolygonTriangulation tri = triangulate_polygon(loops);
-    std::vector<Vec2> flat;
-    for (const auto& l : loops) flat.insert(flat.end(), l.begin(), l.end());
-    std::vector<std::pair<double, Vec2>> by_area;
-    for (const auto& t : tri.triangles) {
-      const Vec2 &p = flat[t[0]], &q = flat[t[1]], &r = flat[t[2]];
-      const double area = std::abs((q - p).x() * (r - p).y() - (q - p).y() * (r - p).x());
-      if (area > 0) by_area.emplace_back(area, 0.29 * p + 0.33 * q + 0.38 * r);
-    }
-    std::stable_sort(by_area.begin(), by_area.end(),
-                     [](const auto& x, const auto& y) { return x.first > y.first; });
-    const Surface& s = *model_.faces[static_cast<std::size_t>(piece.face)].surface;
+    if (found.empty()) found = unchecked;
     std::vector<Vec3> out;
-    for (std::size_t i = 0; i < by_area.size() && i < count; ++i) {
-      out.push_back(s.point(by_area[i].second.x(), by_area[i].second.y()));
-    }
+    for (const Vec2& uv : found) out.push_back(face.surface->point(uv.x(), uv.y()));
     return out;
   }
 

@@ -147,6 +147,12 @@ inline constexpr double kTracedSnapReach = 100.0;
 /// crossing tolerance apart, or when a step is this small relative to the parameters.
 inline constexpr double kNewtonConvergedFraction = 1e-3;
 inline constexpr double kNewtonStall = 1e-15;
+/// A piece's interior points come from triangles of its outline sampled with this many
+/// points per pcurve, then kInteriorRefine times as many, up to kInteriorSamplesMax, until
+/// enough of them lie inside the piece's exact (arc) outline.
+inline constexpr int kInteriorSamples = 16;
+inline constexpr int kInteriorRefine = 4;
+inline constexpr int kInteriorSamplesMax = 1024;
 /// Newton steps allowed for the point where an edge pierces a surface.
 inline constexpr int kPierceIterations = 30;
 /// Pcurves are cut into this many chords to find crossing candidates, and a chord's box is

@@ -43,6 +43,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     return f;
   }
   const geo::FitOutput& fit = tile.output;
+  ops::metrics().add_points_processed(static_cast<std::uint64_t>(fit.input_points));
 
   // Each primitive is built as a kernel solid and checked; its box (in CRS coordinates, the
   // tile origin added) gives its anchor cell. A primitive that is not a valid solid is left
