@@ -5,7 +5,8 @@ halo) and indexes the run. One extra input is a truncated tile. Checked:
   * the truncated tile's fit job is dead with a reason naming the file; every other job done;
     the run exits 3 (jobs_failed) and still publishes everything else;
   * every cell's manifest names its files with matching SHA-256 and sizes; every object is
-    published in exactly one cell; the run index holds them all;
+    published in exactly one cell, and the cells' objects are those of the same tiles
+    assembled as one cell (none lost, none cut); the run index holds them all;
   * validators on every cell: ogrinfo + GDAL's validate_gpkg.py on each GeoPackage, ajv with
     the CityJSON 2.0.2 schemas on each CityJSONSeq, the Khronos glTF validator on each glb;
     the root tileset names every cell's tileset;
@@ -70,12 +71,12 @@ with open(corrupt, "wb") as f:
 inputs = tiles + [corrupt]
 
 
-def write_config(name, output, threads, queue=""):
+def write_config(name, output, threads, queue="", cell_size=100, halo=45):
     path = f"{work}/{name}.yaml"
     with open(path, "w") as f:
         f.write("run:\n  name: city\n  inputs:\n" + "".join(f"    - {p}\n" for p in inputs) +
-                f"  output: {output}\n  threads: {threads}\ncity:\n  cell_size: 100\n"
-                f"  halo: 45\nlog:\n  level: warn\n  format: json\n{queue}")
+                f"  output: {output}\n  threads: {threads}\ncity:\n  cell_size: {cell_size}\n"
+                f"  halo: {halo}\nlog:\n  level: warn\n  format: json\n{queue}")
     return path
 
 
@@ -124,6 +125,24 @@ for cell in manifest["cells"]:
         assert sha256(f"{rundir}/{o['key']}") == o["sha256"], o
     cells.append((cm["cell"], cdir, cm))
 assert len(objects_seen) == totals["objects"], (len(objects_seen), totals)
+
+
+def object_groups(rundir_, manifest_):
+    groups = set()
+    for cell in manifest_["cells"]:
+        cm = json.load(open(f"{rundir_}/{cell['manifest']['key']}"))
+        for o in cm["objects"]:
+            groups.add(frozenset(p["label"] for p in o["primitives"]))
+    return groups
+
+
+# None lost, none cut: the same tiles as one 5 km cell give the same objects (each object's
+# primitives, by label) as the 100 m cells.
+run("run", write_config("whole", f"{work}/whole", 2, cell_size=5000, halo=1000), ok=(3,))
+whole_dir = f"{work}/whole/runs/city"
+whole = json.load(open(f"{whole_dir}/manifest.json"))
+assert whole["totals"]["cells"] == 1, whole["totals"]
+assert object_groups(rundir, manifest) == object_groups(whole_dir, whole), "objects differ by cell size"
 
 figures = {"tiles": len(tiles), "cells": len(cells), "objects": totals["objects"],
            "primitives": totals["primitives"], "validated": []}

@@ -2,7 +2,9 @@
 // aligned to multiples of S in its CRS, as city runs take them (one fit job per tile). Each
 // tile keeps the input's version, point format, scale, CRS records and extra bytes; its offset
 // is the tile's minimum corner. Files are named <stem>_c<column>_r<row>.las and written
-// through temporary files renamed at the end, so a failure leaves no partial tile.
+// through temporary files renamed at the end, so a failure leaves no partial tile. --out must
+// be new or empty. One file is open per tile: a cut into more tiles than the process may
+// open files (ulimit -n, often 1024) fails with an Io error naming the file.
 
 #include <cmath>
 #include <cstdio>
@@ -53,6 +55,11 @@ int run_tile(const TileCommand& c) {
   geo::LasReader& reader = *opened.value();
   const geo::LasHeader& h = reader.header();
   std::error_code ec;
+  // Tiles of an earlier cut (another size) beside the new ones would be read twice by a run
+  // over the directory: the output directory must be new or empty.
+  if (std::filesystem::exists(c.out, ec) && !std::filesystem::is_empty(c.out, ec)) {
+    return fail(ErrorCode::Usage, c.out + ": not empty; tile into a new directory");
+  }
   std::filesystem::create_directories(c.out, ec);
   if (ec) return fail(ErrorCode::Io, c.out + ": " + ec.message());
   const std::string stem = std::filesystem::path(c.input).stem().string();

@@ -259,7 +259,11 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
         // made): enqueueing is idempotent, so every idle worker may try.
         std::size_t next = 0;
         if (is_city_run(config)) {
-          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
+          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) {
+            // Logged, not fatal: the worker goes on (the run then ends without its next stage,
+            // which status and the missing manifest show).
+            log.error("run", "cannot advance the city run", {{"reason", f.message}});
+          }
         }
         if (next > 0) continue;
         work.finished = true;
@@ -321,7 +325,9 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
         log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
         if (job->kind == "fit" || job->kind == "assemble") {
           std::size_t next = 0;
-          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
+          if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) {
+            log.error("run", "cannot advance the city run", {{"reason", f.message}});
+          }
         }
       } else if (failure.ok()) {
         // The lease expired between the last renewal and the completion (fencing).
@@ -386,6 +392,12 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   if (is_city_run(config)) {
     // The run's index job published it (city/index_job.cpp); nothing is written here.
     summary.manifest = summary.run_dir / "manifest.json";
+    std::error_code ec;
+    if (failure.ok() && summary.dead.empty() && !std::filesystem::exists(summary.manifest, ec)) {
+      return {ErrorCode::Internal, "run " + config.run.name +
+                                       " finished without its index job: no manifest.json (see "
+                                       "the log's \"cannot advance\" lines)"};
+    }
     return failure;
   }
   std::vector<std::pair<std::string, std::string>> results;

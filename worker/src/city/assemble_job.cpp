@@ -68,11 +68,9 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     const std::string tile = "t" + std::to_string(fit.at("tile").get<long long>());
     for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
       const geo::ScenePrimitive& p = scene->primitives[i];
-      auto solid = kernel::build_primitive(p.spec, config.kernel.linear_tolerance);
-      if (!solid.ok()) continue;  // the fit job left out invalid primitives already
-      kernel::BoundingBox box = kernel::bounding_box(solid.value());
-      box.min += tile_origin;
-      box.max += tile_origin;
+      const kernel::BoundingBox box =
+          primitive_crs_box(p.spec, tile_origin, config.kernel.linear_tolerance);
+      if (box.empty()) continue;  // the fit job left out primitives that do not build
       if (!meets_halo(box, cell, size, halo)) continue;
       CellPrimitive cp;
       cp.primitive.spec = p.spec;
@@ -99,8 +97,9 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   }
   const assembly::Assembly& a = assembled.value();
 
-  // Keep the objects anchored in this cell: the smallest corner of their primitives' boxes in
-  // CRS coordinates (the numbers the fit jobs used).
+  // Keep the objects anchored in this cell: the least of their primitives' anchor cells (each
+  // the cell of a primitive's minimum corner, computed as the fit job computed it), so the
+  // object's cell is one the fits named and that has an assemble job.
   clock.enter("publish");
   // Problems of the objects this cell keeps (the assembly also names objects of the halo,
   // which their own cells report) and of primitives that could not be built.
@@ -111,10 +110,14 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<const assembly::AssembledObject*> kept;
   for (const assembly::AssembledObject& object : a.objects) {
     kernel::BoundingBox box;
-    for (int i : object.primitives) box.add(prims[static_cast<std::size_t>(i)].crs_box);
-    if (box.empty()) continue;
-    const Cell anchor = cell_of(box.min.x(), box.min.y(), size);
-    if (anchor.column != cell.column || anchor.row != cell.row) continue;
+    std::optional<Cell> anchor;
+    for (int i : object.primitives) {
+      const kernel::BoundingBox& b = prims[static_cast<std::size_t>(i)].crs_box;
+      box.add(b);
+      const Cell c = cell_of(b.min.x(), b.min.y(), size);
+      if (!anchor || cell_less(c, *anchor)) anchor = c;
+    }
+    if (!anchor || anchor->column != cell.column || anchor->row != cell.row) continue;
     if (!within_halo(box, cell, size, halo)) {
       problems.push_back("object " + object.id + " reaches past the halo of cell " + name +
                          " (city.halo " + ordered_json(halo).dump() +

@@ -9,6 +9,7 @@
 
 #include "csgtile/config/config.h"
 #include "csgtile/kernel/bounding_box.h"
+#include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/queue.h"
 #include "csgtile/worker/run.h"
@@ -32,6 +33,17 @@ std::array<double, 2> cell_origin(const Cell& cell, double size);
 bool meets_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
 /// Whether the xy extent of `box` lies within the cell grown by `halo`.
 bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
+
+/// Total order of cells (column, then row): an object's cell is the least of its primitives'
+/// anchor cells, which every one of them had an assemble job for.
+bool cell_less(const Cell& a, const Cell& b);
+
+/// The box in CRS coordinates of a primitive read from a fit's scene file (tile `origin`
+/// added), or an empty box when it cannot be built. The fit job (on its scene file's parsed
+/// text) and the assemble jobs compute anchors with this one function from the same bytes,
+/// so they agree bit for bit.
+kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const kernel::Vec3& origin,
+                                      double tolerance);
 
 /// Reads a whole file. Error: Io naming the path.
 Failure read_file(const std::filesystem::path& path, std::string& bytes);

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "city/city_internal.h"
+#include "csgtile/kernel/mass_properties.h"
 #include "csgtile/worker/publish.h"
 
 namespace csgtile::worker::city {
@@ -42,6 +43,20 @@ bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, 
   const auto o = cell_origin(cell, size);
   return box.min.x() >= o[0] - halo && box.max.x() <= o[0] + size + halo &&
          box.min.y() >= o[1] - halo && box.max.y() <= o[1] + size + halo;
+}
+
+bool cell_less(const Cell& a, const Cell& b) {
+  return a.column != b.column ? a.column < b.column : a.row < b.row;
+}
+
+kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const kernel::Vec3& origin,
+                                      double tolerance) {
+  auto solid = kernel::build_primitive(spec, tolerance);
+  if (!solid.ok()) return {};
+  kernel::BoundingBox box = kernel::bounding_box(solid.value());
+  box.min += origin;
+  box.max += origin;
+  return box;
 }
 
 Failure read_file(const std::filesystem::path& path, std::string& bytes) {
@@ -116,7 +131,7 @@ namespace {
 
 /// Distinct tile inputs of the run, each with its position (the tile's number in labels): a
 /// local directory stands for the tile files directly inside it, in name order.
-std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Config& config) {
+std::vector<std::pair<std::string, std::size_t>> expand_tile_inputs(const config::Config& config) {
   std::vector<std::string> expanded;
   for (const std::string& input : config.run.inputs) {
     if (!is_local_directory(input)) {
@@ -125,9 +140,11 @@ std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Confi
     }
     std::vector<std::string> files;
     std::error_code ec;
-    for (const auto& entry : std::filesystem::directory_iterator(input, ec)) {
-      const std::string name = entry.path().filename().string();
-      if (entry.is_regular_file(ec) && name[0] != '.' && is_tile_input(name)) {
+    std::filesystem::directory_iterator it(input, ec), end;
+    for (; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      std::error_code type_ec;
+      if (it->is_regular_file(type_ec) && name[0] != '.' && is_tile_input(name)) {
         files.push_back((std::filesystem::path(input) / name).lexically_normal().string());
       }
     }
@@ -142,11 +159,40 @@ std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Confi
   return out;
 }
 
+std::filesystem::path tiles_file(const config::Config& config) {
+  return std::filesystem::path(config.run.output) / "runs" / config.run.name / "tiles.json";
+}
+
+/// The run's tiles as fixed when it was first enqueued (<run dir>/tiles.json), so that tiles
+/// added to an input directory later do not change a run under way; before that, the
+/// expansion of run.inputs.
+std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Config& config) {
+  std::string text;
+  if (detail::read_file(tiles_file(config), text).ok()) {
+    const auto doc = nlohmann::json::parse(text, nullptr, false);
+    if (doc.is_object() && doc.contains("tiles") && doc["tiles"].is_array()) {
+      std::vector<std::pair<std::string, std::size_t>> out;
+      for (const auto& t : doc["tiles"]) {
+        if (t.is_string()) out.emplace_back(t.get<std::string>(), out.size());
+      }
+      return out;
+    }
+  }
+  return expand_tile_inputs(config);
+}
+
 }  // namespace
 
 Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t& added) {
   added = 0;
   Failure failure;
+  std::error_code ec;
+  if (!std::filesystem::exists(tiles_file(config), ec)) {
+    // The first enqueue fixes the run's tile list.
+    nlohmann::ordered_json doc = {{"run", config.run.name}, {"tiles", nlohmann::ordered_json::array()}};
+    for (const auto& [input, index] : expand_tile_inputs(config)) doc["tiles"].push_back(input);
+    if (Failure f = write_file_atomic(tiles_file(config), doc.dump(2) + "\n"); !f.ok()) return f;
+  }
   for (const auto& [input, index] : tile_inputs(config)) {
     const std::string payload = nlohmann::json({{"input", input}, {"tile", index}}).dump();
     if (queue.enqueue(fit_key(config.run.name, input), "fit", payload, failure)) ++added;
@@ -160,9 +206,14 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
                 std::size_t& enqueued) {
   enqueued = 0;
   const std::string& run = config.run.name;
+  Failure failure;
+  // A stage follows when nothing is unfinished: a cheap count first, so that the records
+  // are read once per stage, not after every job.
+  const QueueCounts counts = queue.counts(failure);
+  if (!failure.ok()) return failure;
+  if (counts.unfinished() > 0) return {};
   const auto tiles = tile_inputs(config);
   if (tiles.empty()) return {};
-  Failure failure;
   const auto results = queue.results(failure);
   if (!failure.ok()) return failure;
   std::set<std::string> dead;
@@ -207,8 +258,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
       const ordered_json& b = it->second.at("bounds");
       if (b.is_null()) continue;
       kernel::BoundingBox box;
-      box.add(kernel::Vec3(b[0].get<double>(), b[1].get<double>(), b[2].get<double>()));
-      box.add(kernel::Vec3(b[3].get<double>(), b[4].get<double>(), b[5].get<double>()));
+      box.add(kernel::Vec3(b.at(0).get<double>(), b.at(1).get<double>(), b.at(2).get<double>()));
+      box.add(kernel::Vec3(b.at(3).get<double>(), b.at(4).get<double>(), b.at(5).get<double>()));
       if (!detail::meets_halo(box, cell, size, halo)) continue;
       near.push_back({{"fit", it->first},
                       {"tile", index},
@@ -234,7 +285,9 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
              {{"run", run}, {"cells", std::to_string(cells.size())}});
   }
   if (assembled < cells.size()) return {};
-  if (queue.enqueue(index_key(run), "index", ordered_json({{"cells", cells.size()}}).dump(), failure)) {
+  if (queue.enqueue(index_key(run), "index",
+                    ordered_json({{"cells", cells.size()}, {"crs", crs.value_or("")}}).dump(),
+                    failure)) {
     ++enqueued;
     log.info("run", "cells finished; index enqueued", {{"run", run}});
   }
@@ -252,6 +305,8 @@ Failure advance_city_run(const config::Config& config, JobQueue& queue, const Lo
     return advance(config, queue, log, enqueued);
   } catch (const nlohmann::json::exception& e) {
     return {ErrorCode::Internal, "run " + config.run.name + ": a fit record is malformed: " + e.what()};
+  } catch (const std::exception& e) {
+    return {ErrorCode::Internal, "run " + config.run.name + ": " + e.what()};
   }
 }
 
@@ -313,6 +368,8 @@ Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
     return run_job(job, run_dir, config, queue, log, result, timings);
   } catch (const nlohmann::json::exception& e) {
     return {ErrorCode::Internal, "job " + job.key + ": a payload or record is malformed: " + e.what()};
+  } catch (const std::filesystem::filesystem_error& e) {
+    return {ErrorCode::Io, "job " + job.key + ": " + e.what()};
   }
 }
 

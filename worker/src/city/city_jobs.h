@@ -5,9 +5,10 @@
 /// the worker; run.cpp dispatches to these.
 ///
 /// Cells are squares of `city.cell_size` aligned to multiples of it in the tiles' CRS
-/// (geo::CityGrid, origin 0, 0), named "c<column>_r<row>". A primitive's anchor is the
-/// minimum (x, y) corner of its bounding box in CRS coordinates; an object's anchor is the
-/// smallest of its primitives', and the object belongs to the cell holding it. A cell is
+/// (origin 0, 0), named "c<column>_r<row>". A primitive's anchor cell holds the minimum
+/// (x, y) corner of its bounding box in CRS coordinates, computed by one function from the
+/// fit's published bytes by every job; an object belongs to the least (column, then row) of
+/// its primitives' anchor cells, which the fits named, so it has an assemble job. A cell is
 /// assembled from the primitives whose boxes meet the cell grown by `city.halo`, in a frame
 /// whose origin is the cell's minimum corner (coordinates stay small); an object reaching
 /// past the halo is reported in the cell's problems.
@@ -48,7 +49,9 @@ std::string fit_key(const std::string& run, const std::string& input);
 std::string assemble_key(const std::string& run, const std::string& cell);
 std::string index_key(const std::string& run);
 
-/// Enqueues one fit job per distinct tile input of the run; `added` counts new ones.
+/// Enqueues one fit job per distinct tile input of the run; `added` counts new ones. The
+/// first enqueue fixes the run's tile list in <run dir>/tiles.json (a directory input is
+/// expanded then), so tiles added later do not change a run under way.
 Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t& added);
 
 /// Enqueues the run's assemble jobs once every fit is done or dead, and its index job once

@@ -54,8 +54,6 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   const kernel::Vec3 o(origin[0], origin[1], origin[2]);
   std::vector<geo::ScenePrimitive> kept;
   ordered_json invalid = ordered_json::array();
-  kernel::BoundingBox bounds;
-  std::map<std::string, Cell> anchors;
   for (const geo::ScenePrimitive& p : tile.scene.primitives) {
     auto solid = kernel::build_primitive(p.spec, config.kernel.linear_tolerance);
     std::string reason;
@@ -69,12 +67,6 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
       invalid.push_back({{"id", p.id}, {"reason", reason}});
       continue;
     }
-    kernel::BoundingBox box = kernel::bounding_box(solid.value());
-    box.min += o;
-    box.max += o;
-    bounds.add(box);
-    const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
-    anchors.emplace(cell.name(), cell);
     kept.push_back(p);
   }
   ops::metrics().add_primitives_built(kept.size());
@@ -82,6 +74,19 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
 
   clock.enter("publish");
   const std::string text = geo::scene_to_json(tile.scene);
+  // Anchors from the file as the assemble jobs will read it (primitive_crs_box): the same
+  // bytes through the same code, so every job puts a primitive in the same cell.
+  auto published = geo::parse_scene(text);
+  if (!published.ok()) return {ErrorCode::Internal, input + ": " + published.error().message};
+  kernel::BoundingBox bounds;
+  std::map<std::string, Cell> anchors;
+  for (const geo::ScenePrimitive& p : published->primitives) {
+    const kernel::BoundingBox box = primitive_crs_box(p.spec, o, config.kernel.linear_tolerance);
+    if (box.empty()) return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
+    bounds.add(box);
+    const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
+    anchors.emplace(cell.name(), cell);
+  }
   const std::string sha = sha256_hex(text);
   const std::string key = "fits/" + sha + ".json";
   if (Failure f = publish_object(run_dir, key, text); !f.ok()) return f;

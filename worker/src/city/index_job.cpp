@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 
 #include "city/city_internal.h"
 #include "csgtile/geo/crs.h"
@@ -35,13 +36,13 @@ Failure root_tileset(const std::filesystem::path& run_dir,
     std::string body;
     if (Failure f = read_file(run_dir / tiles, body); !f.ok()) return f;
     const ordered_json cell = ordered_json::parse(body, nullptr, false);
-    if (cell.is_discarded() || !cell.contains("root")) {
+    if (!cell.is_object() || !cell.contains("root")) {
       return {ErrorCode::Internal, tiles + ": not a tileset"};
     }
-    const ordered_json& r = cell["root"]["boundingVolume"]["region"];
+    const ordered_json& r = cell.at("root").at("boundingVolume").at("region");
     for (int i : {0, 1, 4}) region[i] = std::min(region[i], r[i].get<double>());
     for (int i : {2, 3, 5}) region[i] = std::max(region[i], r[i].get<double>());
-    const double e = cell["geometricError"].get<double>();
+    const double e = cell.at("geometricError").get<double>();
     error = std::max(error, e);
     kids.push_back({{"boundingVolume", {{"region", r}}},
                     {"geometricError", e},
@@ -124,11 +125,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     origin = origin.cwiseMin(corner);
     first = false;
   }
-  std::string crs_text;
-  for (const auto& [key, record] : fits) {
-    crs_text = record.value("crs", "");
-    break;
-  }
+  // The run's CRS as the advance that enqueued this job chose it (the first done tile's in
+  // run order); tiles in another CRS were left out of every cell.
+  const auto payload = ordered_json::parse(job.payload, nullptr, false);
+  const std::string crs_text = payload.is_object() ? payload.value("crs", "") : std::string();
   RunObjects objects;
   if (!crs_text.empty()) {
     auto crs = geo::crs_from_config(crs_text);
@@ -321,7 +321,24 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                         {"not_deterministic", report_files.nondeterministic_keys}};
   const std::string manifest_text = manifest.dump(2) + "\n";
   if (Failure f = write_file_atomic(run_dir / "manifest.json", manifest_text); !f.ok()) return f;
-  if (Failure f = publish::publish_run_directory(config, run_dir, log); !f.ok()) return f;
+  // Only what the manifests name is published (leftovers of an earlier run in the same
+  // directory, e.g. cells of another cell size, stay local).
+  std::set<std::string> listed = {"manifest.json", "timings.json", "tiles.json", index.key};
+  if (tile_children > 0) listed.insert("tiles/tileset.json");
+  for (const auto& entry : report_entries) listed.insert(entry.at("key").get<std::string>());
+  for (const std::string& key : report_files.nondeterministic_keys) listed.insert(key);
+  for (const auto& [key, record] : fits) listed.insert(record.at("scene").at("key").get<std::string>());
+  for (const auto& [key, record] : cells) {
+    const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
+    listed.insert(cell_manifest);
+    std::string text;
+    if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) return f;
+    const ordered_json cm = ordered_json::parse(text);
+    const std::string dir = std::filesystem::path(cell_manifest).parent_path().string();
+    for (const auto& file : cm.at("files")) listed.insert(dir + "/" + file.at("key").get<std::string>());
+    for (const auto& object : record.at("objects")) listed.insert(object.at("key").get<std::string>());
+  }
+  if (Failure f = publish::publish_run_directory(config, run_dir, log, &listed); !f.ok()) return f;
 
   ordered_json record;
   record["manifest"] = {{"key", "manifest.json"},
@@ -331,7 +348,6 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   record["objects"] = object_count;
   record["dead"] = dead.size();
   result = record.dump();
-  (void)job;
   return {};
 }
 

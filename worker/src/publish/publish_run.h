@@ -2,6 +2,8 @@
 // Publishing a finished run beyond the local output directory (config `publish.url`).
 
 #include <filesystem>
+#include <set>
+#include <string>
 
 #include "csgtile/config/config.h"
 #include "csgtile/worker/errors.h"
@@ -11,8 +13,10 @@ namespace csgtile::worker::publish {
 
 /// When `config.publish.url` is set, uploads the finished run directory there
 /// (s3_publish.h: objects, then create-only manifests, then the pointer) and logs what was
-/// uploaded; a no-op otherwise. Errors: as publish_run_to_s3 (Network is retryable).
+/// uploaded; a no-op otherwise. With `only`, just the files it names (paths relative to the
+/// run directory: what the run's manifests list), so that leftovers of an earlier run in the
+/// same directory are never published. Errors: as publish_run_to_s3 (Network is retryable).
 Failure publish_run_directory(const config::Config& config, const std::filesystem::path& run_dir,
-                              const Logger& log);
+                              const Logger& log, const std::set<std::string>* only = nullptr);
 
 }  // namespace csgtile::worker::publish
