@@ -35,6 +35,10 @@ import sys
 import time
 
 binary, source, work, ajv, gltf_dir = sys.argv[1:6]
+# The validators' locations as the other tests take them (deploy/run-tests.sh exports them;
+# a sanitizer build directory has no npm folder of its own).
+ajv = os.environ.get("CSGTILE_AJV", ajv)
+gltf_dir = os.environ.get("CSGTILE_GLTF_VALIDATOR_DIR", gltf_dir)
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 
