@@ -616,7 +616,10 @@ void Builder::boxes() {
     // its length over the points of the box's long faces (a face partly shadowed by an
     // obstacle in front of it, or cut by a column, is completed by the others).
     double v0 = std::min(seed.vmin, depth.v0), v1 = std::max(seed.vmax, depth.v1);
-    const auto [u0, u1] = box_length(seed, c0, c1, v0, v1, tight, cos_normal);
+    // Plain variables, not a structured binding: lambdas below capture them (clang 14 does
+    // not capture bindings).
+    const std::pair<double, double> length = box_length(seed, c0, c1, v0, v1, tight, cos_normal);
+    const double u0 = length.first, u1 = length.second;
     auto local = [&](const Vec3& p) {
       const Vec3 d = p - seed.origin;
       return Vec3(d.dot(seed.u), d.dot(seed.v), d.dot(seed.n));
