@@ -29,7 +29,6 @@ import os
 import random
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -284,24 +283,13 @@ if s3:
         assert hashlib.sha256(s3_object(listed[rel]["key"])).hexdigest() == digest, rel
     figures["s3_published_files"] = len(listed)
 
-pg_bin = "/usr/lib/postgresql/15/bin"
-if os.path.exists(f"{pg_bin}/initdb"):
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    pg = f"{work}/pg"
-    os.makedirs(pg)
-    as_pg = ["runuser", "-u", "postgres", "--"] if os.geteuid() == 0 else []
-    if as_pg:
-        shutil.chown(pg, "postgres")
-    subprocess.run(as_pg + [f"{pg_bin}/initdb", "-D", f"{pg}/data", "-A", "trust", "-U", "csgtile"],
-                   check=True, capture_output=True)
-    ctl = as_pg + [f"{pg_bin}/pg_ctl", "-D", f"{pg}/data"]
-    subprocess.run(ctl + ["-o", f"-p {port} -k {pg} -c listen_addresses=127.0.0.1", "-l",
-                          f"{pg}/log", "-w", "start"], check=True, capture_output=True)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from private_postgres import PrivatePostgres, available as postgres_available  # noqa: E402
+
+if postgres_available():
+    server = PrivatePostgres(f"{work}/pg")
     try:
-        queue = (f"queue:\n  backend: postgres\n  postgres_dsn: \"host=127.0.0.1 port={port} "
-                 f"dbname=postgres user=csgtile connect_timeout=5\"\n")
+        queue = "queue:\n" + server.queue_yaml()
         # Short leases, and a worker killed (SIGKILL) every 0.7-1.5 s while the run lasts, then
         # restarted as a supervisor would: jobs of killed workers are taken over.
         queue += "  lease_seconds: 2\n  max_attempts: 20\n"
@@ -338,7 +326,7 @@ if os.path.exists(f"{pg_bin}/initdb"):
         assert pg_outputs == reference, sorted(set(pg_outputs.items()) ^ set(reference.items()))[:6]
         figures["identical"].append(f"postgres, 3 workers, {kills} SIGKILLs")
     finally:
-        subprocess.run(ctl + ["-m", "fast", "stop"], capture_output=True)
+        server.stop()
 else:
     missing("POSTGRES", "PostgreSQL 15")
 

@@ -1,6 +1,6 @@
 """A private PostgreSQL 15 server for the CLI tests: initdb in a directory of the test (as the
 postgres user when run as root), trust authentication for the role csgtile, 127.0.0.1 on a
-free port. chaos_workers.py and city_run.py start theirs inline, the same way."""
+free port (city_run.py, sigterm_grace.py; chaos_workers.py starts its own inline, the same way)."""
 import os
 import shutil
 import socket

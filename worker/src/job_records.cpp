@@ -32,6 +32,20 @@ void JobRecords::add(const std::string& key, ordered_json record) {
   jobs.push_back({{"key", key}, {"result", std::move(record)}});
 }
 
+bool is_job_of_run(const std::string& key, const std::string& run) {
+  const std::size_t colon = key.find(':');
+  return colon != std::string::npos && key.size() > colon + run.size() + 1 &&
+         key.compare(colon + 1, run.size(), run) == 0 && key[colon + 1 + run.size()] == ':';
+}
+
+ordered_json dead_jobs_json(const std::vector<DeadJob>& dead) {
+  ordered_json out = ordered_json::array();
+  for (const DeadJob& d : dead) {
+    out.push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
+  }
+  return out;
+}
+
 Failure write_timings(const std::filesystem::path& run_dir, const std::string& run,
                       const JobRecords& records) {
   const ordered_json file = {

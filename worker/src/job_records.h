@@ -7,7 +7,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include <vector>
+
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/queue.h"
 #include "csgtile/worker/run.h"
 
 namespace csgtile::worker {
@@ -23,6 +26,13 @@ struct JobRecords {
   nlohmann::ordered_json timings = nlohmann::ordered_json::array();
   void add(const std::string& key, nlohmann::ordered_json record);
 };
+
+/// Whether a queue key "<kind>:<run>:..." belongs to `run` (run names have no ':'): a queue
+/// may hold several runs' jobs.
+bool is_job_of_run(const std::string& key, const std::string& run);
+
+/// The manifest's "dead" list: {"key", "attempts", "error"} per dead job, in the given order.
+nlohmann::ordered_json dead_jobs_json(const std::vector<DeadJob>& dead);
 
 /// Writes run_dir/timings.json (atomically) from the records' timings. Error: Io.
 Failure write_timings(const std::filesystem::path& run_dir, const std::string& run,

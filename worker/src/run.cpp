@@ -240,6 +240,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
                    const WorkOptions& options, WorkSummary& work) {
   const std::filesystem::path run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
   const std::string worker_id = options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
+  // Looked at once: it lists input directories, and the loop polls every few milliseconds.
+  const bool city_run = is_city_run(config);
   Failure failure;
   while (true) {
     ops::metrics().mark_progress();  // liveness (/healthz): the loop turns
@@ -258,7 +260,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
         // The next stage of a city run may be due (its enqueue lost to a crash, or not yet
         // made): enqueueing is idempotent, so every idle worker may try.
         std::size_t next = 0;
-        if (is_city_run(config)) {
+        if (city_run) {
           if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) {
             // Logged, not fatal: the worker goes on (the run then ends without its next stage,
             // which status and the missing manifest show).
@@ -380,11 +382,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   // A queue may hold several runs (one PostgreSQL database for a cluster, or one SQLite file
   // for runs sharing an output folder): a run publishes only its own jobs, whose keys are
   // "<kind>:<run name>:..." (run names have no ':').
-  const std::string own = ":" + config.run.name + ":";
-  auto of_this_run = [&own](const std::string& key) {
-    const std::size_t colon = key.find(':');
-    return colon != std::string::npos && key.compare(colon, own.size(), own) == 0;
-  };
+  auto of_this_run = [&config](const std::string& key) { return is_job_of_run(key, config.run.name); };
   summary.dead.clear();
   for (DeadJob& d : queue->dead_jobs(failure)) {
     if (of_this_run(d.key)) summary.dead.push_back(std::move(d));
@@ -448,10 +446,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   JobRecords records;
   for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
   manifest["jobs"] = std::move(records.jobs);
-  manifest["dead"] = ordered_json::array();
-  for (const DeadJob& d : summary.dead) {
-    manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
-  }
+  manifest["dead"] = dead_jobs_json(summary.dead);
   if (Failure f = write_timings(summary.run_dir, config.run.name, records); !f.ok()) return f;
   manifest["timings"] = "timings.json";
   manifest["index"] = {{"key", index.key},

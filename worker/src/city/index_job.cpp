@@ -104,12 +104,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   const auto results = queue.results(failure);
   if (!failure.ok()) return failure;
   std::vector<DeadJob> dead;
-  const std::string own = ":" + run + ":";
   for (DeadJob& d : queue.dead_jobs(failure)) {
-    const std::size_t colon = d.key.find(':');
-    if (colon != std::string::npos && d.key.compare(colon, own.size(), own) == 0) {
-      dead.push_back(std::move(d));
-    }
+    if (is_job_of_run(d.key, run)) dead.push_back(std::move(d));
   }
   if (!failure.ok()) return failure;
   const auto fits = done_records(results, "fit", run);
@@ -245,10 +241,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                        {"warnings", index.stats.warnings}};
   manifest["tiles"] = tiles_entry;
   manifest["jobs"] = std::move(records.jobs);
-  manifest["dead"] = ordered_json::array();
-  for (const DeadJob& d : dead) {
-    manifest["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
-  }
+  manifest["dead"] = dead_jobs_json(dead);
   manifest["problems"] = problems;
   manifest["timings"] = "timings.json";
   if (Failure f = write_timings(run_dir, run, records); !f.ok()) return f;
