@@ -44,8 +44,8 @@ export CSGTILE_REQUIRE_S3RVER="${CSGTILE_REQUIRE_S3RVER:-1}"
 # puppeteer-core and the 3D view compiled in (three, esbuild) from the same install.
 export CSGTILE_PUPPETEER_DIR="$PWD/build/npm/node_modules/puppeteer-core"
 export CSGTILE_REQUIRE_REPORT_VIEWER="${CSGTILE_REQUIRE_REPORT_VIEWER:-1}"
-# The random mixed-primitive Boolean property test runs ten times its default case count
-# here (400 pairs); the sanitizer stage keeps the default.
+# The seeded Boolean property tests run ten times their default case counts here (4 000 box
+# pairs, 400 mixed-primitive pairs); the sanitizer stage keeps the defaults.
 CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --output-on-failure -j"$jobs"
 
 if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then

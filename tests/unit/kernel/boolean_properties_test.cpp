@@ -36,16 +36,25 @@ Shape box_at(const Vec3& size, const Location& at) {
   return make_box(size.x(), size.y(), size.z()).value().moved(at);
 }
 
+// The one answer a Boolean may give instead of a solid when the exact result is not a
+// manifold solid (it pinches along an edge shared by four faces): the kernel's solids are
+// manifold, so it refuses by name.
+bool is_named_non_manifold_refusal(const Result<Shape>& r) {
+  return !r.ok() && r.error().code == ErrorCode::InvalidShape &&
+         r.error().message.find("non_manifold_edge") != std::string::npos;
+}
+
 // Random box pairs, often touching or sharing faces: snapped placements on a coarse grid.
+// 400 × CSGTILE_PROPERTY_SCALE cases (4 000 in CI). A result is a valid solid whose volumes
+// add up, or, where the exact result pinches (a hole touching the outer face along a line,
+// e.g. case 1539, the regression test CutWhoseHoleTouchesTheOuterFaceAlongALine), the named
+// non-manifold refusal; at most one case in a thousand may be such a refusal.
 TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
   std::mt19937_64 rng(7);
   std::uniform_int_distribution<int> grid(0, 4);
   std::uniform_int_distribution<int> turn(0, 7);
-  int checked = 0;
-  // Fixed at 400: at 4 000 (this generator, seed 7) one case still returns a named error
-  // (case 1539: a cut whose hole touches the outer face along a line, a non-manifold edge
-  // the checker rejects; see the issue notes).
-  const int cases = 400;
+  int checked = 0, refused = 0;
+  const int cases = 400 * test::property_scale();
   for (int i = 0; i < cases; ++i) {
     // Drawn one by one: argument evaluation order is unspecified, the sequence must not be.
     double v[13];
@@ -62,16 +71,42 @@ TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
     std::snprintf(buf, sizeof buf, "case %d: A %gx%gx%g at (%g,%g,%g); B %gx%gx%g at (%g,%g,%g) turned %g*pi/4", i,
                   sa.x(), sa.y(), sa.z(), ta.x(), ta.y(), ta.z(), sb.x(), sb.y(), sb.z(), tb.x(), tb.y(), tb.z(), v[12]);
     const std::string tag = buf;
-    const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
-    const Shape c = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
-    const Shape d = valid(boolean_operation(a, b, BooleanOp::Cut), tag + " cut");
+    const auto fuse = boolean_operation(a, b, BooleanOp::Fuse);
+    const auto common = boolean_operation(a, b, BooleanOp::Common);
+    const auto cut = boolean_operation(a, b, BooleanOp::Cut);
+    if (is_named_non_manifold_refusal(fuse) || is_named_non_manifold_refusal(common) ||
+        is_named_non_manifold_refusal(cut)) {
+      ++refused;
+      std::cout << tag << ": refused as non-manifold\n";
+      continue;
+    }
+    const Shape u = valid(fuse, tag + " fuse");
+    const Shape c = valid(common, tag + " common");
+    const Shape d = valid(cut, tag + " cut");
     if (u.is_null() || c.is_null() || d.is_null()) continue;
     const double va = volume(a), vb = volume(b);
     EXPECT_NEAR(volume(u) + volume(c), va + vb, 1e-9 * (va + vb)) << tag;
     EXPECT_NEAR(volume(d), va - volume(c), 1e-9 * va) << tag;
     ++checked;
   }
-  EXPECT_EQ(checked, cases);
+  EXPECT_EQ(checked + refused, cases);
+  EXPECT_LE(refused * 1000, cases) << refused << " named non-manifold refusals in " << cases;
+}
+
+// Case 1539 of the box pairs: a slab cut by a turned bar whose vertical edge lies in the
+// slab's side face. The exact result has a diamond hole touching that face along a line, an
+// edge bounded by four faces: not a manifold solid, so the cut is refused by name, while
+// fuse and common (manifold) are valid and their volumes add up.
+TEST(BooleanDegenerate, CutWhoseHoleTouchesTheOuterFaceAlongALine) {
+  const Shape slab = box_at(Vec3(5, 5, 1), Location::translation(Vec3(0.5, 1.5, 0.5)));
+  const Shape bar = box_at(Vec3(1, 1, 3), Location::translation(Vec3(1.5, 1.5, 0.5)) *
+                                              Location::rotation(Vec3::Zero(), Vec3::UnitZ(), std::numbers::pi / 4));
+  const auto cut = boolean_operation(slab, bar, BooleanOp::Cut);
+  EXPECT_TRUE(is_named_non_manifold_refusal(cut)) << (cut.ok() ? "a solid" : cut.error().message);
+  const Shape u = valid(boolean_operation(slab, bar, BooleanOp::Fuse), "fuse");
+  const Shape c = valid(boolean_operation(slab, bar, BooleanOp::Common), "common");
+  EXPECT_NEAR(volume(c), 1.0, 1e-12);  // the bar's 1 × 1 section through the slab's height 1
+  EXPECT_NEAR(volume(u) + volume(c), volume(slab) + volume(bar), 1e-9 * volume(u));
 }
 
 TEST(BooleanProperty, SelfOperationsOfEveryPrimitive) {
