@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 
+#include "boolean/arguments.h"
 #include "boolean/classifier.h"
 #include "boolean/face_split.h"
 #include "boolean/fuse_groups.h"
@@ -1553,20 +1554,46 @@ Result<Interference> solid_interference(const Shape& a, const Shape& b, const Bo
   BoundingBox ba = bounding_box(a), bb = bounding_box(b);
   ba.enlarge(options.tolerance);
   if (!ba.intersects(bb)) return Interference::Disjoint;
-  return BooleanEngine(a, b, BooleanOp::Common, options).interference();
+  auto pa = detail::prepare_argument(a, options);
+  if (!pa.ok()) return pa.error();
+  auto pb = detail::prepare_argument(b, options);
+  if (!pb.ok()) return pb.error();
+  return BooleanEngine(pa.value().shape, pb.value().shape, BooleanOp::Common, options).interference();
 }
+
+namespace detail {
+
+Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options,
+                         std::vector<std::vector<FaceOrigin>>* origins) {
+  BooleanEngine engine(a, b, op, options);
+  auto shape = engine.run();
+  if (shape.ok() && origins != nullptr) *origins = engine.take_origins();
+  return shape;
+}
+
+}  // namespace detail
 
 Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
                                 const BooleanOptions& options) {
-  return BooleanEngine(a, b, op, options).run();
+  auto pa = detail::prepare_argument(a, options);
+  if (!pa.ok()) return pa.error();
+  auto pb = detail::prepare_argument(b, options);
+  if (!pb.ok()) return pb.error();
+  return detail::run_engine(pa.value().shape, pb.value().shape, op, options, nullptr);
 }
 
 Result<BooleanResult> boolean_operation_with_history(const Shape& a, const Shape& b, BooleanOp op,
                                                      const BooleanOptions& options) {
-  BooleanEngine engine(a, b, op, options);
-  auto shape = engine.run();
+  auto pa = detail::prepare_argument(a, options);
+  if (!pa.ok()) return pa.error();
+  auto pb = detail::prepare_argument(b, options);
+  if (!pb.ok()) return pb.error();
+  BooleanResult out;
+  auto shape = detail::run_engine(pa.value().shape, pb.value().shape, op, options, &out.origins);
   if (!shape.ok()) return shape.error();
-  return BooleanResult{shape.value(), engine.take_origins()};
+  out.shape = shape.value();
+  detail::restate_origins(out.origins, pa.value(), pb.value());
+  return out;
 }
 
 namespace detail {
@@ -1608,7 +1635,15 @@ std::vector<std::vector<std::size_t>> fuse_groups(const std::vector<Shape>& shap
 
 }  // namespace detail
 
-Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options) {
+Result<Shape> boolean_fuse_all(const std::vector<Shape>& inputs, const BooleanOptions& options) {
+  // Arguments prepared once; partial results are engine results, ready as they are.
+  std::vector<Shape> shapes;
+  shapes.reserve(inputs.size());
+  for (const Shape& s : inputs) {
+    auto p = detail::prepare_argument(s, options);
+    if (!p.ok()) return p.error();
+    shapes.push_back(p.value().shape);
+  }
   std::vector<Shape> out;
   for (const auto& members : detail::fuse_groups(shapes, options.tolerance)) {
     std::vector<Shape> group;
@@ -1619,7 +1654,7 @@ Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOp
     }
     // A balanced tree of fuses (boolean/fuse_tree.h).
     auto fused = detail::fuse_tree(group, [&](const Shape& x, const Shape& y) {
-      return boolean_operation(x, y, BooleanOp::Fuse, options);
+      return detail::run_engine(x, y, BooleanOp::Fuse, options, nullptr);
     });
     if (!fused.ok()) return fused;
     for (const Shape& s : Explorer(fused.value(), ShapeKind::Solid)) out.push_back(s);
@@ -1630,15 +1665,19 @@ Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOp
 Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,
                            const BooleanOptions& options) {
   if (shapes.empty()) return ShapeFactory::compound({});
-  Shape acc = shapes.front();
+  auto first = detail::prepare_argument(shapes.front(), options);
+  if (!first.ok()) return first.error();
+  Shape acc = first.value().shape;
   for (std::size_t i = 1; i < shapes.size(); ++i) {
+    auto next = detail::prepare_argument(shapes[i], options);
+    if (!next.ok()) return next.error();
     // An empty intermediate result: common stays empty, cut stays empty.
     if (map_child_shapes(acc, ShapeKind::Solid).size() == 0) {
       if (op != BooleanOp::Fuse) return acc;
-      acc = shapes[i];
+      acc = next.value().shape;
       continue;
     }
-    auto r = boolean_operation(acc, shapes[i], op, options);
+    auto r = detail::run_engine(acc, next.value().shape, op, options, nullptr);
     if (!r.ok()) return r;
     acc = r.value();
   }

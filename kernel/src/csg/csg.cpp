@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <set>
 
+#include "boolean/arguments.h"
 #include "boolean/fuse_groups.h"
 #include "boolean/fuse_tree.h"
 #include "csgtile/kernel/explorer.h"
@@ -49,15 +50,17 @@ Tracked append_tree(std::vector<CsgNode>& nodes, const CsgModel& model) {
   return t;
 }
 
-/// a op b, composing the result faces' sources through the arguments'.
+/// a op b, composing the result faces' sources through the arguments'. A model's shape is a
+/// primitive or a Boolean result, ready for the engine as it is (boolean/arguments.h).
 Result<Tracked> tracked_boolean(const Tracked& a, const Tracked& b, BooleanOp op,
                                 const BooleanOptions& options) {
-  auto r = boolean_operation_with_history(a.shape, b.shape, op, options);
+  std::vector<std::vector<FaceOrigin>> origins;
+  auto r = detail::run_engine(a.shape, b.shape, op, options, &origins);
   if (!r.ok()) return r.error();
-  Tracked out{r.value().shape, {}};
-  out.sources.resize(r.value().origins.size());
+  Tracked out{r.value(), {}};
+  out.sources.resize(origins.size());
   for (std::size_t f = 0; f < out.sources.size(); ++f) {
-    for (const FaceOrigin& o : r.value().origins[f]) {
+    for (const FaceOrigin& o : origins[f]) {
       const Tracked& from = o.operand == 0 ? a : b;
       const auto& list = from.sources.at(static_cast<std::size_t>(o.face));
       out.sources[f].insert(out.sources[f].end(), list.begin(), list.end());

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <cstdio>
 #include <random>
+#include <set>
 
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
@@ -236,6 +237,55 @@ TEST(BooleanErrors, NonSolidArgumentsAreNamed) {
   auto face_only = boolean_operation(a, a.child(0).child(0), BooleanOp::Fuse);
   ASSERT_FALSE(face_only.ok());
   EXPECT_EQ(face_only.error().code, ErrorCode::InvalidArgument);
+}
+
+// Compounds and compsolids of solids are arguments like solids: the union of their solids'
+// interiors. Two apart boxes in a compound, cut by one bar across both; two overlapping boxes
+// in a compound fused with a third; a compsolid of two face-sharing boxes; an earlier
+// result as an argument.
+TEST(BooleanArguments, CompoundsAndCompsolidsOfSolids) {
+  const Shape left = make_box(2, 2, 2).value();
+  const Shape right = box_at(Vec3(2, 2, 2), Location::translation(Vec3(3, 0, 0)));
+  const Shape pair = ShapeFactory::compound({left, right}).value();
+  const Shape bar = box_at(Vec3(7, 1, 1), Location::translation(Vec3(-1, 0.5, 0.5)));
+  const Shape cut = valid(boolean_operation(pair, bar, BooleanOp::Cut), "compound - bar");
+  EXPECT_EQ(solids(cut), 2u);
+  EXPECT_NEAR(volume(cut), 2 * (8.0 - 2.0), 1e-9);
+  const Shape common = valid(boolean_operation(bar, pair, BooleanOp::Common), "bar & compound");
+  EXPECT_EQ(solids(common), 2u);
+  EXPECT_NEAR(volume(common), 4.0, 1e-9);
+
+  // Overlapping solids inside one compound count once.
+  const Shape shifted = box_at(Vec3(2, 2, 2), Location::translation(Vec3(1, 0, 0)));
+  const Shape overlapping = ShapeFactory::compound({left, shifted}).value();
+  const Shape cap = box_at(Vec3(3, 2, 1), Location::translation(Vec3(0, 0, 2)));
+  const Shape fused = valid(boolean_operation(overlapping, cap, BooleanOp::Fuse), "overlapping | cap");
+  EXPECT_EQ(solids(fused), 1u);
+  EXPECT_NEAR(volume(fused), 3 * 2 * 2 + 6.0, 1e-9);
+  // The history names the faces of the compound as given (12: six per box): all but the two
+  // inside the other box and the two tops under the cap; the cap's all but its bottom.
+  auto traced = boolean_operation_with_history(overlapping, cap, BooleanOp::Fuse);
+  ASSERT_TRUE(traced.ok()) << traced.error().message;
+  std::set<FaceOrigin> named;
+  for (const auto& list : traced.value().origins) named.insert(list.begin(), list.end());
+  std::size_t from_compound = 0, from_cap = 0;
+  for (const FaceOrigin& o : named) {
+    EXPECT_LT(o.face, o.operand == 0 ? 12 : 6);
+    ++(o.operand == 0 ? from_compound : from_cap);
+  }
+  EXPECT_EQ(from_compound, 8u);
+  EXPECT_EQ(from_cap, 5u);
+
+  // A compsolid: two boxes sharing the face x = 2.
+  const Shape next = box_at(Vec3(2, 2, 2), Location::translation(Vec3(2, 0, 0)));
+  const Shape cs = ShapeFactory::compsolid({left, next}).value();
+  const Shape column = make_cylinder(0.5, 4).value().moved(Location::translation(Vec3(2, 1, -1)));
+  const Shape drilled = valid(boolean_operation(cs, column, BooleanOp::Cut), "compsolid - column");
+  EXPECT_NEAR(volume(drilled), 16.0 - std::numbers::pi * 0.25 * 2, 1e-7 * 16.0);
+
+  // An earlier result as an argument.
+  const Shape again = valid(boolean_operation(drilled, cap, BooleanOp::Fuse), "result | cap");
+  EXPECT_NEAR(volume(again), volume(drilled) + 6.0 - 0.0, 1e-7 * 22.0);
 }
 
 // Thin slivers: boxes overlapping by far less than their size but far more than the
