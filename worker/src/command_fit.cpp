@@ -107,6 +107,7 @@ int run_fit(const FitCommand& c) {
   seconds["total"] = since(start);
   out["points"] = f.input_points;
   out["ground_points"] = f.ground_points;
+  out["other_class_points"] = f.other_class_points;
   out["outlier_points"] = f.outlier_points;
   out["fitted_points"] = f.fitted_points;
   out["small_cluster_points"] = f.small_cluster_points;
@@ -136,8 +137,8 @@ int run_fit(const FitCommand& c) {
     std::cout << out.dump() << "\n";
     return 0;
   }
-  std::printf("%-20s%lld (ground %lld, outliers %lld)\n", "points", f.input_points, f.ground_points,
-              f.outlier_points);
+  std::printf("%-20s%lld (ground %lld, other classes %lld, outliers %lld)\n", "points",
+              f.input_points, f.ground_points, f.other_class_points, f.outlier_points);
   std::printf("%-20s%lld in %d regions\n", "fitted points", f.fitted_points, f.regions);
   std::printf("%-20s%zu\n", "primitives", f.primitives.size());
   for (int t = 0; t < kernel::kPrimitiveTypeCount; ++t) {

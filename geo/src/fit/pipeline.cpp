@@ -154,21 +154,36 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       terrain.ny = static_cast<int>((y1 - y0) / terrain.cell) + 1;
       terrain.z.assign(static_cast<std::size_t>(terrain.nx) * static_cast<std::size_t>(terrain.ny),
                        NAN);
+      terrain.mean.assign(terrain.z.size(), 0.0);
     }
   }
+  std::vector<std::uint32_t> terrain_count(terrain.z.size(), 0);
+  const bool filter_classes = !options.classes.keep.empty() && classes.size() == points.size();
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
+    if (!ground[i] && filter_classes &&
+        std::find(options.classes.keep.begin(), options.classes.keep.end(), classes[i]) ==
+            options.classes.keep.end()) {
+      ++out.other_class_points;
+      continue;
+    }
     if (ground[i]) {
       ++out.ground_points;
       if (terrain.nx > 0) {
         const auto x = static_cast<std::size_t>((points[i].x() - terrain.x0) / terrain.cell);
         const auto y = static_cast<std::size_t>((points[i].y() - terrain.y0) / terrain.cell);
-        double& h = terrain.z[y * static_cast<std::size_t>(terrain.nx) + x];
+        const std::size_t c = y * static_cast<std::size_t>(terrain.nx) + x;
+        double& h = terrain.z[c];
         if (!(h <= points[i].z())) h = points[i].z();
+        terrain.mean[c] += points[i].z();
+        ++terrain_count[c];
       }
     } else {
       above.push_back(points[i]);
     }
+  }
+  for (std::size_t c = 0; c < terrain.mean.size(); ++c) {
+    terrain.mean[c] = terrain_count[c] > 0 ? terrain.mean[c] / terrain_count[c] : NAN;
   }
   PrimitiveOptions primitive_options = options.primitives;
   if (primitive_options.ground == nullptr && terrain.nx > 0) primitive_options.ground = &terrain;

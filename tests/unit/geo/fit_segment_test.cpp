@@ -103,6 +103,33 @@ TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
   EXPECT_LT(out->unassigned_points, out->fitted_points / 10);
 }
 
+// With classes.keep, only the kept classes are fitted: the sphere labelled vegetation (5)
+// is left out and counted, the column and beam (6) are fitted; ground stays class 2.
+TEST(FitSegment, ClassFilterKeepsOnlyTheNamedClasses) {
+  const Cloud c = small_scene();
+  const std::size_t ground = 10 * 10 * 100;  // the first cloud: 10 m × 10 m at 0.1 m
+  std::vector<std::uint8_t> classes(c.points.size(), 6);
+  std::fill(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(ground), 2);
+  const std::size_t sphere = c.points.size() - 5000;  // the last cloud
+  std::fill(classes.begin() + static_cast<std::ptrdiff_t>(sphere), classes.end(), 5);
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.classes.keep = {6};
+  const auto out = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->other_class_points, 5000);
+  EXPECT_EQ(out->ground_points, static_cast<long long>(ground));
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Sphere)], 0);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Box)], 1);
+  // Without the filter the sphere is fitted again.
+  o.classes.keep.clear();
+  const auto all = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(all.ok());
+  EXPECT_EQ(all->other_class_points, 0);
+  EXPECT_EQ(all->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
+}
+
 TEST(FitSegment, PipelineOutputIsTheSameBytesForTheSameSeed) {
   const Cloud c = small_scene();
   FitPipelineOptions o;

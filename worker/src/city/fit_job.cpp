@@ -102,6 +102,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["fit_options_sha256"] = sha256_hex(options_text);
   record["points"] = fit.input_points;
   record["ground_points"] = fit.ground_points;
+  record["other_class_points"] = fit.other_class_points;
   record["outlier_points"] = fit.outlier_points;
   record["fitted_points"] = fit.fitted_points;
   record["assigned_points"] = fit.assigned_points;

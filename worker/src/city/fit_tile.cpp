@@ -52,6 +52,7 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
     std::vector<const char*> keys;
   };
   const std::vector<Section> known = {
+      {"classes", {"keep"}},
       {"outliers", {"enabled", "neighbours", "std_ratio"}},
       {"voxel", {"size"}},
       {"normals", {"neighbours"}},
@@ -89,6 +90,19 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
     return it == doc.end() ? empty : *it;
   };
   const auto& ransac = sec("ransac");
+  if (const auto keep = sec("classes").find("keep"); keep != sec("classes").end()) {
+    bool valid = keep->is_array();
+    o.classes.keep.clear();
+    for (std::size_t k = 0; valid && k < keep->size(); ++k) {
+      const auto& c = (*keep)[k];
+      valid = c.is_number_integer() && c.get<long long>() >= 0 && c.get<long long>() <= 255;
+      if (valid) o.classes.keep.push_back(static_cast<std::uint8_t>(c.get<long long>()));
+    }
+    if (!valid) {
+      error = file + ": classes.keep must be a list of class numbers 0..255";
+      return false;
+    }
+  }
   bool ok =
       take(sec("outliers"), "outliers", "enabled", o.outliers.enabled, error) &&
       take(sec("outliers"), "outliers", "neighbours", o.outliers.neighbours, error) &&

@@ -74,7 +74,16 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const kerne
                                                            double* tolerance_used = nullptr);
 
 /// Every option of the fit pipeline.
+/// Which classified points are fitted. When the input carries a classification (LAS) and
+/// `keep` is not empty, only non-ground points of those ASPRS classes are fitted (e.g. 6,
+/// buildings, and 26 in AHN, civil structures), so that trees and cars do not compete for
+/// primitives; ground (class 2) is still taken for the terrain. Unclassified inputs keep all.
+struct ClassOptions {
+  std::vector<std::uint8_t> keep;
+};
+
 struct FitPipelineOptions {
+  ClassOptions classes;
   OutlierOptions outliers;
   VoxelOptions voxel;
   NormalOptions normals;
@@ -101,6 +110,7 @@ struct FitOutput {
   std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
   long long input_points = 0;
   long long ground_points = 0;
+  long long other_class_points = 0;    ///< non-ground points of classes not kept
   long long outlier_points = 0;
   long long fitted_points = 0;         ///< points given to the RANSAC (after downsampling)
   long long assigned_points = 0;       ///< of those, explained by an output primitive
