@@ -2,7 +2,7 @@
 """Recall and precision of fitted primitives against a `csgtile synth` truth file.
 
 Usage: fit_recall.py --truth T.json --fit F.json [--las SCAN.las --min-points 50]
-                     [--radius 0.02 --angle 5 --position 0.02]
+                     [--radius 0.02 --angle 5 --position 0.02 --iou 0.8 --extent 0.04]
                      [--min-recall R --min-precision P]   (exit 1 below them: CLI tests)
 
 A truth primitive and a fitted one match when their types are equal and
@@ -12,7 +12,17 @@ A truth primitive and a fitted one match when their types are equal and
     within `radius`;
   - sphere: centres within `position`, radii within `radius`;
   - torus: centres within `position`, axes within `angle`, both radii within `radius`;
-  - box: centres within `position` and each truth edge direction within `angle` of a fitted one.
+  - box: centres within `position` and each truth edge direction within `angle` of a fitted one;
+  - extrusion: directions (local z) within `angle`; the fitted profile (outer ring minus holes,
+    placed in the world and projected along the truth's direction into the truth's profile
+    plane) overlaps the truth's with IoU >= `--iou` (0.8); height and base (the start along
+    the direction) each within `--extent` (default 2 × `position`; an airborne scan of 0.4 m
+    spacing places a building's ends no better than its spacing: --extent 0.5 shows those);
+  - revolution: axes within `angle`, the fitted axis line within `position` of the truth
+    axis at the profile's mid-height, angles (radians → degrees) within `angle`, and at 20
+    heights spread over the truth profile's inner 90 % the outer radii within `radius` at
+    >= 80 % of them (the rest are steps of the profile that a small shift along the axis moves
+    across a height).
 Matching is one-to-one, greedy by position error. With --las, only truth primitives hit by at
 least --min-points points (the scan's "truth_index" extra dimension) count as visible, and
 recall is given over the visible ones as well. Prints one JSON object.
@@ -104,9 +114,95 @@ def describe(p):
     elif kind == "torus":
         out["centre"] = apply(rot, t, [0, 0, 0])
         out["R"], out["r"] = p["R"] * s, p["r"] * s
+    elif kind == "extrusion":
+        out["origin"] = apply(rot, t, [0, 0, 0])
+        out["centre"] = apply(rot, t, [0, 0, p["h"] / 2])
+        out["h"] = p["h"] * s
+        out["rings"] = [[apply(rot, t, [v[0], v[1], 0]) for v in ring]
+                        for ring in [p["profile"]] + p.get("holes", [])]
+        out["frame"] = [col(rot, 0), col(rot, 1)]
+    elif kind == "revolution":
+        out["origin"] = apply(rot, t, [0, 0, 0])
+        out["profile"] = [[v[0] * s, v[1] * s] for v in p["profile"]]
+        out["angle"] = p.get("angle", 2 * math.pi)
+        zs = [v[1] for v in out["profile"]]
+        out["centre"] = apply(rot, t, [0, 0, (min(zs) + max(zs)) / 2 / s])
     else:
         out["centre"] = apply(rot, t, [0, 0, 0])
     return out
+
+
+def inside(x, y, ring):
+    inn = False
+    j = len(ring) - 1
+    for i in range(len(ring)):
+        (xi, yi), (xj, yj) = ring[i], ring[j]
+        if (yi > y) != (yj > y) and x < (xj - xi) * (y - yi) / (yj - yi) + xi:
+            inn = not inn
+        j = i
+    return inn
+
+
+def profile_iou(t, f):
+    """IoU of two extrusion profiles in the truth's profile plane (200 × 200 samples)."""
+    u, v = t["frame"]
+
+    def flat(rings):
+        return [[(dot(sub(p, t["origin"]), u), dot(sub(p, t["origin"]), v)) for p in r]
+                for r in rings]
+
+    tr, fr = flat(t["rings"]), flat(f["rings"])
+    xs = [p[0] for r in tr + fr for p in r]
+    ys = [p[1] for r in tr + fr for p in r]
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+    n = 200
+    both = either = 0
+    for i in range(n):
+        x = x0 + (x1 - x0) * (i + 0.5) / n
+        for j in range(n):
+            y = y0 + (y1 - y0) * (j + 0.5) / n
+            a = inside(x, y, tr[0]) and not any(inside(x, y, h) for h in tr[1:])
+            b = inside(x, y, fr[0]) and not any(inside(x, y, h) for h in fr[1:])
+            both += a and b
+            either += a or b
+    return both / either if either else 0.0
+
+
+def outer_radius(profile, z):
+    """Largest rho where the closed (rho, z) profile crosses height z; None when it does not."""
+    best = None
+    for i in range(len(profile)):
+        (ra, za), (rb, zb) = profile[i], profile[(i + 1) % len(profile)]
+        if za == zb or (za - z) * (zb - z) > 0:
+            continue
+        r = ra + (rb - ra) * (z - za) / (zb - za)
+        best = r if best is None else max(best, r)
+    return best
+
+
+def revolution_error(t, f, tol):
+    """Axis distance when revolution f matches t within the tolerances, else None."""
+    if angle_deg(t["axis"], f["axis"]) > tol.angle:
+        return None
+    e = line_distance(t["centre"], f["origin"], f["axis"])
+    if e > tol.position or abs(math.degrees(t["angle"] - f["angle"])) > tol.angle:
+        return None
+    zs = [v[1] for v in t["profile"]]
+    z0, z1 = min(zs), max(zs)
+    good = 0
+    heights = [z0 + (z1 - z0) * (0.05 + 0.9 * k / 19) for k in range(20)]
+    for z in heights:
+        world = [t["origin"][i] + z * t["axis"][i] for i in range(3)]
+        fz = dot(sub(world, f["origin"]), f["axis"])
+        rt, rf = outer_radius(t["profile"], z), outer_radius(f["profile"], fz)
+        if rt is not None and rf is not None and abs(rt - rf) <= tol.radius:
+            good += 1
+    return e if good >= 0.8 * len(heights) else None
+
+
+def apply_axis(d, h):
+    """The point at distance h from a description's origin along its axis."""
+    return [d["origin"][i] + h * d["axis"][i] for i in range(3)]
 
 
 def cone_radius_at(c, point):
@@ -144,6 +240,18 @@ def match_error(t, f, tol):
             if min(angle_deg(a, b) for b in f["axes"]) > tol.angle:
                 return None
         e = norm(sub(t["centre"], f["centre"]))
+    elif kind == "extrusion":
+        if angle_deg(t["axis"], f["axis"]) > tol.angle or abs(t["h"] - f["h"]) > tol.extent:
+            return None
+        # Base: where each starts along the truth's direction (the fitted one may run either way).
+        fb = [dot(sub(f["origin"], t["origin"]), t["axis"]),
+              dot(sub(apply_axis(f, f["h"]), t["origin"]), t["axis"])]
+        if min(abs(b) for b in fb) > tol.extent:
+            return None
+        iou = profile_iou(t, f)
+        return (1.0 - iou) if iou >= tol.iou else None
+    elif kind == "revolution":
+        return revolution_error(t, f, tol)
     else:
         return None
     return e if e <= tol.position else None
@@ -174,9 +282,13 @@ def main():
     ap.add_argument("--radius", type=float, default=0.02)
     ap.add_argument("--angle", type=float, default=5.0)
     ap.add_argument("--position", type=float, default=0.02)
+    ap.add_argument("--iou", type=float, default=0.8, help="extrusion profile IoU to match")
     ap.add_argument("--min-recall", type=float, help="exit 1 when visible recall is lower")
     ap.add_argument("--min-precision", type=float, help="exit 1 when precision is lower")
+    ap.add_argument("--extent", type=float, help="extrusion height and base (default 2 × position)")
     tol = ap.parse_args()
+    if tol.extent is None:
+        tol.extent = 2 * tol.position
     truth = json.load(open(tol.truth))["primitives"]
     fitted = json.load(open(tol.fit))["primitives"]
     td = [describe(p) for p in truth]
@@ -206,10 +318,13 @@ def main():
     for f in fd:
         by_type.setdefault(f["type"], {"truth": 0, "visible": 0, "matched": 0, "fitted": 0})
         by_type[f["type"]]["fitted"] += 1
-    errors = {"position": [], "radius": [], "angle": [], "box_size": []}
+    errors = {"position": [], "radius": [], "angle": [], "box_size": [], "extrusion_iou": []}
     for i, j, e in matches:
         t, f = td[i], fd[j]
-        errors["position"].append(e)
+        if t["type"] == "extrusion":
+            errors["extrusion_iou"].append(1.0 - e)
+        else:
+            errors["position"].append(e)
         if "r" in t and t["type"] in ("cylinder", "sphere", "torus"):
             errors["radius"].append(abs(t["r"] - f["r"]))
         if t["type"] in ("cylinder", "cone", "torus"):

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -95,5 +96,65 @@ Vec3 canonical_axis(const Vec3& axis);
 
 /// Two unit vectors completing `axis` to a right-handed orthonormal frame.
 void orthonormal_basis(const Vec3& axis, Vec3& e1, Vec3& e2);
+
+// ---- Extrusions and revolutions (extrusion.cpp) ----
+
+/// A piece of a profile: the seen part of a straight line in a 2-D profile plane, from `a` to
+/// `b` (a wall's trace in an extrusion's section, a cylinder's or cone's generator in (ρ, z)).
+struct ProfileSegment {
+  kernel::Vec2 a, b;
+};
+
+/// Closed rings from profile segments: each ring starts at the longest segment left and
+/// follows, from its free end, the nearest free end of another segment, joining the two at
+/// the intersection of their lines when that lies within `reach` of both ends (a corner),
+/// else by a straight edge between the ends (a side the scan did not see); a ring closes when
+/// its own start is the nearest end. Collinear and repeated vertices are removed; rings of
+/// fewer than 3 vertices or no area are dropped. Deterministic (ties by segment order).
+std::vector<std::vector<kernel::Vec2>> chain_profile(const std::vector<ProfileSegment>& segments,
+                                                     double reach);
+
+/// A higher-level primitive proposed from several shapes: its spec, the points it explains,
+/// its surface area (for coverage) and the shapes it absorbs (they make no primitive of their
+/// own once it is kept).
+struct Proposal {
+  kernel::PrimitiveSpec spec;
+  std::vector<std::uint32_t> members;  ///< ascending
+  double area = 0.0;
+  std::vector<int> shapes;  ///< ascending
+  std::string what;
+};
+
+/// Inputs shared by the proposers: the region's points and normals, its shapes, which points
+/// an earlier primitive already took, and the options.
+struct ProposalInput {
+  std::span<const Vec3> points;
+  std::span<const Vec3> normals;
+  const RansacResult* shapes = nullptr;
+  const std::vector<char>* used = nullptr;
+  const std::vector<char>* absorbed = nullptr;  ///< per shape: taken by an earlier proposal
+  const PrimitiveOptions* options = nullptr;
+  const RansacOptions* ransac = nullptr;
+  double cell = 0.1;  ///< connectivity size of the region
+};
+
+/// Revolutions from coaxial cylinders and cones (two or more) and the planes ⟂ their axis
+/// within their radius. Groups whose profile is a plain cylinder or cone stay those.
+/// Reasons for groups that make no revolution are appended to `rejected`.
+std::vector<Proposal> propose_revolutions(const ProposalInput& in,
+                                          std::vector<Rejection>& rejected);
+
+/// One extrusion from the planes parallel to a common direction (walls, roof slopes) with
+/// the planes ⟂ it as caps, kept only when it describes the region more briefly than the box
+/// around its profile (points unexplained + parameter cost). nullopt and a reason otherwise.
+std::optional<Proposal> propose_extrusion(const ProposalInput& in,
+                                          std::vector<Rejection>& rejected);
+
+/// One vertical extrusion from a flat roof seen from the air (roof.cpp): the outline of its
+/// points as the footprint (inner rings as courtyards), the roof as the top, the ground grid
+/// as the bottom; needs PrimitiveOptions::ground. Kept only when it describes the region more
+/// briefly than the box around its footprint (a rectangular roof stays the boxes' work).
+std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
+                                               std::vector<Rejection>& rejected);
 
 }  // namespace csgtile::geo::detail

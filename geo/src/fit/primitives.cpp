@@ -258,6 +258,7 @@ class Builder {
                      const std::array<double, 4>& section) const;
   void boxes();
   void curved(int index);
+  bool take(const detail::Proposal& proposal);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what);
 
@@ -270,6 +271,7 @@ class Builder {
   double cos_tol_ = 1.0;
   double cell_ = 0.1;
   std::vector<char> used_;
+  std::vector<char> absorbed_;  // per shape: part of a kept extrusion or revolution
   std::vector<PlanePatch> patches_;
   FittedPrimitives out_;
 };
@@ -571,7 +573,7 @@ bool Builder::round_section(const std::vector<std::uint32_t>& members, const Pla
 void Builder::boxes() {
   std::vector<int> order;
   for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {
-    if (shapes_.shapes[s].surface.type != ShapeType::Plane) continue;
+    if (shapes_.shapes[s].surface.type != ShapeType::Plane || absorbed_[s]) continue;
     for (auto& piece : split_plane(points_, shapes_.shapes[s], ransac_.epsilon)) {
       if (static_cast<long long>(piece.size()) < std::max<long long>(3, ransac_.min_points / 4)) {
         continue;
@@ -776,10 +778,45 @@ void Builder::curved(int index) {
   emit(std::move(spec), members, area, what);
 }
 
+// A proposal of several shapes (extrusion, revolution) kept when its solid is valid; its
+// shapes then make nothing of their own. True when kept.
+bool Builder::take(const detail::Proposal& proposal) {
+  const std::size_t before = out_.primitives.size();
+  emit(proposal.spec, proposal.members, proposal.area, proposal.what);
+  if (out_.primitives.size() == before) return false;
+  for (int s : proposal.shapes) absorbed_[static_cast<std::size_t>(s)] = 1;
+  return true;
+}
+
 FittedPrimitives Builder::run() {
+  absorbed_.assign(shapes_.shapes.size(), 0);
+  detail::ProposalInput in;
+  in.points = points_;
+  in.normals = normals_;
+  in.shapes = &shapes_;
+  in.used = &used_;
+  in.absorbed = &absorbed_;
+  in.options = &o_;
+  in.ransac = &ransac_;
+  in.cell = cell_;
+  if (o_.revolutions) {
+    for (const auto& p : detail::propose_revolutions(in, out_.rejected)) take(p);
+  }
+  if (o_.extrusions) {
+    // One at a time: each kept extrusion takes its walls, the next is sought among the rest.
+    for (int k = 0; k < 8; ++k) {
+      const auto p = detail::propose_extrusion(in, out_.rejected);
+      if (!p || !take(*p)) break;
+    }
+    for (int k = 0; k < 8; ++k) {
+      const auto p = detail::propose_roof_extrusion(in, out_.rejected);
+      if (!p || !take(*p)) break;
+    }
+  }
   if (o_.boxes) boxes();
   for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {
     const ShapeType type = shapes_.shapes[s].surface.type;
+    if (absorbed_[s]) continue;
     if (type == ShapeType::Plane) {
       if (!o_.boxes) {
         out_.rejected.push_back({"plane " + std::to_string(s), "planes alone are not primitives",
@@ -811,6 +848,29 @@ double GroundGrid::lowest_near(double x, double y, double radius) const {
     }
   }
   return best;
+}
+
+double GroundGrid::median_near(double x, double y, double radius) const {
+  if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
+  const std::vector<double>& level = mean.size() == z.size() ? mean : z;
+  const auto clamp_x = [&](double v) {
+    return std::clamp(static_cast<int>(std::floor((v - x0) / cell)), 0, nx - 1);
+  };
+  const auto clamp_y = [&](double v) {
+    return std::clamp(static_cast<int>(std::floor((v - y0) / cell)), 0, ny - 1);
+  };
+  std::vector<double> found;
+  for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
+    for (int i = clamp_x(x - radius); i <= clamp_x(x + radius); ++i) {
+      const double h = level[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+                             static_cast<std::size_t>(i)];
+      if (std::isfinite(h)) found.push_back(h);
+    }
+  }
+  if (found.empty()) return NAN;
+  const auto mid = found.begin() + static_cast<std::ptrdiff_t>(found.size() / 2);
+  std::nth_element(found.begin(), mid, found.end());
+  return *mid;
 }
 
 FittedPrimitives primitives_from_shapes(std::span<const Vec3> points, std::span<const Vec3> normals,

@@ -63,7 +63,7 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
         "max_radius", "seed", "plane", "sphere", "cylinder", "cone", "torus", "max_candidates"}},
       {"primitives",
        {"boxes", "max_box_depth", "min_box_thickness", "min_seed_coverage", "angle_tolerance_deg",
-        "min_building_width"}},
+        "min_building_width", "extrusions", "revolutions"}},
   };
   for (const auto& [name, value] : doc.items()) {
     const auto section =
@@ -133,7 +133,9 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
       take(sec("primitives"), "primitives", "angle_tolerance_deg", o.primitives.angle_tolerance_deg,
            error) &&
       take(sec("primitives"), "primitives", "min_building_width", o.primitives.min_building_width,
-           error);
+           error) &&
+      take(sec("primitives"), "primitives", "extrusions", o.primitives.extrusions, error) &&
+      take(sec("primitives"), "primitives", "revolutions", o.primitives.revolutions, error);
   const char* types[] = {"plane", "sphere", "cylinder", "cone", "torus"};
   for (std::size_t t = 0; ok && t < 5; ++t) {
     bool enabled = o.ransac.shapes[t];

@@ -2,8 +2,9 @@
 /// \file
 /// Primitive fitting: an efficient RANSAC (after Schnabel, Wahl and Klein 2007) that finds
 /// planes, spheres, cylinders, cones and tori in a point cloud with normals, and the step that
-/// turns those shapes into scene primitives (boxes from orthogonal planes, bounded cylinders,
-/// cones, spheres, tori) built and checked as kernel solids.
+/// turns those shapes into scene primitives (extrusions from walls or from a flat roof's
+/// outline, revolutions from coaxial surfaces, boxes from orthogonal planes, bounded
+/// cylinders, cones, spheres, tori) built and checked as kernel solids.
 ///
 /// Determinism. Every random choice comes from one seeded generator with our own transforms;
 /// the detection is single-threaded and iterates in index order, so the same points, options
@@ -89,8 +90,13 @@ struct GroundGrid {
   double x0 = 0.0, y0 = 0.0, cell = 1.0;
   int nx = 0, ny = 0;
   std::vector<double> z;  ///< row-major by y, nx × ny
+  /// Mean ground height per cell (same layout; may be empty: then `z` stands for it).
+  std::vector<double> mean;
   /// The lowest height within `radius` metres of (x, y); NaN when there is none.
   double lowest_near(double x, double y, double radius) const;
+  /// The median of the cells' mean heights within `radius` metres of (x, y): the terrain
+  /// level there without the noise's lowest extremes (flat terrain); NaN when there is none.
+  double median_near(double x, double y, double radius) const;
 };
 
 /// Options of the step from shapes to primitives.
@@ -110,6 +116,12 @@ struct PrimitiveOptions {
   double min_building_height = 2.0;
   double min_building_width = 1.0;
   double linear_tolerance = 1e-7;  ///< of the kernel solids built to check primitives
+  /// Extrusions from planes parallel to one direction (an L-shaped or courtyard building, a
+  /// gabled house), kept when they describe the region more briefly than a box.
+  bool extrusions = true;
+  /// Revolutions from coaxial cylinders and cones and the planes ⟂ their axis (a fountain, a
+  /// vase, a curved wall); a plain cylinder or cone stays one.
+  bool revolutions = true;
 };
 
 /// Why a shape or primitive was dropped.
@@ -126,9 +138,14 @@ struct FittedPrimitives {
   long long assigned_points = 0;  ///< points explained by an output primitive
 };
 
-/// Turns detected shapes into primitives: boxes from planes (a seed plane well covered by
-/// its points; its depth from the region's points facing like it at the opposite face or
-/// across it on its long edges, whether or not the RANSAC made planes of them; its length
+/// Turns detected shapes into primitives, in this order: revolutions from two or more
+/// distinct coaxial cylinders, cones or tori with the planes ⟂ their axis (a full turn, or the
+/// inliers' angular span); extrusions from three or more planes parallel to one direction
+/// whose traces close a profile, then from flat roofs' outlines over the ground grid, each
+/// kept only when its description length (points unexplained + λ·parameters) beats the box
+/// around its profile (so a plain box stays a box); then boxes from planes (a seed plane
+/// well covered by its points; its depth from the region's points facing like it at the opposite
+/// face or across it on its long edges, whether or not the RANSAC made planes of them; its length
 /// grown over the points of its faces up to whatever else stands in its cross-section),
 /// cylinders and cones bounded by their inliers along the axis, spheres and tori as they are.
 /// Each primitive is built as a kernel solid and checked; invalid ones are rejected with the

@@ -1,0 +1,553 @@
+// Extrusions from a flat roof seen from the air, whose walls the scan barely sees: the
+// outline of the roof's points (an occupancy grid in the roof's principal frame, closed over
+// the gaps between scan lines, its boundary traced, simplified and its edges snapped to the
+// principal directions and moved onto the outermost roof points) is the footprint, the roof
+// the top, the terrain under it (the ground grid) the bottom. Inner rings of the outline are
+// courtyards unless something stands on the roof there (a stair housing is no hole).
+//
+// Kept only when it describes the region more briefly than the box around its footprint:
+// description length = points unexplained (neither inside the solid nor within the outline's
+// precision of its walls) + roof area the primitive claims but no roof point
+// covers (× point density) + λ · parameters, as in extrusion.cpp. The box of an L-shaped
+// block claims a roof over the empty corner, the extrusion does not.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "fit/fit_internal.h"
+
+namespace csgtile::geo::detail {
+
+namespace {
+
+using kernel::PrimitiveType;
+using kernel::Vec2;
+
+double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+double ring_area(const std::vector<Vec2>& ring) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const Vec2& p = ring[i];
+    const Vec2& q = ring[(i + 1) % ring.size()];
+    a += p.x() * q.y() - p.y() * q.x();
+  }
+  return 0.5 * a;
+}
+
+bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2& a = ring[i];
+    const Vec2& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Convex hull (monotone chain), counter-clockwise.
+std::vector<Vec2> hull_of(std::vector<Vec2> pts) {
+  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  std::vector<Vec2> h(2 * pts.size());
+  std::size_t k = 0;
+  for (const auto& p : pts) {
+    while (k >= 2 && cross2(h[k - 2], h[k - 1], p) <= 0) --k;
+    h[k++] = p;
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross2(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
+    h[k++] = pts[i];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+// Douglas–Peucker on the open chain ring[i..j] (indices modulo n), marking kept vertices.
+void simplify(const std::vector<Vec2>& ring, std::size_t i, std::size_t j, double tol,
+              std::vector<char>& keep) {
+  const std::size_t n = ring.size();
+  if ((j + n - i) % n < 2) return;
+  double worst = -1.0;
+  std::size_t at = i;
+  for (std::size_t k = (i + 1) % n; k != j; k = (k + 1) % n) {
+    const double d = segment_distance(ring[k], ring[i], ring[j]);
+    if (d > worst) {
+      worst = d;
+      at = k;
+    }
+  }
+  if (worst <= tol) return;
+  keep[at] = 1;
+  simplify(ring, i, at, tol, keep);
+  simplify(ring, at, j, tol, keep);
+}
+
+// The boundary loops of the occupied cells of a grid (nx × ny, a one-cell empty border),
+// with the occupied side on the left: outer rings counter-clockwise, holes clockwise. At a
+// vertex where two loops touch diagonally the trace turns left, keeping them apart.
+std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ, int nx, int ny) {
+  auto at = [&](int i, int j) {
+    return i >= 0 && j >= 0 && i < nx && j < ny &&
+           occ[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+               static_cast<std::size_t>(i)];
+  };
+  struct Edge {
+    std::array<int, 2> a, b;
+  };
+  std::vector<Edge> edges;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      if (!at(i, j)) continue;
+      if (!at(i, j - 1)) edges.push_back({{i, j}, {i + 1, j}});
+      if (!at(i + 1, j)) edges.push_back({{i + 1, j}, {i + 1, j + 1}});
+      if (!at(i, j + 1)) edges.push_back({{i + 1, j + 1}, {i, j + 1}});
+      if (!at(i - 1, j)) edges.push_back({{i, j + 1}, {i, j}});
+    }
+  }
+  std::map<std::array<int, 2>, std::vector<std::size_t>> from;
+  for (std::size_t e = 0; e < edges.size(); ++e) from[edges[e].a].push_back(e);
+  std::vector<char> done(edges.size(), 0);
+  std::vector<std::vector<std::array<int, 2>>> loops;
+  for (std::size_t first = 0; first < edges.size(); ++first) {
+    if (done[first]) continue;
+    std::vector<std::array<int, 2>> loop;
+    std::size_t e = first;
+    for (;;) {
+      done[e] = 1;
+      loop.push_back(edges[e].a);
+      const auto& out = from[edges[e].b];
+      std::size_t next = edges.size();
+      const int dx = edges[e].b[0] - edges[e].a[0], dy = edges[e].b[1] - edges[e].a[1];
+      int best_turn = -2;
+      for (auto k : out) {
+        if (done[k]) continue;
+        const int ex = edges[k].b[0] - edges[k].a[0], ey = edges[k].b[1] - edges[k].a[1];
+        const int turn = dx * ey - dy * ex;  // +1 left, 0 straight, -1 right
+        if (turn > best_turn) {
+          best_turn = turn;
+          next = k;
+        }
+      }
+      if (next == edges.size()) break;
+      e = next;
+    }
+    if (loop.size() >= 4) loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z) {
+  Eigen::Matrix3d r;
+  r.col(2) = z.normalized();
+  r.col(1) = r.col(2).cross(x).normalized();
+  r.col(0) = r.col(1).cross(r.col(2)).normalized();
+  return r;
+}
+
+}  // namespace
+
+std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
+                                               std::vector<Rejection>& rejected) {
+  const PrimitiveOptions& o = *in.options;
+  if (o.ground == nullptr) return std::nullopt;
+  const auto& shapes = in.shapes->shapes;
+  const double cos_tol = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
+  const double tight = 2.0 * in.ransac->epsilon;
+  const double spacing = in.shapes->spacing;
+  if (!(spacing > 0.0)) return std::nullopt;
+  std::vector<int> roofs;
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    if (shapes[s].surface.type == ShapeType::Plane && !(*in.absorbed)[s] &&
+        std::abs(shapes[s].surface.axis.z()) >= cos_tol &&
+        static_cast<long long>(shapes[s].inliers.size()) >= in.ransac->min_points) {
+      roofs.push_back(static_cast<int>(s));
+    }
+  }
+  std::stable_sort(roofs.begin(), roofs.end(), [&](int a, int b) {
+    return shapes[static_cast<std::size_t>(a)].inliers.size() >
+           shapes[static_cast<std::size_t>(b)].inliers.size();
+  });
+  long long region_points = 0;
+  for (std::size_t i = 0; i < in.points.size(); ++i) {
+    region_points += (!(*in.used)[i] && in.points[i].allFinite()) ? 1 : 0;
+  }
+  const double lambda = 0.5 * std::log2(std::max<double>(2.0, static_cast<double>(region_points)));
+  const double density = 1.0 / (spacing * spacing);
+  for (int roof : roofs) {
+    const std::string what = "extrusion from roof plane " + std::to_string(roof);
+    std::vector<std::uint32_t> pts;
+    for (auto i : shapes[static_cast<std::size_t>(roof)].inliers) {
+      if (!(*in.used)[i]) pts.push_back(i);
+    }
+    if (static_cast<long long>(pts.size()) < in.ransac->min_points) continue;
+    double top = 0.0;
+    std::vector<Vec2> flat;
+    for (auto i : pts) {
+      top += in.points[i].z();
+      flat.emplace_back(in.points[i].x(), in.points[i].y());
+    }
+    top /= static_cast<double>(pts.size());
+    // Principal frame: the smallest rectangle around the roof's hull.
+    const auto hull = hull_of(flat);
+    if (hull.size() < 3) continue;
+    Vec2 u(1, 0);
+    double best = INFINITY;
+    for (std::size_t k = 0; k < hull.size(); ++k) {
+      Vec2 dir = hull[(k + 1) % hull.size()] - hull[k];
+      if (dir.norm() <= 0.0) continue;
+      dir.normalize();
+      const Vec2 perp(-dir.y(), dir.x());
+      double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+      for (const auto& h : hull) {
+        a0 = std::min(a0, h.dot(dir));
+        a1 = std::max(a1, h.dot(dir));
+        b0 = std::min(b0, h.dot(perp));
+        b1 = std::max(b1, h.dot(perp));
+      }
+      if ((a1 - a0) * (b1 - b0) < best - 1e-9) {
+        best = (a1 - a0) * (b1 - b0);
+        u = dir;
+      }
+    }
+    const Vec2 v(-u.y(), u.x());
+    double a0 = INFINITY, b0 = INFINITY, a1 = -INFINITY, b1 = -INFINITY;
+    for (const auto& p : flat) {
+      a0 = std::min(a0, p.dot(u));
+      a1 = std::max(a1, p.dot(u));
+      b0 = std::min(b0, p.dot(v));
+      b1 = std::max(b1, p.dot(v));
+    }
+    if (std::min(a1 - a0, b1 - b0) < o.min_building_width) continue;
+    const double cell = 1.5 * spacing;
+    const double cells = ((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0);
+    if (cells > 4e6) continue;
+    const int nx = static_cast<int>((a1 - a0) / cell) + 5,
+              ny = static_cast<int>((b1 - b0) / cell) + 5;
+    const double ga = a0 - 2.0 * cell, gb = b0 - 2.0 * cell;  // grid origin (two empty cells)
+    auto index = [&](int i, int j) {
+      return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+             static_cast<std::size_t>(i);
+    };
+    auto cell_of = [&](const Vec2& p) {
+      return std::array<int, 2>{static_cast<int>(std::floor((p.dot(u) - ga) / cell)),
+                                static_cast<int>(std::floor((p.dot(v) - gb) / cell))};
+    };
+    std::vector<char> occ(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+    for (const auto& p : flat) {
+      const auto c = cell_of(p);
+      occ[index(c[0], c[1])] = 1;
+    }
+    const std::size_t seen_cells = static_cast<std::size_t>(std::count(occ.begin(), occ.end(), 1));
+    // Closing (3 × 3 dilation, then erosion) over the gaps between scan lines.
+    auto morph = [&](bool dilate) {
+      std::vector<char> out = occ;
+      for (int j = 1; j + 1 < ny; ++j) {
+        for (int i = 1; i + 1 < nx; ++i) {
+          bool any = false, all = true;
+          for (int dj = -1; dj <= 1; ++dj) {
+            for (int di = -1; di <= 1; ++di) {
+              const bool c = occ[index(i + di, j + dj)] != 0;
+              any = any || c;
+              all = all && c;
+            }
+          }
+          out[index(i, j)] = dilate ? any : all;
+        }
+      }
+      occ = std::move(out);
+    };
+    morph(true);
+    morph(false);
+    // Empty components not reaching the border are holes: small ones (under 4 m²) and those
+    // under something standing on the roof are filled.
+    {
+      std::vector<int> comp(occ.size(), -1);
+      int next = 0;
+      for (int j = 0; j < ny; ++j) {
+        for (int i = 0; i < nx; ++i) {
+          if (occ[index(i, j)] || comp[index(i, j)] >= 0) continue;
+          std::vector<std::array<int, 2>> queue{{i, j}};
+          comp[index(i, j)] = next;
+          bool border = false;
+          for (std::size_t h = 0; h < queue.size(); ++h) {
+            const auto [ci, cj] = queue[h];
+            border = border || ci == 0 || cj == 0 || ci == nx - 1 || cj == ny - 1;
+            const std::array<std::array<int, 2>, 4> nb{
+                {{ci + 1, cj}, {ci - 1, cj}, {ci, cj + 1}, {ci, cj - 1}}};
+            for (const auto& q : nb) {
+              if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+              if (occ[index(q[0], q[1])] || comp[index(q[0], q[1])] >= 0) continue;
+              comp[index(q[0], q[1])] = next;
+              queue.push_back(q);
+            }
+          }
+          bool fill = !border && static_cast<double>(queue.size()) * cell * cell < 4.0;
+          if (!border && !fill) {
+            for (std::size_t k = 0; k < in.points.size() && !fill; ++k) {
+              if (!in.points[k].allFinite() || in.points[k].z() <= top + tight) continue;
+              const auto c = cell_of(Vec2(in.points[k].x(), in.points[k].y()));
+              if (c[0] >= 0 && c[1] >= 0 && c[0] < nx && c[1] < ny &&
+                  comp[index(c[0], c[1])] == next) {
+                fill = true;
+              }
+            }
+          }
+          if (fill) {
+            for (const auto& q : queue) occ[index(q[0], q[1])] = 1;
+          }
+          ++next;
+        }
+      }
+    }
+    const auto loops = trace(occ, nx, ny);
+    // Each loop in world (a, b) coordinates, simplified, edges snapped and moved onto the
+    // outermost roof points near them.
+    std::vector<std::vector<Vec2>> rings;
+    for (const auto& loop : loops) {
+      std::vector<Vec2> ring;
+      for (const auto& c : loop) ring.emplace_back(ga + c[0] * cell, gb + c[1] * cell);
+      if (std::abs(ring_area(ring)) < o.min_building_width * o.min_building_width) continue;
+      std::vector<char> keep(ring.size(), 0);
+      std::size_t far = 0;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        if ((ring[k] - ring[0]).norm() > (ring[far] - ring[0]).norm()) far = k;
+      }
+      keep[0] = keep[far] = 1;
+      simplify(ring, 0, far, 1.0 * cell, keep);
+      simplify(ring, far, 0, 1.0 * cell, keep);
+      std::vector<Vec2> simple;
+      for (std::size_t k = 0; k < ring.size(); ++k) {
+        if (keep[k]) simple.push_back(ring[k]);
+      }
+      if (simple.size() < 3) continue;
+      // Edge lines: direction (snapped to the frame within the angle tolerance) and offset.
+      const std::size_t n = simple.size();
+      std::vector<Vec2> dir(n), normal(n);
+      std::vector<double> offset(n);
+      const double sign = ring_area(simple) > 0.0 ? 1.0 : -1.0;  // outward = right of travel
+      for (std::size_t k = 0; k < n; ++k) {
+        Vec2 d = (simple[(k + 1) % n] - simple[k]).normalized();
+        if (std::abs(d.x()) >= cos_tol) d = Vec2(d.x() > 0 ? 1.0 : -1.0, 0.0);
+        if (std::abs(d.y()) >= cos_tol) d = Vec2(0.0, d.y() > 0 ? 1.0 : -1.0);
+        dir[k] = d;
+        normal[k] = sign * Vec2(d.y(), -d.x());
+        const Vec2 mid = 0.5 * (simple[k] + simple[(k + 1) % n]);
+        offset[k] = mid.dot(normal[k]);
+        const double len = (simple[(k + 1) % n] - simple[k]).norm();
+        // Roof points along the edge, within two cells inside it: the outermost (98th
+        // percentile against noise) is where the roof ends.
+        std::vector<double> outward;
+        for (const auto& p : flat) {
+          const Vec2 q(p.dot(u), p.dot(v));
+          const double along = (q - simple[k]).dot(d);
+          if (along < 0.15 * len || along > 0.85 * len) continue;
+          const double off = q.dot(normal[k]) - offset[k];
+          if (off < -2.0 * cell || off > cell) continue;
+          outward.push_back(off);
+        }
+        if (outward.size() >= 3) {
+          std::sort(outward.begin(), outward.end());
+          offset[k] +=
+              outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
+        }
+      }
+      // Consecutive edges along one line (a stair of the grid left by the simplification)
+      // are one edge.
+      for (bool merged = true; merged && dir.size() > 3;) {
+        merged = false;
+        for (std::size_t k = 0; k < dir.size(); ++k) {
+          const std::size_t next = (k + 1) % dir.size();
+          if (dir[k].dot(dir[next]) >= cos_tol && std::abs(offset[k] - offset[next]) <= cell) {
+            offset[k] = 0.5 * (offset[k] + offset[next]);
+            dir.erase(dir.begin() + static_cast<std::ptrdiff_t>(next));
+            normal.erase(normal.begin() + static_cast<std::ptrdiff_t>(next));
+            offset.erase(offset.begin() + static_cast<std::ptrdiff_t>(next));
+            simple.erase(simple.begin() + static_cast<std::ptrdiff_t>(next));
+            merged = true;
+            break;
+          }
+        }
+      }
+      // Vertex k joins lines k - 1 and k; an edge shorter than a cell (a corner the grid cut
+      // off) is dropped and its neighbours meet.
+      std::vector<Vec2> refined;
+      for (;;) {
+        const std::size_t m = dir.size();
+        refined.clear();
+        for (std::size_t k = 0; k < m; ++k) {
+          const std::size_t prev = (k + m - 1) % m;
+          const double det = normal[prev].x() * normal[k].y() - normal[prev].y() * normal[k].x();
+          if (std::abs(det) > std::sin(10.0 * std::numbers::pi / 180.0)) {
+            refined.emplace_back(
+                (offset[prev] * normal[k].y() - offset[k] * normal[prev].y()) / det,
+                (normal[prev].x() * offset[k] - normal[k].x() * offset[prev]) / det);
+          } else {
+            const Vec2 p = simple[k];
+            refined.push_back(p + (offset[k] - p.dot(normal[k])) * normal[k]);
+          }
+        }
+        std::size_t shortest = m;
+        double length = cell;
+        for (std::size_t k = 0; k < m; ++k) {
+          const double l = (refined[(k + 1) % m] - refined[k]).norm();
+          if (l < length) {
+            length = l;
+            shortest = k;
+          }
+        }
+        if (shortest == m || m <= 3) break;
+        const auto at = static_cast<std::ptrdiff_t>(shortest);
+        dir.erase(dir.begin() + at);
+        normal.erase(normal.begin() + at);
+        offset.erase(offset.begin() + at);
+        simple.erase(simple.begin() + at);
+      }
+      rings.push_back(std::move(refined));
+    }
+    if (rings.empty()) {
+      rejected.push_back({what, "no outline from its points", static_cast<long long>(pts.size())});
+      continue;
+    }
+    std::size_t outer = 0;
+    for (std::size_t r = 1; r < rings.size(); ++r) {
+      if (ring_area(rings[r]) > ring_area(rings[outer])) outer = r;
+    }
+    std::vector<Vec2> profile = rings[outer];
+    if (ring_area(profile) <= 0.0) continue;
+    std::vector<std::vector<Vec2>> holes;
+    for (std::size_t r = 0; r < rings.size(); ++r) {
+      if (r == outer || ring_area(rings[r]) >= 0.0) continue;
+      bool inside = true;
+      for (const auto& p : rings[r]) inside = inside && inside_ring(p, profile);
+      if (inside) holes.push_back(rings[r]);
+    }
+    if (profile.size() <= 4 && holes.empty()) continue;  // a rectangle: the box's
+    // Bottom: the terrain under the footprint.
+    Vec2 centre = Vec2::Zero();
+    for (const auto& p : profile) centre += p / static_cast<double>(profile.size());
+    double radius = 0.0;
+    for (const auto& p : profile) radius = std::max(radius, (p - centre).norm());
+    const Vec2 wc = centre.x() * u + centre.y() * v;
+    const double g = o.ground->median_near(wc.x(), wc.y(), radius + 2.0 * o.ground->cell);
+    if (!std::isfinite(g) || top - g < o.min_building_height) continue;
+    // Description lengths of the extrusion and of the box around it.
+    auto dl = [&](const std::vector<Vec2>& outer_ring, const std::vector<std::vector<Vec2>>& inner,
+                  std::size_t params, std::vector<std::uint32_t>* members) {
+      auto distance = [&](const Vec2& q, double z) {
+        double side = INFINITY;
+        auto edges = [&](const std::vector<Vec2>& r) {
+          for (std::size_t k = 0; k < r.size(); ++k) {
+            side = std::min(side, segment_distance(q, r[k], r[(k + 1) % r.size()]));
+          }
+        };
+        edges(outer_ring);
+        for (const auto& h : inner) edges(h);
+        bool within = inside_ring(q, outer_ring);
+        for (const auto& h : inner) within = within && !inside_ring(q, h);
+        // Inside the solid (walls seen through gaps, whatever stands under the roof) or
+        // beside its walls within the outline's precision (a cell) counts as explained.
+        const double h = top - g;
+        if (z < -tight || z > h + tight) return static_cast<double>(INFINITY);
+        return within ? 0.0 : (side <= cell ? 0.0 : side);
+      };
+      long long explained = 0;
+      for (std::uint32_t i = 0; i < in.points.size(); ++i) {
+        if ((*in.used)[i] || !in.points[i].allFinite()) continue;
+        const Vec3& p = in.points[i];
+        const Vec2 q(Vec2(p.x(), p.y()).dot(u), Vec2(p.x(), p.y()).dot(v));
+        if (distance(q, p.z() - g) <= tight) {
+          ++explained;
+          if (members != nullptr) members->push_back(i);
+        }
+      }
+      // Roof the primitive claims but no roof point covers.
+      double area = ring_area(outer_ring);
+      for (const auto& h : inner) area -= std::abs(ring_area(h));
+      const double missing = std::max(0.0, area - static_cast<double>(seen_cells) * cell * cell);
+      return static_cast<double>(region_points - explained) + missing * density +
+             lambda * static_cast<double>(params);
+    };
+    std::vector<std::uint32_t> members;
+    std::size_t vertices = profile.size();
+    for (const auto& h : holes) vertices += h.size();
+    const double dl_extrusion = dl(profile, holes, 2 * vertices + 7, &members);
+    double ba0 = INFINITY, ba1 = -INFINITY, bb0 = INFINITY, bb1 = -INFINITY;
+    for (const auto& p : profile) {
+      ba0 = std::min(ba0, p.x());
+      ba1 = std::max(ba1, p.x());
+      bb0 = std::min(bb0, p.y());
+      bb1 = std::max(bb1, p.y());
+    }
+    const double dl_box = dl({{ba0, bb0}, {ba1, bb0}, {ba1, bb1}, {ba0, bb1}}, {}, 9, nullptr);
+    if (!(dl_extrusion < dl_box)) {
+      rejected.push_back({what,
+                          "the box around its outline describes the points as well (description "
+                          "length " +
+                              std::to_string(static_cast<long long>(dl_box)) +
+                              " <= " + std::to_string(static_cast<long long>(dl_extrusion)) + ")",
+                          static_cast<long long>(members.size())});
+      continue;
+    }
+    // Placement: x along u, origin at the footprint's centre on the terrain.
+    kernel::Matrix34 q;
+    q.leftCols<3>() = frame_of(Vec3(u.x(), u.y(), 0.0), Vec3::UnitZ());
+    q.col(3) = Vec3(wc.x(), wc.y(), g);
+    auto loc = kernel::Location::from_matrix(q);
+    if (!loc.ok()) continue;
+    Proposal p;
+    p.spec.type = PrimitiveType::Extrusion;
+    for (const auto& v2 : profile) p.spec.profile.push_back(v2 - centre);
+    for (const auto& h : holes) {
+      std::vector<Vec2> hole;
+      for (const auto& v2 : h) hole.push_back(v2 - centre);
+      p.spec.holes.push_back(std::move(hole));
+    }
+    p.spec.height = top - g;
+    p.spec.placement = loc.value();
+    double perimeter = 0.0;
+    auto edges = [&](const std::vector<Vec2>& r) {
+      for (std::size_t k = 0; k < r.size(); ++k) perimeter += (r[(k + 1) % r.size()] - r[k]).norm();
+    };
+    edges(profile);
+    double area = ring_area(profile);
+    for (const auto& h : holes) {
+      edges(h);
+      area -= std::abs(ring_area(h));
+    }
+    p.area = area + perimeter * p.spec.height;  // roof and walls (the floor is never seen)
+    p.members = std::move(members);
+    // Planes whose points the extrusion explains are absorbed.
+    std::vector<char> member(in.points.size(), 0);
+    for (auto i : p.members) member[i] = 1;
+    for (std::size_t s = 0; s < shapes.size(); ++s) {
+      if ((*in.absorbed)[s] || shapes[s].surface.type != ShapeType::Plane) continue;
+      std::size_t n = 0;
+      for (auto i : shapes[s].inliers) n += member[i] ? 1 : 0;
+      if (n * 10 >= shapes[s].inliers.size() * 8) p.shapes.push_back(static_cast<int>(s));
+    }
+    p.what = what;
+    return p;
+  }
+  return std::nullopt;
+}
+
+}  // namespace csgtile::geo::detail
