@@ -15,6 +15,7 @@
 #include <numbers>
 
 #include "fit/fit_internal.h"
+#include "fit/plane2d.h"
 
 namespace csgtile::geo::detail {
 
@@ -22,14 +23,6 @@ namespace {
 
 using kernel::PrimitiveType;
 using kernel::Vec2;
-
-double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-double ring_area(const std::vector<Vec2>& ring) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < ring.size(); ++i) a += cross2(ring[i], ring[(i + 1) % ring.size()]);
-  return 0.5 * a;
-}
 
 // Removes repeated vertices and vertices on the line of their neighbours.
 std::vector<Vec2> clean_ring(std::vector<Vec2> ring, double tiny) {
@@ -56,27 +49,6 @@ std::vector<Vec2> clean_ring(std::vector<Vec2> ring, double tiny) {
   return ring;
 }
 
-// Distance from `p` to the segment a–b.
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring) {
-  bool in = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Vec2& a = ring[i];
-    const Vec2& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      in = !in;
-    }
-  }
-  return in;
-}
-
 // A prism: an outer ring, holes, and heights [0, h] along its direction.
 struct Prism {
   std::vector<Vec2> outer;
@@ -84,47 +56,13 @@ struct Prism {
   double h = 0.0;
   // Distance from a point (x, y in the section, z along the direction) to its surface.
   double distance(const Vec2& q, double z) const {
-    double side = INFINITY;
-    auto edges = [&](const std::vector<Vec2>& ring) {
-      for (std::size_t i = 0; i < ring.size(); ++i) {
-        side = std::min(side, segment_distance(q, ring[i], ring[(i + 1) % ring.size()]));
-      }
-    };
-    edges(outer);
-    for (const auto& hole : holes) edges(hole);
-    bool in = inside_ring(q, outer);
-    for (const auto& hole : holes) in = in && !inside_ring(q, hole);
+    const double side = boundary_distance(q, outer, holes);
+    const bool in = inside_polygon(q, outer, holes);
     const double dz = z < 0.0 ? -z : (z > h ? z - h : 0.0);
     if (dz == 0.0) return in ? std::min({side, z, h - z}) : side;
     return in ? dz : std::hypot(side, dz);
   }
 };
-
-// The smallest rectangle around a ring (a side along a hull edge; the ring's own edges are
-// enough for the profiles here, which are near-convex or have their extreme edges seen).
-std::vector<Vec2> bounding_rectangle(const std::vector<Vec2>& ring) {
-  double best = INFINITY;
-  std::vector<Vec2> rect;
-  for (std::size_t k = 0; k < ring.size(); ++k) {
-    Vec2 dir = ring[(k + 1) % ring.size()] - ring[k];
-    if (dir.norm() <= 0.0) continue;
-    dir.normalize();
-    const Vec2 perp(-dir.y(), dir.x());
-    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
-    for (const auto& p : ring) {
-      a0 = std::min(a0, p.dot(dir));
-      a1 = std::max(a1, p.dot(dir));
-      b0 = std::min(b0, p.dot(perp));
-      b1 = std::max(b1, p.dot(perp));
-    }
-    if ((a1 - a0) * (b1 - b0) < best - 1e-12) {
-      best = (a1 - a0) * (b1 - b0);
-      rect = {a0 * dir + b0 * perp, a1 * dir + b0 * perp, a1 * dir + b1 * perp,
-              a0 * dir + b1 * perp};
-    }
-  }
-  return rect;
-}
 
 // Splits the projections `s` (sorted with their indices) of a shape's inliers on its trace
 // into runs without gaps wider than `gap`.
@@ -139,24 +77,6 @@ std::vector<std::pair<double, double>> runs(std::vector<double> s, double gap, s
     }
   }
   return out;
-}
-
-Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z) {
-  Eigen::Matrix3d r;
-  r.col(0) = x.normalized();
-  r.col(2) = z.normalized();
-  r.col(1) = r.col(2).cross(r.col(0)).normalized();
-  r.col(0) = r.col(1).cross(r.col(2)).normalized();
-  return r;
-}
-
-std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec3& origin) {
-  kernel::Matrix34 q;
-  q.leftCols<3>() = rotation;
-  q.col(3) = origin;
-  auto loc = kernel::Location::from_matrix(q);
-  if (!loc.ok()) return std::nullopt;
-  return loc.value();
 }
 
 double deg(double d) { return d * std::numbers::pi / 180.0; }
@@ -464,7 +384,7 @@ std::vector<Proposal> propose_revolutions(const ProposalInput& in,
       angle = std::clamp(hi - lo, 1e-3, 2.0 * std::numbers::pi);
     }
     const Vec3 x = std::cos(start) * e1 + std::sin(start) * e2;
-    auto loc = place(frame_of(x, axis), origin);
+    auto loc = place(frame_of(x.normalized(), axis), origin);
     if (!loc) continue;
     Proposal p;
     p.spec.type = PrimitiveType::Revolution;
@@ -657,9 +577,7 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
       double mean = 0.0;
       for (auto i : inl) {
         const auto [q, t] = section(in.points[i]);
-        bool in_hole = false;
-        for (const auto& hole : prism.holes) in_hole = in_hole || inside_ring(q, hole);
-        if ((inside_ring(q, prism.outer) && !in_hole) ||
+        if (inside_polygon(q, prism.outer, prism.holes) ||
             Prism{prism.outer, prism.holes, 1.0}.distance(q, 0.5) <= 2.0 * tight) {
           ++over;
           mean += t;
@@ -694,7 +612,10 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
       last_reason = "no height along the direction";
       continue;
     }
-    Prism box{bounding_rectangle(prism.outer), {}, prism.h};
+    // The box: the smallest rectangle with a side along an edge of the profile (enough for
+    // the profiles here, which are near-convex or have their extreme edges seen).
+    const auto rectangle = smallest_rectangle(prism.outer, 1e-12);
+    Prism box{rectangle ? rectangle->corners() : std::vector<Vec2>{}, {}, prism.h};
     std::vector<std::uint32_t> members;
     long long box_points = 0;
     for (std::uint32_t i = 0; i < in.points.size(); ++i) {
@@ -716,7 +637,7 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
       last_points = static_cast<long long>(members.size());
       continue;
     }
-    auto loc = place(frame_of(e1, d), origin + t0 * d);
+    auto loc = place(frame_of(e1.normalized(), d), origin + t0 * d);
     if (!loc) continue;
     Proposal p;
     p.spec.type = PrimitiveType::Extrusion;
@@ -725,19 +646,8 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
     p.spec.height = prism.h;
     p.spec.placement = *loc;
     p.members = std::move(members);
-    double perimeter = 0.0;
-    auto edges = [&](const std::vector<Vec2>& ring) {
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        perimeter += (ring[(k + 1) % ring.size()] - ring[k]).norm();
-      }
-    };
-    edges(prism.outer);
-    double area = std::abs(ring_area(prism.outer));
-    for (const auto& h : prism.holes) {
-      edges(h);
-      area -= std::abs(ring_area(h));
-    }
-    p.area = 2.0 * area + perimeter * prism.h;
+    p.area = 2.0 * polygon_area(prism.outer, prism.holes) +
+             polygon_perimeter(prism.outer, prism.holes) * prism.h;
     std::sort(absorbed.begin(), absorbed.end());
     absorbed.erase(std::unique(absorbed.begin(), absorbed.end()), absorbed.end());
     p.shapes = absorbed;

@@ -14,6 +14,7 @@
 
 #include "csgtile/kernel/check.h"
 #include "fit/fit_internal.h"
+#include "fit/plane2d.h"
 
 namespace csgtile::geo {
 
@@ -36,31 +37,6 @@ struct PlanePatch {
   double sagitta = 0.0;  // how far its points bow out of the plane across its width
   bool used = false;
 };
-
-double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
-  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-}
-
-// Convex hull (Andrew's monotone chain), counter-clockwise, no repeated point.
-std::vector<Vec2> convex_hull(std::vector<Vec2> pts) {
-  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
-  if (pts.size() < 3) return pts;
-  std::vector<Vec2> hull(2 * pts.size());
-  std::size_t k = 0;
-  for (const auto& p : pts) {
-    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], p) <= 0) --k;
-    hull[k++] = p;
-  }
-  for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross2(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
-    hull[k++] = pts[i];
-  }
-  hull.resize(k - 1);
-  return hull;
-}
 
 // The plane's inliers split into pieces connected in the plane at the scale of their own
 // spacing: coplanar faces of neighbouring boxes (a row of beams between columns) that the
@@ -116,28 +92,9 @@ PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, 
     const Vec3 d = points[i] - patch.origin;
     flat.emplace_back(d.dot(e1), d.dot(e2));
   }
-  const auto hull = convex_hull(flat);
-  // The smallest rectangle has a side along a hull edge (rotating calipers, by brute force).
-  double best_area = INFINITY;
-  Vec2 best_dir(1, 0);
-  for (std::size_t k = 0; k < hull.size(); ++k) {
-    Vec2 dir = hull[(k + 1) % hull.size()] - hull[k];
-    if (dir.norm() <= 0.0) continue;
-    dir.normalize();
-    const Vec2 perp(-dir.y(), dir.x());
-    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
-    for (const auto& h : hull) {
-      a0 = std::min(a0, h.dot(dir));
-      a1 = std::max(a1, h.dot(dir));
-      b0 = std::min(b0, h.dot(perp));
-      b1 = std::max(b1, h.dot(perp));
-    }
-    const double area = (a1 - a0) * (b1 - b0);
-    if (area < best_area - 1e-12) {
-      best_area = area;
-      best_dir = dir;
-    }
-  }
+  // The smallest rectangle around the points has a side along an edge of their hull.
+  const auto rectangle = detail::smallest_rectangle(detail::convex_hull(flat), 1e-12);
+  const Vec2 best_dir = rectangle ? rectangle->dir : Vec2(1, 0);
   patch.u = best_dir.x() * e1 + best_dir.y() * e2;
   patch.v = patch.n.cross(patch.u);
   patch.umin = patch.vmin = INFINITY;

@@ -18,6 +18,7 @@
 #include <numbers>
 
 #include "fit/fit_internal.h"
+#include "fit/plane2d.h"
 
 namespace csgtile::geo::detail {
 
@@ -25,61 +26,6 @@ namespace {
 
 using kernel::PrimitiveType;
 using kernel::Vec2;
-
-double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
-  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-}
-
-double ring_area(const std::vector<Vec2>& ring) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < ring.size(); ++i) {
-    const Vec2& p = ring[i];
-    const Vec2& q = ring[(i + 1) % ring.size()];
-    a += p.x() * q.y() - p.y() * q.x();
-  }
-  return 0.5 * a;
-}
-
-bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring) {
-  bool in = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Vec2& a = ring[i];
-    const Vec2& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      in = !in;
-    }
-  }
-  return in;
-}
-
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-// Convex hull (monotone chain), counter-clockwise.
-std::vector<Vec2> hull_of(std::vector<Vec2> pts) {
-  std::sort(pts.begin(), pts.end(), [](const Vec2& a, const Vec2& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
-  if (pts.size() < 3) return pts;
-  std::vector<Vec2> h(2 * pts.size());
-  std::size_t k = 0;
-  for (const auto& p : pts) {
-    while (k >= 2 && cross2(h[k - 2], h[k - 1], p) <= 0) --k;
-    h[k++] = p;
-  }
-  for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross2(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
-    h[k++] = pts[i];
-  }
-  h.resize(k - 1);
-  return h;
-}
 
 // Douglas–Peucker on the open chain ring[i..j] (indices modulo n), marking kept vertices.
 void simplify(const std::vector<Vec2>& ring, std::size_t i, std::size_t j, double tol,
@@ -155,14 +101,6 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
   return loops;
 }
 
-Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z) {
-  Eigen::Matrix3d r;
-  r.col(2) = z.normalized();
-  r.col(1) = r.col(2).cross(x).normalized();
-  r.col(0) = r.col(1).cross(r.col(2)).normalized();
-  return r;
-}
-
 }  // namespace
 
 std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
@@ -207,27 +145,10 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
     }
     top /= static_cast<double>(pts.size());
     // Principal frame: the smallest rectangle around the roof's hull.
-    const auto hull = hull_of(flat);
+    const auto hull = convex_hull(flat);
     if (hull.size() < 3) continue;
-    Vec2 u(1, 0);
-    double best = INFINITY;
-    for (std::size_t k = 0; k < hull.size(); ++k) {
-      Vec2 dir = hull[(k + 1) % hull.size()] - hull[k];
-      if (dir.norm() <= 0.0) continue;
-      dir.normalize();
-      const Vec2 perp(-dir.y(), dir.x());
-      double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
-      for (const auto& h : hull) {
-        a0 = std::min(a0, h.dot(dir));
-        a1 = std::max(a1, h.dot(dir));
-        b0 = std::min(b0, h.dot(perp));
-        b1 = std::max(b1, h.dot(perp));
-      }
-      if ((a1 - a0) * (b1 - b0) < best - 1e-9) {
-        best = (a1 - a0) * (b1 - b0);
-        u = dir;
-      }
-    }
+    const auto rectangle = smallest_rectangle(hull, 1e-9);
+    const Vec2 u = rectangle ? rectangle->dir : Vec2(1, 0);
     const Vec2 v(-u.y(), u.x());
     double a0 = INFINITY, b0 = INFINITY, a1 = -INFINITY, b1 = -INFINITY;
     for (const auto& p : flat) {
@@ -453,16 +374,8 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
     auto dl = [&](const std::vector<Vec2>& outer_ring, const std::vector<std::vector<Vec2>>& inner,
                   std::size_t params, std::vector<std::uint32_t>* members) {
       auto distance = [&](const Vec2& q, double z) {
-        double side = INFINITY;
-        auto edges = [&](const std::vector<Vec2>& r) {
-          for (std::size_t k = 0; k < r.size(); ++k) {
-            side = std::min(side, segment_distance(q, r[k], r[(k + 1) % r.size()]));
-          }
-        };
-        edges(outer_ring);
-        for (const auto& h : inner) edges(h);
-        bool within = inside_ring(q, outer_ring);
-        for (const auto& h : inner) within = within && !inside_ring(q, h);
+        const double side = boundary_distance(q, outer_ring, inner);
+        const bool within = inside_polygon(q, outer_ring, inner);
         // Inside the solid (walls seen through gaps, whatever stands under the roof) or
         // beside its walls within the outline's precision (a cell) counts as explained.
         const double h = top - g;
@@ -480,8 +393,7 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
         }
       }
       // Roof the primitive claims but no roof point covers.
-      double area = ring_area(outer_ring);
-      for (const auto& h : inner) area -= std::abs(ring_area(h));
+      const double area = polygon_area(outer_ring, inner);
       const double missing = std::max(0.0, area - static_cast<double>(seen_cells) * cell * cell);
       return static_cast<double>(region_points - explained) + missing * density +
              lambda * static_cast<double>(params);
@@ -508,11 +420,9 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
       continue;
     }
     // Placement: x along u, origin at the footprint's centre on the terrain.
-    kernel::Matrix34 q;
-    q.leftCols<3>() = frame_of(Vec3(u.x(), u.y(), 0.0), Vec3::UnitZ());
-    q.col(3) = Vec3(wc.x(), wc.y(), g);
-    auto loc = kernel::Location::from_matrix(q);
-    if (!loc.ok()) continue;
+    const auto loc =
+        place(frame_of(Vec3(u.x(), u.y(), 0.0), Vec3::UnitZ()), Vec3(wc.x(), wc.y(), g));
+    if (!loc) continue;
     Proposal p;
     p.spec.type = PrimitiveType::Extrusion;
     for (const auto& v2 : profile) p.spec.profile.push_back(v2 - centre);
@@ -522,18 +432,9 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
       p.spec.holes.push_back(std::move(hole));
     }
     p.spec.height = top - g;
-    p.spec.placement = loc.value();
-    double perimeter = 0.0;
-    auto edges = [&](const std::vector<Vec2>& r) {
-      for (std::size_t k = 0; k < r.size(); ++k) perimeter += (r[(k + 1) % r.size()] - r[k]).norm();
-    };
-    edges(profile);
-    double area = ring_area(profile);
-    for (const auto& h : holes) {
-      edges(h);
-      area -= std::abs(ring_area(h));
-    }
-    p.area = area + perimeter * p.spec.height;  // roof and walls (the floor is never seen)
+    p.spec.placement = *loc;
+    // Roof and walls (the floor is never seen).
+    p.area = polygon_area(profile, holes) + polygon_perimeter(profile, holes) * p.spec.height;
     p.members = std::move(members);
     // Planes whose points the extrusion explains are absorbed.
     std::vector<char> member(in.points.size(), 0);

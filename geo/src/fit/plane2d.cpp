@@ -1,0 +1,143 @@
+// Plane geometry of the fitting module (plane2d.h). The proposers' outputs depend on these
+// to the last bit: keep the order of every sum and comparison when changing them.
+
+#include "fit/plane2d.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace csgtile::geo::detail {
+
+double ring_area(const std::vector<Vec2>& ring) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < ring.size(); ++i) a += cross2(ring[i], ring[(i + 1) % ring.size()]);
+  return 0.5 * a;
+}
+
+bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2& a = ring[i];
+    const Vec2& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
+                    const std::vector<std::vector<Vec2>>& holes) {
+  bool in = inside_ring(p, outer);
+  for (const auto& hole : holes) in = in && !inside_ring(p, hole);
+  return in;
+}
+
+double boundary_distance(const Vec2& p, const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes) {
+  double side = INFINITY;
+  auto edges = [&](const std::vector<Vec2>& ring) {
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      side = std::min(side, segment_distance(p, ring[i], ring[(i + 1) % ring.size()]));
+    }
+  };
+  edges(outer);
+  for (const auto& hole : holes) edges(hole);
+  return side;
+}
+
+double polygon_perimeter(const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes) {
+  double perimeter = 0.0;
+  auto edges = [&](const std::vector<Vec2>& ring) {
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      perimeter += (ring[(k + 1) % ring.size()] - ring[k]).norm();
+    }
+  };
+  edges(outer);
+  for (const auto& hole : holes) edges(hole);
+  return perimeter;
+}
+
+double polygon_area(const std::vector<Vec2>& outer, const std::vector<std::vector<Vec2>>& holes) {
+  double area = std::abs(ring_area(outer));
+  for (const auto& hole : holes) area -= std::abs(ring_area(hole));
+  return area;
+}
+
+std::vector<Vec2> convex_hull(std::vector<Vec2> points) {
+  std::sort(points.begin(), points.end(), [](const Vec2& a, const Vec2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  if (points.size() < 3) return points;
+  std::vector<Vec2> hull(2 * points.size());
+  std::size_t k = 0;
+  for (const auto& p : points) {
+    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], p) <= 0) --k;
+    hull[k++] = p;
+  }
+  for (std::size_t i = points.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross2(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+std::vector<Vec2> OrientedRectangle::corners() const {
+  const Vec2 perp = across();
+  return {a0 * dir + b0 * perp, a1 * dir + b0 * perp, a1 * dir + b1 * perp, a0 * dir + b1 * perp};
+}
+
+std::optional<OrientedRectangle> smallest_rectangle(const std::vector<Vec2>& polygon,
+                                                    double slack) {
+  double best = INFINITY;
+  std::optional<OrientedRectangle> out;
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    Vec2 dir = polygon[(k + 1) % polygon.size()] - polygon[k];
+    if (dir.norm() <= 0.0) continue;
+    dir.normalize();
+    const Vec2 perp(-dir.y(), dir.x());
+    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+    for (const auto& p : polygon) {
+      a0 = std::min(a0, p.dot(dir));
+      a1 = std::max(a1, p.dot(dir));
+      b0 = std::min(b0, p.dot(perp));
+      b1 = std::max(b1, p.dot(perp));
+    }
+    const double area = (a1 - a0) * (b1 - b0);
+    if (area < best - slack) {
+      best = area;
+      out = OrientedRectangle{dir, a0, a1, b0, b1};
+    }
+  }
+  return out;
+}
+
+Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z) {
+  Eigen::Matrix3d r;
+  r.col(2) = z.normalized();
+  r.col(1) = r.col(2).cross(x).normalized();
+  r.col(0) = r.col(1).cross(r.col(2)).normalized();
+  return r;
+}
+
+std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec3& origin) {
+  kernel::Matrix34 q;
+  q.leftCols<3>() = rotation;
+  q.col(3) = origin;
+  auto loc = kernel::Location::from_matrix(q);
+  if (!loc.ok()) return std::nullopt;
+  return loc.value();
+}
+
+}  // namespace csgtile::geo::detail

@@ -1,0 +1,80 @@
+#pragma once
+// Plane geometry shared by the fitting module's proposers (extrusion.cpp, roof.cpp,
+// primitives.cpp): rings (closed polygons as vertex lists, no repeated closing vertex;
+// counter-clockwise has positive area), polygons with holes, the convex hull, the smallest
+// rectangle around a polygon, and the frame and placement of a fitted solid.
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "csgtile/kernel/location.h"
+
+namespace csgtile::geo::detail {
+
+using kernel::Vec2;
+using kernel::Vec3;
+
+/// z of the cross product a × b (positive when b turns left from a).
+inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// z of (a − o) × (b − o): positive when o → a → b turns left.
+inline double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+/// Signed area of a ring (shoelace): positive counter-clockwise.
+double ring_area(const std::vector<Vec2>& ring);
+
+/// Whether `p` lies inside the ring (even-odd rule; either orientation).
+bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring);
+
+/// Distance from `p` to the segment a–b (to `a` when the segment has no length).
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b);
+
+/// Whether `p` lies inside `outer` and in none of the `holes`.
+bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
+                    const std::vector<std::vector<Vec2>>& holes);
+
+/// Distance from `p` to the nearest edge of `outer` or of one of the `holes` (infinity when
+/// all rings are empty).
+double boundary_distance(const Vec2& p, const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes);
+
+/// Total edge length of `outer` and its `holes`.
+double polygon_perimeter(const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes);
+
+/// Area of `outer` less the areas of its `holes`, whatever the rings' orientations.
+double polygon_area(const std::vector<Vec2>& outer, const std::vector<std::vector<Vec2>>& holes);
+
+/// Convex hull (Andrew's monotone chain): counter-clockwise, no repeated or collinear point.
+/// Fewer than 3 distinct points come back sorted (by x, then y) as they are.
+std::vector<Vec2> convex_hull(std::vector<Vec2> points);
+
+/// A rectangle with a side along the unit direction `dir`: [a0, a1] along `dir`, [b0, b1]
+/// along across() (dir turned left).
+struct OrientedRectangle {
+  Vec2 dir;
+  double a0 = 0.0, a1 = 0.0, b0 = 0.0, b1 = 0.0;
+  Vec2 across() const { return {-dir.y(), dir.x()}; }
+  /// Corners, counter-clockwise from (a0, b0).
+  std::vector<Vec2> corners() const;
+};
+
+/// The smallest rectangle around `polygon` with a side along one of its edges: on a convex
+/// hull, the smallest of all (rotating calipers, by brute force, O(n²)). An edge's rectangle
+/// replaces the best so far only when smaller by more than `slack` (ties: the first edge).
+/// nullopt when no edge has a length.
+std::optional<OrientedRectangle> smallest_rectangle(const std::vector<Vec2>& polygon, double slack);
+
+/// Rotation whose columns are: x made orthogonal to z, z × x, and z (all unit, right-handed).
+/// x only needs a component across z; its length does not matter but enters the rounding.
+Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z);
+
+/// The location with that rotation and origin; nullopt when the kernel refuses the matrix.
+std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec3& origin);
+
+}  // namespace csgtile::geo::detail
