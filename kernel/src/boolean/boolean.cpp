@@ -24,6 +24,8 @@
 #include "boolean/surface_intersection.h"
 #include "boolean/tolerance.h"
 #include "boolean/uv_geometry.h"
+#include "check/check_internal.h"
+#include "mass/mass_internal.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -426,21 +428,44 @@ class BooleanEngine {
     const double pu = face.surface->u_period(), pv = face.surface->v_period();
     const int ku = pu > 0 ? 2 : 0, kv = pv > 0 ? 1 : 0;
     const double tol = uv_margin(f) * kCrossingUvSlacks;
-    std::set<int> done;
+    // Boundary uses (and their period copies) whose box stays clear of the curve's cannot
+    // cross it: skipped without sampling (crossing_boxes_apart; the same hits).
+    const std::vector<CrossingBox>& boxes = boundary_boxes(f);
+    const std::vector<Vec2> curve_points = crossing_points(pc, t0, t1);  // sampled once
+    const CrossingBox curve_box = crossing_box(pc, t0, t1, curve_points);
+    std::size_t k = 0;
     for (const BLoop& loop : face.loops) {
       for (const BUse& u : loop) {
+        const CrossingBox& use_box = boxes[k++];
         if (u.edge == skip_edge) continue;
         const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
         for (int i = -ku; i <= ku; ++i) {
           for (int j = -kv; j <= kv; ++j) {
+            if (crossing_boxes_apart(curve_box, use_box, Vec2(i * pu, j * pv), tol)) continue;
             Curve2dPtr shifted = shift_pcurve(u.pcurve, Vec2(i * pu, j * pv));
-            for (const Crossing& c : intersect_pcurves(pc, t0, t1, *shifted, e.t0, e.t1, tol)) {
+            for (const Crossing& c : intersect_pcurves(pc, t0, t1, curve_points, *shifted, e.t0, e.t1, tol)) {
               hits.push_back({c.t, u.edge, c.s});
             }
           }
         }
       }
     }
+  }
+
+  // Crossing boxes of face f's boundary uses (loop order), kept while intersect_faces runs
+  // (the loops do not change before split_edges).
+  const std::vector<CrossingBox>& boundary_boxes(std::size_t f) {
+    if (boundary_boxes_.size() != model_.faces.size()) boundary_boxes_.assign(model_.faces.size(), {});
+    std::vector<CrossingBox>& boxes = boundary_boxes_[f];
+    if (boxes.empty()) {
+      for (const BLoop& loop : model_.faces[f].loops) {
+        for (const BUse& u : loop) {
+          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          boxes.push_back(crossing_box(*u.pcurve, e.t0, e.t1));
+        }
+      }
+    }
+    return boxes;
   }
 
   // Adds the part of a curve lying inside both faces (fa, fb) as section edges (or, with
@@ -868,6 +893,7 @@ class BooleanEngine {
 
   Status intersect_faces() {
     const double tol = options_.tolerance;
+    boundary_boxes_.clear();
     for (std::size_t fa = 0; fa < first_b_face_; ++fa) {
       for (std::size_t fb = first_b_face_; fb < model_.faces.size(); ++fb) {
         BoundingBox ba = model_.faces[fa].box, bb = model_.faces[fb].box;
@@ -910,12 +936,21 @@ class BooleanEngine {
     for (std::size_t f = 0; f < model_.faces.size(); ++f) {
       const std::vector<BUse> extra = model_.faces[f].extra;
       const double tol = uv_margin(f) * kCrossingUvSlacks;
+      // Pairs whose boxes stay apart cannot cross (crossing_boxes_apart): skipped unsampled.
+      std::vector<std::vector<Vec2>> points;  // each sampled once
+      std::vector<CrossingBox> boxes;
+      for (const BUse& u : extra) {
+        const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+        points.push_back(e.degenerate() ? std::vector<Vec2>{} : crossing_points(*u.pcurve, e.t0, e.t1));
+        boxes.push_back(e.degenerate() ? CrossingBox{} : crossing_box(*u.pcurve, e.t0, e.t1, points.back()));
+      }
       for (std::size_t i = 0; i < extra.size(); ++i) {
         for (std::size_t j = i + 1; j < extra.size(); ++j) {
-          const BEdge a = model_.edges[static_cast<std::size_t>(extra[i].edge)];
-          const BEdge b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
+          const BEdge& a = model_.edges[static_cast<std::size_t>(extra[i].edge)];
+          const BEdge& b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
           if (a.degenerate() || b.degenerate()) continue;
-          for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, *extra[j].pcurve, b.t0, b.t1, tol)) {
+          if (crossing_boxes_apart(boxes[i], boxes[j], Vec2::Zero(), tol)) continue;
+          for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, points[i], *extra[j].pcurve, b.t0, b.t1, tol)) {
             const double sa = param_slack(a.t1 - a.t0), sb = param_slack(b.t1 - b.t0);
             const bool inner_a = c.t > a.t0 + sa && c.t < a.t1 - sa;
             const bool inner_b = c.s > b.t0 + sb && c.s < b.t1 - sb;
@@ -1127,6 +1162,7 @@ class BooleanEngine {
   std::vector<FacePolygon> polygons_;
   std::vector<std::pair<std::size_t, std::size_t>> coincident_;
   std::vector<PendingPartial> pending_partials_;
+  std::vector<std::vector<CrossingBox>> boundary_boxes_;  // see boundary_boxes()
 };
 
 }  // namespace
@@ -1294,21 +1330,37 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   BoundingBox extent;
   for (const BFace& f : model_.faces) extent.add(f.box);
   const ToleranceModel planes{tol, std::max(extent.empty() ? 0.0 : extent.size().norm(), tol)};
+  // The uses of each edge by the live faces (face ascending, then loop order), as the scan
+  // below reads them; after each pass only the lists of edges the changed faces used before or
+  // use now are brought up to date (a full rebuild per merge made this step quadratic).
+  using UseList = std::vector<std::pair<std::size_t, bool>>;
+  std::vector<UseList> uses(model_.edges.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (!faces[i].alive) continue;
+    for (const BLoop& loop : faces[i].loops) {
+      for (const BUse& u : loop) uses[static_cast<std::size_t>(u.edge)].emplace_back(i, u.forward);
+    }
+  }
   bool changed = true;
   while (changed) {
     changed = false;
-    std::map<int, std::vector<std::pair<std::size_t, bool>>> uses;
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      if (!faces[i].alive) continue;
-      for (const BLoop& loop : faces[i].loops) {
-        for (const BUse& u : loop) uses[u.edge].emplace_back(i, u.forward);
+    std::vector<std::size_t> touched;  // faces this pass changes
+    std::vector<int> touched_edges;    // edges they used before or use after
+    auto touch = [&](std::size_t f) {
+      touched.push_back(f);
+      for (const BLoop& loop : faces[f].loops) {
+        for (const BUse& u : loop) touched_edges.push_back(u.edge);
       }
-    }
-    for (const auto& [edge, list] : uses) {
+    };
+    for (std::size_t edge_index = 0; edge_index < uses.size(); ++edge_index) {
+      const int edge = static_cast<int>(edge_index);
+      const UseList& list = uses[edge_index];  // as at the start of the pass
       if (list.size() != 2 || list[0].second == list[1].second) continue;
       const std::size_t i = list[0].first, j = list[1].first;
       if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed, planes)) continue;
+      touch(i);
       if (i != j) {
+        touch(j);
         // Refit j's pcurves on i's plane, then join.
         for (BLoop& loop : faces[j].loops) {
           for (BUse& w : loop) {
@@ -1329,6 +1381,31 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       splice(faces[i], a->first, a->second, b->first, b->second);
       changed = true;
       break;
+    }
+    // Bring the lists up to date: entries of untouched faces stay, touched live faces give
+    // theirs afresh; a stable sort by face restores the order a rebuild would give.
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+    std::map<int, UseList> fresh;
+    for (const std::size_t f : touched) {
+      for (const BLoop& loop : faces[f].loops) {
+        for (const BUse& u : loop) {
+          touched_edges.push_back(u.edge);
+          if (faces[f].alive) fresh[u.edge].emplace_back(f, u.forward);
+        }
+      }
+    }
+    std::sort(touched_edges.begin(), touched_edges.end());
+    touched_edges.erase(std::unique(touched_edges.begin(), touched_edges.end()), touched_edges.end());
+    for (const int e : touched_edges) {
+      UseList& list = uses[static_cast<std::size_t>(e)];
+      UseList next;
+      for (const auto& entry : list) {
+        if (!std::binary_search(touched.begin(), touched.end(), entry.first)) next.push_back(entry);
+      }
+      if (auto it = fresh.find(e); it != fresh.end()) next.insert(next.end(), it->second.begin(), it->second.end());
+      std::stable_sort(next.begin(), next.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      list = std::move(next);
     }
   }
   // 3. Straight edges meeting end to end at a vertex nothing else uses become one edge.
@@ -1487,6 +1564,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   struct ShellInfo {
     Shape shell;
     double volume;
+    Shape probe;  // the shell as a solid of its own (volume is its mass_properties volume)
   };
   std::vector<ShellInfo> outer, cavities;
   for (auto& [r, list] : groups) {
@@ -1494,12 +1572,13 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (!shell.ok()) return shell.error();
     auto probe = ShapeFactory::solid({shell.value()});
     if (!probe.ok()) return probe.error();
-    const double v = mass_properties(probe.value()).volume;
+    const double v = solid_volume(probe.value());  // mass_properties' volume (to rounding)
     if (std::abs(v) <= tol * tol * tol) continue;  // no volume: a leftover sheet
-    (v > 0 ? outer : cavities).push_back({shell.value(), v});
+    (v > 0 ? outer : cavities).push_back({shell.value(), v, probe.value()});
   }
   std::vector<std::vector<Shape>> solid_shells;
   for (const ShellInfo& o : outer) solid_shells.push_back({o.shell});
+  std::vector<std::pair<Shape, double>> known_volumes;  // solids whose volume is measured
   for (const ShellInfo& c : cavities) {
     // The smallest outer shell around the cavity.
     const Vec3 p = vertex_point(*Explorer(c.shell, ShapeKind::Vertex).begin());
@@ -1514,8 +1593,14 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     solid_shells[static_cast<std::size_t>(best)].push_back(c.shell);
   }
   std::vector<Shape> solids;
-  for (auto& shells : solid_shells) {
-    auto s = ShapeFactory::solid(shells);
+  for (std::size_t k = 0; k < solid_shells.size(); ++k) {
+    if (solid_shells[k].size() == 1) {
+      // Without cavities the solid is the probe: its volume is known (the checker's test).
+      solids.push_back(outer[k].probe);
+      known_volumes.emplace_back(outer[k].probe, outer[k].volume);
+      continue;
+    }
+    auto s = ShapeFactory::solid(solid_shells[k]);
     if (!s.ok()) return s.error();
     solids.push_back(s.value());
   }
@@ -1529,7 +1614,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (at != ShapeIndex::npos) origins_[at] = faces[face_of_shape[k]].origins;
   }
   if (options_.check_result) {
-    const CheckReport report = check_shape(result.value());
+    const CheckReport report = check_shape_with_volumes(result.value(), known_volumes);
     if (!report.valid()) {
       return Error{ErrorCode::InvalidShape, std::string("the ") + boolean_op_name(op_) +
                                                 " result fails the checker: " +

@@ -42,9 +42,36 @@ FacePolygon face_polygon(const BModel& m, const BFace& face);
 struct Crossing {
   double t, s;
 };
+/// What intersect_pcurves looks at of a curve over [t0, t1]: the box of its sampled points
+/// and how far a crossing may lie outside it (the candidate boxes' growth, and for a line the
+/// parameter slack of a near miss at an end). Two curves whose boxes stay apart by more than
+/// both reaches and the tolerance have no crossing, so the call can be skipped (a cull that
+/// gives exactly the same answers). Two lines are never culled (their crossing comes from the
+/// lines' intersection, whatever the boxes; the call is cheap).
+struct CrossingBox {
+  Vec2 min, max;
+  double reach = 0;
+  bool line = false;
+};
+CrossingBox crossing_box(const Curve2d& c, double t0, double t1);
+/// The same from the curve's crossing_points (sampled once for many calls).
+CrossingBox crossing_box(const Curve2d& c, double t0, double t1, const std::vector<Vec2>& points);
+/// The points intersect_pcurves samples a curve at over [t0, t1] (polylines at least once per
+/// segment), endpoints included.
+std::vector<Vec2> crossing_points(const Curve2d& c, double t0, double t1);
+/// Whether intersect_pcurves(a, b shifted by `shift_b`, tolerance) certainly finds nothing.
+/// Conservative: boxes are padded for the rounding of a shifted copy's points.
+bool crossing_boxes_apart(const CrossingBox& a, const CrossingBox& b, const Vec2& shift_b,
+                          double tolerance);
+
 /// Transversal or touching intersections of a(t), t ∈ [t0, t1] and b(s), s ∈ [s0, s1]:
 /// candidates from sampled polylines, refined by Newton's method, deduplicated.
 std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1, const Curve2d& b,
+                                        double s0, double s1, double tolerance);
+/// The same with a's samples given (`a_points` = crossing_points(a, t0, t1)): a curve crossed
+/// with many others is sampled once.
+std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1,
+                                        const std::vector<Vec2>& a_points, const Curve2d& b,
                                         double s0, double s1, double tolerance);
 
 }  // namespace csgtile::kernel::detail

@@ -5,8 +5,9 @@
 #include <string>
 #include <unordered_map>
 
+#include "check/check_internal.h"
 #include "csgtile/kernel/explorer.h"
-#include "csgtile/kernel/mass_properties.h"
+#include "mass/mass_internal.h"
 
 namespace csgtile::kernel {
 
@@ -50,13 +51,15 @@ Shape end_vertex(const Shape& edge) {
   return edge.child(edge.orientation() == Orientation::Reversed ? 0 : 1);
 }
 
+// Side of q with respect to the line o → p: +1 left, −1 right, 0 on it (floating point).
+int orient(const Vec2& o, const Vec2& p, const Vec2& q) {
+  const double v = (p.x() - o.x()) * (q.y() - o.y()) - (p.y() - o.y()) * (q.x() - o.x());
+  return (v > 0) - (v < 0);
+}
+
 // Proper crossing of two segments (touching at endpoints does not count: loops meet at
 // shared vertices).
 bool segments_cross(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-  auto orient = [](const Vec2& o, const Vec2& p, const Vec2& q) {
-    const double v = (p.x() - o.x()) * (q.y() - o.y()) - (p.y() - o.y()) * (q.x() - o.x());
-    return (v > 0) - (v < 0);
-  };
   const int o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
   return o1 * o2 < 0 && o3 * o4 < 0;
 }
@@ -97,7 +100,10 @@ bool chords_cross(const Chord& x, const Chord& y, int depth, int& budget) {
 
 class Checker {
  public:
-  explicit Checker(CheckReport& report) : report_(report) {}
+  Checker(CheckReport& report, const std::vector<std::pair<Shape, double>>& known_volumes)
+      : report_(report) {
+    for (const auto& [solid, v] : known_volumes) known_volumes_.emplace(solid.body_id(), std::pair{solid, v});
+  }
 
   void run(const Shape& root) {
     if (root.is_null()) {
@@ -227,12 +233,22 @@ class Checker {
     check_loops_cross(chords, name);
   }
 
-  // The sampled loops' sides pairwise (O(k²)); crossings confirmed by chords_cross.
+  // The sampled loops' sides pairwise (O(k²)); crossings confirmed by chords_cross. A pair
+  // whose second side has both ends on one side of the first's line is not asked: that is
+  // segments_cross's first test, on which chords_cross would return false at once (the same
+  // verdicts, the same refinement budget). Consecutive sides share their point exactly, so
+  // its side is reused.
   void check_loops_cross(const std::vector<Chord>& chords, const std::string& name) {
     int budget = kChordRefinements;
     for (std::size_t i = 0; i < chords.size(); ++i) {
+      const Chord& x = chords[i];
+      int end_side = 0;
       for (std::size_t j = i + 1; j < chords.size(); ++j) {
-        if (chords_cross(chords[i], chords[j], kChordDepth, budget)) {
+        const Chord& y = chords[j];
+        const int start_side = j > i + 1 && y.a == chords[j - 1].b ? end_side : orient(x.a, x.b, y.a);
+        end_side = orient(x.a, x.b, y.b);
+        if (start_side * end_side >= 0) continue;
+        if (chords_cross(x, y, kChordDepth, budget)) {
           add(CheckStatus::SelfIntersection, name + ": its boundary loops cross");
           return;
         }
@@ -287,20 +303,40 @@ class Checker {
                 " is not 2(1 - genus)");
       }
     }
-    if (!report_.has(CheckStatus::OpenShell) && mass_properties(solid).volume <= 0.0) {
+    if (!report_.has(CheckStatus::OpenShell) && volume(solid) <= 0.0) {
       add(CheckStatus::BadFaceOrientation, name + " encloses a non-positive volume");
     }
   }
 
+  // The solid's volume (detail::solid_volume: mass_properties' to rounding), or the caller's
+  // copy of it (the same function on the same solid).
+  double volume(const Shape& solid) const {
+    const auto it = known_volumes_.find(solid.body_id());
+    if (it != known_volumes_.end() && it->second.first == solid) return it->second.second;
+    return detail::solid_volume(solid);
+  }
+
   CheckReport& report_;
+  std::unordered_map<const void*, std::pair<Shape, double>> known_volumes_;  // by body
 };
 
 }  // namespace
 
 CheckReport check_shape(const Shape& shape) {
   CheckReport report;
-  Checker(report).run(shape);
+  Checker(report, {}).run(shape);
   return report;
 }
+
+namespace detail {
+
+CheckReport check_shape_with_volumes(const Shape& shape,
+                                     const std::vector<std::pair<Shape, double>>& known) {
+  CheckReport report;
+  Checker(report, known).run(shape);
+  return report;
+}
+
+}  // namespace detail
 
 }  // namespace csgtile::kernel

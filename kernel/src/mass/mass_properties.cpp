@@ -3,10 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numbers>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "csgtile/kernel/explorer.h"
 #include "geometry/geometry_internal.h"
+#include "mass/mass_internal.h"
 
 namespace csgtile::kernel {
 
@@ -15,18 +20,76 @@ namespace {
 // Integrands per unit (u, v) area, N = S_u × S_v in world coordinates (un-normalised).
 // 0: area |N|, 1: volume p·N / 3, 2..4: first moments p_i² N_i / 2.
 using Moments = std::array<double, 5>;
+// The volume integrand alone (solid_volume; planes and cylinders take the closed forms of
+// FaceIntegrator::inner, the rest the same Gauss sums as the full Moments).
+using VolumeMoment = std::array<double, 1>;
 
 constexpr double kAngularPanel = std::numbers::pi / 4;
 
-Moments& operator+=(Moments& a, const Moments& b) {
-  for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+template <std::size_t N>
+std::array<double, N>& operator+=(std::array<double, N>& a, const std::array<double, N>& b) {
+  for (std::size_t i = 0; i < N; ++i) a[i] += b[i];
   return a;
 }
-Moments scaled(const Moments& m, double s) {
-  Moments out;
-  for (std::size_t i = 0; i < m.size(); ++i) out[i] = m[i] * s;
+template <std::size_t N>
+std::array<double, N> scaled(const std::array<double, N>& m, double s) {
+  std::array<double, N> out;
+  for (std::size_t i = 0; i < N; ++i) out[i] = m[i] * s;
   return out;
 }
+
+// Point and partial derivatives of a surface in world coordinates. Planes and cylinders (most
+// faces of city models) are evaluated here with the very expressions of their classes
+// (geometry/surface_quadrics.cpp), one cosine/sine pair per point; a face in the identity
+// location skips the transform (identical values). Others go through the virtual calls.
+struct SurfacePoint {
+  Vec3 p, su, sv;  // point, ∂/∂u, ∂/∂v
+};
+
+class SurfaceEvaluator {
+ public:
+  SurfaceEvaluator(const Surface& surface, const Location& location)
+      : surface_(surface), location_(location), identity_(location.is_identity()) {
+    if (surface.kind() == SurfaceKind::Plane) {
+      kind_ = Kind::Plane;
+      frame_ = static_cast<const PlaneSurface&>(surface).frame();
+    } else if (surface.kind() == SurfaceKind::Cylinder) {
+      kind_ = Kind::Cylinder;
+      frame_ = static_cast<const CylinderSurface&>(surface).frame();
+      radius_ = static_cast<const CylinderSurface&>(surface).radius();
+    }
+  }
+
+  bool plane() const { return kind_ == Kind::Plane; }
+  bool cylinder() const { return kind_ == Kind::Cylinder; }
+
+  // A cylinder's point at (u, v) from c = cos u, s = sin u.
+  SurfacePoint evaluate_cylinder(double c, double s, double v) const {
+    const Vec3 radial = c * frame_.x + s * frame_.y;
+    const Vec3 radial_derivative = -s * frame_.x + c * frame_.y;
+    return placed({frame_.origin + radius_ * radial + v * frame_.z, radius_ * radial_derivative, frame_.z});
+  }
+
+  SurfacePoint evaluate(double u, double v) const {
+    if (kind_ == Kind::Plane) return placed({frame_.origin + u * frame_.x + v * frame_.y, frame_.x, frame_.y});
+    if (kind_ == Kind::Cylinder) return evaluate_cylinder(std::cos(u), std::sin(u), v);
+    return placed({surface_.point(u, v), surface_.du(u, v), surface_.dv(u, v)});
+  }
+
+ private:
+  enum class Kind { Plane, Cylinder, Other };
+  SurfacePoint placed(const SurfacePoint& local) const {
+    if (identity_) return local;
+    return {location_.apply_point(local.p), location_.apply_vector(local.su), location_.apply_vector(local.sv)};
+  }
+
+  const Surface& surface_;
+  const Location& location_;
+  bool identity_;
+  Kind kind_ = Kind::Other;
+  Frame frame_;
+  double radius_ = 0;
+};
 
 // Panels for an interval of a parameter: trigonometric integrands need panels no wider than
 // π/4 for 16-point Gauss to reach rounding; polynomial ones are exact with one panel.
@@ -35,26 +98,37 @@ int panel_count(double span, bool angular) {
   return std::max(1, static_cast<int>(std::ceil(std::abs(span) / kAngularPanel - 1e-12)));
 }
 
-template <class F>
-Moments integrate_panels(const F& f, double a, double b, int panels) {
+// Composite Gauss–Legendre over [a, b]; f(x, node) gets the node's index as well (nodes are
+// numbered panel by panel).
+template <class M, class F>
+M integrate_panels_indexed(const F& f, double a, double b, int panels) {
   const auto& rule = detail::gauss_legendre_rule();
-  Moments total{};
+  M total{};
   const double width = (b - a) / panels;
+  std::size_t node = 0;
   for (int p = 0; p < panels; ++p) {
     const double lo = a + p * width;
     const double half = 0.5 * width, mid = lo + half;
     for (int k = 0; k < detail::GaussLegendreRule::kOrder; ++k) {
       const auto i = static_cast<std::size_t>(k);
-      total += scaled(f(mid + half * rule.nodes[i]), half * rule.weights[i]);
+      total += scaled(f(mid + half * rule.nodes[i], node++), half * rule.weights[i]);
     }
   }
   return total;
 }
 
+template <class M, class F>
+M integrate_panels(const F& f, double a, double b, int panels) {
+  return integrate_panels_indexed<M>([&](double x, std::size_t) { return f(x); }, a, b, panels);
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+template <class M>
 class FaceIntegrator {
  public:
   FaceIntegrator(const Surface& surface, const Location& location, double u_ref)
-      : surface_(surface), location_(location), u_ref_(u_ref) {
+      : evaluator_(surface, location), u_ref_(u_ref) {
     angular_u_ = surface.u_period() > 0;
     angular_v_ = surface.v_period() > 0 || surface.kind() == SurfaceKind::Sphere;
     if (surface.kind() == SurfaceKind::Revolution) {
@@ -64,29 +138,29 @@ class FaceIntegrator {
 
   // ∫ F(c(t)) v'(t) dt over [t0, t1], F(u, v) = ∫_{u_ref}^{u} f(s, v) ds: this edge use's
   // share of Green's theorem ∬ f du dv = ∮ F dv.
-  Moments edge_term(const Curve2d& pcurve, double t0, double t1) const {
+  M edge_term(const Curve2d& pcurve, double t0, double t1) const {
     auto g = [&](double t) {
       const Vec2 c = pcurve.point(t);
       const double dv = pcurve.derivative(t).y();
-      if (dv == 0.0) return Moments{};
+      if (dv == 0.0) return M{};
       return scaled(inner(c.x(), c.y()), dv);
     };
     switch (pcurve.kind()) {
       case Curve2dKind::Line: {
         const Vec2 d = pcurve.derivative(t0);
-        if (d.y() == 0.0) return Moments{};  // constant v: no contribution
+        if (d.y() == 0.0) return M{};  // constant v: no contribution
         const double span_u = d.x() * (t1 - t0), span_v = d.y() * (t1 - t0);
         const int panels = std::max(panel_count(span_u, angular_u_), panel_count(span_v, angular_v_));
-        return integrate_panels(g, t0, t1, panels);
+        return integrate_panels<M>(g, t0, t1, panels);
       }
       case Curve2dKind::Circle:
-        return integrate_panels(g, t0, t1, panel_count(t1 - t0, true));
+        return integrate_panels<M>(g, t0, t1, panel_count(t1 - t0, true));
       case Curve2dKind::Trig: {
         // Trigonometric in t, plus a linear drift d·t that may sweep angular parameters.
         const Vec2 d = static_cast<const Trig2d&>(pcurve).d();
         const int drift = std::max(panel_count(d.x() * (t1 - t0), angular_u_),
                                    panel_count(d.y() * (t1 - t0), angular_v_));
-        return integrate_panels(g, t0, t1, std::max(panel_count(t1 - t0, true), drift));
+        return integrate_panels<M>(g, t0, t1, std::max(panel_count(t1 - t0, true), drift));
       }
       case Curve2dKind::Polyline: {
         // Segments of traced sections are short (their chords are within the edge tolerance
@@ -94,7 +168,7 @@ class FaceIntegrator {
         // that error, and the segments are many.
         static constexpr double kNode = 0.7745966692414834;  // sqrt(3/5)
         static constexpr double kWeights[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
-        Moments total{};
+        M total{};
         const double first = std::floor(t0), last = std::ceil(t1);
         for (double s = first; s < last; s += 1.0) {
           const double a = std::max(s, t0), b = std::min(s + 1.0, t1);
@@ -106,33 +180,99 @@ class FaceIntegrator {
         return total;
       }
     }
-    return Moments{};
+    return M{};
   }
 
  private:
-  Moments density(double u, double v) const {
-    const Vec3 p = location_.apply_point(surface_.point(u, v));
-    const Vec3 n = location_.apply_vector(surface_.du(u, v)).cross(location_.apply_vector(surface_.dv(u, v)));
-    return {n.norm(), p.dot(n) / 3.0, 0.5 * p.x() * p.x() * n.x(), 0.5 * p.y() * p.y() * n.y(),
-            0.5 * p.z() * p.z() * n.z()};
+  M density(double u, double v) const { return density_at(evaluator_.evaluate(u, v)); }
+  M density_at(const SurfacePoint& x) const {
+    const Vec3& p = x.p;
+    const Vec3 n = x.su.cross(x.sv);
+    if constexpr (std::is_same_v<M, VolumeMoment>) {
+      return {p.dot(n) / 3.0};
+    } else {
+      return {n.norm(), p.dot(n) / 3.0, 0.5 * p.x() * p.x() * n.x(), 0.5 * p.y() * p.y() * n.y(),
+              0.5 * p.z() * p.z() * n.z()};
+    }
   }
-  Moments inner(double u, double v) const {
-    auto f = [&](double s) { return density(s, v); };
-    return integrate_panels(f, u_ref_, u, panel_count(u - u_ref_, angular_u_));
+  M inner(double u, double v) const {
+    const int panels = panel_count(u - u_ref_, angular_u_);
+    if constexpr (std::is_same_v<M, VolumeMoment>) {
+      if (evaluator_.plane()) return {plane_inner_volume(u, v)};
+      if (evaluator_.cylinder()) return {cylinder_inner_volume(u, v, panels)};
+    }
+    if (!evaluator_.cylinder()) {
+      auto f = [&](double s) { return density(s, v); };
+      return integrate_panels<M>(f, u_ref_, u, panels);
+    }
+    // On a cylinder the nodes' cosines and sines depend on u only, and an edge of constant u
+    // (a seam, a vertical section line) asks for one u at every outer node: the values of the
+    // last u are kept (the very numbers std::cos and std::sin give, so nothing changes).
+    if (trig_.empty() || !same_bits(u, trig_u_)) {
+      trig_.clear();
+      integrate_panels_indexed<M>(
+          [&](double s, std::size_t) {
+            trig_.emplace_back(std::cos(s), std::sin(s));
+            return M{};
+          },
+          u_ref_, u, panels);
+      trig_u_ = u;
+    }
+    auto f = [&](double, std::size_t node) {
+      return density_at(evaluator_.evaluate_cylinder(trig_[node].first, trig_[node].second, v));
+    };
+    return integrate_panels_indexed<M>(f, u_ref_, u, panels);
   }
 
-  const Surface& surface_;
-  const Location& location_;
+  // The volume integrand alone (solid_volume) on a plane p = o + s·x + v·y, N = x × y: linear
+  // in s, integrated in closed form, (u − u_ref)·((o + v·y)·N + x·N (u + u_ref)/2) / 3.
+  // Equal to the Gauss sum of the other path up to rounding.
+  double plane_inner_volume(double u, double v) const {
+    if (!plane_ready_) {
+      const SurfacePoint origin = evaluator_.evaluate(0.0, 0.0);
+      const Vec3 n = origin.su.cross(origin.sv);
+      plane_o_ = origin.p.dot(n) / 3.0;
+      plane_x_ = origin.su.dot(n) / 3.0;
+      plane_y_ = origin.sv.dot(n) / 3.0;
+      plane_ready_ = true;
+    }
+    return (u - u_ref_) * ((plane_o_ + v * plane_y_) + plane_x_ * 0.5 * (u + u_ref_));
+  }
+  // On a cylinder p = P(s) + v·z with N(s) = S_u(s) × z: p·N = P·N + v z·N (z·N vanishes up to
+  // rounding), so the u-integral is A(u) + v·B(u), and both are kept for the last u (an edge of
+  // constant u, a seam or a vertical section line, asks for one u at every outer node).
+  double cylinder_inner_volume(double u, double v, int panels) const {
+    if (!cylinder_ready_ || !same_bits(u, cylinder_u_)) {
+      const auto f = [&](double s, std::size_t) {
+        const SurfacePoint x = evaluator_.evaluate_cylinder(std::cos(s), std::sin(s), 0.0);
+        const Vec3 n = x.su.cross(x.sv);
+        return std::array<double, 2>{x.p.dot(n) / 3.0, x.sv.dot(n) / 3.0};
+      };
+      cylinder_ab_ = integrate_panels_indexed<std::array<double, 2>>(f, u_ref_, u, panels);
+      cylinder_u_ = u;
+      cylinder_ready_ = true;
+    }
+    return cylinder_ab_[0] + v * cylinder_ab_[1];
+  }
+
+  SurfaceEvaluator evaluator_;
   double u_ref_;
+  mutable double trig_u_ = 0;  // inner()'s cache: the u of trig_
+  mutable std::vector<std::pair<double, double>> trig_;
+  mutable bool plane_ready_ = false, cylinder_ready_ = false;  // volume-only caches
+  mutable double plane_o_ = 0, plane_x_ = 0, plane_y_ = 0;
+  mutable double cylinder_u_ = 0;
+  mutable std::array<double, 2> cylinder_ab_{};
   bool angular_u_ = false, angular_v_ = false;
 };
 
-Moments face_moments(const Shape& face) {
+template <class M>
+M face_moments(const Shape& face) {
   const FaceData& data = *face.body().face();
   // Integrate over the face body (its own wires and edge orientations: the outer loop is
   // counter-clockwise in (u, v)), then apply the face's orientation to the flux terms.
   const Shape body_face = face.oriented(Orientation::Forward);
-  if (body_face.child_count() == 0) return Moments{};
+  if (body_face.child_count() == 0) return M{};
   double u_ref = 0.0;
   {
     const Shape wire = body_face.child(0);
@@ -141,8 +281,8 @@ Moments face_moments(const Shape& face) {
       u_ref = data.pcurves[0][0]->point(edge.body().edge()->first).x();
     }
   }
-  FaceIntegrator integrator(*data.surface, face.location(), u_ref);
-  Moments total{};
+  FaceIntegrator<M> integrator(*data.surface, face.location(), u_ref);
+  M total{};
   for (std::size_t w = 0; w < body_face.child_count(); ++w) {
     const Shape wire = body_face.child(w);
     for (std::size_t e = 0; e < wire.child_count(); ++e) {
@@ -150,14 +290,14 @@ Moments face_moments(const Shape& face) {
       const Orientation o = edge.orientation();
       if (o != Orientation::Forward && o != Orientation::Reversed) continue;
       const EdgeData& ed = *edge.body().edge();
-      Moments m = integrator.edge_term(*data.pcurves[w][e], ed.first, ed.last);
+      M m = integrator.edge_term(*data.pcurves[w][e], ed.first, ed.last);
       total += scaled(m, o == Orientation::Forward ? 1.0 : -1.0);
     }
   }
   const Orientation fo = face.orientation();
   const double flux_sign = fo == Orientation::Forward ? 1.0 : fo == Orientation::Reversed ? -1.0 : 0.0;
-  Moments out = scaled(total, flux_sign);
-  out[0] = std::abs(total[0]);
+  M out = scaled(total, flux_sign);
+  if constexpr (!std::is_same_v<M, VolumeMoment>) out[0] = std::abs(total[0]);
   return out;
 }
 
@@ -215,7 +355,7 @@ MassProperties mass_properties(const Shape& shape) {
   MassProperties mp;
   if (shape.is_null()) return mp;
   Moments total{};
-  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments(face);
+  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<Moments>(face);
   mp.area = total[0];
   mp.volume = total[1];
   if (mp.volume != 0.0) {
@@ -225,5 +365,16 @@ MassProperties mass_properties(const Shape& shape) {
   if (mp.volume == 0.0 && !mp.bounds.empty()) mp.centroid = 0.5 * (mp.bounds.min + mp.bounds.max);
   return mp;
 }
+
+namespace detail {
+
+double solid_volume(const Shape& shape) {
+  if (shape.is_null()) return 0.0;
+  VolumeMoment total{};
+  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<VolumeMoment>(face);
+  return total[0];
+}
+
+}  // namespace detail
 
 }  // namespace csgtile::kernel
