@@ -5,6 +5,7 @@ Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c]
                      [--config C] [--sigma S] [--cell 0.25] [--pixel 2]
                      [--min-share TILE=V ...] [--min-iou TILE=V ...]
                      [--min-median-iou TILE=V ...] [--min-primitives TILE=N ...]
+                     [--max-below-ground TILE=N ...]
                      (exit 1 below a threshold, 77 when no tile is present: CLI tests)
        real_tiles.py CSGTILE OUT_DIR --self-test   (the script's own geometry on known answers)
 
@@ -888,6 +889,8 @@ def main():
     ap.add_argument("--min-iou", action="append", help="TILE=V: footprint IoU")
     ap.add_argument("--min-median-iou", action="append", help="TILE=V: median per-building IoU")
     ap.add_argument("--min-primitives", action="append", help="TILE=N")
+    ap.add_argument("--max-below-ground", action="append",
+                    help="TILE=N: primitives reaching more than 0.5 m under the ground")
     ap.add_argument("--self-test", action="store_true",
                     help="check the distance, footprint and PNG code on known answers, then exit")
     args = ap.parse_args()
@@ -933,6 +936,10 @@ def main():
             if name in per_tile and (got[key] is None or got[key] < per_tile[name]):
                 report["failures"].append("%s: %s %s below %s"
                                           % (name, key, got[key], per_tile[name]))
+        below = parse_limits(args.max_below_ground, "max-below-ground")
+        if name in below and len(res["primitives_below_ground"]) > below[name]:
+            report["failures"].append("%s: %d primitives below the ground (at most %g)"
+                                      % (name, len(res["primitives_below_ground"]), below[name]))
         if "footprints_error" in res:
             report["failures"].append("%s: no footprints: %s" % (name, res["footprints_error"]))
         image = res["image"]

@@ -35,10 +35,34 @@ struct FitCommand {
   std::string config;
   std::string out;
   std::string crs;
+  std::string dump_shapes;
   std::uint64_t seed = 1;
   bool seed_given = false;
   bool json = false;
 };
+
+// The RANSAC's view of every region as text: "P region x y z nx ny nz shape" per point and
+// "S region index type px py pz ax ay az inliers" per shape (tests/bench/beam_causes.py).
+bool write_detections(const std::string& path, const std::vector<geo::RegionDetection>& regions) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const auto& d = regions[r];
+    for (std::size_t i = 0; i < d.points.size(); ++i) {
+      const auto& p = d.points[i];
+      const auto& n = d.normals[i];
+      std::fprintf(f, "P %zu %.4f %.4f %.4f %.3f %.3f %.3f %d\n", r, p.x(), p.y(), p.z(), n.x(),
+                   n.y(), n.z(), i < d.shapes.assignment.size() ? d.shapes.assignment[i] : -1);
+    }
+    for (std::size_t s = 0; s < d.shapes.shapes.size(); ++s) {
+      const geo::Surface& q = d.shapes.shapes[s].surface;
+      std::fprintf(f, "S %zu %zu %d %.4f %.4f %.4f %.5f %.5f %.5f %zu\n", r, s,
+                   static_cast<int>(q.type), q.point.x(), q.point.y(), q.point.z(), q.axis.x(),
+                   q.axis.y(), q.axis.z(), d.shapes.shapes[s].inliers.size());
+    }
+  }
+  return std::fclose(f) == 0;
+}
 
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -66,6 +90,7 @@ int run_fit(const FitCommand& c) {
     }
   }
   if (c.seed_given) options.ransac.seed = c.seed;
+  options.keep_detections = !c.dump_shapes.empty();
   if (!c.crs.empty() && !geo::crs_from_config(c.crs).ok()) {
     return fail(ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message);
   }
@@ -88,6 +113,10 @@ int run_fit(const FitCommand& c) {
     std::error_code ec;
     std::filesystem::rename(temp, target, ec);
     if (ec) return fail(ErrorCode::Io, c.out + ": " + ec.message());
+  }
+
+  if (!c.dump_shapes.empty() && !write_detections(c.dump_shapes, f.detections)) {
+    return fail(ErrorCode::Io, c.dump_shapes + ": cannot write");
   }
 
   Json per_type = Json::object();
@@ -174,6 +203,9 @@ void register_fit(CLI::App& app, Action& action) {
   cmd->add_option("--seed", c->seed, "Seed of the RANSAC (overrides the config's)");
   cmd->add_option("--crs", c->crs, "CRS to assume when the file has none (EPSG:code[+vertical])");
   cmd->add_flag("--json", c->json, "Print one JSON object");
+  cmd->add_option("--dump-shapes", c->dump_shapes,
+                  "Diagnostics: write every region's points, normals and RANSAC shapes to this "
+                  "text file (tests/bench/beam_causes.py reads it)");
   cmd->callback([&action, c, cmd] {
     c->seed_given = cmd->count("--seed") > 0;
     action = [c] { return run_fit(*c); };

@@ -138,6 +138,11 @@ struct ProposalInput {
   double cell = 0.1;  ///< connectivity size of the region
 };
 
+/// The planes not yet absorbed whose inliers lie at least 80% among `members` (ascending
+/// indices of in.shapes): those a proposal explaining `members` absorbs.
+std::vector<int> planes_explained_by(const ProposalInput& in,
+                                     const std::vector<std::uint32_t>& members);
+
 /// Revolutions from coaxial cylinders and cones (two or more) and the planes ⟂ their axis
 /// within their radius. Groups whose profile is a plain cylinder or cone stay those.
 /// Reasons for groups that make no revolution are appended to `rejected`.
@@ -156,5 +161,20 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
 /// briefly than the box around its footprint (a rectangular roof stays the boxes' work).
 std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
                                                std::vector<Rejection>& rejected);
+
+/// The lowest terrain level (GroundGrid::mean, or z without means) of the cells whose centre
+/// lies within one cell of the polygon `footprint` (a simple ring in x, y, any orientation):
+/// the ground under a building, where the scan sees it around the walls, at the foot of a
+/// slope, without the lower ground farther off (a quay beside a canal) or the noise's lowest
+/// points. NaN when no such cell has ground (pitched.cpp).
+double lowest_ground_under(const GroundGrid& ground, const std::vector<kernel::Vec2>& footprint);
+
+/// Buildings under pitched roofs seen from the air (pitched.cpp): a tilted roof plane, or two
+/// sharing their horizontal direction and meeting at a ridge, become one extrusion along that
+/// direction whose section is the roof's profile down to the terrain (a trapezoid under a
+/// shed roof, a pentagon under a gable); needs PrimitiveOptions::ground. Proposals share no
+/// point; reasons for planes that make none are appended to `rejected`.
+std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
+                                            std::vector<Rejection>& rejected);
 
 }  // namespace csgtile::geo::detail

@@ -231,6 +231,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     auto detected = detect_shapes(p, n, ransac);
     if (!detected.ok()) return detected.error();
     out.candidates += detected.value().candidates;
+    if (options.keep_detections) out.detections.push_back({p, n, detected.value()});
     FitRegion stats;
     stats.points = static_cast<long long>(p.size());
     stats.spacing = detected.value().spacing;

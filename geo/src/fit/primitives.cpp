@@ -144,6 +144,29 @@ PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, 
   return patch;
 }
 
+// The noise of the points about a plane patch: 1.4826 × the median |offset| of the points
+// over the middle 80% of its rectangle within 0.25 m of it, a robust σ that edge
+// points of walls and the points of anything standing on it barely move. 0 for fewer than
+// 8 points.
+double robust_noise(std::span<const Vec3> points, const PlanePatch& seed) {
+  const double du = 0.1 * (seed.umax - seed.umin), dv = 0.1 * (seed.vmax - seed.vmin);
+  std::vector<double> offsets;
+  for (const Vec3& p : points) {
+    if (!p.allFinite()) continue;
+    const Vec3 d = p - seed.origin;
+    const double a = d.dot(seed.u), b = d.dot(seed.v), c = std::abs(d.dot(seed.n));
+    if (a < seed.umin + du || a > seed.umax - du || b < seed.vmin + dv || b > seed.vmax - dv ||
+        c > 0.25) {
+      continue;
+    }
+    offsets.push_back(c);
+  }
+  if (offsets.size() < 8) return 0.0;
+  const auto mid = offsets.begin() + static_cast<std::ptrdiff_t>(offsets.size() / 2);
+  std::nth_element(offsets.begin(), mid, offsets.end());
+  return 1.4826 * *mid;
+}
+
 // Share of voxels of size `cell` the points occupy, against the area of the primitive's
 // surface: an estimate of how much of the primitive the scan saw.
 double coverage_of(std::span<const Vec3> points, const std::vector<std::uint32_t>& members,
@@ -215,6 +238,7 @@ class Builder {
                      const std::array<double, 4>& section) const;
   void boxes();
   void curved(int index);
+  std::string coaxial_overlap(const PrimitiveSpec& spec) const;
   bool take(const detail::Proposal& proposal);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what);
@@ -408,10 +432,15 @@ Builder::Depth Builder::box_depth(const PlanePatch& seed, double margin, double 
 // The box's extent along the seed's length: from the seed's rectangle, grown at each end over
 // the points of the box's faces within its cross-section (long faces, and the edges between
 // them where normals straddle), so that a face shortened by a shadow or split by the RANSAC
-// is completed by the other faces' points. Points facing along the length (normal more than
+// is completed by the other faces' points; a sparse face's normals straddle its edges, so a
+// point on the section's outline counts whichever face its normal follows, as long as the
+// normal lies in the section's plane. Points facing along the length (normal more than
 // 30° out of the section's plane) end it: inside the section, an end face or a member the
 // box runs into; just beside it (within the noise margin), a crossing member or a column at
-// a junction, after which only half the usual gap is crossed.
+// a junction, after which only half the usual gap is crossed. Points of a box built earlier
+// within the section (a crossing member's) count as such a crossing; points of a curved
+// surface across the length (a column) are not faces of the box. Over gaps with nothing
+// facing along, the faces go on for up to twice the section's larger side (shadows).
 std::pair<double, double> Builder::box_length(const PlanePatch& seed, double c0, double c1,
                                               double v0, double v1, double tight,
                                               double cos_normal) const {
@@ -421,19 +450,34 @@ std::pair<double, double> Builder::box_length(const PlanePatch& seed, double c0,
   std::vector<std::pair<double, Seen>> beyond_low, beyond_high;  // distance past the seed
   std::size_t within = 0;  // face points along the seed's own length
   for (std::size_t i = 0; i < points_.size(); ++i) {
-    if (used_[i] || !points_[i].allFinite() || normals_.empty()) continue;
+    if (!points_[i].allFinite() || normals_.empty()) continue;
     const Vec3 d = points_[i] - seed.origin;
     const double a = d.dot(seed.u), b = d.dot(seed.v), c = d.dot(seed.n);
     if (a < seed.umin - 3.0 * length || a > seed.umax + 3.0 * length) continue;
     if (b < v0 - tight || b > v1 + tight || c < c0 - tight || c > c1 + tight) continue;
+    if (used_[i]) {
+      // A member built earlier (a crossing beam) holds this point: the box meets it here.
+      if (a < seed.umin) beyond_low.emplace_back(seed.umin - a, Seen::Beside);
+      if (a > seed.umax) beyond_high.emplace_back(a - seed.umax, Seen::Beside);
+      continue;
+    }
     const Vec3& n = normals_[i];
     if (n.squaredNorm() < 0.5) continue;
     const bool along = std::abs(n.dot(seed.u)) >= kAlong;
+    // A curved surface across the length (a column the box passes or meets) is a member
+    // crossing it, not one of its faces, whichever way its points' normals turn.
+    const int shape = shapes_.assignment.empty() ? -1 : shapes_.assignment[i];
+    if (!along && shape >= 0 &&
+        shapes_.shapes[static_cast<std::size_t>(shape)].surface.type != ShapeType::Plane &&
+        std::abs(shapes_.shapes[static_cast<std::size_t>(shape)].surface.axis.dot(seed.u)) <
+            kAlong) {
+      continue;
+    }
     const bool near_c = std::abs(c - c0) <= tight || std::abs(c - c1) <= tight;
     const bool near_b = std::abs(b - v0) <= tight || std::abs(b - v1) <= tight;
     const bool on_face = (near_c && b >= v0 && b <= v1 && std::abs(n.dot(seed.n)) >= cos_normal) ||
                          (near_b && c >= c0 && c <= c1 && std::abs(n.dot(seed.v)) >= cos_normal) ||
-                         (near_b && near_c && !along);
+                         ((near_b || near_c) && !along);
     Seen seen = Seen::Face;
     if (along) {
       const bool inside = b >= v0 + tight && b <= v1 - tight && c >= c0 + tight && c <= c1 - tight;
@@ -453,6 +497,10 @@ std::pair<double, double> Builder::box_length(const PlanePatch& seed, double c0,
   // (its own density: a sparse beam is not the dense column beside it).
   const double mean_gap = length / static_cast<double>(std::max<std::size_t>(within, 1));
   const double max_gap = std::max(8.0 * mean_gap, 2.0 * ransac_.epsilon);
+  // A shadow (an obstacle between the scanner and the face) leaves a gap of about the
+  // obstacle's size; where the same section continues beyond it with nothing facing along
+  // the length in between, the face goes on: gaps up to twice the section's larger side.
+  const double shadow_gap = std::max(max_gap, 2.0 * std::max(v1 - v0, c1 - c0));
   auto grow = [&](std::vector<std::pair<double, Seen>>& beyond) {
     std::sort(beyond.begin(), beyond.end());
     constexpr int kEnding = 3;  // a few straddling normals mix in with a face's last points
@@ -469,7 +517,7 @@ std::pair<double, double> Builder::box_length(const PlanePatch& seed, double c0,
         beside = true;
         continue;
       }
-      if (distance - reach > (beside ? 0.5 * max_gap : max_gap)) break;
+      if (distance - reach > (beside ? 0.5 * max_gap : shadow_gap)) break;
       reach = distance;
       ends = 0;
       beside = false;
@@ -554,8 +602,12 @@ void Builder::boxes() {
     if (seed.sagitta > 0.5 * ransac_.epsilon) continue;
     const Depth depth = box_depth(seed, margin, cos_normal);
     double c0 = depth.c0, c1 = depth.c1;
-    if (c1 - c0 < o_.min_box_thickness && o_.ground != nullptr &&
-        std::abs(seed.n.z()) >= cos_tol_ &&
+    // A roof's own noise band (a few stray points below or above it) is no depth: judged
+    // against the plane's noise (robust σ of the points over it) and epsilon, not only the
+    // thinnest box.
+    const double own_depth =
+        std::max({o_.min_box_thickness, 3.0 * ransac_.epsilon, 4.0 * robust_noise(points_, seed)});
+    if (c1 - c0 < own_depth && o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ &&
         std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width) {
       // A roof seen from above: down to the terrain under it. Only for roofs wide enough to
       // be a building: a beam's underside seen from below has no depth of its own either.
@@ -563,7 +615,16 @@ void Builder::boxes() {
                           0.5 * (seed.vmin + seed.vmax) * seed.v;
       const double radius =
           0.5 * std::hypot(seed.umax - seed.umin, seed.vmax - seed.vmin) + 2.0 * o_.ground->cell;
-      const double g = o_.ground->lowest_near(centre.x(), centre.y(), radius);
+      // The lowest terrain around the roof's footprint (not farther off), else near it.
+      std::vector<Vec2> corners;
+      for (const double a : {seed.umin, seed.umax}) {
+        for (const double b : {seed.vmin, seed.vmax}) {
+          const Vec3 w = seed.origin + a * seed.u + b * seed.v;
+          corners.emplace_back(w.x(), w.y());
+        }
+      }
+      double g = detail::lowest_ground_under(*o_.ground, detail::convex_hull(corners));
+      if (!std::isfinite(g)) g = o_.ground->lowest_near(centre.x(), centre.y(), radius);
       if (std::isfinite(g) && centre.z() - g >= o_.min_building_height) {
         const double c = (g - seed.origin.z()) * seed.n.z();
         c0 = std::min(0.0, c);
@@ -579,6 +640,44 @@ void Builder::boxes() {
     // not capture bindings).
     const std::pair<double, double> length = box_length(seed, c0, c1, v0, v1, tight, cos_normal);
     const double u0 = length.first, u1 = length.second;
+    // Never below the terrain: a depth that crosses a pitched roof or a building to points on
+    // its far side can put a tilted box metres into the ground. The side of the box away from
+    // the seed is clipped at the lowest ground near it; a seed face itself under the terrain,
+    // or nothing left after clipping, gives no box.
+    if (o_.ground != nullptr) {
+      std::vector<Vec2> corners;  // the box's footprint: its corners seen from above
+      for (const double a : {u0, u1}) {
+        for (const double b : {v0, v1}) {
+          for (const double c : {c0, c1}) {
+            const Vec3 w = seed.origin + a * seed.u + b * seed.v + c * seed.n;
+            corners.emplace_back(w.x(), w.y());
+          }
+        }
+      }
+      const double g = detail::lowest_ground_under(*o_.ground, detail::convex_hull(corners));
+      const double tolerance = std::max(0.2, 2.0 * ransac_.epsilon);
+      double face = INFINITY;  // lowest corner of the box's face on the seed plane
+      for (const double a : {u0, u1}) {
+        for (const double b : {v0, v1}) {
+          face = std::min(face, (seed.origin + a * seed.u + b * seed.v).z());
+        }
+      }
+      const double nz = seed.n.z();
+      if (std::isfinite(g) && face + std::min(c0 * nz, c1 * nz) < g - tolerance) {
+        if (nz > 0.0) {
+          c0 = std::max(c0, std::min(0.0, (g - face) / nz));
+        } else if (nz < 0.0) {
+          c1 = std::min(c1, std::max(0.0, (g - face) / nz));
+        }
+        if (face < g - tolerance || c1 - c0 < o_.min_box_thickness) {
+          out_.rejected.push_back({"box from plane " + std::to_string(seed.shape),
+                                   "it would reach below the terrain",
+                                   static_cast<long long>(seed.members.size())});
+          seed.used = true;
+          continue;
+        }
+      }
+    }
     auto local = [&](const Vec3& p) {
       const Vec3 d = p - seed.origin;
       return Vec3(d.dot(seed.u), d.dot(seed.v), d.dot(seed.n));
@@ -732,7 +831,44 @@ void Builder::curved(int index) {
       break;
     }
   }
+  if (spec.type == PrimitiveType::Cylinder || spec.type == PrimitiveType::Cone) {
+    // One piece per axis: a round tower split by the RANSAC into cones (one inverted) keeps
+    // the earlier, larger one.
+    const std::string other = coaxial_overlap(spec);
+    if (!other.empty()) {
+      out_.rejected.push_back(
+          {what, "overlaps the coaxial " + other, static_cast<long long>(members.size())});
+      return;
+    }
+  }
   emit(std::move(spec), members, area, what);
+}
+
+// The id of a kept cylinder or cone on the same axis as `spec` (directions within the angle
+// tolerance, axes within half the larger radius, or 2 ε, of each other) whose extent along
+// the axis overlaps it; empty when none.
+std::string Builder::coaxial_overlap(const PrimitiveSpec& spec) const {
+  const Vec3 b = spec.placement.rotation().col(2).normalized();
+  const Vec3 pb = spec.placement.translation();
+  const double rb = std::max(spec.radius, spec.type == PrimitiveType::Cone ? spec.radius2 : 0.0);
+  for (const auto& p : out_.primitives) {
+    const PrimitiveSpec& q = p.spec;
+    if (q.type != PrimitiveType::Cylinder && q.type != PrimitiveType::Cone) continue;
+    const Vec3 a = q.placement.rotation().col(2).normalized();
+    if (std::abs(a.dot(b)) < cos_tol_) continue;
+    const Vec3 pa = q.placement.translation();
+    const double ra = std::max(q.radius, q.type == PrimitiveType::Cone ? q.radius2 : 0.0);
+    const double reach = std::max(0.5 * std::max(ra, rb), 2.0 * ransac_.epsilon);
+    const Vec3 qb = pb + spec.height * b;
+    auto off_axis = [&](const Vec3& x) {
+      const Vec3 d = x - pa;
+      return (d - d.dot(a) * a).norm();
+    };
+    if (off_axis(pb) > reach || off_axis(qb) > reach) continue;
+    const double t0 = (pb - pa).dot(a), t1 = (qb - pa).dot(a);
+    if (std::min(std::max(t0, t1), q.height) > std::max(std::min(t0, t1), 0.0)) return p.id;
+  }
+  return {};
 }
 
 // A proposal of several shapes (extrusion, revolution) kept when its solid is valid; its
@@ -769,6 +905,7 @@ FittedPrimitives Builder::run() {
       const auto p = detail::propose_roof_extrusion(in, out_.rejected);
       if (!p || !take(*p)) break;
     }
+    for (const auto& p : detail::propose_pitched_roofs(in, out_.rejected)) take(p);
   }
   if (o_.boxes) boxes();
   for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {

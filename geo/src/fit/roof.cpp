@@ -368,7 +368,14 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
     double radius = 0.0;
     for (const auto& p : profile) radius = std::max(radius, (p - centre).norm());
     const Vec2 wc = centre.x() * u + centre.y() * v;
-    const double g = o.ground->median_near(wc.x(), wc.y(), radius + 2.0 * o.ground->cell);
+    // The lowest terrain level around the footprint (the foot of a slope: walls do not stop
+    // above it), else the median level near it.
+    std::vector<Vec2> footprint;
+    for (const auto& q : profile) footprint.push_back(q.x() * u + q.y() * v);
+    double g = lowest_ground_under(*o.ground, footprint);
+    if (!std::isfinite(g)) {
+      g = o.ground->median_near(wc.x(), wc.y(), radius + 2.0 * o.ground->cell);
+    }
     if (!std::isfinite(g) || top - g < o.min_building_height) continue;
     // Description lengths of the extrusion and of the box around it.
     auto dl = [&](const std::vector<Vec2>& outer_ring, const std::vector<std::vector<Vec2>>& inner,
@@ -437,18 +444,26 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
     p.area = polygon_area(profile, holes) + polygon_perimeter(profile, holes) * p.spec.height;
     p.members = std::move(members);
     // Planes whose points the extrusion explains are absorbed.
-    std::vector<char> member(in.points.size(), 0);
-    for (auto i : p.members) member[i] = 1;
-    for (std::size_t s = 0; s < shapes.size(); ++s) {
-      if ((*in.absorbed)[s] || shapes[s].surface.type != ShapeType::Plane) continue;
-      std::size_t n = 0;
-      for (auto i : shapes[s].inliers) n += member[i] ? 1 : 0;
-      if (n * 10 >= shapes[s].inliers.size() * 8) p.shapes.push_back(static_cast<int>(s));
-    }
+    p.shapes = planes_explained_by(in, p.members);
     p.what = what;
     return p;
   }
   return std::nullopt;
+}
+
+std::vector<int> planes_explained_by(const ProposalInput& in,
+                                     const std::vector<std::uint32_t>& members) {
+  const auto& shapes = in.shapes->shapes;
+  std::vector<char> member(in.points.size(), 0);
+  for (auto i : members) member[i] = 1;
+  std::vector<int> out;
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    if ((*in.absorbed)[s] || shapes[s].surface.type != ShapeType::Plane) continue;
+    std::size_t n = 0;
+    for (auto i : shapes[s].inliers) n += member[i] ? 1 : 0;
+    if (n * 10 >= shapes[s].inliers.size() * 8) out.push_back(static_cast<int>(s));
+  }
+  return out;
 }
 
 }  // namespace csgtile::geo::detail

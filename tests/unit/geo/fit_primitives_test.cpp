@@ -146,6 +146,144 @@ TEST(FitPrimitives, BeamWithAShadowAcrossItsSideIsOneBox) {
   EXPECT_NEAR(sorted_size(p)[2], 3.0, 0.02);
 }
 
+// The fit with the cloud's own normals (as the scan's geometry gives them).
+Fitted fit_given_normals(const Cloud& c) {
+  RansacOptions o;
+  o.epsilon = 0.01;
+  o.min_points = 50;
+  o.seed = 3;
+  auto shapes = detect_shapes(c.points, c.normals, o);
+  EXPECT_TRUE(shapes.ok());
+  Fitted f;
+  f.shapes = shapes.value();
+  f.primitives = primitives_from_shapes(c.points, c.normals, f.shapes, PrimitiveOptions{}, o, 0);
+  return f;
+}
+
+// A shadow 0.4 m wide across the only dense side of a beam, its far side too sparse to bridge
+// it point to point (0.17 m apart): the same section goes on beyond the shadow, so the two
+// pieces of the side are one box over the whole length, not a half-beam and a rejected piece.
+TEST(FitPrimitives, BeamWhoseOnlyDenseSideIsShadowedIsOneBox) {
+  const Vec3 corner(0.0, 0.0, 3.7);
+  const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
+  Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 21);
+  c.append(testing::rectangle_cloud(corner + 1.7 * ex, lz, 1.3 * ex, 0.01, 0.002, 22));
+  c.append(testing::rectangle_cloud(corner + ly, 3.0 * ex, lz, 0.17, 0.002, 23));  // far side
+  const Fitted f = fit_given_normals(c);
+  ASSERT_EQ(f.primitives.primitives.size(), 1U);
+  const auto& p = f.primitives.primitives[0].spec;
+  ASSERT_EQ(p.type, PrimitiveType::Box);
+  EXPECT_LT((box_centre(p) - (corner + 0.5 * (3.0 * ex + ly + lz))).norm(), 0.02);
+  EXPECT_NEAR(sorted_size(p)[2], 3.0, 0.02);
+  EXPECT_NEAR(sorted_size(p)[0], 0.2, 0.02);
+}
+
+// A sparse face's estimated normals straddle its edges (the neighbourhood reaches the next
+// face): here the far side of a beam beyond the end of its dense side, normals halfway
+// between the side and the underside, in the section's plane. Points on the section's
+// outline still carry the box along: one box over the whole length.
+TEST(FitPrimitives, BeamContinuedByFacePointsWithStraddlingNormalsIsOneBox) {
+  const Vec3 corner(0.0, 0.0, 3.7);
+  const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
+  Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 31);       // side
+  c.append(testing::rectangle_cloud(corner + ly, 1.3 * ex, lz, 0.04, 0.002, 32));  // far side
+  Cloud straddling =
+      testing::rectangle_cloud(corner + ly + 1.3 * ex, 1.7 * ex, lz, 0.02, 0.002, 33);
+  for (auto& n : straddling.normals) n = Vec3(0.0, 0.6, -0.8);
+  c.append(straddling);
+  const Fitted f = fit_given_normals(c);
+  ASSERT_EQ(f.primitives.primitives.size(), 1U);
+  const auto& p = f.primitives.primitives[0].spec;
+  ASSERT_EQ(p.type, PrimitiveType::Box);
+  EXPECT_LT((box_centre(p) - (corner + 0.5 * (3.0 * ex + ly + lz))).norm(), 0.02);
+  EXPECT_NEAR(sorted_size(p)[2], 3.0, 0.02);
+}
+
+// Posts standing in a row beyond a beam's end, their surfaces 1.5 cm off the plane of its side:
+// their points lie on the box's outline with normals across its length, but they belong to
+// cylinders across the length, members the beam meets, not its faces. The box keeps its own
+// 2 m, whatever the shadow-gap rule would bridge between the posts.
+TEST(FitPrimitives, PostsInARowBeyondABeamDoNotLengthenIt) {
+  const Vec3 corner(0.0, 0.0, 3.7);
+  const Vec3 lx(2.0, 0.0, 0.0), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
+  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 41);        // side y = 0
+  c.append(testing::rectangle_cloud(corner, lx, ly, 0.015, 0.002, 42));       // underside
+  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002, 43));  // side y = 0.2
+  for (int k = 0; k < 4; ++k) {
+    c.append(testing::cylinder_cloud(Vec3(2.3 + 0.45 * k, -0.165, 3.2), Vec3::UnitZ(), 0.15, 1.3,
+                                     0.0, 2.0 * std::numbers::pi, 3000, 0.002,
+                                     static_cast<std::uint64_t>(44 + k)));
+  }
+  const Fitted f = fit(c);
+  int boxes = 0, cylinders = 0;
+  for (const auto& p : f.primitives.primitives) {
+    if (p.spec.type == PrimitiveType::Box) {
+      ++boxes;
+      EXPECT_NEAR(sorted_size(p.spec)[2], 2.0, 0.03) << "the box runs on along the posts";
+      EXPECT_LT((box_centre(p.spec) - (corner + 0.5 * (lx + ly + lz))).norm(), 0.02);
+    }
+    cylinders += p.spec.type == PrimitiveType::Cylinder ? 1 : 0;
+  }
+  EXPECT_EQ(boxes, 1);
+  EXPECT_EQ(cylinders, 4);
+}
+
+// Two collinear beams abutting a crossing beam from either side (a node of a timber grid),
+// their sides and undersides coplanar across the node. The crossing beam, scanned densest, is
+// built first; its points in the node tell the others that a member crosses there, so the
+// shadow-gap rule does not carry either across it: three boxes, not a crossing beam and one
+// long beam through it.
+TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
+  const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), lz(0.0, 0.0, 0.3);
+  Cloud c;
+  // The crossing beam along y: x in [-0.1, 0.1], its sides hidden where the others abut.
+  for (const double x : {-0.1, 0.1}) {
+    c.append(testing::rectangle_cloud(Vec3(x, -1.5, 3.7), 1.4 * ey, lz, 0.007, 0.002, 51));
+    c.append(testing::rectangle_cloud(Vec3(x, 0.1, 3.7), 1.4 * ey, lz, 0.007, 0.002, 52));
+  }
+  c.append(testing::rectangle_cloud(Vec3(-0.1, -1.5, 3.7), 0.2 * ex, 3.0 * ey, 0.01, 0.002, 53));
+  // The collinear beams along x, each 1.4 m of visible length.
+  std::uint64_t seed = 54;
+  for (const double x0 : {-1.5, 0.1}) {
+    for (const double y : {-0.1, 0.1}) {
+      c.append(testing::rectangle_cloud(Vec3(x0, y, 3.7), 1.4 * ex, lz, 0.01, 0.002, seed++));
+    }
+    c.append(testing::rectangle_cloud(Vec3(x0, -0.1, 3.7), 1.4 * ex, 0.2 * ey, 0.015, 0.002,
+                                      seed++));
+  }
+  // Boxes only: the node's cross-shaped section would otherwise be one extrusion, which is
+  // not what this test is about.
+  RansacOptions o;
+  o.epsilon = 0.01;
+  o.min_points = 50;
+  o.seed = 3;
+  PrimitiveOptions boxes_only;
+  boxes_only.extrusions = false;
+  boxes_only.revolutions = false;
+  const auto normals = estimate_normals(c.points, {});
+  auto shapes = detect_shapes(c.points, normals, o);
+  ASSERT_TRUE(shapes.ok());
+  Fitted f;
+  f.shapes = shapes.value();
+  f.primitives = primitives_from_shapes(c.points, normals, f.shapes, boxes_only, o, 0);
+  std::vector<kernel::PrimitiveSpec> boxes;
+  for (const auto& p : f.primitives.primitives) {
+    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
+  }
+  std::string why;
+  for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
+  ASSERT_EQ(boxes.size(), 3U) << why;
+  std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) {
+    return box_centre(a).x() < box_centre(b).x();
+  });
+  EXPECT_LT((box_centre(boxes[0]) - Vec3(-0.8, 0.0, 3.85)).norm(), 0.02);
+  EXPECT_LT((box_centre(boxes[1]) - Vec3(0.0, 0.0, 3.85)).norm(), 0.02);
+  EXPECT_LT((box_centre(boxes[2]) - Vec3(0.8, 0.0, 3.85)).norm(), 0.02);
+  EXPECT_NEAR(sorted_size(boxes[0])[2], 1.4, 0.03);
+  EXPECT_NEAR(sorted_size(boxes[1])[2], 3.0, 0.03);
+  EXPECT_NEAR(sorted_size(boxes[2])[2], 1.4, 0.03);
+}
+
 // Two beams meeting end to end at a post that stands wider than they are (the gate's
 // junctions): their sides are coplanar, their undersides one plane, but the post between
 // them ends each: two boxes, each as long as it is.

@@ -109,9 +109,11 @@ struct PrimitiveOptions {
   /// Cylinders, cones and tori whose inliers span a smaller angle around the axis (or, for
   /// cylinders and cones, are shorter than two connectivity cells) are rejected as spurious.
   double min_angular_span_deg = 90.0;
-  /// When set, a horizontal seed plane with no depth of its own at least min_building_height
-  /// above the ground, and at least min_building_width wide, becomes a box from the ground
-  /// up to it (a roof whose walls the airborne scan barely sees; not a beam's underside).
+  /// When set, a horizontal seed plane with no depth of its own (none beyond its noise: 3 ε or
+  /// 4 × its points' robust σ) at least min_building_height above the ground, and at least
+  /// min_building_width wide, becomes a box from the ground up to it (a roof whose walls the
+  /// airborne scan barely sees; not a beam's underside); tilted roof planes (one, or two at a
+  /// ridge) become extrusions down to the ground; no box reaches below the ground.
   const GroundGrid* ground = nullptr;
   double min_building_height = 2.0;
   double min_building_width = 1.0;

@@ -91,6 +91,7 @@ struct FitPipelineOptions {
   ClusterOptions clusters;
   RansacOptions ransac;
   PrimitiveOptions primitives;
+  bool keep_detections = false;  ///< diagnostics: fill FitOutput::detections
 };
 
 /// One region (Euclidean cluster) as the RANSAC saw it.
@@ -101,6 +102,14 @@ struct FitRegion {
   int shapes = 0;                ///< surfaces detected
   int primitives = 0;            ///< primitives kept
   std::uint64_t candidates = 0;
+};
+
+/// One region as the RANSAC saw it: its points and normals (region order) and the shapes it
+/// found, with each point's shape (diagnostics, e.g. tests/bench/beam_causes.py).
+struct RegionDetection {
+  std::vector<kernel::Vec3> points;
+  std::vector<kernel::Vec3> normals;
+  RansacResult shapes;
 };
 
 /// What the pipeline found and how long each stage took.
@@ -121,6 +130,7 @@ struct FitOutput {
   double cluster_tolerance = 0.0;       ///< Euclidean clustering distance used
   std::uint64_t candidates = 0;
   std::vector<std::pair<std::string, double>> seconds;  ///< per stage, in order
+  std::vector<RegionDetection> detections;  ///< per region, when keep_detections was set
 };
 
 /// Ground → outliers → voxels → clusters → per cluster: normals, RANSAC, primitives.
