@@ -922,6 +922,8 @@ def main():
         absent = [p for p in needed if not os.path.exists(os.path.join(args.data, p))]
         if absent:
             report["missing"].append({"tile": name, "absent": absent})
+            print("real_tiles: %s not measured (absent under %s: %s); its thresholds are not "
+                  "checked" % (name, args.data, ", ".join(absent)), file=sys.stderr)
             continue
         res = measure_tile(name, spec, args, args.out_dir)
         report["tiles"][name] = res

@@ -68,6 +68,12 @@ double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint3
 double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                        double quantile);
 
+/// Normals as estimate_normals gives them and, from the same neighbourhoods, the curvature
+/// (surface variation λ0/(λ0+λ1+λ2)); 1/3, the largest, where there is no normal. Both are
+/// resized to the number of points.
+void normals_and_curvature(std::span<const Vec3> points, int neighbours, std::vector<Vec3>& normals,
+                           std::vector<double>& curvature);
+
 /// Candidates from samples with unit normals (index 0 is the seed). Each returns nullopt when
 /// the samples are degenerate for the type; the caller verifies the candidate on the samples.
 std::optional<Surface> plane_from_samples(std::span<const Vec3> p, std::span<const Vec3> n);

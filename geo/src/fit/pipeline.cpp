@@ -1,5 +1,5 @@
 // The ground filter and the fit pipeline: ground → outliers → voxels → normals → clusters →
-// per cluster RANSAC and primitives.
+// (grown regions →) per region RANSAC and primitives.
 
 #include <algorithm>
 #include <chrono>
@@ -126,6 +126,13 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     return bad("ground.cell and ground.window must be > 0, ground.height >= 0");
   }
   if (!(options.clusters.tolerance >= 0.0)) return bad("clusters.tolerance must be >= 0");
+  if (options.regions.enabled) {
+    if (options.regions.neighbours < 3) return bad("regions.neighbours must be >= 3");
+    if (!(options.regions.smoothness_deg > 0.0) || !(options.regions.smoothness_deg <= 180.0))
+      return bad("regions.smoothness_deg must be in (0, 180]");
+    if (!(options.regions.curvature > 0.0)) return bad("regions.curvature must be > 0");
+    if (options.regions.min_points < 1) return bad("regions.min_points must be >= 1");
+  }
 
   FitOutput out;
   out.input_points = static_cast<long long>(points.size());
@@ -158,7 +165,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
   }
   std::vector<std::uint32_t> terrain_count(terrain.z.size(), 0);
-  const bool filter_classes = !options.classes.keep.empty() && classes.size() == points.size();
+  // Only inputs that carry a classification are filtered: a LAS whose points are all class 0
+  // or 1 (never classified, unclassified) keeps every point, as with no classes at all.
+  const bool filter_classes =
+      !options.classes.keep.empty() && classes.size() == points.size() &&
+      std::any_of(classes.begin(), classes.end(), [](std::uint8_t c) { return c > 1; });
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
     if (!ground[i] && filter_classes &&
@@ -205,16 +216,56 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   out.seconds.emplace_back("voxels", seconds_since(start));
 
   start = std::chrono::steady_clock::now();
-  const std::vector<Vec3> normals = estimate_normals(cloud, options.normals);
+  std::vector<Vec3> normals;
+  std::vector<double> curvature;
+  detail::normals_and_curvature(cloud, options.normals.neighbours, normals, curvature);
   out.seconds.emplace_back("normals", seconds_since(start));
 
   start = std::chrono::steady_clock::now();
-  const auto clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+  auto clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
   long long clustered = 0;
   for (const auto& c : clusters) clustered += static_cast<long long>(c.size());
   out.small_cluster_points = out.fitted_points - clustered;
-  out.regions = static_cast<int>(clusters.size());
   out.seconds.emplace_back("clusters", seconds_since(start));
+
+  if (options.regions.enabled) {
+    // Each cluster becomes its grown regions (in region_growing's order) followed by its
+    // points in none of them as one leftover region, so that no point is lost to the RANSAC.
+    // Regions are numbered in cluster order, then in that order within a cluster.
+    start = std::chrono::steady_clock::now();
+    std::vector<std::vector<std::uint32_t>> split;
+    std::vector<Vec3> p, n;
+    std::vector<double> k;
+    for (const auto& cluster : clusters) {
+      p.clear();
+      n.clear();
+      k.clear();
+      for (auto i : cluster) {
+        p.push_back(cloud[i]);
+        n.push_back(normals[i]);
+        k.push_back(curvature[i]);
+      }
+      const auto grown = region_growing(p, n, options.regions, k);
+      std::vector<char> taken(cluster.size(), 0);
+      for (const auto& g : grown) {
+        std::vector<std::uint32_t> members;
+        members.reserve(g.size());
+        for (auto local : g) {
+          members.push_back(cluster[local]);
+          taken[local] = 1;
+        }
+        split.push_back(std::move(members));
+      }
+      std::vector<std::uint32_t> rest;
+      for (std::size_t local = 0; local < cluster.size(); ++local) {
+        if (!taken[local]) rest.push_back(cluster[local]);
+      }
+      if (!rest.empty()) split.push_back(std::move(rest));
+    }
+    clusters = std::move(split);
+    out.seconds.emplace_back("regions", seconds_since(start));
+  }
+  out.regions = static_cast<int>(clusters.size());
 
   start = std::chrono::steady_clock::now();
   double primitives_seconds = 0.0;

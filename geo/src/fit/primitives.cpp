@@ -927,11 +927,13 @@ FittedPrimitives Builder::run() {
 
 double GroundGrid::lowest_near(double x, double y, double radius) const {
   if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
+  // Clamped in double before the conversion: a far or huge coordinate stays in range.
   const auto clamp_x = [&](double v) {
-    return std::clamp(static_cast<int>(std::floor((v - x0) / cell)), 0, nx - 1);
+    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
   };
   const auto clamp_y = [&](double v) {
-    return std::clamp(static_cast<int>(std::floor((v - y0) / cell)), 0, ny - 1);
+    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
   };
   double best = NAN;
   for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
@@ -947,11 +949,13 @@ double GroundGrid::lowest_near(double x, double y, double radius) const {
 double GroundGrid::median_near(double x, double y, double radius) const {
   if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
   const std::vector<double>& level = mean.size() == z.size() ? mean : z;
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
+  // Clamped in double before the conversion: a far or huge coordinate stays in range.
   const auto clamp_x = [&](double v) {
-    return std::clamp(static_cast<int>(std::floor((v - x0) / cell)), 0, nx - 1);
+    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
   };
   const auto clamp_y = [&](double v) {
-    return std::clamp(static_cast<int>(std::floor((v - y0) / cell)), 0, ny - 1);
+    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
   };
   std::vector<double> found;
   for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
@@ -970,6 +974,17 @@ double GroundGrid::median_near(double x, double y, double radius) const {
 FittedPrimitives primitives_from_shapes(std::span<const Vec3> points, std::span<const Vec3> normals,
                                         const RansacResult& shapes, const PrimitiveOptions& options,
                                         const RansacOptions& ransac, int region) {
+  if (shapes.assignment.size() != points.size() ||
+      (!normals.empty() && normals.size() != points.size())) {
+    FittedPrimitives none;
+    none.rejected.push_back({"region " + std::to_string(region),
+                             "shapes or normals do not match the points (" +
+                                 std::to_string(shapes.assignment.size()) + " assignments, " +
+                                 std::to_string(normals.size()) + " normals, " +
+                                 std::to_string(points.size()) + " points)",
+                             static_cast<long long>(points.size())});
+    return none;
+  }
   Builder builder(points, normals, shapes, options, ransac, region);
   return builder.run();
 }

@@ -168,9 +168,12 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
       return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
              static_cast<std::size_t>(i);
     };
+    // Clamped in double to one cell outside the grid, so any finite point converts safely.
     auto cell_of = [&](const Vec2& p) {
-      return std::array<int, 2>{static_cast<int>(std::floor((p.dot(u) - ga) / cell)),
-                                static_cast<int>(std::floor((p.dot(v) - gb) / cell))};
+      const auto to_cell = [&](double t, int n) {
+        return static_cast<int>(std::clamp(std::floor(t / cell), -1.0, static_cast<double>(n)));
+      };
+      return std::array<int, 2>{to_cell(p.dot(u) - ga, nx), to_cell(p.dot(v) - gb, ny)};
     };
     std::vector<char> occ(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
     for (const auto& p : flat) {

@@ -1,7 +1,7 @@
 // The segmentation stages that PCL does for us: statistical outlier removal, voxel grid,
-// neighbourhoods for normals and Euclidean clustering. PCL's headers stay in this file; its types
-// never leave it. PCL works in float: the points are tile-local, so float keeps them to a few
-// micrometres.
+// neighbourhoods for normals, Euclidean clustering and region growing. PCL's headers stay in
+// this file; its types never leave it. PCL works in float: the points are tile-local, so float
+// keeps them to a few micrometres.
 
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/filters/voxel_grid.h>
@@ -9,10 +9,13 @@
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
+#include <pcl/segmentation/region_growing.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 
 #include "csgtile/geo/segment.h"
 #include "fit/fit_internal.h"
@@ -84,16 +87,18 @@ std::vector<Vec3> voxel_downsample(std::span<const Vec3> points, const VoxelOpti
   return out;
 }
 
-std::vector<Vec3> estimate_normals(std::span<const Vec3> points, const NormalOptions& options) {
-  std::vector<Vec3> normals(points.size(), Vec3::Zero());
+void detail::normals_and_curvature(std::span<const Vec3> points, int neighbours,
+                                   std::vector<Vec3>& normals, std::vector<double>& curvature) {
+  normals.assign(points.size(), Vec3::Zero());
+  curvature.assign(points.size(), 1.0 / 3.0);
   std::vector<std::uint32_t> index;
   auto cloud = to_cloud(points, index);
-  if (cloud->size() < 3 || options.neighbours < 3) return normals;
+  if (cloud->size() < 3 || neighbours < 3) return;
   // PCL finds the neighbours; the principal components are ours, so that collinear and
   // duplicated neighbourhoods (two vanishing spreads) give no normal instead of an arbitrary one.
   pcl::search::KdTree<pcl::PointXYZ> tree;
   tree.setInputCloud(cloud);
-  const int k = std::min<int>(options.neighbours, static_cast<int>(cloud->size()));
+  const int k = std::min<int>(neighbours, static_cast<int>(cloud->size()));
   pcl::Indices found;
   std::vector<float> distances;
   for (std::size_t q = 0; q < cloud->size(); ++q) {
@@ -112,9 +117,102 @@ std::vector<Vec3> estimate_normals(std::span<const Vec3> points, const NormalOpt
     const auto& values = eig.eigenvalues();
     if (!(values(2) > 0.0) || !(values(1) > 1e-4 * values(2))) continue;
     const Vec3 n = eig.eigenvectors().col(0);
-    if (n.allFinite()) normals[index[q]] = n.normalized();
+    if (!n.allFinite()) continue;
+    normals[index[q]] = n.normalized();
+    curvature[index[q]] =
+        std::max(0.0, values(0)) / (std::max(0.0, values(0)) + values(1) + values(2));
   }
+}
+
+std::vector<Vec3> estimate_normals(std::span<const Vec3> points, const NormalOptions& options) {
+  std::vector<Vec3> normals;
+  std::vector<double> curvature;
+  detail::normals_and_curvature(points, options.neighbours, normals, curvature);
   return normals;
+}
+
+std::vector<std::vector<std::uint32_t>> region_growing(std::span<const Vec3> points,
+                                                       std::span<const Vec3> normals,
+                                                       const RegionGrowingOptions& options,
+                                                       std::span<const double> curvature) {
+  std::vector<std::vector<std::uint32_t>> out;
+  if (normals.size() != points.size() || (!curvature.empty() && curvature.size() != points.size()))
+    return out;
+  if (!options.enabled) {
+    std::vector<std::uint32_t> all;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (points[i].allFinite()) all.push_back(static_cast<std::uint32_t>(i));
+    }
+    if (!all.empty()) out.push_back(std::move(all));
+    return out;
+  }
+  if (options.neighbours < 3 || !(options.smoothness_deg > 0.0) || !(options.curvature > 0.0))
+    return out;
+  std::vector<double> computed;
+  if (curvature.empty()) {
+    std::vector<Vec3> unused;
+    detail::normals_and_curvature(points, options.neighbours, unused, computed);
+    curvature = computed;
+  }
+  // Only points with a normal take part: PCL would compare a zero normal at 90° to everything,
+  // and a NaN one unpredictably. They stay outside every region.
+  std::vector<std::uint32_t> index;
+  auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  auto cloud_normals = std::make_shared<pcl::PointCloud<pcl::Normal>>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    const Vec3& n = normals[i];
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e30 || !n.allFinite() ||
+        !(n.squaredNorm() > 0.25) || !std::isfinite(curvature[i])) {
+      continue;
+    }
+    const Vec3 u = n.normalized();
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                   static_cast<float>(p.z())));
+    cloud_normals->push_back(pcl::Normal(static_cast<float>(u.x()), static_cast<float>(u.y()),
+                                         static_cast<float>(u.z()),
+                                         static_cast<float>(curvature[i])));
+    index.push_back(static_cast<std::uint32_t>(i));
+  }
+  const long long min_points = std::max<long long>(1, options.min_points);
+  if (static_cast<long long>(cloud->size()) < std::max<long long>(3, min_points)) return out;
+  cloud->width = static_cast<std::uint32_t>(cloud->size());
+  cloud->height = 1;
+  cloud->is_dense = true;
+  cloud_normals->width = cloud->width;
+  cloud_normals->height = 1;
+  cloud_normals->is_dense = true;
+  auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  pcl::RegionGrowing<pcl::PointXYZ, pcl::Normal> growing;
+  growing.setSearchMethod(tree);
+  growing.setNumberOfNeighbours(static_cast<unsigned int>(
+      std::min<std::size_t>(static_cast<std::size_t>(options.neighbours), cloud->size())));
+  growing.setMinClusterSize(
+      static_cast<pcl::uindex_t>(std::min<long long>(min_points, std::numeric_limits<int>::max())));
+  growing.setMaxClusterSize(static_cast<pcl::uindex_t>(std::numeric_limits<int>::max()));
+  growing.setSmoothModeFlag(true);
+  growing.setSmoothnessThreshold(
+      static_cast<float>(options.smoothness_deg * std::numbers::pi / 180.0));
+  growing.setCurvatureTestFlag(true);
+  growing.setCurvatureThreshold(static_cast<float>(options.curvature));
+  growing.setResidualTestFlag(false);
+  growing.setInputCloud(cloud);
+  growing.setInputNormals(cloud_normals);
+  std::vector<pcl::PointIndices> regions;
+  growing.extract(regions);
+  for (const auto& r : regions) {
+    if (r.indices.empty()) continue;
+    std::vector<std::uint32_t> members;
+    members.reserve(r.indices.size());
+    for (auto k : r.indices) members.push_back(index[static_cast<std::size_t>(k)]);
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() > b.size();
+    return a.front() < b.front();
+  });
+  return out;
 }
 
 std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3> points,

@@ -1,5 +1,6 @@
-// The segmentation stages one by one (outliers, voxels, normals, ground, clusters) and the
-// whole fit pipeline: primitives found, counts kept, and the same bytes for the same seed.
+// The segmentation stages one by one (outliers, voxels, normals, ground, clusters, region
+// growing) and the whole fit pipeline: primitives found, counts kept, and the same bytes for the
+// same seed.
 
 #include <gtest/gtest.h>
 
@@ -72,6 +73,79 @@ TEST(FitSegment, ClustersAreSeparatedAndOrderedBySize) {
   EXPECT_EQ(clusters[1].front(), 0U);
 }
 
+// Region growing with our own normals and curvature, as the pipeline runs it.
+std::vector<std::vector<std::uint32_t>> grow(const Cloud& c, const RegionGrowingOptions& o) {
+  return region_growing(c.points, estimate_normals(c.points, {}), o);
+}
+
+RegionGrowingOptions growing_on() {
+  RegionGrowingOptions o;
+  o.enabled = true;
+  return o;
+}
+
+TEST(FitSegment, RegionGrowingSplitsTwoPlanesAtARightAngle) {
+  // A floor and a wall sharing the edge along x: one Euclidean cluster, two smooth pieces.
+  Cloud c = testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.02, 0.001, 20);
+  const std::size_t floor = c.points.size();
+  c.append(testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 0, 2), 0.02, 0.001, 21));
+  ASSERT_EQ(euclidean_clusters(c.points, {}).size(), 1U);
+  const auto regions = grow(c, growing_on());
+  ASSERT_EQ(regions.size(), 2U);
+  for (const auto& r : regions) {
+    EXPECT_TRUE(std::is_sorted(r.begin(), r.end()));
+    const auto on_floor =
+        std::count_if(r.begin(), r.end(), [&](std::uint32_t i) { return i < floor; });
+    // Each region is (nearly) one plane; only points at the edge may go either way.
+    const auto major = std::max<std::size_t>(static_cast<std::size_t>(on_floor),
+                                             r.size() - static_cast<std::size_t>(on_floor));
+    EXPECT_GE(major, r.size() * 99 / 100);
+    EXPECT_GE(r.size(), floor * 9 / 10);
+  }
+  EXPECT_GE(regions[0].size(), regions[1].size());
+}
+
+TEST(FitSegment, RegionGrowingKeepsASmoothCylinderWhole) {
+  const Cloud c = testing::cylinder_cloud(Vec3::Zero(), Vec3::UnitZ(), 0.3, 2.0, 0.0,
+                                          2.0 * std::numbers::pi, 8000, 0.001, 22);
+  const auto regions = grow(c, growing_on());
+  ASSERT_EQ(regions.size(), 1U);
+  EXPECT_GE(regions[0].size(), c.points.size() * 95 / 100);
+}
+
+TEST(FitSegment, RegionGrowingDisabledGivesOneRegion) {
+  Cloud c = testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.02, 0.001, 23);
+  c.append(testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 0, 2), 0.02, 0.001, 24));
+  const auto regions = grow(c, {});
+  ASSERT_EQ(regions.size(), 1U);
+  EXPECT_EQ(regions[0].size(), c.points.size());
+  EXPECT_EQ(regions[0].front(), 0U);
+}
+
+TEST(FitSegment, RegionGrowingOnDegenerateInputGivesNoRegion) {
+  const RegionGrowingOptions on = growing_on();
+  EXPECT_TRUE(region_growing({}, {}, on).empty());
+  std::vector<Vec3> line;
+  for (int i = 0; i < 200; ++i) line.emplace_back(0.01 * i, 0.02 * i, 0.0);
+  EXPECT_TRUE(region_growing(line, estimate_normals(line, {}), on).empty());
+  const std::vector<Vec3> same(100, Vec3(1, 2, 3));
+  EXPECT_TRUE(region_growing(same, estimate_normals(same, {}), on).empty());
+  // Sizes that do not match, and NaNs, are refused or skipped, never a crash.
+  EXPECT_TRUE(region_growing(line, std::vector<Vec3>(3, Vec3::UnitZ()), on).empty());
+  std::vector<Vec3> nan_normals(line.size(), Vec3(NAN, 0, 1));
+  EXPECT_TRUE(region_growing(line, nan_normals, on).empty());
+}
+
+TEST(FitSegment, RegionGrowingIsDeterministic) {
+  Cloud c = testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.02, 0.003, 25);
+  c.append(testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 0, 2), 0.02, 0.003, 26));
+  c.append(testing::cylinder_cloud(Vec3(1, 1, 0), Vec3::UnitZ(), 0.2, 1.5, 0.0,
+                                   2.0 * std::numbers::pi, 3000, 0.003, 27));
+  const auto a = grow(c, growing_on());
+  EXPECT_FALSE(a.empty());
+  EXPECT_EQ(a, grow(c, growing_on()));
+}
+
 Cloud small_scene() {
   // A column under a beam seen from three sides, a sphere, and a ground plane.
   Cloud c =
@@ -122,6 +196,12 @@ TEST(FitSegment, ClassFilterKeepsOnlyTheNamedClasses) {
   EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Sphere)], 0);
   EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
   EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Box)], 1);
+  // An input never classified (every point class 1) keeps all its points.
+  const std::vector<std::uint8_t> unclassified(c.points.size(), 1);
+  const auto kept = fit_point_cloud(c.points, unclassified, o);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(kept->other_class_points, 0);
+  EXPECT_EQ(kept->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
   // Without the filter the sphere is fitted again.
   o.classes.keep.clear();
   const auto all = fit_point_cloud(c.points, classes, o);
@@ -146,6 +226,37 @@ TEST(FitSegment, PipelineOutputIsTheSameBytesForTheSameSeed) {
   const std::string a = text();
   EXPECT_EQ(a, text());
   EXPECT_NE(a.find("\"quality\""), std::string::npos);
+}
+
+TEST(FitSegment, PipelineWithRegionGrowingKeepsEveryClusterPointAndIsDeterministic) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  const auto whole = fit_point_cloud(c.points, {}, o);
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  o.regions.enabled = true;
+  auto run = [&] {
+    const auto out = fit_point_cloud(c.points, {}, o);
+    EXPECT_TRUE(out.ok());
+    Scene s;
+    s.name = "regions";
+    s.primitives = out->primitives;
+    return std::make_pair(*out, scene_to_json(s));
+  };
+  const auto [split, text] = run();
+  EXPECT_GT(split.regions, whole->regions);  // the beam's faces, at least, come apart
+  long long in_regions = 0;
+  for (const auto& r : split.region_stats) in_regions += r.points;
+  EXPECT_EQ(in_regions, split.fitted_points - split.small_cluster_points);
+  EXPECT_EQ(split.per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
+  EXPECT_EQ(split.per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
+  EXPECT_EQ(text, run().second);
+  o.regions.smoothness_deg = 0.0;
+  const auto bad = fit_point_cloud(c.points, {}, o);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("regions.smoothness_deg"), std::string::npos);
 }
 
 TEST(FitSegment, PipelineOptionsAreChecked) {

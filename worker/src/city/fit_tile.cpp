@@ -58,6 +58,7 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
       {"normals", {"neighbours"}},
       {"ground", {"enabled", "use_classification", "cell", "window", "height"}},
       {"clusters", {"tolerance", "min_points"}},
+      {"regions", {"enabled", "neighbours", "smoothness_deg", "curvature", "min_points"}},
       {"ransac",
        {"epsilon", "normal_deviation_deg", "cluster_epsilon", "min_points", "probability",
         "max_radius", "seed", "plane", "sphere", "cylinder", "cone", "torus", "max_candidates"}},
@@ -116,6 +117,11 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
       take(sec("ground"), "ground", "height", o.ground.height, error) &&
       take(sec("clusters"), "clusters", "tolerance", o.clusters.tolerance, error) &&
       take(sec("clusters"), "clusters", "min_points", o.clusters.min_points, error) &&
+      take(sec("regions"), "regions", "enabled", o.regions.enabled, error) &&
+      take(sec("regions"), "regions", "neighbours", o.regions.neighbours, error) &&
+      take(sec("regions"), "regions", "smoothness_deg", o.regions.smoothness_deg, error) &&
+      take(sec("regions"), "regions", "curvature", o.regions.curvature, error) &&
+      take(sec("regions"), "regions", "min_points", o.regions.min_points, error) &&
       take(ransac, "ransac", "epsilon", o.ransac.epsilon, error) &&
       take(ransac, "ransac", "normal_deviation_deg", o.ransac.normal_deviation_deg, error) &&
       take(ransac, "ransac", "cluster_epsilon", o.ransac.cluster_epsilon, error) &&

@@ -119,7 +119,9 @@ struct PrimitiveOptions {
   double min_building_width = 1.0;
   double linear_tolerance = 1e-7;  ///< of the kernel solids built to check primitives
   /// Extrusions from planes parallel to one direction (an L-shaped or courtyard building, a
-  /// gabled house), kept when they describe the region more briefly than a box.
+  /// gabled house), kept when they describe the region more briefly than a box; also the
+  /// buildings under flat roof outlines and under pitched roofs (off: those stay boxes or
+  /// roof slabs).
   bool extrusions = true;
   /// Revolutions from coaxial cylinders and cones and the planes ⟂ their axis (a fountain, a
   /// vase, a curved wall); a plain cylinder or cone stays one.
@@ -145,7 +147,8 @@ struct FittedPrimitives {
 /// inliers' angular span); extrusions from three or more planes parallel to one direction
 /// whose traces close a profile, then from flat roofs' outlines over the ground grid, each
 /// kept only when its description length (points unexplained + λ·parameters) beats the box
-/// around its profile (so a plain box stays a box); then boxes from planes (a seed plane
+/// around its profile (so a plain box stays a box); then pitched roofs (one tilted plane, or
+/// two rising to a ridge) as extrusions down to the ground grid; then boxes from planes (a seed plane
 /// well covered by its points; its depth from the region's points facing like it at the opposite
 /// face or across it on its long edges, whether or not the RANSAC made planes of them; its length
 /// grown over the points of its faces up to whatever else stands in its cross-section),
@@ -153,6 +156,8 @@ struct FittedPrimitives {
 /// Each primitive is built as a kernel solid and checked; invalid ones are rejected with the
 /// kernel's reason. `region` becomes part of the ids. `normals` are those given to
 /// detect_shapes (unit or zero; may be empty, then box faces are found without them).
+/// `shapes.assignment` has one entry per point; where it (or `normals`) does not match the
+/// points, the result has no primitive and a rejection saying so.
 FittedPrimitives primitives_from_shapes(std::span<const kernel::Vec3> points,
                                         std::span<const kernel::Vec3> normals,
                                         const RansacResult& shapes, const PrimitiveOptions& options,

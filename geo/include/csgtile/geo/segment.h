@@ -2,7 +2,7 @@
 /// \file
 /// Cleaning and segmentation of a point cloud before fitting, each stage a separate call with
 /// a plain options struct (statistical outliers, voxel downsampling, normals, ground,
-/// Euclidean clusters), and the whole fit pipeline that chains them with fit.h.
+/// Euclidean clusters, region growing), and the whole fit pipeline that chains them with fit.h.
 ///
 /// Points are tile-local coordinates in metres. Outputs are index lists in ascending order or
 /// per-point vectors in input order; clusters are ordered by size (largest first), ties by
@@ -73,15 +73,40 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const kerne
                                                            const ClusterOptions& options,
                                                            double* tolerance_used = nullptr);
 
-/// Every option of the fit pipeline.
+/// Region growing on normals and curvature (PCL RegionGrowing), splitting a cluster into
+/// smooth pieces (two walls meeting at an edge become two regions; a cylinder stays one).
+/// From the seed of lowest curvature, a neighbour (one of the `neighbours` nearest) joins
+/// when its normal is within `smoothness_deg` of the current point's, and keeps growing when
+/// its curvature (surface variation λ0/(λ0+λ1+λ2) of its neighbourhood, at most 1/3) is
+/// below `curvature` (1.0: every point keeps growing). Regions below `min_points` are dropped.
+struct RegionGrowingOptions {
+  bool enabled = false;  ///< off: the pipeline fits each Euclidean cluster whole
+  int neighbours = 16;
+  double smoothness_deg = 10.0;
+  double curvature = 1.0;
+  long long min_points = 40;
+};
+/// Smooth regions of `points` (indices, ascending within a region; regions by size, largest
+/// first, ties by smallest index). `normals` are per point (zero: none, e.g. from
+/// estimate_normals); `curvature` per point, or empty to compute it from the `neighbours`
+/// nearest points. Points without a finite non-zero normal, and those of regions below
+/// `min_points`, are in no region. Disabled: one region of every finite point. Mismatched
+/// sizes, empty or degenerate (e.g. collinear) input: no region.
+std::vector<std::vector<std::uint32_t>> region_growing(std::span<const kernel::Vec3> points,
+                                                       std::span<const kernel::Vec3> normals,
+                                                       const RegionGrowingOptions& options,
+                                                       std::span<const double> curvature = {});
+
 /// Which classified points are fitted. When the input carries a classification (LAS) and
 /// `keep` is not empty, only non-ground points of those ASPRS classes are fitted (e.g. 6,
 /// buildings, and 26 in AHN, civil structures), so that trees and cars do not compete for
-/// primitives; ground (class 2) is still taken for the terrain. Unclassified inputs keep all.
+/// primitives; ground (class 2) is still taken for the terrain. Unclassified inputs (no
+/// classes, or every point class 0 or 1) keep all.
 struct ClassOptions {
   std::vector<std::uint8_t> keep;
 };
 
+/// Every option of the fit pipeline.
 struct FitPipelineOptions {
   ClassOptions classes;
   OutlierOptions outliers;
@@ -89,12 +114,17 @@ struct FitPipelineOptions {
   NormalOptions normals;
   GroundOptions ground;
   ClusterOptions clusters;
+  /// When enabled, each Euclidean cluster is split into grown regions; its points in no
+  /// grown region stay together as one more region of that cluster (after its grown ones),
+  /// so that the RANSAC still sees them (edges, noisy normals) instead of losing them.
+  /// Normals and curvature come from the `normals` neighbourhoods.
+  RegionGrowingOptions regions;
   RansacOptions ransac;
   PrimitiveOptions primitives;
   bool keep_detections = false;  ///< diagnostics: fill FitOutput::detections
 };
 
-/// One region (Euclidean cluster) as the RANSAC saw it.
+/// One region (Euclidean cluster, or a grown region of one) as the RANSAC saw it.
 struct FitRegion {
   long long points = 0;
   double spacing = 0.0;          ///< estimated point spacing
@@ -133,7 +163,8 @@ struct FitOutput {
   std::vector<RegionDetection> detections;  ///< per region, when keep_detections was set
 };
 
-/// Ground → outliers → voxels → clusters → per cluster: normals, RANSAC, primitives.
+/// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
+/// primitives.
 /// `classes` may be empty. Errors: InvalidArgument for bad options (naming the option).
 kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
