@@ -4,11 +4,14 @@
 #include "boolean/arguments.h"
 
 #include <algorithm>
+#include <map>
+#include <numeric>
 #include <unordered_map>
 
 #include "boolean/fuse_groups.h"
 #include "boolean/fuse_tree.h"
 #include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
 
 namespace csgtile::kernel::detail {
 
@@ -32,8 +35,36 @@ Result<PreparedArgument> prepare_argument(const Shape& argument, const BooleanOp
   const ShapeIndex solid_index = map_child_shapes(argument, ShapeKind::Solid);
   if (solid_index.size() < 2) return PreparedArgument{argument, {}};
   const std::vector<Shape>& solids = solid_index.shapes();
-  const auto groups = fuse_groups(solids, options.tolerance);
-  if (groups.size() == solids.size()) return PreparedArgument{argument, {}};
+  const auto box_groups = fuse_groups(solids, options.tolerance);
+  if (box_groups.size() == solids.size()) return PreparedArgument{argument, {}};
+  // Within each group of meeting boxes, the solids that really meet (the engine's contact
+  // test): components of that graph are what gets fused.
+  std::vector<std::size_t> parent(solids.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  auto root = [&](std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  bool any_contact = false;
+  for (const auto& members : box_groups) {
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      BoundingBox bi = bounding_box(solids[members[i]]);
+      bi.enlarge(options.tolerance);
+      for (std::size_t j = i + 1; j < members.size(); ++j) {
+        if (!bi.intersects(bounding_box(solids[members[j]]))) continue;
+        if (root(members[i]) == root(members[j])) continue;
+        auto contact = run_interference(solids[members[i]], solids[members[j]], options);
+        if (!contact.ok()) return contact.error();
+        if (contact.value() == Interference::Disjoint) continue;
+        const std::size_t ra = root(members[i]), rb = root(members[j]);
+        parent[std::max(ra, rb)] = std::min(ra, rb);
+        any_contact = true;
+      }
+    }
+  }
+  if (!any_contact) return PreparedArgument{argument, {}};
+  std::map<std::size_t, std::vector<std::size_t>> components;  // keyed by smallest member
+  for (std::size_t i = 0; i < solids.size(); ++i) components[root(i)].push_back(i);
 
   const ShapeIndex argument_faces = map_child_shapes(argument, ShapeKind::Face);
   auto traced_solid = [&](const Shape& solid) {
@@ -60,7 +91,8 @@ Result<PreparedArgument> prepare_argument(const Shape& argument, const BooleanOp
   // Each face of the union, by body and location, with its argument faces.
   std::unordered_map<Shape, std::vector<int>, ShapeSameHash, ShapeSameEqual> history;
   std::vector<Shape> parts;
-  for (const auto& members : groups) {
+  for (const auto& component : components) {
+    const std::vector<std::size_t>& members = component.second;
     std::vector<Traced> group;
     for (std::size_t i : members) group.push_back(traced_solid(solids[i]));
     Traced united = group.front();

@@ -17,6 +17,9 @@ namespace csgtile::kernel::detail {
 Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options,
                          std::vector<std::vector<FaceOrigin>>* origins);
 
+/// The engine's contact test of two prepared shapes (solid_interference without the box test).
+Result<Interference> run_interference(const Shape& a, const Shape& b, const BooleanOptions& options);
+
 /// An argument ready for the engine.
 struct PreparedArgument {
   Shape shape;  ///< the argument itself, or the union of its solids
@@ -25,9 +28,10 @@ struct PreparedArgument {
   std::vector<std::vector<int>> faces;
 };
 
-/// The argument itself when it has one solid or its solids' bounding boxes (grown by the
-/// tolerance) are pairwise apart; otherwise the union of its solids, each group of solids
-/// whose boxes meet fused as a balanced tree. Errors: those of the fuse.
+/// The argument itself when no two of its solids meet (boxes grown by the tolerance apart, or
+/// the engine's contact test says disjoint: a Boolean result's solids, for one, never need
+/// it); otherwise the union of its solids, each group of solids that meet (directly or through
+/// others) fused as a balanced tree. Errors: those of the contact test and of the fuse.
 Result<PreparedArgument> prepare_argument(const Shape& argument, const BooleanOptions& options);
 
 /// Restates origins that name faces of the prepared arguments as origins naming faces of

@@ -1643,10 +1643,14 @@ Result<Interference> solid_interference(const Shape& a, const Shape& b, const Bo
   if (!pa.ok()) return pa.error();
   auto pb = detail::prepare_argument(b, options);
   if (!pb.ok()) return pb.error();
-  return BooleanEngine(pa.value().shape, pb.value().shape, BooleanOp::Common, options).interference();
+  return detail::run_interference(pa.value().shape, pb.value().shape, options);
 }
 
 namespace detail {
+
+Result<Interference> run_interference(const Shape& a, const Shape& b, const BooleanOptions& options) {
+  return BooleanEngine(a, b, BooleanOp::Common, options).interference();
+}
 
 Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options,
                          std::vector<std::vector<FaceOrigin>>* origins) {

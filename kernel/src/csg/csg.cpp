@@ -50,8 +50,27 @@ Tracked append_tree(std::vector<CsgNode>& nodes, const CsgModel& model) {
   return t;
 }
 
-/// a op b, composing the result faces' sources through the arguments'. A model's shape is a
-/// primitive or a Boolean result, ready for the engine as it is (boolean/arguments.h).
+/// `t` ready for the engine (boolean/arguments.h): a model whose shape is a set of solids that
+/// meet (op none scenes, stacked models) becomes their union, each face keeping the sources
+/// of the faces it comes from.
+Result<Tracked> prepared(const Tracked& t, const BooleanOptions& options) {
+  auto p = detail::prepare_argument(t.shape, options);
+  if (!p.ok()) return p.error();
+  if (p.value().faces.empty()) return t;
+  if (t.sources.empty()) return Tracked{p.value().shape, {}};  // a model without history
+  Tracked out{p.value().shape, std::vector<std::vector<FaceSource>>(p.value().faces.size())};
+  for (std::size_t f = 0; f < out.sources.size(); ++f) {
+    for (int from : p.value().faces[f]) {
+      const auto& list = t.sources.at(static_cast<std::size_t>(from));
+      out.sources[f].insert(out.sources[f].end(), list.begin(), list.end());
+    }
+    sort_unique(out.sources[f]);
+  }
+  return out;
+}
+
+/// a op b on prepared arguments (and the engine's own results, which are), composing the
+/// result faces' sources through the arguments'.
 Result<Tracked> tracked_boolean(const Tracked& a, const Tracked& b, BooleanOp op,
                                 const BooleanOptions& options) {
   std::vector<std::vector<FaceOrigin>> origins;
@@ -139,9 +158,11 @@ Result<CsgModel> csg_primitive(const PrimitiveSpec& spec, std::string label, dou
 Result<CsgModel> csg_boolean(const CsgModel& a, const CsgModel& b, BooleanOp op,
                              const BooleanOptions& options) {
   CsgModel m;
-  const Tracked ta = append_tree(m.nodes, a);
-  const Tracked tb = append_tree(m.nodes, b);
-  auto r = tracked_boolean(ta, tb, op, options);
+  auto ta = prepared(append_tree(m.nodes, a), options);
+  if (!ta.ok()) return ta.error();
+  auto tb = prepared(append_tree(m.nodes, b), options);
+  if (!tb.ok()) return tb.error();
+  auto r = tracked_boolean(ta.value(), tb.value(), op, options);
   if (!r.ok()) return r.error();
   CsgNode node;
   node.kind = node_kind(op);
@@ -160,7 +181,9 @@ Result<CsgModel> csg_combine(const std::vector<CsgModel>& models, BooleanOp op,
   node.kind = node_kind(op);
   std::vector<Tracked> items;
   for (const CsgModel& model : models) {
-    items.push_back(append_tree(m.nodes, model));
+    auto item = prepared(append_tree(m.nodes, model), options);
+    if (!item.ok()) return item.error();
+    items.push_back(std::move(item).value());
     node.children.push_back(static_cast<int>(m.nodes.size()) - 1);
   }
   m.nodes.push_back(std::move(node));

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "csgtile/geo/scene.h"
+#include "csgtile/kernel/check.h"
 #include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -166,6 +167,29 @@ TEST(Csg, CombineRecordsOneNaryNodeAndPassesUntouchedSolidsThrough) {
   int lone = 0;
   for (const auto& list : r->face_sources) lone += list.size() == 1 && list[0].node == 3;
   EXPECT_EQ(lone, 6);
+}
+
+// A model whose shape is a set of overlapping solids (a plain scene, a stacked model) is
+// taken as their union: the result is valid, its volume right, and every face's sources lie
+// on its surface.
+TEST(Csg, SetOfOverlappingSolidsIsTakenAsTheirUnion) {
+  const CsgModel a = leaf(box_at({2, 2, 2}, {0, 0, 0}), "a");
+  const CsgModel b = leaf(box_at({2, 2, 2}, {1, 0, 0}), "b");
+  CsgModel set;
+  set.shape = ShapeFactory::compound({a.shape, b.shape}).value();
+  CsgNode root;  // as assembly's stacked models: a fuse node over parts left unfused
+  root.kind = CsgNodeKind::Fuse;
+  root.children = {0, 1};
+  set.nodes = {a.nodes[0], b.nodes[0], root};
+  for (int i = 0; i < 6; ++i) set.face_sources.push_back({FaceSource{0, i}});
+  for (int i = 0; i < 6; ++i) set.face_sources.push_back({FaceSource{1, i}});
+  ASSERT_EQ(map_child_shapes(set.shape, ShapeKind::Face).size(), 12u);
+  const CsgModel cap = leaf(box_at({3, 2, 1}, {0, 0, 2}), "cap");
+  auto r = csg_boolean(set, cap, BooleanOp::Fuse);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_TRUE(check_shape(r->shape).valid());
+  EXPECT_NEAR(mass_properties(r->shape).volume, 12.0 + 6.0, 1e-9);
+  expect_sources_on_surfaces(r.value());
 }
 
 TEST(Csg, CheckFindsBrokenHistories) {

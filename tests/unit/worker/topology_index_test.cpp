@@ -320,6 +320,19 @@ TEST(Relations, OverlapAndEqualityAreExact) {
   EXPECT_EQ(rows[2].kind, RelationKind::Overlaps);  // b, c
 }
 
+// An object made of overlapping solids (a plain set) is compared as their union: two
+// overlapping 2-cubes (union 12, sum 16) inside a larger box are within it, not overlapping.
+TEST(Relations, ObjectOfOverlappingSolidsIsTheirUnion) {
+  const auto left = leaf(box({0, 0, 0}, {2, 2, 2}), "left").shape;
+  const auto right = leaf(box({1, 0, 0}, {2, 2, 2}), "right").shape;
+  const auto pair = kernel::ShapeFactory::compound({left, right}).value();
+  const auto outer = leaf(box({-1, -1, -1}, {5, 4, 4}), "outer").shape;
+  const auto rows = compute_relations({pair, outer}, 1e-7);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].kind, RelationKind::Within);
+  EXPECT_NEAR(rows[0].common_volume, 12.0, 1e-9);
+}
+
 TEST(Relations, ThreadCountDoesNotChangeTheResult) {
   std::vector<kernel::Shape> solids;
   for (const IndexObject& o : sample_objects()) solids.push_back(o.model.shape);

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "export/topology_index.h"
 
@@ -101,9 +102,20 @@ bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma
 
 std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& solids,
                                               double linear_tolerance, int threads) {
-  std::vector<Measured> measured(solids.size());
-  for (std::size_t i = 0; i < solids.size(); ++i) {
-    const kernel::MassProperties mp = kernel::mass_properties(solids[i]);
+  kernel::BooleanOptions options;
+  options.tolerance = linear_tolerance;
+  // An object made of several solids that overlap (a plain set of primitives) is measured and
+  // compared as the union of its solids, which is what the Booleans take it for; where that
+  // union fails, the object is kept as given and its pairs end Unknown with the reason.
+  std::vector<kernel::Shape> shapes(solids.begin(), solids.end());
+  for (kernel::Shape& s : shapes) {
+    if (kernel::map_child_shapes(s, kernel::ShapeKind::Solid).size() < 2) continue;
+    auto united = kernel::boolean_fuse_all({s}, options);
+    if (united.ok()) s = united.value();
+  }
+  std::vector<Measured> measured(shapes.size());
+  for (std::size_t i = 0; i < shapes.size(); ++i) {
+    const kernel::MassProperties mp = kernel::mass_properties(shapes[i]);
     measured[i] = {mp.volume, mp.area, mp.bounds};
     measured[i].box.enlarge(linear_tolerance);
   }
@@ -127,8 +139,6 @@ std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& 
   }
   std::sort(pairs.begin(), pairs.end());
 
-  kernel::BooleanOptions options;
-  options.tolerance = linear_tolerance;
   // Pairs are independent (shapes are immutable and shared safely between threads): workers
   // take them in turn and each result lands in its pair's slot, so the output does not
   // depend on the number of threads or on scheduling.
@@ -142,7 +152,7 @@ std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& 
       r.a = i;
       r.b = j;
       try {
-        related[k] = classify(solids[i], solids[j], measured[i], measured[j], options, r) ? 1 : 0;
+        related[k] = classify(shapes[i], shapes[j], measured[i], measured[j], options, r) ? 1 : 0;
       } catch (const std::exception& e) {
         // The kernel does not throw across its API; an allocation failure still might.
         r.kind = RelationKind::Unknown;

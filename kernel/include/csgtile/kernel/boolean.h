@@ -78,8 +78,9 @@ Result<Interference> solid_interference(const Shape& a, const Shape& b,
 /// fused as a balanced tree of pairwise fuses (neighbours in input order first, so each solid
 /// takes part in about log2(n) operations; where the fuse of two partial results fails, the
 /// second one's halves are fused into the first one in turn, down to single solids) and the
-/// groups are gathered in one compound. Solids that
-/// touch nothing pass through unchanged. Deterministic. Errors as boolean_operation.
+/// groups are gathered in one compound. Solids that touch nothing pass through unchanged (an
+/// input compound whose own solids meet is first replaced by their union, as in
+/// boolean_operation). Deterministic. Errors as boolean_operation.
 Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options = {});
 
 /// fuse: union of all; common: intersection of all; cut: the first minus all the others.
