@@ -58,6 +58,13 @@ if [ "$build_only" = 0 ] && { ! command -v node >/dev/null 2>&1 || ! command -v 
   packages+=(nodejs npm)
 fi
 
+# /dev/null must be the null device: initdb (the PostgreSQL tests) writes to it as the
+# postgres user. On this machine kind it was once found replaced by a regular root-only file.
+if [ ! -c /dev/null ] && [ "$(id -u)" -eq 0 ]; then
+  echo "setup: /dev/null is not the null device; restoring it" >&2
+  rm -f /dev/null && mknod -m 666 /dev/null c 1 3
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q '^install ok installed$'; then

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <future>
 #include <thread>
 #include <nlohmann/json.hpp>
@@ -20,6 +21,7 @@
 #include "export/cityjson_seq.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
+#include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "job_records.h"
 #include "publish/publish_run.h"
@@ -373,6 +375,50 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   return publish_run(config, *queue, log, summary);
 }
 
+namespace {
+
+// Whether `manifest` already publishes this run as it stands: the same run, version, config,
+// seed, jobs and dead jobs, and every export it names present with its recorded size and
+// SHA-256. Then publishing again would write the same bytes (the exports are deterministic),
+// so a worker that finds the run finished need not rebuild them.
+bool already_published(const std::filesystem::path& manifest_path, const ordered_json& head,
+                       const std::filesystem::path& run_dir) {
+  std::error_code ec;
+  if (!std::filesystem::exists(manifest_path, ec)) return false;
+  ordered_json manifest;
+  try {
+    std::ifstream in(manifest_path, std::ios::binary);
+    manifest = ordered_json::parse(in);
+  } catch (const std::exception&) {
+    return false;  // unreadable or half-written by an older version: publish again
+  }
+  for (const auto& [key, value] : head.items()) {
+    if (!manifest.contains(key) || manifest[key] != value) return false;
+  }
+  auto present = [&](const ordered_json& entry, const char* key, const char* sha, const char* bytes) {
+    if (!entry.is_object() || !entry.contains(key) || !entry.contains(sha) || !entry.contains(bytes))
+      return false;
+    std::string hex;
+    std::uint64_t size = 0;
+    if (!fetch::file_sha256(run_dir / entry[key].get<std::string>(), hex, size).ok()) return false;
+    return hex == entry[sha].get<std::string>() && size == entry[bytes].get<std::uint64_t>();
+  };
+  try {
+    if (!present(manifest["index"], "key", "sha256", "bytes")) return false;
+    if (!present(manifest["cityjson"], "key", "sha256", "bytes")) return false;
+    const ordered_json& tiles = manifest["tiles"];
+    if (!tiles.is_null() && (!present(tiles, "key", "sha256", "bytes") ||
+                             !present(tiles, "content", "content_sha256", "content_bytes"))) {
+      return false;
+    }
+  } catch (const std::exception&) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Logger& log, RunSummary& summary) {
   summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
   const ops::LongStepScope long_step(ops::metrics(), "publish");  // live while publishing
@@ -403,6 +449,22 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     if (of_this_run(entry.first)) results.push_back(std::move(entry));
   }
   if (!failure.ok()) return failure;
+  // The manifest's head: what identifies this publication. Another worker (or this one,
+  // earlier) may have published exactly this already; then nothing is rebuilt.
+  JobRecords records;
+  for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
+  ordered_json head;
+  head["run"] = config.run.name;
+  head["csgtile_version"] = CSGTILE_VERSION;
+  head["config_sha256"] = output_config_sha256(config);
+  head["seed"] = config.run.seed;
+  head["jobs"] = records.jobs;
+  head["dead"] = dead_jobs_json(summary.dead);
+  summary.manifest = summary.run_dir / "manifest.json";
+  if (already_published(summary.manifest, head, summary.run_dir)) {
+    log.info("run", "already published", {{"manifest", summary.manifest.string()}});
+    return publish::publish_run_directory(config, summary.run_dir, log);
+  }
   // The run's exports (export/), published before the manifest names them.
   RunObjects objects;
   if (Failure f = collect_run_objects(config, results, summary.run_dir, objects); !f.ok())
@@ -436,17 +498,9 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     log.info("tiles", "not written", {{"reason", tiles.skipped}});
   }
   for (const std::string& w : tiles.warnings) log.log(config::LogLevel::Warn, "tiles", w);
-  ordered_json manifest;
-  manifest["run"] = config.run.name;
-  manifest["csgtile_version"] = CSGTILE_VERSION;
-  manifest["config_sha256"] = output_config_sha256(config);
-  manifest["seed"] = config.run.seed;
+  ordered_json manifest = std::move(head);
   // Stage timings differ from run to run: they go to timings.json, which the manifest names
   // but does not hash, so manifest.json stays byte-identical.
-  JobRecords records;
-  for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
-  manifest["jobs"] = std::move(records.jobs);
-  manifest["dead"] = dead_jobs_json(summary.dead);
   if (Failure f = write_timings(summary.run_dir, config.run.name, records); !f.ok()) return f;
   manifest["timings"] = "timings.json";
   manifest["index"] = {{"key", index.key},
@@ -479,7 +533,6 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     manifest["tiles"] = nullptr;
     manifest["tiles_skipped"] = tiles.skipped;
   }
-  summary.manifest = summary.run_dir / "manifest.json";
   if (Failure f = write_file_atomic(summary.manifest, manifest.dump(2) + "\n"); !f.ok()) return f;
   return publish::publish_run_directory(config, summary.run_dir, log);
 }
