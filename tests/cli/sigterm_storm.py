@@ -22,7 +22,10 @@ signals = int(sys.argv[3]) if len(sys.argv) > 3 else 100
 grace = 10.0
 rng = random.Random(11)
 shutil.rmtree(work, ignore_errors=True)
-inputs = write_jobs(f"{work}/scenes", 400, posts=8)  # ~0.2 s each: the storm ends first
+# ~0.5 s each (40 posts): the storm ends while jobs are still queued, so the SIGTERMs land on
+# workers in their jobs and idle polls, not on the run's publication (8 posts ended all 400
+# jobs mid-storm once the Booleans got faster).
+inputs = write_jobs(f"{work}/scenes", 400, posts=40)
 config = f"{work}/run.yaml"
 with open(config, "w") as f:
     f.write("run:\n  name: storm\n  inputs:\n" + "".join(f"    - {p}\n" for p in inputs) +
