@@ -604,11 +604,15 @@ void Builder::boxes() {
     double c0 = depth.c0, c1 = depth.c1;
     // A roof's own noise band (a few stray points below or above it) is no depth: judged
     // against the plane's noise (robust σ of the points over it) and epsilon, not only the
-    // thinnest box.
-    const double own_depth =
-        std::max({o_.min_box_thickness, 3.0 * ransac_.epsilon, 4.0 * robust_noise(points_, seed)});
-    if (c1 - c0 < own_depth && o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ &&
-        std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width) {
+    // thinnest box. The noise (a pass over the region) is measured only for horizontal seeds
+    // wide enough to be a roof, with a terrain to reach.
+    const auto no_own_depth = [&] {
+      const double floor = std::max(o_.min_box_thickness, 3.0 * ransac_.epsilon);
+      return c1 - c0 < floor || c1 - c0 < 4.0 * robust_noise(points_, seed);
+    };
+    if (o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ &&
+        std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width &&
+        no_own_depth()) {
       // A roof seen from above: down to the terrain under it. Only for roofs wide enough to
       // be a building: a beam's underside seen from below has no depth of its own either.
       const Vec3 centre = seed.origin + 0.5 * (seed.umin + seed.umax) * seed.u +

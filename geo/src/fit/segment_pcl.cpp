@@ -46,6 +46,26 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
   return cloud;
 }
 
+// PCL's index lists (into the cloud) as lists of input indices, each ascending, empty ones
+// dropped; ordered by size (largest first), ties by smallest index: deterministic.
+std::vector<std::vector<std::uint32_t>> to_groups(const std::vector<pcl::PointIndices>& lists,
+                                                  const std::vector<std::uint32_t>& index) {
+  std::vector<std::vector<std::uint32_t>> out;
+  for (const auto& list : lists) {
+    if (list.indices.empty()) continue;
+    std::vector<std::uint32_t> members;
+    members.reserve(list.indices.size());
+    for (auto k : list.indices) members.push_back(index[static_cast<std::size_t>(k)]);
+    std::sort(members.begin(), members.end());
+    out.push_back(std::move(members));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    if (a.size() != b.size()) return a.size() > b.size();
+    return a.front() < b.front();
+  });
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
@@ -200,19 +220,7 @@ std::vector<std::vector<std::uint32_t>> region_growing(std::span<const Vec3> poi
   growing.setInputNormals(cloud_normals);
   std::vector<pcl::PointIndices> regions;
   growing.extract(regions);
-  for (const auto& r : regions) {
-    if (r.indices.empty()) continue;
-    std::vector<std::uint32_t> members;
-    members.reserve(r.indices.size());
-    for (auto k : r.indices) members.push_back(index[static_cast<std::size_t>(k)]);
-    std::sort(members.begin(), members.end());
-    out.push_back(std::move(members));
-  }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-    if (a.size() != b.size()) return a.size() > b.size();
-    return a.front() < b.front();
-  });
-  return out;
+  return to_groups(regions, index);
 }
 
 std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3> points,
@@ -220,8 +228,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3>
                                                            double* tolerance_used) {
   std::vector<std::uint32_t> index;
   auto cloud = to_cloud(points, index);
-  std::vector<std::vector<std::uint32_t>> out;
-  if (cloud->empty()) return out;
+  if (cloud->empty()) return {};
   double tolerance = options.tolerance;
   if (!(tolerance > 0.0)) tolerance = 1.5 * detail::neighbour_reach(points, index, 0.9);
   if (!(tolerance > 0.0)) tolerance = 1e-3;
@@ -237,18 +244,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3>
   extraction.setInputCloud(cloud);
   std::vector<pcl::PointIndices> clusters;
   extraction.extract(clusters);
-  for (const auto& c : clusters) {
-    std::vector<std::uint32_t> members;
-    members.reserve(c.indices.size());
-    for (auto k : c.indices) members.push_back(index[static_cast<std::size_t>(k)]);
-    std::sort(members.begin(), members.end());
-    out.push_back(std::move(members));
-  }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-    if (a.size() != b.size()) return a.size() > b.size();
-    return a.front() < b.front();
-  });
-  return out;
+  return to_groups(clusters, index);
 }
 
 }  // namespace csgtile::geo
