@@ -607,8 +607,8 @@ void Builder::boxes() {
     // thinnest box. The noise (a pass over the region) is measured only for horizontal seeds
     // wide enough to be a roof, with a terrain to reach.
     const auto no_own_depth = [&] {
-      const double floor = std::max(o_.min_box_thickness, 3.0 * ransac_.epsilon);
-      return c1 - c0 < floor || c1 - c0 < 4.0 * robust_noise(points_, seed);
+      const double least = std::max(o_.min_box_thickness, 3.0 * ransac_.epsilon);
+      return c1 - c0 < least || c1 - c0 < 4.0 * robust_noise(points_, seed);
     };
     if (o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ &&
         std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width &&
