@@ -64,6 +64,6 @@ if [ "${CSGTILE_SKIP_FUZZ:-0}" != 1 ]; then
         -DCSGTILE_FUZZ=ON -DCSGTILE_BUILD_TESTS=OFF >/dev/null
   # Only the fuzz targets (and the libraries they parse with) need this instrumented build.
   cmake --build build-fuzz -j"$jobs" --target native_reader_fuzz native_reader_fuzz_seeds \
-        las_reader_fuzz las_reader_fuzz_seeds
+        las_reader_fuzz las_reader_fuzz_seeds laz_reader_fuzz laz_reader_fuzz_seeds
   ctest --test-dir build-fuzz --output-on-failure -L fuzz
 fi

@@ -18,6 +18,8 @@ packages=(
   libopenvdb-dev libtbb-dev libboost-dev
   # geo: georeferencing (GeographicLib); PROJ's cs2cs is the tests' independent oracle
   libgeographiclib-dev proj-bin
+  # geo: CRS definitions and transformations (PROJ, with its data)
+  libproj-dev proj-data
   # geo fitting: PCL 1.13 (outlier removal, voxel grid, kd-tree neighbourhoods, Euclidean
   # clustering; only common/search/kdtree/filters/segmentation are linked, with FLANN)
   libpcl-dev

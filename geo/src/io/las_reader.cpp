@@ -12,6 +12,7 @@
 #include "io/byte_source.h"
 #include "io/endian.h"
 #include "io/las_format.h"
+#include "io/laz/laz_records.h"
 
 namespace csgtile::geo {
 
@@ -179,6 +180,7 @@ struct Parsed {
   LasCrsRecords crs;
   Decoding decoding;
   std::uint64_t readable = 0;  // complete records that will be read
+  std::unique_ptr<detail::laz::LazRecords> laz;  // compressed point data (LAZ, COPC)
 };
 
 // Parses and checks everything before the points, in the order the fields are needed.
@@ -265,21 +267,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     for (int i = 0; i < 5; ++i) h.points_by_return[i] = h.legacy_points_by_return[i];
   }
 
-  // Compressed point data is recognised by the format id's top bits (LASzip convention).
-  const char* kLazAdvice =
-      "; no LASzip decoder is available — decompress it first (e.g. `pdal translate in.laz "
-      "out.las` or `las2las -i in.laz -o out.las`)";
-  if ((format_id & 0xC0) != 0) {
-    // COPC puts its "copc" info VLR first, right after the header: name it when present.
-    std::array<std::uint8_t, 6> first_vlr_user{};
-    const bool copc = load_le<std::uint32_t>(&head[detail::kLasVlrCount]) > 0 &&
-                      h.header_size + 8u <= size &&
-                      src.read_at(h.header_size + 2u, first_vlr_user).ok() &&
-                      std::memcmp(first_vlr_user.data(), "copc\0", 5) == 0;
-    return Error{ErrorCode::Unsupported, name + (copc ? ": COPC (cloud-optimised LAZ), " : ": ") +
-                                             "LAZ-compressed (point format id " + num(format_id) +
-                                             " has the compression bit set)" + kLazAdvice};
-  }
+  // Compressed point data is recognised by the format id's top bits (LASzip convention) and
+  // the laszip VLR.
+  const bool compressed_bit = (format_id & 0xC0) != 0;
 
   // Offsets and the VLR area.
   if (h.offset_to_point_data < h.header_size) {
@@ -340,16 +330,24 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     s.vlrs.push_back(std::move(r));
     pos = end;
   }
+  const LasRecord* laszip = nullptr;
+  bool copc = false;
   for (const auto& r : s.vlrs) {
-    if (r.user_id == "laszip encoded" && r.record_id == 22204) {
-      return Error{ErrorCode::Unsupported,
-                   name + ": LAZ-compressed (it has a LASzip VLR)" + std::string(kLazAdvice)};
-    }
-    if (r.user_id == "copc" && r.record_id == 1) {
-      return Error{
-          ErrorCode::Unsupported,
-          name + ": COPC (LAZ-compressed cloud-optimised point cloud)" + std::string(kLazAdvice)};
-    }
+    if (r.user_id == "laszip encoded" && r.record_id == 22204 && laszip == nullptr) laszip = &r;
+    if (r.user_id == "copc" && r.record_id == 1) copc = true;
+  }
+  if (compressed_bit && laszip == nullptr) {
+    return corrupt(name, "LAZ-compressed (point format id " + num(format_id) +
+                             " has the compression bit set) but no laszip VLR (\"laszip "
+                             "encoded\", 22204) says how");
+  }
+  if (laszip != nullptr && !laszip->data) {
+    return corrupt(name, "the laszip VLR was not loaded (VLR area over its limit)");
+  }
+  const bool compressed = laszip != nullptr;
+  if (laszip != nullptr && !compressed_bit) {
+    warnings.push_back(name + ": a laszip VLR without the compression bit in the point format "
+                              "id; read as LAZ");
   }
 
   // Point format and record length.
@@ -398,7 +396,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   const std::uint64_t data_bytes = data_end - h.offset_to_point_data;
   const std::uint64_t complete = data_bytes / h.record_length;
   s.readable = h.point_count;
-  if (h.point_count > complete) {
+  if (compressed) {
+    // Checked against the chunk table below.
+  } else if (h.point_count > complete) {
     const std::string what = "truncated: the header's point count is " + num(h.point_count) +
                              " records of " + num(h.record_length) + " bytes, but only " +
                              num(data_bytes) +
@@ -466,6 +466,17 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
       h.waveform_data_start > size) {
     warnings.push_back(name + ": start of waveform data " + num(h.waveform_data_start) +
                        " passes the end of the file; waveform packets are ignored anyway");
+  }
+
+  if (compressed) {
+    auto spec = detail::laz::parse_laszip_vlr(*laszip->data, h.point_format, h.record_length, name);
+    if (!spec.ok()) return spec.error();
+    auto chunks = detail::laz::read_chunks(src, spec.value(), h.offset_to_point_data, data_end,
+                                           h.point_count);
+    if (!chunks.ok()) return chunks.error();
+    s.laz = std::make_unique<detail::laz::LazRecords>(
+        src, std::move(spec).value(), std::move(chunks).value(), h.record_length,
+        options.all_attributes ? detail::laz::kAllLayers : detail::laz::kLayerZ);
   }
 
   // Extra bytes and their descriptors.
@@ -609,8 +620,10 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     }
   }
   info.format = PointFileFormat::Las;
-  info.description = "LAS " + num(h.version_major) + "." + num(h.version_minor) + " point format " +
-                     num(h.point_format);
+  info.description = std::string(copc ? "COPC (LAZ " : compressed ? "LAZ (LAS " : "LAS ") +
+                     num(h.version_major) + "." + num(h.version_minor) + (compressed ? ")" : "") +
+                     " point format " + num(h.point_format);
+  if (compressed) info.description += ", " + s.laz->spec().describe();
   info.point_count = h.point_count;
   Bounds3 bounds;
   bounds.min = h.min;
@@ -697,12 +710,35 @@ kernel::Result<std::size_t> LasReader::read_records(PointBatch& batch, std::size
   while (done < n) {
     const std::size_t k = std::min(per_chunk, n - done);
     s.chunk.resize(k * d.record_length);
-    const std::uint64_t at =
-        s.file.header.offset_to_point_data + (s.next + done) * std::uint64_t{d.record_length};
-    if (auto st = s.file.source->read_at(at, s.chunk); !st.ok()) return st.error();
+    if (s.file.laz) {
+      if (auto st = s.file.laz->read(s.next + done, k, s.chunk.data()); !st.ok()) return st.error();
+    } else {
+      const std::uint64_t at =
+          s.file.header.offset_to_point_data + (s.next + done) * std::uint64_t{d.record_length};
+      if (auto st = s.file.source->read_at(at, s.chunk); !st.ok()) return st.error();
+    }
     s.nan_gps += decode(d, s.chunk.data(), k, batch.points.data() + done,
                         batch.extra_bytes.data() + done * d.extra_length);
     done += k;
+  }
+  s.next += n;
+  return n;
+}
+
+bool LasReader::compressed() const { return state_->file.laz != nullptr; }
+
+kernel::Result<std::size_t> LasReader::read_raw(std::vector<std::uint8_t>& out, std::size_t max) {
+  State& s = *state_;
+  const std::size_t length = s.file.decoding.record_length;
+  const std::size_t n =
+      static_cast<std::size_t>(std::min<std::uint64_t>(s.file.readable - s.next, max));
+  out.resize(n * length);
+  if (n == 0) return std::size_t{0};
+  if (s.file.laz) {
+    if (auto st = s.file.laz->read(s.next, n, out.data()); !st.ok()) return st.error();
+  } else {
+    const std::uint64_t at = s.file.header.offset_to_point_data + s.next * std::uint64_t{length};
+    if (auto st = s.file.source->read_at(at, out); !st.ok()) return st.error();
   }
   s.next += n;
   return n;

@@ -77,10 +77,6 @@ const std::map<std::string, Refusal>& refusals() {
        {kernel::ErrorCode::CorruptData, {"truncated", "1065", "0 complete records"}}},
       {"pdal/bad_vlr_count.las",
        {kernel::ErrorCode::CorruptData, {"VLR 3 of 3", "offset 429", "VLR count"}}},
-      {"pdal/simple.laz", {kernel::ErrorCode::Unsupported, {"LAZ-compressed", "decompress"}}},
-      {"pdal/1.2-with-color.copc.laz",
-       {kernel::ErrorCode::Unsupported, {"COPC", "LAZ-compressed", "no LASzip decoder"}}},
-      {"laspy/fullwave.laz", {kernel::ErrorCode::Unsupported, {"LAZ-compressed"}}},
   };
   return kRefusals;
 }

@@ -173,8 +173,11 @@ Failure fit_tile(const std::filesystem::path& path, const std::string& name,
                  FittedTile& out) {
   const auto start = std::chrono::steady_clock::now();
   out = FittedTile{};
-  // Every point is read (the pipeline needs the whole tile), in the local frame.
-  auto opened = geo::open_point_file(path);
+  // Every point is read (the pipeline needs the whole tile), in the local frame. Only
+  // coordinates, returns and classes are used: layered LAZ skips its other layers.
+  geo::PointReadOptions read_options;
+  read_options.all_attributes = false;
+  auto opened = geo::open_point_file(path, read_options);
   if (!opened.ok()) return {from_kernel(opened.error().code), opened.error().message};
   geo::PointReader& reader = *opened.value();
   std::array<double, 3> origin{0.0, 0.0, 0.0};

@@ -162,9 +162,11 @@ PointFields las_point_fields(int format);
 /// Streaming LAS reader.
 class LasReader final : public PointReader {
  public:
-  /// Opens and checks a LAS file. Errors: IoError (cannot open/read), CorruptData (a header
-  /// field disagrees with the file: the message names the file, the field and the values),
-  /// Unsupported (LAZ/COPC, point format > 10), UnsupportedVersion (not 1.0-1.4).
+  /// Opens and checks a LAS or LAZ (COPC) file. Errors: IoError (cannot open/read),
+  /// CorruptData (a header field, the laszip VLR or the chunk table disagrees with the file:
+  /// the message names the file, the field and the values), Unsupported (a LAZ compressor,
+  /// coder or item LASzip does not define, point format > 10), UnsupportedVersion (not
+  /// 1.0-1.4).
   static kernel::Result<std::unique_ptr<LasReader>> open(const std::filesystem::path& path,
                                                          const PointReadOptions& options = {});
   /// As open, over bytes in memory that outlive the reader.
@@ -181,6 +183,12 @@ class LasReader final : public PointReader {
   std::uint64_t readable_points() const;
   /// Continues reading at point `index` (≤ readable_points()). Errors: InvalidArgument.
   kernel::Status seek(std::uint64_t index);
+  /// The next `max` (or fewer, 0 at the end) point records as the file's uncompressed records
+  /// (record length bytes each; LAZ is decoded into the records of its LAS), replacing `out`.
+  /// Moves the read position like read(). Errors: as read().
+  kernel::Result<std::size_t> read_raw(std::vector<std::uint8_t>& out, std::size_t max);
+  /// True when the point data is LAZ-compressed (LAZ or COPC).
+  bool compressed() const;
 
  protected:
   kernel::Result<std::size_t> read_records(PointBatch& batch, std::size_t max) override;

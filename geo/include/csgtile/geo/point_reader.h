@@ -53,6 +53,12 @@ struct PointReadOptions {
   /// Points whose x, y or z is NaN or infinite (holes of organised PCD clouds) are dropped
   /// and counted in one warning. When unset they are passed on.
   bool skip_non_finite = true;
+  /// When false, LAZ of point formats 6-10 decodes only what fitting needs: coordinates,
+  /// return numbers, scanner channel and classification. Its other attributes (intensity,
+  /// flags, scan angle, user data, point source, GPS time, colour, NIR, wave packets, extra
+  /// bytes) are left undecoded and hold their chunk's first point's values. Other formats
+  /// always decode everything.
+  bool all_attributes = true;
 };
 
 /// What a reader knows before reading points.
