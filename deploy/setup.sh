@@ -37,11 +37,15 @@ packages=(
   gdal-bin python3-gdal
   # deploy/k8s checks: YAML lint of the Kubernetes manifests (tests/deploy)
   yamllint
+  # val3dity (../shared/tools/val3dity, prebuilt for Debian 12) on published CityJSON: its
+  # runtime libraries
+  libgeos-c1v5 libgmp10 libmpfr6 libboost-filesystem1.74.0
   # run report check: headless Chromium opens report/index.html (tests/cli/report_chromium.py)
   chromium
 )
 # Tools, tests and linters that building the binary does not need (left out by --build-only).
 test_only=(clang clang-format clang-tidy libclang-rt-14-dev git proj-bin postgresql-15 openssl
+           libgeos-c1v5 libmpfr6 libboost-filesystem1.74.0
            libgtest-dev libgmock-dev googletest libbenchmark-dev python3 gdal-bin python3-gdal
            yamllint chromium)
 if [ "$build_only" = 1 ]; then

@@ -55,6 +55,7 @@ Config from_document(const json& document) {
   read(document, "run", "output", config.run.output);
   read(document, "run", "seed", config.run.seed);
   read(document, "run", "threads", config.run.threads);
+  read(document, "run", "crs", config.run.crs);
   read(document, "kernel", "linear_tolerance", config.kernel.linear_tolerance);
   read(document, "kernel", "chordal_tolerance", config.kernel.chordal_tolerance);
   read_enum(document, "queue", "backend", kBackendNames, config.queue.backend);
@@ -109,6 +110,13 @@ LoadResult load_string(std::string_view yaml, std::string_view source, const Env
     detail::apply_environment(env, document, result.problems);
     detail::validate(document, result.problems);
     sort_problems(result.problems);
+    for (const auto& [pointer, origin] : document.origins) {
+      if (pointer.empty()) continue;
+      const nlohmann::json::json_pointer at(pointer);
+      if (document.json.contains(at)) {
+        result.lines[detail::display_path(document.json, at)] = origin.line;
+      }
+    }
     if (result.problems.empty()) {
       Config config = from_document(document.json);
       // Rules between keys, which the schema cannot state.
@@ -165,7 +173,8 @@ std::string to_json(const Config& config) {
                 {"inputs", config.run.inputs},
                 {"output", config.run.output},
                 {"seed", config.run.seed},
-                {"threads", config.run.threads}};
+                {"threads", config.run.threads},
+                {"crs", config.run.crs}};
   out["kernel"] = {{"linear_tolerance", config.kernel.linear_tolerance},
                    {"chordal_tolerance", config.kernel.chordal_tolerance}};
   out["queue"] = {{"backend", std::string(to_string(config.queue.backend))},

@@ -176,7 +176,7 @@ def validate_configs(where, objects, names):
         with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
             f.write(cm["data"]["csgtile.yaml"])
         clean = {k: v for k, v in os.environ.items() if not k.startswith("CSGTILE_")}
-        result = subprocess.run([binary, "validate-config", f.name], capture_output=True, text=True,
+        result = subprocess.run([binary, "validate-config", "--no-input-check", f.name], capture_output=True, text=True,
                                 env={**clean, **env})
         os.unlink(f.name)
         if result.returncode != 0:

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Grace period on SIGTERM (issue #8): `csgtile worker` with queue.grace_seconds gets SIGTERM
 while it runs a job longer than the grace period (a large Boolean scene, several seconds).
-  * It releases the job and exits 0 within the grace period, logging "released at shutdown";
+  * It releases the job and exits 0 within the grace period, logging "released at shutdown"
+    and (--json) printing one JSON line naming the released job;
   * the job is queued again with its attempt count unchanged (0: the released attempt does
     not count), nothing is left running;
   * another worker then completes it (attempts 1).
@@ -65,8 +66,10 @@ def job_row(name):
 
 def start_worker(config, tag):
     log = open(f"{work}/worker-{tag}.log", "w+")
-    w = subprocess.Popen([binary, "worker", config], stdout=subprocess.DEVNULL, stderr=log)
+    out = open(f"{work}/worker-{tag}.out", "w+")
+    w = subprocess.Popen([binary, "worker", config, "--json"], stdout=out, stderr=log)
     w.log = log
+    w.out = out
     return w
 
 
@@ -105,6 +108,11 @@ try:
     assert exit_seconds < GRACE, f"exit took {exit_seconds:.2f} s, the grace period is {GRACE} s"
     messages = [e.get("message") for e in log_events(w)]
     assert "released at shutdown" in messages, messages
+    # --json says so on stdout too, though the process ends without unwinding.
+    w.out.seek(0)
+    said = [json.loads(line) for line in w.out if line.startswith("{")]
+    assert len(said) == 1 and said[0]["stopped"] is True and said[0]["released"] is True, said
+    assert said[0]["job"].startswith("build:released:"), said
     assert job_row("released") == ("queued", 0), job_row("released")
     assert not os.path.exists(f"{work}/out/runs/released/manifest.json")
 

@@ -10,8 +10,20 @@
 
 namespace csgtile::worker::detail {
 
-std::optional<config::Config> load_run_config(const std::string& file) {
-  const auto loaded = config::load_file(file, config::from_process_environment());
+namespace {
+// The load, with the checks against the world appended when it loaded.
+config::LoadResult load_checked(const std::string& file, RunChecks what) {
+  auto loaded = config::load_file(file, config::from_process_environment());
+  if (loaded.ok()) {
+    auto found = check_run_config(loaded, what);
+    loaded.problems.insert(loaded.problems.end(), found.begin(), found.end());
+  }
+  return loaded;
+}
+}  // namespace
+
+std::optional<config::Config> load_run_config(const std::string& file, RunChecks what) {
+  const auto loaded = load_checked(file, what);
   if (!loaded.ok()) {
     for (const auto& p : loaded.problems) std::cerr << config::format_problem(file, p) << "\n";
     return std::nullopt;
@@ -25,11 +37,16 @@ void register_validate_config(CLI::App& app, Action& action) {
                                  "problem with its key and line");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
+  auto no_inputs = std::make_shared<bool>(false);
   cmd->add_option("FILE", *file, "YAML config file")->required();
   cmd->add_flag("--json", *json, "Print the result as one JSON object");
-  cmd->callback([&action, file, json] {
-    action = [file, json] {
-      const auto result = config::load_file(*file, config::from_process_environment());
+  cmd->add_flag("--no-input-check", *no_inputs,
+                "Do not check that local inputs exist (a config written for another machine, "
+                "e.g. a pod's)");
+  cmd->callback([&action, file, json, no_inputs] {
+    action = [file, json, no_inputs] {
+      const auto result =
+          load_checked(*file, *no_inputs ? RunChecks::CrsOnly : RunChecks::CrsAndInputs);
       if (*json) {
         nlohmann::ordered_json out;
         out["file"] = *file;

@@ -31,7 +31,7 @@ void register_run(CLI::App& app, Action& action) {
       "Kubernetes Indexed Job: --index $JOB_COMPLETION_INDEX)");
   cmd->callback([&action, file, json, listen, listen_option, index, index_option] {
     action = [file, json, listen, listen_option, index, index_option] {
-      auto loaded = load_run_config(*file);
+      auto loaded = load_run_config(*file, RunChecks::CrsAndInputs);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
       if (index_option->count() > 0) {
         const auto n = static_cast<long long>(loaded->run.inputs.size());
@@ -59,7 +59,18 @@ void register_run(CLI::App& app, Action& action) {
         log.error("run", started.message, {{"error", error_info(started.code).name}});
         return error_info(started.code).exit_code;
       }
-      const Failure failure = run_embedded(cfg, log, summary);
+      // A job released at shutdown ends the process inside the run: say so first.
+      const auto on_forced_exit = [&](const std::string& job, bool released) {
+        if (*json) {
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
+                                              {"job", job}, {"released", released}}.dump() << "\n";
+        } else {
+          std::cout << "run " << cfg.run.name << " stopped; job " << job
+                    << (released ? " released to the queue" : " not released (its lease will expire)")
+                    << "; run again to resume\n";
+        }
+      };
+      const Failure failure = run_embedded(cfg, log, summary, on_forced_exit);
       if (!failure.ok()) {
         log.error("run", failure.message, {{"error", error_info(failure.code).name}});
         return error_info(failure.code).exit_code;

@@ -24,7 +24,7 @@ void register_status(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print one JSON object");
   cmd->callback([&action, file, json] {
     action = [file, json] {
-      const auto loaded = load_run_config(*file);
+      const auto loaded = load_run_config(*file, RunChecks::CrsOnly);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
       const config::Config& cfg = *loaded;
       const std::string where = describe_queue(cfg);

@@ -24,7 +24,7 @@ void register_enqueue(CLI::App& app, Action& action) {
   cmd->add_flag("--json", *json, "Print one JSON object");
   cmd->callback([&action, file, json] {
     action = [file, json] {
-      const auto cfg = load_run_config(*file);
+      const auto cfg = load_run_config(*file, RunChecks::CrsAndInputs);
       if (!cfg) return error_info(ErrorCode::ConfigInvalid).exit_code;
       Logger log(cfg->log.level, cfg->log.format);
       Failure failure;
@@ -64,7 +64,7 @@ void register_worker(CLI::App& app, Action& action) {
       "overrides metrics.listen");
   cmd->callback([&action, file, json, idle, listen, listen_option] {
     action = [file, json, idle, listen, listen_option] {
-      const auto loaded = load_run_config(*file);
+      const auto loaded = load_run_config(*file, RunChecks::CrsOnly);
       if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
       const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
@@ -88,6 +88,18 @@ void register_worker(CLI::App& app, Action& action) {
       WorkSummary work;
       RunSummary summary;
       bool published = false;
+      // A job released at shutdown ends the process in work_queue: say so first.
+      options.on_forced_exit = [&](const std::string& job, bool released) {
+        if (*json) {
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
+                                              {"published", published}, {"job", job},
+                                              {"released", released}}.dump() << "\n";
+        } else {
+          std::cout << "worker stopped: run " << cfg.run.name << "; job " << job
+                    << (released ? " released to the queue" : " not released (its lease will expire)")
+                    << " at the end of the grace period\n";
+        }
+      };
       // The queue finished: publish (again only after more work), then exit or wait for more.
       while (true) {
         failure = work_queue(cfg, *queue, log, options, work);

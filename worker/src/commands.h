@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "checks/run_checks.h"
 #include "csgtile/config/config.h"
 
 namespace csgtile::worker::detail {
@@ -17,7 +18,9 @@ struct GlobalOptions {
 
 /// Loads a run config with its CSGTILE_* overrides for a command; on problems prints each
 /// (file:line: key: message) to stderr and returns nullopt (exit with config_invalid).
-std::optional<config::Config> load_run_config(const std::string& file);
+/// Loads a config (and CSGTILE_* overrides) and checks it against the world
+/// (checks/run_checks.h); prints every problem with key and line and returns nullopt on any.
+std::optional<config::Config> load_run_config(const std::string& file, RunChecks what);
 
 /// A registered subcommand's action, returning the exit code.
 using Action = std::function<int()>;

@@ -304,6 +304,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
                    {"reason", released_failure.ok() ? "lease lost" : released_failure.message}});
       }
       log.info("worker", "stopped by signal", {{"jobs", std::to_string(work.jobs)}});
+      if (options.on_forced_exit) options.on_forced_exit(job->key, released);
       exit_leaving_threads(0);
     }
     runner.join();
@@ -356,7 +357,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
   }
 }
 
-Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary) {
+Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary,
+                     const ForcedExitReport& on_forced_exit) {
   summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
   Failure failure;
   auto queue = open_queue(config, failure);
@@ -365,6 +367,7 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   if (Failure f = enqueue_run(config, *queue, log, added); !f.ok()) return f;
   WorkOptions options;
   options.exit_when_idle = true;
+  options.on_forced_exit = on_forced_exit;
   WorkSummary work;
   if (Failure f = work_queue(config, *queue, log, options, work); !f.ok()) return f;
   if (work.stopped) {

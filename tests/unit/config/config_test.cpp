@@ -52,7 +52,8 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
                                    ? ""
                                    : format_problem(result.source, result.problems.front()));
   Config expected;
-  expected.run = {"demo", {"scenes/block_a.json", "scenes/block_b.json"}, "out/demo", 42, 4};
+  expected.run = {"demo", {"scenes/pavilion.json", "scenes/courtyard_block.json"}, "out/demo", 42, 4,
+                  "EPSG:28992+5709"};
   expected.kernel = {1.0e-7, 0.005};
   expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120, 20,
                     "verify-full", "/etc/ssl/certs/csgtile-db-ca.pem"};

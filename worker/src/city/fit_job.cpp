@@ -38,8 +38,16 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   options.ransac.seed = config.run.seed;
   FittedTile tile;
   const std::string name = std::filesystem::path(local.path).stem().string();
-  if (Failure f = fit_tile(local.path, name, options, "", tile); !f.ok()) {
-    f.message = input + ": " + f.message;
+  if (Failure f = fit_tile(local.path, name, options, config.run.crs, tile); !f.ok()) {
+    // Name the input once: readers already name the file they read (for a URL, its local
+    // copy, which the input's name then replaces).
+    const std::string local_name = std::filesystem::path(local.path).string();
+    const std::size_t at = f.message.find(local_name);
+    if (at == std::string::npos) {
+      f.message = input + ": " + f.message;
+    } else if (input != local_name) {
+      f.message.replace(at, local_name.size(), input);
+    }
     return f;
   }
   const geo::FitOutput& fit = tile.output;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "csgtile/geo/crs.h"
@@ -183,22 +184,35 @@ Failure fit_tile(const std::filesystem::path& path, const std::string& name,
   std::array<double, 3> origin{0.0, 0.0, 0.0};
   std::string crs_text;
   const auto* las = dynamic_cast<const geo::LasReader*>(&reader);
+  // The CRS as the run records it: "EPSG:h[+v]" for EPSG codes, else WKT 1.
+  auto crs_label = [](const geo::Crs& v) {
+    if (v.epsg == 0) return geo::crs_to_wkt1(v);
+    std::string text = "EPSG:" + std::to_string(v.epsg);
+    if (v.vertical && v.vertical->epsg != 0) text += "+" + std::to_string(v.vertical->epsg);
+    return text;
+  };
+  std::optional<geo::Crs> given;
+  if (!crs_override.empty()) {
+    auto parsed = geo::crs_from_config(crs_override);
+    if (!parsed.ok()) {
+      return {ErrorCode::ConfigInvalid, "CRS " + crs_override + ": " + parsed.error().message};
+    }
+    given = std::move(parsed).value();
+    crs_text = crs_label(*given);
+  }
   if (las != nullptr) {
     origin = las->header().offset;
-    auto crs = geo::las_file_crs(las->crs(), crs_override);
-    if (crs.ok()) {
-      const geo::Crs& v = crs.value();
-      if (v.epsg != 0) {
-        crs_text = "EPSG:" + std::to_string(v.epsg);
-        if (v.vertical && v.vertical->epsg != 0) crs_text += "+" + std::to_string(v.vertical->epsg);
-      } else {
-        crs_text = geo::crs_to_wkt1(v);
+    auto own = geo::las_file_crs(las->crs(), "");
+    if (given && own.ok()) {
+      // The run's CRS is for tiles without one; a tile that says otherwise is an error.
+      if (auto diff = geo::crs_difference(own.value(), *given)) {
+        return {ErrorCode::InputInvalid,
+                "the tile's CRS (" + geo::describe_crs(own.value()) + ") differs from run.crs (" +
+                    crs_override + ": " + geo::describe_crs(*given) + "): " + *diff};
       }
+    } else if (!given && own.ok()) {
+      crs_text = crs_label(own.value());
     }
-  } else if (!crs_override.empty()) {
-    auto crs = geo::crs_from_config(crs_override);
-    if (!crs.ok()) return {ErrorCode::ConfigInvalid, "CRS " + crs_override + ": " + crs.error().message};
-    crs_text = crs_override;
   }
   std::vector<kernel::Vec3> raw;
   std::vector<std::uint8_t> classes;

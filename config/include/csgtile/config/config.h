@@ -23,6 +23,9 @@ struct RunConfig {
   std::string output = "out";       ///< output directory, non-empty
   std::uint64_t seed = 1;           ///< 0..2^53
   int threads = 0;                  ///< 0 = all cores; 0..1024
+  /// CRS of the run's tiles: "" takes each tile's own; else "EPSG:N", "EPSG:N+V" (with a
+  /// vertical CRS) or WKT, for tiles that carry none. A tile whose own CRS differs fails.
+  std::string crs;
   bool operator==(const RunConfig&) const = default;
 };
 
@@ -149,7 +152,16 @@ struct LoadResult {
   std::optional<Config> config;
   std::vector<Problem> problems;
   std::string source;  ///< the `source` / path given to the load, for format_problem
+  /// Line of each value by its display path ("run.crs", "run.inputs[1]"), for problems that
+  /// checks after the load (e.g. the worker's, on inputs and CRSs) find; 0 when it came from
+  /// the environment.
+  std::map<std::string, int> lines;
   bool ok() const { return config.has_value() && problems.empty(); }
+  /// The line of `path`, or 0.
+  int line_of(const std::string& path) const {
+    const auto it = lines.find(path);
+    return it == lines.end() ? 0 : it->second;
+  }
 };
 
 /// Parses YAML text, applies environment overrides, validates against the schema, and

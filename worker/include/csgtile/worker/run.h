@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,10 +31,16 @@ struct RunSummary {
   bool stopped = false;
 };
 
+/// Called just before a stopped worker ends the process because its job outlasted the grace
+/// period (the job is released to the queue): the job's key and whether the release
+/// succeeded. The command prints its summary here; nothing after it runs.
+using ForcedExitReport = std::function<void(const std::string& job, bool released)>;
+
 /// Runs `config` to completion on its SQLite queue. Jobs that fail are retried or end dead
 /// (their reasons in the summary and the manifest); the run itself fails only when the
 /// queue or the output directory cannot be used.
-Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary);
+Failure run_embedded(const config::Config& config, const Logger& log, RunSummary& summary,
+                     const ForcedExitReport& on_forced_exit = {});
 
 /// Adds one build job per input of `config` (a no-op for jobs already in the queue);
 /// `added` counts the new ones.
@@ -43,6 +50,7 @@ struct WorkOptions {
   bool exit_when_idle = false;  ///< return once the queue has no unfinished job
   std::chrono::milliseconds poll{100};  ///< wait between claims when nothing is runnable
   std::string worker_id;        ///< default "local-<pid>"
+  ForcedExitReport on_forced_exit;  ///< may be empty
 };
 
 struct WorkSummary {

@@ -1,0 +1,68 @@
+#include "checks/run_checks.h"
+
+#include <filesystem>
+#include <string>
+
+#include "city/city_jobs.h"
+#include "csgtile/geo/crs.h"
+
+namespace csgtile::worker::detail {
+
+namespace {
+
+// The local path an input names, or "" for a remote URL.
+std::string local_path(const std::string& input) {
+  if (input.rfind("file://", 0) == 0) return input.substr(7);
+  if (input.find("://") != std::string::npos) return "";
+  return input;
+}
+
+}  // namespace
+
+std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, RunChecks what) {
+  std::vector<config::Problem> problems;
+  const config::Config& config = *loaded.config;
+  if (!config.run.crs.empty()) {
+    auto crs = geo::crs_from_config(config.run.crs);
+    if (!crs.ok()) {
+      problems.push_back({"run.crs", loaded.line_of("run.crs"),
+                          "not a CRS this build reads: " + crs.error().message});
+    }
+  }
+  if (what == RunChecks::CrsOnly) return problems;
+  for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
+    const std::string& input = config.run.inputs[i];
+    const std::string key = "run.inputs[" + std::to_string(i) + "]";
+    const std::string path = local_path(input);
+    if (path.empty()) continue;  // fetched when its job runs
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(status)) {
+      problems.push_back({key, loaded.line_of(key),
+                          path + ": no such file or directory" +
+                              (ec && ec != std::errc::no_such_file_or_directory
+                                   ? " (" + ec.message() + ")"
+                                   : "")});
+      continue;
+    }
+    if (!std::filesystem::is_directory(status)) continue;
+    bool readable = false;
+    std::filesystem::directory_iterator it(path, ec), end;
+    for (; !ec && it != end && !readable; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      std::error_code type_ec;
+      if (!it->is_regular_file(type_ec) || name.empty() || name[0] == '.') continue;
+      readable = city::is_tile_input(name);
+    }
+    if (ec) {
+      problems.push_back({key, loaded.line_of(key), path + ": cannot list: " + ec.message()});
+    } else if (!readable) {
+      problems.push_back({key, loaded.line_of(key),
+                          path + ": the directory holds no LIDAR tile (.las .laz .ply .pcd "
+                                 ".xyz .txt); a directory input is a city of tiles"});
+    }
+  }
+  return problems;
+}
+
+}  // namespace csgtile::worker::detail
