@@ -35,6 +35,13 @@ AngularUnit angular_unit_from_size(std::string name, double radians);
 /// Known vertical CRS name by EPSG code (empty when unknown) and its unit.
 std::optional<VerticalCrs> vertical_from_epsg(int code);
 
+/// A CRS from PROJ's EPSG database (proj_database.cpp), for codes outside the table: its
+/// WKT 1 read by crs_from_wkt, the datum's Helmert to WGS 84 as PROJ ranks it. Errors:
+/// Unsupported naming the code (not in the database, geocentric, a method not computed).
+kernel::Result<Crs> crs_from_proj_database(int code);
+/// A vertical CRS's name and unit from PROJ's database; nullopt when it is none.
+std::optional<VerticalCrs> vertical_from_proj_database(int code);
+
 /// Geographic CRS of the table (4326, 4258, ...).
 std::optional<Crs> geographic_from_epsg(int code);
 

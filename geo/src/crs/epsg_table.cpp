@@ -581,24 +581,23 @@ kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg) {
     if (!crs) crs = detail::projected_from_epsg(code);
   }
   if (!crs) {
-    if (code == 3857 || code == 900913) {
-      return kernel::Error{kernel::ErrorCode::Unsupported,
-                           "EPSG:" + std::to_string(code) +
-                               " (Web Mercator) is not supported: its method (Popular "
-                               "Visualisation Pseudo Mercator) is not a survey projection"};
-    }
-    return kernel::Error{
-        kernel::ErrorCode::Unsupported,
-        "EPSG:" + std::to_string(code) + " is not in the built-in CRS table (supply WKT instead)"};
+    // Beyond the table: PROJ's database, as WKT 1 through the WKT reader.
+    auto from_proj = detail::crs_from_proj_database(code);
+    if (!from_proj.ok()) return from_proj.error();
+    crs = std::move(from_proj).value();
+    if (vertical_epsg == 0 && crs->vertical) return *crs;
   }
   if (vertical_epsg != 0) {
     if (auto v = detail::vertical_from_epsg(vertical_epsg)) {
       crs->vertical = *v;
+    } else if (auto p = detail::vertical_from_proj_database(vertical_epsg)) {
+      crs->vertical = *p;
     } else {
       crs->vertical =
           VerticalCrs{vertical_epsg, "EPSG:" + std::to_string(vertical_epsg), metre_unit()};
       crs->warnings.push_back("vertical CRS EPSG:" + std::to_string(vertical_epsg) +
-                              " is not in the built-in table: its unit is assumed to be metre");
+                              " is neither in the built-in table nor a vertical CRS of PROJ's "
+                              "database: its unit is assumed to be metre");
     }
   }
   return *std::move(crs);

@@ -526,7 +526,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"("queue":{"backend":"sqlite","grace_seconds":25,"lease_seconds":60,"max_attempts":5,)"
             R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
             R"("sqlite_path":""},)"
-            R"("run":{"inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
+            R"("run":{"crs":"","inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
 }
 
 TEST(ConfigFormat, OneLinePerProblem) {

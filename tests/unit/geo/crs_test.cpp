@@ -194,13 +194,57 @@ TEST(CrsEpsg, VerticalCodesAndUnknownCodes) {
   ASSERT_TRUE(odd.ok());
   EXPECT_TRUE(mentions(odd.value().warnings, "EPSG:9999"));
 
-  auto unknown = crs_from_epsg(31370);
+  auto unknown = crs_from_epsg(99999);
   ASSERT_FALSE(unknown.ok());
   EXPECT_EQ(unknown.error().code, ErrorCode::Unsupported);
-  EXPECT_NE(unknown.error().message.find("EPSG:31370"), std::string::npos);
+  EXPECT_NE(unknown.error().message.find("EPSG:99999"), std::string::npos);
   auto web = crs_from_epsg(3857);
   ASSERT_FALSE(web.ok());
-  EXPECT_NE(web.error().message.find("Web Mercator"), std::string::npos);
+  EXPECT_NE(web.error().message.find("Pseudo-Mercator"), std::string::npos);
+}
+
+// Codes outside the built-in table come from PROJ's database (issue #19): the national grids
+// a city service meets, with the datum shift PROJ ranks first; methods this build does not
+// compute, and geocentric CRSs, are refused naming the code and what is missing.
+TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
+  struct Case {
+    int code;
+    const char* name_part;
+    ProjectionMethod method;
+  };
+  for (const Case& c : {Case{3067, "TM35FIN", ProjectionMethod::TransverseMercator},
+                        Case{31370, "Belgian Lambert 72", ProjectionMethod::LambertConicConformal2SP},
+                        Case{2180, "CS92", ProjectionMethod::TransverseMercator},
+                        Case{3006, "SWEREF99 TM", ProjectionMethod::TransverseMercator},
+                        Case{7856, "MGA zone 56", ProjectionMethod::TransverseMercator}}) {
+    SCOPED_TRACE(c.code);
+    auto crs = crs_from_epsg(c.code);
+    ASSERT_TRUE(crs.ok()) << crs.error().message;
+    EXPECT_EQ(crs.value().epsg, c.code);
+    EXPECT_NE(crs.value().name.find(c.name_part), std::string::npos) << crs.value().name;
+    ASSERT_TRUE(crs.value().projection.has_value());
+    EXPECT_EQ(crs.value().projection->method, c.method);
+    EXPECT_TRUE(crs.value().datum.to_wgs84.has_value()) << crs.value().datum.to_wgs84_source;
+  }
+  // BD72's shift is a real Helmert (metres of translation), named with its accuracy.
+  const Crs lambert72 = crs_from_epsg(31370).value();
+  EXPECT_GT(std::abs(lambert72.datum.to_wgs84->tx_m), 50.0);
+  EXPECT_NE(lambert72.datum.to_wgs84_source.find("BD72 to WGS 84"), std::string::npos)
+      << lambert72.datum.to_wgs84_source;
+  EXPECT_NE(lambert72.datum.to_wgs84_source.find("accuracy"), std::string::npos);
+  // A vertical CRS from the database: its name and unit, no warning.
+  auto finland = crs_from_epsg(3067, 3900);
+  ASSERT_TRUE(finland.ok()) << finland.error().message;
+  ASSERT_TRUE(finland.value().vertical.has_value());
+  EXPECT_NE(finland.value().vertical->name.find("N2000"), std::string::npos);
+  EXPECT_FALSE(mentions(finland.value().warnings, "EPSG:3900"));
+  for (const auto& [code, what] : std::vector<std::pair<int, std::string>>{
+           {2056, "EPSG:2056"}, {5514, "EPSG:5514"}, {4978, "geocentric"}}) {
+    auto refused = crs_from_epsg(code);
+    ASSERT_FALSE(refused.ok()) << code;
+    EXPECT_EQ(refused.error().code, ErrorCode::Unsupported) << refused.error().message;
+    EXPECT_NE(refused.error().message.find(what), std::string::npos) << refused.error().message;
+  }
 }
 
 TEST(CrsEpsg, ZUnitFollowsVerticalThenHorizontal) {
@@ -413,9 +457,9 @@ TEST(CrsGeoKeys, ErrorsNameTheKey) {
   ASSERT_FALSE(geocentric.ok());
   EXPECT_EQ(geocentric.error().code, ErrorCode::Unsupported);
 
-  auto unknown = crs_from_geokeys({key(1024, 1), key(3072, 31370)});
+  auto unknown = crs_from_geokeys({key(1024, 1), key(3072, 2056)});  // Hotine: not computed
   ASSERT_FALSE(unknown.ok());
-  EXPECT_NE(unknown.error().message.find("31370"), std::string::npos);
+  EXPECT_NE(unknown.error().message.find("2056"), std::string::npos);
 
   auto bad_value = crs_from_geokeys({GeoKeyEntry{1024, {}, "oops"}});
   ASSERT_FALSE(bad_value.ok());

@@ -210,6 +210,18 @@ TEST(GeoProjectionVsCs2cs, LambertConicInFeet) {
   expect_family({"Texas Centric LCC", 6580, 6318, false, 25.8, 36.5, -106.6, -93.5});
 }
 
+// National grids outside the built-in table, resolved through PROJ's database (issue #19):
+// computed by our projections, checked against cs2cs.
+TEST(GeoProjectionVsCs2cs, NationalGridsFromProjsDatabase) {
+  REQUIRE_PROJ();
+  expect_family({"ETRS89 / TM35FIN", 3067, 4258, false, 60.0, 69.5, 20.0, 31.0});
+  expect_family({"BD72 / Belgian Lambert 72", 31370, 4313, false, 49.6, 51.4, 2.6, 6.3});
+  expect_family({"ETRS89 / Poland CS92", 2180, 4258, true, 49.1, 54.8, 14.2, 24.1});
+  // UTM 33's parameters, so computed as UTM: within its legal eastings (Sweden's land is).
+  expect_family({"SWEREF99 TM", 3006, 4619, true, 55.3, 69.0, 11.0, 20.5});
+  expect_family({"GDA2020 / MGA zone 56", 7856, 7844, false, -37.5, -10.0, 150.0, 156.0});
+}
+
 // The Japanese plane rectangular systems (northing-first axes), as in the pnext test files.
 TEST(GeoProjectionVsCs2cs, JapanPlaneRectangular) {
   REQUIRE_PROJ();
