@@ -67,7 +67,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<std::uint8_t> tail;
     check(raw_all(laz, tail, 1000), "a read after a seek failed where the first succeeded");
     check(tail.size() == (count - at) * length &&
-              std::equal(tail.begin(), tail.end(), all.begin() + static_cast<std::ptrdiff_t>(at * length)),
+              std::equal(tail.begin(), tail.end(),
+                         all.begin() + static_cast<std::ptrdiff_t>(at * length)),
           "records after a seek differ");
   }
   PointReadOptions fit;
@@ -116,8 +117,8 @@ int main(int argc, char** argv) {
     for (const auto& entry : fs::recursive_directory_iterator(argv[2])) {
       if (!entry.is_regular_file() || entry.file_size() > 256 * 1024) continue;
       if (entry.path().extension() != ".laz") continue;
-      const std::string name = entry.path().parent_path().filename().string() + "_" +
-                               entry.path().filename().string();
+      const std::string name =
+          entry.path().parent_path().filename().string() + "_" + entry.path().filename().string();
       fs::copy_file(entry.path(), dir / name, fs::copy_options::overwrite_existing, error);
       if (!error) ++copied;
     }

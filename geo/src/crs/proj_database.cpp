@@ -58,8 +58,8 @@ bool helmert_to_wgs84(const PJ* geodetic, double values[7], std::string& source)
   if (factory == nullptr) return false;
   proj_operation_factory_context_set_grid_availability_use(
       ctx, factory, PROJ_GRID_AVAILABILITY_DISCARD_OPERATION_IF_MISSING_GRID);
-  proj_operation_factory_context_set_spatial_criterion(
-      ctx, factory, PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
+  proj_operation_factory_context_set_spatial_criterion(ctx, factory,
+                                                       PROJ_SPATIAL_CRITERION_PARTIAL_INTERSECTION);
   PJ_OBJ_LIST* ops = proj_create_operations(ctx, geodetic, wgs84.p, factory);
   proj_operation_factory_context_destroy(factory);
   if (ops == nullptr) return false;
@@ -95,9 +95,9 @@ kernel::Result<Crs> crs_from_proj_database(int code) {
   const std::string name = proj_get_name(crs.p) != nullptr ? proj_get_name(crs.p) : "";
   const PJ_TYPE type = proj_get_type(crs.p);
   if (type == PJ_TYPE_GEOCENTRIC_CRS) {
-    return kernel::Error{kernel::ErrorCode::Unsupported,
-                         label(code) + " (" + name + ") is geocentric: tiles are read in a "
-                                                    "geographic or projected CRS"};
+    return kernel::Error{kernel::ErrorCode::Unsupported, label(code) + " (" + name +
+                                                             ") is geocentric: tiles are read in a "
+                                                             "geographic or projected CRS"};
   }
   const char* options[] = {"MULTILINE=NO", nullptr};
   const char* wkt = proj_as_wkt(ctx, crs.p, PJ_WKT1_GDAL, options);
@@ -107,17 +107,18 @@ kernel::Result<Crs> crs_from_proj_database(int code) {
   }
   auto parsed = crs_from_wkt(wkt);
   if (!parsed.ok()) {
-    return kernel::Error{parsed.error().code, label(code) + " (" + name +
-                                                  ", from PROJ's database): " +
-                                                  parsed.error().message};
+    return kernel::Error{
+        parsed.error().code,
+        label(code) + " (" + name + ", from PROJ's database): " + parsed.error().message};
   }
   Crs out = std::move(parsed).value();
   out.epsg = type == PJ_TYPE_COMPOUND_CRS ? out.epsg : code;
   if (type != PJ_TYPE_COMPOUND_CRS) out.name = name;
   out.source = label(code) + " (PROJ database)";
   const GeodeticDatum& d = out.datum;
-  const bool settled = d.epsg == 6326 || (d.to_wgs84 && d.to_wgs84_source.rfind("assumed", 0) != 0 &&
-                                          d.to_wgs84_source != "unknown");
+  const bool settled =
+      d.epsg == 6326 ||
+      (d.to_wgs84 && d.to_wgs84_source.rfind("assumed", 0) != 0 && d.to_wgs84_source != "unknown");
   if (!settled) {
     Object geodetic(proj_crs_get_geodetic_crs(ctx, crs.p));
     double v[7] = {0, 0, 0, 0, 0, 0, 0};

@@ -26,10 +26,10 @@ using ::testing::HasSubstr;
 
 fs::path laz_dir() { return test::shared_dir() / "data" / "laz"; }
 
-#define SKIP_WITHOUT_LAZ_DATA()                                            \
-  if (!fs::is_directory(laz_dir())) {                                      \
-    GTEST_SKIP() << "LAZ test data not found at " << laz_dir()             \
-                 << " (see ../shared/data/laz/README.md)";                 \
+#define SKIP_WITHOUT_LAZ_DATA()                                \
+  if (!fs::is_directory(laz_dir())) {                          \
+    GTEST_SKIP() << "LAZ test data not found at " << laz_dir() \
+                 << " (see ../shared/data/laz/README.md)";     \
   }
 
 std::vector<fs::path> laz_files() {
@@ -180,8 +180,8 @@ TEST(LazReader, FittingAttributesAloneOfALayeredFile) {
   SKIP_WITHOUT_LAZ_DATA();
   PointReadOptions options;
   options.all_attributes = false;
-  for (const char* stem : {"las_with_several_extra_byte_bloc-chunk0", "1.2-with-color.copc",
-                           "1_4_w_evlr"}) {
+  for (const char* stem :
+       {"las_with_several_extra_byte_bloc-chunk0", "1.2-with-color.copc", "1_4_w_evlr"}) {
     SCOPED_TRACE(stem);
     auto laz = LasReader::open(laz_dir() / (std::string(stem) + ".laz"), options);
     auto las = LasReader::open(laz_dir() / (std::string(stem) + ".las"));

@@ -38,11 +38,11 @@ std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, 
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (!std::filesystem::exists(status)) {
-      problems.push_back({key, loaded.line_of(key),
-                          path + ": no such file or directory" +
-                              (ec && ec != std::errc::no_such_file_or_directory
-                                   ? " (" + ec.message() + ")"
-                                   : "")});
+      problems.push_back(
+          {key, loaded.line_of(key),
+           path + ": no such file or directory" +
+               (ec && ec != std::errc::no_such_file_or_directory ? " (" + ec.message() + ")"
+                                                                 : "")});
       continue;
     }
     if (!std::filesystem::is_directory(status)) continue;

@@ -9,8 +9,11 @@ namespace csgtile::geo::detail::laz {
 
 ByteStream::ByteStream(ByteSource& source, std::uint64_t offset, std::uint64_t length,
                        std::size_t block)
-    : source_(&source), source_next_(offset), source_end_(offset + length),
-      window_start_(offset), block_(block) {}
+    : source_(&source),
+      source_next_(offset),
+      source_end_(offset + length),
+      window_start_(offset),
+      block_(block) {}
 
 std::uint8_t ByteStream::refill() {
   if (source_ != nullptr && source_next_ < source_end_ && io_.ok()) {

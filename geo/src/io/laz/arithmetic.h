@@ -42,7 +42,8 @@ class ByteStream {
              std::size_t block = 1 << 20);
 
   std::uint8_t get() {
-    if (next_ != end_) [[likely]] return *next_++;
+    if (next_ != end_) [[likely]]
+      return *next_++;
     return refill();
   }
   /// Copies n bytes (zeros past the end, counted as overrun).

@@ -22,7 +22,6 @@ namespace {
 using detail::load_le;
 using detail::store_le;
 
-
 // One layer: its bytes, its stream and its decoder. `active` when requested and non-empty.
 struct Layer {
   std::uint32_t size = 0;
@@ -88,7 +87,6 @@ struct Point14 {
     store_le<std::uint64_t>(p + 22, gps);
   }
 };
-
 
 // ---------------------------------------------------------------- POINT14 (30 bytes)
 
@@ -182,12 +180,13 @@ class Point14V3 final : public LayeredItemDecoder {
     }
     if (layers_[2].active) {
       const std::uint32_t ccc = ((p.classification & 0x1Fu) << 1) + (cpr == 3 ? 1u : 0u);
-      p.classification =
-          static_cast<std::uint8_t>(layers_[2].dec.decode_symbol(lazy_model<256>(c->classification[ccc])));
+      p.classification = static_cast<std::uint8_t>(
+          layers_[2].dec.decode_symbol(lazy_model<256>(c->classification[ccc])));
     }
     if (layers_[3].active) {
       const std::uint32_t last_flags = (p.edge << 5) | (p.scan_direction << 4) | p.class_flags;
-      const std::uint32_t flags = layers_[3].dec.decode_symbol(lazy_model<64>(c->flags[last_flags]));
+      const std::uint32_t flags =
+          layers_[3].dec.decode_symbol(lazy_model<64>(c->flags[last_flags]));
       p.edge = (flags >> 5) & 1;
       p.scan_direction = (flags >> 4) & 1;
       p.class_flags = flags & 0x0F;
@@ -313,18 +312,20 @@ class Rgb14V3 final : public LayeredItemDecoder {
     auto [state, last] =
         channels_.switch_to(context, [&](const State* from) { return make(from->last); });
     if (rgb_.active) {
-      const auto c = decode_rgb(rgb_.dec, state->rgb, {last->last[0], last->last[1], last->last[2]});
+      const auto c =
+          decode_rgb(rgb_.dec, state->rgb, {last->last[0], last->last[1], last->last[2]});
       for (int i = 0; i < 3; ++i) last->last[i] = c[i];
     }
     if (nir_ && nir_layer_.active) {
       const std::uint32_t sym = nir_layer_.dec.decode_symbol(state->nir_used);
       const std::uint16_t prev = last->last[3];
-      std::uint16_t v = (sym & 1) ? static_cast<std::uint8_t>(
-                                        nir_layer_.dec.decode_symbol(state->nir_diff[0]) + (prev & 0xFF))
-                                  : (prev & 0xFF);
+      std::uint16_t v = (sym & 1)
+                            ? static_cast<std::uint8_t>(
+                                  nir_layer_.dec.decode_symbol(state->nir_diff[0]) + (prev & 0xFF))
+                            : (prev & 0xFF);
       v |= (sym & 2) ? static_cast<std::uint16_t>(
-                           static_cast<std::uint8_t>(nir_layer_.dec.decode_symbol(state->nir_diff[1]) +
-                                                     (prev >> 8))
+                           static_cast<std::uint8_t>(
+                               nir_layer_.dec.decode_symbol(state->nir_diff[1]) + (prev >> 8))
                            << 8)
                      : (prev & 0xFF00);
       last->last[3] = v;
@@ -408,8 +409,8 @@ class Byte14V3 final : public LayeredItemDecoder {
         channels_.switch_to(context, [&](const State* from) { return make(from->last.data()); });
     for (std::size_t i = 0; i < n_; ++i) {
       if (layers_[i].active) {
-        last->last[i] = static_cast<std::uint8_t>(
-            last->last[i] + layers_[i].dec.decode_symbol(state->models[i]));
+        last->last[i] = static_cast<std::uint8_t>(last->last[i] +
+                                                  layers_[i].dec.decode_symbol(state->models[i]));
       }
       out[i] = last->last[i];
     }

@@ -21,16 +21,26 @@ Error corrupt(const std::string& name, const std::string& what) {
 
 const char* type_name(ItemType t) {
   switch (t) {
-    case ItemType::Byte: return "BYTE";
-    case ItemType::Point10: return "POINT10";
-    case ItemType::GpsTime11: return "GPSTIME11";
-    case ItemType::Rgb12: return "RGB12";
-    case ItemType::WavePacket13: return "WAVEPACKET13";
-    case ItemType::Point14: return "POINT14";
-    case ItemType::Rgb14: return "RGB14";
-    case ItemType::RgbNir14: return "RGBNIR14";
-    case ItemType::WavePacket14: return "WAVEPACKET14";
-    case ItemType::Byte14: return "BYTE14";
+    case ItemType::Byte:
+      return "BYTE";
+    case ItemType::Point10:
+      return "POINT10";
+    case ItemType::GpsTime11:
+      return "GPSTIME11";
+    case ItemType::Rgb12:
+      return "RGB12";
+    case ItemType::WavePacket13:
+      return "WAVEPACKET13";
+    case ItemType::Point14:
+      return "POINT14";
+    case ItemType::Rgb14:
+      return "RGB14";
+    case ItemType::RgbNir14:
+      return "RGBNIR14";
+    case ItemType::WavePacket14:
+      return "WAVEPACKET14";
+    case ItemType::Byte14:
+      return "BYTE14";
   }
   return "?";
 }
@@ -39,28 +49,45 @@ const char* type_name(ItemType t) {
 std::vector<ItemType> format_items(int format) {
   using T = ItemType;
   switch (format) {
-    case 0: return {T::Point10};
-    case 1: return {T::Point10, T::GpsTime11};
-    case 2: return {T::Point10, T::Rgb12};
-    case 3: return {T::Point10, T::GpsTime11, T::Rgb12};
-    case 4: return {T::Point10, T::GpsTime11, T::WavePacket13};
-    case 5: return {T::Point10, T::GpsTime11, T::Rgb12, T::WavePacket13};
-    case 6: return {T::Point14};
-    case 7: return {T::Point14, T::Rgb14};
-    case 8: return {T::Point14, T::RgbNir14};
-    case 9: return {T::Point14, T::WavePacket14};
-    case 10: return {T::Point14, T::RgbNir14, T::WavePacket14};
-    default: return {};
+    case 0:
+      return {T::Point10};
+    case 1:
+      return {T::Point10, T::GpsTime11};
+    case 2:
+      return {T::Point10, T::Rgb12};
+    case 3:
+      return {T::Point10, T::GpsTime11, T::Rgb12};
+    case 4:
+      return {T::Point10, T::GpsTime11, T::WavePacket13};
+    case 5:
+      return {T::Point10, T::GpsTime11, T::Rgb12, T::WavePacket13};
+    case 6:
+      return {T::Point14};
+    case 7:
+      return {T::Point14, T::Rgb14};
+    case 8:
+      return {T::Point14, T::RgbNir14};
+    case 9:
+      return {T::Point14, T::WavePacket14};
+    case 10:
+      return {T::Point14, T::RgbNir14, T::WavePacket14};
+    default:
+      return {};
   }
 }
 
 const char* compressor_name(std::uint16_t c) {
   switch (c) {
-    case 0: return "none";
-    case kCompressorPointwise: return "point-wise";
-    case kCompressorPointwiseChunked: return "point-wise, chunked";
-    case kCompressorLayeredChunked: return "layered, chunked";
-    default: return "unknown";
+    case 0:
+      return "none";
+    case kCompressorPointwise:
+      return "point-wise";
+    case kCompressorPointwiseChunked:
+      return "point-wise, chunked";
+    case kCompressorLayeredChunked:
+      return "layered, chunked";
+    default:
+      return "unknown";
   }
 }
 
@@ -76,7 +103,8 @@ std::string LazSpec::describe() const {
                   "), LASzip " + num(version_major) + "." + num(version_minor) + "r" +
                   num(version_revision);
   if (chunked()) {
-    s += variable_chunks() ? ", chunks of variable size" : ", chunks of " + num(chunk_size) + " points";
+    s += variable_chunks() ? ", chunks of variable size"
+                           : ", chunks of " + num(chunk_size) + " points";
   }
   return s;
 }
@@ -120,16 +148,16 @@ kernel::Result<LazSpec> parse_laszip_vlr(std::span<const std::uint8_t> p, int po
     item.type = static_cast<ItemType>(load_le<std::uint16_t>(e));
     item.size = load_le<std::uint16_t>(e + 2);
     item.version = load_le<std::uint16_t>(e + 4);
-    const std::string label = "item " + num(i + 1) + " of " + num(item_count) + ", " +
-                              (std::string(type_name(item.type)) == "?"
-                                   ? "type " + num(static_cast<unsigned>(item.type))
-                                   : item_label(item));
+    const std::string label =
+        "item " + num(i + 1) + " of " + num(item_count) + ", " +
+        (std::string(type_name(item.type)) == "?" ? "type " + num(static_cast<unsigned>(item.type))
+                                                  : item_label(item));
     const bool known = s.layered() ? make_layered_decoder(item) != nullptr
                                    : make_pointwise_decoder(item) != nullptr;
     if (!known) {
-      return Error{ErrorCode::Unsupported,
-                   name + ": " + what + ": " + label + " is not an item " +
-                       compressor_name(s.compressor) + " compression defines"};
+      return Error{ErrorCode::Unsupported, name + ": " + what + ": " + label + " is not an item " +
+                                               compressor_name(s.compressor) +
+                                               " compression defines"};
     }
     if (item.type != ItemType::Byte && item.type != ItemType::Byte14) main.push_back(item.type);
     total += item.size;
@@ -176,8 +204,9 @@ kernel::Result<std::vector<Chunk>> read_chunks(ByteSource& src, const LazSpec& s
     table = load_le<std::int64_t>(head.data());
   }
   if (static_cast<std::uint64_t>(table) == data_begin) {
-    return corrupt(name, "LAZ chunk table was never written (the compressor was interrupted): "
-                         "its offset points at itself");
+    return corrupt(name,
+                   "LAZ chunk table was never written (the compressor was interrupted): "
+                   "its offset points at itself");
   }
   if (table < 0 || static_cast<std::uint64_t>(table) < chunks_start ||
       static_cast<std::uint64_t>(table) + 8 > data_end) {
@@ -205,22 +234,25 @@ kernel::Result<std::vector<Chunk>> read_chunks(ByteSource& src, const LazSpec& s
   std::uint32_t last_points = 0, last_bytes = 0;
   for (std::uint32_t i = 0; i < count; ++i) {
     if (spec.variable_chunks()) {
-      last_points = static_cast<std::uint32_t>(ic.decode(dec, static_cast<std::int32_t>(last_points), 0));
+      last_points =
+          static_cast<std::uint32_t>(ic.decode(dec, static_cast<std::int32_t>(last_points), 0));
       chunks[i].points = last_points;
     }
-    last_bytes = static_cast<std::uint32_t>(ic.decode(dec, static_cast<std::int32_t>(last_bytes), 1));
+    last_bytes =
+        static_cast<std::uint32_t>(ic.decode(dec, static_cast<std::int32_t>(last_bytes), 1));
     chunks[i].bytes = last_bytes;
   }
   if (!in.io_status().ok()) return in.io_status().error();
   if (in.overrun() > 0) {
-    return corrupt(name, where + ": its " + num(count) +
-                             " entries run past the end of the point data");
+    return corrupt(name,
+                   where + ": its " + num(count) + " entries run past the end of the point data");
   }
   std::uint64_t at = chunks_start, first = 0;
   for (std::uint32_t i = 0; i < count; ++i) {
     Chunk& c = chunks[i];
     if (!spec.variable_chunks()) {
-      c.points = std::min<std::uint64_t>(spec.chunk_size, point_count - std::min(point_count, first));
+      c.points =
+          std::min<std::uint64_t>(spec.chunk_size, point_count - std::min(point_count, first));
     }
     const std::string label = where + ", chunk " + num(i + 1) + " of " + num(count);
     if (c.bytes == 0 || c.points == 0) {
@@ -291,9 +323,9 @@ kernel::Status ChunkDecoder::decode(std::size_t n, std::uint8_t* out, const std:
         at += spec_.items[i].size;
       }
       if (layered_count_ != left_) {
-        return {kernel::ErrorCode::CorruptData,
-                where + ": the chunk says it holds " + num(layered_count_) +
-                    " points, the chunk table " + num(left_)};
+        return {kernel::ErrorCode::CorruptData, where + ": the chunk says it holds " +
+                                                    num(layered_count_) +
+                                                    " points, the chunk table " + num(left_)};
       }
     } else {
       std::size_t at = 0;

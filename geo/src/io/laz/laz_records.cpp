@@ -29,8 +29,11 @@ struct LazRecords::Stream {
 
 LazRecords::LazRecords(ByteSource& source, LazSpec spec, std::vector<Chunk> chunks,
                        std::size_t record_length, std::uint32_t layers)
-    : source_(source), spec_(std::move(spec)), chunks_(std::move(chunks)),
-      record_length_(record_length), layers_(layers) {}
+    : source_(source),
+      spec_(std::move(spec)),
+      chunks_(std::move(chunks)),
+      record_length_(record_length),
+      layers_(layers) {}
 
 LazRecords::~LazRecords() = default;
 
@@ -42,9 +45,9 @@ std::size_t LazRecords::chunk_of(std::uint64_t point) const {
 
 std::string LazRecords::where(std::size_t i) const {
   const Chunk& c = chunks_[i];
-  return source_.name() + ": LAZ chunk " + num(i + 1) + " of " + num(chunks_.size()) +
-         " (points " + num(c.first_point) + "-" + num(c.first_point + c.points - 1) + ", " +
-         num(c.bytes) + " bytes at byte " + num(c.offset) + ")";
+  return source_.name() + ": LAZ chunk " + num(i + 1) + " of " + num(chunks_.size()) + " (points " +
+         num(c.first_point) + "-" + num(c.first_point + c.points - 1) + ", " + num(c.bytes) +
+         " bytes at byte " + num(c.offset) + ")";
 }
 
 bool LazRecords::streamed(std::size_t i) const {
@@ -52,7 +55,8 @@ bool LazRecords::streamed(std::size_t i) const {
 }
 
 kernel::Status LazRecords::decode_window(std::size_t from) {
-  const auto threads = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const auto threads =
+      static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
   const std::size_t width = std::min(kMaxWindow, threads);
   std::size_t to = from;
   while (to < chunks_.size() && to - from < width && !streamed(to)) ++to;
@@ -72,8 +76,8 @@ kernel::Status LazRecords::decode_window(std::size_t from) {
     ByteStream in(bytes[k]);
     ChunkDecoder decoder(spec_, record_length_, layers_);
     decoder.begin(&in, chunks_[i].points);
-    status[k] = decoder.decode(static_cast<std::size_t>(chunks_[i].points), d.records.data(),
-                               where(i));
+    status[k] =
+        decoder.decode(static_cast<std::size_t>(chunks_[i].points), d.records.data(), where(i));
   });
   for (std::size_t k = 0; k < status.size(); ++k) {
     if (!status[k].ok()) {
@@ -117,8 +121,8 @@ kernel::Status LazRecords::read(std::uint64_t first, std::size_t n, std::uint8_t
   while (n > 0) {
     const std::size_t i = chunk_of(first);
     const Chunk& c = chunks_[i];
-    const std::size_t k = static_cast<std::size_t>(
-        std::min<std::uint64_t>(n, c.first_point + c.points - first));
+    const std::size_t k =
+        static_cast<std::size_t>(std::min<std::uint64_t>(n, c.first_point + c.points - first));
     if (streamed(i)) {
       if (auto st = read_streamed(i, first, k, out); !st.ok()) return st;
     } else {

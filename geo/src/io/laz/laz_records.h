@@ -18,8 +18,8 @@ namespace csgtile::geo::detail::laz {
 class LazRecords {
  public:
   /// `source` outlives this; `spec` and `chunks` as parse_laszip_vlr / read_chunks made them.
-  LazRecords(ByteSource& source, LazSpec spec, std::vector<Chunk> chunks,
-             std::size_t record_length, std::uint32_t layers);
+  LazRecords(ByteSource& source, LazSpec spec, std::vector<Chunk> chunks, std::size_t record_length,
+             std::uint32_t layers);
   ~LazRecords();
 
   /// Copies records [first, first + n) into out (n × record_length bytes). Errors: CorruptData

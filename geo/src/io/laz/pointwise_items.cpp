@@ -18,7 +18,6 @@ namespace {
 using detail::load_le;
 using detail::store_le;
 
-
 std::uint8_t fold8(std::int32_t v) { return static_cast<std::uint8_t>(v); }
 std::int32_t clamp8(std::int32_t v) { return v < 0 ? 0 : v > 255 ? 255 : v; }
 std::int32_t times(std::int32_t a, std::int32_t b) {  // the format's 32-bit product
@@ -40,17 +39,23 @@ class Point10V1 final : public PointwiseItemDecoder {
     const std::int32_t dy = dy_.decode(dec, median_y, k < 19 ? k : 19);
     store_le<std::int32_t>(last_ + 4, wrap_add(load_le<std::int32_t>(last_ + 4), dy));
     k = (k + dy_.k()) / 2;
-    store_le<std::int32_t>(last_ + 8, z_.decode(dec, load_le<std::int32_t>(last_ + 8), k < 19 ? k : 19));
+    store_le<std::int32_t>(last_ + 8,
+                           z_.decode(dec, load_le<std::int32_t>(last_ + 8), k < 19 ? k : 19));
     const std::uint32_t changed = dec.decode_symbol(changed_);
     if (changed != 0) {
       if (changed & 32) {
         store_le<std::uint16_t>(last_ + 12, static_cast<std::uint16_t>(intensity_.decode(
                                                 dec, load_le<std::uint16_t>(last_ + 12))));
       }
-      if (changed & 16) last_[14] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(bits_[last_[14]])));
-      if (changed & 8) last_[15] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(class_[last_[15]])));
-      if (changed & 4) last_[16] = static_cast<std::uint8_t>(scan_angle_.decode(dec, last_[16], k < 3));
-      if (changed & 2) last_[17] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(user_[last_[17]])));
+      if (changed & 16)
+        last_[14] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(bits_[last_[14]])));
+      if (changed & 8)
+        last_[15] =
+            static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(class_[last_[15]])));
+      if (changed & 4)
+        last_[16] = static_cast<std::uint8_t>(scan_angle_.decode(dec, last_[16], k < 3));
+      if (changed & 2)
+        last_[17] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(user_[last_[17]])));
       if (changed & 1) {
         store_le<std::uint16_t>(last_ + 18, static_cast<std::uint16_t>(source_.decode(
                                                 dec, load_le<std::uint16_t>(last_ + 18))));
@@ -93,25 +98,29 @@ class Point10V2 final : public PointwiseItemDecoder {
     const std::uint32_t changed = dec.decode_symbol(changed_);
     std::uint32_t r, n, m, l;
     if (changed != 0) {
-      if (changed & 32) last_[14] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(bits_[last_[14]])));
+      if (changed & 32)
+        last_[14] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(bits_[last_[14]])));
       r = last_[14] & 7;
       n = (last_[14] >> 3) & 7;
       m = kNumberReturnMap[n][r];
       l = kNumberReturnLevel[n][r];
       if (changed & 16) {
-        const auto v = static_cast<std::uint16_t>(
-            intensity_.decode(dec, last_intensity_[m], m < 3 ? m : 3));
+        const auto v =
+            static_cast<std::uint16_t>(intensity_.decode(dec, last_intensity_[m], m < 3 ? m : 3));
         store_le<std::uint16_t>(last_ + 12, v);
         last_intensity_[m] = v;
       } else {
         store_le<std::uint16_t>(last_ + 12, last_intensity_[m]);
       }
-      if (changed & 8) last_[15] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(class_[last_[15]])));
+      if (changed & 8)
+        last_[15] =
+            static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(class_[last_[15]])));
       if (changed & 4) {
         const std::uint32_t v = dec.decode_symbol(scan_angle_[(last_[14] >> 6) & 1]);
         last_[16] = fold8(static_cast<std::int32_t>(v + last_[16]));
       }
-      if (changed & 2) last_[17] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(user_[last_[17]])));
+      if (changed & 2)
+        last_[17] = static_cast<std::uint8_t>(dec.decode_symbol(lazy_model<256>(user_[last_[17]])));
       if (changed & 1) {
         store_le<std::uint16_t>(last_ + 18, static_cast<std::uint16_t>(source_.decode(
                                                 dec, load_le<std::uint16_t>(last_ + 18))));
@@ -289,8 +298,8 @@ class ByteV1 final : public PointwiseItemDecoder {
   void first(const std::uint8_t* raw) override { std::copy_n(raw, last_.size(), last_.begin()); }
   void next(ArithmeticDecoder& dec, std::uint8_t* out) override {
     for (std::size_t i = 0; i < last_.size(); ++i) {
-      last_[i] = out[i] = static_cast<std::uint8_t>(
-          bytes_.decode(dec, last_[i], static_cast<std::uint32_t>(i)));
+      last_[i] = out[i] =
+          static_cast<std::uint8_t>(bytes_.decode(dec, last_[i], static_cast<std::uint32_t>(i)));
     }
   }
 
@@ -305,7 +314,8 @@ class ByteV2 final : public PointwiseItemDecoder {
   void first(const std::uint8_t* raw) override { std::copy_n(raw, last_.size(), last_.begin()); }
   void next(ArithmeticDecoder& dec, std::uint8_t* out) override {
     for (std::size_t i = 0; i < last_.size(); ++i) {
-      last_[i] = out[i] = fold8(static_cast<std::int32_t>(last_[i] + dec.decode_symbol(models_[i])));
+      last_[i] = out[i] =
+          fold8(static_cast<std::int32_t>(last_[i] + dec.decode_symbol(models_[i])));
     }
   }
 
@@ -334,8 +344,9 @@ std::array<std::uint16_t, 3> decode_rgb(ArithmeticDecoder& dec, RgbModels& m,
       c[2] = last[2] & 0xFF;
     }
     diff = (c[0] >> 8) - (last[0] >> 8);
-    c[1] |= (sym & 8) ? static_cast<std::uint16_t>(fold8(corr(3) + clamp8(diff + (last[1] >> 8))) << 8)
-                      : (last[1] & 0xFF00);
+    c[1] |= (sym & 8)
+                ? static_cast<std::uint16_t>(fold8(corr(3) + clamp8(diff + (last[1] >> 8))) << 8)
+                : (last[1] & 0xFF00);
     if (sym & 32) {
       const std::int32_t d = (diff + ((c[1] >> 8) - (last[1] >> 8))) / 2;
       c[2] |= static_cast<std::uint16_t>(fold8(corr(5) + clamp8(d + (last[2] >> 8))) << 8);

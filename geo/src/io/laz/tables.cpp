@@ -46,8 +46,8 @@ std::uint64_t GpsTimeState::decode(ArithmeticDecoder& dec) {
   for (int round = 0; round < 4; ++round) {
     if (diff_[last_] == 0) {
       const auto multi = static_cast<std::int32_t>(dec.decode_symbol(zero_diff_));
-      const std::int32_t small = coding_ == Coding::V2 ? 1 : 0;  // a 32-bit difference
-      const std::int32_t full = small + 1;                       // a full new time
+      const std::int32_t small = coding_ == Coding::V2 ? 1 : 0;      // a 32-bit difference
+      const std::int32_t full = small + 1;                           // a full new time
       if (coding_ == Coding::V2 && multi == 0) return time_[last_];  // unchanged
       if (multi == small) {
         diff_[last_] = gps_.decode(dec, 0, 0);
@@ -63,8 +63,8 @@ std::uint64_t GpsTimeState::decode(ArithmeticDecoder& dec) {
     }
     const auto multi = static_cast<std::int32_t>(dec.decode_symbol(multi_));
     if (multi == 1) {
-      time_[last_] += static_cast<std::uint64_t>(
-          static_cast<std::int64_t>(gps_.decode(dec, diff_[last_], 1)));
+      time_[last_] +=
+          static_cast<std::uint64_t>(static_cast<std::int64_t>(gps_.decode(dec, diff_[last_], 1)));
       extreme_[last_] = 0;
     } else if (multi == code_unchanged) {
       // unchanged
@@ -130,13 +130,12 @@ void WavePacketCoder::decode(ArithmeticDecoder& dec, const std::uint8_t* last_pa
   }
   std::uint8_t* p = out + 1;
   store_le<std::uint64_t>(p, offset);
-  store_le<std::int32_t>(
-      p + 8, packet_size_.decode(dec, static_cast<std::int32_t>(last_size)));
+  store_le<std::int32_t>(p + 8, packet_size_.decode(dec, static_cast<std::int32_t>(last_size)));
   store_le<std::int32_t>(p + 12, return_point_.decode(dec, load_le<std::int32_t>(last + 12)));
   for (int i = 0; i < 3; ++i) {
-    store_le<std::int32_t>(p + 16 + 4 * i,
-                           xyz_.decode(dec, load_le<std::int32_t>(last + 16 + 4 * i),
-                                       static_cast<std::uint32_t>(i)));
+    store_le<std::int32_t>(
+        p + 16 + 4 * i,
+        xyz_.decode(dec, load_le<std::int32_t>(last + 16 + 4 * i), static_cast<std::uint32_t>(i)));
   }
 }
 
