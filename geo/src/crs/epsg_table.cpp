@@ -585,7 +585,6 @@ kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg) {
     auto from_proj = detail::crs_from_proj_database(code);
     if (!from_proj.ok()) return from_proj.error();
     crs = std::move(from_proj).value();
-    if (vertical_epsg == 0 && crs->vertical) return *crs;
   }
   if (vertical_epsg != 0) {
     if (auto v = detail::vertical_from_epsg(vertical_epsg)) {

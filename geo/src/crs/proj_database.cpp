@@ -8,6 +8,8 @@
 #include <proj.h>
 
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <string>
 
 #include "crs/crs_internal.h"
@@ -83,9 +85,9 @@ bool helmert_to_wgs84(const PJ* geodetic, double values[7], std::string& source)
   return found;
 }
 
-}  // namespace
-
-kernel::Result<Crs> crs_from_proj_database(int code) {
+// The lookup itself (a query of PROJ's SQLite database and an operation search, tens of
+// milliseconds); crs_from_proj_database keeps its results.
+kernel::Result<Crs> lookup(int code) {
   PJ_CONTEXT* ctx = context();
   Object crs = from_database(code);
   if (!crs) {
@@ -133,6 +135,24 @@ kernel::Result<Crs> crs_from_proj_database(int code) {
     }
   }
   return out;
+}
+
+}  // namespace
+
+kernel::Result<Crs> crs_from_proj_database(int code) {
+  // Every job of a run asks again for the same few codes: each is looked up once per process.
+  // The database does not change while the process runs; the bound keeps hostile inputs
+  // (random codes in GeoTIFF keys) from growing the memo without end.
+  static std::mutex mutex;
+  static std::map<int, kernel::Result<Crs>> memo;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (auto it = memo.find(code); it != memo.end()) return it->second;
+  }
+  kernel::Result<Crs> found = lookup(code);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (memo.size() < 4096) memo.emplace(code, found);
+  return found;
 }
 
 std::optional<VerticalCrs> vertical_from_proj_database(int code) {

@@ -638,6 +638,16 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   return true;
 }
 
+// Records [first, first + n) as the uncompressed file holds them: read in place, or
+// decoded from LAZ.
+kernel::Status read_record_bytes(Parsed& file, std::uint64_t first, std::size_t n,
+                                 std::uint8_t* out) {
+  if (file.laz) return file.laz->read(first, n, out);
+  const std::size_t length = file.decoding.record_length;
+  const std::uint64_t at = file.header.offset_to_point_data + first * std::uint64_t{length};
+  return file.source->read_at(at, std::span(out, n * length));
+}
+
 }  // namespace
 
 struct LasReader::State {
@@ -710,12 +720,8 @@ kernel::Result<std::size_t> LasReader::read_records(PointBatch& batch, std::size
   while (done < n) {
     const std::size_t k = std::min(per_chunk, n - done);
     s.chunk.resize(k * d.record_length);
-    if (s.file.laz) {
-      if (auto st = s.file.laz->read(s.next + done, k, s.chunk.data()); !st.ok()) return st.error();
-    } else {
-      const std::uint64_t at =
-          s.file.header.offset_to_point_data + (s.next + done) * std::uint64_t{d.record_length};
-      if (auto st = s.file.source->read_at(at, s.chunk); !st.ok()) return st.error();
+    if (auto st = read_record_bytes(s.file, s.next + done, k, s.chunk.data()); !st.ok()) {
+      return st.error();
     }
     s.nan_gps += decode(d, s.chunk.data(), k, batch.points.data() + done,
                         batch.extra_bytes.data() + done * d.extra_length);
@@ -734,12 +740,7 @@ kernel::Result<std::size_t> LasReader::read_raw(std::vector<std::uint8_t>& out, 
       static_cast<std::size_t>(std::min<std::uint64_t>(s.file.readable - s.next, max));
   out.resize(n * length);
   if (n == 0) return std::size_t{0};
-  if (s.file.laz) {
-    if (auto st = s.file.laz->read(s.next, n, out.data()); !st.ok()) return st.error();
-  } else {
-    const std::uint64_t at = s.file.header.offset_to_point_data + s.next * std::uint64_t{length};
-    if (auto st = s.file.source->read_at(at, out); !st.ok()) return st.error();
-  }
+  if (auto st = read_record_bytes(s.file, s.next, n, out.data()); !st.ok()) return st.error();
   s.next += n;
   return n;
 }

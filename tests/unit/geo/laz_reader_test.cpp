@@ -16,6 +16,8 @@
 
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
+#include "io/byte_source.h"
+#include "io/laz/arithmetic.h"
 #include "test_support.h"
 
 namespace csgtile::geo {
@@ -311,6 +313,26 @@ TEST(LazReader, ABadLaszipVlrIsRefusedByName) {
   st = open_and_read("item.laz", bad);
   ASSERT_FALSE(st.ok());
   EXPECT_THAT(st.error().message, HasSubstr("POINT10 v2 (21 bytes)"));
+}
+
+// Layers are taken from a chunk read through a small window (a chunk too large to hold):
+// each layer keeps its bytes though the window is refilled under it.
+TEST(LazByteStream, LayersTakenAcrossRefilledWindowsKeepTheirBytes) {
+  std::vector<std::uint8_t> bytes(100);
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7 + 1);
+  auto source = detail::memory_source("chunk", bytes);
+  detail::laz::ByteStream chunk(*source, 10, 80, 16);  // windows of 16 bytes
+  (void)chunk.get();                                     // byte 10
+  detail::laz::ByteStream a = chunk.take(30);            // bytes 11-40, across three windows
+  detail::laz::ByteStream b = chunk.take(5);             // bytes 41-45
+  detail::laz::ByteStream c = chunk.take(60);            // 44 bytes left: 16 past the end
+  for (std::size_t i = 11; i <= 40; ++i) ASSERT_EQ(a.get(), bytes[i]) << i;
+  for (std::size_t i = 41; i <= 45; ++i) ASSERT_EQ(b.get(), bytes[i]) << i;
+  for (std::size_t i = 46; i < 90; ++i) ASSERT_EQ(c.get(), bytes[i]) << i;
+  EXPECT_EQ(a.overrun() + b.overrun() + c.overrun(), 0u);
+  EXPECT_EQ(chunk.overrun(), 16u);
+  EXPECT_EQ(c.get(), 0);  // past its own end: zero, counted
+  EXPECT_EQ(c.overrun(), 1u);
 }
 
 }  // namespace

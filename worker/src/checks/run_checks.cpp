@@ -5,19 +5,9 @@
 
 #include "city/city_jobs.h"
 #include "csgtile/geo/crs.h"
+#include "fetch/fetch.h"
 
 namespace csgtile::worker::detail {
-
-namespace {
-
-// The local path an input names, or "" for a remote URL.
-std::string local_path(const std::string& input) {
-  if (input.rfind("file://", 0) == 0) return input.substr(7);
-  if (input.find("://") != std::string::npos) return "";
-  return input;
-}
-
-}  // namespace
 
 std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, RunChecks what) {
   std::vector<config::Problem> problems;
@@ -33,8 +23,8 @@ std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, 
   for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
     const std::string& input = config.run.inputs[i];
     const std::string key = "run.inputs[" + std::to_string(i) + "]";
-    const std::string path = local_path(input);
-    if (path.empty()) continue;  // fetched when its job runs
+    if (fetch::is_url(input)) continue;  // fetched (and checked) when its job runs
+    const std::string& path = input;
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (!std::filesystem::exists(status)) {

@@ -15,8 +15,8 @@ namespace csgtile::worker::detail {
 enum class RunChecks { CrsOnly, CrsAndInputs };
 
 /// Problems of `loaded` (which must have loaded): run.crs that is not a CRS; a local input
-/// (a path or file:// URL) that does not exist; a local directory (a city of tiles) that
-/// holds no LIDAR tile (.las .laz .ply .pcd .xyz .txt).
+/// path that does not exist; a local directory (a city of tiles) that holds no LIDAR tile
+/// (.las .laz .ply .pcd .xyz .txt). URLs, file:// too, are checked when a job fetches them.
 std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, RunChecks what);
 
 }  // namespace csgtile::worker::detail

@@ -9,11 +9,7 @@ namespace csgtile::geo::detail::laz {
 
 ByteStream::ByteStream(ByteSource& source, std::uint64_t offset, std::uint64_t length,
                        std::size_t block)
-    : source_(&source),
-      source_next_(offset),
-      source_end_(offset + length),
-      window_start_(offset),
-      block_(block) {}
+    : source_(&source), source_next_(offset), source_end_(offset + length), block_(block) {}
 
 std::uint8_t ByteStream::refill() {
   if (source_ != nullptr && source_next_ < source_end_ && io_.ok()) {
@@ -23,11 +19,9 @@ std::uint8_t ByteStream::refill() {
     if (auto st = source_->read_at(source_next_, buffer_); !st.ok()) {
       io_ = st;
     } else {
-      window_start_ = source_next_;
       source_next_ += n;
-      begin_ = buffer_.data();
-      next_ = begin_;
-      end_ = begin_ + n;
+      next_ = buffer_.data();
+      end_ = next_ + n;
       return *next_++;
     }
   }
@@ -51,22 +45,22 @@ void ByteStream::get(std::uint8_t* out, std::size_t n) {
 }
 
 ByteStream ByteStream::take(std::size_t n) {
-  const std::size_t have = static_cast<std::size_t>(end_ - next_);
-  const std::size_t k = std::min(n, have);
-  ByteStream sub(std::span<const std::uint8_t>(next_, k));
-  next_ += k;
-  if (k < n) {  // the layer claims more bytes than the chunk holds
-    sub.overrun_ = 0;
-    overrun_ += n - k;
+  std::size_t left = static_cast<std::size_t>(end_ - next_);  // bytes this stream still has
+  if (source_ != nullptr) left += static_cast<std::size_t>(source_end_ - source_next_);
+  const std::size_t k = std::min(n, left);
+  overrun_ += n - k;         // a layer that claims more bytes than the chunk holds
+  if (source_ == nullptr) {  // memory outlives the stream: point into it
+    ByteStream sub(std::span<const std::uint8_t>(next_, k));
+    next_ += k;
+    return sub;
   }
+  // Over a ByteSource the window is refilled under a sub-stream: it gets its own copy.
+  ByteStream sub;
+  sub.buffer_.resize(k);
+  get(sub.buffer_.data(), k);
+  sub.next_ = sub.buffer_.data();
+  sub.end_ = sub.next_ + k;
   return sub;
-}
-
-std::uint64_t ByteStream::consumed() const {
-  if (source_ != nullptr) {
-    return window_start_ + static_cast<std::uint64_t>(next_ - begin_) + overrun_;
-  }
-  return overrun_;  // memory streams report only their overrun
 }
 
 void BitModel::update() {

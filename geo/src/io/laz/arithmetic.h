@@ -31,9 +31,14 @@ inline constexpr std::uint32_t kSymbolLengthShift = 15;
 inline constexpr std::uint32_t kSymbolMaxCount = 1u << kSymbolLengthShift;
 
 /// Bytes for a decoder: a window that is refilled from a ByteSource when one is attached.
+/// Movable, not copyable (it may own the bytes it points into).
 class ByteStream {
  public:
   ByteStream() = default;
+  ByteStream(ByteStream&&) = default;
+  ByteStream& operator=(ByteStream&&) = default;
+  ByteStream(const ByteStream&) = delete;
+  ByteStream& operator=(const ByteStream&) = delete;
   /// Memory that outlives the stream.
   explicit ByteStream(std::span<const std::uint8_t> bytes)
       : next_(bytes.data()), end_(bytes.data() + bytes.size()) {}
@@ -54,12 +59,12 @@ class ByteStream {
     return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 |
            std::uint32_t{b[3]} << 24;
   }
-  /// A sub-stream of the next n bytes (memory streams only); this stream skips them.
+  /// A sub-stream of the next n bytes; this stream skips them. Over memory it points into the
+  /// same bytes; over a ByteSource it owns a copy (later refills replace this window). Bytes
+  /// it claims past the end count as this stream's overrun.
   ByteStream take(std::size_t n);
   /// Bytes read past the end (each returned as 0).
   std::uint64_t overrun() const { return overrun_; }
-  /// Bytes consumed from the start.
-  std::uint64_t consumed() const;
   /// An I/O error met while refilling (the stream then reads as past its end).
   const kernel::Status& io_status() const { return io_; }
 
@@ -68,13 +73,11 @@ class ByteStream {
 
   const std::uint8_t* next_ = nullptr;
   const std::uint8_t* end_ = nullptr;
-  const std::uint8_t* begin_ = nullptr;  // of the current window (refilled streams)
   ByteSource* source_ = nullptr;
-  std::uint64_t source_next_ = 0, source_end_ = 0, window_start_ = 0;
-  std::vector<std::uint8_t> buffer_;
+  std::uint64_t source_next_ = 0, source_end_ = 0;
+  std::vector<std::uint8_t> buffer_;  // the current window, or a sub-stream's own bytes
   std::size_t block_ = 0;
   std::uint64_t overrun_ = 0;
-  std::uint64_t memory_size_ = 0;
   kernel::Status io_;
 };
 

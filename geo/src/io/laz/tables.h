@@ -128,7 +128,6 @@ class GpsTimeState {
   void reset(std::uint64_t first_bits);
   /// Decodes the next time (v2: every point; v3: only points whose time changed).
   std::uint64_t decode(ArithmeticDecoder& dec);
-  std::uint64_t current() const { return time_[last_]; }
 
  private:
   void start_sequence(ArithmeticDecoder& dec);
