@@ -1,4 +1,5 @@
-# Module boundary check (DESIGN.md §2): kernel <- geo <- worker, config <- worker.
+# Module boundary check (DESIGN.md §2): kernel <- geo <- worker, config <- worker; inside geo,
+# geo/fit (csgtile::fit) sits on geo's core, which sees neither it nor PCL.
 # Usage: cmake -DROOT=<source dir> -P check_boundaries.cmake
 # Fails (FATAL_ERROR) listing every include a module must not see.
 if(NOT ROOT)
@@ -8,9 +9,9 @@ endif()
 # Forbidden include prefixes per module directory (regular expressions on the include path).
 set(third_party_worker "pcl/|GeographicLib/|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/")
 set(rules
-  "kernel|${third_party_worker}|openvdb/|tbb/|nlohmann/|csgtile/(geo|config|worker)/"
+  "kernel|${third_party_worker}|openvdb/|tbb/|nlohmann/|csgtile/(geo|fit|config|worker)/"
   "geo|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/|csgtile/(config|worker)/"
-  "config|pcl/|GeographicLib/|curl/|sqlite3|libpq|openvdb/|csgtile/(kernel|geo|worker)/")
+  "config|pcl/|GeographicLib/|curl/|sqlite3|libpq|openvdb/|csgtile/(kernel|geo|fit|worker)/")
 set(violations "")
 
 function(scan_module module pattern)
@@ -18,7 +19,10 @@ function(scan_module module pattern)
   foreach(f IN LISTS files)
     # kernel/assembly may use OpenVDB and TBB (DESIGN.md §2); nothing else in the kernel may.
     if(module STREQUAL "kernel" AND f MATCHES "/kernel/assembly/")
-      set(p "${third_party_worker}|csgtile/(geo|config|worker)/")
+      set(p "${third_party_worker}|csgtile/(geo|fit|config|worker)/")
+    elseif(module STREQUAL "geo" AND NOT f MATCHES "/geo/fit/")
+      # geo's core: no PCL and no fitting (the fit room depends on it, not the reverse).
+      set(p "${pattern}|pcl/|csgtile/fit/")
     else()
       set(p "${pattern}")
     endif()

@@ -21,7 +21,7 @@
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/geo/scene.h"
-#include "csgtile/geo/segment.h"
+#include "csgtile/fit/segment.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::detail {
@@ -43,7 +43,7 @@ struct FitCommand {
 
 // The RANSAC's view of every region as text: "P region x y z nx ny nz shape" per point and
 // "S region index type px py pz ax ay az inliers" per shape (tests/bench/beam_causes.py).
-bool write_detections(const std::string& path, const std::vector<geo::RegionDetection>& regions) {
+bool write_detections(const std::string& path, const std::vector<fit::RegionDetection>& regions) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   for (std::size_t r = 0; r < regions.size(); ++r) {
@@ -55,7 +55,7 @@ bool write_detections(const std::string& path, const std::vector<geo::RegionDete
                    n.y(), n.z(), i < d.shapes.assignment.size() ? d.shapes.assignment[i] : -1);
     }
     for (std::size_t s = 0; s < d.shapes.shapes.size(); ++s) {
-      const geo::Surface& q = d.shapes.shapes[s].surface;
+      const fit::Surface& q = d.shapes.shapes[s].surface;
       std::fprintf(f, "S %zu %zu %d %.4f %.4f %.4f %.5f %.5f %.5f %zu\n", r, s,
                    static_cast<int>(q.type), q.point.x(), q.point.y(), q.point.z(), q.axis.x(),
                    q.axis.y(), q.axis.z(), d.shapes.shapes[s].inliers.size());
@@ -82,7 +82,7 @@ int run_fit(const FitCommand& c) {
     return error_info(code).exit_code;
   };
 
-  geo::FitPipelineOptions options;
+  fit::FitPipelineOptions options;
   if (!c.config.empty()) {
     std::string error, text;
     if (!city::read_fit_options(c.config, options, text, error)) {
@@ -100,7 +100,7 @@ int run_fit(const FitCommand& c) {
       !f.ok()) {
     return fail(f.code, f.message);
   }
-  const geo::FitOutput& f = tile.output;
+  const fit::FitOutput& f = tile.output;
   const double read_seconds = tile.read_seconds;
   const std::string text = geo::scene_to_json(tile.scene);
   {

@@ -3,6 +3,7 @@
 
 #include "boolean/marching.h"
 
+#include "boolean/cell_hash.h"
 #include "boolean/pcurve_fit.h"
 
 #include <Eigen/LU>
@@ -137,7 +138,7 @@ class PointHash {
             static_cast<long long>(std::floor(p.z() / cell_))};
   }
   static long long hash(long long x, long long y, long long z) {
-    return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL);
+    return cell_hash(x, y, z);
   }
   long long key(const Vec3& p) const {
     const auto c = coords(p);

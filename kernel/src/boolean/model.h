@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "boolean/cell_hash.h"
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/shape.h"
 
@@ -66,7 +67,7 @@ class BModel {
   double tolerance_;
   std::unordered_map<long long, std::vector<int>> grid_;
   long long cell_key(long long x, long long y, long long z) const {
-    return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL);
+    return cell_hash(x, y, z);
   }
 };
 

@@ -190,6 +190,20 @@ TEST(BooleanDegenerate, FacesSharingAVertexOnlyShareThatVertex) {
   EXPECT_EQ(map_child_shapes(u, ShapeKind::Vertex).size(), 15u);
 }
 
+// Regression (CI, cli.run.city_crs under UBSan): at RD New coordinates and the default
+// tolerance the vertex grid's cell indices are near 2e11, and their hash overflowed a signed
+// integer. Buildings of a georeferenced run are fused where they are.
+TEST(BooleanGeoreferenced, BoxesAtNationalGridCoordinatesFuse) {
+  const Vec3 rd(85120.5, 446780.25, -1.5);
+  const Shape a = box_at(Vec3(12, 8, 9), Location::translation(rd));
+  const Shape b = box_at(Vec3(6, 8, 12), Location::translation(rd + Vec3(9, 2, 0)));
+  const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
+  EXPECT_NEAR(volume(u), 12 * 8 * 9 + 6 * 8 * 12 - 3 * 6 * 9, 1e-6);
+  EXPECT_EQ(solids(u), 1u);
+  const Shape c = valid(boolean_operation(a, b, BooleanOp::Common), "common");
+  EXPECT_NEAR(volume(c), 3 * 6 * 9, 1e-6);
+}
+
 TEST(BooleanDegenerate, IdenticalSolids) {
   const Shape a = make_cylinder(1, 2).value();
   EXPECT_NEAR(volume(valid(boolean_operation(a, a, BooleanOp::Fuse), "fuse")), 2 * std::numbers::pi, 1e-12);

@@ -27,7 +27,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   const auto payload = nlohmann::json::parse(job.payload);  // valid: resolve_job_input read it
 
   clock.enter("fit");
-  geo::FitPipelineOptions options;
+  fit::FitPipelineOptions options;
   std::string options_text;
   if (!config.city.fit_config.empty()) {
     std::string error;
@@ -50,7 +50,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     }
     return f;
   }
-  const geo::FitOutput& fit = tile.output;
+  const fit::FitOutput& fit = tile.output;
   ops::metrics().add_points_processed(static_cast<std::uint64_t>(fit.input_points));
 
   // Each primitive is built as a kernel solid and checked; its box (in CRS coordinates, the

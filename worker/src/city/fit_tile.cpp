@@ -35,7 +35,7 @@ bool take(const nlohmann::json& object, const std::string& path, const char* key
 
 }  // namespace
 
-bool parse_fit_options(std::string_view text, const std::string& file, geo::FitPipelineOptions& o,
+bool parse_fit_options(std::string_view text, const std::string& file, fit::FitPipelineOptions& o,
                        std::string& error) {
   nlohmann::json doc;
   try {
@@ -154,7 +154,7 @@ bool parse_fit_options(std::string_view text, const std::string& file, geo::FitP
 }
 
 
-bool read_fit_options(const std::string& file, geo::FitPipelineOptions& options, std::string& text,
+bool read_fit_options(const std::string& file, fit::FitPipelineOptions& options, std::string& text,
                       std::string& error) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
@@ -170,7 +170,7 @@ bool read_fit_options(const std::string& file, geo::FitPipelineOptions& options,
 }
 
 Failure fit_tile(const std::filesystem::path& path, const std::string& name,
-                 const geo::FitPipelineOptions& options, const std::string& crs_override,
+                 const fit::FitPipelineOptions& options, const std::string& crs_override,
                  FittedTile& out) {
   const auto start = std::chrono::steady_clock::now();
   out = FittedTile{};
@@ -240,7 +240,7 @@ Failure fit_tile(const std::filesystem::path& path, const std::string& name,
   for (auto& p : raw) p -= o;
   out.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  auto fitted = geo::fit_point_cloud(raw, classes, options);
+  auto fitted = fit::fit_point_cloud(raw, classes, options);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
   out.scene.name = name;

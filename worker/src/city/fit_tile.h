@@ -9,25 +9,25 @@
 #include <string_view>
 
 #include "csgtile/geo/scene.h"
-#include "csgtile/geo/segment.h"
+#include "csgtile/fit/segment.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::city {
 
-/// Reads fit options from JSON text: an object whose sections mirror geo::FitPipelineOptions
+/// Reads fit options from JSON text: an object whose sections mirror fit::FitPipelineOptions
 /// (outliers, voxel, normals, ground, clusters, ransac, primitives); every key optional,
 /// unknown keys and wrong types are errors naming their path, prefixed by `file`.
 bool parse_fit_options(std::string_view text, const std::string& file,
-                       geo::FitPipelineOptions& options, std::string& error);
+                       fit::FitPipelineOptions& options, std::string& error);
 /// Reads `file` into `text` and parses it as parse_fit_options does.
-bool read_fit_options(const std::string& file, geo::FitPipelineOptions& options, std::string& text,
+bool read_fit_options(const std::string& file, fit::FitPipelineOptions& options, std::string& text,
                       std::string& error);
 
 struct FittedTile {
   /// The primitives in the tile-local frame: origin = the LAS offset (the floor of the
   /// smallest x and y for other formats), CRS from the file or the override; the seed.
   geo::Scene scene;
-  geo::FitOutput output;  ///< counts, rejections, stage seconds
+  fit::FitOutput output;  ///< counts, rejections, stage seconds
   double read_seconds = 0.0;
 };
 
@@ -35,7 +35,7 @@ struct FittedTile {
 /// is used when the file names no CRS ("" = none). Errors: as the readers (Io, InputInvalid,
 /// Unsupported), ConfigInvalid (bad options or override).
 Failure fit_tile(const std::filesystem::path& path, const std::string& name,
-                 const geo::FitPipelineOptions& options, const std::string& crs_override,
+                 const fit::FitPipelineOptions& options, const std::string& crs_override,
                  FittedTile& out);
 
 }  // namespace csgtile::worker::city

@@ -9,10 +9,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "csgtile/geo/fit.h"
+#include "csgtile/fit/fit.h"
 #include "fit_clouds.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 namespace {
 
 using kernel::PrimitiveType;
@@ -355,4 +355,4 @@ TEST(FitExtrusion, DegenerateInputMakesNoExtrusionAndSaysWhy) {
 }
 
 }  // namespace
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

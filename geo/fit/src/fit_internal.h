@@ -12,9 +12,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "csgtile/geo/fit.h"
+#include "csgtile/fit/fit.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 using kernel::Vec3;
 
@@ -183,4 +183,4 @@ double lowest_ground_under(const GroundGrid& ground, const std::vector<kernel::V
 std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
                                             std::vector<Rejection>& rejected);
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

@@ -15,9 +15,9 @@
 #include <utility>
 #include <vector>
 
-#include "csgtile/geo/fit.h"
+#include "csgtile/fit/fit.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 /// Statistical outlier removal: a point whose mean distance to its `neighbours` nearest
 /// points exceeds the cloud's mean by `std_ratio` standard deviations is an outlier.
@@ -144,7 +144,7 @@ struct RegionDetection {
 
 /// What the pipeline found and how long each stage took.
 struct FitOutput {
-  std::vector<ScenePrimitive> primitives;  ///< ids "r<region>-<n>"
+  std::vector<geo::ScenePrimitive> primitives;  ///< ids "r<region>-<n>"
   std::vector<Rejection> rejected;
   std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
   long long input_points = 0;
@@ -170,4 +170,4 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options);
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

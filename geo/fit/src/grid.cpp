@@ -5,9 +5,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "fit/fit_internal.h"
+#include "fit_internal.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 namespace {
 
@@ -149,4 +149,4 @@ double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32
   return quantile_of(kth_neighbour_distances(points, members), quantile);
 }
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

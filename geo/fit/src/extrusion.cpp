@@ -14,10 +14,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "fit/fit_internal.h"
-#include "fit/plane2d.h"
+#include "fit_internal.h"
+#include "plane2d.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 namespace {
 
@@ -658,4 +658,4 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
   return std::nullopt;
 }
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

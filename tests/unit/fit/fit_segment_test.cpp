@@ -8,14 +8,16 @@
 #include <numbers>
 
 #include "csgtile/geo/scene.h"
-#include "csgtile/geo/segment.h"
+#include "csgtile/fit/segment.h"
 #include "fit_clouds.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 namespace {
 
 using kernel::PrimitiveType;
 using kernel::Vec3;
+using geo::Scene;
+using geo::scene_to_json;
 using testing::Cloud;
 
 TEST(FitSegment, StatisticalOutliersAreRemoved) {
@@ -272,4 +274,4 @@ TEST(FitSegment, PipelineOptionsAreChecked) {
 }
 
 }  // namespace
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

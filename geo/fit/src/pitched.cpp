@@ -19,10 +19,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "fit/fit_internal.h"
-#include "fit/plane2d.h"
+#include "fit_internal.h"
+#include "plane2d.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 namespace {
 
@@ -388,4 +388,4 @@ std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
   return out;
 }
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

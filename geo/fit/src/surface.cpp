@@ -6,9 +6,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "fit/fit_internal.h"
+#include "fit_internal.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 const char* shape_type_name(ShapeType type) {
   switch (type) {
@@ -447,4 +447,4 @@ std::optional<Surface> refine_surface(const Surface& start, std::span<const Vec3
 
 }  // namespace detail
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

@@ -12,7 +12,7 @@
 
 #include "csgtile/kernel/location.h"
 
-namespace csgtile::geo::testing {
+namespace csgtile::fit::testing {
 
 using kernel::Vec3;
 
@@ -144,4 +144,4 @@ inline double line_distance(const Vec3& p, const Vec3& q, const Vec3& a) {
   return (v - v.dot(a) * a).norm();
 }
 
-}  // namespace csgtile::geo::testing
+}  // namespace csgtile::fit::testing

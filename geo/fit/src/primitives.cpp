@@ -13,10 +13,10 @@
 #include <tuple>
 
 #include "csgtile/kernel/check.h"
-#include "fit/fit_internal.h"
-#include "fit/plane2d.h"
+#include "fit_internal.h"
+#include "plane2d.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 namespace {
 
@@ -271,10 +271,10 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
                              static_cast<long long>(members.size())});
     return;
   }
-  ScenePrimitive p;
+  geo::ScenePrimitive p;
   p.spec = std::move(spec);
   p.id = "r" + std::to_string(region_) + "-" + std::to_string(out_.primitives.size());
-  FitQuality q;
+  geo::FitQuality q;
   q.inliers = static_cast<long long>(members.size());
   double sum = 0.0;
   std::size_t counted = 0;
@@ -993,4 +993,4 @@ FittedPrimitives primitives_from_shapes(std::span<const Vec3> points, std::span<
   return builder.run();
 }
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

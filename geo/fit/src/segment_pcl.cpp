@@ -17,10 +17,10 @@
 #include <limits>
 #include <numbers>
 
-#include "csgtile/geo/segment.h"
-#include "fit/fit_internal.h"
+#include "csgtile/fit/segment.h"
+#include "fit_internal.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 namespace {
 
@@ -247,4 +247,4 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const Vec3>
   return to_groups(clusters, index);
 }
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

@@ -17,10 +17,10 @@
 #include <map>
 #include <numbers>
 
-#include "fit/fit_internal.h"
-#include "fit/plane2d.h"
+#include "fit_internal.h"
+#include "plane2d.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 namespace {
 
@@ -469,4 +469,4 @@ std::vector<int> planes_explained_by(const ProposalInput& in,
   return out;
 }
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

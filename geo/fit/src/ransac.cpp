@@ -20,10 +20,10 @@
 #include <numbers>
 #include <queue>
 
-#include "fit/fit_internal.h"
+#include "fit_internal.h"
 #include "synth/random.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 namespace {
 
@@ -86,7 +86,7 @@ class Detector {
   std::span<const Vec3> points_;
   std::span<const Vec3> normals_;
   RansacOptions o_;
-  detail::Random random_;
+  geo::detail::Random random_;
   double cos_alpha_ = 0.0;
   std::vector<char> has_normal_;
   std::vector<int> assignment_;
@@ -428,4 +428,4 @@ kernel::Result<RansacResult> detect_shapes(std::span<const Vec3> points,
   return detector.run();
 }
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

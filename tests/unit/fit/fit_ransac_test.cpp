@@ -8,11 +8,11 @@
 #include <limits>
 #include <numbers>
 
-#include "csgtile/geo/fit.h"
-#include "csgtile/geo/segment.h"
+#include "csgtile/fit/fit.h"
+#include "csgtile/fit/segment.h"
 #include "fit_clouds.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 namespace {
 
 using kernel::Vec3;
@@ -184,4 +184,4 @@ TEST(FitRansac, SameSeedSameShapes) {
 }
 
 }  // namespace
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

@@ -12,7 +12,7 @@
 
 #include "csgtile/kernel/location.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 using kernel::Vec2;
 using kernel::Vec3;
@@ -77,4 +77,4 @@ Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z);
 /// The location with that rotation and origin; nullopt when the kernel refuses the matrix.
 std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec3& origin);
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

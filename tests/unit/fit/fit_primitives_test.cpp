@@ -8,12 +8,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "csgtile/geo/fit.h"
-#include "csgtile/geo/segment.h"
+#include "csgtile/fit/fit.h"
+#include "csgtile/fit/segment.h"
 #include "csgtile/kernel/check.h"
 #include "fit_clouds.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 namespace {
 
 using kernel::PrimitiveType;
@@ -414,4 +414,4 @@ TEST(FitPrimitives, LonePlaneIsRejectedWithAReason) {
 }
 
 }  // namespace
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

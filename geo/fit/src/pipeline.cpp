@@ -5,10 +5,10 @@
 #include <chrono>
 #include <cmath>
 
-#include "csgtile/geo/segment.h"
-#include "fit/fit_internal.h"
+#include "csgtile/fit/segment.h"
+#include "fit_internal.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 namespace {
 
@@ -314,4 +314,4 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   return out;
 }
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

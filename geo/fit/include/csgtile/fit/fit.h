@@ -19,7 +19,7 @@
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/location.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 
 /// The surfaces the RANSAC detects.
 enum class ShapeType : std::uint8_t { Plane, Sphere, Cylinder, Cone, Torus };
@@ -136,7 +136,7 @@ struct Rejection {
 };
 
 struct FittedPrimitives {
-  std::vector<ScenePrimitive> primitives;  ///< ids "r<region>-<n>", quality filled
+  std::vector<geo::ScenePrimitive> primitives;  ///< ids "r<region>-<n>", quality filled
   std::vector<Rejection> rejected;
   std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
   long long assigned_points = 0;  ///< points explained by an output primitive
@@ -163,4 +163,4 @@ FittedPrimitives primitives_from_shapes(std::span<const kernel::Vec3> points,
                                         const RansacResult& shapes, const PrimitiveOptions& options,
                                         const RansacOptions& ransac, int region);
 
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit

@@ -1,12 +1,12 @@
 // Plane geometry of the fitting module (plane2d.h). The proposers' outputs depend on these
 // to the last bit: keep the order of every sum and comparison when changing them.
 
-#include "fit/plane2d.h"
+#include "plane2d.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace csgtile::geo::detail {
+namespace csgtile::fit::detail {
 
 double ring_area(const std::vector<Vec2>& ring) {
   double a = 0.0;
@@ -140,4 +140,4 @@ std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec
   return loc.value();
 }
 
-}  // namespace csgtile::geo::detail
+}  // namespace csgtile::fit::detail

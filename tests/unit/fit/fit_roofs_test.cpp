@@ -11,10 +11,10 @@
 #include <cmath>
 #include <numbers>
 
-#include "csgtile/geo/fit.h"
+#include "csgtile/fit/fit.h"
 #include "fit_clouds.h"
 
-namespace csgtile::geo {
+namespace csgtile::fit {
 namespace {
 
 using kernel::PrimitiveType;
@@ -232,4 +232,4 @@ TEST(FitRoofs, CoaxialOverlappingConesMakeOnePrimitive) {
 }
 
 }  // namespace
-}  // namespace csgtile::geo
+}  // namespace csgtile::fit
