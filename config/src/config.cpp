@@ -84,9 +84,21 @@ Config from_document(const json& document) {
   read(document, "city", "cell_size", config.city.cell_size);
   read(document, "city", "halo", config.city.halo);
   read(document, "city", "voxel_size", config.city.voxel_size);
-  read(document, "city", "fit_config", config.city.fit_config);
+  detail::read_fit(document, config.fit);
   read(document, "publish", "url", config.publish.url);
   return config;
+}
+
+/// A top-level key that is a section of `fit:` (a fit options file of older versions, or a
+/// section written one level too high) says where it belongs.
+void hint_fit_sections(std::vector<Problem>& problems) {
+  const json& fit = detail::schema_document().at("properties").at("fit").at("properties");
+  for (Problem& p : problems) {
+    if (p.path.find('.') == std::string::npos && fit.contains(p.path) &&
+        p.message.starts_with("unknown key")) {
+      p.message = "unknown key; fit options go under fit: (fit." + p.path + ")";
+    }
+  }
 }
 
 /// Problems tied to a line come first, in line order; then the others (environment, file),
@@ -109,6 +121,7 @@ LoadResult load_string(std::string_view yaml, std::string_view source, const Env
     detail::yaml_to_document(yaml, document, result.problems);
     detail::apply_environment(env, document, result.problems);
     detail::validate(document, result.problems);
+    hint_fit_sections(result.problems);
     sort_problems(result.problems);
     for (const auto& [pointer, origin] : document.origins) {
       if (pointer.empty()) continue;
@@ -202,13 +215,17 @@ std::string to_json(const Config& config) {
                   {"s3_region", config.fetch.s3_region}};
   out["city"] = {{"cell_size", config.city.cell_size},
                  {"halo", config.city.halo},
-                 {"voxel_size", config.city.voxel_size},
-                 {"fit_config", config.city.fit_config}};
+                 {"voxel_size", config.city.voxel_size}};
+  out["fit"] = detail::fit_to_json(config.fit);
   out["publish"] = {{"url", config.publish.url}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so
   // the bytes depend on the values only. Invalid UTF-8 (possible only through the
   // environment) is replaced rather than thrown on.
   return out.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+std::string to_json(const FitConfig& fit) {
+  return detail::fit_to_json(fit).dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 std::string format_problem(std::string_view source, const Problem& p) {

@@ -67,6 +67,13 @@ std::string describe_value(const nlohmann::json& value);
 /// "integer", "number", "string", "boolean", "list", "mapping".
 std::string describe_type(std::string_view schema_type_name);
 
+// ---- the fit section (fit_config.cpp) -------------------------------------------------------
+
+/// Reads `fit:` of a valid document into `fit` (absent keys keep their defaults).
+void read_fit(const nlohmann::json& document, FitConfig& fit);
+/// `fit` as the canonical JSON object of to_json.
+nlohmann::json fit_to_json(const FitConfig& fit);
+
 // ---- steps -----------------------------------------------------------------------------------
 
 /// Parses `yaml` into `document` (yaml_to_json.cpp). Reports syntax errors, duplicate keys,

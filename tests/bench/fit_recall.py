@@ -29,10 +29,10 @@ recall is given over the visible ones as well. Prints one JSON object.
 
 The figures of issue #6 (build dir B; configs beside this script):
   B/csgtile synth gate --mode terrestrial --points 1000000 --out gate.las --truth gate.json
-  B/csgtile fit gate.las --out fit.json [--config tests/bench/fit_terrestrial.json] --json
+  B/csgtile fit gate.las --out fit.json [--config tests/bench/fit_terrestrial.yaml] --json
   python3 tests/bench/fit_recall.py --truth gate.json --fit fit.json --las gate.las
   B/csgtile synth city-block --out city.las --truth city.json
-  B/csgtile fit city.las --out fit.json --config tests/bench/fit_airborne.json --json
+  B/csgtile fit city.las --out fit.json --config tests/bench/fit_airborne.yaml --json
   python3 tests/bench/fit_recall.py --truth city.json --fit fit.json --las city.las
 (--outliers 0.01 on synth for the issue's 1% outliers; --noise 0.03 with the *_3cm configs;
 --position 0.05 shows the boxes found but not yet placed within 2 cm.)

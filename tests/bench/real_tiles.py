@@ -49,8 +49,8 @@ Prints one JSON object: {"sigma_m", "tiles": {name: figures}, "missing", "failur
 The figures of issue #6's closing note (build dir B, from the repository root):
   python3 tests/bench/real_tiles.py B/csgtile /tmp/real_tiles
   python3 tests/bench/real_tiles.py B/csgtile /tmp/real_tiles_air \\
-      --config tests/bench/fit_airborne.json
-(--config with any fit JSON for a sweep; --sigma 0.1 for a looser σ.)
+      --config tests/bench/fit_airborne.yaml
+(--config with any csgtile config for a sweep; --sigma 0.1 for a looser σ.)
 Standard library only (struct + zlib for the PNG); GDAL's ogr2ogr for the SQLite footprints.
 """
 import argparse
@@ -756,7 +756,7 @@ def measure_tile(name, spec, args, out_dir):
         hist[c] = hist.get(c, 0) + 1
     res["classes"] = {str(k): hist[k] for k in sorted(hist)}
 
-    unexplained = measure_distances(res, prims, pts, args.sigma, fit_epsilon(args.config))
+    unexplained = measure_distances(res, prims, pts, args.sigma, fit_epsilon(args.csgtile, args.config))
     measure_below_ground(res, prims, pts)
     raster = TileRaster(pts, unexplained, prims, args.cell)
     res["extent_m2"] = sum(raster.extent) * args.cell ** 2
@@ -854,11 +854,13 @@ def self_test():
     return fails
 
 
-def fit_epsilon(config):
-    eps = 0.02  # geo::RansacOptions default
+def fit_epsilon(csgtile, config):
+    """fit.ransac.epsilon of the config as csgtile reads it (validate-config), else the default."""
+    eps = 0.02  # fit::RansacOptions default
     if config:
-        with open(config) as f:
-            eps = json.load(f).get("ransac", {}).get("epsilon", eps)
+        p = subprocess.run([csgtile, "validate-config", "--no-input-check", "--json", config],
+                           capture_output=True, text=True)
+        eps = json.loads(p.stdout)["config"]["fit"]["ransac"]["epsilon"]
     return eps
 
 
@@ -879,7 +881,7 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--tiles", default=",".join(TILES))
-    ap.add_argument("--config", help="fit config JSON given to csgtile fit --config")
+    ap.add_argument("--config", help="csgtile config (YAML, fit: section) given to csgtile fit --config")
     ap.add_argument("--sigma", type=float, default=0.05,
                     help="σ in metres (default 0.05: AHN3's nominal stochastic error)")
     ap.add_argument("--cell", type=float, default=0.25)

@@ -59,12 +59,14 @@ def main():
     p = run(bin_, "fit", os.path.join(work, "missing.las"), "--out", os.path.join(work, "x.json"), check=False)
     if p.returncode == 0 or "missing.las" not in p.stderr:
         sys.exit("a missing input must fail naming the file: %d %s" % (p.returncode, p.stderr))
-    config = os.path.join(work, "bad.json")
+    config = os.path.join(work, "bad.yaml")
     with open(config, "w") as fh:
-        fh.write('{"ransac": {"epsilom": 0.02}}')
+        fh.write("fit:\n  ransac:\n    epsilom: 0.02\n    min_points: 2\n")
     p = run(bin_, "fit", las, "--config", config, "--out", os.path.join(work, "x.json"), check=False)
-    if p.returncode == 0 or "ransac.epsilom" not in p.stderr:
-        sys.exit("an unknown config key must fail naming it: %d %s" % (p.returncode, p.stderr))
+    # Every problem at once, each with its key and line; exit 78 (config_invalid).
+    if (p.returncode != 78 or "bad.yaml:3: fit.ransac.epsilom" not in p.stderr or
+            "bad.yaml:4: fit.ransac.min_points" not in p.stderr):
+        sys.exit("config problems must fail naming key and line: %d %s" % (p.returncode, p.stderr))
     shutil.rmtree(work, ignore_errors=True)
     print("ok")
 

@@ -1,5 +1,5 @@
-// `csgtile fit INPUT [--config C] --out primitives.json [--json] [--seed N] [--crs EPSG:N]`:
-// reads a LAS/PLY/PCD/XYZ point cloud, segments it, fits primitives (geo/fit.h, geo/segment.h)
+// `csgtile fit INPUT [--config C.yaml] --out primitives.json [--json] [--seed N] [--crs EPSG:N]`:
+// reads a LAS/LAZ/PLY/PCD/XYZ point cloud, segments it, fits primitives (csgtile/fit/*.h)
 // and writes them in the scene format, in the tile-local frame (origin = the LAS offset, or
 // the floor of the smallest x and y for other formats) with the CRS and the seed. The file
 // holds no timings: the same input, config and seed give the same bytes. Counts per type,
@@ -82,21 +82,24 @@ int run_fit(const FitCommand& c) {
     return error_info(code).exit_code;
   };
 
-  fit::FitPipelineOptions options;
+  // The csgtile config (its fit: section, run.seed, run.crs, kernel.linear_tolerance), every
+  // problem printed with its key and line; no --config: the defaults.
+  config::Config config;
   if (!c.config.empty()) {
-    std::string error, text;
-    if (!city::read_fit_options(c.config, options, text, error)) {
-      return fail(ErrorCode::ConfigInvalid, error);
-    }
+    auto loaded = load_run_config(c.config, RunChecks::CrsOnly);
+    if (!loaded) return fail(ErrorCode::ConfigInvalid, c.config + ": invalid config");
+    config = std::move(*loaded);
   }
-  if (c.seed_given) options.ransac.seed = c.seed;
+  if (c.seed_given) config.run.seed = c.seed;
+  const std::string crs = c.crs.empty() ? config.run.crs : c.crs;
+  fit::FitPipelineOptions options = city::fit_options(config);
   options.keep_detections = !c.dump_shapes.empty();
   if (!c.crs.empty() && !geo::crs_from_config(c.crs).ok()) {
     return fail(ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message);
   }
   city::FittedTile tile;
   if (Failure f = city::fit_tile(c.input, std::filesystem::path(c.input).stem().string(), options,
-                                 c.crs, tile);
+                                 crs, tile);
       !f.ok()) {
     return fail(f.code, f.message);
   }
@@ -198,10 +201,12 @@ void register_fit(CLI::App& app, Action& action) {
   cmd->add_option("INPUT", c->input, "Point cloud (LAS, PLY, PCD or XYZ text)")->required();
   cmd->add_option("--out", c->out, "Scene JSON of the fitted primitives to write")->required();
   cmd->add_option("--config", c->config,
-                  "Fit options as JSON: sections outliers, voxel, normals, ground, clusters, "
-                  "ransac, primitives (see geo/segment.h)");
-  cmd->add_option("--seed", c->seed, "Seed of the RANSAC (overrides the config's)");
-  cmd->add_option("--crs", c->crs, "CRS to assume when the file has none (EPSG:code[+vertical])");
+                  "csgtile config (YAML, with CSGTILE_* overrides): its fit: section, run.seed, "
+                  "run.crs and kernel.linear_tolerance");
+  cmd->add_option("--seed", c->seed, "Seed of the RANSAC (replaces the config's run.seed)");
+  cmd->add_option("--crs", c->crs,
+                  "CRS to assume when the file has none (EPSG:code[+vertical]; replaces the "
+                  "config's run.crs)");
   cmd->add_flag("--json", c->json, "Print one JSON object");
   cmd->add_option("--dump-shapes", c->dump_shapes,
                   "Diagnostics: write every region's points, normals and RANSAC shapes to this "

@@ -61,20 +61,26 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   expected.metrics = {"127.0.0.1:9464"};
   expected.fetch = {{"https", "s3"}, 10, 900, 1024, 30, 4294967296ull, 3, 3, "", "/var/cache/csgtile",
                     "", "eu-west-1"};
-  expected.city = {250.0, 50.0, 0.5, ""};
+  expected.city = {250.0, 50.0, 0.5};
+  expected.fit.classes.keep = {6, 26};  // the example's only fit value that is not a default
   expected.publish = {""};
   EXPECT_EQ(*result.config, expected);
 }
 
-TEST(ConfigLoad, ExampleFileWritesEveryKeyOfTheSchema) {
-  const std::string text = test::read_file(example("csgtile.yaml"));
-  const json schema = json::parse(schema_json());
-  for (const auto& [section, section_schema] : schema["properties"].items()) {
-    EXPECT_THAT(text, HasSubstr("\n" + section + ":\n"));
-    for (const auto& [key, key_schema] : section_schema["properties"].items()) {
-      EXPECT_THAT(text, HasSubstr("\n  " + key + ":")) << section << "." << key;
+/// Every key of `schema` is written in `text` at its depth (two spaces a level).
+void expect_written(const std::string& text, const json& schema, const std::string& indent,
+                    const std::string& path) {
+  for (const auto& [key, key_schema] : schema["properties"].items()) {
+    const std::string key_path = path.empty() ? key : path + "." + key;
+    EXPECT_THAT(text, HasSubstr("\n" + indent + key + ":")) << key_path;
+    if (key_schema.value("type", "") == "object") {
+      expect_written(text, key_schema, indent + "  ", key_path);
     }
   }
+}
+
+TEST(ConfigLoad, ExampleFileWritesEveryKeyOfTheSchema) {
+  expect_written(test::read_file(example("csgtile.yaml")), json::parse(schema_json()), "", "");
 }
 
 TEST(ConfigLoad, MinimalExampleLoads) {
@@ -282,7 +288,7 @@ TEST(ConfigProblems, BadIndentationIsASyntaxError) {
 TEST(ConfigProblems, TopLevelMustBeAMapping) {
   EXPECT_THAT(problems_of("- run\n- log\n"),
               ElementsAre(Problem{"", 1,
-                                  "the top level must be a mapping of sections (city, fetch, kernel, "
+                                  "the top level must be a mapping of sections (city, fetch, fit, kernel, "
                                   "log, metrics, publish, queue, run), got a list"}));
   EXPECT_THAT(problems_of("just text\n"), ElementsAre(testing::Field(&Problem::line, 1)));
 }
@@ -485,21 +491,28 @@ TEST(ConfigSchema, EveryObjectIsClosedAndEveryPropertyDescribed) {
   expect_documented(json::parse(schema_json()), "");
 }
 
+/// Both directions, at every depth: every schema key has the struct's default, every struct
+/// key is in the schema.
+void expect_defaults(const json& schema, const json& defaults, const std::string& path) {
+  ASSERT_TRUE(defaults.is_object()) << path;
+  const json& properties = schema.at("properties");
+  for (const auto& [key, key_schema] : properties.items()) {
+    const std::string key_path = path.empty() ? key : path + "." + key;
+    ASSERT_TRUE(defaults.contains(key)) << key_path;
+    if (key_schema.value("type", "") == "object") {
+      expect_defaults(key_schema, defaults.at(key), key_path);
+    } else {
+      ASSERT_TRUE(key_schema.contains("default")) << key_path;
+      EXPECT_EQ(key_schema.at("default"), defaults.at(key)) << key_path;
+    }
+  }
+  EXPECT_EQ(defaults.size(), properties.size()) << path;
+}
+
 TEST(ConfigSchema, DefaultsEqualTheStructDefaults) {
-  const json schema = json::parse(schema_json());
   const json defaults = json::parse(to_json(config_of("")));
   ASSERT_EQ(defaults, json::parse(to_json(Config{})));
-  // Both directions: every schema key has the struct's default, every struct key is in the
-  // schema.
-  for (const auto& [section, section_schema] : schema.at("properties").items()) {
-    ASSERT_TRUE(defaults.contains(section)) << section;
-    for (const auto& [key, key_schema] : section_schema.at("properties").items()) {
-      ASSERT_TRUE(key_schema.contains("default")) << section << "." << key;
-      EXPECT_EQ(key_schema.at("default"), defaults.at(section).at(key)) << section << "." << key;
-    }
-    EXPECT_EQ(defaults.at(section).size(), section_schema.at("properties").size()) << section;
-  }
-  EXPECT_EQ(defaults.size(), schema.at("properties").size());
+  expect_defaults(json::parse(schema_json()), defaults, "");
 }
 
 TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
@@ -515,11 +528,24 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 
 TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(to_json(Config{}),
-            R"({"city":{"cell_size":250.0,"fit_config":"","halo":50.0,"voxel_size":0.5},)"
+            R"({"city":{"cell_size":250.0,"halo":50.0,"voxel_size":0.5},)"
             R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
             R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
             R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
             R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
+            R"("fit":{"classes":{"keep":[]},"clusters":{"min_points":40,"tolerance":0.0},)"
+            R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
+            R"("window":30.0},"normals":{"neighbours":16},)"
+            R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
+            R"("primitives":{"angle_tolerance_deg":5.0,"boxes":true,"extrusions":true,)"
+            R"("max_box_depth":40.0,"min_angular_span_deg":90.0,"min_box_thickness":0.04,)"
+            R"("min_building_height":2.0,"min_building_width":1.0,"min_seed_coverage":0.6,)"
+            R"("revolutions":true},)"
+            R"("ransac":{"cluster_epsilon":0.0,"epsilon":0.02,"max_candidates":2000000,)"
+            R"("max_radius":30.0,"min_points":40,"normal_deviation_deg":25.0,"probability":0.99,)"
+            R"("shapes":["plane","sphere","cylinder","cone","torus"]},)"
+            R"("regions":{"curvature":1.0,"enabled":false,"min_points":40,"neighbours":16,)"
+            R"("smoothness_deg":10.0},"voxel":{"size":0.0}},)"
             R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
             R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
             R"("publish":{"url":""},)"
@@ -527,6 +553,44 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
             R"("sqlite_path":""},)"
             R"("run":{"crs":"","inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
+}
+
+TEST(ConfigFit, SectionLoadsWithLinesAndOverrides) {
+  const LoadResult loaded = load_string(
+      "fit:\n  classes:\n    keep: [6, 26]\n  ransac:\n    epsilon: 0.05\n"
+      "    shapes: [plane, cylinder]\n  primitives:\n    min_building_height: 3\n",
+      "fit.yaml", {{"CSGTILE_FIT__VOXEL__SIZE", "0.25"}, {"CSGTILE_FIT__RANSAC__MIN_POINTS", "12"}});
+  ASSERT_TRUE(loaded.ok());
+  const FitConfig& fit = loaded.config->fit;
+  EXPECT_EQ(fit.classes.keep, (std::vector<int>{6, 26}));
+  EXPECT_EQ(fit.ransac.epsilon, 0.05);
+  EXPECT_EQ(fit.ransac.shapes, (std::vector<std::string>{"plane", "cylinder"}));
+  EXPECT_EQ(fit.primitives.min_building_height, 3.0);
+  EXPECT_EQ(fit.voxel.size, 0.25);
+  EXPECT_EQ(fit.ransac.min_points, 12);
+  EXPECT_EQ(loaded.line_of("fit.ransac.epsilon"), 5);
+  EXPECT_EQ(fit.normals, FitNormalsConfig{});  // untouched sections keep their defaults
+}
+
+TEST(ConfigFit, EveryProblemWithItsKeyAndLine) {
+  const LoadResult loaded = load_string(
+      "fit:\n  ransac:\n    epsilom: 0.02\n    min_points: 2\n    shapes: [plane, blob]\n"
+      "  classes:\n    keep: [6, 300]\n  outliers:\n    neighbours: 1\n",
+      "fit.yaml");
+  ASSERT_FALSE(loaded.ok());
+  std::vector<std::string> paths;
+  for (const auto& p : loaded.problems) paths.push_back(p.path + "@" + std::to_string(p.line));
+  EXPECT_THAT(paths, ::testing::IsSupersetOf({"fit.ransac.epsilom@3", "fit.ransac.min_points@4",
+                                              "fit.ransac.shapes[1]@5", "fit.classes.keep[1]@7",
+                                              "fit.outliers.neighbours@9"}));
+}
+
+TEST(ConfigFit, ASectionOneLevelTooHighSaysWhereItBelongs) {
+  // A fit options file of older versions ({"ransac": {...}}) is not a config.
+  const LoadResult loaded = load_string(R"({"ransac": {"epsilon": 0.02}})", "old.json");
+  ASSERT_EQ(loaded.problems.size(), 1u);
+  EXPECT_EQ(loaded.problems[0].path, "ransac");
+  EXPECT_EQ(loaded.problems[0].message, "unknown key; fit options go under fit: (fit.ransac)");
 }
 
 TEST(ConfigFormat, OneLinePerProblem) {

@@ -27,15 +27,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   const auto payload = nlohmann::json::parse(job.payload);  // valid: resolve_job_input read it
 
   clock.enter("fit");
-  fit::FitPipelineOptions options;
-  std::string options_text;
-  if (!config.city.fit_config.empty()) {
-    std::string error;
-    if (!read_fit_options(config.city.fit_config, options, options_text, error)) {
-      return {ErrorCode::ConfigInvalid, "city.fit_config: " + error};
-    }
-  }
-  options.ransac.seed = config.run.seed;
+  const fit::FitPipelineOptions options = fit_options(config);
   FittedTile tile;
   const std::string name = std::filesystem::path(local.path).stem().string();
   if (Failure f = fit_tile(local.path, name, options, config.run.crs, tile); !f.ok()) {
@@ -107,7 +99,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["crs"] = tile.scene.frame ? tile.scene.frame->crs : std::string();
   record["origin"] = origin;
   record["seed"] = options.ransac.seed;
-  record["fit_options_sha256"] = sha256_hex(options_text);
+  // The fit section as the canonical config JSON writes it: same options, same hash.
+  record["fit_options_sha256"] = sha256_hex(config::to_json(config.fit));
   record["points"] = fit.input_points;
   record["ground_points"] = fit.ground_points;
   record["other_class_points"] = fit.other_class_points;

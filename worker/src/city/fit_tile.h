@@ -1,27 +1,24 @@
 #pragma once
 /// \file
-/// One LIDAR tile → fitted primitives: the fit options' JSON form (the file `csgtile fit
-/// --config` and `city.fit_config` name) and the read → segment → fit step shared by
-/// `csgtile fit` and the run's fit jobs. Internal to the worker.
+/// One LIDAR tile → fitted primitives: the fit options from the config (its `fit:` section,
+/// run.seed, kernel.linear_tolerance) and the read → segment → fit step shared by `csgtile
+/// fit` and the run's fit jobs. Internal to the worker.
 
 #include <filesystem>
 #include <string>
 #include <string_view>
 
-#include "csgtile/geo/scene.h"
+#include "csgtile/config/config.h"
 #include "csgtile/fit/segment.h"
+#include "csgtile/geo/scene.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::city {
 
-/// Reads fit options from JSON text: an object whose sections mirror fit::FitPipelineOptions
-/// (outliers, voxel, normals, ground, clusters, ransac, primitives); every key optional,
-/// unknown keys and wrong types are errors naming their path, prefixed by `file`.
-bool parse_fit_options(std::string_view text, const std::string& file,
-                       fit::FitPipelineOptions& options, std::string& error);
-/// Reads `file` into `text` and parses it as parse_fit_options does.
-bool read_fit_options(const std::string& file, fit::FitPipelineOptions& options, std::string& text,
-                      std::string& error);
+/// The fit's options: `config.fit` key for key, the RANSAC seeded with `run.seed` (the one
+/// seed rule: `csgtile fit --seed` replaces run.seed), every solid the fit builds at
+/// `kernel.linear_tolerance`. The default config gives fit::FitPipelineOptions{} (a test).
+fit::FitPipelineOptions fit_options(const config::Config& config);
 
 struct FittedTile {
   /// The primitives in the tile-local frame: origin = the LAS offset (the floor of the

@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "csgtile/config/fit_config.h"
+
 namespace csgtile::config {
 
 /// `run:` — what to process and where to write it.
@@ -99,9 +101,6 @@ struct CityConfig {
   /// reported. [0, cell_size)
   double halo = 50.0;
   double voxel_size = 0.5;   ///< OpenVDB culling voxel edge (m); (0, 100]
-  /// Fit options as JSON (the file `csgtile fit --config` reads); "" = the built-in defaults.
-  /// Its content is hashed into every fit job's record.
-  std::string fit_config;
   bool operator==(const CityConfig&) const = default;
 };
 
@@ -121,6 +120,7 @@ struct Config {
   MetricsConfig metrics;
   FetchConfig fetch;
   CityConfig city;
+  FitConfig fit;  ///< `fit:` (fit_config.h)
   PublishConfig publish;
   bool operator==(const Config&) const = default;
 };
@@ -182,6 +182,8 @@ std::string_view schema_json();
 /// whitespace) — for logs/manifests and for hashing. The same config gives the same bytes,
 /// and loading the output gives the same config back.
 std::string to_json(const Config& config);
+/// The `fit:` section alone, in the same canonical form (a fit record's options hash).
+std::string to_json(const FitConfig& fit);
 
 /// One-line rendering: "file.yaml:12: queue.max_attmpts: unknown key (did you mean
 /// max_attempts?)". The line is left out when 0, the path when empty.

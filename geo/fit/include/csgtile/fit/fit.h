@@ -58,6 +58,7 @@ struct RansacOptions {
   std::uint64_t seed = 1;
   std::array<bool, kShapeTypeCount> shapes{true, true, true, true, true};  ///< by ShapeType
   std::uint64_t max_candidates = 2000000;  ///< hard cap on minimal samples drawn
+  bool operator==(const RansacOptions&) const = default;
 };
 
 /// One detected shape: the refitted surface and its inliers (a connected component).
@@ -126,6 +127,7 @@ struct PrimitiveOptions {
   /// Revolutions from coaxial cylinders and cones and the planes ⟂ their axis (a fountain, a
   /// vase, a curved wall); a plain cylinder or cone stays one.
   bool revolutions = true;
+  bool operator==(const PrimitiveOptions&) const = default;
 };
 
 /// Why a shape or primitive was dropped.

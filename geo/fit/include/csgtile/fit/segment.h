@@ -25,6 +25,7 @@ struct OutlierOptions {
   bool enabled = true;
   int neighbours = 12;
   double std_ratio = 3.0;
+  bool operator==(const OutlierOptions&) const = default;
 };
 /// Indices of the points kept (finite and not outliers), ascending.
 std::vector<std::uint32_t> remove_statistical_outliers(std::span<const kernel::Vec3> points,
@@ -34,6 +35,7 @@ std::vector<std::uint32_t> remove_statistical_outliers(std::span<const kernel::V
 /// every point. Output order: by voxel (x, then y, then z).
 struct VoxelOptions {
   double size = 0.0;
+  bool operator==(const VoxelOptions&) const = default;
 };
 std::vector<kernel::Vec3> voxel_downsample(std::span<const kernel::Vec3> points,
                                            const VoxelOptions& options);
@@ -43,6 +45,7 @@ std::vector<kernel::Vec3> voxel_downsample(std::span<const kernel::Vec3> points,
 /// (collinear or duplicated points).
 struct NormalOptions {
   int neighbours = 16;
+  bool operator==(const NormalOptions&) const = default;
 };
 std::vector<kernel::Vec3> estimate_normals(std::span<const kernel::Vec3> points,
                                            const NormalOptions& options);
@@ -56,6 +59,7 @@ struct GroundOptions {
   double cell = 1.0;
   double window = 30.0;
   double height = 0.3;
+  bool operator==(const GroundOptions&) const = default;
 };
 /// Per point: 1 ground, 0 not. `classes` may be empty (no classification).
 std::vector<char> ground_mask(std::span<const kernel::Vec3> points,
@@ -67,6 +71,7 @@ std::vector<char> ground_mask(std::span<const kernel::Vec3> points,
 struct ClusterOptions {
   double tolerance = 0.0;
   long long min_points = 40;
+  bool operator==(const ClusterOptions&) const = default;
 };
 /// `tolerance_used` (optional) receives the distance used.
 std::vector<std::vector<std::uint32_t>> euclidean_clusters(std::span<const kernel::Vec3> points,
@@ -85,6 +90,7 @@ struct RegionGrowingOptions {
   double smoothness_deg = 10.0;
   double curvature = 1.0;
   long long min_points = 40;
+  bool operator==(const RegionGrowingOptions&) const = default;
 };
 /// Smooth regions of `points` (indices, ascending within a region; regions by size, largest
 /// first, ties by smallest index). `normals` are per point (zero: none, e.g. from
@@ -104,6 +110,7 @@ std::vector<std::vector<std::uint32_t>> region_growing(std::span<const kernel::V
 /// classes, or every point class 0 or 1) keep all.
 struct ClassOptions {
   std::vector<std::uint8_t> keep;
+  bool operator==(const ClassOptions&) const = default;
 };
 
 /// Every option of the fit pipeline.
@@ -122,6 +129,7 @@ struct FitPipelineOptions {
   RansacOptions ransac;
   PrimitiveOptions primitives;
   bool keep_detections = false;  ///< diagnostics: fill FitOutput::detections
+  bool operator==(const FitPipelineOptions&) const = default;
 };
 
 /// One region (Euclidean cluster, or a grown region of one) as the RANSAC saw it.

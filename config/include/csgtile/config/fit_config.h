@@ -1,0 +1,101 @@
+#pragma once
+/// \file
+/// `fit:` — segmentation and fitting options, as plain values. They mirror geo/fit's option
+/// structs (csgtile/fit/segment.h), which the worker fills from them in one place; a test
+/// checks that the defaults here are geo/fit's defaults.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace csgtile::config {
+
+struct FitClassesConfig {
+  std::vector<int> keep;  ///< ASPRS classes fitted when classified; empty = all non-ground
+  bool operator==(const FitClassesConfig&) const = default;
+};
+
+struct FitOutliersConfig {
+  bool enabled = true;
+  int neighbours = 12;    ///< 2..1000
+  double std_ratio = 3.0; ///< (0, 100]
+  bool operator==(const FitOutliersConfig&) const = default;
+};
+
+struct FitVoxelConfig {
+  double size = 0.0;  ///< [0, 100]; 0 keeps every point
+  bool operator==(const FitVoxelConfig&) const = default;
+};
+
+struct FitNormalsConfig {
+  int neighbours = 16;  ///< 3..1000
+  bool operator==(const FitNormalsConfig&) const = default;
+};
+
+struct FitGroundConfig {
+  bool enabled = true;
+  bool use_classification = true;
+  double cell = 1.0;
+  double window = 30.0;
+  double height = 0.3;
+  bool operator==(const FitGroundConfig&) const = default;
+};
+
+struct FitClustersConfig {
+  double tolerance = 0.0;  ///< 0: from the spacing
+  long long min_points = 40;
+  bool operator==(const FitClustersConfig&) const = default;
+};
+
+struct FitRegionsConfig {
+  bool enabled = false;
+  int neighbours = 16;
+  double smoothness_deg = 10.0;
+  double curvature = 1.0;
+  long long min_points = 40;
+  bool operator==(const FitRegionsConfig&) const = default;
+};
+
+struct FitRansacConfig {
+  double epsilon = 0.02;
+  double normal_deviation_deg = 25.0;
+  double cluster_epsilon = 0.0;  ///< 0: from the spacing
+  long long min_points = 40;
+  double probability = 0.99;
+  double max_radius = 30.0;
+  /// Surface types detected: "plane", "sphere", "cylinder", "cone", "torus".
+  std::vector<std::string> shapes{"plane", "sphere", "cylinder", "cone", "torus"};
+  std::uint64_t max_candidates = 2000000;
+  bool operator==(const FitRansacConfig&) const = default;
+};
+
+struct FitPrimitivesConfig {
+  bool boxes = true;
+  double max_box_depth = 40.0;
+  double min_box_thickness = 0.04;
+  double min_seed_coverage = 0.6;
+  double angle_tolerance_deg = 5.0;
+  double min_angular_span_deg = 90.0;
+  double min_building_height = 2.0;
+  double min_building_width = 1.0;
+  bool extrusions = true;
+  bool revolutions = true;
+  bool operator==(const FitPrimitivesConfig&) const = default;
+};
+
+/// Every fit option. The RANSAC's seed is `run.seed`; the kernel tolerance of the solids the
+/// fit builds is `kernel.linear_tolerance` (neither is repeated here).
+struct FitConfig {
+  FitClassesConfig classes;
+  FitOutliersConfig outliers;
+  FitVoxelConfig voxel;
+  FitNormalsConfig normals;
+  FitGroundConfig ground;
+  FitClustersConfig clusters;
+  FitRegionsConfig regions;
+  FitRansacConfig ransac;
+  FitPrimitivesConfig primitives;
+  bool operator==(const FitConfig&) const = default;
+};
+
+}  // namespace csgtile::config

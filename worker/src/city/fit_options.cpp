@@ -1,0 +1,57 @@
+// The config's `fit:` section (with run.seed and kernel.linear_tolerance) → geo/fit's options.
+
+#include "city/fit_tile.h"
+
+namespace csgtile::worker::city {
+
+fit::FitPipelineOptions fit_options(const config::Config& config) {
+  const config::FitConfig& c = config.fit;
+  fit::FitPipelineOptions o;
+  o.classes.keep.clear();
+  for (int k : c.classes.keep) o.classes.keep.push_back(static_cast<std::uint8_t>(k));
+  o.outliers.enabled = c.outliers.enabled;
+  o.outliers.neighbours = c.outliers.neighbours;
+  o.outliers.std_ratio = c.outliers.std_ratio;
+  o.voxel.size = c.voxel.size;
+  o.normals.neighbours = c.normals.neighbours;
+  o.ground.enabled = c.ground.enabled;
+  o.ground.use_classification = c.ground.use_classification;
+  o.ground.cell = c.ground.cell;
+  o.ground.window = c.ground.window;
+  o.ground.height = c.ground.height;
+  o.clusters.tolerance = c.clusters.tolerance;
+  o.clusters.min_points = c.clusters.min_points;
+  o.regions.enabled = c.regions.enabled;
+  o.regions.neighbours = c.regions.neighbours;
+  o.regions.smoothness_deg = c.regions.smoothness_deg;
+  o.regions.curvature = c.regions.curvature;
+  o.regions.min_points = c.regions.min_points;
+  o.ransac.epsilon = c.ransac.epsilon;
+  o.ransac.normal_deviation_deg = c.ransac.normal_deviation_deg;
+  o.ransac.cluster_epsilon = c.ransac.cluster_epsilon;
+  o.ransac.min_points = c.ransac.min_points;
+  o.ransac.probability = c.ransac.probability;
+  o.ransac.max_radius = c.ransac.max_radius;
+  o.ransac.max_candidates = c.ransac.max_candidates;
+  o.ransac.seed = config.run.seed;
+  for (int t = 0; t < fit::kShapeTypeCount; ++t) {
+    const std::string name = fit::shape_type_name(static_cast<fit::ShapeType>(t));
+    bool on = false;
+    for (const std::string& s : c.ransac.shapes) on = on || s == name;
+    o.ransac.shapes[static_cast<std::size_t>(t)] = on;
+  }
+  o.primitives.boxes = c.primitives.boxes;
+  o.primitives.max_box_depth = c.primitives.max_box_depth;
+  o.primitives.min_box_thickness = c.primitives.min_box_thickness;
+  o.primitives.min_seed_coverage = c.primitives.min_seed_coverage;
+  o.primitives.angle_tolerance_deg = c.primitives.angle_tolerance_deg;
+  o.primitives.min_angular_span_deg = c.primitives.min_angular_span_deg;
+  o.primitives.min_building_height = c.primitives.min_building_height;
+  o.primitives.min_building_width = c.primitives.min_building_width;
+  o.primitives.extrusions = c.primitives.extrusions;
+  o.primitives.revolutions = c.primitives.revolutions;
+  o.primitives.linear_tolerance = config.kernel.linear_tolerance;
+  return o;
+}
+
+}  // namespace csgtile::worker::city
