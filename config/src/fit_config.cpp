@@ -58,6 +58,8 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "primitives", "min_building_width", fit.primitives.min_building_width);
   take(f, "primitives", "extrusions", fit.primitives.extrusions);
   take(f, "primitives", "revolutions", fit.primitives.revolutions);
+  take(f, "primitives", "min_curved_coverage", fit.primitives.min_curved_coverage);
+  take(f, "primitives", "max_overreach", fit.primitives.max_overreach);
 }
 
 json fit_to_json(const FitConfig& fit) {
@@ -97,7 +99,9 @@ json fit_to_json(const FitConfig& fit) {
                        {"min_building_height", fit.primitives.min_building_height},
                        {"min_building_width", fit.primitives.min_building_width},
                        {"extrusions", fit.primitives.extrusions},
-                       {"revolutions", fit.primitives.revolutions}};
+                       {"revolutions", fit.primitives.revolutions},
+                       {"min_curved_coverage", fit.primitives.min_curved_coverage},
+                       {"max_overreach", fit.primitives.max_overreach}};
   return out;
 }
 

@@ -183,4 +183,13 @@ double lowest_ground_under(const GroundGrid& ground, const std::vector<kernel::V
 std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
                                             std::vector<Rejection>& rejected);
 
+/// Rule 4 of issue #18 (support.cpp): empty when a primitive whose solid has bounding box
+/// `box` and whose inliers cover `coverage` of its surface is supported by the points of its
+/// region (bounding box `region`, connectivity `cell`), else the reason: a curved primitive
+/// covered below PrimitiveOptions::min_curved_coverage, or any primitive reaching beyond the
+/// region (below: beyond the terrain too) by more than max_overreach of its extent.
+std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::BoundingBox& box,
+                        double coverage, const kernel::BoundingBox& region, double cell,
+                        const PrimitiveOptions& o);
+
 }  // namespace csgtile::fit::detail

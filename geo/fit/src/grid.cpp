@@ -1,4 +1,4 @@
-// The spatial grid of the RANSAC and the spacing estimate.
+// The spatial grid of the RANSAC, the spacing estimate, and the ground grid's queries.
 
 #include <algorithm>
 #include <array>
@@ -150,3 +150,53 @@ double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32
 }
 
 }  // namespace csgtile::fit::detail
+
+namespace csgtile::fit {
+
+double GroundGrid::lowest_near(double x, double y, double radius) const {
+  if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
+  // Clamped in double before the conversion: a far or huge coordinate stays in range.
+  const auto clamp_x = [&](double v) {
+    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
+  };
+  const auto clamp_y = [&](double v) {
+    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
+  };
+  double best = NAN;
+  for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
+    for (int i = clamp_x(x - radius); i <= clamp_x(x + radius); ++i) {
+      const double h = z[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+                         static_cast<std::size_t>(i)];
+      if (std::isfinite(h) && !(h >= best)) best = h;
+    }
+  }
+  return best;
+}
+
+double GroundGrid::median_near(double x, double y, double radius) const {
+  if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
+  const std::vector<double>& level = mean.size() == z.size() ? mean : z;
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
+  // Clamped in double before the conversion: a far or huge coordinate stays in range.
+  const auto clamp_x = [&](double v) {
+    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
+  };
+  const auto clamp_y = [&](double v) {
+    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
+  };
+  std::vector<double> found;
+  for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
+    for (int i = clamp_x(x - radius); i <= clamp_x(x + radius); ++i) {
+      const double h = level[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+                             static_cast<std::size_t>(i)];
+      if (std::isfinite(h)) found.push_back(h);
+    }
+  }
+  if (found.empty()) return NAN;
+  const auto mid = found.begin() + static_cast<std::ptrdiff_t>(found.size() / 2);
+  std::nth_element(found.begin(), mid, found.end());
+  return *mid;
+}
+
+}  // namespace csgtile::fit

@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "csgtile/kernel/check.h"
+#include "csgtile/kernel/mass_properties.h"
 #include "fit_internal.h"
 #include "plane2d.h"
 
@@ -213,6 +214,9 @@ class Builder {
         used_(points.size(), 0) {
     cos_tol_ = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
     cell_ = shapes.cluster_epsilon > 0.0 ? shapes.cluster_epsilon : 3.0 * ransac.epsilon;
+    for (const Vec3& p : points) {
+      if (p.allFinite()) region_box_.add(p);
+    }
   }
 
   FittedPrimitives run();
@@ -254,6 +258,7 @@ class Builder {
   std::vector<char> used_;
   std::vector<char> absorbed_;  // per shape: part of a kept extrusion or revolution
   std::vector<PlanePatch> patches_;
+  kernel::BoundingBox region_box_;  // of the region's finite points
   FittedPrimitives out_;
 };
 
@@ -269,6 +274,13 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   if (!report.valid()) {
     out_.rejected.push_back({what, std::string("invalid solid: ") + report.issues.front().message,
                              static_cast<long long>(members.size())});
+    return;
+  }
+  const double coverage = coverage_of(points_, members, cell_, area);
+  if (std::string why = detail::unsupported(spec, kernel::bounding_box(solid.value()), coverage,
+                                           region_box_, cell_, o_);
+      !why.empty()) {
+    out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
     return;
   }
   geo::ScenePrimitive p;
@@ -287,7 +299,7 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
     ++counted;
   }
   q.rms = counted > 0 ? std::sqrt(sum / static_cast<double>(counted)) : 0.0;
-  q.coverage = coverage_of(points_, members, cell_, area);
+  q.coverage = coverage;
   p.quality = q;
   ++out_.per_type[static_cast<std::size_t>(p.spec.type)];
   out_.assigned_points += q.inliers;
@@ -928,52 +940,6 @@ FittedPrimitives Builder::run() {
 }
 
 }  // namespace
-
-double GroundGrid::lowest_near(double x, double y, double radius) const {
-  if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
-  // Clamped in double before the conversion: a far or huge coordinate stays in range.
-  const auto clamp_x = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
-  };
-  const auto clamp_y = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
-  };
-  double best = NAN;
-  for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
-    for (int i = clamp_x(x - radius); i <= clamp_x(x + radius); ++i) {
-      const double h = z[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                         static_cast<std::size_t>(i)];
-      if (std::isfinite(h) && !(h >= best)) best = h;
-    }
-  }
-  return best;
-}
-
-double GroundGrid::median_near(double x, double y, double radius) const {
-  if (nx <= 0 || ny <= 0 || !(cell > 0.0)) return NAN;
-  const std::vector<double>& level = mean.size() == z.size() ? mean : z;
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
-  // Clamped in double before the conversion: a far or huge coordinate stays in range.
-  const auto clamp_x = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
-  };
-  const auto clamp_y = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
-  };
-  std::vector<double> found;
-  for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
-    for (int i = clamp_x(x - radius); i <= clamp_x(x + radius); ++i) {
-      const double h = level[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-                             static_cast<std::size_t>(i)];
-      if (std::isfinite(h)) found.push_back(h);
-    }
-  }
-  if (found.empty()) return NAN;
-  const auto mid = found.begin() + static_cast<std::ptrdiff_t>(found.size() / 2);
-  std::nth_element(found.begin(), mid, found.end());
-  return *mid;
-}
 
 FittedPrimitives primitives_from_shapes(std::span<const Vec3> points, std::span<const Vec3> normals,
                                         const RansacResult& shapes, const PrimitiveOptions& options,

@@ -413,5 +413,68 @@ TEST(FitPrimitives, LonePlaneIsRejectedWithAReason) {
   EXPECT_NE(f.primitives.rejected[0].reason.find("no box"), std::string::npos);
 }
 
+// Rule 4 (issue #18): a primitive must be supported by its points. A 21.7 m sphere fitted to
+// the 49 points of a roof's gentle cap (as over the timber gate and over row houses) covers
+// a thousandth of its surface and reaches tens of metres past the region: rejected, with the
+// reason counted; a well-seen ball is kept.
+RansacResult one_shape(const Surface& surface, std::size_t n, double cell) {
+  RansacResult r;
+  DetectedShape shape;
+  shape.surface = surface;
+  for (std::uint32_t i = 0; i < n; ++i) shape.inliers.push_back(i);
+  r.shapes.push_back(shape);
+  r.assignment.assign(n, 0);
+  r.cluster_epsilon = cell;
+  return r;
+}
+
+TEST(FitPrimitives, GiantSphereOverAFewRoofPointsIsRejectedAsUnsupported) {
+  const Vec3 centre(3.0, 4.0, -21.2);
+  const Cloud c = testing::sphere_cloud(centre, 21.7, 21.2, 49, 0.0, 11);
+  Surface s;
+  s.type = ShapeType::Sphere;
+  s.point = centre;
+  s.radius = 21.7;
+  const RansacOptions o;
+  const FittedPrimitives f =
+      primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.5), PrimitiveOptions{}, o, 0);
+  EXPECT_TRUE(f.primitives.empty());
+  ASSERT_EQ(f.rejected.size(), 1U);
+  EXPECT_EQ(f.rejected[0].reason.rfind("unsupported: ", 0), 0U) << f.rejected[0].reason;
+  EXPECT_EQ(f.rejected[0].points, 49);
+}
+
+TEST(FitPrimitives, SphereReachingFarBelowItsPointsIsRejectedAsUnsupported) {
+  // Densely seen (coverage passes) but the cap is 0.3 m of a 6 m sphere over a 4 m patch:
+  // the full sphere hangs 11 m below every point of the region.
+  const Vec3 centre(0.0, 0.0, -5.7);
+  const Cloud c = testing::sphere_cloud(centre, 6.0, 5.7, 4000, 0.0, 12);
+  Surface s;
+  s.type = ShapeType::Sphere;
+  s.point = centre;
+  s.radius = 6.0;
+  PrimitiveOptions po;
+  po.min_curved_coverage = 0.0;
+  const FittedPrimitives f =
+      primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.1), po, RansacOptions{}, 0);
+  EXPECT_TRUE(f.primitives.empty());
+  ASSERT_EQ(f.rejected.size(), 1U);
+  EXPECT_NE(f.rejected[0].reason.find("beyond the points of its region"), std::string::npos)
+      << f.rejected[0].reason;
+}
+
+TEST(FitPrimitives, WellSeenBallIsKept) {
+  const Vec3 centre(1.0, 2.0, 3.0);
+  const Cloud c = testing::sphere_cloud(centre, 0.5, -0.5, 3000, 0.0, 13);
+  Surface s;
+  s.type = ShapeType::Sphere;
+  s.point = centre;
+  s.radius = 0.5;
+  const FittedPrimitives f = primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.05),
+                                                    PrimitiveOptions{}, RansacOptions{}, 0);
+  ASSERT_EQ(f.primitives.size(), 1U) << (f.rejected.empty() ? "" : f.rejected[0].reason);
+  EXPECT_GT(f.primitives[0].quality->coverage, 0.5);
+}
+
 }  // namespace
 }  // namespace csgtile::fit

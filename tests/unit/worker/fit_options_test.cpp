@@ -29,7 +29,8 @@ fit:
            probability: 0.95, max_radius: 12, shapes: [plane, cone], max_candidates: 1000}
   primitives: {boxes: false, max_box_depth: 20, min_box_thickness: 0.1, min_seed_coverage: 0.5,
                angle_tolerance_deg: 3, min_angular_span_deg: 120, min_building_height: 3,
-               min_building_width: 2, extrusions: false, revolutions: false}
+               min_building_width: 2, extrusions: false, revolutions: false,
+               min_curved_coverage: 0.2, max_overreach: 0.5}
 )",
                                           "every.yaml");
   ASSERT_TRUE(loaded.ok()) << (loaded.problems.empty() ? "" : loaded.problems[0].message);
@@ -74,6 +75,8 @@ fit:
   EXPECT_EQ(o.primitives.min_building_width, 2.0);
   EXPECT_FALSE(o.primitives.extrusions);
   EXPECT_FALSE(o.primitives.revolutions);
+  EXPECT_EQ(o.primitives.min_curved_coverage, 0.2);
+  EXPECT_EQ(o.primitives.max_overreach, 0.5);
   EXPECT_EQ(o.primitives.linear_tolerance, 1.0e-6);  // kernel.linear_tolerance
 }
 

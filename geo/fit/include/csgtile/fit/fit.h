@@ -127,6 +127,14 @@ struct PrimitiveOptions {
   /// Revolutions from coaxial cylinders and cones and the planes ⟂ their axis (a fountain, a
   /// vase, a curved wall); a plain cylinder or cone stays one.
   bool revolutions = true;
+  /// Support (every primitive, whichever step made it): a cylinder, cone, sphere, torus or
+  /// revolution whose inliers cover less of its surface than this (voxels of the
+  /// connectivity cell) is rejected ...
+  double min_curved_coverage = 0.05;
+  /// ... and so is any primitive reaching farther beyond its region's points (below: beyond
+  /// the terrain too) than this share of the region's largest extent, or three
+  /// connectivity cells when more.
+  double max_overreach = 0.25;
   bool operator==(const PrimitiveOptions&) const = default;
 };
 
