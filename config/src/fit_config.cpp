@@ -23,6 +23,7 @@ void read_fit(const json& document, FitConfig& fit) {
   if (found == document.end() || !found->is_object()) return;
   const json& f = *found;
   take(f, "classes", "keep", fit.classes.keep);
+  take(f, "classes", "drop", fit.classes.drop);
   take(f, "outliers", "enabled", fit.outliers.enabled);
   take(f, "outliers", "neighbours", fit.outliers.neighbours);
   take(f, "outliers", "std_ratio", fit.outliers.std_ratio);
@@ -64,7 +65,7 @@ void read_fit(const json& document, FitConfig& fit) {
 
 json fit_to_json(const FitConfig& fit) {
   json out;
-  out["classes"] = {{"keep", fit.classes.keep}};
+  out["classes"] = {{"keep", fit.classes.keep}, {"drop", fit.classes.drop}};
   out["outliers"] = {{"enabled", fit.outliers.enabled},
                      {"neighbours", fit.outliers.neighbours},
                      {"std_ratio", fit.outliers.std_ratio}};

@@ -165,16 +165,23 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
   }
   std::vector<std::uint32_t> terrain_count(terrain.z.size(), 0);
-  // Only inputs that carry a classification are filtered: a LAS whose points are all class 0
-  // or 1 (never classified, unclassified) keeps every point, as with no classes at all.
-  const bool filter_classes =
-      !options.classes.keep.empty() && classes.size() == points.size() &&
+  // Only inputs that carry a classification are filtered (a LAS whose points are all class 0
+  // or 1, never classified or unclassified, keeps every point, as with no classes at all): by
+  // `keep` when some point carries a kept class, else by `drop`.
+  const auto listed = [](const std::vector<std::uint8_t>& list, std::uint8_t c) {
+    return std::find(list.begin(), list.end(), c) != list.end();
+  };
+  const bool classified =
+      classes.size() == points.size() &&
       std::any_of(classes.begin(), classes.end(), [](std::uint8_t c) { return c > 1; });
+  const bool by_keep = classified && std::any_of(classes.begin(), classes.end(), [&](std::uint8_t c) {
+                         return listed(options.classes.keep, c);
+                       });
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
-    if (!ground[i] && filter_classes &&
-        std::find(options.classes.keep.begin(), options.classes.keep.end(), classes[i]) ==
-            options.classes.keep.end()) {
+    if (!ground[i] && classified &&
+        (by_keep ? !listed(options.classes.keep, classes[i])
+                 : listed(options.classes.drop, classes[i]))) {
       ++out.other_class_points;
       continue;
     }

@@ -533,7 +533,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
             R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
             R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
-            R"("fit":{"classes":{"keep":[]},"clusters":{"min_points":40,"tolerance":0.0},)"
+            R"("fit":{"classes":{"drop":[3,4,5,7,9,18],"keep":[6]},"clusters":{"min_points":40,"tolerance":0.0},)"
             R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
             R"("window":30.0},"normals":{"neighbours":16},)"
             R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
@@ -564,6 +564,7 @@ TEST(ConfigFit, SectionLoadsWithLinesAndOverrides) {
   ASSERT_TRUE(loaded.ok());
   const FitConfig& fit = loaded.config->fit;
   EXPECT_EQ(fit.classes.keep, (std::vector<int>{6, 26}));
+  EXPECT_EQ(fit.classes.drop, (std::vector<int>{3, 4, 5, 7, 9, 18}));  // default kept
   EXPECT_EQ(fit.ransac.epsilon, 0.05);
   EXPECT_EQ(fit.ransac.shapes, (std::vector<std::string>{"plane", "cylinder"}));
   EXPECT_EQ(fit.primitives.min_building_height, 3.0);

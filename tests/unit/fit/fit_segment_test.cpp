@@ -206,10 +206,32 @@ TEST(FitSegment, ClassFilterKeepsOnlyTheNamedClasses) {
   EXPECT_EQ(kept->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
   // Without the filter the sphere is fitted again.
   o.classes.keep.clear();
+  o.classes.drop.clear();
   const auto all = fit_point_cloud(c.points, classes, o);
   ASSERT_TRUE(all.ok());
   EXPECT_EQ(all->other_class_points, 0);
   EXPECT_EQ(all->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
+}
+
+// The defaults on a tile classified without buildings (ground 2, unclassified 1, vegetation
+// 5): no keep class is present, so every non-ground point but the dropped vegetation is
+// fitted — the column and beam (1) are, the tree-like sphere (5) is not.
+TEST(FitSegment, ClassifiedTileWithoutBuildingClassDropsOnlyVegetation) {
+  const Cloud c = small_scene();
+  const std::size_t ground = 10 * 10 * 100;
+  std::vector<std::uint8_t> classes(c.points.size(), 1);
+  std::fill(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(ground), 2);
+  const std::size_t sphere = c.points.size() - 5000;
+  std::fill(classes.begin() + static_cast<std::ptrdiff_t>(sphere), classes.end(), 5);
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  ASSERT_EQ(o.classes.keep, (std::vector<std::uint8_t>{6}));  // the default
+  const auto out = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->other_class_points, 5000);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Sphere)], 0);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Box)], 1);
 }
 
 TEST(FitSegment, PipelineOutputIsTheSameBytesForTheSameSeed) {

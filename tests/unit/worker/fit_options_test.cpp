@@ -18,7 +18,7 @@ TEST(FitOptions, EveryKeyReachesItsOption) {
 run: {seed: 77}
 kernel: {linear_tolerance: 1.0e-6}
 fit:
-  classes: {keep: [6, 26]}
+  classes: {keep: [6, 26], drop: [7]}
   outliers: {enabled: false, neighbours: 9, std_ratio: 2.5}
   voxel: {size: 0.3}
   normals: {neighbours: 11}
@@ -37,6 +37,7 @@ fit:
   const fit::FitPipelineOptions o = fit_options(*loaded.config);
   const fit::FitPipelineOptions d;
   EXPECT_EQ(o.classes.keep, (std::vector<std::uint8_t>{6, 26}));
+  EXPECT_EQ(o.classes.drop, (std::vector<std::uint8_t>{7}));
   // Every option differs from its default: no key is dropped on the way.
   EXPECT_FALSE(o.outliers == d.outliers);
   EXPECT_EQ(o.outliers.neighbours, 9);

@@ -9,6 +9,8 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   fit::FitPipelineOptions o;
   o.classes.keep.clear();
   for (int k : c.classes.keep) o.classes.keep.push_back(static_cast<std::uint8_t>(k));
+  o.classes.drop.clear();
+  for (int k : c.classes.drop) o.classes.drop.push_back(static_cast<std::uint8_t>(k));
   o.outliers.enabled = c.outliers.enabled;
   o.outliers.neighbours = c.outliers.neighbours;
   o.outliers.std_ratio = c.outliers.std_ratio;

@@ -11,7 +11,9 @@
 namespace csgtile::config {
 
 struct FitClassesConfig {
-  std::vector<int> keep;  ///< ASPRS classes fitted when classified; empty = all non-ground
+  std::vector<int> keep{6};  ///< ASPRS classes fitted when the tile carries any of them
+  /// Classes never fitted on a classified tile without a keep class.
+  std::vector<int> drop{3, 4, 5, 7, 9, 18};
   bool operator==(const FitClassesConfig&) const = default;
 };
 

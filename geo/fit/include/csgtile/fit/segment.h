@@ -103,13 +103,16 @@ std::vector<std::vector<std::uint32_t>> region_growing(std::span<const kernel::V
                                                        const RegionGrowingOptions& options,
                                                        std::span<const double> curvature = {});
 
-/// Which classified points are fitted. When the input carries a classification (LAS) and
-/// `keep` is not empty, only non-ground points of those ASPRS classes are fitted (e.g. 6,
-/// buildings, and 26 in AHN, civil structures), so that trees and cars do not compete for
-/// primitives; ground (class 2) is still taken for the terrain. Unclassified inputs (no
+/// Which classified points are fitted. An input that carries a classification (LAS, some
+/// point of a class above 1) and some point of a `keep` class fits only the non-ground points
+/// of those classes (default 6, buildings: trees, cars and bridges do not compete for
+/// primitives; add 26 for AHN's civil structures); one classified without them fits every
+/// non-ground point except the `drop` classes (vegetation 3-5, noise 7 and 18, water 9).
+/// Ground (class 2, GroundOptions) is always taken for the terrain. Unclassified inputs (no
 /// classes, or every point class 0 or 1) keep all.
 struct ClassOptions {
-  std::vector<std::uint8_t> keep;
+  std::vector<std::uint8_t> keep{6};
+  std::vector<std::uint8_t> drop{3, 4, 5, 7, 9, 18};
   bool operator==(const ClassOptions&) const = default;
 };
 
