@@ -166,6 +166,21 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
                               "\" is not one of box, cylinder, cone, sphere, torus, extrusion, "
                               "revolution");
   }
+  if (j.contains("clip")) {
+    // Half-spaces in the local frame, [nx, ny, nz, d] each: the part n·p <= d is kept.
+    if (!j["clip"].is_array()) return r.fail("clip", "must be an array of [nx, ny, nz, d]");
+    for (const json& c : j["clip"]) {
+      bool good = c.is_array() && c.size() == 4;
+      Eigen::Vector4d v = Eigen::Vector4d::Zero();
+      for (std::size_t k = 0; good && k < 4; ++k) {
+        good = c[k].is_number() && std::isfinite(c[k].get<double>());
+        if (good) v[static_cast<Eigen::Index>(k)] = c[k].get<double>();
+      }
+      const double n = v.head<3>().norm();
+      if (!good || !(n > 0.0)) return r.fail("clip", "must hold [nx, ny, nz, d] with n != 0");
+      s.clips.push_back(std::abs(n - 1.0) > 1e-12 ? Eigen::Vector4d(v / n) : v);
+    }
+  }
   auto placement = r.placement();
   if (!placement.ok()) return placement.error();
   s.placement = placement.value();
@@ -310,6 +325,11 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
       // The default (a full turn) is left implicit, as hand-written scenes do.
       if (s.angle < 2 * std::numbers::pi) j["angle"] = s.angle;
       break;
+  }
+  if (!s.clips.empty()) {
+    OrderedJson clips = OrderedJson::array();
+    for (const auto& c : s.clips) clips.push_back({clean(c.x()), clean(c.y()), clean(c.z()), c.w()});
+    j["clip"] = std::move(clips);
   }
   const kernel::Matrix34 m = s.placement.matrix();
   OrderedJson rows = OrderedJson::array();

@@ -65,6 +65,8 @@ import zlib
 from array import array
 from collections import deque
 
+import top_surface  # beside this script
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_DATA = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "data"))
 
@@ -741,6 +743,23 @@ def write_top_view(path, raster, px):
     return width, height, len({bytes(rgb[o:o + 3]) for o in range(0, len(rgb), 3 * px)})
 
 
+def footprint_test(buildings, origin):
+    """inside(x, y) for fit-frame points: in any published footprint (bounding boxes first)."""
+    ox, oy = origin[0], origin[1]
+    polys = []
+    for polys_of in buildings:
+        for poly in polys_of:
+            local = [[(q[0] - ox, q[1] - oy) for q in ring] for ring in poly]
+            xs = [q[0] for q in local[0]]
+            ys = [q[1] for q in local[0]]
+            polys.append((min(xs), min(ys), max(xs), max(ys), local))
+
+    def inside(x, y):
+        return any(a <= x <= c and b <= y <= d and inside_rings(x, y, rings)
+                   for a, b, c, d, rings in polys)
+    return inside
+
+
 def measure_tile(name, spec, args, out_dir):
     res, scene = run_fit(name, spec, args, out_dir)
     if scene is None:
@@ -761,6 +780,7 @@ def measure_tile(name, spec, args, out_dir):
     raster = TileRaster(pts, unexplained, prims, args.cell)
     res["extent_m2"] = sum(raster.extent) * args.cell ** 2
     res["model_footprint_m2"] = sum(raster.model) * args.cell ** 2
+    buildings = []
     if spec["footprints"] and not args.no_footprints:
         kind, rel, layer = spec["footprints"]
         try:
@@ -772,6 +792,9 @@ def measure_tile(name, spec, args, out_dir):
             measure_footprints(res, raster, buildings, origin)
         elif "footprints_error" not in res:
             res["footprints_error"] = "%s: no polygons" % rel
+    inside = footprint_test(buildings, origin) if spec["footprints"] and not args.no_footprints \
+        and buildings else None
+    res["top_surface"] = top_surface.measure_top_surface(prims, pts, args.top_cell, inside)
     png = os.path.join(out_dir, name + "_top.png")
     width, height, distinct = write_top_view(png, raster, args.pixel)
     res["image"] = {"path": png, "width": width, "height": height, "colours": distinct,
@@ -885,6 +908,8 @@ def main():
     ap.add_argument("--sigma", type=float, default=0.05,
                     help="σ in metres (default 0.05: AHN3's nominal stochastic error)")
     ap.add_argument("--cell", type=float, default=0.25)
+    ap.add_argument("--top-cell", type=float, default=0.5,
+                    help="grid of the top-surface figures (issue #18: 0.5 m)")
     ap.add_argument("--pixel", type=int, default=2, help="image pixels per cell edge")
     ap.add_argument("--no-footprints", action="store_true")
     ap.add_argument("--min-share", action="append", help="TILE=V: building share within 2σ")

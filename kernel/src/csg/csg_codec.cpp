@@ -16,6 +16,10 @@ using detail::ByteReader;
 using detail::ByteWriter;
 
 constexpr std::size_t kMaxLabel = 1 << 16;
+// A Primitive node whose primitive has clips is written with this bit set in its kind byte,
+// the clips (count, 4 f64 each) after its holes: files without clips keep their bytes, and
+// a reader that knows no clips refuses the kind rather than drop them.
+constexpr std::uint8_t kClippedBit = 0x80;
 
 void write_points(ByteWriter& out, const std::vector<Vec2>& points) {
   out.varint(points.size());
@@ -53,9 +57,15 @@ void write_primitive(ByteWriter& out, const PrimitiveSpec& p) {
   write_points(out, p.profile);
   out.varint(p.holes.size());
   for (const auto& hole : p.holes) write_points(out, hole);
+  if (!p.clips.empty()) {
+    out.varint(p.clips.size());
+    for (const auto& c : p.clips) {
+      for (int k = 0; k < 4; ++k) out.f64le(c[k]);
+    }
+  }
 }
 
-PrimitiveSpec read_primitive(ByteReader& in) {
+PrimitiveSpec read_primitive(ByteReader& in, bool clipped) {
   PrimitiveSpec p;
   const std::uint8_t type = in.byte();
   if (!in.failed() && type >= kPrimitiveTypeCount) {
@@ -85,6 +95,15 @@ PrimitiveSpec read_primitive(ByteReader& in) {
   p.profile = read_points(in);
   const std::size_t holes = in.count(1, "hole");
   for (std::size_t h = 0; h < holes && !in.failed(); ++h) p.holes.push_back(read_points(in));
+  if (clipped) {
+    const std::size_t clips = in.count(32, "clip");
+    if (clips == 0 && !in.failed()) in.fail("a clipped primitive has no clip");
+    for (std::size_t c = 0; c < clips && !in.failed(); ++c) {
+      Eigen::Vector4d v;
+      for (int k = 0; k < 4; ++k) v[k] = in.f64le();
+      p.clips.push_back(v);
+    }
+  }
   return p;
 }
 
@@ -93,7 +112,9 @@ std::string encode(const CsgModel& m) {
   out.varint(m.nodes.size());
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
     const CsgNode& node = m.nodes[i];
-    out.byte(static_cast<std::uint8_t>(node.kind));
+    const bool clipped = node.kind == CsgNodeKind::Primitive && !node.primitive.clips.empty();
+    out.byte(static_cast<std::uint8_t>(static_cast<std::uint8_t>(node.kind) |
+                                       (clipped ? kClippedBit : 0)));
     out.varint(node.label.size());
     out.bytes(node.label);
     if (node.kind == CsgNodeKind::Primitive) {
@@ -118,7 +139,10 @@ std::optional<Error> decode(ByteReader& in, CsgModel& m) {
   const std::size_t n = in.count(2, "CSG node");
   for (std::size_t i = 0; i < n && !in.failed(); ++i) {
     CsgNode node;
-    const std::uint8_t kind = in.byte();
+    std::uint8_t kind = in.byte();
+    const bool clipped = (kind & kClippedBit) != 0 &&
+                         (kind & ~kClippedBit) == static_cast<std::uint8_t>(CsgNodeKind::Primitive);
+    if (clipped) kind = static_cast<std::uint8_t>(CsgNodeKind::Primitive);
     if (!in.failed() && kind > static_cast<std::uint8_t>(CsgNodeKind::Cut)) {
       in.fail("CSG node " + std::to_string(i) + " has unknown kind " + std::to_string(kind));
       break;
@@ -130,7 +154,7 @@ std::optional<Error> decode(ByteReader& in, CsgModel& m) {
     node.label.resize(label);
     for (std::size_t k = 0; k < label; ++k) node.label[k] = static_cast<char>(in.byte());
     if (node.kind == CsgNodeKind::Primitive) {
-      node.primitive = read_primitive(in);
+      node.primitive = read_primitive(in, clipped);
     } else {
       const std::size_t children = in.count(1, "CSG child");
       for (std::size_t k = 0; k < children && !in.failed(); ++k) {

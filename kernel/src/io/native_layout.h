@@ -13,7 +13,9 @@
 ///   csg       (tag 13): node count, nodes (post-order) × { kind:u8, label (length + UTF-8),
 ///                       Primitive: type:u8, placement (rotation 9 f64, scale f64, translation
 ///                       3 f64), size 3 f64, radius, radius2, height, angle f64, profile
-///                       (count, 2 f64 each), holes (count, each a profile); operations:
+///                       (count, 2 f64 each), holes (count, each a profile), and when the
+///                       kind byte has bit 7 set (a clipped primitive) clips (count ≥ 1,
+///                       4 f64 each: n, d); operations:
 ///                       child count, child deltas (this index − child ≥ 1) },
 ///                       face count (= faces of the root shape), per face { count, count ×
 ///                       { node, face } }. f64 = IEEE double, 8 bytes little-endian.

@@ -255,6 +255,37 @@ TEST(CsgNative, RoundTripKeepsTreeSourcesAndBytes) {
   EXPECT_TRUE(plain->nodes.empty());
 }
 
+// A clipped leaf (a building's roof part) keeps its clips through the native format and the
+// scene format, bit for bit; its history names the leaf for the roof face too.
+TEST(CsgNative, ClippedPrimitiveRoundTrips) {
+  PrimitiveSpec part;
+  part.type = PrimitiveType::Extrusion;
+  part.profile = {{0, 0}, {6, 0}, {6, 5}, {0, 5}};
+  part.height = 15.0;
+  const Vec3 n = Vec3(0.0, -0.6, 1.0).normalized();
+  part.clips.push_back(Eigen::Vector4d(n.x(), n.y(), n.z(), 7.0 * n.z()));
+  auto leaf = csg_primitive(part, "roof part");
+  ASSERT_TRUE(leaf.ok()) << leaf.error().message;
+  EXPECT_TRUE(check_csg(leaf.value()).ok());
+  const std::string bytes = write_native_model(leaf.value());
+  auto back = read_native_model(bytes);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  ASSERT_EQ(back->nodes.size(), 1u);
+  EXPECT_EQ(back->nodes[0].primitive.clips, part.clips);
+  EXPECT_EQ(write_native_model(back.value()), bytes);
+  geo::Scene scene;
+  scene.primitives.push_back({part, "p", std::nullopt});
+  auto parsed = geo::parse_scene(geo::scene_to_json(scene));
+  ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+  EXPECT_EQ(parsed->primitives[0].spec.clips, part.clips);
+  // A plain leaf is written as before (no clip bit).
+  PrimitiveSpec plain = part;
+  plain.clips.clear();
+  const std::string plain_bytes = write_native_model(csg_primitive(plain).value());
+  EXPECT_TRUE(read_native_model(plain_bytes).ok());
+  EXPECT_TRUE(read_native_model(plain_bytes)->nodes[0].primitive.clips.empty());
+}
+
 TEST(CsgNative, DamagedSectionsAreRefusedByName) {
   auto r = csg_boolean(leaf(box_at({1, 1, 1}, {0, 0, 0})), leaf(box_at({1, 1, 1}, {0.5, 0, 0})),
                        BooleanOp::Fuse);

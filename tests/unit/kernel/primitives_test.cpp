@@ -156,5 +156,35 @@ TEST(Primitive, BuildPrimitiveAppliesThePlacement) {
   EXPECT_TRUE(check_shape(s.value()).valid());
 }
 
+// A building's roof part: the extrusion of its outline cut by the half-space under its roof
+// plane — here an L-shaped outline under one slope, z = 6 + 0.5 x (clip n·p <= d with
+// n ∝ (-0.5, 0, 1), d = 6 / |(-0.5, 0, 1)|). Volume: each rectangle's area times the mean
+// height over it.
+TEST(Primitive, ClipsCutTheSolidByTheirHalfSpaces) {
+  PrimitiveSpec spec;
+  spec.type = PrimitiveType::Extrusion;
+  spec.profile = {{0, 0}, {8, 0}, {8, 4}, {4, 4}, {4, 10}, {0, 10}};
+  spec.height = 20.0;
+  const Vec3 n = Vec3(-0.5, 0.0, 1.0).normalized();
+  spec.clips.push_back(Eigen::Vector4d(n.x(), n.y(), n.z(), 6.0 * n.z()));
+  spec.placement = Location::translation(Vec3(85000.0, 446000.0, -1.0));
+  const auto solid = build_primitive(spec);
+  ASSERT_TRUE(solid.ok()) << solid.error().message;
+  EXPECT_TRUE(check_shape(solid.value()).valid());
+  // [0,8]×[0,4]: mean height 6 + 0.5·4 = 8; [0,4]×[4,10]: 6 + 0.5·2 = 7.
+  EXPECT_NEAR(mass_properties(solid.value()).volume, 32.0 * 8.0 + 24.0 * 7.0, 1e-6);
+  EXPECT_EQ(map_child_shapes(solid.value(), ShapeKind::Face).size(), 8u);  // 6 walls, floor, roof
+  // A plane above the solid changes nothing; one below it, or a bad normal, is an error.
+  PrimitiveSpec above = spec;
+  above.clips = {Eigen::Vector4d(0, 0, 1, 50.0)};
+  EXPECT_NEAR(mass_properties(build_primitive(above).value()).volume, 56.0 * 20.0, 1e-6);
+  PrimitiveSpec below = spec;
+  below.clips = {Eigen::Vector4d(0, 0, 1, -1.0)};
+  EXPECT_EQ(build_primitive(below).error().code, ErrorCode::DegenerateGeometry);
+  PrimitiveSpec bad = spec;
+  bad.clips = {Eigen::Vector4d(0, 0, 2, 1.0)};
+  EXPECT_EQ(build_primitive(bad).error().code, ErrorCode::DegenerateGeometry);
+}
+
 }  // namespace
 }  // namespace csgtile::kernel

@@ -118,6 +118,11 @@ std::string primitive_parameters(const kernel::PrimitiveSpec& spec) {
       j["angle"] = spec.angle;
       break;
   }
+  if (!spec.clips.empty()) {
+    Json clips = Json::array();
+    for (const auto& c : spec.clips) clips.push_back(Json::array({c.x(), c.y(), c.z(), c.w()}));
+    j["clip"] = std::move(clips);
+  }
   j["placement"] = matrix_json(spec.placement);
   return j.dump();
 }

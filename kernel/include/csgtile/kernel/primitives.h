@@ -84,10 +84,16 @@ struct PrimitiveSpec {
   std::vector<Vec2> profile;       ///< extrusion outer ring (x, y); revolution (rho, z)
   std::vector<std::vector<Vec2>> holes;  ///< extrusion holes
   double angle = 6.283185307179586;      ///< revolution angle
+  /// Half-spaces the primitive is cut by, in its local frame: the part where n·p <= d is
+  /// kept, for each (n, d) = (x, y, z), w with n a unit vector (a building's roof part: the
+  /// extrusion of its outline under its roof plane). Empty for a plain primitive.
+  std::vector<Eigen::Vector4d> clips;
   Location placement;
 };
 
-/// Builds the primitive's solid and moves it by its placement. Errors as the builders.
+/// Builds the primitive's solid (cut by its clips, exactly, with the Boolean engine at
+/// `tolerance`) and moves it by its placement. Errors as the builders; DegenerateGeometry when
+/// a clip is not a unit normal and a finite offset, removes the whole solid or splits it.
 Result<Shape> build_primitive(const PrimitiveSpec& spec, double tolerance = kDefaultTolerance);
 
 }  // namespace csgtile::kernel
