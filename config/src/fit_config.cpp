@@ -59,6 +59,7 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "primitives", "min_building_width", fit.primitives.min_building_width);
   take(f, "primitives", "extrusions", fit.primitives.extrusions);
   take(f, "primitives", "revolutions", fit.primitives.revolutions);
+  take(f, "primitives", "roof_parts", fit.primitives.roof_parts);
   take(f, "primitives", "min_curved_coverage", fit.primitives.min_curved_coverage);
   take(f, "primitives", "max_overreach", fit.primitives.max_overreach);
 }
@@ -101,6 +102,7 @@ json fit_to_json(const FitConfig& fit) {
                        {"min_building_width", fit.primitives.min_building_width},
                        {"extrusions", fit.primitives.extrusions},
                        {"revolutions", fit.primitives.revolutions},
+                       {"roof_parts", fit.primitives.roof_parts},
                        {"min_curved_coverage", fit.primitives.min_curved_coverage},
                        {"max_overreach", fit.primitives.max_overreach}};
   return out;

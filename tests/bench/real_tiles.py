@@ -199,6 +199,8 @@ class Primitive:
         self.frame = placement(p)
         self.s = self.frame[1]
         self.id = p.get("id", "")
+        # Half-spaces n·p <= w of the local frame the solid is cut by (a roof part).
+        self.clips = [tuple(float(v) for v in c) for c in p.get("clip", [])]
         t = self.type
         if t == "box":
             self.size = [float(v) for v in p["size"]]
@@ -278,6 +280,8 @@ class Primitive:
                 d = max(d2, dz)
             else:
                 d = math.hypot(max(d2, 0.0), max(dz, 0.0))
+        for nx, ny, nz, w in self.clips:  # the intersection: the larger signed distance
+            d = max(d, nx * lx + ny * ly + nz * lz - w)
         return abs(d) * self.s
 
     def footprint(self):

@@ -12,7 +12,8 @@ cell:
   false_area     model cells holding no building point, as a share of the model's cells;
 each over the whole tile and over the points inside the published footprints (when given).
 
-The vertical line meets a box, a cylinder and an extrusion (vertical or lying) exactly; a
+The vertical line meets a box, a cylinder and an extrusion (vertical or lying), each cut by
+its clips (the half-spaces of a roof part), exactly; a
 cone, sphere, torus or revolution through its analytic inside test, scanned down from the
 primitive's top at 5 cm and refined by bisection to 1 mm.
 Standard library only; imported by real_tiles.py.
@@ -43,32 +44,32 @@ def _slab(o, d, lo, hi, interval):
     return (t0, t1) if t0 <= t1 else None
 
 
-def _box_top(prim, o, d):
+def _box_spans(prim, o, d):
     iv = (-math.inf, math.inf)
     for k in range(3):
         iv = _slab(o[k], d[k], 0.0, prim.size[k], iv)
         if iv is None:
-            return None
-    return iv[1]
+            return []
+    return [iv]
 
 
-def _cylinder_top(prim, o, d):
+def _cylinder_spans(prim, o, d):
     r, h = prim.p["r"], prim.p["h"]
     iv = _slab(o[2], d[2], 0.0, h, (-math.inf, math.inf))
     if iv is None:
-        return None
+        return []
     a = d[0] * d[0] + d[1] * d[1]
     b = 2 * (o[0] * d[0] + o[1] * d[1])
     c = o[0] * o[0] + o[1] * o[1] - r * r
     if a < 1e-18:
-        return iv[1] if c <= 0 else None
+        return [iv] if c <= 0 else []
     disc = b * b - 4 * a * c
     if disc < 0:
-        return None
+        return []
     q = math.sqrt(disc)
     lo, hi = (-b - q) / (2 * a), (-b + q) / (2 * a)
     t0, t1 = max(iv[0], lo), min(iv[1], hi)
-    return t1 if t0 <= t1 else None
+    return [(t0, t1)] if t0 <= t1 else []
 
 
 def _inside_polygon(px, py, rings):
@@ -83,12 +84,12 @@ def _inside_polygon(px, py, rings):
     return inside
 
 
-def _extrusion_top(prim, o, d):
+def _extrusion_spans(prim, o, d):
     iv = _slab(o[2], d[2], 0.0, prim.h, (-math.inf, math.inf))
     if iv is None:
-        return None
+        return []
     if abs(d[0]) < 1e-12 and abs(d[1]) < 1e-12:  # the line runs along the extrusion
-        return iv[1] if _inside_polygon(o[0], o[1], prim.rings) else None
+        return [iv] if _inside_polygon(o[0], o[1], prim.rings) else []
     # The line crosses the profile's plane: where it is inside the profile (even-odd).
     cuts = []
     for ring in prim.rings:
@@ -106,16 +107,37 @@ def _extrusion_top(prim, o, d):
             if 0.0 <= u < 1.0:
                 cuts.append(t)
     cuts.sort()
-    best = None
+    spans = []
     for k in range(0, len(cuts) - 1, 2):
         t0, t1 = max(iv[0], cuts[k]), min(iv[1], cuts[k + 1])
         if t0 <= t1:
-            best = t1 if best is None else max(best, t1)
-    return best
+            spans.append((t0, t1))
+    return spans
+
+
+def _clipped(spans, clips, o, d):
+    """The spans' parts where n·(o + t d) <= w for every clip (n, w) of the local frame."""
+    for nx, ny, nz, w in clips:
+        nd = nx * d[0] + ny * d[1] + nz * d[2]
+        no = nx * o[0] + ny * o[1] + nz * o[2]
+        out = []
+        for t0, t1 in spans:
+            if abs(nd) < 1e-15:
+                if no <= w:
+                    out.append((t0, t1))
+                continue
+            lim = (w - no) / nd
+            a, b = (t0, min(t1, lim)) if nd > 0 else (max(t0, lim), t1)
+            if a <= b:
+                out.append((a, b))
+        spans = out
+    return spans
 
 
 def _inside(prim, lx, ly, lz):
     t, p = prim.type, prim.p
+    if any(nx * lx + ny * ly + nz * lz > w for nx, ny, nz, w in prim.clips):
+        return False
     if t == "sphere":
         return lx * lx + ly * ly + lz * lz <= p["r"] ** 2
     if t == "torus":
@@ -156,13 +178,12 @@ def top_of(prim, x, y):
     if not (prim.lo[0] <= x <= prim.hi[0] and prim.lo[1] <= y <= prim.hi[1]):
         return None
     o, d = _line(prim, x, y)
-    if prim.type == "box":
-        return _box_top(prim, o, d)
-    if prim.type == "cylinder":
-        return _cylinder_top(prim, o, d)
-    if prim.type == "extrusion":
-        return _extrusion_top(prim, o, d)
-    return _scanned_top(prim, o, d)
+    spans = {"box": _box_spans, "cylinder": _cylinder_spans,
+             "extrusion": _extrusion_spans}.get(prim.type)
+    if spans is None:
+        return _scanned_top(prim, o, d)
+    found = _clipped(spans(prim, o, d), prim.clips, o, d)
+    return max(t1 for _, t1 in found) if found else None
 
 
 def top_surface(prims, x0, y0, nx, ny, cell):

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -161,6 +162,24 @@ std::vector<Proposal> propose_revolutions(const ProposalInput& in,
 std::optional<Proposal> propose_extrusion(const ProposalInput& in,
                                           std::vector<Rejection>& rejected);
 
+/// The outline of a roof's points seen from the air (roof.cpp): an occupancy grid in the
+/// points' principal frame, closed over the gaps between scan lines, holes under something
+/// standing on the roof (`above_roof`) or under 4 m² filled, its boundary traced, simplified,
+/// its edges snapped to the principal directions and moved onto the outermost points.
+struct RoofOutline {
+  kernel::Vec2 u{1.0, 0.0}, v{0.0, 1.0};    ///< principal frame: (a, b) = (p·u, p·v)
+  double cell = 0.0;                         ///< occupancy grid cell (1.5 × the spacing)
+  std::size_t seen_cells = 0;                ///< cells holding a roof point
+  std::vector<kernel::Vec2> profile;         ///< outer ring in (a, b), counter-clockwise
+  std::vector<std::vector<kernel::Vec2>> holes;  ///< courtyards in (a, b), clockwise
+};
+/// nullopt when the points make no outline (too narrow, too large a grid; `why` says so
+/// when it is worth a rejection).
+std::optional<RoofOutline> roof_outline(const ProposalInput& in,
+                                        const std::vector<kernel::Vec2>& flat,
+                                        const std::function<bool(const kernel::Vec3&)>& above_roof,
+                                        std::string& why);
+
 /// One vertical extrusion from a flat roof seen from the air (roof.cpp): the outline of its
 /// points as the footprint (inner rings as courtyards), the roof as the top, the ground grid
 /// as the bottom; needs PrimitiveOptions::ground. Kept only when it describes the region more
@@ -182,6 +201,12 @@ double lowest_ground_under(const GroundGrid& ground, const std::vector<kernel::V
 /// point; reasons for planes that make none are appended to `rejected`.
 std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
                                             std::vector<Rejection>& rejected);
+
+/// Roof parts (roof_parts.cpp): each tilted roof plane left after the pitched roofs becomes
+/// the extrusion of its points' outline from the terrain up past the roof, clipped by the
+/// half-space under its plane. Needs PrimitiveOptions::ground and roof_parts. Proposals
+/// share no point; reasons for planes that make none are appended to `rejected`.
+std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Rejection>& rejected);
 
 /// Rule 4 of issue #18 (support.cpp): empty when a primitive whose solid has bounding box
 /// `box` and whose inliers cover `coverage` of its surface is supported by the points of its

@@ -922,6 +922,7 @@ FittedPrimitives Builder::run() {
       if (!p || !take(*p)) break;
     }
     for (const auto& p : detail::propose_pitched_roofs(in, out_.rejected)) take(p);
+    for (const auto& p : detail::propose_roof_parts(in, out_.rejected)) take(p);
   }
   if (o_.boxes) boxes();
   for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {

@@ -103,6 +103,243 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
 
 }  // namespace
 
+std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vector<Vec2>& flat,
+                                        const std::function<bool(const Vec3&)>& above_roof,
+                                        std::string& why) {
+  const PrimitiveOptions& o = *in.options;
+  const double cos_tol = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
+  const double spacing = in.shapes->spacing;
+  if (!(spacing > 0.0)) return std::nullopt;
+  // Principal frame: the smallest rectangle around the roof's hull.
+  const auto hull = convex_hull(flat);
+  if (hull.size() < 3) return std::nullopt;
+  const auto rectangle = smallest_rectangle(hull, 1e-9);
+  const Vec2 u = rectangle ? rectangle->dir : Vec2(1, 0);
+  const Vec2 v(-u.y(), u.x());
+  double a0 = INFINITY, b0 = INFINITY, a1 = -INFINITY, b1 = -INFINITY;
+  for (const auto& p : flat) {
+    a0 = std::min(a0, p.dot(u));
+    a1 = std::max(a1, p.dot(u));
+    b0 = std::min(b0, p.dot(v));
+    b1 = std::max(b1, p.dot(v));
+  }
+  if (std::min(a1 - a0, b1 - b0) < o.min_building_width) return std::nullopt;
+  const double cell = 1.5 * spacing;
+  const double cells = ((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0);
+  if (cells > 4e6) return std::nullopt;
+  const int nx = static_cast<int>((a1 - a0) / cell) + 5,
+            ny = static_cast<int>((b1 - b0) / cell) + 5;
+  const double ga = a0 - 2.0 * cell, gb = b0 - 2.0 * cell;  // grid origin (two empty cells)
+  auto index = [&](int i, int j) {
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
+           static_cast<std::size_t>(i);
+  };
+  // Clamped in double to one cell outside the grid, so any finite point converts safely.
+  auto cell_of = [&](const Vec2& p) {
+    const auto to_cell = [&](double t, int n) {
+      return static_cast<int>(std::clamp(std::floor(t / cell), -1.0, static_cast<double>(n)));
+    };
+    return std::array<int, 2>{to_cell(p.dot(u) - ga, nx), to_cell(p.dot(v) - gb, ny)};
+  };
+  std::vector<char> occ(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+  for (const auto& p : flat) {
+    const auto c = cell_of(p);
+    occ[index(c[0], c[1])] = 1;
+  }
+  const std::size_t seen_cells = static_cast<std::size_t>(std::count(occ.begin(), occ.end(), 1));
+  // Closing (3 × 3 dilation, then erosion) over the gaps between scan lines.
+  auto morph = [&](bool dilate) {
+    std::vector<char> out = occ;
+    for (int j = 1; j + 1 < ny; ++j) {
+      for (int i = 1; i + 1 < nx; ++i) {
+        bool any = false, all = true;
+        for (int dj = -1; dj <= 1; ++dj) {
+          for (int di = -1; di <= 1; ++di) {
+            const bool c = occ[index(i + di, j + dj)] != 0;
+            any = any || c;
+            all = all && c;
+          }
+        }
+        out[index(i, j)] = dilate ? any : all;
+      }
+    }
+    occ = std::move(out);
+  };
+  morph(true);
+  morph(false);
+  // Empty components not reaching the border are holes: small ones (under 4 m²) and those
+  // under something standing on the roof are filled.
+  {
+    std::vector<int> comp(occ.size(), -1);
+    int next = 0;
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        if (occ[index(i, j)] || comp[index(i, j)] >= 0) continue;
+        std::vector<std::array<int, 2>> queue{{i, j}};
+        comp[index(i, j)] = next;
+        bool border = false;
+        for (std::size_t h = 0; h < queue.size(); ++h) {
+          const auto [ci, cj] = queue[h];
+          border = border || ci == 0 || cj == 0 || ci == nx - 1 || cj == ny - 1;
+          const std::array<std::array<int, 2>, 4> nb{
+              {{ci + 1, cj}, {ci - 1, cj}, {ci, cj + 1}, {ci, cj - 1}}};
+          for (const auto& q : nb) {
+            if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+            if (occ[index(q[0], q[1])] || comp[index(q[0], q[1])] >= 0) continue;
+            comp[index(q[0], q[1])] = next;
+            queue.push_back(q);
+          }
+        }
+        bool fill = !border && static_cast<double>(queue.size()) * cell * cell < 4.0;
+        if (!border && !fill) {
+          for (std::size_t k = 0; k < in.points.size() && !fill; ++k) {
+            if (!in.points[k].allFinite() || !above_roof(in.points[k])) continue;
+            const auto c = cell_of(Vec2(in.points[k].x(), in.points[k].y()));
+            if (c[0] >= 0 && c[1] >= 0 && c[0] < nx && c[1] < ny &&
+                comp[index(c[0], c[1])] == next) {
+              fill = true;
+            }
+          }
+        }
+        if (fill) {
+          for (const auto& q : queue) occ[index(q[0], q[1])] = 1;
+        }
+        ++next;
+      }
+    }
+  }
+  const auto loops = trace(occ, nx, ny);
+  // Each loop in world (a, b) coordinates, simplified, edges snapped and moved onto the
+  // outermost roof points near them.
+  std::vector<std::vector<Vec2>> rings;
+  for (const auto& loop : loops) {
+    std::vector<Vec2> ring;
+    for (const auto& c : loop) ring.emplace_back(ga + c[0] * cell, gb + c[1] * cell);
+    if (std::abs(ring_area(ring)) < o.min_building_width * o.min_building_width) continue;
+    std::vector<char> keep(ring.size(), 0);
+    std::size_t far = 0;
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      if ((ring[k] - ring[0]).norm() > (ring[far] - ring[0]).norm()) far = k;
+    }
+    keep[0] = keep[far] = 1;
+    simplify(ring, 0, far, 1.0 * cell, keep);
+    simplify(ring, far, 0, 1.0 * cell, keep);
+    std::vector<Vec2> simple;
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      if (keep[k]) simple.push_back(ring[k]);
+    }
+    if (simple.size() < 3) continue;
+    // Edge lines: direction (snapped to the frame within the angle tolerance) and offset.
+    const std::size_t n = simple.size();
+    std::vector<Vec2> dir(n), normal(n);
+    std::vector<double> offset(n);
+    const double sign = ring_area(simple) > 0.0 ? 1.0 : -1.0;  // outward = right of travel
+    for (std::size_t k = 0; k < n; ++k) {
+      Vec2 d = (simple[(k + 1) % n] - simple[k]).normalized();
+      if (std::abs(d.x()) >= cos_tol) d = Vec2(d.x() > 0 ? 1.0 : -1.0, 0.0);
+      if (std::abs(d.y()) >= cos_tol) d = Vec2(0.0, d.y() > 0 ? 1.0 : -1.0);
+      dir[k] = d;
+      normal[k] = sign * Vec2(d.y(), -d.x());
+      const Vec2 mid = 0.5 * (simple[k] + simple[(k + 1) % n]);
+      offset[k] = mid.dot(normal[k]);
+      const double len = (simple[(k + 1) % n] - simple[k]).norm();
+      // Roof points along the edge, within two cells inside it: the outermost (98th
+      // percentile against noise) is where the roof ends.
+      std::vector<double> outward;
+      for (const auto& p : flat) {
+        const Vec2 q(p.dot(u), p.dot(v));
+        const double along = (q - simple[k]).dot(d);
+        if (along < 0.15 * len || along > 0.85 * len) continue;
+        const double off = q.dot(normal[k]) - offset[k];
+        if (off < -2.0 * cell || off > cell) continue;
+        outward.push_back(off);
+      }
+      if (outward.size() >= 3) {
+        std::sort(outward.begin(), outward.end());
+        offset[k] +=
+            outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
+      }
+    }
+    // Consecutive edges along one line (a stair of the grid left by the simplification)
+    // are one edge.
+    for (bool merged = true; merged && dir.size() > 3;) {
+      merged = false;
+      for (std::size_t k = 0; k < dir.size(); ++k) {
+        const std::size_t next = (k + 1) % dir.size();
+        if (dir[k].dot(dir[next]) >= cos_tol && std::abs(offset[k] - offset[next]) <= cell) {
+          offset[k] = 0.5 * (offset[k] + offset[next]);
+          dir.erase(dir.begin() + static_cast<std::ptrdiff_t>(next));
+          normal.erase(normal.begin() + static_cast<std::ptrdiff_t>(next));
+          offset.erase(offset.begin() + static_cast<std::ptrdiff_t>(next));
+          simple.erase(simple.begin() + static_cast<std::ptrdiff_t>(next));
+          merged = true;
+          break;
+        }
+      }
+    }
+    // Vertex k joins lines k - 1 and k; an edge shorter than a cell (a corner the grid cut
+    // off) is dropped and its neighbours meet.
+    std::vector<Vec2> refined;
+    for (;;) {
+      const std::size_t m = dir.size();
+      refined.clear();
+      for (std::size_t k = 0; k < m; ++k) {
+        const std::size_t prev = (k + m - 1) % m;
+        const double det = normal[prev].x() * normal[k].y() - normal[prev].y() * normal[k].x();
+        if (std::abs(det) > std::sin(10.0 * std::numbers::pi / 180.0)) {
+          refined.emplace_back(
+              (offset[prev] * normal[k].y() - offset[k] * normal[prev].y()) / det,
+              (normal[prev].x() * offset[k] - normal[k].x() * offset[prev]) / det);
+        } else {
+          const Vec2 p = simple[k];
+          refined.push_back(p + (offset[k] - p.dot(normal[k])) * normal[k]);
+        }
+      }
+      std::size_t shortest = m;
+      double length = cell;
+      for (std::size_t k = 0; k < m; ++k) {
+        const double l = (refined[(k + 1) % m] - refined[k]).norm();
+        if (l < length) {
+          length = l;
+          shortest = k;
+        }
+      }
+      if (shortest == m || m <= 3) break;
+      const auto at = static_cast<std::ptrdiff_t>(shortest);
+      dir.erase(dir.begin() + at);
+      normal.erase(normal.begin() + at);
+      offset.erase(offset.begin() + at);
+      simple.erase(simple.begin() + at);
+    }
+    rings.push_back(std::move(refined));
+  }
+  if (rings.empty()) {
+    why = "no outline from its points";
+    return std::nullopt;
+  }
+  std::size_t outer = 0;
+  for (std::size_t r = 1; r < rings.size(); ++r) {
+    if (ring_area(rings[r]) > ring_area(rings[outer])) outer = r;
+  }
+  std::vector<Vec2> profile = rings[outer];
+  if (ring_area(profile) <= 0.0) return std::nullopt;
+  std::vector<std::vector<Vec2>> holes;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    if (r == outer || ring_area(rings[r]) >= 0.0) continue;
+    bool inside = true;
+    for (const auto& p : rings[r]) inside = inside && inside_ring(p, profile);
+    if (inside) holes.push_back(rings[r]);
+  }
+  RoofOutline out;
+  out.u = u;
+  out.v = v;
+  out.cell = cell;
+  out.seen_cells = seen_cells;
+  out.profile = std::move(profile);
+  out.holes = std::move(holes);
+  return out;
+}
+
 std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
                                                std::vector<Rejection>& rejected) {
   const PrimitiveOptions& o = *in.options;
@@ -144,226 +381,18 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
       flat.emplace_back(in.points[i].x(), in.points[i].y());
     }
     top /= static_cast<double>(pts.size());
-    // Principal frame: the smallest rectangle around the roof's hull.
-    const auto hull = convex_hull(flat);
-    if (hull.size() < 3) continue;
-    const auto rectangle = smallest_rectangle(hull, 1e-9);
-    const Vec2 u = rectangle ? rectangle->dir : Vec2(1, 0);
-    const Vec2 v(-u.y(), u.x());
-    double a0 = INFINITY, b0 = INFINITY, a1 = -INFINITY, b1 = -INFINITY;
-    for (const auto& p : flat) {
-      a0 = std::min(a0, p.dot(u));
-      a1 = std::max(a1, p.dot(u));
-      b0 = std::min(b0, p.dot(v));
-      b1 = std::max(b1, p.dot(v));
-    }
-    if (std::min(a1 - a0, b1 - b0) < o.min_building_width) continue;
-    const double cell = 1.5 * spacing;
-    const double cells = ((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0);
-    if (cells > 4e6) continue;
-    const int nx = static_cast<int>((a1 - a0) / cell) + 5,
-              ny = static_cast<int>((b1 - b0) / cell) + 5;
-    const double ga = a0 - 2.0 * cell, gb = b0 - 2.0 * cell;  // grid origin (two empty cells)
-    auto index = [&](int i, int j) {
-      return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-             static_cast<std::size_t>(i);
-    };
-    // Clamped in double to one cell outside the grid, so any finite point converts safely.
-    auto cell_of = [&](const Vec2& p) {
-      const auto to_cell = [&](double t, int n) {
-        return static_cast<int>(std::clamp(std::floor(t / cell), -1.0, static_cast<double>(n)));
-      };
-      return std::array<int, 2>{to_cell(p.dot(u) - ga, nx), to_cell(p.dot(v) - gb, ny)};
-    };
-    std::vector<char> occ(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
-    for (const auto& p : flat) {
-      const auto c = cell_of(p);
-      occ[index(c[0], c[1])] = 1;
-    }
-    const std::size_t seen_cells = static_cast<std::size_t>(std::count(occ.begin(), occ.end(), 1));
-    // Closing (3 × 3 dilation, then erosion) over the gaps between scan lines.
-    auto morph = [&](bool dilate) {
-      std::vector<char> out = occ;
-      for (int j = 1; j + 1 < ny; ++j) {
-        for (int i = 1; i + 1 < nx; ++i) {
-          bool any = false, all = true;
-          for (int dj = -1; dj <= 1; ++dj) {
-            for (int di = -1; di <= 1; ++di) {
-              const bool c = occ[index(i + di, j + dj)] != 0;
-              any = any || c;
-              all = all && c;
-            }
-          }
-          out[index(i, j)] = dilate ? any : all;
-        }
-      }
-      occ = std::move(out);
-    };
-    morph(true);
-    morph(false);
-    // Empty components not reaching the border are holes: small ones (under 4 m²) and those
-    // under something standing on the roof are filled.
-    {
-      std::vector<int> comp(occ.size(), -1);
-      int next = 0;
-      for (int j = 0; j < ny; ++j) {
-        for (int i = 0; i < nx; ++i) {
-          if (occ[index(i, j)] || comp[index(i, j)] >= 0) continue;
-          std::vector<std::array<int, 2>> queue{{i, j}};
-          comp[index(i, j)] = next;
-          bool border = false;
-          for (std::size_t h = 0; h < queue.size(); ++h) {
-            const auto [ci, cj] = queue[h];
-            border = border || ci == 0 || cj == 0 || ci == nx - 1 || cj == ny - 1;
-            const std::array<std::array<int, 2>, 4> nb{
-                {{ci + 1, cj}, {ci - 1, cj}, {ci, cj + 1}, {ci, cj - 1}}};
-            for (const auto& q : nb) {
-              if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
-              if (occ[index(q[0], q[1])] || comp[index(q[0], q[1])] >= 0) continue;
-              comp[index(q[0], q[1])] = next;
-              queue.push_back(q);
-            }
-          }
-          bool fill = !border && static_cast<double>(queue.size()) * cell * cell < 4.0;
-          if (!border && !fill) {
-            for (std::size_t k = 0; k < in.points.size() && !fill; ++k) {
-              if (!in.points[k].allFinite() || in.points[k].z() <= top + tight) continue;
-              const auto c = cell_of(Vec2(in.points[k].x(), in.points[k].y()));
-              if (c[0] >= 0 && c[1] >= 0 && c[0] < nx && c[1] < ny &&
-                  comp[index(c[0], c[1])] == next) {
-                fill = true;
-              }
-            }
-          }
-          if (fill) {
-            for (const auto& q : queue) occ[index(q[0], q[1])] = 1;
-          }
-          ++next;
-        }
-      }
-    }
-    const auto loops = trace(occ, nx, ny);
-    // Each loop in world (a, b) coordinates, simplified, edges snapped and moved onto the
-    // outermost roof points near them.
-    std::vector<std::vector<Vec2>> rings;
-    for (const auto& loop : loops) {
-      std::vector<Vec2> ring;
-      for (const auto& c : loop) ring.emplace_back(ga + c[0] * cell, gb + c[1] * cell);
-      if (std::abs(ring_area(ring)) < o.min_building_width * o.min_building_width) continue;
-      std::vector<char> keep(ring.size(), 0);
-      std::size_t far = 0;
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        if ((ring[k] - ring[0]).norm() > (ring[far] - ring[0]).norm()) far = k;
-      }
-      keep[0] = keep[far] = 1;
-      simplify(ring, 0, far, 1.0 * cell, keep);
-      simplify(ring, far, 0, 1.0 * cell, keep);
-      std::vector<Vec2> simple;
-      for (std::size_t k = 0; k < ring.size(); ++k) {
-        if (keep[k]) simple.push_back(ring[k]);
-      }
-      if (simple.size() < 3) continue;
-      // Edge lines: direction (snapped to the frame within the angle tolerance) and offset.
-      const std::size_t n = simple.size();
-      std::vector<Vec2> dir(n), normal(n);
-      std::vector<double> offset(n);
-      const double sign = ring_area(simple) > 0.0 ? 1.0 : -1.0;  // outward = right of travel
-      for (std::size_t k = 0; k < n; ++k) {
-        Vec2 d = (simple[(k + 1) % n] - simple[k]).normalized();
-        if (std::abs(d.x()) >= cos_tol) d = Vec2(d.x() > 0 ? 1.0 : -1.0, 0.0);
-        if (std::abs(d.y()) >= cos_tol) d = Vec2(0.0, d.y() > 0 ? 1.0 : -1.0);
-        dir[k] = d;
-        normal[k] = sign * Vec2(d.y(), -d.x());
-        const Vec2 mid = 0.5 * (simple[k] + simple[(k + 1) % n]);
-        offset[k] = mid.dot(normal[k]);
-        const double len = (simple[(k + 1) % n] - simple[k]).norm();
-        // Roof points along the edge, within two cells inside it: the outermost (98th
-        // percentile against noise) is where the roof ends.
-        std::vector<double> outward;
-        for (const auto& p : flat) {
-          const Vec2 q(p.dot(u), p.dot(v));
-          const double along = (q - simple[k]).dot(d);
-          if (along < 0.15 * len || along > 0.85 * len) continue;
-          const double off = q.dot(normal[k]) - offset[k];
-          if (off < -2.0 * cell || off > cell) continue;
-          outward.push_back(off);
-        }
-        if (outward.size() >= 3) {
-          std::sort(outward.begin(), outward.end());
-          offset[k] +=
-              outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
-        }
-      }
-      // Consecutive edges along one line (a stair of the grid left by the simplification)
-      // are one edge.
-      for (bool merged = true; merged && dir.size() > 3;) {
-        merged = false;
-        for (std::size_t k = 0; k < dir.size(); ++k) {
-          const std::size_t next = (k + 1) % dir.size();
-          if (dir[k].dot(dir[next]) >= cos_tol && std::abs(offset[k] - offset[next]) <= cell) {
-            offset[k] = 0.5 * (offset[k] + offset[next]);
-            dir.erase(dir.begin() + static_cast<std::ptrdiff_t>(next));
-            normal.erase(normal.begin() + static_cast<std::ptrdiff_t>(next));
-            offset.erase(offset.begin() + static_cast<std::ptrdiff_t>(next));
-            simple.erase(simple.begin() + static_cast<std::ptrdiff_t>(next));
-            merged = true;
-            break;
-          }
-        }
-      }
-      // Vertex k joins lines k - 1 and k; an edge shorter than a cell (a corner the grid cut
-      // off) is dropped and its neighbours meet.
-      std::vector<Vec2> refined;
-      for (;;) {
-        const std::size_t m = dir.size();
-        refined.clear();
-        for (std::size_t k = 0; k < m; ++k) {
-          const std::size_t prev = (k + m - 1) % m;
-          const double det = normal[prev].x() * normal[k].y() - normal[prev].y() * normal[k].x();
-          if (std::abs(det) > std::sin(10.0 * std::numbers::pi / 180.0)) {
-            refined.emplace_back(
-                (offset[prev] * normal[k].y() - offset[k] * normal[prev].y()) / det,
-                (normal[prev].x() * offset[k] - normal[k].x() * offset[prev]) / det);
-          } else {
-            const Vec2 p = simple[k];
-            refined.push_back(p + (offset[k] - p.dot(normal[k])) * normal[k]);
-          }
-        }
-        std::size_t shortest = m;
-        double length = cell;
-        for (std::size_t k = 0; k < m; ++k) {
-          const double l = (refined[(k + 1) % m] - refined[k]).norm();
-          if (l < length) {
-            length = l;
-            shortest = k;
-          }
-        }
-        if (shortest == m || m <= 3) break;
-        const auto at = static_cast<std::ptrdiff_t>(shortest);
-        dir.erase(dir.begin() + at);
-        normal.erase(normal.begin() + at);
-        offset.erase(offset.begin() + at);
-        simple.erase(simple.begin() + at);
-      }
-      rings.push_back(std::move(refined));
-    }
-    if (rings.empty()) {
-      rejected.push_back({what, "no outline from its points", static_cast<long long>(pts.size())});
+    std::string why;
+    const auto outline = roof_outline(
+        in, flat, [&](const Vec3& p) { return p.z() > top + tight; }, why);
+    if (!outline) {
+      if (!why.empty()) rejected.push_back({what, why, static_cast<long long>(pts.size())});
       continue;
     }
-    std::size_t outer = 0;
-    for (std::size_t r = 1; r < rings.size(); ++r) {
-      if (ring_area(rings[r]) > ring_area(rings[outer])) outer = r;
-    }
-    std::vector<Vec2> profile = rings[outer];
-    if (ring_area(profile) <= 0.0) continue;
-    std::vector<std::vector<Vec2>> holes;
-    for (std::size_t r = 0; r < rings.size(); ++r) {
-      if (r == outer || ring_area(rings[r]) >= 0.0) continue;
-      bool inside = true;
-      for (const auto& p : rings[r]) inside = inside && inside_ring(p, profile);
-      if (inside) holes.push_back(rings[r]);
-    }
+    const Vec2 u = outline->u, v = outline->v;
+    const double cell = outline->cell;
+    const std::size_t seen_cells = outline->seen_cells;
+    const std::vector<Vec2>& profile = outline->profile;
+    const std::vector<std::vector<Vec2>>& holes = outline->holes;
     if (profile.size() <= 4 && holes.empty()) continue;  // a rectangle: the box's
     // Bottom: the terrain under the footprint.
     Vec2 centre = Vec2::Zero();

@@ -12,6 +12,8 @@
 #include <numbers>
 
 #include "csgtile/fit/fit.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "fit_internal.h"
 #include "fit_clouds.h"
 
 namespace csgtile::fit {
@@ -54,7 +56,8 @@ FittedPrimitives fit_airborne(const Cloud& c, const GroundGrid& ground, bool ext
 std::string describe(const FittedPrimitives& f) {
   std::string s;
   for (const auto& p : f.primitives) {
-    s += std::string(kernel::primitive_type_name(p.spec.type)) + " ";
+    s += std::string(kernel::primitive_type_name(p.spec.type)) +
+         (p.spec.clips.empty() ? "" : "(clipped)") + " ";
   }
   for (const auto& r : f.rejected) s += "| " + r.what + ": " + r.reason + " ";
   return s;
@@ -229,6 +232,47 @@ TEST(FitRoofs, CoaxialOverlappingConesMakeOnePrimitive) {
   bool named = false;
   for (const auto& r : f.rejected) named = named || r.reason.find("coaxial") != std::string::npos;
   EXPECT_TRUE(named) << describe(f);
+}
+
+// A shed roof (z = 6 + 0.3 y) over an L-shaped outline, seen from the air: its roof part
+// (roof_parts.cpp, the step after the pitched roofs) is the extrusion of the L from the
+// terrain, clipped by the roof plane — no roof over the L's empty corner.
+TEST(FitRoofs, RoofPartOfAShedOverAnLIsTheClippedExtrusionOfTheL) {
+  const GroundGrid ground = flat_ground();
+  const Vec3 slope(0.0, 1.0, 0.3);
+  Cloud c = roof(Vec3(0.0, 0.0, 6.0), Vec3(12.0, 0.0, 0.0), 5.0 * slope, 0.01, 21);
+  c.append(roof(Vec3(0.0, 0.0, 6.0) + 5.0 * slope, Vec3(5.0, 0.0, 0.0), 7.0 * slope, 0.01, 22));
+  const RansacOptions o = airborne_ransac();
+  auto shapes = detect_shapes(c.points, c.normals, o);
+  ASSERT_TRUE(shapes.ok());
+  PrimitiveOptions options;
+  options.ground = &ground;
+  std::vector<char> used(c.points.size(), 0), absorbed(shapes->shapes.size(), 0);
+  detail::ProposalInput in;
+  in.points = c.points;
+  in.normals = c.normals;
+  in.shapes = &shapes.value();
+  in.used = &used;
+  in.absorbed = &absorbed;
+  in.options = &options;
+  in.ransac = &o;
+  in.cell = 3.0 * o.epsilon;
+  std::vector<Rejection> rejected;
+  const auto parts = detail::propose_roof_parts(in, rejected);
+  ASSERT_FALSE(parts.empty());
+  const kernel::PrimitiveSpec& s = parts[0].spec;  // the largest plane: the whole roof
+  ASSERT_EQ(s.type, PrimitiveType::Extrusion);
+  ASSERT_EQ(s.clips.size(), 1u);
+  const auto solid = kernel::build_primitive(s);
+  ASSERT_TRUE(solid.ok()) << solid.error().message;
+  // Volume of the L under the roof: [0,12]×[0,5] at mean 6.75, [0,5]×[5,12] at mean 8.55,
+  // within the outline's precision (1.5 × the spacing along the edges); a roof over the
+  // empty corner would add 49 m² × 9.5 m, 63 %.
+  const double expected = 60.0 * 6.75 + 35.0 * 8.55;
+  EXPECT_NEAR(kernel::mass_properties(solid.value()).volume, expected, 0.08 * expected);
+  const kernel::BoundingBox box = kernel::bounding_box(solid.value());
+  EXPECT_NEAR(box.max.z(), 6.0 + 0.3 * 12.0, 0.15);
+  EXPECT_NEAR(box.min.z(), 0.0, 0.1);
 }
 
 }  // namespace

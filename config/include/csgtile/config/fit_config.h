@@ -82,6 +82,7 @@ struct FitPrimitivesConfig {
   double min_building_width = 1.0;
   bool extrusions = true;
   bool revolutions = true;
+  bool roof_parts = true;
   double min_curved_coverage = 0.05;
   double max_overreach = 0.25;
   bool operator==(const FitPrimitivesConfig&) const = default;

@@ -127,6 +127,10 @@ struct PrimitiveOptions {
   /// Revolutions from coaxial cylinders and cones and the planes ⟂ their axis (a fountain, a
   /// vase, a curved wall); a plain cylinder or cone stays one.
   bool revolutions = true;
+  /// Tilted roof planes no pitched roof took become roof parts: the extrusion of their
+  /// points' outline from the terrain, clipped by the half-space under the plane (needs
+  /// `ground`; issue #18).
+  bool roof_parts = true;
   /// Support (every primitive, whichever step made it): a cylinder, cone, sphere, torus or
   /// revolution whose inliers cover less of its surface than this (voxels of the
   /// connectivity cell) is rejected ...
