@@ -867,6 +867,31 @@ def self_test():
             grid.fill(rings, lambda k: cells.__setitem__(k, 1))
         check("%s footprint area" % prim.type, sum(cells) * 0.0625, area, tol)
 
+    # The top surface (top_surface.py): the highest z on the vertical through a point.
+    def top(prim, x, y):
+        z = top_surface.top_of(prim, x, y)
+        return -1.0 if z is None else z
+    check("top of box", top(box, *to_world(box.frame, 1, 1.5, 0)[:2]), 11.0)
+    check("top beside box", top(box, 20, 20), -1.0)
+    check("top of lying cylinder", top(cyl, 1.5, 2.6), 3.0 + 0.8)
+    check("top of sphere", top(sph, 1, 1), 3.0, 2e-3)
+    check("top of cone", top(cone, 0.5, 0), 0.5, 2e-3)
+    # A shed roof part: the L under z = 6 + 0.5 x (clip n·p <= d in its frame).
+    nn = math.sqrt(1.25)
+    part = Primitive({"type": "extrusion", "h": 20, "placement": rot_z(0, (10, 20, -1)),
+                      "profile": [[0, 0], [8, 0], [8, 4], [4, 4], [4, 10], [0, 10]],
+                      "clip": [[-0.5 / nn, 0, 1 / nn, 7 / nn]]})
+    check("top of roof part", top(part, 10 + 2, 20 + 1), -1 + 7 + 0.5 * 2)
+    check("top over the L's notch", top(part, 10 + 6, 20 + 6), -1.0)
+    check("roof part's roof distance", part.distance(12, 21, 7.0), 0.0, 1e-9)
+    fig = top_surface.measure_top_surface(
+        [box], ([c[0] for c in [to_world(box.frame, 1, 1.5, 4.1)]] + [30.0],
+                [c[1] for c in [to_world(box.frame, 1, 1.5, 4.1)]] + [30.0],
+                [11.1, 5.0], [6, 6]), 0.5)
+    check("top-surface coverage", fig["whole_tile"]["coverage"], 0.5)
+    check("top-surface within 0.3 m", fig["whole_tile"]["within_0.3m"], 0.5)
+    check("top-surface rmse", fig["whole_tile"]["rmse_m"], 0.1, 1e-9)
+
     path = os.path.join(os.environ.get("TMPDIR", "/tmp"),
                         "real_tiles_self_test_%d.png" % os.getpid())
     write_png(path, 2, 1, bytearray([255, 0, 0, 0, 0, 255]))

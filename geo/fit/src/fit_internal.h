@@ -180,6 +180,21 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in,
                                         const std::function<bool(const kernel::Vec3&)>& above_roof,
                                         std::string& why);
 
+/// The outline's footprint in world x, y, its centre, and the terrain under it: the lowest
+/// level around it (lowest_ground_under), else the median level near it; NaN without ground.
+struct OutlineGround {
+  std::vector<kernel::Vec2> footprint;   ///< the outer ring in world x, y
+  kernel::Vec2 centre = kernel::Vec2::Zero();  ///< in the outline's (a, b) frame
+  kernel::Vec2 world_centre = kernel::Vec2::Zero();
+  double ground = NAN;
+};
+OutlineGround outline_ground(const RoofOutline& outline, const GroundGrid& ground);
+
+/// The vertical extrusion of `outline` (profile and holes about its centre) from `g.ground`
+/// up by `height`, x along the outline's u; nullopt when the placement fails.
+std::optional<kernel::PrimitiveSpec> outline_extrusion(const RoofOutline& outline,
+                                                       const OutlineGround& g, double height);
+
 /// One vertical extrusion from a flat roof seen from the air (roof.cpp): the outline of its
 /// points as the footprint (inner rings as courtyards), the roof as the top, the ground grid
 /// as the bottom; needs PrimitiveOptions::ground. Kept only when it describes the region more
@@ -207,6 +222,13 @@ std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
 /// half-space under its plane. Needs PrimitiveOptions::ground and roof_parts. Proposals
 /// share no point; reasons for planes that make none are appended to `rejected`.
 std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Rejection>& rejected);
+
+/// LoD1.2 blocks (blocks.cpp) of the points no kept primitive explains (`explained` false):
+/// pieces of one height, each its outline extruded from the terrain to the 70th percentile of
+/// its heights. Needs PrimitiveOptions::ground and blocks. Proposals share no point.
+std::vector<Proposal> propose_blocks(const ProposalInput& in,
+                                     const std::function<bool(const Vec3&)>& explained,
+                                     std::vector<Rejection>& rejected);
 
 /// Rule 4 of issue #18 (support.cpp): empty when a primitive whose solid has bounding box
 /// `box` and whose inliers cover `coverage` of its surface is supported by the points of its

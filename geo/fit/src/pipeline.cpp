@@ -204,6 +204,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     terrain.mean[c] = terrain_count[c] > 0 ? terrain.mean[c] / terrain_count[c] : NAN;
   }
   PrimitiveOptions primitive_options = options.primitives;
+  // Blocks are buildings' (LoD1.2 of what no surface explains): only where the points are
+  // known to be buildings' — a tile classified with a kept class — never trees'.
+  primitive_options.blocks = options.primitives.blocks && by_keep;
   if (primitive_options.ground == nullptr && terrain.nx > 0) primitive_options.ground = &terrain;
   out.seconds.emplace_back("ground", seconds_since(start));
 
@@ -300,7 +303,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (detected.value().shapes.empty()) {
       out.rejected.push_back({"region " + std::to_string(r), detected.value().reason,
                               static_cast<long long>(p.size())});
-      continue;
+      // A building region without a surface is still a building: its block (LoD1.2).
+      if (!primitive_options.blocks || primitive_options.ground == nullptr) continue;
     }
     const auto t = std::chrono::steady_clock::now();
     auto fitted = primitives_from_shapes(p, n, detected.value(), primitive_options, ransac,

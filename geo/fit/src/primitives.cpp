@@ -16,6 +16,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "fit_internal.h"
 #include "plane2d.h"
+#include "synth/ray_internal.h"
 
 namespace csgtile::fit {
 
@@ -242,6 +243,20 @@ class Builder {
                      const std::array<double, 4>& section) const;
   void boxes();
   void curved(int index);
+  void blocks();
+  // What the proposal steps see of the region (points, shapes, what is used or absorbed).
+  detail::ProposalInput proposal_input() const {
+    detail::ProposalInput in;
+    in.points = points_;
+    in.normals = normals_;
+    in.shapes = &shapes_;
+    in.used = &used_;
+    in.absorbed = &absorbed_;
+    in.options = &o_;
+    in.ransac = &ransac_;
+    in.cell = cell_;
+    return in;
+  }
   std::string coaxial_overlap(const PrimitiveSpec& spec) const;
   bool take(const detail::Proposal& proposal);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
@@ -899,15 +914,7 @@ bool Builder::take(const detail::Proposal& proposal) {
 
 FittedPrimitives Builder::run() {
   absorbed_.assign(shapes_.shapes.size(), 0);
-  detail::ProposalInput in;
-  in.points = points_;
-  in.normals = normals_;
-  in.shapes = &shapes_;
-  in.used = &used_;
-  in.absorbed = &absorbed_;
-  in.options = &o_;
-  in.ransac = &ransac_;
-  in.cell = cell_;
+  const detail::ProposalInput in = proposal_input();
   if (o_.revolutions) {
     for (const auto& p : detail::propose_revolutions(in, out_.rejected)) take(p);
   }
@@ -937,7 +944,33 @@ FittedPrimitives Builder::run() {
     }
     curved(static_cast<int>(s));
   }
+  if (o_.extrusions) blocks();
   return std::move(out_);
+}
+
+// The region's points no kept primitive explains (inside one, or up to half a metre above
+// it) become LoD1.2 blocks (blocks.cpp).
+void Builder::blocks() {
+  std::vector<geo::detail::PreparedPrimitive> kept;
+  for (const auto& p : out_.primitives) kept.push_back(geo::detail::prepare_primitive(p.spec));
+  const double above = std::max(0.5, 3.0 * ransac_.epsilon);
+  auto explained = [&](const Vec3& q) {
+    for (const auto& p : kept) {
+      const kernel::BoundingBox& b = p.world_bounds;
+      if (q.x() < b.min.x() || q.x() > b.max.x() || q.y() < b.min.y() || q.y() > b.max.y() ||
+          q.z() < b.min.z() || q.z() > b.max.z() + above) {
+        continue;
+      }
+      if (geo::detail::primitive_contains(p, q) ||
+          geo::detail::primitive_contains(p, q - Vec3(0.0, 0.0, above))) {
+        return true;
+      }
+    }
+    return false;
+  };
+  for (const auto& p : detail::propose_blocks(proposal_input(), explained, out_.rejected)) {
+    take(p);
+  }
 }
 
 }  // namespace

@@ -340,6 +340,41 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
   return out;
 }
 
+OutlineGround outline_ground(const RoofOutline& outline, const GroundGrid& ground) {
+  OutlineGround out;
+  for (const auto& q : outline.profile) {
+    out.footprint.push_back(q.x() * outline.u + q.y() * outline.v);
+    out.centre += q / static_cast<double>(outline.profile.size());
+  }
+  out.world_centre = out.centre.x() * outline.u + out.centre.y() * outline.v;
+  out.ground = lowest_ground_under(ground, out.footprint);
+  if (!std::isfinite(out.ground)) {
+    double radius = 0.0;
+    for (const auto& q : outline.profile) radius = std::max(radius, (q - out.centre).norm());
+    out.ground = ground.median_near(out.world_centre.x(), out.world_centre.y(),
+                                    radius + 2.0 * ground.cell);
+  }
+  return out;
+}
+
+std::optional<kernel::PrimitiveSpec> outline_extrusion(const RoofOutline& outline,
+                                                       const OutlineGround& g, double height) {
+  const auto loc = place(frame_of(Vec3(outline.u.x(), outline.u.y(), 0.0), Vec3::UnitZ()),
+                         Vec3(g.world_centre.x(), g.world_centre.y(), g.ground));
+  if (!loc) return std::nullopt;
+  kernel::PrimitiveSpec spec;
+  spec.type = PrimitiveType::Extrusion;
+  for (const auto& q : outline.profile) spec.profile.push_back(q - g.centre);
+  for (const auto& h : outline.holes) {
+    std::vector<Vec2> hole;
+    for (const auto& q : h) hole.push_back(q - g.centre);
+    spec.holes.push_back(std::move(hole));
+  }
+  spec.height = height;
+  spec.placement = *loc;
+  return spec;
+}
+
 std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
                                                std::vector<Rejection>& rejected) {
   const PrimitiveOptions& o = *in.options;

@@ -61,20 +61,11 @@ std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Re
       continue;
     }
     const Vec2 u = outline->u, v = outline->v;
-    std::vector<Vec2> footprint;
-    for (const auto& q : outline->profile) footprint.push_back(q.x() * u + q.y() * v);
-    double g = lowest_ground_under(*o.ground, footprint);
-    Vec2 centre = Vec2::Zero();
-    for (const auto& q : outline->profile) centre += q / static_cast<double>(footprint.size());
-    const Vec2 wc = centre.x() * u + centre.y() * v;
-    if (!std::isfinite(g)) {
-      double radius = 0.0;
-      for (const auto& q : outline->profile) radius = std::max(radius, (q - centre).norm());
-      g = o.ground->median_near(wc.x(), wc.y(), radius + 2.0 * o.ground->cell);
-    }
+    const OutlineGround under = outline_ground(*outline, *o.ground);
+    const double g = under.ground;
     // The roof's height over the outline's corners (a plane: its extremes are there).
     double low = INFINITY, high = -INFINITY;
-    for (const auto& p : footprint) {
+    for (const auto& p : under.footprint) {
       const double z = (d - n.x() * p.x() - n.y() * p.y()) / n.z();
       low = std::min(low, z);
       high = std::max(high, z);
@@ -85,22 +76,14 @@ std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Re
                           static_cast<long long>(pts.size())});
       continue;
     }
-    const auto loc =
-        place(frame_of(Vec3(u.x(), u.y(), 0.0), Vec3::UnitZ()), Vec3(wc.x(), wc.y(), g));
-    if (!loc) continue;
+    auto spec = outline_extrusion(*outline, under, high - g + 1.0);  // up past the roof
+    if (!spec) continue;
     Proposal p;
-    p.spec.type = PrimitiveType::Extrusion;
-    for (const auto& q : outline->profile) p.spec.profile.push_back(q - centre);
-    for (const auto& h : outline->holes) {
-      std::vector<Vec2> hole;
-      for (const auto& q : h) hole.push_back(q - centre);
-      p.spec.holes.push_back(std::move(hole));
-    }
-    p.spec.height = high - g + 1.0;  // up past the roof: the plane cuts it
-    p.spec.placement = *loc;
+    p.spec = std::move(*spec);
+    const kernel::Location loc = p.spec.placement;
     // The plane in the local frame: n·(R x + t) <= d.
-    const Vec3 nl = loc->rotation().transpose() * n;
-    p.spec.clips.push_back(Eigen::Vector4d(nl.x(), nl.y(), nl.z(), d - n.dot(loc->translation())));
+    const Vec3 nl = loc.rotation().transpose() * n;
+    p.spec.clips.push_back(Eigen::Vector4d(nl.x(), nl.y(), nl.z(), d - n.dot(loc.translation())));
     // Members: unclaimed points over the outline (within a cell of it) and under the roof.
     for (std::uint32_t i = 0; i < in.points.size(); ++i) {
       if (claimed[i] || !in.points[i].allFinite()) continue;

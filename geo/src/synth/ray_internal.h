@@ -31,10 +31,12 @@ struct PreparedPrimitive {
 
 PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec);
 
-/// First crossing with t in (t_min, t_max] (world units, |direction| = 1).
+/// First crossing with t in (t_min, t_max] (world units, |direction| = 1). A primitive's
+/// clips are not cast against (the simulator scans plain primitives).
 std::optional<RayHit> hit_primitive(const PreparedPrimitive& p, const kernel::Vec3& origin,
                                     const kernel::Vec3& direction, double t_min, double t_max);
 
+/// Whether `point` (world) lies in the solid, its clips honoured.
 bool primitive_contains(const PreparedPrimitive& p, const kernel::Vec3& point);
 
 /// Even-odd point-in-polygon over all rings (outer and holes).

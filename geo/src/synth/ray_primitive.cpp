@@ -486,6 +486,9 @@ std::optional<RayHit> hit_primitive(const PreparedPrimitive& p, const Vec3& orig
 bool primitive_contains(const PreparedPrimitive& p, const Vec3& point) {
   const Vec3 q = p.rotation_transposed * (point - p.translation) / p.scale;
   const kernel::PrimitiveSpec& s = p.spec;
+  for (const auto& c : s.clips) {
+    if (c.head<3>().dot(q) > c.w()) return false;
+  }
   switch (s.type) {
     case PrimitiveType::Box:
       return (q.array() >= 0.0).all() && (q.array() <= s.size.array()).all();

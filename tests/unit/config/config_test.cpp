@@ -537,7 +537,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
             R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
             R"("window":30.0},"normals":{"neighbours":16},)"
             R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
-            R"("primitives":{"angle_tolerance_deg":5.0,"boxes":true,"extrusions":true,)"
+            R"("primitives":{"angle_tolerance_deg":5.0,"blocks":true,"boxes":true,"extrusions":true,)"
             R"("max_box_depth":40.0,"max_overreach":0.25,"min_angular_span_deg":90.0,)"
             R"("min_box_thickness":0.04,"min_building_height":2.0,"min_building_width":1.0,)"
             R"("min_curved_coverage":0.05,"min_seed_coverage":0.6,)"

@@ -4,11 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "csgtile/geo/scene.h"
 #include "csgtile/fit/segment.h"
+#include "csgtile/kernel/mass_properties.h"
 #include "fit_clouds.h"
 
 namespace csgtile::fit {
@@ -293,6 +295,57 @@ TEST(FitSegment, PipelineOptionsAreChecked) {
   const auto empty = fit_point_cloud(std::vector<Vec3>{}, {}, FitPipelineOptions{});
   ASSERT_TRUE(empty.ok());
   EXPECT_TRUE(empty->primitives.empty());
+}
+
+// A classified building whose roof no plane explains (a bumpy 10 × 8 m roof, ±0.8 m) is not
+// left out: it becomes an LoD1.2 block, its outline extruded from the terrain to the 70th
+// percentile of its heights. The same points unclassified (a tree could look like this) make
+// no block.
+TEST(FitSegment, BuildingPointsNoSurfaceExplainsBecomeAnLod12Block) {
+  Cloud c = testing::rectangle_cloud(Vec3(-15, -15, 0), Vec3(40, 0, 0), Vec3(0, 40, 0), 0.3, 0.01, 31);
+  const std::size_t ground = c.points.size();
+  std::vector<double> heights;
+  for (double x = 0.0; x < 10.0; x += 0.3) {
+    for (double y = 0.0; y < 8.0; y += 0.3) {
+      const double z = 7.0 + 0.8 * std::sin(1.7 * x) * std::cos(1.3 * y);
+      c.points.emplace_back(x, y, z);
+      c.normals.emplace_back(0, 0, 1);
+      heights.push_back(z);
+    }
+  }
+  std::sort(heights.begin(), heights.end());
+  const double p70 = heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
+  std::vector<std::uint8_t> classes(c.points.size(), 6);
+  std::fill(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(ground), 2);
+  FitPipelineOptions o;
+  o.outliers.enabled = false;
+  const auto out = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  const geo::ScenePrimitive* block = nullptr;
+  for (const auto& p : out->primitives) {
+    if (p.spec.type == PrimitiveType::Extrusion && p.spec.clips.empty()) block = &p;
+  }
+  std::string found;
+  for (const auto& p : out->primitives) found += std::string(kernel::primitive_type_name(p.spec.type)) + " ";
+  for (const auto& r : out->rejected) found += "| " + r.what + ": " + r.reason + " ";
+  ASSERT_NE(block, nullptr) << found;
+  const auto solid = kernel::build_primitive(block->spec);
+  ASSERT_TRUE(solid.ok());
+  const kernel::BoundingBox box = kernel::bounding_box(solid.value());
+  EXPECT_NEAR(box.max.z(), p70, 0.05);
+  EXPECT_NEAR(box.min.z(), 0.0, 0.1);
+  EXPECT_NEAR(box.min.x(), 0.0, 0.5);
+  EXPECT_NEAR(box.max.x(), 10.0, 0.5);
+  EXPECT_NEAR(box.max.y(), 8.0, 0.5);
+  // Unclassified: the same cloud makes no block (ground from the morphological filter).
+  const auto bare = fit_point_cloud(c.points, {}, o);
+  ASSERT_TRUE(bare.ok());
+  for (const auto& p : bare->primitives) {
+    // A block would be an unclipped extrusion from the terrain (z = 0) to the 70th percentile.
+    EXPECT_FALSE(p.spec.type == PrimitiveType::Extrusion && p.spec.clips.empty() &&
+                 std::abs(p.spec.height - p70) < 0.05)
+        << "a block from unclassified points";
+  }
 }
 
 }  // namespace

@@ -30,7 +30,8 @@ fit:
   primitives: {boxes: false, max_box_depth: 20, min_box_thickness: 0.1, min_seed_coverage: 0.5,
                angle_tolerance_deg: 3, min_angular_span_deg: 120, min_building_height: 3,
                min_building_width: 2, extrusions: false, revolutions: false,
-               min_curved_coverage: 0.2, max_overreach: 0.5, roof_parts: false}
+               min_curved_coverage: 0.2, max_overreach: 0.5, roof_parts: false,
+               blocks: false}
 )",
                                           "every.yaml");
   ASSERT_TRUE(loaded.ok()) << (loaded.problems.empty() ? "" : loaded.problems[0].message);
@@ -79,6 +80,7 @@ fit:
   EXPECT_EQ(o.primitives.min_curved_coverage, 0.2);
   EXPECT_EQ(o.primitives.max_overreach, 0.5);
   EXPECT_FALSE(o.primitives.roof_parts);
+  EXPECT_FALSE(o.primitives.blocks);
   EXPECT_EQ(o.primitives.linear_tolerance, 1.0e-6);  // kernel.linear_tolerance
 }
 

@@ -83,6 +83,7 @@ struct FitPrimitivesConfig {
   bool extrusions = true;
   bool revolutions = true;
   bool roof_parts = true;
+  bool blocks = true;
   double min_curved_coverage = 0.05;
   double max_overreach = 0.25;
   bool operator==(const FitPrimitivesConfig&) const = default;

@@ -131,6 +131,10 @@ struct PrimitiveOptions {
   /// points' outline from the terrain, clipped by the half-space under the plane (needs
   /// `ground`; issue #18).
   bool roof_parts = true;
+  /// Points of a region no primitive explains become LoD1.2 blocks (their outline extruded
+  /// from the terrain to the 70th percentile of their heights; needs `ground`). The fit
+  /// pipeline makes blocks only of classified building points (ClassOptions::keep found).
+  bool blocks = true;
   /// Support (every primitive, whichever step made it): a cylinder, cone, sphere, torus or
   /// revolution whose inliers cover less of its surface than this (voxels of the
   /// connectivity cell) is rejected ...
