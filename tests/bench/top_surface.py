@@ -147,7 +147,7 @@ def _inside(prim, lx, ly, lz):
             return False
         return math.hypot(lx, ly) <= p["r1"] + (p["r2"] - p["r1"]) * lz / p["h"]
     # revolution (any angle taken as a full turn)
-    return _inside_polygon(math.hypot(lx, ly), lz, prim.profile)
+    return _inside_polygon(math.hypot(lx, ly), lz, [prim.profile])
 
 
 def _scanned_top(prim, o, d):
