@@ -4,6 +4,7 @@
 Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c]
                      [--config C] [--sigma S] [--cell 0.25] [--pixel 2]
                      [--min-share TILE=V ...] [--min-iou TILE=V ...]
+                     [--min-top-within TILE=V ...] [--min-top-coverage TILE=V ...]
                      [--min-median-iou TILE=V ...] [--min-primitives TILE=N ...]
                      [--max-below-ground TILE=N ...]
                      (exit 1 below a threshold, 77 when no tile is present: CLI tests)
@@ -942,6 +943,11 @@ def main():
     ap.add_argument("--pixel", type=int, default=2, help="image pixels per cell edge")
     ap.add_argument("--no-footprints", action="store_true")
     ap.add_argument("--min-share", action="append", help="TILE=V: building share within 2σ")
+    ap.add_argument("--min-top-within", action="append",
+                    help="TILE=V: building points within 0.3 m of the model's top (inside the "
+                         "footprints when the tile has them, else the whole tile)")
+    ap.add_argument("--min-top-coverage", action="append",
+                    help="TILE=V: building points over the model (same scope)")
     ap.add_argument("--min-iou", action="append", help="TILE=V: footprint IoU")
     ap.add_argument("--min-median-iou", action="append", help="TILE=V: median per-building IoU")
     ap.add_argument("--min-primitives", action="append", help="TILE=N")
@@ -957,6 +963,8 @@ def main():
         print(json.dumps({"self_test": "fail" if fails else "pass", "failures": fails}))
         return 1 if fails else 0
     limits = {"building_share_2sigma": parse_limits(args.min_share, "min-share"),
+              "top_within_0.3m": parse_limits(args.min_top_within, "min-top-within"),
+              "top_coverage": parse_limits(args.min_top_coverage, "min-top-coverage"),
               "iou": parse_limits(args.min_iou, "min-iou"),
               "median_iou": parse_limits(args.min_median_iou, "min-median-iou"),
               "primitives": parse_limits(args.min_primitives, "min-primitives")}
@@ -986,7 +994,10 @@ def main():
         if "error" in res:
             report["failures"].append("%s: csgtile fit failed: %s" % (name, res["error"]))
             continue
+        top = res["top_surface"].get("inside_footprints") or res["top_surface"]["whole_tile"]
         got = {"building_share_2sigma": res["building_share"]["2sigma"],
+               "top_within_0.3m": top.get("within_0.3m"),
+               "top_coverage": top.get("coverage"),
                "iou": res.get("iou"),
                "median_iou": res.get("buildings", {}).get("median_iou"),
                "primitives": res["primitives"]}
