@@ -12,6 +12,7 @@ Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISIO
 import json
 import os
 import shutil
+import stat
 import subprocess
 import sys
 
@@ -67,6 +68,12 @@ def main():
     if (p.returncode != 78 or "bad.yaml:3: fit.ransac.epsilom" not in p.stderr or
             "bad.yaml:4: fit.ransac.min_points" not in p.stderr):
         sys.exit("config problems must fail naming key and line: %d %s" % (p.returncode, p.stderr))
+    # An --out that is not a regular file is refused, never replaced (a device stays one).
+    p = run(bin_, "fit", las, "--out", "/dev/null", check=False)
+    if p.returncode == 0 or "not a regular file" not in p.stderr or \
+            not stat.S_ISCHR(os.stat("/dev/null").st_mode):
+        sys.exit("--out /dev/null must be refused and left a device: %d %s"
+                 % (p.returncode, p.stderr))
     shutil.rmtree(work, ignore_errors=True)
     print("ok")
 

@@ -108,6 +108,14 @@ int run_fit(const FitCommand& c) {
   const std::string text = geo::scene_to_json(tile.scene);
   {
     const std::filesystem::path target(c.out);
+    // Written beside the target and renamed onto it: never onto a device or a directory
+    // (`--out /dev/null` would replace the device node with a file).
+    std::error_code status_error;
+    const auto status = std::filesystem::status(target, status_error);
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+      return fail(ErrorCode::Usage, c.out + ": not a regular file (the scene is written there "
+                                           "and replaces it)");
+    }
     const std::filesystem::path temp = target.string() + ".tmp";
     std::ofstream file(temp, std::ios::binary | std::ios::trunc);
     file << text;
