@@ -79,7 +79,8 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
       flat.emplace_back(in.points[i].x(), in.points[i].y());
     }
     std::sort(heights.begin(), heights.end());
-    const double roof = heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
+    const double roof =
+        heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
     const double tight = 2.0 * in.ransac->epsilon;
     std::string why;
     const auto outline = roof_outline(
@@ -91,8 +92,8 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
     const OutlineGround under = outline_ground(*outline, *o.ground);
     const double g = under.ground;
     if (!std::isfinite(g) || roof - g < o.min_building_height) {
-      rejected.push_back({what, "not a building's height above the terrain",
-                          static_cast<long long>(pts.size())});
+      rejected.push_back(
+          {what, "not a building's height above the terrain", static_cast<long long>(pts.size())});
       continue;
     }
     auto spec = outline_extrusion(*outline, under, roof - g);

@@ -17,7 +17,8 @@ namespace csgtile::fit::detail {
 using kernel::PrimitiveType;
 using kernel::Vec2;
 
-std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Rejection>& rejected) {
+std::vector<Proposal> propose_roof_parts(const ProposalInput& in,
+                                         std::vector<Rejection>& rejected) {
   std::vector<Proposal> out;
   const PrimitiveOptions& o = *in.options;
   if (o.ground == nullptr || !o.roof_parts) return out;
@@ -72,8 +73,8 @@ std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Re
     }
     if (!std::isfinite(g) || high - g < o.min_building_height ||
         low - g < 0.5 * o.min_building_height) {
-      rejected.push_back({what, "its eaves are not above the terrain",
-                          static_cast<long long>(pts.size())});
+      rejected.push_back(
+          {what, "its eaves are not above the terrain", static_cast<long long>(pts.size())});
       continue;
     }
     auto spec = outline_extrusion(*outline, under, high - g + 1.0);  // up past the roof

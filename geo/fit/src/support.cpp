@@ -19,8 +19,7 @@ using kernel::Vec3;
 //    the region's extent (at least three connectivity cells) — above, beside, or below both
 //    the region and the terrain under it.
 std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& box, double coverage,
-                        const kernel::BoundingBox& region, double cell,
-                        const PrimitiveOptions& o) {
+                        const kernel::BoundingBox& region, double cell, const PrimitiveOptions& o) {
   const bool curved = spec.type != PrimitiveType::Box && spec.type != PrimitiveType::Extrusion;
   if (curved && coverage < o.min_curved_coverage) {
     char text[160];

@@ -66,7 +66,8 @@ fit:
   EXPECT_EQ(o.ransac.max_radius, 12.0);
   EXPECT_EQ(o.ransac.max_candidates, 1000u);
   EXPECT_EQ(o.ransac.seed, 77u);  // run.seed, the one seed rule
-  EXPECT_EQ(o.ransac.shapes, (std::array<bool, fit::kShapeTypeCount>{true, false, false, true, false}));
+  EXPECT_EQ(o.ransac.shapes,
+            (std::array<bool, fit::kShapeTypeCount>{true, false, false, true, false}));
   EXPECT_FALSE(o.primitives.boxes);
   EXPECT_EQ(o.primitives.max_box_depth, 20.0);
   EXPECT_EQ(o.primitives.min_box_thickness, 0.1);

@@ -19,8 +19,8 @@ struct FitClassesConfig {
 
 struct FitOutliersConfig {
   bool enabled = true;
-  int neighbours = 12;    ///< 2..1000
-  double std_ratio = 3.0; ///< (0, 100]
+  int neighbours = 12;     ///< 2..1000
+  double std_ratio = 3.0;  ///< (0, 100]
   bool operator==(const FitOutliersConfig&) const = default;
 };
 
