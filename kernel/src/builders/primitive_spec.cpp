@@ -25,6 +25,9 @@ Result<Shape> apply_clips(Shape solid, const std::vector<Eigen::Vector4d>& clips
     e1 = (e1 - e1.dot(n) * n).normalized();
     const Vec3 e2 = n.cross(e1);
     const BoundingBox box = bounding_box(solid);
+    if (box.empty() || !(box.max - box.min).allFinite() || (box.max - box.min).maxCoeff() > 1e9) {
+      return Error{ErrorCode::DegenerateGeometry, which + ": the solid is too large to clip"};
+    }
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int c = 0; c < 8; ++c) {
       const Vec3 p((c & 1) ? box.max.x() : box.min.x(), (c & 2) ? box.max.y() : box.min.y(),
