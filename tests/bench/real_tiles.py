@@ -165,18 +165,7 @@ def seg_dist(px, py, ax, ay, bx, by):
     return math.sqrt(dx * dx + dy * dy)
 
 
-def inside_rings(px, py, rings):
-    """Even-odd point-in-polygon over several rings (outer + holes)."""
-    inside = False
-    for ring in rings:
-        n = len(ring)
-        for i in range(n):
-            ax, ay = ring[i]
-            bx, by = ring[(i + 1) % n]
-            if (ay > py) != (by > py):
-                if px < ax + (py - ay) * (bx - ax) / (by - ay):
-                    inside = not inside
-    return inside
+inside_rings = top_surface.inside_rings  # even-odd over several rings (outer + holes)
 
 
 def profile_distance(rho, z, profile, skip_axis):

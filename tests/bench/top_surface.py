@@ -72,7 +72,8 @@ def _cylinder_spans(prim, o, d):
     return [(t0, t1)] if t0 <= t1 else []
 
 
-def _inside_polygon(px, py, rings):
+def inside_rings(px, py, rings):
+    """Even-odd point-in-polygon over several rings (outer + holes)."""
     inside = False
     for ring in rings:
         n = len(ring)
@@ -89,7 +90,7 @@ def _extrusion_spans(prim, o, d):
     if iv is None:
         return []
     if abs(d[0]) < 1e-12 and abs(d[1]) < 1e-12:  # the line runs along the extrusion
-        return [iv] if _inside_polygon(o[0], o[1], prim.rings) else []
+        return [iv] if inside_rings(o[0], o[1], prim.rings) else []
     # The line crosses the profile's plane: where it is inside the profile (even-odd).
     cuts = []
     for ring in prim.rings:
@@ -147,7 +148,7 @@ def _inside(prim, lx, ly, lz):
             return False
         return math.hypot(lx, ly) <= p["r1"] + (p["r2"] - p["r1"]) * lz / p["h"]
     # revolution (any angle taken as a full turn)
-    return _inside_polygon(math.hypot(lx, ly), lz, [prim.profile])
+    return inside_rings(math.hypot(lx, ly), lz, [prim.profile])
 
 
 def _scanned_top(prim, o, d):

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -23,6 +22,7 @@
 #include "csgtile/geo/scene.h"
 #include "csgtile/fit/segment.h"
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/publish.h"
 
 namespace csgtile::worker::detail {
 
@@ -106,25 +106,7 @@ int run_fit(const FitCommand& c) {
   const fit::FitOutput& f = tile.output;
   const double read_seconds = tile.read_seconds;
   const std::string text = geo::scene_to_json(tile.scene);
-  {
-    const std::filesystem::path target(c.out);
-    // Written beside the target and renamed onto it: never onto a device or a directory
-    // (`--out /dev/null` would replace the device node with a file).
-    std::error_code status_error;
-    const auto status = std::filesystem::status(target, status_error);
-    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
-      return fail(ErrorCode::Usage, c.out + ": not a regular file (the scene is written there "
-                                           "and replaces it)");
-    }
-    const std::filesystem::path temp = target.string() + ".tmp";
-    std::ofstream file(temp, std::ios::binary | std::ios::trunc);
-    file << text;
-    file.close();
-    if (!file) return fail(ErrorCode::Io, c.out + ": cannot write");
-    std::error_code ec;
-    std::filesystem::rename(temp, target, ec);
-    if (ec) return fail(ErrorCode::Io, c.out + ": " + ec.message());
-  }
+  if (Failure w = write_file_atomic(c.out, text); !w.ok()) return fail(w.code, w.message);
 
   if (!c.dump_shapes.empty() && !write_detections(c.dump_shapes, f.detections)) {
     return fail(ErrorCode::Io, c.dump_shapes + ": cannot write");

@@ -33,6 +33,12 @@ Failure io_error(const std::string& what, const std::filesystem::path& path, int
 
 Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
   std::error_code ec;
+  // The rename would replace whatever is there: never a device, a pipe or a directory
+  // (`--out /dev/null` must not turn the device node into a file).
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    return {ErrorCode::Io, path.string() + ": not a regular file (it would be replaced)"};
+  }
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
   std::filesystem::create_directories(dir, ec);
   if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};

@@ -429,20 +429,10 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
     const std::vector<Vec2>& profile = outline->profile;
     const std::vector<std::vector<Vec2>>& holes = outline->holes;
     if (profile.size() <= 4 && holes.empty()) continue;  // a rectangle: the box's
-    // Bottom: the terrain under the footprint.
-    Vec2 centre = Vec2::Zero();
-    for (const auto& p : profile) centre += p / static_cast<double>(profile.size());
-    double radius = 0.0;
-    for (const auto& p : profile) radius = std::max(radius, (p - centre).norm());
-    const Vec2 wc = centre.x() * u + centre.y() * v;
-    // The lowest terrain level around the footprint (the foot of a slope: walls do not stop
-    // above it), else the median level near it.
-    std::vector<Vec2> footprint;
-    for (const auto& q : profile) footprint.push_back(q.x() * u + q.y() * v);
-    double g = lowest_ground_under(*o.ground, footprint);
-    if (!std::isfinite(g)) {
-      g = o.ground->median_near(wc.x(), wc.y(), radius + 2.0 * o.ground->cell);
-    }
+    // Bottom: the lowest terrain level around the footprint (the foot of a slope: walls do
+    // not stop above it), else the median level near it.
+    const OutlineGround under = outline_ground(*outline, *o.ground);
+    const double g = under.ground;
     if (!std::isfinite(g) || top - g < o.min_building_height) continue;
     // Description lengths of the extrusion and of the box around it.
     auto dl = [&](const std::vector<Vec2>& outer_ring, const std::vector<std::vector<Vec2>>& inner,
@@ -494,19 +484,10 @@ std::optional<Proposal> propose_roof_extrusion(const ProposalInput& in,
       continue;
     }
     // Placement: x along u, origin at the footprint's centre on the terrain.
-    const auto loc =
-        place(frame_of(Vec3(u.x(), u.y(), 0.0), Vec3::UnitZ()), Vec3(wc.x(), wc.y(), g));
-    if (!loc) continue;
+    auto spec = outline_extrusion(*outline, under, top - g);
+    if (!spec) continue;
     Proposal p;
-    p.spec.type = PrimitiveType::Extrusion;
-    for (const auto& v2 : profile) p.spec.profile.push_back(v2 - centre);
-    for (const auto& h : holes) {
-      std::vector<Vec2> hole;
-      for (const auto& v2 : h) hole.push_back(v2 - centre);
-      p.spec.holes.push_back(std::move(hole));
-    }
-    p.spec.height = top - g;
-    p.spec.placement = *loc;
+    p.spec = std::move(*spec);
     // Roof and walls (the floor is never seen).
     p.area = polygon_area(profile, holes) + polygon_perimeter(profile, holes) * p.spec.height;
     p.members = std::move(members);

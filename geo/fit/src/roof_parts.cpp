@@ -85,11 +85,20 @@ std::vector<Proposal> propose_roof_parts(const ProposalInput& in,
     // The plane in the local frame: n·(R x + t) <= d.
     const Vec3 nl = loc.rotation().transpose() * n;
     p.spec.clips.push_back(Eigen::Vector4d(nl.x(), nl.y(), nl.z(), d - n.dot(loc.translation())));
-    // Members: unclaimed points over the outline (within a cell of it) and under the roof.
+    // Members: unclaimed points over the outline (within a cell of it) and under the roof;
+    // the outline's box in its frame first, so that the polygon tests meet only its points.
+    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+    for (const auto& q : outline->profile) {
+      a0 = std::min(a0, q.x() - outline->cell);
+      a1 = std::max(a1, q.x() + outline->cell);
+      b0 = std::min(b0, q.y() - outline->cell);
+      b1 = std::max(b1, q.y() + outline->cell);
+    }
     for (std::uint32_t i = 0; i < in.points.size(); ++i) {
       if (claimed[i] || !in.points[i].allFinite()) continue;
       const Vec3& q3 = in.points[i];
       const Vec2 q(Vec2(q3.x(), q3.y()).dot(u), Vec2(q3.x(), q3.y()).dot(v));
+      if (q.x() < a0 || q.x() > a1 || q.y() < b0 || q.y() > b1) continue;
       if (q3.z() < g - tight || n.dot(q3) > d + tight) continue;
       if (inside_polygon(q, outline->profile, outline->holes) ||
           boundary_distance(q, outline->profile, outline->holes) <= outline->cell) {

@@ -16,7 +16,8 @@ namespace csgtile::worker {
 std::string sha256_hex(std::string_view bytes);
 
 /// Writes `bytes` to `path` atomically (temp file in the same directory, fsync, rename,
-/// fsync of the directory). Creates parent directories. Error: Io, naming the path.
+/// fsync of the directory). Creates parent directories. Error: Io, naming the path; also
+/// when `path` exists and is not a regular file (a device, a pipe, a directory).
 Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
 
 /// A relative object key is safe when it has no "..", no absolute root, no empty or "."
