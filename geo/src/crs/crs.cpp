@@ -37,11 +37,14 @@ const char* projection_method_name(ProjectionMethod method) {
       return "Polar Stereographic (variant B)";
     case ProjectionMethod::ObliqueStereographic:
       return "Oblique Stereographic";
+    case ProjectionMethod::ComputedByProj:
+      return "computed by PROJ";
   }
   return "?";
 }
 
 double Crs::z_unit_metres() const {
+  if (kind == CrsKind::Geocentric) return linear_unit.metres;
   if (vertical) return vertical->unit.metres;
   if (kind == CrsKind::Projected) return linear_unit.metres;
   return 1.0;
@@ -94,12 +97,19 @@ Status validate_crs(const Crs& crs) {
       (!(crs.vertical->unit.metres > 0) || !std::isfinite(crs.vertical->unit.metres))) {
     return invalid("vertical unit '" + crs.vertical->unit.name + "' must have a positive size");
   }
-  if (crs.kind == CrsKind::Geographic) {
-    if (crs.projection) return invalid("a geographic CRS has no projection");
+  if (crs.kind != CrsKind::Projected) {
+    if (crs.projection) return invalid("a geographic or geocentric CRS has no projection");
+    if (crs.kind == CrsKind::Geocentric && crs.vertical) {
+      return invalid("a geocentric CRS has no vertical CRS (z is geocentric)");
+    }
     return Status();
   }
   if (!crs.projection) return invalid("projected CRS '" + crs.name + "' has no projection");
   const Projection& p = *crs.projection;
+  if (p.method == ProjectionMethod::ComputedByProj) {
+    if (p.proj_string.empty()) return invalid(p.method_name + ": no PROJ definition");
+    return Status();
+  }
   const std::string method = projection_method_name(p.method);
   if (!finite_all({p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor,
                    p.standard_parallel_1_deg, p.standard_parallel_2_deg, p.false_easting_m,
@@ -168,13 +178,28 @@ std::string both(const char* what, const std::string& a, const std::string& b) {
 
 std::string num(double v) { return detail::format_number(v); }
 
+const char* kind_name(CrsKind kind) {
+  switch (kind) {
+    case CrsKind::Geographic:
+      return "geographic";
+    case CrsKind::Projected:
+      return "projected";
+    case CrsKind::Geocentric:
+      return "geocentric";
+  }
+  return "?";
+}
+
+std::string method_label(const Projection& p) {
+  return p.method == ProjectionMethod::ComputedByProj && !p.method_name.empty()
+             ? p.method_name
+             : std::string(projection_method_name(p.method));
+}
+
 }  // namespace
 
 std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
-  if (a.kind != b.kind) {
-    return both("kind", a.kind == CrsKind::Projected ? "projected" : "geographic",
-                b.kind == CrsKind::Projected ? "projected" : "geographic");
-  }
+  if (a.kind != b.kind) return both("kind", kind_name(a.kind), kind_name(b.kind));
   const Ellipsoid& ea = a.datum.ellipsoid;
   const Ellipsoid& eb = b.datum.ellipsoid;
   if (!close_rel(ea.semi_major_m, eb.semi_major_m, 1e-12)) {
@@ -210,7 +235,11 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
       }
     }
   }
-  if (a.kind == CrsKind::Geographic) {
+  if (a.kind == CrsKind::Geocentric) {
+    if (!close_rel(a.linear_unit.metres, b.linear_unit.metres, 1e-12)) {
+      return both("linear unit", a.linear_unit.name, b.linear_unit.name);
+    }
+  } else if (a.kind == CrsKind::Geographic) {
     if (!close_rel(a.angular_unit.radians, b.angular_unit.radians, 1e-12)) {
       return both("angular unit", a.angular_unit.name, b.angular_unit.name);
     }
@@ -222,8 +251,13 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
     const Projection& pa = *a.projection;
     const Projection& pb = *b.projection;
     if (pa.method != pb.method) {
-      return both("projection method", projection_method_name(pa.method),
-                  projection_method_name(pb.method));
+      return both("projection method", method_label(pa), method_label(pb));
+    }
+    if (pa.method == ProjectionMethod::ComputedByProj) {
+      if (pa.proj_string != pb.proj_string) {
+        return both("projection (PROJ)", pa.proj_string, pb.proj_string);
+      }
+      return std::nullopt;
     }
     struct Field {
       const char* name;
@@ -306,9 +340,9 @@ std::string describe_crs(const Crs& crs) {
   if (crs.epsg != 0) out += "EPSG:" + std::to_string(crs.epsg) + " ";
   out += crs.name.empty() ? std::string("unnamed") : crs.name;
   if (crs.kind == CrsKind::Projected && crs.projection) {
-    out += ": ";
-    out += projection_method_name(crs.projection->method);
-    out += ", " + crs.linear_unit.name;
+    out += ": " + method_label(*crs.projection) + ", " + crs.linear_unit.name;
+  } else if (crs.kind == CrsKind::Geocentric) {
+    out += ": geocentric, " + crs.linear_unit.name;
   } else {
     out += ": geographic, " + crs.angular_unit.name;
   }
@@ -335,6 +369,11 @@ Result<Crs> crs_from_config(std::string_view text) {
   };
   std::string_view s = trim(text);
   if (s.empty()) return Error{ErrorCode::InvalidArgument, "empty CRS text in the config"};
+  if (s.front() == '{') {  // PROJJSON
+    auto crs = detail::crs_from_proj_text(s, "PROJJSON");
+    if (crs.ok()) crs.value().source = "config (PROJJSON)";
+    return crs;
+  }
   if (s.find('[') != std::string_view::npos || s.find('(') != std::string_view::npos) {
     auto crs = crs_from_wkt(s);
     if (crs.ok()) crs.value().source = "config";

@@ -39,6 +39,14 @@ std::optional<VerticalCrs> vertical_from_epsg(int code);
 /// WKT 1 read by crs_from_wkt, the datum's Helmert to WGS 84 as PROJ ranks it. Errors:
 /// Unsupported naming the code (not in the database, geocentric, a method not computed).
 kernel::Result<Crs> crs_from_proj_database(int code);
+/// A CRS from any text PROJ reads (WKT 1/2, PROJJSON, "EPSG:n", PROJ strings with
+/// +type=crs): our WKT reader on PROJ's WKT 1 where it models the CRS, else a projection
+/// computed by PROJ (ProjectionMethod::ComputedByProj) or a geocentric CRS. `what` names the
+/// text in messages ("WKT", "PROJJSON", "EPSG:5514"). Errors: Unsupported (PROJ cannot read
+/// it, or it is no geographic, projected, geocentric or compound CRS).
+kernel::Result<Crs> crs_from_proj_text(std::string_view text, const std::string& what);
+/// Our own WKT reader alone (crs_from_wkt falls back to PROJ for what it refuses).
+kernel::Result<Crs> crs_from_wkt_own(std::string_view wkt);
 /// A vertical CRS's name and unit from PROJ's database; nullopt when it is none.
 std::optional<VerticalCrs> vertical_from_proj_database(int code);
 

@@ -599,6 +599,11 @@ kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg) {
                               "database: its unit is assumed to be metre");
     }
   }
+  if (auto status = validate_crs(*crs); !status.ok()) {
+    return kernel::Error{status.error().code, "EPSG:" + std::to_string(code) + "+" +
+                                                  std::to_string(vertical_epsg) + ": " +
+                                                  status.error().message};
+  }
   return *std::move(crs);
 }
 

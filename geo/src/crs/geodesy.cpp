@@ -2,7 +2,9 @@
 
 #include "crs/geodesy.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <GeographicLib/Constants.hpp>
@@ -14,7 +16,7 @@
 #include <GeographicLib/UTMUPS.hpp>
 
 #include "crs/crs_internal.h"
-#include "crs/oblique_stereographic.h"
+#include "crs/proj_engine.h"
 
 namespace csgtile::geo::detail {
 namespace {
@@ -169,27 +171,21 @@ class PolarEngine final : public ProjectionEngine {
   bool north_ = true;
 };
 
-class ObliqueEngine final : public ProjectionEngine {
- public:
-  ObliqueEngine(double a, double f, const Projection& p)
-      : os_(a, f, p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor,
-            p.false_easting_m, p.false_northing_m) {}
-  void forward(double lat, double lon, double& easting, double& northing) const override {
-    if (!os_.forward(lat, lon, easting, northing)) {
-      throw DomainError("latitude " + format_number(lat) + ", longitude " + format_number(lon) +
-                        " cannot be projected (antipode of the origin)");
-    }
-  }
-  void reverse(double easting, double northing, double& lat, double& lon) const override {
-    if (!os_.reverse(easting, northing, lat, lon)) {
-      throw DomainError("easting " + format_number(easting) + ", northing " +
-                        format_number(northing) + ": the latitude iteration did not converge");
-    }
-  }
-
- private:
-  ObliqueStereographic os_;
-};
+// The PROJ string of a method PROJ computes for us: the oblique stereographic of RD New
+// (PROJ's "sterea" is EPSG method 9809, the double stereographic of GN 7-2).
+std::string proj_string_of(const Crs& crs) {
+  const Projection& p = *crs.projection;
+  if (p.method == ProjectionMethod::ComputedByProj) return p.proj_string;
+  const Ellipsoid& e = crs.datum.ellipsoid;
+  const std::string earth = e.inverse_flattening == 0.0
+                                ? "+R=" + format_number(e.semi_major_m)
+                                : "+a=" + format_number(e.semi_major_m) +
+                                      " +rf=" + format_number(e.inverse_flattening);
+  return "+proj=sterea +lat_0=" + format_number(p.latitude_of_origin_deg) +
+         " +lon_0=" + format_number(p.longitude_of_origin_deg) +
+         " +k=" + format_number(p.scale_factor) + " +x_0=" + format_number(p.false_easting_m) +
+         " +y_0=" + format_number(p.false_northing_m) + " " + earth;
+}
 
 std::unique_ptr<ProjectionEngine> make_engine(const Crs& crs) {
   const Projection& p = *crs.projection;
@@ -211,7 +207,11 @@ std::unique_ptr<ProjectionEngine> make_engine(const Crs& crs) {
     case ProjectionMethod::PolarStereographicB:
       return std::make_unique<PolarEngine>(a, f, p);
     case ProjectionMethod::ObliqueStereographic:
-      return std::make_unique<ObliqueEngine>(a, f, p);
+    case ProjectionMethod::ComputedByProj: {
+      auto engine = make_proj_engine(proj_string_of(crs));
+      if (!engine.ok()) throw DomainError(engine.error().message);
+      return std::move(engine).value();
+    }
   }
   return nullptr;
 }
@@ -230,6 +230,16 @@ Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
   if (crs.kind == CrsKind::Geographic) {
     math->xy_to_degrees_ = crs.angular_unit.radians / kDegree;
     if (crs.angular_unit.epsg == 9102) math->xy_to_degrees_ = 1.0;  // exact for degrees
+  } else if (crs.kind == CrsKind::Geocentric) {
+    math->xy_to_metres_ = crs.linear_unit.metres;
+    math->z_to_metres_ = crs.linear_unit.metres;
+    try {
+      math->earth_ = std::make_shared<const GeographicLib::Geocentric>(
+          crs.datum.ellipsoid.semi_major_m, crs.datum.ellipsoid.flattening());
+    } catch (const std::exception& e) {
+      return Error{ErrorCode::InvalidArgument,
+                   "ellipsoid '" + crs.datum.ellipsoid.name + "' refused: " + e.what()};
+    }
   } else {
     math->xy_to_metres_ = crs.linear_unit.metres;
     try {
@@ -243,8 +253,31 @@ Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
   return std::shared_ptr<const CrsMath>(std::move(math));
 }
 
+void ProjectionEngine::reverse_many(double* x, double* y, std::size_t count) const {
+  for (std::size_t i = 0; i < count; ++i) {
+    double lat = 0.0, lon = 0.0;
+    try {
+      reverse(x[i], y[i], lat, lon);
+    } catch (const std::exception&) {
+      lat = lon = std::numeric_limits<double>::quiet_NaN();
+    }
+    x[i] = lat;
+    y[i] = lon;
+  }
+}
+
 GeodeticPoint CrsMath::to_geodetic(const kernel::Vec3& xyz) const {
   GeodeticPoint g;
+  if (earth_) {
+    require_finite(xyz.x(), xyz.y(), "coordinates");
+    if (!std::isfinite(xyz.z())) throw DomainError("non-finite coordinates");
+    earth_->Reverse(xyz.x() * xy_to_metres_, xyz.y() * xy_to_metres_, xyz.z() * z_to_metres_,
+                    g.latitude_deg, g.longitude_deg, g.height_m);
+    require_finite(g.latitude_deg, g.longitude_deg, "geodetic result");
+    if (prime_meridian_deg_ != 0.0)
+      g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+    return g;
+  }
   g.height_m = xyz.z() * z_to_metres_;
   if (!engine_) {
     g.longitude_deg = xyz.x() * xy_to_degrees_;
@@ -263,6 +296,47 @@ GeodeticPoint CrsMath::to_geodetic(const kernel::Vec3& xyz) const {
   return g;
 }
 
+void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
+                               std::span<GeodeticPoint> out) const {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!engine_) {
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      try {
+        out[i] = to_geodetic(in[i]);
+      } catch (const std::exception&) {
+        out[i] = GeodeticPoint{nan, nan, nan};
+      }
+    }
+    return;
+  }
+  // Projected: the projection in batches (PROJ transforms a batch per call), units and the
+  // prime meridian around it.
+  constexpr std::size_t kBatch = 1024;
+  double x[kBatch];
+  double y[kBatch];
+  for (std::size_t start = 0; start < in.size(); start += kBatch) {
+    const std::size_t n = std::min(kBatch, in.size() - start);
+    for (std::size_t i = 0; i < n; ++i) {
+      const kernel::Vec3& p = in[start + i];
+      const bool ok = std::isfinite(p.x()) && std::isfinite(p.y());
+      x[i] = ok ? p.x() * xy_to_metres_ : nan;
+      y[i] = ok ? p.y() * xy_to_metres_ : nan;
+    }
+    engine_->reverse_many(x, y, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      GeodeticPoint& g = out[start + i];
+      g.latitude_deg = x[i];
+      g.longitude_deg = y[i];
+      g.height_m = in[start + i].z() * z_to_metres_;
+      if (!std::isfinite(g.latitude_deg) || !std::isfinite(g.longitude_deg)) {
+        g = GeodeticPoint{nan, nan, nan};
+      } else if (prime_meridian_deg_ != 0.0) {
+        g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+      }
+    }
+  }
+}
+
 kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
   require_finite(point.latitude_deg, point.longitude_deg, "geodetic coordinates");
   if (std::fabs(point.latitude_deg) > 90.0)
@@ -270,6 +344,11 @@ kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
   double lon = point.longitude_deg;
   if (prime_meridian_deg_ != 0.0)
     lon = GeographicLib::Math::AngNormalize(lon - prime_meridian_deg_);
+  if (earth_) {
+    kernel::Vec3 x;
+    earth_->Forward(point.latitude_deg, lon, point.height_m, x.x(), x.y(), x.z());
+    return x / xy_to_metres_;
+  }
   const double z = point.height_m / z_to_metres_;
   if (!engine_) return kernel::Vec3(lon / xy_to_degrees_, point.latitude_deg / xy_to_degrees_, z);
   double e = 0.0, n = 0.0;

@@ -5,7 +5,9 @@
 // Calls here throw (GeographicLib::GeographicErr, or DomainError for our own checks); the
 // public wrappers in georeference.cpp catch and turn them into kernel errors or NaNs.
 
+#include <cstddef>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -33,6 +35,10 @@ class ProjectionEngine {
   virtual ~ProjectionEngine() = default;
   virtual void forward(double lat, double lon, double& easting, double& northing) const = 0;
   virtual void reverse(double easting, double northing, double& lat, double& lon) const = 0;
+  /// Bulk reverse in place: on entry x[i], y[i] are easting and northing (metres), on exit
+  /// latitude and longitude (degrees). A point outside the domain gets NaNs; never throws.
+  /// The default calls reverse() point by point; PROJ's engine transforms the batch at once.
+  virtual void reverse_many(double* x, double* y, std::size_t count) const;
 };
 
 /// A Crs made computable. Immutable; const calls are thread-safe.
@@ -46,11 +52,15 @@ class CrsMath {
   GeodeticPoint to_geodetic(const kernel::Vec3& xyz) const;
   /// Geodetic on the CRS's datum → CRS coordinates. Throws.
   kernel::Vec3 from_geodetic(const GeodeticPoint& point) const;
+  /// Bulk to_geodetic; a point it cannot convert gets NaNs (to_geodetic on it says why).
+  /// `out` has the size of `in`. Never throws.
+  void to_geodetic_many(std::span<const kernel::Vec3> in, std::span<GeodeticPoint> out) const;
 
  private:
   explicit CrsMath(Crs crs) : crs_(std::move(crs)) {}
   Crs crs_;
-  std::unique_ptr<ProjectionEngine> engine_;  // null for geographic CRSs
+  std::unique_ptr<ProjectionEngine> engine_;  // null for geographic and geocentric CRSs
+  std::shared_ptr<const GeographicLib::Geocentric> earth_;  // geocentric CRSs: the ellipsoid
   double xy_to_metres_ = 1.0;                 // projected
   double xy_to_degrees_ = 1.0;                // geographic
   double z_to_metres_ = 1.0;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 #include <limits>
 #include <string>
 
@@ -140,8 +141,9 @@ struct Georeferencer::Impl {
   GeographicLib::LocalCartesian local;  // used on the identity-datum path
 
   // Both throw on points outside the domain.
-  Vec3 forward(const Vec3& p) const {
-    GeodeticPoint g = math->to_geodetic(p);
+  Vec3 forward(const Vec3& p) const { return forward_geodetic(math->to_geodetic(p)); }
+  // The part of forward after the CRS's own coordinates: geodetic on its datum → local.
+  Vec3 forward_geodetic(GeodeticPoint g) const {
     g.height_m += options.geoid_undulation_m;
     Vec3 out;
     if (shift.is_identity()) {
@@ -259,13 +261,23 @@ Status Georeferencer::to_local(std::span<const Vec3> in, std::span<Vec3> out) co
                                                   std::to_string(out.size()) + ")");
   }
   const Impl& impl = *impl_;
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    try {
-      out[i] = impl.forward(in[i]);
-      if (!finite(out[i])) throw detail::DomainError("non-finite result");
-    } catch (const std::exception& e) {
-      return Status(ErrorCode::InvalidArgument,
-                    "point " + std::to_string(i) + ": " + domain_error(crs(), in[i], e).message);
+  // The CRS's own coordinates → geodetic in batches (PROJ transforms a batch per call), the
+  // rest point by point; a point that fails is redone alone for its reason.
+  constexpr std::size_t kBatch = 4096;
+  std::vector<GeodeticPoint> geodetic(std::min(kBatch, in.size()));
+  for (std::size_t start = 0; start < in.size(); start += kBatch) {
+    const std::size_t n = std::min(kBatch, in.size() - start);
+    impl.math->to_geodetic_many(in.subspan(start, n), std::span(geodetic).first(n));
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = start + k;
+      try {
+        const GeodeticPoint& g = geodetic[k];
+        out[i] = std::isfinite(g.latitude_deg) ? impl.forward_geodetic(g) : impl.forward(in[i]);
+        if (!finite(out[i])) throw detail::DomainError("non-finite result");
+      } catch (const std::exception& e) {
+        return Status(ErrorCode::InvalidArgument,
+                      "point " + std::to_string(i) + ": " + domain_error(crs(), in[i], e).message);
+      }
     }
   }
   return Status();

@@ -827,9 +827,30 @@ std::string geogcs_wkt(const Crs& crs) {
   return s + "]";
 }
 
+// DATUM, PRIMEM, UNIT and AXIS of a WKT 1 GEOCCS.
+std::string geocentric_body_wkt(const Crs& crs) {
+  const GeodeticDatum& d = crs.datum;
+  const Ellipsoid& e = d.ellipsoid;
+  std::string s = "DATUM[" + quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," +
+                  num(e.semi_major_m) + "," + num(e.inverse_flattening) + authority(e.epsg) + "]";
+  if (d.to_wgs84 && d.epsg != 6326) {
+    const Helmert7& h = *d.to_wgs84;
+    s += ",TOWGS84[" + num(h.tx_m) + "," + num(h.ty_m) + "," + num(h.tz_m) + "," +
+         num(-h.rx_arcsec + 0.0) + "," + num(-h.ry_arcsec + 0.0) + "," + num(-h.rz_arcsec + 0.0) +
+         "," + num(h.scale_ppm) + "]";
+  }
+  s += authority(d.epsg) + "],PRIMEM[" +
+       quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
+       num(d.prime_meridian_deg) + "]," + unit_wkt(crs.linear_unit) +
+       ",AXIS[\"Geocentric X\",OTHER],AXIS[\"Geocentric Y\",OTHER],AXIS[\"Geocentric Z\",NORTH]";
+  return s;
+}
+
 }  // namespace
 
-Result<Crs> crs_from_wkt(std::string_view wkt) {
+namespace detail {
+
+Result<Crs> crs_from_wkt_own(std::string_view wkt) {
   if (wkt.size() > kMaxWktLength) {
     return Error{ErrorCode::InvalidArgument,
                  "WKT longer than " + std::to_string(kMaxWktLength) + " bytes"};
@@ -862,9 +883,24 @@ Result<Crs> crs_from_wkt(std::string_view wkt) {
   return out;
 }
 
+}  // namespace detail
+
+Result<Crs> crs_from_wkt(std::string_view wkt) {
+  auto own = detail::crs_from_wkt_own(wkt);
+  if (own.ok() || own.error().code != ErrorCode::Unsupported) return own;
+  // A valid CRS our reader does not model (a method, a geocentric CRS): PROJ reads it.
+  auto by_proj = detail::crs_from_proj_text(wkt, "WKT");
+  if (by_proj.ok()) return by_proj;
+  return Error{ErrorCode::Unsupported, own.error().message + "; PROJ: " + by_proj.error().message};
+}
+
 std::string crs_to_wkt1(const Crs& crs) {
   std::string s;
-  if (crs.kind == CrsKind::Geographic || !crs.projection) {
+  if (crs.kind == CrsKind::Geocentric) {
+    s = "GEOCCS[" + quoted(crs.name) + "," + geocentric_body_wkt(crs) + authority(crs.epsg) + "]";
+  } else if (crs.projection && crs.projection->method == ProjectionMethod::ComputedByProj) {
+    s = crs.projection->wkt1;
+  } else if (crs.kind == CrsKind::Geographic || !crs.projection) {
     s = geogcs_wkt(crs);
   } else {
     const Projection& p = *crs.projection;
@@ -901,6 +937,8 @@ std::string crs_to_wkt1(const Crs& crs) {
         s += parameter("latitude_of_origin", p.standard_parallel_1_deg);
         s += parameter("central_meridian", p.longitude_of_origin_deg);
         s += parameter("scale_factor", 1.0);
+        break;
+      case ProjectionMethod::ComputedByProj:  // written by PROJ above
         break;
     }
     s += parameter("false_easting", p.false_easting_m / unit);

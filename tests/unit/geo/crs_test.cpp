@@ -198,9 +198,9 @@ TEST(CrsEpsg, VerticalCodesAndUnknownCodes) {
   ASSERT_FALSE(unknown.ok());
   EXPECT_EQ(unknown.error().code, ErrorCode::Unsupported);
   EXPECT_NE(unknown.error().message.find("EPSG:99999"), std::string::npos);
-  auto web = crs_from_epsg(3857);
-  ASSERT_FALSE(web.ok());
-  EXPECT_NE(web.error().message.find("Pseudo-Mercator"), std::string::npos);
+  auto web = crs_from_epsg(3857);  // not in the table: PROJ's database
+  ASSERT_TRUE(web.ok()) << web.error().message;
+  EXPECT_NE(web.value().name.find("Pseudo-Mercator"), std::string::npos);
 }
 
 // Codes outside the built-in table come from PROJ's database (issue #19): the national grids
@@ -238,13 +238,27 @@ TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
   ASSERT_TRUE(finland.value().vertical.has_value());
   EXPECT_NE(finland.value().vertical->name.find("N2000"), std::string::npos);
   EXPECT_FALSE(mentions(finland.value().warnings, "EPSG:3900"));
-  for (const auto& [code, what] : std::vector<std::pair<int, std::string>>{
-           {2056, "EPSG:2056"}, {5514, "EPSG:5514"}, {4978, "geocentric"}}) {
-    auto refused = crs_from_epsg(code);
-    ASSERT_FALSE(refused.ok()) << code;
-    EXPECT_EQ(refused.error().code, ErrorCode::Unsupported) << refused.error().message;
-    EXPECT_NE(refused.error().message.find(what), std::string::npos) << refused.error().message;
+  // Methods our engines do not compute are PROJ's; geocentric CRSs are read too.
+  for (const auto& [code, method] : std::vector<std::pair<int, std::string>>{
+           {2056, "Oblique Mercator"}, {5514, "Krovak"}, {3857, "Pseudo Mercator"},
+           {3035, "Lambert Azimuthal Equal Area"}, {3577, "Albers"}}) {
+    auto crs = crs_from_epsg(code);
+    ASSERT_TRUE(crs.ok()) << code << ": " << crs.error().message;
+    ASSERT_TRUE(crs.value().projection.has_value());
+    EXPECT_EQ(crs.value().projection->method, ProjectionMethod::ComputedByProj);
+    EXPECT_NE(crs.value().projection->method_name.find(method), std::string::npos)
+        << crs.value().projection->method_name;
+    EXPECT_EQ(crs.value().epsg, code);
+    EXPECT_TRUE(crs.value().datum.to_wgs84.has_value()) << crs.value().datum.to_wgs84_source;
   }
+  auto ecef = crs_from_epsg(4978);
+  ASSERT_TRUE(ecef.ok()) << ecef.error().message;
+  EXPECT_EQ(ecef.value().kind, CrsKind::Geocentric);
+  EXPECT_DOUBLE_EQ(ecef.value().z_unit_metres(), 1.0);
+  EXPECT_FALSE(crs_from_epsg(4978, 5709).ok());  // no vertical CRS on geocentric coordinates
+  auto none = crs_from_epsg(4099999);
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.error().code, ErrorCode::Unsupported);
 }
 
 TEST(CrsEpsg, ZUnitFollowsVerticalThenHorizontal) {
@@ -457,9 +471,13 @@ TEST(CrsGeoKeys, ErrorsNameTheKey) {
   ASSERT_FALSE(geocentric.ok());
   EXPECT_EQ(geocentric.error().code, ErrorCode::Unsupported);
 
-  auto unknown = crs_from_geokeys({key(1024, 1), key(3072, 2056)});  // Hotine: not computed
+  // A projected code whose method PROJ computes for us (Swiss oblique Mercator).
+  auto swiss = crs_from_geokeys({key(1024, 1), key(3072, 2056)});
+  ASSERT_TRUE(swiss.ok()) << swiss.error().message;
+  EXPECT_EQ(swiss.value().projection->method, ProjectionMethod::ComputedByProj);
+  auto unknown = crs_from_geokeys({key(1024, 1), key(3072, 65000)});
   ASSERT_FALSE(unknown.ok());
-  EXPECT_NE(unknown.error().message.find("2056"), std::string::npos);
+  EXPECT_NE(unknown.error().message.find("65000"), std::string::npos);
 
   auto bad_value = crs_from_geokeys({GeoKeyEntry{1024, {}, "oops"}});
   ASSERT_FALSE(bad_value.ok());
@@ -645,9 +663,14 @@ TEST(CrsWkt, ErrorsAreNamed) {
 
   auto mercator = crs_from_wkt(
       R"wkt(PROJCS["WGS 84 / World Mercator",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Mercator_1SP"],PARAMETER["central_meridian",0],PARAMETER["scale_factor",1],PARAMETER["false_easting",0],PARAMETER["false_northing",0],UNIT["metre",1]])wkt");
-  ASSERT_FALSE(mercator.ok());
-  EXPECT_EQ(mercator.error().code, ErrorCode::Unsupported);
-  EXPECT_NE(mercator.error().message.find("Mercator_1SP"), std::string::npos);
+  ASSERT_TRUE(mercator.ok()) << mercator.error().message;  // a method PROJ computes
+  EXPECT_EQ(mercator.value().projection->method, ProjectionMethod::ComputedByProj);
+  EXPECT_NE(mercator.value().projection->proj_string.find("+proj=merc"), std::string::npos);
+  auto nonsense = crs_from_wkt(
+      R"wkt(PROJCS["x",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["No_Such_Projection"],UNIT["metre",1]])wkt");
+  ASSERT_FALSE(nonsense.ok());
+  EXPECT_EQ(nonsense.error().code, ErrorCode::Unsupported);
+  EXPECT_NE(nonsense.error().message.find("No_Such_Projection"), std::string::npos);
 
   auto geocentric = crs_from_wkt(
       R"wkt(GEOCCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]]])wkt");

@@ -93,6 +93,9 @@ enum class ProjectionMethod {
   PolarStereographicA,       ///< [9810] natural origin at a pole with a scale factor (UPS)
   PolarStereographicB,       ///< [9829] scale 1 on a standard parallel
   ObliqueStereographic,      ///< [9809] double stereographic, e.g. RD New (EPSG:28992)
+  /// Any other method PROJ computes (Krovak, Hotine / Swiss oblique Mercator, Mercator,
+  /// Lambert azimuthal equal area, Albers, ...): Projection::proj_string defines it.
+  ComputedByProj,
 };
 
 /// EPSG name of a method, e.g. "Lambert Conic Conformal (2SP)".
@@ -115,6 +118,13 @@ struct Projection {
   double standard_parallel_2_deg = 0.0;
   double false_easting_m = 0.0;
   double false_northing_m = 0.0;
+  /// ComputedByProj only (empty otherwise):
+  std::string method_name;  ///< EPSG name of the method, e.g. "Krovak (North Orientated)"
+  /// The projection as a PROJ string on the CRS's ellipsoid, in metres, longitudes relative
+  /// to the CRS's prime meridian (e.g. "+proj=krovak +lat_0=49.5 ... +ellps=bessel"). The
+  /// numeric fields above are not used.
+  std::string proj_string;
+  std::string wkt1;  ///< the projected CRS as PROJ writes it in WKT 1 (for crs_to_wkt1)
 };
 
 /// A vertical CRS: informative (no geoid model is applied, see georeference.h) except for its
@@ -125,16 +135,18 @@ struct VerticalCrs {
   LinearUnit unit;
 };
 
-enum class CrsKind { Geographic, Projected };
+/// Geographic: x longitude, y latitude. Projected: x easting, y northing. Geocentric: x, y, z
+/// Earth-centred Earth-fixed on the datum's ellipsoid, in the linear unit (e.g. EPSG:4978).
+enum class CrsKind { Geographic, Projected, Geocentric };
 
-/// A horizontal CRS (geographic or projected) with an optional vertical CRS.
+/// A horizontal CRS (geographic, projected or geocentric) with an optional vertical CRS.
 struct Crs {
   CrsKind kind = CrsKind::Geographic;
   std::string name = "WGS 84";
   int epsg = 4326;  ///< 0 for user-defined
   GeodeticDatum datum;
   AngularUnit angular_unit;              ///< unit of x, y of a geographic CRS
-  LinearUnit linear_unit;                ///< unit of x, y of a projected CRS
+  LinearUnit linear_unit;                ///< unit of x, y (z) of a projected (geocentric) CRS
   std::optional<Projection> projection;  ///< set exactly when kind == Projected
   std::optional<VerticalCrs> vertical;
   /// What a builder had to assume or ignore (e.g. "user-defined datum assumed to be WGS 84").
