@@ -10,26 +10,13 @@
 #include <string_view>
 #include <vector>
 
+#include "csgtile/geo/byte_source.h"
 #include "csgtile/kernel/result.h"
 
 namespace csgtile::geo::detail {
 
-/// Bytes that can be read at any offset. Implementations are not thread-safe.
-class ByteSource {
- public:
-  virtual ~ByteSource() = default;
-  /// Size in bytes, fixed when the source was opened.
-  virtual std::uint64_t size() const = 0;
-  /// Reads exactly out.size() bytes at `offset`. Errors: IoError, CorruptData (past the end).
-  virtual kernel::Status read_at(std::uint64_t offset, std::span<std::uint8_t> out) = 0;
-  const std::string& name() const { return name_; }
-
- protected:
-  explicit ByteSource(std::string name) : name_(std::move(name)) {}
-
- private:
-  std::string name_;
-};
+/// The public interface (csgtile/geo/byte_source.h) under its private name.
+using ByteSource = geo::ByteSource;
 
 /// Opens `path` for reading. Errors: IoError naming the file and the system's reason.
 kernel::Result<std::unique_ptr<ByteSource>> open_file_source(const std::filesystem::path& path);

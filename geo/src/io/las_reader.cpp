@@ -9,6 +9,8 @@
 #include <cstring>
 
 #include "csgtile/geo/las.h"
+
+#include "csgtile/geo/copc.h"
 #include "io/byte_source.h"
 #include "io/endian.h"
 #include "io/las_format.h"
@@ -181,7 +183,40 @@ struct Parsed {
   Decoding decoding;
   std::uint64_t readable = 0;  // complete records that will be read
   std::unique_ptr<detail::laz::LazRecords> laz;  // compressed point data (LAZ, COPC)
+  std::optional<CopcInfo> copc;                   // COPC files
+  std::optional<std::size_t> copc_nodes_read;     // a COPC query: nodes selected
 };
+
+// The chunks of the COPC nodes a region (and a depth) selects, renumbered as one run of
+// points; each node must be a chunk of the chunk table (same offset, size and count).
+kernel::Result<std::vector<detail::laz::Chunk>> copc_chunks(
+    detail::ByteSource& src, const CopcInfo& info, const std::vector<detail::laz::Chunk>& all,
+    const PointReadOptions& options) {
+  auto nodes = read_copc_hierarchy(src, info);
+  if (!nodes.ok()) return nodes.error();
+  CopcQuery query;
+  query.box = options.region;
+  query.max_depth = options.copc_max_depth;
+  std::vector<detail::laz::Chunk> out;
+  std::uint64_t first = 0;
+  for (const CopcNode& n : select_copc_nodes(nodes.value(), query)) {
+    const auto it = std::lower_bound(
+        all.begin(), all.end(), n.offset,
+        [](const detail::laz::Chunk& c, std::uint64_t offset) { return c.offset < offset; });
+    if (it == all.end() || it->offset != n.offset || it->bytes != n.bytes ||
+        it->points != n.points) {
+      return corrupt(src.name(), "COPC hierarchy node " + num(n.depth) + "-" + num(n.x) + "-" +
+                                     num(n.y) + "-" + num(n.z) + " (offset " + num(n.offset) +
+                                     ", " + num(n.bytes) + " bytes, " + num(n.points) +
+                                     " points) is no chunk of the chunk table");
+    }
+    detail::laz::Chunk c = *it;
+    c.first_point = first;
+    first += c.points;
+    out.push_back(c);
+  }
+  return out;
+}
 
 // Parses and checks everything before the points, in the order the fields are needed.
 kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std::string>& warnings,
@@ -331,11 +366,12 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     pos = end;
   }
   const LasRecord* laszip = nullptr;
-  bool copc = false;
+  const LasRecord* copc_vlr = nullptr;
   for (const auto& r : s.vlrs) {
     if (r.user_id == "laszip encoded" && r.record_id == 22204 && laszip == nullptr) laszip = &r;
-    if (r.user_id == "copc" && r.record_id == 1) copc = true;
+    if (r.user_id == "copc" && r.record_id == 1 && copc_vlr == nullptr) copc_vlr = &r;
   }
+  const bool copc = copc_vlr != nullptr;
   if (compressed_bit && laszip == nullptr) {
     return corrupt(name, "LAZ-compressed (point format id " + num(format_id) +
                              " has the compression bit set) but no laszip VLR (\"laszip "
@@ -474,6 +510,19 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     auto chunks = detail::laz::read_chunks(src, spec.value(), h.offset_to_point_data, data_end,
                                            h.point_count);
     if (!chunks.ok()) return chunks.error();
+    if (copc_vlr != nullptr && copc_vlr->data) {
+      auto parsed_info = parse_copc_info(*copc_vlr->data, size, name);
+      if (!parsed_info.ok()) return parsed_info.error();
+      s.copc = parsed_info.value();
+      if (options.region || options.copc_max_depth >= 0) {
+        auto selected = copc_chunks(src, *s.copc, chunks.value(), options);
+        if (!selected.ok()) return selected.error();
+        s.copc_nodes_read = selected.value().size();
+        s.readable = 0;
+        for (const auto& c : selected.value()) s.readable += c.points;
+        chunks = std::move(selected);
+      }
+    }
     s.laz = std::make_unique<detail::laz::LazRecords>(
         src, std::move(spec).value(), std::move(chunks).value(), h.record_length,
         options.all_attributes ? detail::laz::kAllLayers : detail::laz::kLayerZ);
@@ -625,6 +674,10 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
                      " point format " + num(h.point_format);
   if (compressed) info.description += ", " + s.laz->spec().describe();
   info.point_count = h.point_count;
+  if (s.copc_nodes_read) {
+    info.description += ", " + num(*s.copc_nodes_read) + " octree nodes of the region read";
+    info.point_count = s.readable;  // the points of the nodes read
+  }
   Bounds3 bounds;
   bounds.min = h.min;
   bounds.max = h.max;
@@ -664,7 +717,8 @@ LasReader::LasReader(std::string name, PointCloudInfo info, PointReadOptions opt
 LasReader::~LasReader() = default;
 
 kernel::Result<std::unique_ptr<LasReader>> LasReader::open_source(
-    std::unique_ptr<detail::ByteSource> source, const PointReadOptions& options) {
+    std::unique_ptr<ByteSource> source, const PointReadOptions& options) {
+  if (!source) return Error{ErrorCode::InvalidArgument, "LasReader::open_source: no source"};
   auto state = std::make_unique<State>();
   state->file.source = std::move(source);
   PointCloudInfo info;
@@ -695,6 +749,14 @@ const std::vector<LasRecord>& LasReader::vlrs() const { return state_->file.vlrs
 const std::vector<LasRecord>& LasReader::evlrs() const { return state_->file.evlrs; }
 const LasCrsRecords& LasReader::crs() const { return state_->file.crs; }
 std::uint64_t LasReader::readable_points() const { return state_->file.readable; }
+const std::optional<CopcInfo>& LasReader::copc() const { return state_->file.copc; }
+
+kernel::Result<std::vector<CopcNode>> LasReader::copc_hierarchy() {
+  if (!state_->file.copc) {
+    return Error{ErrorCode::InvalidArgument, name() + ": not a COPC file (no copc info VLR)"};
+  }
+  return read_copc_hierarchy(*state_->file.source, *state_->file.copc);
+}
 
 kernel::Status LasReader::seek(std::uint64_t index) {
   if (index > state_->file.readable) {

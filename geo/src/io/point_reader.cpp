@@ -132,6 +132,30 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       batch.clear();
       return std::size_t{0};
     }
+    if (options_.region) {
+      // Keep the points inside the region, in order, with their extra bytes (a point with
+      // a NaN coordinate is inside no region).
+      const Bounds3& r = *options_.region;
+      const std::size_t stride = batch.extra_record_size();
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < batch.points.size(); ++i) {
+        const Point& p = batch.points[i];
+        if (!(p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] && p.y <= r.max[1] &&
+              p.z >= r.min[2] && p.z <= r.max[2])) {
+          continue;
+        }
+        if (kept != i) {
+          batch.points[kept] = p;
+          if (stride > 0) {
+            std::memmove(batch.extra_bytes.data() + kept * stride,
+                         batch.extra_bytes.data() + i * stride, stride);
+          }
+        }
+        ++kept;
+      }
+      batch.points.resize(kept);
+      batch.extra_bytes.resize(kept * stride);
+    }
     // One pass for the common case: the batch's bounds and a non-finite detector (v·0 is 0
     // for finite v and NaN for NaN or infinity, so `poison` stays 0 exactly when all are
     // finite).

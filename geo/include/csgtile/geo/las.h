@@ -8,7 +8,8 @@
 /// (bounded) and one chunk buffer; points come in batches through PointReader::read().
 /// Every header field that drives a read or an allocation is checked against the file size
 /// before use, so a hostile header fails in microseconds with a message naming the file,
-/// the field and the values. LAZ and COPC (compressed) files are recognised and refused.
+/// the field and the values. LAZ and COPC (compressed) files are decoded by geo's own LAZ
+/// decoder.
 
 #include <array>
 #include <cstdint>
@@ -22,14 +23,12 @@
 
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/point.h"
+#include "csgtile/geo/byte_source.h"
+#include "csgtile/geo/copc.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/kernel/result.h"
 
 namespace csgtile::geo {
-
-namespace detail {
-class ByteSource;
-}  // namespace detail
 
 /// The public header block, as stored (fields a version lacks stay zero).
 struct LasHeader {
@@ -172,6 +171,11 @@ class LasReader final : public PointReader {
   /// As open, over bytes in memory that outlive the reader.
   static kernel::Result<std::unique_ptr<LasReader>> open_memory(
       std::string name, std::span<const std::uint8_t> bytes, const PointReadOptions& options = {});
+  /// As open, over any random-access source (the worker's HTTP range reader): only the
+  /// header, the records, the chunk table and the chunks read are fetched; a COPC file with
+  /// options.region fetches its hierarchy pages and the chunks of the nodes meeting it.
+  static kernel::Result<std::unique_ptr<LasReader>> open_source(
+      std::unique_ptr<ByteSource> source, const PointReadOptions& options = {});
   ~LasReader() override;
 
   const LasHeader& header() const;
@@ -189,6 +193,11 @@ class LasReader final : public PointReader {
   kernel::Result<std::size_t> read_raw(std::vector<std::uint8_t>& out, std::size_t max);
   /// True when the point data is LAZ-compressed (LAZ or COPC).
   bool compressed() const;
+  /// The COPC info VLR of a COPC file (nullopt otherwise).
+  const std::optional<CopcInfo>& copc() const;
+  /// Reads the COPC hierarchy (all nodes holding points). Errors: InvalidArgument when the
+  /// file is not COPC; as read_copc_hierarchy.
+  kernel::Result<std::vector<CopcNode>> copc_hierarchy();
 
  protected:
   kernel::Result<std::size_t> read_records(PointBatch& batch, std::size_t max) override;
@@ -198,8 +207,6 @@ class LasReader final : public PointReader {
   struct State;
   LasReader(std::string name, PointCloudInfo info, PointReadOptions options,
             std::unique_ptr<State> state);
-  static kernel::Result<std::unique_ptr<LasReader>> open_source(
-      std::unique_ptr<detail::ByteSource> source, const PointReadOptions& options);
   std::unique_ptr<State> state_;
 };
 

@@ -20,7 +20,7 @@ namespace csgtile::geo {
 
 /// Formats open_point_file understands.
 enum class PointFileFormat {
-  Las,  ///< ASPRS LAS 1.0-1.4 (LAZ and COPC are recognised and refused)
+  Las,  ///< ASPRS LAS 1.0-1.4, LAZ (LASzip compressors 1-3) and COPC
   Ply,  ///< PLY ascii / binary_little_endian / binary_big_endian, element "vertex"
   Pcd,  ///< PCL PCD 0.5-0.7, DATA ascii / binary / binary_compressed. binary_compressed is one
         ///< LZF block stored field by field, so it is decoded whole (memory ≈ its uncompressed
@@ -59,6 +59,12 @@ struct PointReadOptions {
   /// bytes) are left undecoded and hold their chunk's first point's values. Other formats
   /// always decode everything.
   bool all_attributes = true;
+  /// Only the points inside this box (CRS coordinates, bounds inclusive) are returned. COPC
+  /// files read only the chunks of the octree nodes that meet it (csgtile/geo/copc.h); other
+  /// files are read whole and the points outside are dropped.
+  std::optional<Bounds3> region;
+  /// COPC only: the deepest octree level read (0: the root node alone); -1 reads every level.
+  int copc_max_depth = -1;
 };
 
 /// What a reader knows before reading points.
@@ -139,7 +145,7 @@ kernel::Result<PointFileFormat> detect_point_format(const std::filesystem::path&
 
 /// Opens a point-cloud file of any supported format, checking its header against the file.
 /// Errors: IoError (cannot open or read), CorruptData (malformed header, with the file, the
-/// field and the values), Unsupported (LAZ/COPC, unknown formats, unsupported features),
+/// field and the values), Unsupported (unknown formats, unsupported features),
 /// UnsupportedVersion (a LAS version after 1.4).
 kernel::Result<std::unique_ptr<PointReader>> open_point_file(const std::filesystem::path& path,
                                                              const PointReadOptions& options = {});

@@ -17,9 +17,12 @@
 
 #include "csgtile/kernel/result.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::geo {
 class ByteSource;
-}
+namespace detail {
+using ByteSource = geo::ByteSource;
+}  // namespace detail
+}  // namespace csgtile::geo
 
 namespace csgtile::geo::detail::laz {
 

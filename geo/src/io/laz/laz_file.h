@@ -13,9 +13,12 @@
 #include "csgtile/kernel/result.h"
 #include "io/laz/items.h"
 
-namespace csgtile::geo::detail {
+namespace csgtile::geo {
 class ByteSource;
-}
+namespace detail {
+using ByteSource = geo::ByteSource;
+}  // namespace detail
+}  // namespace csgtile::geo
 
 namespace csgtile::geo::detail::laz {
 
