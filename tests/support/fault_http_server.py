@@ -16,7 +16,9 @@ killed. Paths (NAME is a file in the directory):
   /status/CODE             an empty response with that status
   /huge                    declares a Content-Length of 1 TB, sends a little
   /endless                 chunked body that never ends (size cap must stop it)
+  /range/NAME              the file, honouring "Range: bytes=a-b" (206 + Content-Range)
   /counts                  JSON: requests seen per path
+  /bytes                   JSON: body bytes sent per path
 """
 import json
 import os
@@ -30,6 +32,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 ROOT = sys.argv[1] if len(sys.argv) > 1 else "."
 COUNTS = {}
+BYTES = {}
 LOCK = threading.Lock()
 
 
@@ -51,6 +54,8 @@ class Handler(BaseHTTPRequestHandler):
             return f.read()
 
     def send_bytes(self, data, status=200, length=None):
+        with LOCK:
+            BYTES[self.path] = BYTES.get(self.path, 0) + len(data)
         self.send_response(status)
         self.send_header("Content-Length", str(len(data) if length is None else length))
         self.end_headers()
@@ -140,9 +145,35 @@ class Handler(BaseHTTPRequestHandler):
                 piece = b"y" * 65536
                 while True:
                     self.wfile.write(b"%x\r\n%s\r\n" % (len(piece), piece))
+            elif kind == "range":
+                data = self.body_of(parts[1])
+                spec = self.headers.get("Range", "")
+                if not spec.startswith("bytes="):
+                    self.send_bytes(data)
+                    return
+                first, _, last = spec[len("bytes="):].partition("-")
+                first = int(first)
+                last = min(int(last) if last else len(data) - 1, len(data) - 1)
+                if first >= len(data):
+                    self.send_response(416)
+                    self.send_header("Content-Range", "bytes */%d" % len(data))
+                    self.send_header("Content-Length", "0")
+                    self.end_headers()
+                    return
+                piece = data[first:last + 1]
+                with LOCK:
+                    BYTES[self.path] = BYTES.get(self.path, 0) + len(piece)
+                self.send_response(206)
+                self.send_header("Content-Range", "bytes %d-%d/%d" % (first, last, len(data)))
+                self.send_header("Content-Length", str(len(piece)))
+                self.end_headers()
+                self.wfile.write(piece)
             elif kind == "counts":
                 with LOCK:
                     self.send_bytes(json.dumps(COUNTS).encode())
+            elif kind == "bytes":
+                with LOCK:
+                    self.send_bytes(json.dumps(BYTES).encode())
             else:
                 self.send_bytes(b"not found", status=404)
         except FileNotFoundError:

@@ -21,6 +21,7 @@
 
 #include "csgtile/worker/publish.h"
 #include "fetch/sigv4.h"
+#include "fetch/transport.h"
 
 #ifndef CSGTILE_VERSION
 #define CSGTILE_VERSION "dev"
@@ -178,9 +179,9 @@ std::size_t on_write(char* data, std::size_t size, std::size_t count, void* user
 }
 
 curl_socket_t on_open_socket(void* user, curlsocktype, curl_sockaddr* address) {
-  auto* sink = static_cast<Sink*>(user);
+  auto* refused = static_cast<std::string*>(user);
   if (address_refused(address)) {
-    sink->refused_address = describe_refusal(address);
+    *refused = describe_refusal(address);
     return CURL_SOCKET_BAD;
   }
   return ::socket(address->family, address->socktype, address->protocol);
@@ -220,7 +221,8 @@ bool transient_curl(CURLcode code) {
 
 // Options every transfer shares: no redirects followed by libcurl, the path as given (it is
 // what S3 signed), timeouts, TLS verification, the address policy and the error text.
-void set_common_options(CURL* c, const Policy& policy, Sink& sink, char* error_text) {
+void set_common_options(CURL* c, const Policy& policy, std::string& refused_address,
+                        char* error_text) {
   curl_easy_setopt(c, CURLOPT_FOLLOWLOCATION, 0L);
   curl_easy_setopt(c, CURLOPT_PATH_AS_IS, 1L);
   curl_easy_setopt(c, CURLOPT_NOSIGNAL, 1L);
@@ -232,7 +234,7 @@ void set_common_options(CURL* c, const Policy& policy, Sink& sink, char* error_t
   curl_easy_setopt(c, CURLOPT_USERAGENT, "csgtile/" CSGTILE_VERSION);
   curl_easy_setopt(c, CURLOPT_ERRORBUFFER, error_text);
   curl_easy_setopt(c, CURLOPT_OPENSOCKETFUNCTION, on_open_socket);
-  curl_easy_setopt(c, CURLOPT_OPENSOCKETDATA, &sink);
+  curl_easy_setopt(c, CURLOPT_OPENSOCKETDATA, &refused_address);
 }
 
 Attempt transfer_once(const std::string& url, const std::vector<std::string>& headers,
@@ -255,7 +257,7 @@ Attempt transfer_once(const std::string& url, const std::vector<std::string>& he
     list.release();
     list.reset(grown);
   }
-  set_common_options(c, policy, sink, error_text);
+  set_common_options(c, policy, sink.refused_address, error_text);
   curl_easy_setopt(c, CURLOPT_URL, url.c_str());
   curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, allowed_protocols.c_str());
   curl_easy_setopt(c, CURLOPT_LOW_SPEED_LIMIT, policy.low_speed_bytes_per_second);
@@ -411,6 +413,67 @@ std::string finish_hex(EVP_MD_CTX* ctx) {
 
 
 }  // namespace
+
+namespace transport {
+
+void init() { global_init(); }
+std::string redact(const std::string& url) { return redacted(url); }
+void set_options(CURL* c, const Policy& policy, std::string& refused_address, char* error_text) {
+  set_common_options(c, policy, refused_address, error_text);
+}
+bool transient(CURLcode code) { return transient_curl(code); }
+
+Failure resolve(const std::string& text, const Policy& policy, Target& target) {
+  const std::string where = redacted(text);
+  if (has_control(text)) return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
+  UrlParts parts;
+  if (!split_url(text, parts)) return {ErrorCode::InputInvalid, where + ": not a valid URL"};
+  if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) ==
+      policy.schemes.end()) {
+    return {ErrorCode::FetchRefused, where + ": scheme '" + parts.scheme + "' is not allowed"};
+  }
+  if (!parts.user.empty() || !parts.password.empty()) {
+    return {ErrorCode::FetchRefused, where + ": credentials in the URL are refused"};
+  }
+  target = {};
+  target.s3 = parts.scheme == "s3";
+  if (target.s3) {
+    S3Target signed_target;
+    if (Failure f = s3_target(parts, text, policy, "GET", sha256_hex(""), signed_target); !f.ok()) {
+      return f;
+    }
+    target.url = signed_target.url;
+    target.headers = signed_target.headers;
+    target.protocols = "http,https";
+    return {};
+  }
+  if (parts.scheme != "http" && parts.scheme != "https") {
+    return {ErrorCode::FetchRefused, where + ": range requests need http, https or s3"};
+  }
+  target.url = text.substr(0, text.find('#'));
+  target.protocols = parts.scheme;
+  return {};
+}
+
+Failure redirect_target(const std::string& from, const std::string& location, const Policy& policy,
+                        Target& target) {
+  UrlParts next;
+  UrlParts current;
+  if (!split_url(location, next) || !split_url(from, current) ||
+      (next.scheme != "http" && next.scheme != "https") ||
+      std::find(policy.schemes.begin(), policy.schemes.end(), next.scheme) ==
+          policy.schemes.end() ||
+      (current.scheme == "https" && next.scheme == "http") || !next.user.empty() ||
+      !next.password.empty()) {
+    return {ErrorCode::FetchRefused, redacted(from) + ": redirect to " + redacted(location) +
+                                         " refused (only http(s), never https to http)"};
+  }
+  target.url = location;
+  target.protocols = next.scheme;
+  return {};
+}
+
+}  // namespace transport
 
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
   std::ifstream in(path, std::ios::binary);
@@ -738,7 +801,7 @@ Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3
   Sink sink;  // only for the address policy
   char error_text[CURL_ERROR_SIZE] = "";
   CURL* c = curl.get();
-  set_common_options(c, policy, sink, error_text);
+  set_common_options(c, policy, sink.refused_address, error_text);
   curl_easy_setopt(c, CURLOPT_URL, target.url.c_str());
   curl_easy_setopt(c, CURLOPT_PROTOCOLS_STR, "http,https");
   curl_easy_setopt(c, CURLOPT_LOW_SPEED_LIMIT, policy.low_speed_bytes_per_second);

@@ -14,11 +14,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "csgtile/geo/byte_source.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::fetch {
@@ -105,5 +107,25 @@ struct Credentials {
   std::string session_token;
 };
 Credentials s3_credentials();
+
+/// Requests and bytes a range source fetched (for reports and benches).
+struct RangeStats {
+  std::uint64_t requests = 0;
+  std::uint64_t bytes = 0;
+};
+
+/// Opens an http(s):// or s3:// object for random access by HTTP range requests, as a
+/// geo::ByteSource for the LAS/LAZ/COPC reader: only what the reader reads is fetched (a COPC
+/// region query: header, VLRs, chunk table, hierarchy pages and the nodes' chunks). The first
+/// request asks for the first `block_bytes` and learns the size from Content-Range; smaller
+/// reads are served from aligned blocks of that size (a few kept), larger ones fetched exactly.
+/// A server that ignores Range (HTTP 200) sends the whole object, which is then served from
+/// memory (at most policy.max_bytes). Same policy as fetch(): schemes, address rules, TLS,
+/// timeouts, retries of transient failures, redirects one by one, S3 signed per request.
+/// Errors: as fetch(); a read that fails later is an IoError of the reader naming the range.
+Failure open_range_source(const std::string& url, const Policy& policy,
+                          std::unique_ptr<geo::ByteSource>& source,
+                          std::shared_ptr<RangeStats> stats = nullptr,
+                          std::uint64_t block_bytes = 64 * 1024);
 
 }  // namespace csgtile::worker::fetch

@@ -1,0 +1,139 @@
+// HTTP range reads (fetch::open_range_source) against a loopback server: a COPC region query
+// fetches its hierarchy and the chunks it needs, not the file; a server without Range support
+// still works; errors are named. The LAZ/COPC data are ../shared/data/laz (skipped if absent).
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <tuple>
+
+#include "background_process.h"
+#include "csgtile/geo/las.h"
+#include "fetch/fetch.h"
+#include "test_commands.h"
+#include "test_support.h"
+
+namespace {
+
+using namespace csgtile;
+using namespace csgtile::worker;
+namespace fs = std::filesystem;
+using csgtile::test::BackgroundProcess;
+using csgtile::test::quoted;
+
+fs::path laz_dir() { return test::shared_dir() / "data" / "laz"; }
+
+using Xyz = std::tuple<double, double, double>;
+
+std::vector<Xyz> all_points(geo::PointReader& reader) {
+  std::vector<Xyz> out;
+  geo::PointBatch batch;
+  for (;;) {
+    auto n = reader.read(batch, 4096);
+    EXPECT_TRUE(n.ok()) << n.error().message;
+    if (!n.ok() || n.value() == 0) break;
+    for (const geo::Point& p : batch.points) out.emplace_back(p.x, p.y, p.z);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+class RangeSource : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::is_directory(laz_dir())) GTEST_SKIP() << "LAZ data not found at " << laz_dir();
+    server = std::make_unique<BackgroundProcess>(
+        "exec python3 " +
+        quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/fault_http_server.py") + " " +
+        quoted(laz_dir()));
+    ASSERT_TRUE(server->running()) << server->problem();
+    base = "http://127.0.0.1:" + server->first_line();
+    policy.retry_delay_ms = 10;
+  }
+  std::unique_ptr<geo::LasReader> open(const std::string& path,
+                                       const geo::PointReadOptions& options = {},
+                                       std::shared_ptr<fetch::RangeStats> stats = nullptr,
+                                       std::uint64_t block = 64 * 1024) {
+    std::unique_ptr<geo::ByteSource> source;
+    Failure f = fetch::open_range_source(base + path, policy, source, std::move(stats), block);
+    EXPECT_TRUE(f.ok()) << f.message;
+    if (!f.ok()) return nullptr;
+    auto reader = geo::LasReader::open_source(std::move(source), options);
+    EXPECT_TRUE(reader.ok()) << reader.error().message;
+    return reader.ok() ? std::move(reader).value() : nullptr;
+  }
+  std::unique_ptr<BackgroundProcess> server;
+  std::string base;
+  fetch::Policy policy;
+};
+
+TEST_F(RangeSource, ACopcRegionOverHttpFetchesOnlyItsNodes) {
+  const fs::path local = laz_dir() / "1.2-with-color.copc.laz";
+  auto whole = geo::LasReader::open(local);
+  ASSERT_TRUE(whole.ok());
+  const geo::LasHeader h = whole.value()->header();
+  geo::PointReadOptions options;
+  geo::Bounds3 region;
+  region.min = {h.min[0], h.min[1], -1e300};
+  region.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
+  options.region = region;
+  auto local_query = geo::LasReader::open(local, options);
+  ASSERT_TRUE(local_query.ok());
+  const auto expected = all_points(*local_query.value());
+
+  auto stats = std::make_shared<fetch::RangeStats>();
+  // The shared COPC file is small (33 KB): blocks of 1 KiB stand for the 64 KiB of a real one.
+  auto remote = open("/range/1.2-with-color.copc.laz", options, stats, 1024);
+  ASSERT_NE(remote, nullptr);
+  EXPECT_EQ(all_points(*remote), expected);
+  const auto size = fs::file_size(local);
+  EXPECT_GT(stats->requests, 1u);
+  EXPECT_LT(stats->bytes, size) << "a region must not fetch the whole file";
+  std::cout << "[copc over http] region of a quarter: " << stats->bytes << " of " << size
+            << " bytes in " << stats->requests << " requests\n";
+
+  // Every point over ranges equals the local file's.
+  auto all = open("/range/1.2-with-color.copc.laz");
+  ASSERT_NE(all, nullptr);
+  EXPECT_EQ(all_points(*all), all_points(*whole.value()));
+}
+
+TEST_F(RangeSource, ALargeLazIsReadChunkByChunkAndEqualsTheLocalFile) {
+  auto stats = std::make_shared<fetch::RangeStats>();
+  auto remote = open("/range/ahn3_cropped_2.laz", {}, stats);
+  ASSERT_NE(remote, nullptr);
+  auto local = geo::LasReader::open(laz_dir() / "ahn3_cropped_2.laz");
+  ASSERT_TRUE(local.ok());
+  EXPECT_EQ(all_points(*remote), all_points(*local.value()));
+  // Chunks are fetched exactly; the header's block and the chunk table's overlap them a little.
+  EXPECT_LE(stats->bytes, fs::file_size(laz_dir() / "ahn3_cropped_2.laz") + 3 * 64 * 1024);
+}
+
+TEST_F(RangeSource, AServerWithoutRangesSendsTheWholeObjectOnce) {
+  auto stats = std::make_shared<fetch::RangeStats>();
+  auto remote = open("/ok/point10.laz", {}, stats);
+  ASSERT_NE(remote, nullptr);
+  auto local = geo::LasReader::open(laz_dir() / "point10.laz");
+  ASSERT_TRUE(local.ok());
+  EXPECT_EQ(all_points(*remote), all_points(*local.value()));
+  EXPECT_EQ(stats->requests, 1u);
+}
+
+TEST_F(RangeSource, MissingObjectsAndRefusedSchemesAreNamed) {
+  std::unique_ptr<geo::ByteSource> source;
+  Failure f = fetch::open_range_source(base + "/status/404", policy, source);
+  EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
+  EXPECT_NE(f.message.find("404"), std::string::npos) << f.message;
+  f = fetch::open_range_source("file:///etc/hostname", policy, source);
+  EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
+  f = fetch::open_range_source(base + "/flaky/10/point10.laz", policy, source);
+  EXPECT_EQ(f.code, ErrorCode::Network) << f.message;
+  f = fetch::open_range_source("http://169.254.169.254/latest", policy, source);
+  EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
+  EXPECT_EQ(source, nullptr);
+}
+
+}  // namespace
