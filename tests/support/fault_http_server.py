@@ -33,7 +33,7 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 ROOT = sys.argv[1] if len(sys.argv) > 1 else "."
 COUNTS = {}
 BYTES = {}
-LOCK = threading.Lock()
+LOCK = threading.RLock()
 
 
 def bump(path):

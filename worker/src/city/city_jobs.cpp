@@ -8,9 +8,13 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "city/city_internal.h"
+#include "csgtile/geo/las.h"
+#include "fetch/fetch.h"
+#include "fetch/input.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/worker/publish.h"
 
@@ -129,9 +133,63 @@ std::string index_key(const std::string& run) { return "index:" + run + ":run"; 
 
 namespace {
 
+/// One fit job's tile: an input file, or one cell of a COPC input (`cell` set: the job reads
+/// the octree nodes meeting the cell grown by city.halo and keeps the primitives anchored in
+/// the cell). `id` names it in queue keys and labels: the input, with " @<cell>" for cells.
+struct Tile {
+  std::string id;
+  std::string input;
+  std::optional<detail::Cell> cell;
+  std::size_t index = 0;
+};
+
+bool is_copc_name(const std::string& input) {
+  std::string path = input.substr(0, input.find_first_of("?#"));
+  for (char& c : path) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return path.size() > 9 && path.compare(path.size() - 9, 9, ".copc.laz") == 0;
+}
+
+// The cells a COPC input's header bounds cover (its header read locally, or by range
+// requests for a URL). Errors: as the readers and the fetcher.
+Failure copc_cells(const std::string& input, const config::Config& config,
+                   std::vector<detail::Cell>& cells) {
+  cells.clear();
+  kernel::Result<std::unique_ptr<geo::LasReader>> reader =
+      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
+  const bool remote = fetch::is_url(input) && input.rfind("file://", 0) != 0;
+  if (remote) {
+    std::unique_ptr<geo::ByteSource> source;
+    if (Failure f = fetch::open_range_source(input, fetch::policy_of(config.fetch), source);
+        !f.ok()) {
+      return f;
+    }
+    reader = geo::LasReader::open_source(std::move(source));
+  } else {
+    const std::string path = input.rfind("file://", 0) == 0 ? input.substr(7) : input;
+    reader = geo::LasReader::open(path.substr(0, path.find('#')));
+  }
+  if (!reader.ok()) return {from_kernel(reader.error().code), reader.error().message};
+  const geo::LasHeader& h = reader.value()->header();
+  const double size = config.city.cell_size;
+  if (!(h.min[0] <= h.max[0]) || !(h.min[1] <= h.max[1])) return {};  // no points
+  const detail::Cell low = detail::cell_of(h.min[0], h.min[1], size);
+  const detail::Cell high = detail::cell_of(h.max[0], h.max[1], size);
+  const double count = static_cast<double>(high.column - low.column + 1) *
+                       static_cast<double>(high.row - low.row + 1);
+  if (count > 1e6) {
+    return {ErrorCode::InputInvalid, input + ": its extent covers " + std::to_string(count) +
+                                         " cells of city.cell_size (more than 10^6)"};
+  }
+  for (std::int64_t c = low.column; c <= high.column; ++c) {
+    for (std::int64_t r = low.row; r <= high.row; ++r) cells.push_back({c, r});
+  }
+  return {};
+}
+
 /// Distinct tile inputs of the run, each with its position (the tile's number in labels): a
-/// local directory stands for the tile files directly inside it, in name order.
-std::vector<std::pair<std::string, std::size_t>> expand_tile_inputs(const config::Config& config) {
+/// local directory stands for the tile files directly inside it, in name order; an input
+/// named *.copc.laz stands for one tile per cell of city.cell_size its extent covers.
+Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out) {
   std::vector<std::string> expanded;
   for (const std::string& input : config.run.inputs) {
     if (!is_local_directory(input)) {
@@ -151,34 +209,51 @@ std::vector<std::pair<std::string, std::size_t>> expand_tile_inputs(const config
     std::sort(files.begin(), files.end());
     expanded.insert(expanded.end(), files.begin(), files.end());
   }
-  std::vector<std::pair<std::string, std::size_t>> out;
+  out.clear();
   std::set<std::string> seen;
   for (const std::string& input : expanded) {
-    if (is_tile_input(input) && seen.insert(input).second) out.emplace_back(input, out.size());
+    if (!is_tile_input(input) || !seen.insert(input).second) continue;
+    if (!is_copc_name(input)) {
+      out.push_back({input, input, std::nullopt, out.size()});
+      continue;
+    }
+    std::vector<detail::Cell> cells;
+    if (Failure f = copc_cells(input, config, cells); !f.ok()) return f;
+    for (const detail::Cell& cell : cells) {
+      out.push_back({input + " @" + cell.name(), input, cell, out.size()});
+    }
   }
-  return out;
+  return {};
 }
 
 std::filesystem::path tiles_file(const config::Config& config) {
   return std::filesystem::path(config.run.output) / "runs" / config.run.name / "tiles.json";
 }
 
-/// The run's tiles as fixed when it was first enqueued (<run dir>/tiles.json), so that tiles
-/// added to an input directory later do not change a run under way; before that, the
-/// expansion of run.inputs.
-std::vector<std::pair<std::string, std::size_t>> tile_inputs(const config::Config& config) {
+/// The run's tiles as fixed when it was first enqueued (<run dir>/tiles.json: an input
+/// string, or {"input", "cell": [column, row]} for a cell of a COPC input), so that tiles
+/// added to an input directory later do not change a run under way; empty before that.
+std::vector<Tile> tile_inputs(const config::Config& config) {
   std::string text;
-  if (detail::read_file(tiles_file(config), text).ok()) {
-    const auto doc = nlohmann::json::parse(text, nullptr, false);
-    if (doc.is_object() && doc.contains("tiles") && doc["tiles"].is_array()) {
-      std::vector<std::pair<std::string, std::size_t>> out;
-      for (const auto& t : doc["tiles"]) {
-        if (t.is_string()) out.emplace_back(t.get<std::string>(), out.size());
-      }
-      return out;
+  std::vector<Tile> out;
+  if (!detail::read_file(tiles_file(config), text).ok()) {
+    if (!expand_tile_inputs(config, out).ok()) out.clear();
+    return out;
+  }
+  const auto doc = nlohmann::json::parse(text, nullptr, false);
+  if (!doc.is_object() || !doc.contains("tiles") || !doc["tiles"].is_array()) return out;
+  for (const auto& t : doc["tiles"]) {
+    if (t.is_string()) {
+      out.push_back({t.get<std::string>(), t.get<std::string>(), std::nullopt, out.size()});
+    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
+               t.contains("cell") && t["cell"].is_array() && t["cell"].size() == 2 &&
+               t["cell"][0].is_number_integer() && t["cell"][1].is_number_integer()) {
+      const detail::Cell cell{t["cell"][0].get<std::int64_t>(), t["cell"][1].get<std::int64_t>()};
+      const std::string input = t["input"].get<std::string>();
+      out.push_back({input + " @" + cell.name(), input, cell, out.size()});
     }
   }
-  return expand_tile_inputs(config);
+  return out;
 }
 
 }  // namespace
@@ -189,13 +264,22 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   std::error_code ec;
   if (!std::filesystem::exists(tiles_file(config), ec)) {
     // The first enqueue fixes the run's tile list.
+    std::vector<Tile> expanded;
+    if (Failure f = expand_tile_inputs(config, expanded); !f.ok()) return f;
     nlohmann::ordered_json doc = {{"run", config.run.name}, {"tiles", nlohmann::ordered_json::array()}};
-    for (const auto& [input, index] : expand_tile_inputs(config)) doc["tiles"].push_back(input);
+    for (const Tile& t : expanded) {
+      if (t.cell) {
+        doc["tiles"].push_back({{"input", t.input}, {"cell", {t.cell->column, t.cell->row}}});
+      } else {
+        doc["tiles"].push_back(t.input);
+      }
+    }
     if (Failure f = write_file_atomic(tiles_file(config), doc.dump(2) + "\n"); !f.ok()) return f;
   }
-  for (const auto& [input, index] : tile_inputs(config)) {
-    const std::string payload = nlohmann::json({{"input", input}, {"tile", index}}).dump();
-    if (queue.enqueue(fit_key(config.run.name, input), "fit", payload, failure)) ++added;
+  for (const Tile& t : tile_inputs(config)) {
+    nlohmann::json payload = {{"input", t.input}, {"tile", t.index}};
+    if (t.cell) payload["cell"] = {t.cell->column, t.cell->row};
+    if (queue.enqueue(fit_key(config.run.name, t.id), "fit", payload.dump(), failure)) ++added;
     if (!failure.ok()) return failure;
   }
   return failure;
@@ -225,8 +309,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   std::map<std::string, ordered_json> fits;
   for (auto& [key, record] : detail::done_records(results, "fit", run)) fits[key] = std::move(record);
   std::size_t finished = 0;
-  for (const auto& [input, index] : tiles) {
-    const std::string key = fit_key(run, input);
+  for (const Tile& t : tiles) {
+    const std::string key = fit_key(run, t.id);
     if (fits.count(key) || dead.count(key)) ++finished;
   }
   if (finished < tiles.size()) return {};  // fits still running
@@ -237,8 +321,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   std::map<std::string, std::vector<ordered_json>> cell_fits;  // cell name → fits meeting its halo
   std::map<std::string, detail::Cell> cells;
   const double size = config.city.cell_size, halo = config.city.halo;
-  for (const auto& [input, index] : tiles) {
-    const auto it = fits.find(fit_key(run, input));
+  for (const Tile& t : tiles) {
+    const auto it = fits.find(fit_key(run, t.id));
     if (it == fits.end()) continue;
     const ordered_json& record = it->second;
     const std::string tile_crs = record.value("crs", "");
@@ -252,8 +336,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   }
   for (const auto& [name, cell] : cells) {
     std::vector<ordered_json> near;
-    for (const auto& [input, index] : tiles) {
-      const auto it = fits.find(fit_key(run, input));
+    for (const Tile& t : tiles) {
+      const auto it = fits.find(fit_key(run, t.id));
       if (it == fits.end() || it->second.value("crs", "") != *crs) continue;
       const ordered_json& b = it->second.at("bounds");
       if (b.is_null()) continue;
@@ -262,7 +346,7 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
       box.add(kernel::Vec3(b.at(3).get<double>(), b.at(4).get<double>(), b.at(5).get<double>()));
       if (!detail::meets_halo(box, cell, size, halo)) continue;
       near.push_back({{"fit", it->first},
-                      {"tile", index},
+                      {"tile", t.index},
                       {"scene", it->second.at("scene")},
                       {"origin", it->second.at("origin")}});
     }

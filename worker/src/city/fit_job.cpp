@@ -1,7 +1,10 @@
 // The `fit` job of a city run: one LIDAR tile → its fitted primitives, published as a scene
 // file in the tile's frame, with the cells holding their anchors (city_jobs.h).
 
+#include <cmath>
 #include <map>
+#include <memory>
+#include <optional>
 #include <set>
 
 #include "city/city_internal.h"
@@ -11,6 +14,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/publish.h"
+#include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
@@ -20,17 +24,56 @@ namespace csgtile::worker::city::detail {
 Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
                     const config::Config& config, std::string& result, StageTimings* timings) {
   ops::StageClock clock(timings);
+  std::shared_ptr<fetch::RangeStats> range_stats;  // a COPC cell read by range requests
   clock.enter("fetch");
   std::string input;
   fetch::LocalInput local;
-  if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
-  const auto payload = nlohmann::json::parse(job.payload);  // valid: resolve_job_input read it
+  const auto payload = nlohmann::json::parse(job.payload, nullptr, false);
+  if (payload.is_discarded() || !payload.is_object() || !payload.contains("input") ||
+      !payload["input"].is_string()) {
+    return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
+  }
+  // A cell of a COPC input: only the octree nodes meeting the cell and its halo are read
+  // (by range requests for a URL: no download of the file), and only the primitives
+  // anchored in the cell are kept (the neighbouring cells' jobs keep theirs).
+  std::optional<Cell> only_cell;
+  TileSource source;
+  if (payload.contains("cell")) {
+    const auto& c = payload["cell"];
+    if (!c.is_array() || c.size() != 2 || !c[0].is_number_integer() || !c[1].is_number_integer()) {
+      return {ErrorCode::Internal, "job " + job.key + " has a malformed cell"};
+    }
+    only_cell = Cell{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()};
+    const auto corner = cell_origin(*only_cell, config.city.cell_size);
+    geo::Bounds3 region;
+    region.min = {corner[0] - config.city.halo, corner[1] - config.city.halo, -INFINITY};
+    region.max = {corner[0] + config.city.cell_size + config.city.halo,
+                  corner[1] + config.city.cell_size + config.city.halo, INFINITY};
+    source.region = region;
+    input = payload["input"].get<std::string>();
+    if (fetch::is_url(input) && input.rfind("file://", 0) != 0) {
+      auto stats = std::make_shared<fetch::RangeStats>();
+      if (Failure f = fetch::open_range_source(input, fetch::policy_of(config.fetch),
+                                               source.remote, stats);
+          !f.ok()) {
+        return f;
+      }
+      range_stats = stats;
+      local.path = input;
+      local.fetched = true;
+    }
+  }
+  if (!source.remote) {
+    if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
+    source.path = local.path;
+  }
 
   clock.enter("fit");
   const fit::FitPipelineOptions options = fit_options(config);
   FittedTile tile;
-  const std::string name = std::filesystem::path(local.path).stem().string();
-  if (Failure f = fit_tile(local.path, name, options, config.run.crs, tile); !f.ok()) {
+  std::string name = std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
+  if (only_cell) name += "_" + only_cell->name();
+  if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile); !f.ok()) {
     // Name the input once: readers already name the file they read (for a URL, its local
     // copy, which the input's name then replaces).
     const std::string local_name = std::filesystem::path(local.path).string();
@@ -73,19 +116,32 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   tile.scene.primitives = std::move(kept);
 
   clock.enter("publish");
-  const std::string text = geo::scene_to_json(tile.scene);
+  std::string text = geo::scene_to_json(tile.scene);
   // Anchors from the file as the assemble jobs will read it (primitive_crs_box): the same
   // bytes through the same code, so every job puts a primitive in the same cell.
   auto published = geo::parse_scene(text);
   if (!published.ok()) return {ErrorCode::Internal, input + ": " + published.error().message};
   kernel::BoundingBox bounds;
   std::map<std::string, Cell> anchors;
+  std::size_t other_cells = 0;
+  std::vector<geo::ScenePrimitive> in_cell;
   for (const geo::ScenePrimitive& p : published->primitives) {
     const kernel::BoundingBox box = primitive_crs_box(p.spec, o, config.kernel.linear_tolerance);
     if (box.empty()) return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
-    bounds.add(box);
     const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
+    if (only_cell && (cell.column != only_cell->column || cell.row != only_cell->row)) {
+      ++other_cells;  // anchored in a neighbour cell: that cell's job keeps it
+      continue;
+    }
+    bounds.add(box);
     anchors.emplace(cell.name(), cell);
+    in_cell.push_back(p);
+  }
+  if (other_cells > 0) {
+    geo::Scene kept_scene = published.value();
+    kept_scene.primitives = std::move(in_cell);
+    tile.scene.primitives = kept_scene.primitives;
+    text = geo::scene_to_json(kept_scene);
   }
   const std::string sha = sha256_hex(text);
   const std::string key = "fits/" + sha + ".json";
@@ -95,6 +151,14 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["input"] = input;
   record["input_sha256"] = local.sha256;
   record["tile"] = payload.value("tile", 0);
+  if (only_cell) {
+    record["cell"] = only_cell->name();
+    record["primitives_of_other_cells"] = other_cells;
+  }
+  if (range_stats) {
+    record["range_reads"] = {{"requests", range_stats->requests}, {"bytes", range_stats->bytes}};
+    ops::metrics().add_bytes_fetched(range_stats->bytes);
+  }
   record["scene"] = {{"key", key}, {"sha256", sha}, {"bytes", text.size()}};
   record["crs"] = tile.scene.frame ? tile.scene.frame->crs : std::string();
   record["origin"] = origin;

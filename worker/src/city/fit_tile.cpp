@@ -13,16 +13,27 @@
 
 namespace csgtile::worker::city {
 
-Failure fit_tile(const std::filesystem::path& path, const std::string& name,
-                 const fit::FitPipelineOptions& options, const std::string& crs_override,
-                 FittedTile& out) {
+Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
+                 const std::string& crs_override, FittedTile& out) {
   const auto start = std::chrono::steady_clock::now();
   out = FittedTile{};
   // Every point is read (the pipeline needs the whole tile), in the local frame. Only
   // coordinates, returns and classes are used: layered LAZ skips its other layers.
   geo::PointReadOptions read_options;
   read_options.all_attributes = false;
-  auto opened = geo::open_point_file(path, read_options);
+  read_options.region = source.region;
+  kernel::Result<std::unique_ptr<geo::PointReader>> opened =
+      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
+  if (source.remote) {
+    auto las = geo::LasReader::open_source(std::move(source.remote), read_options);
+    if (las.ok()) {
+      opened = std::unique_ptr<geo::PointReader>(std::move(las).value());
+    } else {
+      opened = las.error();
+    }
+  } else {
+    opened = geo::open_point_file(source.path, read_options);
+  }
   if (!opened.ok()) return {from_kernel(opened.error().code), opened.error().message};
   geo::PointReader& reader = *opened.value();
   std::array<double, 3> origin{0.0, 0.0, 0.0};

@@ -5,11 +5,15 @@
 /// fit` and the run's fit jobs. Internal to the worker.
 
 #include <filesystem>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include "csgtile/config/config.h"
 #include "csgtile/fit/segment.h"
+#include "csgtile/geo/byte_source.h"
+#include "csgtile/geo/point.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/worker/errors.h"
 
@@ -28,11 +32,26 @@ struct FittedTile {
   double read_seconds = 0.0;
 };
 
-/// Reads every point of a LAS/PLY/PCD/XYZ file and fits primitives to them. `crs_override`
-/// is used when the file names no CRS ("" = none). Errors: as the readers (Io, InputInvalid,
-/// Unsupported), ConfigInvalid (bad options or override).
-Failure fit_tile(const std::filesystem::path& path, const std::string& name,
-                 const fit::FitPipelineOptions& options, const std::string& crs_override,
-                 FittedTile& out);
+/// Where a tile's points come from: a local file, or a random-access source (a URL read by
+/// range requests); with a region, only the points inside it (a COPC file reads only the
+/// octree nodes that meet it).
+struct TileSource {
+  std::filesystem::path path;                ///< used when `remote` is null
+  std::unique_ptr<geo::ByteSource> remote;   ///< LAS/LAZ/COPC over ranges
+  std::optional<geo::Bounds3> region;
+};
+
+/// Reads every point of a LAS/PLY/PCD/XYZ file (or of its region) and fits primitives to
+/// them. `crs_override` is used when the file names no CRS ("" = none). Errors: as the
+/// readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override).
+Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
+                 const std::string& crs_override, FittedTile& out);
+inline Failure fit_tile(const std::filesystem::path& path, const std::string& name,
+                        const fit::FitPipelineOptions& options, const std::string& crs_override,
+                        FittedTile& out) {
+  TileSource source;
+  source.path = path;
+  return fit_tile(std::move(source), name, options, crs_override, out);
+}
 
 }  // namespace csgtile::worker::city

@@ -117,8 +117,9 @@ struct RangeStats {
 /// Opens an http(s):// or s3:// object for random access by HTTP range requests, as a
 /// geo::ByteSource for the LAS/LAZ/COPC reader: only what the reader reads is fetched (a COPC
 /// region query: header, VLRs, chunk table, hierarchy pages and the nodes' chunks). The first
-/// request asks for the first `block_bytes` and learns the size from Content-Range; smaller
-/// reads are served from aligned blocks of that size (a few kept), larger ones fetched exactly.
+/// request asks for the first 16 KiB (header and VLRs) and learns the size from
+/// Content-Range; reads smaller than `block_bytes` (at most 1/16 of the object) are served
+/// from aligned blocks of that size (a few kept), larger ones fetched exactly.
 /// A server that ignores Range (HTTP 200) sends the whole object, which is then served from
 /// memory (at most policy.max_bytes). Same policy as fetch(): schemes, address rules, TLS,
 /// timeouts, retries of transient failures, redirects one by one, S3 signed per request.

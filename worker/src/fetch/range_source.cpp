@@ -90,7 +90,8 @@ class HttpRangeSource final : public geo::ByteSource {
   // The first request: the first block, and the object's size from Content-Range.
   Failure open() {
     Reply reply;
-    if (Failure f = get(0, kBlock, reply); !f.ok()) return f;
+    const std::uint64_t first = std::min<std::uint64_t>(kBlock, kFirstBlock);
+    if (Failure f = get(0, first, reply); !f.ok()) return f;
     if (reply.status == 200) {  // no range support: the whole object came
       whole_ = std::make_unique<std::string>(std::move(reply.body));
       size_ = whole_->size();
@@ -109,12 +110,15 @@ class HttpRangeSource final : public geo::ByteSource {
                   reply.content_range + "')"};
     }
     size_ = static_cast<std::uint64_t>(total);
-    if (reply.body.size() != std::min<std::uint64_t>(kBlock, size_)) {
+    if (reply.body.size() != std::min<std::uint64_t>(first, size_)) {
       return {ErrorCode::Network, name() + ": asked for the first " +
-                                      std::to_string(std::min<std::uint64_t>(kBlock, size_)) +
+                                      std::to_string(std::min<std::uint64_t>(first, size_)) +
                                       " bytes, got " + std::to_string(reply.body.size())};
     }
-    keep(0, std::move(reply.body));
+    // Blocks of a small object stay small (at most 1/16 of it), so that reading a part of
+    // it never means fetching all of it.
+    kBlock = std::max<std::uint64_t>(512, std::min(kBlock, size_ / 16));
+    first_ = std::move(reply.body);
     return {};
   }
 
@@ -132,9 +136,15 @@ class HttpRangeSource final : public geo::ByteSource {
       std::memcpy(out.data(), whole_->data() + offset, out.size());
       return kernel::Status();
     }
-    if (out.size() >= kBlock) return fetch_exact(offset, out);
-    // Small reads (headers, VLRs, records): whole aligned blocks, a few kept.
+    // The part within the first request's bytes (header, VLRs) comes from them.
     std::size_t done = 0;
+    if (offset < first_.size()) {
+      done = static_cast<std::size_t>(std::min<std::uint64_t>(out.size(), first_.size() - offset));
+      std::memcpy(out.data(), first_.data() + offset, done);
+      if (done == out.size()) return kernel::Status();
+    }
+    if (out.size() - done >= kBlock) return fetch_exact(offset + done, out.subspan(done));
+    // Small reads (headers, VLRs, records): whole aligned blocks, a few kept.
     while (done < out.size()) {
       const std::uint64_t at = offset + done;
       const std::uint64_t start = at / kBlock * kBlock;
@@ -298,7 +308,9 @@ class HttpRangeSource final : public geo::ByteSource {
   std::uint64_t size_ = 0;
   std::unique_ptr<std::string> whole_;
   std::vector<std::pair<std::uint64_t, std::string>> blocks_;
-  const std::uint64_t kBlock;  // small reads are served from aligned blocks this size
+  std::string first_;  // the first bytes (header, VLRs), from the first request
+  static constexpr std::uint64_t kFirstBlock = 16 * 1024;
+  std::uint64_t kBlock;  // small reads are served from aligned blocks this size
 };
 
 }  // namespace
