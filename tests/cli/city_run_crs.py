@@ -55,6 +55,8 @@ run(write_config("delft", [laz], "EPSG:28992+5709"))
 rundir = f"{work}/delft/runs/delft"
 manifest = json.load(open(f"{rundir}/manifest.json"))
 assert manifest["crs"] == "EPSG:28992+5709", manifest["crs"]
+# The datum transformation the run used to place RD New on WGS 84 (3D Tiles, frames).
+assert "Amersfoort" in manifest["crs_to_wgs84"], manifest["crs_to_wgs84"]
 assert manifest["dead"] == [], manifest["dead"]
 cells = [c["manifest"]["key"] for c in manifest["cells"]]
 assert cells, manifest

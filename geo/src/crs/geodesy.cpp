@@ -358,6 +358,14 @@ kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
 }
 
 Result<DatumShift> DatumShift::create(const GeodeticDatum& datum) {
+  if (!datum.to_wgs84_pipeline.empty()) {
+    auto pipeline = make_geodetic_transform(datum.to_wgs84_pipeline);
+    if (!pipeline.ok()) return pipeline.error();
+    DatumShift shift;
+    shift.identity_ = false;
+    shift.pipeline_ = std::move(pipeline).value();
+    return shift;
+  }
   if (!datum.to_wgs84) {
     return Error{ErrorCode::Unsupported,
                  "datum '" + datum.name + "' has no known transformation to WGS 84 (" +
@@ -390,6 +398,13 @@ Result<DatumShift> DatumShift::create(const GeodeticDatum& datum) {
 
 kernel::Vec3 DatumShift::to_wgs84_ecef(const GeodeticPoint& p) const {
   kernel::Vec3 x;
+  if (pipeline_) {
+    GeodeticPoint w = p;
+    pipeline_->forward(w.latitude_deg, w.longitude_deg, w.height_m);
+    GeographicLib::Geocentric::WGS84().Forward(w.latitude_deg, w.longitude_deg, w.height_m, x.x(),
+                                               x.y(), x.z());
+    return x;
+  }
   const GeographicLib::Geocentric& earth = identity_ ? GeographicLib::Geocentric::WGS84() : *earth_;
   earth.Forward(p.latitude_deg, p.longitude_deg, p.height_m, x.x(), x.y(), x.z());
   return identity_ ? x : apply(x);
@@ -397,6 +412,12 @@ kernel::Vec3 DatumShift::to_wgs84_ecef(const GeodeticPoint& p) const {
 
 GeodeticPoint DatumShift::from_wgs84_ecef(const kernel::Vec3& ecef) const {
   GeodeticPoint p;
+  if (pipeline_) {
+    GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), p.latitude_deg,
+                                               p.longitude_deg, p.height_m);
+    pipeline_->inverse(p.latitude_deg, p.longitude_deg, p.height_m);
+    return p;
+  }
   if (identity_) {
     GeographicLib::Geocentric::WGS84().Reverse(ecef.x(), ecef.y(), ecef.z(), p.latitude_deg,
                                                p.longitude_deg, p.height_m);

@@ -22,6 +22,10 @@ class Geocentric;
 }
 
 namespace csgtile::geo::detail {
+class GeodeticTransform;
+}
+
+namespace csgtile::geo::detail {
 
 /// A point outside a projection's domain (our checks; GeographicLib throws its own).
 class DomainError : public std::runtime_error {
@@ -90,6 +94,7 @@ class DatumShift {
 
  private:
   bool identity_ = true;
+  std::shared_ptr<const GeodeticTransform> pipeline_;       // PROJ's, instead of the Helmert
   std::shared_ptr<const GeographicLib::Geocentric> earth_;  // the datum's ellipsoid
   Eigen::Matrix3d matrix_ = Eigen::Matrix3d::Identity();    // (1 + s)·R
   Eigen::Matrix3d inverse_ = Eigen::Matrix3d::Identity();

@@ -32,9 +32,23 @@ Object from_database(int code) {
                                           PJ_CATEGORY_CRS, 0, nullptr));
 }
 
-// The first Helmert transformation PROJ ranks for `geodetic` → WGS 84 (EPSG:4326), as
-// position-vector TOWGS84 values; false when it knows none (grid-only or none at all).
-bool helmert_to_wgs84(const PJ* geodetic, double values[7], std::string& source) {
+std::string operation_label(PJ_CONTEXT* ctx, const PJ* op) {
+  const char* name = proj_get_name(op);
+  const char* auth = proj_get_id_auth_name(op, 0);
+  const char* id = proj_get_id_code(op, 0);
+  const double accuracy = proj_coordoperation_get_accuracy(ctx, op);
+  return (auth != nullptr && id != nullptr ? std::string(auth) + ":" + id + " " : "") +
+         (name != nullptr ? name : "transformation") +
+         (accuracy >= 0 ? ", accuracy " + std::to_string(accuracy).substr(0, 5) + " m" : "") +
+         " (chosen by PROJ " + std::string(proj_info().release).substr(0, 10) + ")";
+}
+
+// PROJ's best transformation `geodetic` → WGS 84 (EPSG:4326) among those whose grids are
+// installed, no ballpark: a Helmert (position-vector TOWGS84 values in `values`) or, when the
+// best is something else (a grid shift), its PROJ pipeline in longitude/latitude degrees
+// order (`pipeline`). False when PROJ knows none.
+bool best_shift_to_wgs84(const PJ* geodetic, double values[7], std::string& pipeline,
+                         std::string& source) {
   PJ_CONTEXT* ctx = context();
   Object wgs84(proj_create_from_database(ctx, "EPSG", "4326", PJ_CATEGORY_CRS, 0, nullptr));
   if (!wgs84) return false;
@@ -52,16 +66,20 @@ bool helmert_to_wgs84(const PJ* geodetic, double values[7], std::string& source)
   for (int i = 0; i < n && !found; ++i) {
     Object op(proj_list_get(ctx, ops, i));
     if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.p) != 0) continue;
-    if (proj_coordoperation_get_towgs84_values(ctx, op.p, values, 7, 0) == 0) continue;
-    const char* name = proj_get_name(op.p);
-    const char* auth = proj_get_id_auth_name(op.p, 0);
-    const char* id = proj_get_id_code(op.p, 0);
-    const double accuracy = proj_coordoperation_get_accuracy(ctx, op.p);
-    source = (auth != nullptr && id != nullptr ? std::string(auth) + ":" + id + " " : "") +
-             (name != nullptr ? name : "Helmert") +
-             (accuracy >= 0 ? ", accuracy " + std::to_string(accuracy).substr(0, 5) + " m" : "") +
-             " (chosen by PROJ " + std::string(proj_info().release).substr(0, 10) + ")";
-    found = std::isfinite(values[0]) && std::isfinite(values[6]);
+    if (proj_coordoperation_get_towgs84_values(ctx, op.p, values, 7, 0) != 0) {
+      found = std::isfinite(values[0]) && std::isfinite(values[6]);
+      pipeline.clear();
+    } else {
+      // Not a Helmert: keep PROJ's own pipeline when it can run here (its grids found).
+      if (proj_coordoperation_is_instantiable(ctx, op.p) == 0) continue;
+      Object normal(proj_normalize_for_visualization(ctx, op.p));
+      const char* text =
+          normal ? proj_as_proj_string(ctx, normal.p, PJ_PROJ_5, nullptr) : nullptr;
+      if (text == nullptr) continue;
+      pipeline = text;
+      found = true;
+    }
+    if (found) source = operation_label(ctx, op.p);
   }
   proj_list_destroy(ops);
   return found;
@@ -77,8 +95,14 @@ void settle_datum(const PJ* crs, Crs& out) {
   Object geodetic(proj_crs_get_geodetic_crs(context(), crs));
   double v[7] = {0, 0, 0, 0, 0, 0, 0};
   std::string source;
-  if (geodetic && helmert_to_wgs84(geodetic.p, v, source)) {
-    out.datum.to_wgs84 = helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+  std::string pipeline;
+  if (geodetic && best_shift_to_wgs84(geodetic.p, v, pipeline, source)) {
+    if (pipeline.empty()) {
+      out.datum.to_wgs84 = helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
+    } else {
+      out.datum.to_wgs84.reset();
+      out.datum.to_wgs84_pipeline = pipeline;
+    }
     out.datum.to_wgs84_source = source;
     // The WKT reader's "not known" warnings no longer hold.
     std::erase_if(out.warnings,
@@ -224,7 +248,8 @@ kernel::Result<Crs> geocentric_of(const PJ* crs, const std::string& what) {
     out.datum.to_wgs84_source = "unknown";
     double v[7] = {0, 0, 0, 0, 0, 0, 0};
     std::string source;
-    if (helmert_to_wgs84(crs, v, source)) {
+    std::string pipeline;
+    if (best_shift_to_wgs84(crs, v, pipeline, source) && pipeline.empty()) {
       out.datum.to_wgs84 = helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
       out.datum.to_wgs84_source = source;
     }

@@ -55,6 +55,13 @@ std::uint64_t next_engine_id() {
 }
 
 // A PJ for the string on this thread's context, or null with PROJ's reason in `why`.
+ProjObject create_any(const std::string& definition, std::string* why) {
+  ProjObject pj(proj_create(proj_thread_context(), definition.c_str()));
+  if (!pj && why != nullptr) *why = proj_last_error();
+  return pj;
+}
+
+// As create_any, and checks that it is a projection (geodetic in, metres out).
 ProjObject create(const std::string& definition, std::string* why) {
   ProjObject pj(proj_create(proj_thread_context(), definition.c_str()));
   if (!pj) {
@@ -139,7 +146,64 @@ class ProjEngine final : public ProjectionEngine {
   std::uint64_t id_;
 };
 
+// One PJ per thread for a definition, built on first use (ids are never reused).
+class ThreadPj {
+ public:
+  explicit ThreadPj(std::string definition)
+      : definition_(std::move(definition)), id_(next_engine_id()) {}
+  PJ* get() const {
+    ThreadCache& cache = thread_cache();
+    if (PJ* found = cache.find(id_)) return found;
+    std::string why;
+    ProjObject made = create_any(definition_, &why);
+    if (!made) throw DomainError("PROJ refused '" + definition_ + "' on this thread: " + why);
+    return cache.insert(id_, std::move(made));
+  }
+
+ private:
+  std::string definition_;
+  std::uint64_t id_;
+};
+
+class ProjGeodeticTransform final : public GeodeticTransform {
+ public:
+  explicit ProjGeodeticTransform(std::string pipeline) : pj_(std::move(pipeline)) {}
+  void forward(double& lat, double& lon, double& h) const override { run(PJ_FWD, lat, lon, h); }
+  void inverse(double& lat, double& lon, double& h) const override { run(PJ_INV, lat, lon, h); }
+
+ private:
+  void run(PJ_DIRECTION direction, double& lat, double& lon, double& h) const {
+    PJ* p = pj_.get();
+    PJ_COORD c = proj_coord(lon, lat, h, 0.0);
+    PJ_COORD r = proj_trans(p, direction, c);
+    if (!std::isfinite(r.lpzt.lam) || !std::isfinite(r.lpzt.phi) || r.lpzt.lam == HUGE_VAL) {
+      const int code = proj_errno(p);
+      proj_errno_reset(p);
+      const char* text =
+          code != 0 ? proj_context_errno_string(proj_thread_context(), code) : nullptr;
+      throw DomainError("latitude " + format_number(lat) + ", longitude " + format_number(lon) +
+                        ": PROJ's datum transformation fails there (" +
+                        (text != nullptr ? text : "outside its area or grid") + ")");
+    }
+    lon = r.lpzt.lam;
+    lat = r.lpzt.phi;
+    h = std::isfinite(r.lpzt.z) ? r.lpzt.z : h;
+  }
+  ThreadPj pj_;
+};
+
 }  // namespace
+
+kernel::Result<std::shared_ptr<const GeodeticTransform>> make_geodetic_transform(
+    const std::string& pipeline) {
+  std::string why;
+  ProjObject pj = create_any(pipeline, &why);
+  if (!pj) {
+    return kernel::Error{kernel::ErrorCode::InvalidArgument,
+                         "PROJ refuses the datum transformation '" + pipeline + "': " + why};
+  }
+  return std::shared_ptr<const GeodeticTransform>(new ProjGeodeticTransform(pipeline));
+}
 
 kernel::Result<std::unique_ptr<ProjectionEngine>> make_proj_engine(const std::string& proj_string) {
   std::string why;

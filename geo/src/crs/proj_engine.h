@@ -15,4 +15,18 @@ namespace csgtile::geo::detail {
 /// (geodetic in, metres out). Errors: InvalidArgument naming the string and PROJ's reason.
 kernel::Result<std::unique_ptr<ProjectionEngine>> make_proj_engine(const std::string& proj_string);
 
+/// A PROJ transformation of geodetic coordinates (a datum shift PROJ chose): longitude and
+/// latitude in degrees, height in metres, in place. Throws DomainError where PROJ cannot
+/// transform (outside its grid). Thread-safe (one PJ per thread).
+class GeodeticTransform {
+ public:
+  virtual ~GeodeticTransform() = default;
+  virtual void forward(double& lat, double& lon, double& h) const = 0;
+  virtual void inverse(double& lat, double& lon, double& h) const = 0;
+};
+
+/// Errors: InvalidArgument naming the pipeline and PROJ's reason.
+kernel::Result<std::shared_ptr<const GeodeticTransform>> make_geodetic_transform(
+    const std::string& pipeline);
+
 }  // namespace csgtile::geo::detail

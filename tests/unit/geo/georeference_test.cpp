@@ -437,6 +437,44 @@ TEST(RdNewProjection, ObliqueStereographicAgreesWithCs2cs) {
 
 // RD → ETRS89 lat/lon with our EPSG:9281 Helmert against cs2cs EPSG:28992 → EPSG:4937, which
 // uses the same transformation when the RDNAPTRANS grid is absent (projinfo lists it first).
+// A datum whose best transformation PROJ finds is a grid shift whose grid is installed
+// (DHDN → WGS 84 by BETA2007, Debian proj-data): PROJ's own pipeline is used, as cs2cs uses it,
+// and its name and accuracy are recorded; the datum's Helmert would be metres off.
+TEST(ProjDatumShift, GridShiftsPROJChoosesAreApplied) {
+  REQUIRE_PROJ();
+  const Crs gk3 = epsg(31467);  // DHDN / 3-degree Gauss-Kruger zone 3
+  ASSERT_FALSE(gk3.datum.to_wgs84_pipeline.empty()) << gk3.datum.to_wgs84_source;
+  EXPECT_NE(gk3.datum.to_wgs84_pipeline.find("hgridshift"), std::string::npos)
+      << gk3.datum.to_wgs84_pipeline;
+  EXPECT_NE(gk3.datum.to_wgs84_source.find("accuracy"), std::string::npos);
+  std::mt19937_64 rng(31467);
+  std::uniform_real_distribution<double> x(3400000, 3600000), y(5300000, 5900000);
+  std::vector<Triple> points;
+  for (int i = 0; i < 1500; ++i) points.push_back({x(rng), y(rng), 0.0});
+  // EPSG:31467's authority axis order is northing first, as cs2cs reads it.
+  std::vector<Triple> northing_first;
+  for (const Triple& p : points) northing_first.push_back({p[1], p[0], p[2]});
+  auto oracle = cs2cs("EPSG:31467", "EPSG:4326", northing_first);
+  ASSERT_TRUE(oracle.has_value());
+  double worst = 0;
+  const Crs wgs84 = epsg(4326);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    auto w = transform_point(gk3, wgs84, Vec3(points[i][0], points[i][1], 0.0));
+    ASSERT_TRUE(w.ok()) << w.error().message;
+    worst = std::max(worst, geodetic_gap_m(w.value().y(), w.value().x(), (*oracle)[i][0],
+                                           (*oracle)[i][1]));
+  }
+  std::cout << "[agreement] DHDN GK3 -> WGS 84 (" << gk3.datum.to_wgs84_source
+            << ") vs cs2cs: max " << worst * 1e3 << " mm\n";
+  EXPECT_LT(worst, 1e-3);
+  // And back through the pipeline's inverse.
+  auto back = transform_point(wgs84, gk3, Vec3(9.0, 49.0, 0.0));
+  ASSERT_TRUE(back.ok());
+  auto again = transform_point(gk3, wgs84, back.value());
+  ASSERT_TRUE(again.ok());
+  EXPECT_LT(geodetic_gap_m(again.value().y(), again.value().x(), 49.0, 9.0), 1e-6);
+}
+
 TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
   REQUIRE_PROJ();
   const Crs rd = epsg(28992);

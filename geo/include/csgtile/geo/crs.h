@@ -63,7 +63,13 @@ struct GeodeticDatum {
   /// but not placed on the globe). All zeros for datums that EPSG relates to WGS 84 by a null
   /// transformation (ETRS89, NAD83 and their realisations: metre-level agreement).
   std::optional<Helmert7> to_wgs84 = Helmert7{};
-  std::string to_wgs84_source = "identity";  ///< e.g. "EPSG:9281 Amersfoort to ETRS89 (8)"
+  /// When PROJ's best transformation to WGS 84 is not a Helmert (a grid shift whose grid is
+  /// installed, e.g. BETA2007 for DHDN): its PROJ pipeline from longitude, latitude (degrees)
+  /// and height on this datum to WGS 84, used instead of to_wgs84 (then nullopt).
+  std::string to_wgs84_pipeline;
+  /// What the relation is, e.g. "EPSG:9281 Amersfoort to ETRS89 (8)" or, from PROJ, the
+  /// operation's name, code and accuracy: written into every run's manifest.
+  std::string to_wgs84_source = "identity";
 };
 
 /// A unit of length. US survey foot: 1200/3937 m; international foot: 0.3048 m.
