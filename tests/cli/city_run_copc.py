@@ -3,6 +3,8 @@
   * the input stands for one fit job per cell of city.cell_size its extent covers
     (tiles.json lists them); each job reads the octree nodes meeting its cell grown by
     city.halo, and its point count equals the reference LAS's points inside that box;
+  * `csgtile info URL` shows the header, the VLRs and the octree as for the local file,
+    fetching less than the file;
   * the same run with the input given as an http:// URL on a loopback server that honours
     Range requests publishes the same outputs, and no job downloads the file: each fit
     record's range_reads fetched fewer bytes than the file holds, and the server never
@@ -98,6 +100,16 @@ try:
     # This file is small (33 KB): the fixed part (first 16 KiB, chunk table, hierarchy, upper
     # levels) dominates; on a large COPC a cell fetches its share of the nodes.
     assert fetched < len(records_http) * size, (fetched, len(records_http), size)
+    # `csgtile info URL`: the header, VLRs and the octree by range requests, as for the file.
+    def info(target):
+        p = subprocess.run([binary, "info", target, "--json"], capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout)
+    remote, local_info = info(f"{base}/range/1.2-with-color.copc.laz"), info(copc)
+    assert remote["copc"] == local_info["copc"] and remote["copc"]["nodes"] > 1, remote["copc"]
+    assert remote["fetched"]["bytes"] < size, remote["fetched"]
+    for key in ("description", "point_count", "bounds", "crs", "vlrs", "evlrs"):
+        assert remote[key] == local_info[key], key
     counts = json.loads(urllib.request.urlopen(f"{base}/counts").read())
     assert not any(k.startswith("/ok/") for k in counts), counts
     sent = json.loads(urllib.request.urlopen(f"{base}/bytes").read())

@@ -1,8 +1,10 @@
-// `csgtile info FILE [--json] [--scan]`: what a point-cloud file says about itself — version,
-// point format, counts, bounds, scale/offset, CRS (interpreted, with its records), VLRs/EVLRs, extra bytes — and the
-// problems the reader found. LAS headers are reported without reading the points unless
+// `csgtile info FILE|URL [--json] [--scan]`: what a point-cloud file says about itself —
+// version, point format, counts, bounds, scale/offset, CRS (interpreted, with its records),
+// VLRs/EVLRs, extra bytes, a COPC file's octree — and the problems the reader found. A URL
+// (http, https, s3) is read by range requests: only the header, records and pages shown. LAS headers are reported without reading the points unless
 // --scan is given; PLY/PCD/XYZ have no header bounds, so their points are always scanned.
 
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 #include <iostream>
@@ -13,6 +15,7 @@
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/worker/errors.h"
+#include "fetch/fetch.h"
 
 namespace csgtile::worker::detail {
 
@@ -137,11 +140,25 @@ int run_info(const InfoOptions& o) {
     return error_info(code).exit_code;
   };
 
-  auto format = geo::detect_point_format(o.file);
-  if (!format.ok()) return fail(from_kernel(format.error().code), format.error().message);
   std::unique_ptr<geo::PointReader> reader;
   geo::LasReader* las = nullptr;
-  if (format.value() == geo::PointFileFormat::Las) {
+  std::shared_ptr<fetch::RangeStats> fetched;
+  const bool remote = fetch::is_url(o.file) && o.file.rfind("file://", 0) != 0;
+  auto format = remote ? kernel::Result<geo::PointFileFormat>(geo::PointFileFormat::Las)
+                       : geo::detect_point_format(o.file);
+  if (!format.ok()) return fail(from_kernel(format.error().code), format.error().message);
+  if (remote) {
+    // A URL (http, https, s3): LAS, LAZ or COPC read by range requests, only what is shown.
+    std::unique_ptr<geo::ByteSource> source;
+    fetched = std::make_shared<fetch::RangeStats>();
+    if (Failure f = fetch::open_range_source(o.file, fetch::Policy{}, source, fetched); !f.ok()) {
+      return fail(f.code, f.message);
+    }
+    auto opened = geo::LasReader::open_source(std::move(source));
+    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+    las = opened.value().get();
+    reader = std::move(opened).value();
+  } else if (format.value() == geo::PointFileFormat::Las) {
     auto opened = geo::LasReader::open(o.file);
     if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
     las = opened.value().get();
@@ -203,6 +220,25 @@ int run_info(const InfoOptions& o) {
     out["evlrs"] = std::move(evlrs);
   }
   out["extra_bytes"] = info.extra ? extra_json(*info.extra) : Json(nullptr);
+  // COPC: the octree as its hierarchy says (the pages are read; no point chunk is).
+  std::optional<std::vector<geo::CopcNode>> copc_nodes;
+  if (las != nullptr && las->copc()) {
+    auto nodes = las->copc_hierarchy();
+    if (!nodes.ok()) return fail(from_kernel(nodes.error().code), nodes.error().message);
+    copc_nodes = std::move(nodes).value();
+    const geo::CopcInfo& c = *las->copc();
+    int depth = 0;
+    std::uint64_t points = 0;
+    for (const auto& n : *copc_nodes) {
+      depth = std::max(depth, n.depth);
+      points += n.points;
+    }
+    out["copc"] = {{"center", c.center},         {"halfsize", c.halfsize},
+                   {"spacing", c.spacing},       {"nodes", copc_nodes->size()},
+                   {"max_depth", depth},         {"points", points},
+                   {"gpstime", {c.gpstime_minimum, c.gpstime_maximum}}};
+  }
+  if (fetched) out["fetched"] = {{"requests", fetched->requests}, {"bytes", fetched->bytes}};
   out["warnings"] = reader->warnings();
 
   if (scan_error) {
@@ -290,6 +326,18 @@ int run_info(const InfoOptions& o) {
       if (d.offset) std::printf("  offset %.10g", *d.offset);
       std::printf("\n");
     }
+  }
+  if (out.contains("copc")) {
+    const Json& c = out["copc"];
+    std::printf("%-13s%s nodes, depth 0-%s, %s points in the hierarchy, root half size %.10g, "
+                "spacing %.10g\n",
+                "copc", c["nodes"].dump().c_str(), c["max_depth"].dump().c_str(),
+                c["points"].dump().c_str(), c["halfsize"].get<double>(),
+                c["spacing"].get<double>());
+  }
+  if (fetched) {
+    std::printf("%-13s%" PRIu64 " bytes in %" PRIu64 " range requests\n", "fetched",
+                fetched->bytes, fetched->requests);
   }
   std::printf("%-13s%zu\n", "warnings", reader->warnings().size());
   for (const auto& w : reader->warnings()) std::printf("  %s\n", w.c_str());
