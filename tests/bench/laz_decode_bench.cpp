@@ -7,7 +7,9 @@
 //   laz_fit    — all cores, decoding only what fitting needs (layered files skip layers),
 //   points     — LasReader::read (decoded into points) on all cores,
 // and prints one JSON object: points/s per case, the ratios to the LAS baseline and the
-// parallel speed-up, and peak RSS.
+// parallel speed-up, and peak RSS. For the COPC file of ../shared/data/laz it also reports
+// the bytes a region query reads (a quarter of the extent in x and y, and the root level
+// alone) over the bytes of a whole read, counted at the byte source.
 //
 // Usage: laz_decode_bench [FILE.laz ...] [--passes K]
 
@@ -21,6 +23,10 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <iterator>
+#include <memory>
+#include <span>
+#include <utility>
 #include <vector>
 
 #include "csgtile/geo/las.h"
@@ -78,6 +84,74 @@ double best(const fs::path& path, bool points, bool fit_only, int passes, std::u
   return b;
 }
 
+// Bytes in memory, counting what is read of them.
+class CountingSource final : public csgtile::geo::ByteSource {
+ public:
+  CountingSource(const std::vector<std::uint8_t>& bytes, std::uint64_t* read)
+      : ByteSource("copc"), bytes_(bytes), read_(read) {}
+  std::uint64_t size() const override { return bytes_.size(); }
+  csgtile::kernel::Status read_at(std::uint64_t offset, std::span<std::uint8_t> out) override {
+    if (offset > bytes_.size() || out.size() > bytes_.size() - offset) {
+      return csgtile::kernel::Status(csgtile::kernel::ErrorCode::CorruptData, "past the end");
+    }
+    std::copy_n(bytes_.data() + offset, out.size(), out.data());
+    *read_ += out.size();
+    return csgtile::kernel::Status();
+  }
+
+ private:
+  const std::vector<std::uint8_t>& bytes_;
+  std::uint64_t* read_;
+};
+
+// Points and bytes read for one COPC query (no region: the whole file).
+std::pair<std::uint64_t, std::uint64_t> copc_read(const std::vector<std::uint8_t>& bytes,
+                                                  const csgtile::geo::PointReadOptions& options) {
+  std::uint64_t read = 0, points = 0;
+  auto reader = csgtile::geo::LasReader::open_source(std::make_unique<CountingSource>(bytes, &read),
+                                                     options);
+  if (!reader.ok()) {
+    std::fprintf(stderr, "%s\n", reader.error().message.c_str());
+    std::exit(1);
+  }
+  csgtile::geo::PointBatch batch;
+  for (;;) {
+    auto n = reader.value()->read(batch, 1 << 16);
+    if (!n.ok() || n.value() == 0) break;
+    points += n.value();
+  }
+  return {points, read};
+}
+
+void report_copc(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  auto header = csgtile::geo::LasReader::open(path);
+  if (!header.ok()) return;
+  const auto& h = header.value()->header();
+  const auto [all_points, all_bytes] = copc_read(bytes, {});
+  csgtile::geo::PointReadOptions quarter;
+  csgtile::geo::Bounds3 box;
+  box.min = {h.min[0], h.min[1], -1e300};
+  box.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
+  quarter.region = box;
+  const auto [q_points, q_bytes] = copc_read(bytes, quarter);
+  csgtile::geo::PointReadOptions root;
+  root.copc_max_depth = 0;
+  const auto [r_points, r_bytes] = copc_read(bytes, root);
+  std::printf(", \"copc\": {\"file\": \"%s\", \"file_bytes\": %zu, \"whole\": {\"points\": %llu, "
+              "\"bytes_read\": %llu}, \"quarter_region\": {\"points\": %llu, \"bytes_read\": %llu, "
+              "\"bytes_over_whole\": %.3f}, \"root_level\": {\"points\": %llu, \"bytes_read\": %llu, "
+              "\"bytes_over_whole\": %.3f}}",
+              path.filename().c_str(), bytes.size(), static_cast<unsigned long long>(all_points),
+              static_cast<unsigned long long>(all_bytes), static_cast<unsigned long long>(q_points),
+              static_cast<unsigned long long>(q_bytes),
+              static_cast<double>(q_bytes) / static_cast<double>(all_bytes),
+              static_cast<unsigned long long>(r_points), static_cast<unsigned long long>(r_bytes),
+              static_cast<double>(r_bytes) / static_cast<double>(all_bytes));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -124,6 +198,9 @@ int main(int argc, char** argv) {
         pts / t_las, pts / t_one, pts / t_all, pts / t_fit, pts / t_points, t_las / t_one,
         t_las / t_all, t_one / t_all);
   }
-  std::printf("], \"peak_rss_mib\": %.1f}\n", peak_rss_mib());
+  std::printf("]");
+  const fs::path copc = fs::path(CSGTILE_SHARED_DIR) / "data" / "laz" / "1.2-with-color.copc.laz";
+  if (fs::exists(copc)) report_copc(copc);
+  std::printf(", \"peak_rss_mib\": %.1f}\n", peak_rss_mib());
   return 0;
 }
