@@ -1,4 +1,5 @@
-// Projections (GeographicLib + our oblique stereographic) and datum shifts for CrsMath.
+// Projections (PROJ, with our domain rules) and datum shifts (Helmert in ECEF on GeographicLib's
+// geocentric conversions, or PROJ's pipeline) for CrsMath.
 
 #include "crs/geodesy.h"
 
@@ -7,13 +8,8 @@
 #include <limits>
 #include <string>
 
-#include <GeographicLib/Constants.hpp>
 #include <GeographicLib/Geocentric.hpp>
-#include <GeographicLib/LambertConformalConic.hpp>
 #include <GeographicLib/Math.hpp>
-#include <GeographicLib/PolarStereographic.hpp>
-#include <GeographicLib/TransverseMercator.hpp>
-#include <GeographicLib/UTMUPS.hpp>
 
 #include "crs/crs_internal.h"
 #include "crs/proj_engine.h"
@@ -25,195 +21,120 @@ using kernel::Error;
 using kernel::ErrorCode;
 using kernel::Result;
 
-// UTM / UPS on WGS 84 through GeographicLib::UTMUPS, which also checks that a point lies
-// within the zone's legal bounds (it throws GeographicErr otherwise). zone 0 is UPS.
-class UtmUpsEngine final : public ProjectionEngine {
- public:
-  UtmUpsEngine(int zone, bool north) : zone_(zone), north_(north) {}
-  void forward(double lat, double lon, double& easting, double& northing) const override {
-    int zone = 0;
-    bool northp = false;
-    GeographicLib::UTMUPS::Forward(lat, lon, zone, northp, easting, northing, zone_);
-    if (northp != north_) {
-      // UTMUPS picks the hemisphere from the latitude; the CRS fixes it.
-      if (zone_ == GeographicLib::UTMUPS::UPS) {
-        throw DomainError("latitude " + format_number(lat) +
-                          " is in the other hemisphere of this UPS CRS");
-      }
-      northing += north_ ? -GeographicLib::UTMUPS::UTMShift() : GeographicLib::UTMUPS::UTMShift();
-    }
-  }
-  void reverse(double easting, double northing, double& lat, double& lon) const override {
-    GeographicLib::UTMUPS::Reverse(zone_, north_, easting, northing, lat, lon);
-  }
+// Every projection is PROJ's (proj_engine.cpp), from a PROJ string on the CRS's ellipsoid in
+// metres with longitudes relative to the CRS's prime meridian; the domain rules PROJ does
+// not apply are ours, checked around it (DomainChecks).
 
- private:
-  int zone_;
-  bool north_;
-};
+std::string earth_of(const Ellipsoid& e) {
+  return e.inverse_flattening == 0.0 ? "+R=" + format_number(e.semi_major_m)
+                                     : "+a=" + format_number(e.semi_major_m) +
+                                           " +rf=" + format_number(e.inverse_flattening);
+}
 
-// Transverse Mercator (Krüger series to 6th order, GeographicLib's TransverseMercator:
-// 5 nm within 3900 km of the central meridian) with a latitude of origin. For UTM zones on
-// other ellipsoids than WGS 84 the legal window of UTMUPS is applied too (easting 0-1000 km;
+// The PROJ string of a projection (EPSG method → PROJ operation).
+std::string proj_string_of(const Crs& crs) {
+  const Projection& p = *crs.projection;
+  auto n = [](double v) { return format_number(v); };
+  const std::string origin = " +x_0=" + n(p.false_easting_m) + " +y_0=" + n(p.false_northing_m) +
+                             " " + earth_of(crs.datum.ellipsoid);
+  switch (p.method) {
+    case ProjectionMethod::TransverseMercator:  // PROJ's exact (Poder/Engsager) algorithm
+      return "+proj=tmerc +lat_0=" + n(p.latitude_of_origin_deg) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
+    case ProjectionMethod::LambertConicConformal1SP:
+      return "+proj=lcc +lat_1=" + n(p.latitude_of_origin_deg) +
+             " +lat_0=" + n(p.latitude_of_origin_deg) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k_0=" + n(p.scale_factor) + origin;
+    case ProjectionMethod::LambertConicConformal2SP:
+      return "+proj=lcc +lat_1=" + n(p.standard_parallel_1_deg) +
+             " +lat_2=" + n(p.standard_parallel_2_deg) + " +lat_0=" + n(p.latitude_of_origin_deg) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + origin;
+    case ProjectionMethod::PolarStereographicA:
+      return "+proj=stere +lat_0=" + n(p.latitude_of_origin_deg > 0 ? 90.0 : -90.0) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k_0=" + n(p.scale_factor) + origin;
+    case ProjectionMethod::PolarStereographicB:
+      return "+proj=stere +lat_0=" + n(p.standard_parallel_1_deg > 0 ? 90.0 : -90.0) +
+             " +lat_ts=" + n(p.standard_parallel_1_deg) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + origin;
+    case ProjectionMethod::ObliqueStereographic:  // PROJ's sterea: EPSG 9809 (GN 7-2)
+      return "+proj=sterea +lat_0=" + n(p.latitude_of_origin_deg) +
+             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
+    case ProjectionMethod::ComputedByProj:
+      return p.proj_string;
+  }
+  return std::string();
+}
+
+// Domain rules around PROJ's projection: transverse Mercator within 90° of its central
+// meridian; UTM zones (on any ellipsoid) within their legal window (easting 0-1000 km;
 // northing -100..9700 km north, 900..10100 km south), so a tile behaves the same in
-// EPSG:32631 and EPSG:25831.
-class TransverseMercatorEngine final : public ProjectionEngine {
+// EPSG:32631 and EPSG:25831; polar stereographic never at the opposite pole.
+class DomainChecks final : public ProjectionEngine {
  public:
-  TransverseMercatorEngine(double a, double f, const Projection& p)
-      : tm_(a, f, p.scale_factor), p_(p) {
-    double x = 0.0;
-    tm_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x,
-                y_origin_);
+  DomainChecks(std::unique_ptr<ProjectionEngine> inner, const Projection& p)
+      : inner_(std::move(inner)), p_(p) {
     int zone = 0;
     bool north = true;
     if (is_utm(p, &zone, &north)) {
       utm_zone_ = zone;
       utm_north_ = north;
     }
+    polar_ = p.method == ProjectionMethod::PolarStereographicA ||
+             p.method == ProjectionMethod::PolarStereographicB;
+    polar_north_ = p.method == ProjectionMethod::PolarStereographicA
+                       ? p.latitude_of_origin_deg > 0
+                       : p.standard_parallel_1_deg > 0;
   }
   void forward(double lat, double lon, double& easting, double& northing) const override {
-    if (std::fabs(GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon)) > 90.0) {
+    if (p_.method == ProjectionMethod::TransverseMercator &&
+        std::fabs(GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon)) > 90.0) {
       throw DomainError("longitude " + format_number(lon) +
                         " is more than 90 degrees from the central meridian");
     }
-    double x = 0.0, y = 0.0;
-    tm_.Forward(p_.longitude_of_origin_deg, lat, lon, x, y);
-    easting = p_.false_easting_m + x;
-    northing = p_.false_northing_m + (y - y_origin_);
-    check_utm_window(easting, northing);
-  }
-  void reverse(double easting, double northing, double& lat, double& lon) const override {
-    check_utm_window(easting, northing);
-    tm_.Reverse(p_.longitude_of_origin_deg, easting - p_.false_easting_m,
-                northing - p_.false_northing_m + y_origin_, lat, lon);
-  }
-
- private:
-  void check_utm_window(double easting, double northing) const {
-    if (utm_zone_ == 0) return;
-    const bool ok = easting >= 0.0 && easting <= 1.0e6 &&
-                    (utm_north_ ? northing >= -1.0e5 && northing < 9.7e6
-                                : northing >= 9.0e5 && northing <= 1.01e7);
-    if (!ok) {
-      throw DomainError("easting " + format_number(easting) + ", northing " +
-                        format_number(northing) + " out of legal bounds for UTM zone " +
-                        std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
-    }
-  }
-  GeographicLib::TransverseMercator tm_;
-  Projection p_;
-  double y_origin_ = 0.0;
-  int utm_zone_ = 0;
-  bool utm_north_ = true;
-};
-
-// Lambert conformal conic (1SP: scale k0 on the natural origin's parallel; 2SP: scale 1 on
-// both standard parallels), origin shifted to the (false) origin's latitude.
-class LambertEngine final : public ProjectionEngine {
- public:
-  LambertEngine(double a, double f, const Projection& p)
-      : lcc_(p.method == ProjectionMethod::LambertConicConformal1SP
-                 ? GeographicLib::LambertConformalConic(a, f, p.latitude_of_origin_deg,
-                                                        p.scale_factor)
-                 : GeographicLib::LambertConformalConic(a, f, p.standard_parallel_1_deg,
-                                                        p.standard_parallel_2_deg, 1.0)),
-        p_(p) {
-    double x = 0.0;
-    lcc_.Forward(p.longitude_of_origin_deg, p.latitude_of_origin_deg, p.longitude_of_origin_deg, x,
-                 y_origin_);
-  }
-  void forward(double lat, double lon, double& easting, double& northing) const override {
-    double x = 0.0, y = 0.0;
-    lcc_.Forward(p_.longitude_of_origin_deg, lat, lon, x, y);
-    easting = p_.false_easting_m + x;
-    northing = p_.false_northing_m + (y - y_origin_);
-  }
-  void reverse(double easting, double northing, double& lat, double& lon) const override {
-    lcc_.Reverse(p_.longitude_of_origin_deg, easting - p_.false_easting_m,
-                 northing - p_.false_northing_m + y_origin_, lat, lon);
-  }
-
- private:
-  GeographicLib::LambertConformalConic lcc_;
-  Projection p_;
-  double y_origin_ = 0.0;
-};
-
-// Polar stereographic, variant A (scale k0 at the pole) or B (scale 1 on a standard
-// parallel, GeographicLib's SetScale).
-class PolarEngine final : public ProjectionEngine {
- public:
-  PolarEngine(double a, double f, const Projection& p)
-      : ps_(a, f, p.method == ProjectionMethod::PolarStereographicA ? p.scale_factor : 1.0), p_(p) {
-    north_ = p.method == ProjectionMethod::PolarStereographicA ? p.latitude_of_origin_deg > 0
-                                                               : p.standard_parallel_1_deg > 0;
-    if (p.method == ProjectionMethod::PolarStereographicB)
-      ps_.SetScale(std::fabs(p.standard_parallel_1_deg), 1.0);
-  }
-  void forward(double lat, double lon, double& easting, double& northing) const override {
-    if ((north_ && lat <= -90.0) || (!north_ && lat >= 90.0)) {
+    if (polar_ && ((polar_north_ && lat <= -90.0) || (!polar_north_ && lat >= 90.0))) {
       throw DomainError("the opposite pole cannot be projected");
     }
-    double x = 0.0, y = 0.0;
-    ps_.Forward(north_, lat, GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon), x, y);
-    easting = p_.false_easting_m + x;
-    northing = p_.false_northing_m + y;
+    inner_->forward(lat, lon, easting, northing);
+    check_utm_window(easting, northing);
   }
   void reverse(double easting, double northing, double& lat, double& lon) const override {
-    double dlon = 0.0;
-    ps_.Reverse(north_, easting - p_.false_easting_m, northing - p_.false_northing_m, lat, dlon);
-    lon = GeographicLib::Math::AngNormalize(dlon + p_.longitude_of_origin_deg);
+    check_utm_window(easting, northing);
+    inner_->reverse(easting, northing, lat, lon);
+  }
+  void reverse_many(double* x, double* y, std::size_t count) const override {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    if (utm_zone_ != 0) {
+      for (std::size_t i = 0; i < count; ++i) {
+        if (!in_utm_window(x[i], y[i])) x[i] = y[i] = nan;
+      }
+    }
+    inner_->reverse_many(x, y, count);
   }
 
  private:
-  GeographicLib::PolarStereographic ps_;
+  bool in_utm_window(double easting, double northing) const {
+    return easting >= 0.0 && easting <= 1.0e6 &&
+           (utm_north_ ? northing >= -1.0e5 && northing < 9.7e6
+                       : northing >= 9.0e5 && northing <= 1.01e7);
+  }
+  void check_utm_window(double easting, double northing) const {
+    if (utm_zone_ == 0 || in_utm_window(easting, northing)) return;
+    throw DomainError("easting " + format_number(easting) + ", northing " +
+                      format_number(northing) + " out of legal bounds for UTM zone " +
+                      std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
+  }
+  std::unique_ptr<ProjectionEngine> inner_;
   Projection p_;
-  bool north_ = true;
+  int utm_zone_ = 0;
+  bool utm_north_ = true;
+  bool polar_ = false;
+  bool polar_north_ = true;
 };
 
-// The PROJ string of a method PROJ computes for us: the oblique stereographic of RD New
-// (PROJ's "sterea" is EPSG method 9809, the double stereographic of GN 7-2).
-std::string proj_string_of(const Crs& crs) {
-  const Projection& p = *crs.projection;
-  if (p.method == ProjectionMethod::ComputedByProj) return p.proj_string;
-  const Ellipsoid& e = crs.datum.ellipsoid;
-  const std::string earth = e.inverse_flattening == 0.0
-                                ? "+R=" + format_number(e.semi_major_m)
-                                : "+a=" + format_number(e.semi_major_m) +
-                                      " +rf=" + format_number(e.inverse_flattening);
-  return "+proj=sterea +lat_0=" + format_number(p.latitude_of_origin_deg) +
-         " +lon_0=" + format_number(p.longitude_of_origin_deg) +
-         " +k=" + format_number(p.scale_factor) + " +x_0=" + format_number(p.false_easting_m) +
-         " +y_0=" + format_number(p.false_northing_m) + " " + earth;
-}
-
 std::unique_ptr<ProjectionEngine> make_engine(const Crs& crs) {
-  const Projection& p = *crs.projection;
-  const double a = crs.datum.ellipsoid.semi_major_m;
-  const double f = crs.datum.ellipsoid.flattening();
-  int zone = 0;
-  bool north = true;
-  if (is_wgs84_ellipsoid(crs.datum.ellipsoid) && crs.datum.prime_meridian_deg == 0.0) {
-    if (is_utm(p, &zone, &north)) return std::make_unique<UtmUpsEngine>(zone, north);
-    if (is_ups(p, &north)) return std::make_unique<UtmUpsEngine>(GeographicLib::UTMUPS::UPS, north);
-  }
-  switch (p.method) {
-    case ProjectionMethod::TransverseMercator:
-      return std::make_unique<TransverseMercatorEngine>(a, f, p);
-    case ProjectionMethod::LambertConicConformal1SP:
-    case ProjectionMethod::LambertConicConformal2SP:
-      return std::make_unique<LambertEngine>(a, f, p);
-    case ProjectionMethod::PolarStereographicA:
-    case ProjectionMethod::PolarStereographicB:
-      return std::make_unique<PolarEngine>(a, f, p);
-    case ProjectionMethod::ObliqueStereographic:
-    case ProjectionMethod::ComputedByProj: {
-      auto engine = make_proj_engine(proj_string_of(crs));
-      if (!engine.ok()) throw DomainError(engine.error().message);
-      return std::move(engine).value();
-    }
-  }
-  return nullptr;
+  auto engine = make_proj_engine(proj_string_of(crs));
+  if (!engine.ok()) throw DomainError(engine.error().message);
+  return std::make_unique<DomainChecks>(std::move(engine).value(), *crs.projection);
 }
 
 void require_finite(double a, double b, const char* what) {

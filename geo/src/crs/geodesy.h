@@ -1,9 +1,10 @@
 #pragma once
-// Private computing side of a Crs: its projection (GeographicLib or our oblique
-// stereographic) with unit handling, and its datum shift to WGS 84 via ECEF.
+// Private computing side of a Crs: its projection (PROJ, proj_engine.h, with our domain rules)
+// with unit handling, and its datum shift to WGS 84 (a Helmert in ECEF, or PROJ's pipeline).
+// GeographicLib stays for what it is best at: geocentric conversions and ENU frames.
 //
-// Calls here throw (GeographicLib::GeographicErr, or DomainError for our own checks); the
-// public wrappers in georeference.cpp catch and turn them into kernel errors or NaNs.
+// Calls here throw (DomainError, GeographicLib::GeographicErr); the public wrappers in
+// georeference.cpp catch and turn them into kernel errors or NaNs.
 
 #include <cstddef>
 #include <memory>
