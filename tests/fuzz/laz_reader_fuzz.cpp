@@ -5,12 +5,15 @@
 // Besides "no crash, no hang, no sanitizer report", an accepted LAZ input must keep the
 // decoder's promises: the records read equal readable_points(); a read that starts at a seek
 // gives the same records as a read from the start (chunks and streams restart cleanly); and
-// decoding only the fitting attributes gives the same coordinates, returns and classes.
+// decoding only the fitting attributes gives the same coordinates, returns and classes; and
+// for a COPC file, a region query (its hierarchy read and checked) never gives a point that a
+// whole read does not give inside that region.
 //
 // Built a second time with CSGTILE_LAZ_SEED_GENERATOR defined, the same file is a program
 // that copies the seed corpus: the LAZ and COPC files of ../shared/data up to 256 KiB.
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -90,6 +93,43 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 a.points[i].classification == b.points[i].classification &&
                 a.points[i].return_number == b.points[i].return_number,
             "fitting attributes differ between a partial and a full decode");
+    }
+  }
+  if (laz.copc() && laz.header().min[0] <= laz.header().max[0]) {
+    // A COPC region query: the lower-left quarter of the header's extent.
+    PointReadOptions query;
+    Bounds3 box;
+    const auto& h = laz.header();
+    box.min = {h.min[0], h.min[1], -1e300};
+    box.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
+    query.region = box;
+    auto region = LasReader::open_memory("fuzz.copc.laz", bytes, query);
+    if (region.ok()) {
+      std::vector<std::array<double, 3>> inside, got;
+      auto whole = LasReader::open_memory("fuzz.copc.laz", bytes);
+      PointBatch batch;
+      bool whole_ok = whole.ok();
+      for (int guard = 0; whole_ok && guard < 1000000; ++guard) {
+        auto n = whole.value()->read(batch, 4096);
+        if (!n.ok()) whole_ok = false;
+        if (!n.ok() || n.value() == 0) break;
+        for (const Point& p : batch.points) {
+          if (box.contains(p.x, p.y, p.z, {0, 0, 0})) inside.push_back({p.x, p.y, p.z});
+        }
+      }
+      bool region_ok = true;
+      for (int guard = 0; guard < 1000000; ++guard) {
+        auto n = region.value()->read(batch, 4096);
+        if (!n.ok()) region_ok = false;
+        if (!n.ok() || n.value() == 0) break;
+        for (const Point& p : batch.points) got.push_back({p.x, p.y, p.z});
+      }
+      if (whole_ok && region_ok) {
+        std::sort(inside.begin(), inside.end());
+        std::sort(got.begin(), got.end());
+        check(std::includes(inside.begin(), inside.end(), got.begin(), got.end()),
+              "a COPC region query gives a point a whole read does not");
+      }
     }
   }
   return 0;
