@@ -239,4 +239,9 @@ std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::Boundin
                         double coverage, const kernel::BoundingBox& region, double cell,
                         const PrimitiveOptions& o);
 
+/// One ground per building (bases.cpp): vertical extrusions whose footprint boxes touch and
+/// whose bases lie within `tolerance` above the lowest of them are lowered onto it (height
+/// grown, clips moved: the top stays); returns how many moved. Deterministic.
+std::size_t snap_extrusion_bases(std::vector<geo::ScenePrimitive>& primitives, double tolerance);
+
 }  // namespace csgtile::fit::detail

@@ -319,6 +319,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     for (std::size_t k = 0; k < out.per_type.size(); ++k) out.per_type[k] += fitted.per_type[k];
     out.assigned_points += fitted.assigned_points;
   }
+  // One ground per building: parts standing within the ground filter's height tolerance of
+  // each other stand on one base (no sliver steps when they are fused).
+  if (options.ground.enabled) detail::snap_extrusion_bases(out.primitives, options.ground.height);
   out.unassigned_points = out.fitted_points - out.assigned_points;
   out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);
   out.seconds.emplace_back("primitives", primitives_seconds);

@@ -407,6 +407,75 @@ TEST(CityJsonSeq, TrianglesThatCollapseAfterQuantisationAreLeftOutAndCounted) {
   }
 }
 
+// Validators snap vertices closer than their tolerance (val3dity: 1 mm, the default scale's
+// unit): two distinct vertices a unit apart read as a repeated point (102) and a triangle on a
+// line as a collapsed ring (104). The writer welds vertices within a unit of each other and
+// absorbs flattened triangles into their neighbours; shells stay closed.
+TEST(CityJsonSeq, NoTwoVerticesWithinAUnitAndNoTriangleOnALine) {
+  // Fitted parts of one building standing 0.6 mm apart (their bases and tops), and a pipe
+  // through them: at 1 mm, the steps' vertices are a unit apart.
+  const std::vector<IndexObject> parts = {object(
+      "parts", combine({leaf(box({0, 0, 0}, {1, 1, 1}), "a"),
+                        leaf(box({0.5, 0.5, 0.0006}, {1, 1, 0.9998}), "b"),
+                        leaf(cylinder({0.25, 0.25, 0.0003}, 0.1, 1.2), "c")},
+                       kernel::BooleanOp::Fuse))};
+  CityJsonOptions options;
+  options.scale = 0.001;
+  options.chordal_tolerance = 0.0001;
+  CityJsonStats stats;
+  const auto text = cityjson_seq(parts, options, &stats);
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  const Sequence s = parse(text.value());
+  ASSERT_EQ(s.features.size(), 1u);
+  const Json& f = s.features[0];
+  const auto vertices = f["vertices"].get<std::vector<std::array<long long, 3>>>();
+  std::size_t near_pairs = 0;
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    for (std::size_t j = i + 1; j < vertices.size(); ++j) {
+      near_pairs += std::abs(vertices[i][0] - vertices[j][0]) <= 1 &&
+                    std::abs(vertices[i][1] - vertices[j][1]) <= 1 &&
+                    std::abs(vertices[i][2] - vertices[j][2]) <= 1;
+    }
+  }
+  EXPECT_EQ(near_pairs, 0u);
+  for (const FileShell& shell : shells_of(f)) {
+    for (const Json& surface : shell.surfaces) {
+      const auto ring = surface[0].get<std::vector<std::size_t>>();
+      if (ring.size() != 3) continue;
+      const auto& a = vertices[ring[0]];
+      const auto& b = vertices[ring[1]];
+      const auto& c = vertices[ring[2]];
+      const long long u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const long long v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const bool on_a_line = u[1] * v[2] - u[2] * v[1] == 0 && u[2] * v[0] - u[0] * v[2] == 0 &&
+                             u[0] * v[1] - u[1] * v[0] == 0;
+      EXPECT_FALSE(on_a_line) << "a triangle on a line";
+    }
+    EXPECT_TRUE(shell_closed(shell));
+  }
+  EXPECT_TRUE(city_object(f)["attributes"]["closed"].get<bool>());
+  EXPECT_EQ(city_object(f)["geometry"][0]["type"], "Solid");
+}
+
+// Where welding would open a shell (a thin pipe whose opposite sides are a unit apart), the
+// object is written unwelded, still a closed solid, and without triangles on a line.
+TEST(CityJsonSeq, WeldingNeverOpensAClosedShell) {
+  const std::vector<IndexObject> pipes = {
+      object("pipes", combine({leaf(cylinder({0, 0, 0}, 0.05, 1), "a"),
+                               leaf(cylinder({0.049, 0.0, 0.3}, 0.03, 1), "b")},
+                              kernel::BooleanOp::Fuse))};
+  CityJsonOptions options;
+  options.scale = 0.001;
+  options.chordal_tolerance = 0.00002;
+  const auto text = cityjson_seq(pipes, options, nullptr);
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  const Sequence s = parse(text.value());
+  ASSERT_EQ(s.features.size(), 1u);
+  const Json& f = s.features[0];
+  for (const FileShell& shell : shells_of(f)) EXPECT_TRUE(shell_closed(shell));
+  EXPECT_EQ(city_object(f)["geometry"][0]["type"], "Solid");
+}
+
 TEST(CityJsonSeq, OpenShellIsWrittenAsMultiSurfaceAndReported) {
   // A box without its top face: a solid the kernel can hold but that encloses nothing.
   const auto boxed = kernel::csg_primitive(box({0, 0, 0}, {1, 1, 1}));

@@ -63,6 +63,39 @@ std::optional<Point> quantise(const Vec3& p, double scale) {
   return q;
 }
 
+// Vertices of one object welded at the file's resolution: a quantised point within one unit
+// (per axis) of an earlier one becomes that one. Validators snap vertices closer than their
+// tolerance (val3dity: 1 mm, the default scale's unit), so two distinct vertices a unit
+// apart read as one repeated point (CONSECUTIVE_POINTS_SAME) or a self-touching ring.
+// First come, first kept: representatives are pairwise more than a unit apart;
+// deterministic for the same mesh.
+class Welder {
+ public:
+  Point operator()(const Point& p) {
+    if (const auto it = seen_.find(p); it != seen_.end()) return it->second;
+    Point rep = p;
+    bool found = false;
+    for (std::int64_t dx = -1; dx <= 1 && !found; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1 && !found; ++dy) {
+        for (std::int64_t dz = -1; dz <= 1 && !found; ++dz) {
+          const Point q{p[0] + dx, p[1] + dy, p[2] + dz};
+          if (representatives_.count(q) != 0) {
+            rep = q;
+            found = true;
+          }
+        }
+      }
+    }
+    if (!found) representatives_.insert(p);
+    seen_.emplace(p, rep);
+    return rep;
+  }
+
+ private:
+  std::set<Point> representatives_;
+  std::map<Point, Point> seen_;
+};
+
 // Consecutive repeats removed, the ring read cyclically.
 Ring without_repeats(Ring ring) {
   ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
@@ -118,6 +151,92 @@ bool clean_polygon(const std::vector<Ring>& rings) {
     }
   }
   return !rings.empty() && !collinear(rings[0]);
+}
+
+std::int64_t dot(const std::array<std::int64_t, 3>& a, const std::array<std::int64_t, 3>& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// A triangle whose three points lie on one line (a sliver that quantisation flattened)
+// bounds nothing, and validators reject it (a ring collapsed to a line). It is removed and
+// its middle point inserted into the surface across its long edge: that surface's two new
+// edges are the reverses of the ones the triangle shared with its other neighbours, so the
+// shell stays closed (a triangle across it is cut in two instead, so that no ring holds three
+// points on a line). A flat triangle and its twin (the same points reversed: a fin) both go.
+// Returns how many were removed.
+std::size_t absorb_flat_triangles(ShellSurfaces& shell) {
+  std::size_t absorbed = 0;
+  // Every change removes a surface, so the scans end; each starts after the last change.
+  std::size_t from = 0;
+  for (;;) {
+    bool changed = false;
+    for (std::size_t si = from; si < shell.size(); ++si) {
+      const Surface& s = shell[si];
+      if (s.rings.size() != 1 || s.rings[0].size() != 3 || !collinear(s.rings[0])) continue;
+      from = si;  // where the next scan starts when this one changes the shell
+      const Ring t = s.rings[0];
+      int mid = -1;  // the point lying between the other two
+      for (int k = 0; k < 3 && mid < 0; ++k) {
+        const Point& m = t[k];
+        const Point& a = t[(k + 1) % 3];
+        const Point& b = t[(k + 2) % 3];
+        if (dot(minus(m, a), minus(b, a)) >= 0 && dot(minus(m, b), minus(a, b)) >= 0) mid = k;
+      }
+      if (mid < 0) continue;
+      const Point m = t[mid];
+      const Point a = t[(mid + 1) % 3];
+      const Point b = t[(mid + 2) % 3];  // the long edge is a → b; across it, b → a
+      // Its twin (the same three points the other way round, a zero-volume fin): both go.
+      std::size_t twin = shell.size();
+      for (std::size_t sj = 0; sj < shell.size() && twin == shell.size(); ++sj) {
+        const Surface& o = shell[sj];
+        if (sj == si || o.rings.size() != 1 || o.rings[0].size() != 3) continue;
+        const Ring& r = o.rings[0];
+        for (int k = 0; k < 3; ++k) {
+          if (r[k] == b && r[(k + 1) % 3] == a && r[(k + 2) % 3] == m) twin = sj;
+        }
+      }
+      if (twin != shell.size()) {
+        shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(std::max(si, twin)));
+        shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(std::min(si, twin)));
+        from = std::min(si, twin);
+        absorbed += 2;
+        changed = true;
+        break;  // indices moved: scan again
+      }
+      bool inserted = false;
+      std::optional<Surface> split;  // a triangle across the edge is cut in two at m
+      for (std::size_t sj = 0; sj < shell.size() && !inserted; ++sj) {
+        if (sj == si) continue;
+        for (Ring& ring : shell[sj].rings) {
+          const std::size_t n = ring.size();
+          for (std::size_t i = 0; i < n && !inserted; ++i) {
+            if (ring[i] != b || ring[(i + 1) % n] != a ||
+                std::find(ring.begin(), ring.end(), m) != ring.end()) {
+              continue;
+            }
+            if (n == 3 && shell[sj].rings.size() == 1) {
+              const Point d = ring[(i + 2) % 3];
+              ring = {b, m, d};
+              split = Surface{{{m, a, d}}, shell[sj].semantic};
+            } else {
+              ring.insert(ring.begin() + static_cast<std::ptrdiff_t>(i + 1), m);
+            }
+            inserted = true;
+          }
+          if (inserted) break;
+        }
+      }
+      if (!inserted) continue;
+      shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(si));
+      if (split) shell.push_back(std::move(*split));
+      ++absorbed;
+      changed = true;
+      break;  // indices moved: scan again
+    }
+    if (!changed) break;
+  }
+  return absorbed;
 }
 
 // Every directed edge of the shell's rings used once, and its reverse once: closed, and
@@ -176,7 +295,8 @@ Semantic classify(const Surface& s, std::int64_t object_min_z, double ground_uni
 // The surfaces of each solid of `root`, shell by shell, quantised. Planar faces are polygons
 // from their wires, curved faces (and planar ones whose polygon does not survive
 // quantisation) triangles of one tessellation, whose edge points the polygons share.
-kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options) {
+kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options,
+                                               bool weld_vertices) {
   kernel::TessellationOptions t;
   t.chordal_tolerance = options.chordal_tolerance;
   auto meshed = kernel::tessellate(root, t);
@@ -185,15 +305,18 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
   const kernel::ShapeIndex faces = kernel::map_child_shapes(root, ShapeKind::Face);
   const kernel::ShapeIndex edges = kernel::map_child_shapes(root, ShapeKind::Edge);
 
+  const std::vector<Vec3>& vertices = mesh.vertices;
   std::vector<Point> points;
-  points.reserve(mesh.vertices.size());
-  for (const Vec3& v : mesh.vertices) {
+  points.reserve(vertices.size());
+  Welder welder;
+  auto weld = [&](const Point& p) { return weld_vertices ? welder(p) : p; };
+  for (const Vec3& v : vertices) {
     const auto q = quantise(v, options.scale);
     if (!q) {
       return kernel::Error{kernel::ErrorCode::InvalidArgument,
                            "a vertex is not finite or too far from the origin for the scale"};
     }
-    points.push_back(*q);
+    points.push_back(weld(*q));
   }
   std::vector<std::vector<std::size_t>> triangles_of(faces.size());
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
@@ -203,7 +326,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
     std::vector<Vec3> out;
     const std::size_t e = edges.find(edge);
     if (e < mesh.edge_vertices.size()) {
-      for (std::uint32_t v : mesh.edge_vertices[e]) out.push_back(mesh.vertices[v]);
+      for (std::uint32_t v : mesh.edge_vertices[e]) out.push_back(vertices[v]);
     }
     return out;
   };
@@ -220,7 +343,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
         Surface s;
         for (const auto& ring : *rings) {
           Ring q;
-          for (const Vec3& p : ring) q.push_back(*quantise(p, options.scale));
+          for (const Vec3& p : ring) q.push_back(weld(*quantise(p, options.scale)));
           s.rings.push_back(without_repeats(std::move(q)));
         }
         if (clean_polygon(s.rings)) {
@@ -254,6 +377,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
           add_face(f, surfaces);
       }
       if (surfaces.empty()) continue;
+      geometry.flat_surfaces -= std::min(geometry.flat_surfaces, absorb_flat_triangles(surfaces));
       geometry.closed &= shell_closed(surfaces);
       volumes.push_back(shell_volume(surfaces));
       shells.push_back(std::move(surfaces));
@@ -464,7 +588,13 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
   Point low{}, high{};
   bool any_vertex = false;
   for (const IndexObject& object : objects) {
-    auto geometry = object_geometry(object.model.shape, options);
+    // Vertices welded at the file's unit (what validators do); where welding would open a
+    // shell that is closed without it (a collapse that pinches the surface), not welded.
+    auto geometry = object_geometry(object.model.shape, options, true);
+    if (geometry.ok() && !geometry.value().closed) {
+      auto plain = object_geometry(object.model.shape, options, false);
+      if (plain.ok() && plain.value().closed) geometry = std::move(plain);
+    }
     std::optional<ObjectGeometry> g;
     if (geometry.ok()) {
       g = std::move(geometry).value();
