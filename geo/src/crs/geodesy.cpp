@@ -59,8 +59,14 @@ std::string proj_string_of(const Crs& crs) {
     case ProjectionMethod::ObliqueStereographic:  // PROJ's sterea: EPSG 9809 (GN 7-2)
       return "+proj=sterea +lat_0=" + n(p.latitude_of_origin_deg) +
              " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::ComputedByProj:
-      return p.proj_string;
+    case ProjectionMethod::ComputedByProj: {
+      // A string made from GeoTIFF keys names no ellipsoid: the datum's.
+      const bool has_earth = p.proj_string.find("+ellps=") != std::string::npos ||
+                             p.proj_string.find("+a=") != std::string::npos ||
+                             p.proj_string.find("+R=") != std::string::npos ||
+                             p.proj_string.find("+datum=") != std::string::npos;
+      return has_earth ? p.proj_string : p.proj_string + " " + earth_of(crs.datum.ellipsoid);
+    }
   }
   return std::string();
 }

@@ -507,6 +507,83 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
       }
       break;
     }
+    case 7:     // CT_Mercator (1SP with a scale, or 2SP with a standard parallel)
+    case 10:    // CT_LambertAzimEqualArea
+    case 11:    // CT_AlbersEqualArea
+    case 12:    // CT_AzimuthalEquidistant
+    case 14:    // CT_Stereographic
+    case 17:    // CT_Equirectangular
+    case 18:    // CT_CassiniSoldner
+    case 22:    // CT_Polyconic
+    case 24: {  // CT_Sinusoidal
+      // Methods PROJ computes: its projection string from the keys (the ellipsoid is the
+      // datum's, added where the projection is computed).
+      auto n = [](double v) { return detail::format_number(v); };
+      const double lat0 = deg({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat}).value_or(0.0);
+      const double lon0 =
+          deg({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}).value_or(0.0);
+      const double fe = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
+      const double fn = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
+      const std::string common =
+          " +lon_0=" + n(lon0) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
+      std::string text;
+      switch (ct) {
+        case 7:
+          if (auto sp1 = deg({ProjStdParallel1})) {
+            text = "+proj=merc +lat_ts=" + n(*sp1) + common;
+          } else {
+            text = "+proj=merc +k_0=" +
+                   n(keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0)) + common;
+          }
+          p.method_name = "Mercator";
+          break;
+        case 10:
+          text = "+proj=laea +lat_0=" + n(lat0) + common;
+          p.method_name = "Lambert Azimuthal Equal Area";
+          break;
+        case 11: {
+          auto sp1 = deg({ProjStdParallel1});
+          auto sp2 = deg({ProjStdParallel2});
+          if (!sp1 || !sp2) {
+            return key_error(ErrorCode::InvalidArgument,
+                             "ProjCoordTransGeoKey 11 (Albers) needs ProjStdParallel1GeoKey "
+                             "(3078) and ProjStdParallel2GeoKey (3079)");
+          }
+          text = "+proj=aea +lat_1=" + n(*sp1) + " +lat_2=" + n(*sp2) + " +lat_0=" + n(lat0) +
+                 common;
+          p.method_name = "Albers Equal Area";
+          break;
+        }
+        case 12:
+          text = "+proj=aeqd +lat_0=" + n(lat0) + common;
+          p.method_name = "Azimuthal Equidistant";
+          break;
+        case 14:
+          text = "+proj=stere +lat_0=" + n(lat0) + " +k_0=" +
+                 n(keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0)) + common;
+          p.method_name = "Stereographic";
+          break;
+        case 17:
+          text = "+proj=eqc +lat_ts=" + n(deg({ProjStdParallel1}).value_or(lat0)) + common;
+          p.method_name = "Equidistant Cylindrical";
+          break;
+        case 18:
+          text = "+proj=cass +lat_0=" + n(lat0) + common;
+          p.method_name = "Cassini-Soldner";
+          break;
+        case 22:
+          text = "+proj=poly +lat_0=" + n(lat0) + common;
+          p.method_name = "American Polyconic";
+          break;
+        default:
+          text = "+proj=sinu" + common;
+          p.method_name = "Sinusoidal";
+          break;
+      }
+      p.method = ProjectionMethod::ComputedByProj;
+      p.proj_string = text;
+      break;
+    }
     default: {
       static const char* const names[] = {"",
                                           "TransverseMercator",
@@ -540,8 +617,10 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
           ct > 0 && ct < 28 ? std::string(" (CT_") + names[ct] + ")" : std::string();
       return key_error(ErrorCode::Unsupported,
                        "ProjCoordTransGeoKey (3075) method " + std::to_string(ct) + name +
-                           " is not supported (supported: 1 TM, 8 LCC 2SP, 9 LCC 1SP, 15 polar "
-                           "stereographic, 16 oblique stereographic)");
+                           " is not supported (supported: 1 TM, 7 Mercator, 8 LCC 2SP, 9 LCC 1SP, "
+                           "10 LAEA, 11 Albers, 12 azimuthal equidistant, 14 stereographic, 15 "
+                           "polar stereographic, 16 oblique stereographic, 17 equirectangular, 18 "
+                           "Cassini-Soldner, 22 polyconic, 24 sinusoidal)");
     }
   }
   return p;

@@ -401,6 +401,30 @@ kernel::Result<Crs> crs_from_proj_text(std::string_view text, const std::string&
   return out;
 }
 
+std::string proj_projected_wkt1(const Crs& crs) {
+  if (!crs.projection) return std::string();
+  const Projection& p = *crs.projection;
+  std::string text = p.proj_string;
+  const Ellipsoid& e = crs.datum.ellipsoid;
+  if (text.find("+ellps=") == std::string::npos && text.find("+a=") == std::string::npos &&
+      text.find("+R=") == std::string::npos && text.find("+datum=") == std::string::npos) {
+    text += e.inverse_flattening == 0.0 ? " +R=" + format_number(e.semi_major_m)
+                                        : " +a=" + format_number(e.semi_major_m) +
+                                              " +rf=" + format_number(e.inverse_flattening);
+  }
+  if (crs.datum.prime_meridian_deg != 0.0) text += " +pm=" + format_number(crs.datum.prime_meridian_deg);
+  if (crs.datum.to_wgs84 && !crs.datum.to_wgs84->is_null()) {
+    const Helmert7& h = *crs.datum.to_wgs84;  // +towgs84 is position vector: negate rotations
+    text += " +towgs84=" + format_number(h.tx_m) + "," + format_number(h.ty_m) + "," +
+            format_number(h.tz_m) + "," + format_number(-h.rx_arcsec + 0.0) + "," +
+            format_number(-h.ry_arcsec + 0.0) + "," + format_number(-h.rz_arcsec + 0.0) + "," +
+            format_number(h.scale_ppm);
+  }
+  text += " +to_meter=" + format_number(crs.linear_unit.metres) + " +no_defs +type=crs";
+  Object made(proj_create(context(), text.c_str()));
+  return made ? wkt1_of(made.p) : std::string();
+}
+
 std::optional<VerticalCrs> vertical_from_proj_database(int code) {
   PJ_CONTEXT* ctx = context();
   Object crs = from_database(code);

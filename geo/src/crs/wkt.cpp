@@ -899,7 +899,7 @@ std::string crs_to_wkt1(const Crs& crs) {
   if (crs.kind == CrsKind::Geocentric) {
     s = "GEOCCS[" + quoted(crs.name) + "," + geocentric_body_wkt(crs) + authority(crs.epsg) + "]";
   } else if (crs.projection && crs.projection->method == ProjectionMethod::ComputedByProj) {
-    s = crs.projection->wkt1;
+    s = crs.projection->wkt1.empty() ? detail::proj_projected_wkt1(crs) : crs.projection->wkt1;
   } else if (crs.kind == CrsKind::Geographic || !crs.projection) {
     s = geogcs_wkt(crs);
   } else {

@@ -297,6 +297,70 @@ TEST(GeoGeographic, GeocentricCrsPlacesEcefPoints) {
   EXPECT_FALSE(crs_difference(ecef, again.value()).has_value());
 }
 
+// User-defined projections in GeoTIFF keys (3075) that PROJ computes for us: the keys become
+// a PROJ string on the datum's ellipsoid; cs2cs with the equivalent PROJ string is the oracle.
+TEST(GeoProjectionVsCs2cs, GeoTiffUserDefinedMethodsComputedByProj) {
+  REQUIRE_PROJ();
+  auto k = [](std::uint16_t id, double v) { return GeoKeyEntry{id, {v}, {}}; };
+  struct Case {
+    const char* name;
+    std::vector<GeoKeyEntry> projection;  // 3075 and its parameters
+    std::string oracle;                   // the same projection for cs2cs
+    double lat, lon;
+  };
+  const std::vector<Case> cases = {
+      {"Albers (CONUS)",
+       {k(3075, 11), k(3078, 29.5), k(3079, 45.5), k(3081, 23), k(3080, -96), k(3082, 0),
+        k(3083, 0)},
+       "+proj=aea +lat_1=29.5 +lat_2=45.5 +lat_0=23 +lon_0=-96 +x_0=0 +y_0=0 +ellps=GRS80",
+       38.0, -100.0},
+      {"LAEA (Europe)",
+       {k(3075, 10), k(3089, 52), k(3088, 10), k(3082, 4321000), k(3083, 3210000)},
+       "+proj=laea +lat_0=52 +lon_0=10 +x_0=4321000 +y_0=3210000 +ellps=GRS80", 48.0, 2.0},
+      {"Mercator 1SP",
+       {k(3075, 7), k(3080, 110), k(3092, 0.997), k(3082, 3900000), k(3083, 900000)},
+       "+proj=merc +lon_0=110 +k_0=0.997 +x_0=3900000 +y_0=900000 +ellps=GRS80", -5.0, 112.0},
+      {"Cassini-Soldner",
+       {k(3075, 18), k(3081, 10.44), k(3080, -61.33), k(3082, 86501.46), k(3083, 65379.0)},
+       "+proj=cass +lat_0=10.44 +lon_0=-61.33 +x_0=86501.46 +y_0=65379 +ellps=GRS80", 10.6,
+       -61.2},
+      {"Equirectangular", {k(3075, 17), k(3078, 30), k(3080, 0)},
+       "+proj=eqc +lat_ts=30 +lon_0=0 +x_0=0 +y_0=0 +ellps=GRS80", 40.0, 20.0},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    std::vector<GeoKeyEntry> keys = {k(1024, 1), k(2048, 4269), k(3072, 32767), k(3074, 32767),
+                                     k(3076, 9001)};
+    keys.insert(keys.end(), c.projection.begin(), c.projection.end());
+    auto crs = crs_from_geokeys(keys);
+    ASSERT_TRUE(crs.ok()) << crs.error().message;
+    ASSERT_EQ(crs.value().projection->method, ProjectionMethod::ComputedByProj);
+    std::vector<Triple> points;
+    for (int i = 0; i < 50; ++i) points.push_back({c.lat + 0.02 * i, c.lon - 0.03 * i, 0.0});
+    auto oracle = cs2cs("+proj=longlat +ellps=GRS80", "+to " + c.oracle, [&] {
+      std::vector<Triple> lonlat;
+      for (const Triple& p : points) lonlat.push_back({p[1], p[0], 0.0});
+      return lonlat;
+    }());
+    ASSERT_TRUE(oracle.has_value());
+    double worst = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      auto mine = geodetic_to_projected(crs.value(), GeodeticPoint{points[i][0], points[i][1], 0});
+      ASSERT_TRUE(mine.ok()) << mine.error().message;
+      worst = std::max(worst, std::hypot(mine.value().x() - (*oracle)[i][0],
+                                         mine.value().y() - (*oracle)[i][1]));
+    }
+    EXPECT_LT(worst, 1e-6) << c.name;
+    // Written as WKT 1 (by PROJ) and read back: the same CRS.
+    auto again = crs_from_wkt(crs_to_wkt1(crs.value()));
+    ASSERT_TRUE(again.ok()) << again.error().message << "\n" << crs_to_wkt1(crs.value());
+    auto back = geodetic_to_projected(again.value(), GeodeticPoint{points[0][0], points[0][1], 0});
+    ASSERT_TRUE(back.ok());
+    EXPECT_LT(std::hypot(back.value().x() - (*oracle)[0][0], back.value().y() - (*oracle)[0][1]),
+              1e-6);
+  }
+}
+
 // The Japanese plane rectangular systems (northing-first axes), as in the pnext test files.
 TEST(GeoProjectionVsCs2cs, JapanPlaneRectangular) {
   REQUIRE_PROJ();
