@@ -3,6 +3,7 @@
   * the input stands for one fit job per cell of city.cell_size its extent covers
     (tiles.json lists them); each job reads the octree nodes meeting its cell grown by
     city.halo, and its point count equals the reference LAS's points inside that box;
+  * `csgtile fit URL` and `csgtile tile URL` give the same bytes as for the local file;
   * `csgtile info URL` shows the header, the VLRs and the octree as for the local file,
     fetching less than the file;
   * the same run with the input given as an http:// URL on a loopback server that honours
@@ -110,6 +111,21 @@ try:
     assert remote["fetched"]["bytes"] < size, remote["fetched"]
     for key in ("description", "point_count", "bounds", "crs", "vlrs", "evlrs"):
         assert remote[key] == local_info[key], key
+    # `csgtile fit URL` and `csgtile tile URL` read by range requests, as they read the file.
+    ahn = os.path.join(laz_dir, "ahn3_cropped_2.laz")
+    for target, out in ((ahn, "local"), (f"{base}/range/ahn3_cropped_2.laz", "remote")):
+        p = subprocess.run([binary, "fit", target, "--out", f"{work}/fit_{out}.json",
+                            "--crs", "EPSG:28992"], capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        p = subprocess.run([binary, "tile", target, "--size", "100", "--out", f"{work}/tiles_{out}"],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+    assert open(f"{work}/fit_local.json", "rb").read() == open(f"{work}/fit_remote.json", "rb").read()
+    names = sorted(os.listdir(f"{work}/tiles_local"))
+    assert names and names == sorted(os.listdir(f"{work}/tiles_remote")), names
+    for n in names:
+        assert open(f"{work}/tiles_local/{n}", "rb").read() == \
+            open(f"{work}/tiles_remote/{n}", "rb").read(), n
     counts = json.loads(urllib.request.urlopen(f"{base}/counts").read())
     assert not any(k.startswith("/ok/") for k in counts), counts
     sent = json.loads(urllib.request.urlopen(f"{base}/bytes").read())

@@ -15,6 +15,8 @@
 #include <sstream>
 
 #include "city/fit_tile.h"
+#include "fetch/fetch.h"
+#include "fetch/input.h"
 #include "commands.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/las.h"
@@ -98,9 +100,19 @@ int run_fit(const FitCommand& c) {
     return fail(ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message);
   }
   city::FittedTile tile;
-  if (Failure f = city::fit_tile(c.input, std::filesystem::path(c.input).stem().string(), options,
-                                 crs, tile);
-      !f.ok()) {
+  city::TileSource source;
+  source.path = c.input;
+  if (fetch::is_url(c.input) && c.input.rfind("file://", 0) != 0) {
+    // A LAS/LAZ/COPC URL (http, https, s3): read by range requests under the config's policy.
+    if (Failure f = fetch::open_range_source(c.input, fetch::policy_of(config.fetch),
+                                             source.remote);
+        !f.ok()) {
+      return fail(f.code, f.message);
+    }
+  }
+  const std::string stem =
+      std::filesystem::path(c.input.substr(0, c.input.find_first_of("?#"))).stem().string();
+  if (Failure f = city::fit_tile(std::move(source), stem, options, crs, tile); !f.ok()) {
     return fail(f.code, f.message);
   }
   const fit::FitOutput& f = tile.output;

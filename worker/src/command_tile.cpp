@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "fetch/fetch.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/worker/errors.h"
 
@@ -50,7 +51,18 @@ int run_tile(const TileCommand& c) {
     return error_info(code).exit_code;
   };
   if (!(c.size > 0) || !std::isfinite(c.size)) return fail(ErrorCode::Usage, "--size must be > 0");
-  auto opened = geo::LasReader::open(c.input);
+  kernel::Result<std::unique_ptr<geo::LasReader>> opened =
+      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
+  if (fetch::is_url(c.input) && c.input.rfind("file://", 0) != 0) {
+    // A LAS/LAZ/COPC URL (http, https, s3): read by range requests.
+    std::unique_ptr<geo::ByteSource> source;
+    if (Failure f = fetch::open_range_source(c.input, fetch::Policy{}, source); !f.ok()) {
+      return fail(f.code, f.message);
+    }
+    opened = geo::LasReader::open_source(std::move(source));
+  } else {
+    opened = geo::LasReader::open(c.input);
+  }
   if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
   geo::LasReader& reader = *opened.value();
   const geo::LasHeader& h = reader.header();

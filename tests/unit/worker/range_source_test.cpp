@@ -7,12 +7,14 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "background_process.h"
 #include "csgtile/geo/las.h"
 #include "fetch/fetch.h"
+#include "s3_test_server.h"
 #include "test_commands.h"
 #include "test_support.h"
 
@@ -134,6 +136,50 @@ TEST_F(RangeSource, MissingObjectsAndRefusedSchemesAreNamed) {
   f = fetch::open_range_source("http://169.254.169.254/latest", policy, source);
   EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
   EXPECT_EQ(source, nullptr);
+}
+
+// Range reads of an s3:// object, signed per request (s3rver checks every signature): a COPC
+// region query gives the local file's points and fetches less than the object.
+TEST(RangeSourceS3, ACopcRegionFromS3EqualsTheLocalQuery) {
+  if (!fs::is_directory(laz_dir())) GTEST_SKIP() << "LAZ data not found at " << laz_dir();
+  csgtile::test::TempDir tmp{"csgtile-range-s3-"};
+  std::string missing;
+  auto server = csgtile::test::start_s3rver(tmp.path() / "s3", "tiles", missing);
+  if (!server && csgtile::test::s3rver_required()) FAIL() << missing;
+  if (!server) GTEST_SKIP() << missing;
+  ASSERT_TRUE(server->running()) << server->problem();
+  fetch::Policy policy;
+  policy.s3.endpoint = "http://127.0.0.1:" + server->first_line();
+  policy.retry_delay_ms = 10;
+  csgtile::test::ScopedEnv env({{"AWS_ACCESS_KEY_ID", "S3RVER"}, {"AWS_SECRET_ACCESS_KEY", "S3RVER"}});
+  const fs::path local = laz_dir() / "1.2-with-color.copc.laz";
+  std::ifstream in(local, std::ios::binary);
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  ASSERT_TRUE(fetch::s3_put("s3://tiles/city/copc.copc.laz", bytes, policy).ok());
+
+  auto whole = geo::LasReader::open(local);
+  ASSERT_TRUE(whole.ok());
+  const geo::LasHeader h = whole.value()->header();
+  geo::PointReadOptions options;
+  geo::Bounds3 region;
+  region.min = {h.min[0], h.min[1], -1e300};
+  region.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
+  options.region = region;
+  auto local_query = geo::LasReader::open(local, options);
+  ASSERT_TRUE(local_query.ok());
+
+  auto stats = std::make_shared<fetch::RangeStats>();
+  std::unique_ptr<geo::ByteSource> source;
+  Failure f = fetch::open_range_source("s3://tiles/city/copc.copc.laz", policy, source, stats, 1024);
+  ASSERT_TRUE(f.ok()) << f.message;
+  auto remote = geo::LasReader::open_source(std::move(source), options);
+  ASSERT_TRUE(remote.ok()) << remote.error().message;
+  EXPECT_EQ(all_points(*remote.value()), all_points(*local_query.value()));
+  EXPECT_GT(stats->requests, 1u);
+  EXPECT_LT(stats->bytes, bytes.size());
+  // A missing key is a named refusal.
+  f = fetch::open_range_source("s3://tiles/city/none.copc.laz", policy, source);
+  EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
 }
 
 }  // namespace
