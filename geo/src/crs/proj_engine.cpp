@@ -79,10 +79,38 @@ ProjObject create(const std::string& definition, std::string* why) {
   return pj;
 }
 
+// One PJ per thread for a definition, built on first use (ids are never reused).
+class ThreadPj {
+ public:
+  // `projection`: the PJ must be a projection (geodetic in, metres out), as checked once.
+  ThreadPj(std::string definition, bool projection)
+      : definition_(std::move(definition)), id_(next_engine_id()), projection_(projection) {}
+  PJ* get() const {
+    ThreadCache& cache = thread_cache();
+    if (PJ* found = cache.find(id_)) return found;
+    std::string why;
+    ProjObject made = projection_ ? create(definition_, &why) : create_any(definition_, &why);
+    if (!made) throw DomainError("PROJ refused '" + definition_ + "' on this thread: " + why);
+    return cache.insert(id_, std::move(made));
+  }
+
+ private:
+  std::string definition_;
+  std::uint64_t id_;
+  bool projection_;
+};
+
+// PROJ's reason for the last failure on `p` (its error number, then reset), or `fallback`.
+std::string pj_reason(PJ* p, const char* fallback) {
+  const int code = proj_errno(p);
+  proj_errno_reset(p);
+  const char* text = code != 0 ? proj_context_errno_string(proj_thread_context(), code) : nullptr;
+  return text != nullptr ? text : fallback;
+}
+
 class ProjEngine final : public ProjectionEngine {
  public:
-  explicit ProjEngine(std::string definition)
-      : definition_(std::move(definition)), id_(next_engine_id()) {}
+  explicit ProjEngine(std::string definition) : pj_(std::move(definition), true) {}
 
   void forward(double lat, double lon, double& easting, double& northing) const override {
     PJ_COORD c = proj_coord(lon * kDegree, lat * kDegree, 0.0, 0.0);
@@ -125,49 +153,15 @@ class ProjEngine final : public ProjectionEngine {
   }
 
  private:
-  PJ* pj() const {
-    ThreadCache& cache = thread_cache();
-    if (PJ* found = cache.find(id_)) return found;
-    std::string why;
-    ProjObject made = create(definition_, &why);
-    // make_proj_engine checked the string on its own thread; PROJ gives the same answer here.
-    if (!made) throw DomainError("PROJ refused '" + definition_ + "' on this thread: " + why);
-    return cache.insert(id_, std::move(made));
-  }
-  std::string reason() const {
-    PJ* p = pj();
-    const int code = proj_errno(p);
-    proj_errno_reset(p);
-    const char* text = code != 0 ? proj_context_errno_string(proj_thread_context(), code) : nullptr;
-    return text != nullptr ? text : "outside the projection's domain";
-  }
+  PJ* pj() const { return pj_.get(); }
+  std::string reason() const { return pj_reason(pj(), "outside the projection's domain"); }
 
-  std::string definition_;
-  std::uint64_t id_;
-};
-
-// One PJ per thread for a definition, built on first use (ids are never reused).
-class ThreadPj {
- public:
-  explicit ThreadPj(std::string definition)
-      : definition_(std::move(definition)), id_(next_engine_id()) {}
-  PJ* get() const {
-    ThreadCache& cache = thread_cache();
-    if (PJ* found = cache.find(id_)) return found;
-    std::string why;
-    ProjObject made = create_any(definition_, &why);
-    if (!made) throw DomainError("PROJ refused '" + definition_ + "' on this thread: " + why);
-    return cache.insert(id_, std::move(made));
-  }
-
- private:
-  std::string definition_;
-  std::uint64_t id_;
+  ThreadPj pj_;
 };
 
 class ProjGeodeticTransform final : public GeodeticTransform {
  public:
-  explicit ProjGeodeticTransform(std::string pipeline) : pj_(std::move(pipeline)) {}
+  explicit ProjGeodeticTransform(std::string pipeline) : pj_(std::move(pipeline), false) {}
   void forward(double& lat, double& lon, double& h) const override { run(PJ_FWD, lat, lon, h); }
   void inverse(double& lat, double& lon, double& h) const override { run(PJ_INV, lat, lon, h); }
 
@@ -177,13 +171,9 @@ class ProjGeodeticTransform final : public GeodeticTransform {
     PJ_COORD c = proj_coord(lon, lat, h, 0.0);
     PJ_COORD r = proj_trans(p, direction, c);
     if (!std::isfinite(r.lpzt.lam) || !std::isfinite(r.lpzt.phi) || r.lpzt.lam == HUGE_VAL) {
-      const int code = proj_errno(p);
-      proj_errno_reset(p);
-      const char* text =
-          code != 0 ? proj_context_errno_string(proj_thread_context(), code) : nullptr;
       throw DomainError("latitude " + format_number(lat) + ", longitude " + format_number(lon) +
                         ": PROJ's datum transformation fails there (" +
-                        (text != nullptr ? text : "outside its area or grid") + ")");
+                        pj_reason(p, "outside its area or grid") + ")");
     }
     lon = r.lpzt.lam;
     lat = r.lpzt.phi;

@@ -107,6 +107,32 @@ void PointReader::warn(std::string message) {
   warnings_.push_back(std::move(message));
 }
 
+namespace {
+
+// Keeps the batch's points for which `keep` holds (called once per point, in order), with
+// their extra bytes, in order.
+template <class Keep>
+void keep_points(PointBatch& batch, Keep keep) {
+  const std::size_t stride = batch.extra_record_size();
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < batch.points.size(); ++i) {
+    const Point p = batch.points[i];
+    if (!keep(p)) continue;
+    if (kept != i) {
+      batch.points[kept] = p;
+      if (stride > 0) {
+        std::memmove(batch.extra_bytes.data() + kept * stride,
+                     batch.extra_bytes.data() + i * stride, stride);
+      }
+    }
+    ++kept;
+  }
+  batch.points.resize(kept);
+  batch.extra_bytes.resize(kept * stride);
+}
+
+}  // namespace
+
 kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max) {
   if (failed_) return *failed_;
   if (at_end_) {
@@ -133,28 +159,12 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       return std::size_t{0};
     }
     if (options_.region) {
-      // Keep the points inside the region, in order, with their extra bytes (a point with
-      // a NaN coordinate is inside no region).
+      // Keep the points inside the region (a point with a NaN coordinate is inside none).
       const Bounds3& r = *options_.region;
-      const std::size_t stride = batch.extra_record_size();
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < batch.points.size(); ++i) {
-        const Point& p = batch.points[i];
-        if (!(p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] && p.y <= r.max[1] &&
-              p.z >= r.min[2] && p.z <= r.max[2])) {
-          continue;
-        }
-        if (kept != i) {
-          batch.points[kept] = p;
-          if (stride > 0) {
-            std::memmove(batch.extra_bytes.data() + kept * stride,
-                         batch.extra_bytes.data() + i * stride, stride);
-          }
-        }
-        ++kept;
-      }
-      batch.points.resize(kept);
-      batch.extra_bytes.resize(kept * stride);
+      keep_points(batch, [&](const Point& p) {
+        return p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] && p.y <= r.max[1] &&
+               p.z >= r.min[2] && p.z <= r.max[2];
+      });
     }
     // One pass for the common case: the batch's bounds and a non-finite detector (v·0 is 0
     // for finite v and NaN for NaN or infinity, so `poison` stays 0 exactly when all are
@@ -173,26 +183,13 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
     if (poison != 0.0) {
       // Some coordinate is NaN or infinite: drop those points (keeping order and their
       // extra bytes) unless asked to keep them, and recompute the bounds of the rest.
-      const std::size_t stride = batch.extra_record_size();
-      std::size_t kept = 0;
       batch_bounds = Bounds3{};
-      for (std::size_t i = 0; i < batch.points.size(); ++i) {
-        const Point p = batch.points[i];
+      keep_points(batch, [&](const Point& p) {
         const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
         if (!finite) ++non_finite_;
-        if (!finite && options_.skip_non_finite) continue;
         if (finite) batch_bounds.add(p.x, p.y, p.z);
-        if (kept != i) {
-          batch.points[kept] = p;
-          if (stride > 0) {
-            std::memmove(batch.extra_bytes.data() + kept * stride,
-                         batch.extra_bytes.data() + i * stride, stride);
-          }
-        }
-        ++kept;
-      }
-      batch.points.resize(kept);
-      batch.extra_bytes.resize(kept * stride);
+        return finite || !options_.skip_non_finite;
+      });
     }
     bounds_read_.add(batch_bounds);
     // Per-point bounds checks only when the batch reaches outside the header's box.
