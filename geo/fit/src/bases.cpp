@@ -75,7 +75,8 @@ std::size_t snap_extrusion_bases(std::vector<geo::ScenePrimitive>& primitives, d
   for (auto& group : groups) {
     if (group.size() < 2) continue;
     std::sort(group.begin(), group.end(), [&](std::size_t a, std::size_t b) {
-      return bases[a].z < bases[b].z || (bases[a].z == bases[b].z && bases[a].index < bases[b].index);
+      return bases[a].z < bases[b].z ||
+             (bases[a].z == bases[b].z && bases[a].index < bases[b].index);
     });
     double level = bases[group.front()].z;
     for (std::size_t k : group) {

@@ -26,8 +26,8 @@ class ThreadCache {
   PJ* find(std::uint64_t id) {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
       if (entries_[i].first == id) {
-        if (i + 1 != entries_.size()) std::rotate(entries_.begin() + i, entries_.begin() + i + 1,
-                                                  entries_.end());
+        if (i + 1 != entries_.size())
+          std::rotate(entries_.begin() + i, entries_.begin() + i + 1, entries_.end());
         return entries_.back().second.p;
       }
     }
@@ -70,7 +70,8 @@ ProjObject create(const std::string& definition, std::string* why) {
   }
   const PJ_TYPE type = proj_get_type(pj.p);
   const bool operation = type == PJ_TYPE_CONVERSION || type == PJ_TYPE_TRANSFORMATION ||
-                         type == PJ_TYPE_CONCATENATED_OPERATION || type == PJ_TYPE_OTHER_COORDINATE_OPERATION;
+                         type == PJ_TYPE_CONCATENATED_OPERATION ||
+                         type == PJ_TYPE_OTHER_COORDINATE_OPERATION;
   if (!operation || proj_angular_input(pj.p, PJ_FWD) == 0 ||
       proj_angular_output(pj.p, PJ_FWD) != 0) {
     if (why != nullptr) *why = "not a projection from geodetic coordinates to metres";
@@ -139,8 +140,8 @@ class ProjEngine final : public ProjectionEngine {
     if (count == 0) return;
     PJ* p = pj();
     proj_errno_reset(p);
-    proj_trans_generic(p, PJ_INV, x, sizeof(double), count, y, sizeof(double), count, nullptr, 0,
-                       0, nullptr, 0, 0);
+    proj_trans_generic(p, PJ_INV, x, sizeof(double), count, y, sizeof(double), count, nullptr, 0, 0,
+                       nullptr, 0, 0);
     for (std::size_t i = 0; i < count; ++i) {
       if (!std::isfinite(x[i]) || !std::isfinite(y[i]) || x[i] == HUGE_VAL) {
         x[i] = y[i] = kNaN;

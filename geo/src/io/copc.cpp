@@ -19,7 +19,7 @@ using kernel::ErrorCode;
 
 constexpr std::size_t kInfoSize = 160;
 constexpr std::size_t kEntrySize = 32;
-constexpr int kMaxDepth = 30;              // cells of 2^-30 of the root: far below any scale
+constexpr int kMaxDepth = 30;               // cells of 2^-30 of the root: far below any scale
 constexpr std::size_t kMaxPages = 1 << 20;  // a hostile file cannot make us loop for ever
 
 Error corrupt(const std::string& name, const std::string& what) {
@@ -36,8 +36,7 @@ std::string key_text(std::int32_t d, std::int32_t x, std::int32_t y, std::int32_
 kernel::Result<CopcInfo> parse_copc_info(std::span<const std::uint8_t> payload,
                                          std::uint64_t file_size, const std::string& name) {
   if (payload.size() < kInfoSize) {
-    return corrupt(name, "info VLR holds " + std::to_string(payload.size()) +
-                             " bytes; it has 160");
+    return corrupt(name, "info VLR holds " + std::to_string(payload.size()) + " bytes; it has 160");
   }
   using detail::load_le;
   CopcInfo info;
@@ -95,8 +94,8 @@ kernel::Result<std::vector<CopcNode>> read_copc_hierarchy(ByteSource& source,
       const auto chunk_offset = load_le<std::uint64_t>(e + 16);
       const auto chunk_bytes = load_le<std::int32_t>(e + 24);
       const auto points = load_le<std::int32_t>(e + 28);
-      const std::string where = "hierarchy page at " + std::to_string(offset) + ", node " +
-                                key_text(d, x, y, z);
+      const std::string where =
+          "hierarchy page at " + std::to_string(offset) + ", node " + key_text(d, x, y, z);
       if (d < 0 || d > kMaxDepth) return corrupt(name, where + ": depth outside 0-30");
       const std::int64_t cells = std::int64_t{1} << d;
       if (x < 0 || y < 0 || z < 0 || x >= cells || y >= cells || z >= cells) {

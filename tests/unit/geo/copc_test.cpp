@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <tuple>
 #include <vector>
 
@@ -22,10 +22,10 @@ namespace fs = std::filesystem;
 
 fs::path copc_file() { return test::shared_dir() / "data" / "laz" / "1.2-with-color.copc.laz"; }
 
-#define SKIP_WITHOUT_COPC()                                                  \
-  if (!fs::is_regular_file(copc_file())) {                                   \
-    GTEST_SKIP() << "COPC test file not found at " << copc_file()            \
-                 << " (see ../shared/data/laz/README.md)";                   \
+#define SKIP_WITHOUT_COPC()                                       \
+  if (!fs::is_regular_file(copc_file())) {                        \
+    GTEST_SKIP() << "COPC test file not found at " << copc_file() \
+                 << " (see ../shared/data/laz/README.md)";        \
   }
 
 std::vector<std::uint8_t> file_bytes(const fs::path& path) {
@@ -85,9 +85,9 @@ TEST(Copc, HierarchyHoldsEveryPointInItsNodesCube) {
   EXPECT_GT(deepest, 0);
   // Each node's points lie in its cube: read node by node through depth-limited queries of
   // one node's cube (the points of a region are exactly those of the nodes meeting it).
-  const CopcNode& leaf = *std::max_element(
-      nodes.value().begin(), nodes.value().end(),
-      [](const CopcNode& a, const CopcNode& b) { return a.depth < b.depth; });
+  const CopcNode& leaf =
+      *std::max_element(nodes.value().begin(), nodes.value().end(),
+                        [](const CopcNode& a, const CopcNode& b) { return a.depth < b.depth; });
   PointReadOptions options;
   options.region = leaf.bounds;
   auto one = LasReader::open(copc_file(), options);
@@ -137,8 +137,8 @@ TEST(Copc, ARegionReadsOnlyTheNodesItMeetsAndGivesEveryPointInside) {
   EXPECT_LT(query_bytes, full_bytes) << "a region must not read every chunk";
 
   // The same region on a plain LAZ (no hierarchy): every point read, the same points kept.
-  auto plain_region = LasReader::open(test::shared_dir() / "data" / "laz" / "ahn3_cropped_2.laz",
-                                      options);
+  auto plain_region =
+      LasReader::open(test::shared_dir() / "data" / "laz" / "ahn3_cropped_2.laz", options);
   ASSERT_TRUE(plain_region.ok());
   for (const auto& [x, y, z] : all_points(*plain_region.value())) {
     EXPECT_TRUE(region.contains(x, y, z, {0, 0, 0}));

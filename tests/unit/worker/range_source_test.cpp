@@ -151,7 +151,8 @@ TEST(RangeSourceS3, ACopcRegionFromS3EqualsTheLocalQuery) {
   fetch::Policy policy;
   policy.s3.endpoint = "http://127.0.0.1:" + server->first_line();
   policy.retry_delay_ms = 10;
-  csgtile::test::ScopedEnv env({{"AWS_ACCESS_KEY_ID", "S3RVER"}, {"AWS_SECRET_ACCESS_KEY", "S3RVER"}});
+  csgtile::test::ScopedEnv env(
+      {{"AWS_ACCESS_KEY_ID", "S3RVER"}, {"AWS_SECRET_ACCESS_KEY", "S3RVER"}});
   const fs::path local = laz_dir() / "1.2-with-color.copc.laz";
   std::ifstream in(local, std::ios::binary);
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -170,7 +171,8 @@ TEST(RangeSourceS3, ACopcRegionFromS3EqualsTheLocalQuery) {
 
   auto stats = std::make_shared<fetch::RangeStats>();
   std::unique_ptr<geo::ByteSource> source;
-  Failure f = fetch::open_range_source("s3://tiles/city/copc.copc.laz", policy, source, stats, 1024);
+  Failure f =
+      fetch::open_range_source("s3://tiles/city/copc.copc.laz", policy, source, stats, 1024);
   ASSERT_TRUE(f.ok()) << f.message;
   auto remote = geo::LasReader::open_source(std::move(source), options);
   ASSERT_TRUE(remote.ok()) << remote.error().message;

@@ -105,9 +105,8 @@ class HttpRangeSource final : public geo::ByteSource {
     }
     const std::int64_t total = total_of(reply.content_range);
     if (total < 0) {
-      return {ErrorCode::Network,
-              name() + ": the range answer has no usable Content-Range ('" +
-                  reply.content_range + "')"};
+      return {ErrorCode::Network, name() + ": the range answer has no usable Content-Range ('" +
+                                      reply.content_range + "')"};
     }
     size_ = static_cast<std::uint64_t>(total);
     if (reply.body.size() != std::min<std::uint64_t>(first, size_)) {
@@ -217,9 +216,8 @@ class HttpRangeSource final : public geo::ByteSource {
       if (last.ok() && !reply.location.empty()) {
         if (target.s3) return {ErrorCode::FetchRefused, name() + ": S3 answered with a redirect"};
         if (++redirects > policy_.max_redirects) {
-          return {ErrorCode::FetchRefused, name() + ": more than " +
-                                               std::to_string(policy_.max_redirects) +
-                                               " redirects"};
+          return {ErrorCode::FetchRefused,
+                  name() + ": more than " + std::to_string(policy_.max_redirects) + " redirects"};
         }
         const std::string from = target.url;
         if (Failure f = transport::redirect_target(from, reply.location, policy_, target);
@@ -243,8 +241,8 @@ class HttpRangeSource final : public geo::ByteSource {
     return last;
   }
 
-  Failure once(const transport::Target& target, std::uint64_t offset, std::uint64_t n,
-               Reply& reply, bool& transient) {
+  Failure once(const transport::Target& target, std::uint64_t offset, std::uint64_t n, Reply& reply,
+               bool& transient) {
     reply = Reply{};
     std::unique_ptr<CURL, CurlDeleter> curl(curl_easy_init());
     if (!curl) return {ErrorCode::Internal, "libcurl could not create a handle"};
@@ -287,8 +285,8 @@ class HttpRangeSource final : public geo::ByteSource {
     }
     curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &reply.status);
     if (reply.status == 200 || reply.status == 206 || reply.status == 416) return {};
-    if (reply.status == 301 || reply.status == 302 || reply.status == 303 ||
-        reply.status == 307 || reply.status == 308) {
+    if (reply.status == 301 || reply.status == 302 || reply.status == 303 || reply.status == 307 ||
+        reply.status == 308) {
       char* location = nullptr;
       curl_easy_getinfo(c, CURLINFO_REDIRECT_URL, &location);
       if (location == nullptr) {

@@ -29,8 +29,8 @@ std::string redact(const std::string& url);
 /// Only http, https and s3. Errors: InputInvalid, FetchRefused, ConfigInvalid.
 Failure resolve(const std::string& url, const Policy& policy, Target& target);
 /// The target of a redirect from `from` to `location` (http(s) only, never https → http).
-Failure redirect_target(const std::string& from, const std::string& location,
-                        const Policy& policy, Target& target);
+Failure redirect_target(const std::string& from, const std::string& location, const Policy& policy,
+                        Target& target);
 /// Timeouts, TLS verification, user agent, error buffer and the address policy (a refused
 /// address is written to `refused_address`).
 void set_options(CURL* c, const Policy& policy, std::string& refused_address, char* error_text);

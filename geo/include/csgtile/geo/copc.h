@@ -25,8 +25,8 @@ namespace csgtile::geo {
 /// The COPC info VLR (160 bytes).
 struct CopcInfo {
   std::array<double, 3> center{0.0, 0.0, 0.0};  ///< centre of the root cube
-  double halfsize = 0.0;  ///< half the root cube's side
-  double spacing = 0.0;   ///< point spacing at the root
+  double halfsize = 0.0;                        ///< half the root cube's side
+  double spacing = 0.0;                         ///< point spacing at the root
   std::uint64_t root_hierarchy_offset = 0;
   std::uint64_t root_hierarchy_size = 0;
   double gpstime_minimum = 0.0;
