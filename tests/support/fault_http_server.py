@@ -17,6 +17,7 @@ killed. Paths (NAME is a file in the directory):
   /huge                    declares a Content-Length of 1 TB, sends a little
   /endless                 chunked body that never ends (size cap must stop it)
   /range/NAME              the file, honouring "Range: bytes=a-b" (206 + Content-Range)
+  /range-then-503/K/NAME   as /range/NAME for the first K requests of this path, then 503
   /counts                  JSON: requests seen per path
   /bytes                   JSON: body bytes sent per path
 """
@@ -145,7 +146,12 @@ class Handler(BaseHTTPRequestHandler):
                 piece = b"y" * 65536
                 while True:
                     self.wfile.write(b"%x\r\n%s\r\n" % (len(piece), piece))
-            elif kind == "range":
+            elif kind in ("range", "range-then-503"):
+                if kind == "range-then-503":
+                    if n > int(parts[1]):
+                        self.send_bytes(b"busy", status=503)
+                        return
+                    parts = ["range", parts[2]]
                 data = self.body_of(parts[1])
                 spec = self.headers.get("Range", "")
                 if not spec.startswith("bytes="):

@@ -124,6 +124,24 @@ TEST_F(RangeSource, AServerWithoutRangesSendsTheWholeObjectOnce) {
   EXPECT_EQ(stats->requests, 1u);
 }
 
+// A server that stops answering after the header: the read fails as an I/O error of the
+// reader naming the URL, and the stats keep the transfer's own failure (Network, retryable).
+TEST_F(RangeSource, AFailureMidReadKeepsItsNetworkCode) {
+  auto stats = std::make_shared<fetch::RangeStats>();
+  auto remote = open("/range-then-503/2/ahn3_cropped_2.laz", {}, stats);
+  ASSERT_NE(remote, nullptr);  // the header, VLRs and chunk table were answered
+  geo::PointBatch batch;
+  kernel::Result<std::size_t> n = std::size_t{0};
+  for (int i = 0; i < 100; ++i) {
+    n = remote->read(batch, 4096);
+    if (!n.ok() || n.value() == 0) break;
+  }
+  ASSERT_FALSE(n.ok());
+  EXPECT_EQ(n.error().code, kernel::ErrorCode::IoError);
+  EXPECT_NE(n.error().message.find("HTTP 503"), std::string::npos) << n.error().message;
+  EXPECT_EQ(stats->last_failure.code, ErrorCode::Network) << stats->last_failure.message;
+}
+
 TEST_F(RangeSource, MissingObjectsAndRefusedSchemesAreNamed) {
   std::unique_ptr<geo::ByteSource> source;
   Failure f = fetch::open_range_source(base + "/status/404", policy, source);

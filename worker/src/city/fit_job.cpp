@@ -74,6 +74,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   std::string name = std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
   if (only_cell) name += "_" + only_cell->name();
   if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile); !f.ok()) {
+    // A range read that failed in transit keeps its own code (Network: the job is retried).
+    if (range_stats && !range_stats->last_failure.ok()) return range_stats->last_failure;
     // Name the input once: readers already name the file they read (for a URL, its local
     // copy, which the input's name then replaces).
     const std::string local_name = std::filesystem::path(local.path).string();

@@ -112,6 +112,9 @@ Credentials s3_credentials();
 struct RangeStats {
   std::uint64_t requests = 0;
   std::uint64_t bytes = 0;
+  /// The transfer failure behind the reader's last IoError (Network stays retryable for the
+  /// job that reads; the reader itself only sees an I/O error).
+  Failure last_failure;
 };
 
 /// Opens an http(s):// or s3:// object for random access by HTTP range requests, as a

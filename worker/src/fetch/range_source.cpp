@@ -164,8 +164,10 @@ class HttpRangeSource final : public geo::ByteSource {
   }
 
  private:
-  static kernel::Status as_status(const Failure& f) {
-    // Transport failures are I/O for the reader; the message keeps the cause.
+  kernel::Status as_status(const Failure& f) const {
+    // Transport failures are I/O for the reader; the message keeps the cause, the stats the
+    // failure itself (its code: Network is retryable).
+    if (stats_) stats_->last_failure = f;
     return kernel::Status(kernel::ErrorCode::IoError, f.message);
   }
 
