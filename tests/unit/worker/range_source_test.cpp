@@ -43,6 +43,20 @@ std::vector<Xyz> all_points(geo::PointReader& reader) {
   return out;
 }
 
+// Read options for the lower-left quarter of a file's extent in x and y (all heights).
+geo::PointReadOptions quarter_of(const fs::path& file) {
+  auto whole = geo::LasReader::open(file);
+  EXPECT_TRUE(whole.ok());
+  geo::PointReadOptions options;
+  if (!whole.ok()) return options;
+  const geo::LasHeader& h = whole.value()->header();
+  geo::Bounds3 region;
+  region.min = {h.min[0], h.min[1], -1e300};
+  region.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
+  options.region = region;
+  return options;
+}
+
 class RangeSource : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -76,12 +90,7 @@ TEST_F(RangeSource, ACopcRegionOverHttpFetchesOnlyItsNodes) {
   const fs::path local = laz_dir() / "1.2-with-color.copc.laz";
   auto whole = geo::LasReader::open(local);
   ASSERT_TRUE(whole.ok());
-  const geo::LasHeader h = whole.value()->header();
-  geo::PointReadOptions options;
-  geo::Bounds3 region;
-  region.min = {h.min[0], h.min[1], -1e300};
-  region.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
-  options.region = region;
+  const geo::PointReadOptions options = quarter_of(local);
   auto local_query = geo::LasReader::open(local, options);
   ASSERT_TRUE(local_query.ok());
   const auto expected = all_points(*local_query.value());
@@ -176,14 +185,7 @@ TEST(RangeSourceS3, ACopcRegionFromS3EqualsTheLocalQuery) {
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   ASSERT_TRUE(fetch::s3_put("s3://tiles/city/copc.copc.laz", bytes, policy).ok());
 
-  auto whole = geo::LasReader::open(local);
-  ASSERT_TRUE(whole.ok());
-  const geo::LasHeader h = whole.value()->header();
-  geo::PointReadOptions options;
-  geo::Bounds3 region;
-  region.min = {h.min[0], h.min[1], -1e300};
-  region.max = {0.5 * (h.min[0] + h.max[0]), 0.5 * (h.min[1] + h.max[1]), 1e300};
-  options.region = region;
+  const geo::PointReadOptions options = quarter_of(local);
   auto local_query = geo::LasReader::open(local, options);
   ASSERT_TRUE(local_query.ok());
 
