@@ -134,10 +134,10 @@ LoadResult load_string(std::string_view yaml, std::string_view source, const Env
       Config config = from_document(document.json);
       // Rules between keys, which the schema cannot state.
       if (config.city.halo >= config.city.cell_size) {
-        result.problems.push_back(
-            {"city.halo", 0,
-             "must be smaller than city.cell_size (" + json(config.city.cell_size).dump() +
-                 "), got " + json(config.city.halo).dump()});
+        result.problems.push_back({"city.halo", 0,
+                                   "must be smaller than city.cell_size (" +
+                                       json(config.city.cell_size).dump() + "), got " +
+                                       json(config.city.halo).dump()});
       } else {
         result.config = std::move(config);
       }
@@ -182,12 +182,9 @@ std::string_view schema_json() { return detail::embedded_schema_text(); }
 
 std::string to_json(const Config& config) {
   json out;
-  out["run"] = {{"name", config.run.name},
-                {"inputs", config.run.inputs},
-                {"output", config.run.output},
-                {"seed", config.run.seed},
-                {"threads", config.run.threads},
-                {"crs", config.run.crs}};
+  out["run"] = {{"name", config.run.name},       {"inputs", config.run.inputs},
+                {"output", config.run.output},   {"seed", config.run.seed},
+                {"threads", config.run.threads}, {"crs", config.run.crs}};
   out["kernel"] = {{"linear_tolerance", config.kernel.linear_tolerance},
                    {"chordal_tolerance", config.kernel.chordal_tolerance}};
   out["queue"] = {{"backend", std::string(to_string(config.queue.backend))},

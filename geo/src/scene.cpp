@@ -17,10 +17,14 @@ using nlohmann::json;
 
 const char* boolean_op_name(BooleanOp op) {
   switch (op) {
-    case BooleanOp::None: return "";
-    case BooleanOp::Fuse: return "fuse";
-    case BooleanOp::Common: return "common";
-    case BooleanOp::Cut: return "cut";
+    case BooleanOp::None:
+      return "";
+    case BooleanOp::Fuse:
+      return "fuse";
+    case BooleanOp::Common:
+      return "common";
+    case BooleanOp::Cut:
+      return "cut";
   }
   return "";
 }
@@ -34,7 +38,8 @@ class PrimitiveReader {
     where_ = "primitives[" + std::to_string(index) + "]";
     if (j.is_object() && j.contains("type") && j["type"].is_string()) {
       where_ += " (" + j["type"].get<std::string>();
-      if (j.contains("id") && j["id"].is_string()) where_ += " \"" + j["id"].get<std::string>() + "\"";
+      if (j.contains("id") && j["id"].is_string())
+        where_ += " \"" + j["id"].get<std::string>() + "\"";
       where_ += ")";
     }
   }
@@ -71,7 +76,8 @@ class PrimitiveReader {
     if (!j_.contains("placement")) return kernel::Location();
     const json& m = j_["placement"];
     kernel::Matrix34 q;
-    if (!m.is_array() || m.size() != 3) return fail("placement", "must be a 3x4 matrix [[...],[...],[...]]");
+    if (!m.is_array() || m.size() != 3)
+      return fail("placement", "must be a 3x4 matrix [[...],[...],[...]]");
     for (int r = 0; r < 3; ++r) {
       const json& row = m[static_cast<std::size_t>(r)];
       if (!row.is_array() || row.size() != 4) return fail("placement", "must be a 3x4 matrix");
@@ -96,7 +102,8 @@ class PrimitiveReader {
 Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
   PrimitiveReader r(j, index);
   if (!j.is_object()) return Error{ErrorCode::InvalidArgument, r.where() + ": must be an object"};
-  if (!j.contains("type") || !j["type"].is_string()) return r.fail("type", "is missing or not a string");
+  if (!j.contains("type") || !j["type"].is_string())
+    return r.fail("type", "is missing or not a string");
   ScenePrimitive out;
   kernel::PrimitiveSpec& s = out.spec;
   const std::string type = j["type"].get<std::string>();
@@ -191,9 +198,11 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
   if (j.contains("quality") && j["quality"].is_object()) {
     const json& q = j["quality"];
     FitQuality fq;
-    if (q.contains("inliers") && q["inliers"].is_number_integer()) fq.inliers = q["inliers"].get<long long>();
+    if (q.contains("inliers") && q["inliers"].is_number_integer())
+      fq.inliers = q["inliers"].get<long long>();
     if (q.contains("rms") && q["rms"].is_number()) fq.rms = q["rms"].get<double>();
-    if (q.contains("coverage") && q["coverage"].is_number()) fq.coverage = q["coverage"].get<double>();
+    if (q.contains("coverage") && q["coverage"].is_number())
+      fq.coverage = q["coverage"].get<double>();
     out.quality = fq;
   }
   return out;
@@ -208,12 +217,18 @@ Result<Scene> parse_scene(std::string_view text) {
   Scene scene;
   if (j.contains("name") && j["name"].is_string()) scene.name = j["name"].get<std::string>();
   if (j.contains("op")) {
-    if (!j["op"].is_string()) return Error{ErrorCode::InvalidArgument, "key \"op\" must be a string"};
+    if (!j["op"].is_string())
+      return Error{ErrorCode::InvalidArgument, "key \"op\" must be a string"};
     const std::string op = j["op"].get<std::string>();
-    if (op == "fuse") scene.op = BooleanOp::Fuse;
-    else if (op == "common") scene.op = BooleanOp::Common;
-    else if (op == "cut") scene.op = BooleanOp::Cut;
-    else return Error{ErrorCode::InvalidArgument, "key \"op\": \"" + op + "\" is not fuse, common or cut"};
+    if (op == "fuse")
+      scene.op = BooleanOp::Fuse;
+    else if (op == "common")
+      scene.op = BooleanOp::Common;
+    else if (op == "cut")
+      scene.op = BooleanOp::Cut;
+    else
+      return Error{ErrorCode::InvalidArgument,
+                   "key \"op\": \"" + op + "\" is not fuse, common or cut"};
   }
   if (j.contains("crs") || j.contains("origin")) {
     SceneFrame frame;
@@ -328,7 +343,8 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
   }
   if (!s.clips.empty()) {
     OrderedJson clips = OrderedJson::array();
-    for (const auto& c : s.clips) clips.push_back({clean(c.x()), clean(c.y()), clean(c.z()), c.w()});
+    for (const auto& c : s.clips)
+      clips.push_back({clean(c.x()), clean(c.y()), clean(c.z()), c.w()});
     j["clip"] = std::move(clips);
   }
   const kernel::Matrix34 m = s.placement.matrix();

@@ -52,7 +52,8 @@ Run run_child(int n, const std::string& mode, int threads) {
     close(fd[0]);
     std::vector<assembly::AssemblyPrimitive> prims;
     const auto specs = test::random_city(n, 42);
-    for (std::size_t i = 0; i < specs.size(); ++i) prims.push_back({specs[i], "p" + std::to_string(i)});
+    for (std::size_t i = 0; i < specs.size(); ++i)
+      prims.push_back({specs[i], "p" + std::to_string(i)});
     assembly::AssemblyOptions o;
     o.threads = threads;
     o.voxel_culling = mode != "no_culling";
@@ -95,9 +96,12 @@ Run run_child(int n, const std::string& mode, int threads) {
 int main(int argc, char** argv) {
   int max_n = 100000, all_pairs_max = 2000, threads = 0;
   for (int i = 1; i + 1 < argc; ++i) {
-    if (!std::strcmp(argv[i], "--max")) max_n = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--all-pairs-max")) all_pairs_max = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--max"))
+      max_n = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--all-pairs-max"))
+      all_pairs_max = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--threads"))
+      threads = std::atoi(argv[++i]);
   }
   std::vector<Run> runs;
   for (int n : {1000, 10000, 100000}) {
@@ -111,16 +115,19 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const Run& r = runs[k];
     const auto& s = r.stats;
-    std::printf("  {\"n\": %d, \"mode\": \"%s\", \"ok\": %s, \"seconds\": %.3f, \"peak_rss_mb\": %.1f, "
-                "\"candidate_pairs\": %lld, \"culled_pairs\": %lld, \"exact_tests\": %lld, "
-                "\"interacting_pairs\": %lld, \"exact_per_interacting\": %.3f, \"objects\": %lld, "
-                "\"objects_failed\": %lld, \"volume\": %.6f, \"phase_seconds\": {\"build\": %.3f, "
-                "\"broad\": %.3f, \"voxel\": %.3f, \"exact\": %.3f, \"fuse\": %.3f}}%s\n",
-                r.n, r.mode.c_str(), r.ok ? "true" : "false", s.seconds_total, r.peak_kb / 1024.0,
-                s.candidate_pairs, s.culled_pairs, s.exact_tests, s.interacting_pairs,
-                s.interacting_pairs > 0 ? static_cast<double>(s.exact_tests) / static_cast<double>(s.interacting_pairs) : 0.0,
-                s.objects, s.objects_failed, r.volume, s.seconds_build, s.seconds_broad, s.seconds_voxel,
-                s.seconds_exact, s.seconds_fuse, k + 1 < runs.size() ? "," : "");
+    std::printf(
+        "  {\"n\": %d, \"mode\": \"%s\", \"ok\": %s, \"seconds\": %.3f, \"peak_rss_mb\": %.1f, "
+        "\"candidate_pairs\": %lld, \"culled_pairs\": %lld, \"exact_tests\": %lld, "
+        "\"interacting_pairs\": %lld, \"exact_per_interacting\": %.3f, \"objects\": %lld, "
+        "\"objects_failed\": %lld, \"volume\": %.6f, \"phase_seconds\": {\"build\": %.3f, "
+        "\"broad\": %.3f, \"voxel\": %.3f, \"exact\": %.3f, \"fuse\": %.3f}}%s\n",
+        r.n, r.mode.c_str(), r.ok ? "true" : "false", s.seconds_total, r.peak_kb / 1024.0,
+        s.candidate_pairs, s.culled_pairs, s.exact_tests, s.interacting_pairs,
+        s.interacting_pairs > 0
+            ? static_cast<double>(s.exact_tests) / static_cast<double>(s.interacting_pairs)
+            : 0.0,
+        s.objects, s.objects_failed, r.volume, s.seconds_build, s.seconds_broad, s.seconds_voxel,
+        s.seconds_exact, s.seconds_fuse, k + 1 < runs.size() ? "," : "");
   }
   // Scaling exponent of the full runs: t ∝ n^k between the smallest and largest n.
   double k = 0;

@@ -46,11 +46,14 @@ std::vector<Shape> city_block(int n, std::uint64_t seed) {
     if (static_cast<int>(out.size()) < n && u(rng) < 0.3) {
       // A wing reaching into the gap and beyond the lot: overlaps the main box.
       const double ww = 3 + 4 * u(rng), wd = 2 + 2 * u(rng), wh = 3 + 6 * u(rng);
-      out.push_back(make_box(ww, wd, wh).value().moved(Location::translation(Vec3(x0 + w - 1, y0 + 1 + u(rng), 0))));
+      out.push_back(make_box(ww, wd, wh)
+                        .value()
+                        .moved(Location::translation(Vec3(x0 + w - 1, y0 + 1 + u(rng), 0))));
     }
     if (static_cast<int>(out.size()) < n && u(rng) < 0.2) {
       const double r = 0.3 + 0.3 * u(rng);
-      out.push_back(make_cylinder(r, h + 2).value().moved(Location::translation(Vec3(x0 + w, y0 + d, 0))));
+      out.push_back(
+          make_cylinder(r, h + 2).value().moved(Location::translation(Vec3(x0 + w, y0 + d, 0))));
     }
   }
   return out;
@@ -100,12 +103,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "gate: %s\n", gate.error().message.c_str());
         return 1;
       }
-      for (const auto& p : gate.value().scene.primitives) prims.push_back(build_primitive(p.spec).value());
+      for (const auto& p : gate.value().scene.primitives)
+        prims.push_back(build_primitive(p.spec).value());
       n = static_cast<int>(prims.size());
     }
     auto t0 = std::chrono::steady_clock::now();
     auto nary = boolean_fuse_all(prims);
-    const double nary_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double nary_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!nary.ok()) {
       std::fprintf(stderr, "n=%d: %s\n", n, nary.error().message.c_str());
       return 1;
@@ -120,12 +125,16 @@ int main(int argc, char** argv) {
     }
     const double peak_mb = peak_rss_kb() / 1024.0;  // before the checksum's own allocations
     const unsigned long long hash = fnv1a(write_native(nary.value()));
-    std::printf("%s  {\"scene\": \"%s\", \"n\": %d, \"nary_seconds\": %.4f, \"fold_seconds\": %.4f, \"fold_over_nary\": %.2f, "
-                "\"solids\": %zu, \"faces\": %zu, \"volume\": %.17g, \"fold_volume\": %.6f, \"peak_rss_mb\": %.1f, "
-                "\"native_fnv1a\": \"%016llx\"}",
-                first ? "" : ",\n", is_gate ? "gate" : "city_block", n, nary_s, fold_s, fold_s > 0 ? fold_s / nary_s : -1.0,
-                counts[static_cast<int>(ShapeKind::Solid)], counts[static_cast<int>(ShapeKind::Face)],
-                mass_properties(nary.value()).volume, fold_volume, peak_mb, hash);
+    std::printf(
+        "%s  {\"scene\": \"%s\", \"n\": %d, \"nary_seconds\": %.4f, \"fold_seconds\": %.4f, "
+        "\"fold_over_nary\": %.2f, "
+        "\"solids\": %zu, \"faces\": %zu, \"volume\": %.17g, \"fold_volume\": %.6f, "
+        "\"peak_rss_mb\": %.1f, "
+        "\"native_fnv1a\": \"%016llx\"}",
+        first ? "" : ",\n", is_gate ? "gate" : "city_block", n, nary_s, fold_s,
+        fold_s > 0 ? fold_s / nary_s : -1.0, counts[static_cast<int>(ShapeKind::Solid)],
+        counts[static_cast<int>(ShapeKind::Face)], mass_properties(nary.value()).volume,
+        fold_volume, peak_mb, hash);
     std::fflush(stdout);
     first = false;
   }

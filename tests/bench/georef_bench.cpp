@@ -15,7 +15,8 @@
 // in the same process just before) and `ratio_to_affine` (georef rate / affine rate): the
 // figure to report. BM_TileMappingToLocal/<family> takes the same points through a
 // TileMapping fitted over the tile (verified within 1e-7 m of the exact path) and reports its
-// ratio to the exact path and to the affine baseline. Single thread; to_local is const and thread-safe, so it scales per core.
+// ratio to the exact path and to the affine baseline. Single thread; to_local is const and
+// thread-safe, so it scales per core.
 
 #include <benchmark/benchmark.h>
 

@@ -27,7 +27,8 @@ PrimitiveSpec spec_of(int i) {
   s.radius2 = 1;
   s.height = 3;
   s.profile = {{1, 0}, {3, 0}, {2, 2}, {1, 2}};
-  if (s.type == PrimitiveType::Extrusion) s.profile = {{0, 0}, {4, 0}, {4, 1}, {1, 1}, {1, 4}, {0, 4}};
+  if (s.type == PrimitiveType::Extrusion)
+    s.profile = {{0, 0}, {4, 0}, {4, 1}, {1, 1}, {1, 4}, {0, 4}};
   s.placement = Location::translation(Vec3(i % 100, (i / 100) % 100, i / 10000));
   return s;
 }

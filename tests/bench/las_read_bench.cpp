@@ -230,7 +230,8 @@ int main(int argc, char** argv) {
       " \"ratio_to_baseline\": %.3f,\n"
       " \"read_and_georef\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": %.1f},\n"
       " \"georef_ratio_to_baseline\": %.4f, \"georef_ratio_to_reader\": %.3f,\n"
-      " \"read_and_tile_mapping\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": %.1f},\n"
+      " \"read_and_tile_mapping\": {\"seconds\": %.4f, \"points_per_s\": %.4g, \"mb_per_s\": "
+      "%.1f},\n"
       " \"mapped_ratio_to_baseline\": %.4f, \"mapped_ratio_to_reader\": %.3f,\n"
       " \"read_rss_growth_mib\": %.1f, \"peak_rss_mib\": %.1f,\n"
       " \"checksum\": %.6g}\n",
@@ -239,8 +240,6 @@ int main(int argc, char** argv) {
       best_baseline / best_reader, best_georef, static_cast<double>(points) / best_georef,
       mb / best_georef, best_baseline / best_georef, best_reader / best_georef, best_mapped,
       static_cast<double>(points) / best_mapped, mb / best_mapped, best_baseline / best_mapped,
-      best_reader / best_mapped, growth,
-      status_mib("VmHWM"),
-      sum + static_cast<double>(checksum));
+      best_reader / best_mapped, growth, status_mib("VmHWM"), sum + static_cast<double>(checksum));
   return 0;
 }

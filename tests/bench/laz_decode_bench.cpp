@@ -22,10 +22,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <string>
 #include <iterator>
 #include <memory>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -108,8 +108,8 @@ class CountingSource final : public csgtile::geo::ByteSource {
 std::pair<std::uint64_t, std::uint64_t> copc_read(const std::vector<std::uint8_t>& bytes,
                                                   const csgtile::geo::PointReadOptions& options) {
   std::uint64_t read = 0, points = 0;
-  auto reader = csgtile::geo::LasReader::open_source(std::make_unique<CountingSource>(bytes, &read),
-                                                     options);
+  auto reader =
+      csgtile::geo::LasReader::open_source(std::make_unique<CountingSource>(bytes, &read), options);
   if (!reader.ok()) {
     std::fprintf(stderr, "%s\n", reader.error().message.c_str());
     std::exit(1);
@@ -140,16 +140,17 @@ void report_copc(const fs::path& path) {
   csgtile::geo::PointReadOptions root;
   root.copc_max_depth = 0;
   const auto [r_points, r_bytes] = copc_read(bytes, root);
-  std::printf(", \"copc\": {\"file\": \"%s\", \"file_bytes\": %zu, \"whole\": {\"points\": %llu, "
-              "\"bytes_read\": %llu}, \"quarter_region\": {\"points\": %llu, \"bytes_read\": %llu, "
-              "\"bytes_over_whole\": %.3f}, \"root_level\": {\"points\": %llu, \"bytes_read\": %llu, "
-              "\"bytes_over_whole\": %.3f}}",
-              path.filename().c_str(), bytes.size(), static_cast<unsigned long long>(all_points),
-              static_cast<unsigned long long>(all_bytes), static_cast<unsigned long long>(q_points),
-              static_cast<unsigned long long>(q_bytes),
-              static_cast<double>(q_bytes) / static_cast<double>(all_bytes),
-              static_cast<unsigned long long>(r_points), static_cast<unsigned long long>(r_bytes),
-              static_cast<double>(r_bytes) / static_cast<double>(all_bytes));
+  std::printf(
+      ", \"copc\": {\"file\": \"%s\", \"file_bytes\": %zu, \"whole\": {\"points\": %llu, "
+      "\"bytes_read\": %llu}, \"quarter_region\": {\"points\": %llu, \"bytes_read\": %llu, "
+      "\"bytes_over_whole\": %.3f}, \"root_level\": {\"points\": %llu, \"bytes_read\": %llu, "
+      "\"bytes_over_whole\": %.3f}}",
+      path.filename().c_str(), bytes.size(), static_cast<unsigned long long>(all_points),
+      static_cast<unsigned long long>(all_bytes), static_cast<unsigned long long>(q_points),
+      static_cast<unsigned long long>(q_bytes),
+      static_cast<double>(q_bytes) / static_cast<double>(all_bytes),
+      static_cast<unsigned long long>(r_points), static_cast<unsigned long long>(r_bytes),
+      static_cast<double>(r_bytes) / static_cast<double>(all_bytes));
 }
 
 }  // namespace

@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
     const std::size_t stl = kernel::to_binary_stl(mesh.value()).size();
     // The glb: one feature per solid, as the exporter writes a cell.
     std::vector<worker::IndexObject> objects;
-    const kernel::ShapeIndex solids = kernel::map_child_shapes(model->shape, kernel::ShapeKind::Solid);
+    const kernel::ShapeIndex solids =
+        kernel::map_child_shapes(model->shape, kernel::ShapeKind::Solid);
     for (std::size_t s = 0; s < solids.size(); ++s) {
       worker::IndexObject o;
       o.id = "solid-" + std::to_string(s);

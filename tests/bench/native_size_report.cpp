@@ -21,8 +21,10 @@ int main() {
       {"cone r=5 h=2.5 (roof)", make_cone(5, 0, 2.5)},
       {"sphere r=1", make_sphere(1)},
       {"torus R=2 r=0.4", make_torus(2, 0.4)},
-      {"extrusion L-shape h=12", make_extrusion({{0, 0}, {30, 0}, {30, 10}, {10, 10}, {10, 20}, {0, 20}}, {}, 12)},
-      {"revolution tower", make_revolution({{0, 0}, {4, 0}, {4, 18}, {3, 20}, {0, 21}}, 6.283185307179586)},
+      {"extrusion L-shape h=12",
+       make_extrusion({{0, 0}, {30, 0}, {30, 10}, {10, 10}, {10, 20}, {0, 20}}, {}, 12)},
+      {"revolution tower",
+       make_revolution({{0, 0}, {4, 0}, {4, 18}, {3, 20}, {0, 21}}, 6.283185307179586)},
   };
   std::printf("{\"chordal_tolerance\": 0.01, \"primitives\": [\n");
   bool first = true;
@@ -34,10 +36,11 @@ int main() {
     auto mesh = tessellate(item.shape.value(), options);
     if (!mesh.ok()) return 1;
     const std::size_t stl = to_binary_stl(mesh.value()).size();
-    std::printf("%s  {\"name\": \"%s\", \"native_bytes\": %zu, \"stl_bytes\": %zu, "
-                "\"triangles\": %zu, \"stl_over_native\": %.2f}",
-                first ? "" : ",\n", item.name, native.size(), stl, mesh->triangles.size(),
-                static_cast<double>(stl) / static_cast<double>(native.size()));
+    std::printf(
+        "%s  {\"name\": \"%s\", \"native_bytes\": %zu, \"stl_bytes\": %zu, "
+        "\"triangles\": %zu, \"stl_over_native\": %.2f}",
+        first ? "" : ",\n", item.name, native.size(), stl, mesh->triangles.size(),
+        static_cast<double>(stl) / static_cast<double>(native.size()));
     first = false;
   }
   std::printf("\n]}\n");

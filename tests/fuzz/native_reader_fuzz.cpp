@@ -164,14 +164,14 @@ int main(int argc, char** argv) {
     return m.value();
   };
   auto fused = csg_boolean(leaf(a, "a"), leaf(b, "b"), BooleanOp::Fuse);
-  auto drilled = fused.ok() ? csg_boolean(fused.value(), leaf(drill, "drill"), BooleanOp::Cut)
-                            : fused;
+  auto drilled =
+      fused.ok() ? csg_boolean(fused.value(), leaf(drill, "drill"), BooleanOp::Cut) : fused;
   if (!drilled.ok()) {
     std::fprintf(stderr, "seed model failed: %s\n", drilled.error().message.c_str());
     return 1;
   }
-  for (const auto& [name, model] : {std::pair{"csg_fused", fused.value()},
-                                    std::pair{"csg_drilled", drilled.value()}}) {
+  for (const auto& [name, model] :
+       {std::pair{"csg_fused", fused.value()}, std::pair{"csg_drilled", drilled.value()}}) {
     std::ofstream out(dir / (std::string(name) + ".csgt"), std::ios::binary);
     out << write_native_model(model);
     check_model_round_trip(write_native_model(model));

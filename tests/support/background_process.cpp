@@ -43,7 +43,8 @@ BackgroundProcess::BackgroundProcess(const std::string& command, double timeout_
     if (n <= 0) {
       int status = 0;
       waitpid(pid_, &status, 0);
-      problem_ = "exited before printing a line (status " + std::to_string(status) + "): " + command;
+      problem_ =
+          "exited before printing a line (status " + std::to_string(status) + "): " + command;
       pid_ = -1;
       return;
     }

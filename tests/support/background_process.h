@@ -4,8 +4,8 @@
 /// its first stdout line read (servers print their port there), killed with its process
 /// group when the object dies.
 
-#include <string>
 #include <sys/types.h>
+#include <string>
 
 namespace csgtile::test {
 

@@ -44,7 +44,8 @@ std::vector<PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOpti
     const long long b = index / 16, in_block = index % 16;
     const long long bx = b % side_blocks, by = b / side_blocks;
     // Blocks of 4 × 4 lots separated by 10 m streets.
-    const Vec3 block_origin(static_cast<double>(bx) * (4 * lot + 10), static_cast<double>(by) * (4 * lot + 10), 0);
+    const Vec3 block_origin(static_cast<double>(bx) * (4 * lot + 10),
+                            static_cast<double>(by) * (4 * lot + 10), 0);
     // One yaw per block (every other block turned), from its own generator.
     double yaw = 0;
     if (!options.axis_aligned_boxes_only && (bx + by) % 2 == 1) {
@@ -53,8 +54,9 @@ std::vector<PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOpti
     }
     const Location block = Location::translation(block_origin) *
                            Location::rotation(Vec3(2 * lot, 2 * lot, 0), Vec3::UnitZ(), yaw);
-    const Location at_lot = block * Location::translation(Vec3(static_cast<double>(in_block % 4) * lot,
-                                                               static_cast<double>(in_block / 4) * lot, 0));
+    const Location at_lot =
+        block * Location::translation(Vec3(static_cast<double>(in_block % 4) * lot,
+                                           static_cast<double>(in_block / 4) * lot, 0));
     auto push = [&](PrimitiveSpec s) {
       if (static_cast<int>(out.size()) < n) out.push_back(std::move(s));
     };
@@ -76,11 +78,13 @@ std::vector<PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOpti
     if (r_wing < 0.12) {
       // A wing from the front wall into the street side of the lot: overlaps the building.
       const double ww = 2 + 2 * u(rng), wd = 2 + 1.5 * u(rng), wh = 3 + 5 * u(rng);
-      push(box(ww, wd, wh, at_lot * Location::translation(corner + Vec3(0.5 + u(rng), -wd + 1, 0))));
+      push(
+          box(ww, wd, wh, at_lot * Location::translation(corner + Vec3(0.5 + u(rng), -wd + 1, 0))));
     }
     if (r_roof < 0.04) {
       // A roof box standing on the building's top: touches it along a face.
-      push(box(2 + 2 * u(rng), 2 + 2 * u(rng), 2 + 2 * u(rng), at_lot * Location::translation(corner + Vec3(1, 1, h))));
+      push(box(2 + 2 * u(rng), 2 + 2 * u(rng), 2 + 2 * u(rng),
+               at_lot * Location::translation(corner + Vec3(1, 1, h))));
     }
     if (!options.axis_aligned_boxes_only && r_col < 0.06) {
       const double r = 0.3 + 0.3 * u(rng);
@@ -88,7 +92,8 @@ std::vector<PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOpti
     }
     if (!options.axis_aligned_boxes_only && r_miss < 0.04) {
       const double r = 0.2 + 0.2 * u(rng), gap = 0.05 + 0.25 * u(rng);
-      push(column(r, 3 + 3 * u(rng), at_lot * Location::translation(corner + Vec3(w / 2, -r - gap, 0))));
+      push(column(r, 3 + 3 * u(rng),
+                  at_lot * Location::translation(corner + Vec3(w / 2, -r - gap, 0))));
     }
   }
   return out;

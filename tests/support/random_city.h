@@ -19,6 +19,7 @@ struct CityOptions {
 };
 
 /// Exactly n primitives (n ≥ 0), deterministic for a seed.
-std::vector<kernel::PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOptions& options = {});
+std::vector<kernel::PrimitiveSpec> random_city(int n, std::uint64_t seed,
+                                               const CityOptions& options = {});
 
 }  // namespace csgtile::test

@@ -25,14 +25,21 @@ kernel::PrimitiveSpec random_primitive(std::mt19937_64& rng, kernel::PrimitiveTy
   kernel::PrimitiveSpec s;
   s.type = type;
   switch (type) {
-    case kernel::PrimitiveType::Box: s.size = Vec3(size(rng), size(rng), size(rng)); break;
-    case kernel::PrimitiveType::Cylinder: s.radius = size(rng); s.height = size(rng); break;
+    case kernel::PrimitiveType::Box:
+      s.size = Vec3(size(rng), size(rng), size(rng));
+      break;
+    case kernel::PrimitiveType::Cylinder:
+      s.radius = size(rng);
+      s.height = size(rng);
+      break;
     case kernel::PrimitiveType::Cone:
       s.radius = size(rng);
       s.radius2 = std::bernoulli_distribution(0.3)(rng) ? 0.0 : size(rng);
       s.height = size(rng);
       break;
-    case kernel::PrimitiveType::Sphere: s.radius = size(rng); break;
+    case kernel::PrimitiveType::Sphere:
+      s.radius = size(rng);
+      break;
     case kernel::PrimitiveType::Torus: {
       s.radius2 = size(rng);
       s.radius = s.radius2 * (1.1 + std::uniform_real_distribution<double>(0, 3)(rng));

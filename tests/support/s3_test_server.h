@@ -30,7 +30,8 @@ inline bool s3rver_required() {
 /// fails, when s3rver_required()). Otherwise the process, whose running() the caller
 /// asserts (a server that does not start is a failure) and whose first_line() is its port.
 inline std::unique_ptr<BackgroundProcess> start_s3rver(const std::filesystem::path& data_dir,
-                                                       const std::string& bucket, std::string& why) {
+                                                       const std::string& bucket,
+                                                       std::string& why) {
   const char* env = std::getenv("CSGTILE_S3RVER_DIR");
 #ifdef CSGTILE_S3RVER_DIR
   const std::filesystem::path module = env != nullptr ? env : CSGTILE_S3RVER_DIR;
@@ -44,8 +45,9 @@ inline std::unique_ptr<BackgroundProcess> start_s3rver(const std::filesystem::pa
   }
   std::filesystem::create_directories(data_dir);
   auto server = std::make_unique<BackgroundProcess>(
-      "exec node " + quoted(std::filesystem::path(CSGTILE_SOURCE_DIR) / "tests/support/s3_server.cjs") +
-      " " + quoted(module) + " " + quoted(data_dir) + " " + bucket);
+      "exec node " +
+      quoted(std::filesystem::path(CSGTILE_SOURCE_DIR) / "tests/support/s3_server.cjs") + " " +
+      quoted(module) + " " + quoted(data_dir) + " " + bucket);
   return server;
 }
 
@@ -61,8 +63,10 @@ class ScopedEnv {
   }
   ~ScopedEnv() {
     for (const auto& [name, value] : saved_) {
-      if (value) setenv(name.c_str(), value->c_str(), 1);
-      else unsetenv(name.c_str());
+      if (value)
+        setenv(name.c_str(), value->c_str(), 1);
+      else
+        unsetenv(name.c_str());
     }
   }
   ScopedEnv(const ScopedEnv&) = delete;

@@ -57,15 +57,15 @@ ordered_json stats_json(const assembly::AssemblyStats& s) {
   j["objects_failed"] = s.objects_failed;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
-  j["seconds"] = {{"build", s.seconds_build}, {"broad_phase", s.seconds_broad},
+  j["seconds"] = {{"build", s.seconds_build},         {"broad_phase", s.seconds_broad},
                   {"voxel_culling", s.seconds_voxel}, {"exact_tests", s.seconds_exact},
-                  {"fuse", s.seconds_fuse}, {"total", s.seconds_total}};
+                  {"fuse", s.seconds_fuse},           {"total", s.seconds_total}};
   return j;
 }
 
 // The deterministic part of a cell's result (no timings): what assembly.json holds.
-ordered_json result_json(const assembly::Assembly& a, const std::vector<assembly::AssemblyPrimitive>& prims,
-                         double volume) {
+ordered_json result_json(const assembly::Assembly& a,
+                         const std::vector<assembly::AssemblyPrimitive>& prims, double volume) {
   ordered_json j;
   j["total_volume"] = volume;
   ordered_json objects = ordered_json::array();
@@ -126,8 +126,9 @@ Failure assemble_into(const std::vector<assembly::AssemblyPrimitive>& prims,
 Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   auto scene = geo::read_scene(args.scene);
   if (!scene.ok()) {
-    return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
-            scene.error().message};
+    return {
+        scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+        scene.error().message};
   }
   std::vector<assembly::AssemblyPrimitive> prims;
   std::map<std::string, int> seen;
@@ -192,16 +193,18 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
 void print_text(const ordered_json& r) {
   auto line = [](const ordered_json& c) {
     const auto& s = c["statistics"];
-    std::printf("%s: %lld objects (%lld failed, %lld past the halo) from %lld primitives; pairs: "
-                "%lld candidates, %lld culled by OpenVDB, %lld tested exactly, %lld in contact; "
-                "volume %.12g; %.3f s\n",
-                c["model"].get<std::string>().c_str(), s["objects"].get<long long>(),
-                s["objects_failed"].get<long long>(), s["objects_past_halo"].get<long long>(),
-                s["primitives_read"].get<long long>(), s["candidate_pairs"].get<long long>(),
-                s["culled_pairs"].get<long long>(), s["exact_tests"].get<long long>(),
-                s["interacting_pairs"].get<long long>(), c["total_volume"].get<double>(),
-                s["seconds"]["total"].get<double>());
-    for (const auto& p : c["problems"]) std::printf("  problem: %s\n", p.get<std::string>().c_str());
+    std::printf(
+        "%s: %lld objects (%lld failed, %lld past the halo) from %lld primitives; pairs: "
+        "%lld candidates, %lld culled by OpenVDB, %lld tested exactly, %lld in contact; "
+        "volume %.12g; %.3f s\n",
+        c["model"].get<std::string>().c_str(), s["objects"].get<long long>(),
+        s["objects_failed"].get<long long>(), s["objects_past_halo"].get<long long>(),
+        s["primitives_read"].get<long long>(), s["candidate_pairs"].get<long long>(),
+        s["culled_pairs"].get<long long>(), s["exact_tests"].get<long long>(),
+        s["interacting_pairs"].get<long long>(), c["total_volume"].get<double>(),
+        s["seconds"]["total"].get<double>());
+    for (const auto& p : c["problems"])
+      std::printf("  problem: %s\n", p.get<std::string>().c_str());
   };
   if (r.contains("cells")) {
     for (const auto& c : r["cells"]) line(c);
@@ -215,21 +218,28 @@ void print_text(const ordered_json& r) {
 
 void register_assemble(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand(
-      "assemble", "Assemble a scene's primitives into unified objects (OpenVDB culling, exact "
-                  "Booleans); write the city model and print the statistics and total volume");
+      "assemble",
+      "Assemble a scene's primitives into unified objects (OpenVDB culling, exact "
+      "Booleans); write the city model and print the statistics and total volume");
   auto a = std::make_shared<AssembleArgs>();
   cmd->add_option("SCENE", a->scene, "Scene JSON file (scene format of shared/spec)")->required();
   cmd->add_option("--out", a->out, "Output directory (model.csgt, assembly.json)")->required();
   cmd->add_flag("--json", a->json, "Print one JSON object");
   cmd->add_option("--voxel", a->voxel, "OpenVDB voxel size, scene units (default 0.5)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--tolerance", a->tolerance, "Contact tolerance (default 1e-7)")->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", a->threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--no-cull", a->no_cull, "Skip the OpenVDB culling (every candidate pair is tested exactly)");
-  cmd->add_flag("--no-broad-phase", a->no_broad, "Skip the bounding-box broad phase (every pair is a candidate)");
-  cmd->add_option("--cell-size", a->cell_size, "Assemble per square cell of this size (grid at the origin)")
+  cmd->add_option("--tolerance", a->tolerance, "Contact tolerance (default 1e-7)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--halo", a->halo, "Halo around each cell (with --cell-size)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", a->threads, "Worker threads (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--no-cull", a->no_cull,
+                "Skip the OpenVDB culling (every candidate pair is tested exactly)");
+  cmd->add_flag("--no-broad-phase", a->no_broad,
+                "Skip the bounding-box broad phase (every pair is a candidate)");
+  cmd->add_option("--cell-size", a->cell_size,
+                  "Assemble per square cell of this size (grid at the origin)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--halo", a->halo, "Halo around each cell (with --cell-size)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--cell", a->cell, "Only this cell: I J (with --cell-size)")->expected(2);
   cmd->callback([&action, a] {
     action = [a] {
@@ -237,7 +247,10 @@ void register_assemble(CLI::App& app, Action& action) {
       const Failure f = run_assemble(*a, report);
       if (!f.ok()) {
         if (a->json) {
-          std::cout << ordered_json{{"error", std::string(error_info(f.code).name) + ": " + f.message}}.dump() << "\n";
+          std::cout << ordered_json{{"error",
+                                     std::string(error_info(f.code).name) + ": " + f.message}}
+                           .dump()
+                    << "\n";
         }
         std::fprintf(stderr, "csgtile assemble: %s\n", f.message.c_str());
         return error_info(f.code).exit_code;

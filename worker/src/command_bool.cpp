@@ -35,8 +35,9 @@ Failure evaluate(const std::string& path, const std::string& out, BoolReport& re
   const auto start = std::chrono::steady_clock::now();
   auto scene = geo::read_scene(path);
   if (!scene.ok()) {
-    return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
-            scene.error().message};
+    return {
+        scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+        scene.error().message};
   }
   report.name = scene->name;
   report.op = geo::boolean_op_name(scene->op);
@@ -46,9 +47,9 @@ Failure evaluate(const std::string& path, const std::string& out, BoolReport& re
     const auto& p = scene->primitives[i];
     auto leaf = kernel::csg_primitive(p.spec, p.id);
     if (!leaf.ok()) {
-      return {from_kernel(leaf.error().code),
-              "primitives[" + std::to_string(i) + "] (" + kernel::primitive_type_name(p.spec.type) +
-                  "): " + leaf.error().message};
+      return {from_kernel(leaf.error().code), "primitives[" + std::to_string(i) + "] (" +
+                                                  kernel::primitive_type_name(p.spec.type) +
+                                                  "): " + leaf.error().message};
     }
     solids.push_back(leaf.value().shape);
     leaves.push_back(std::move(leaf).value());
@@ -76,7 +77,8 @@ Failure evaluate(const std::string& path, const std::string& out, BoolReport& re
   report.counts = kernel::count_shapes(compound.value());
   report.valid = check.valid();
   for (const auto& issue : check.issues) {
-    report.issues.push_back(std::string(kernel::check_status_name(issue.status)) + ": " + issue.message);
+    report.issues.push_back(std::string(kernel::check_status_name(issue.status)) + ": " +
+                            issue.message);
   }
   report.volume = mp.volume;
   report.area = mp.area;
@@ -88,8 +90,9 @@ Failure evaluate(const std::string& path, const std::string& out, BoolReport& re
 
 void register_bool(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand(
-      "bool", "Build a scene's primitives (scene format of shared/spec) and report validity, "
-              "volume, area and topology counts");
+      "bool",
+      "Build a scene's primitives (scene format of shared/spec) and report validity, "
+      "volume, area and topology counts");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   auto model_path = std::make_shared<std::string>();
@@ -124,12 +127,13 @@ void register_bool(CLI::App& app, Action& action) {
         }
         std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
       } else if (failure.ok()) {
-        std::printf("%s: %s  volume %.12g  area %.12g  solids %zu shells %zu faces %zu edges %zu "
-                    "vertices %zu  (%.4f s)\n",
-                    r.name.c_str(), r.valid ? "valid" : "INVALID", r.volume, r.area,
-                    count(kernel::ShapeKind::Solid), count(kernel::ShapeKind::Shell),
-                    count(kernel::ShapeKind::Face), count(kernel::ShapeKind::Edge),
-                    count(kernel::ShapeKind::Vertex), r.seconds);
+        std::printf(
+            "%s: %s  volume %.12g  area %.12g  solids %zu shells %zu faces %zu edges %zu "
+            "vertices %zu  (%.4f s)\n",
+            r.name.c_str(), r.valid ? "valid" : "INVALID", r.volume, r.area,
+            count(kernel::ShapeKind::Solid), count(kernel::ShapeKind::Shell),
+            count(kernel::ShapeKind::Face), count(kernel::ShapeKind::Edge),
+            count(kernel::ShapeKind::Vertex), r.seconds);
         for (const auto& issue : r.issues) std::printf("  %s\n", issue.c_str());
       }
       if (!failure.ok()) {

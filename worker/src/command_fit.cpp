@@ -15,16 +15,16 @@
 #include <sstream>
 
 #include "city/fit_tile.h"
-#include "fetch/fetch.h"
-#include "fetch/input.h"
 #include "commands.h"
+#include "csgtile/fit/segment.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/geo/scene.h"
-#include "csgtile/fit/segment.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/publish.h"
+#include "fetch/fetch.h"
+#include "fetch/input.h"
 
 namespace csgtile::worker::detail {
 
@@ -104,8 +104,8 @@ int run_fit(const FitCommand& c) {
   source.path = c.input;
   if (fetch::is_url(c.input) && c.input.rfind("file://", 0) != 0) {
     // A LAS/LAZ/COPC URL (http, https, s3): read by range requests under the config's policy.
-    if (Failure f = fetch::open_range_source(c.input, fetch::policy_of(config.fetch),
-                                             source.remote);
+    if (Failure f =
+            fetch::open_range_source(c.input, fetch::policy_of(config.fetch), source.remote);
         !f.ok()) {
       return fail(f.code, f.message);
     }

@@ -1,7 +1,8 @@
 // `csgtile info FILE|URL [--json] [--scan]`: what a point-cloud file says about itself —
 // version, point format, counts, bounds, scale/offset, CRS (interpreted, with its records),
 // VLRs/EVLRs, extra bytes, a COPC file's octree — and the problems the reader found. A URL
-// (http, https, s3) is read by range requests: only the header, records and pages shown. LAS headers are reported without reading the points unless
+// (http, https, s3) is read by range requests: only the header, records and pages shown. LAS
+// headers are reported without reading the points unless
 // --scan is given; PLY/PCD/XYZ have no header bounds, so their points are always scanned.
 
 #include <algorithm>
@@ -99,8 +100,8 @@ Json resolved_crs_json(const kernel::Result<geo::Crs>& crs) {
               {"name", c.name},
               {"kind", c.is_projected() ? "projected" : "geographic"},
               {"description", geo::describe_crs(c)},
-              {"vertical_epsg", c.vertical && c.vertical->epsg != 0 ? Json(c.vertical->epsg)
-                                                                    : Json(nullptr)},
+              {"vertical_epsg",
+               c.vertical && c.vertical->epsg != 0 ? Json(c.vertical->epsg) : Json(nullptr)},
               {"source", c.source},
               {"warnings", c.warnings},
               {"error", nullptr}};
@@ -233,9 +234,12 @@ int run_info(const InfoOptions& o) {
       depth = std::max(depth, n.depth);
       points += n.points;
     }
-    out["copc"] = {{"center", c.center},         {"halfsize", c.halfsize},
-                   {"spacing", c.spacing},       {"nodes", copc_nodes->size()},
-                   {"max_depth", depth},         {"points", points},
+    out["copc"] = {{"center", c.center},
+                   {"halfsize", c.halfsize},
+                   {"spacing", c.spacing},
+                   {"nodes", copc_nodes->size()},
+                   {"max_depth", depth},
+                   {"points", points},
                    {"gpstime", {c.gpstime_minimum, c.gpstime_maximum}}};
   }
   if (fetched) out["fetched"] = {{"requests", fetched->requests}, {"bytes", fetched->bytes}};
@@ -329,15 +333,15 @@ int run_info(const InfoOptions& o) {
   }
   if (out.contains("copc")) {
     const Json& c = out["copc"];
-    std::printf("%-13s%s nodes, depth 0-%s, %s points in the hierarchy, root half size %.10g, "
-                "spacing %.10g\n",
-                "copc", c["nodes"].dump().c_str(), c["max_depth"].dump().c_str(),
-                c["points"].dump().c_str(), c["halfsize"].get<double>(),
-                c["spacing"].get<double>());
+    std::printf(
+        "%-13s%s nodes, depth 0-%s, %s points in the hierarchy, root half size %.10g, "
+        "spacing %.10g\n",
+        "copc", c["nodes"].dump().c_str(), c["max_depth"].dump().c_str(),
+        c["points"].dump().c_str(), c["halfsize"].get<double>(), c["spacing"].get<double>());
   }
   if (fetched) {
-    std::printf("%-13s%" PRIu64 " bytes in %" PRIu64 " range requests\n", "fetched",
-                fetched->bytes, fetched->requests);
+    std::printf("%-13s%" PRIu64 " bytes in %" PRIu64 " range requests\n", "fetched", fetched->bytes,
+                fetched->requests);
   }
   std::printf("%-13s%zu\n", "warnings", reader->warnings().size());
   for (const auto& w : reader->warnings()) std::printf("  %s\n", w.c_str());

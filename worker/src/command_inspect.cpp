@@ -45,7 +45,8 @@ Failure inspect_native(const std::string& path, const std::string& bytes, Json& 
   out["type"] = "native_model";
   Json topology;
   for (int k = 0; k < kernel::kShapeKindCount; ++k) {
-    topology[kernel::shape_kind_name(static_cast<kernel::ShapeKind>(k))] = counts[static_cast<std::size_t>(k)];
+    topology[kernel::shape_kind_name(static_cast<kernel::ShapeKind>(k))] =
+        counts[static_cast<std::size_t>(k)];
   }
   out["topology"] = topology;
   out["volume"] = mp.volume;
@@ -55,7 +56,8 @@ Failure inspect_native(const std::string& path, const std::string& bytes, Json& 
   std::map<std::string, int> kinds, primitives;
   for (const auto& node : model->nodes) {
     ++kinds[kernel::csg_node_kind_name(node.kind)];
-    if (node.kind == kernel::CsgNodeKind::Primitive) ++primitives[kernel::primitive_type_name(node.primitive.type)];
+    if (node.kind == kernel::CsgNodeKind::Primitive)
+      ++primitives[kernel::primitive_type_name(node.primitive.type)];
   }
   out["csg"] = {{"nodes", model->nodes.size()}, {"by_kind", kinds}, {"primitives", primitives}};
   return {};
@@ -63,13 +65,16 @@ Failure inspect_native(const std::string& path, const std::string& bytes, Json& 
 
 Failure inspect_gpkg(const std::string& path, Json& out) {
   SqliteDb db;
-  if (auto s = db.open(path, SQLITE_OPEN_READONLY); !s.ok()) return {ErrorCode::Io, s.error().message};
+  if (auto s = db.open(path, SQLITE_OPEN_READONLY); !s.ok())
+    return {ErrorCode::Io, s.error().message};
   out["type"] = "geopackage";
   Json tables = Json::object();
   std::vector<std::string> names;
   {
-    SqliteStatement st(db, "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' "
-                           "AND name NOT LIKE 'rtree_%' ORDER BY name");
+    SqliteStatement st(
+        db,
+        "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' "
+        "AND name NOT LIKE 'rtree_%' ORDER BY name");
     if (!st.ok()) return {ErrorCode::InputInvalid, path + ": not a readable SQLite file"};
     while (st.step() == SQLITE_ROW) names.push_back(st.text(0));
   }
@@ -79,11 +84,14 @@ Failure inspect_gpkg(const std::string& path, Json& out) {
   }
   out["tables"] = tables;
   {
-    SqliteStatement st(db, "SELECT table_name, data_type, srs_id FROM gpkg_contents ORDER BY table_name");
-    if (!st.ok()) return {ErrorCode::InputInvalid, path + ": SQLite but not a GeoPackage (no gpkg_contents)"};
+    SqliteStatement st(
+        db, "SELECT table_name, data_type, srs_id FROM gpkg_contents ORDER BY table_name");
+    if (!st.ok())
+      return {ErrorCode::InputInvalid, path + ": SQLite but not a GeoPackage (no gpkg_contents)"};
     Json contents = Json::array();
     while (st.step() == SQLITE_ROW) {
-      contents.push_back({{"table", st.text(0)}, {"data_type", st.text(1)}, {"srs_id", st.integer(2)}});
+      contents.push_back(
+          {{"table", st.text(0)}, {"data_type", st.text(1)}, {"srs_id", st.integer(2)}});
     }
     out["contents"] = contents;
   }
@@ -105,7 +113,8 @@ Failure inspect_cityjson_seq(const std::string& path, const std::string& bytes, 
     ++line_no;
     if (line.empty()) continue;
     Json j = Json::parse(line, nullptr, false);
-    if (j.is_discarded()) return {ErrorCode::InputInvalid, path + ":" + std::to_string(line_no) + ": not JSON"};
+    if (j.is_discarded())
+      return {ErrorCode::InputInvalid, path + ":" + std::to_string(line_no) + ": not JSON"};
     if (line_no == 1) {
       out["type"] = "cityjson_seq";
       out["version"] = j.value("version", "");
@@ -114,7 +123,8 @@ Failure inspect_cityjson_seq(const std::string& path, const std::string& bytes, 
       continue;
     }
     if (j.value("type", "") != "CityJSONFeature") {
-      return {ErrorCode::InputInvalid, path + ":" + std::to_string(line_no) + ": not a CityJSONFeature"};
+      return {ErrorCode::InputInvalid,
+              path + ":" + std::to_string(line_no) + ": not a CityJSONFeature"};
     }
     ++features;
     if (j.contains("vertices")) vertices += static_cast<long long>(j["vertices"].size());
@@ -168,7 +178,8 @@ Failure inspect(const std::string& path, Json& out) {
     return inspect_cityjson_seq(path, bytes, out);
   }
   Json j = Json::parse(bytes, nullptr, false);
-  if (j.is_discarded()) return {ErrorCode::InputInvalid, path + ": not a file csgtile publishes or reads"};
+  if (j.is_discarded())
+    return {ErrorCode::InputInvalid, path + ": not a file csgtile publishes or reads"};
   if (j.contains("asset") && j.contains("root")) {
     out["type"] = "tileset";
     out["asset"] = j["asset"];
@@ -215,8 +226,10 @@ void print_text(const Json& j, const std::string& indent = "") {
 }  // namespace
 
 void register_inspect(CLI::App& app, Action& action) {
-  auto* cmd = app.add_subcommand("inspect", "Summarise a file csgtile publishes (native model, GeoPackage index, "
-                                            "CityJSONSeq, glTF binary, tileset, manifest, scene)");
+  auto* cmd =
+      app.add_subcommand("inspect",
+                         "Summarise a file csgtile publishes (native model, GeoPackage index, "
+                         "CityJSONSeq, glTF binary, tileset, manifest, scene)");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("FILE", *file, "File to inspect")->required();
@@ -226,7 +239,11 @@ void register_inspect(CLI::App& app, Action& action) {
       Json out;
       const Failure f = inspect(*file, out);
       if (!f.ok()) {
-        if (*json) std::cout << Json{{"file", *file}, {"error", std::string(error_info(f.code).name) + ": " + f.message}}.dump() << "\n";
+        if (*json)
+          std::cout << Json{{"file", *file},
+                            {"error", std::string(error_info(f.code).name) + ": " + f.message}}
+                           .dump()
+                    << "\n";
         std::fprintf(stderr, "csgtile inspect: %s\n", f.message.c_str());
         return error_info(f.code).exit_code;
       }

@@ -12,8 +12,9 @@
 namespace csgtile::worker::detail {
 
 void register_run(CLI::App& app, Action& action) {
-  auto* cmd = app.add_subcommand("run", "Run a whole job on the embedded SQLite queue: one job per "
-                                        "input, outputs under run.output");
+  auto* cmd = app.add_subcommand("run",
+                                 "Run a whole job on the embedded SQLite queue: one job per "
+                                 "input, outputs under run.output");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
@@ -44,8 +45,9 @@ void register_run(CLI::App& app, Action& action) {
         c.run.inputs = {c.run.inputs[static_cast<std::size_t>(*index)]};
         c.run.name += "-" + std::to_string(*index);
         c.queue.backend = config::QueueBackend::Sqlite;
-        c.queue.sqlite_path = (std::filesystem::temp_directory_path() /
-                               ("csgtile-" + c.run.name + ".sqlite")).string();
+        c.queue.sqlite_path =
+            (std::filesystem::temp_directory_path() / ("csgtile-" + c.run.name + ".sqlite"))
+                .string();
       }
       const config::Config& cfg = *loaded;
       Logger log(cfg.log.level, cfg.log.format);
@@ -62,11 +64,16 @@ void register_run(CLI::App& app, Action& action) {
       // A job released at shutdown ends the process inside the run: say so first.
       const auto on_forced_exit = [&](const std::string& job, bool released) {
         if (*json) {
-          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
-                                              {"job", job}, {"released", released}}.dump() << "\n";
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name},
+                                              {"stopped", true},
+                                              {"job", job},
+                                              {"released", released}}
+                           .dump()
+                    << "\n";
         } else {
           std::cout << "run " << cfg.run.name << " stopped; job " << job
-                    << (released ? " released to the queue" : " not released (its lease will expire)")
+                    << (released ? " released to the queue"
+                                 : " not released (its lease will expire)")
                     << "; run again to resume\n";
         }
       };
@@ -77,12 +84,16 @@ void register_run(CLI::App& app, Action& action) {
       }
       if (summary.stopped) {
         if (*json) {
-          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name},
+                                              {"stopped", true},
                                               {"done", summary.counts.done},
-                                              {"unfinished", summary.counts.unfinished()}}.dump() << "\n";
+                                              {"unfinished", summary.counts.unfinished()}}
+                           .dump()
+                    << "\n";
         } else {
-          std::cout << "run " << cfg.run.name << " stopped: " << summary.counts.done << " job(s) done, "
-                    << summary.counts.unfinished() << " left in the queue; run again to resume\n";
+          std::cout << "run " << cfg.run.name << " stopped: " << summary.counts.done
+                    << " job(s) done, " << summary.counts.unfinished()
+                    << " left in the queue; run again to resume\n";
         }
         return 0;
       }
@@ -96,9 +107,10 @@ void register_run(CLI::App& app, Action& action) {
       } else {
         std::cout << "run " << cfg.run.name << ": " << summary.counts.done << " job(s) done, "
                   << summary.counts.dead << " dead\n";
-        for (const DeadJob& d : summary.dead) std::cout << "  dead " << d.key << ": " << d.last_error << "\n";
-        std::cout << "results: " << summary.run_dir.string() << " (manifest: "
-                  << summary.manifest.string() << ")\n";
+        for (const DeadJob& d : summary.dead)
+          std::cout << "  dead " << d.key << ": " << d.last_error << "\n";
+        std::cout << "results: " << summary.run_dir.string()
+                  << " (manifest: " << summary.manifest.string() << ")\n";
       }
       return summary.counts.dead > 0 ? error_info(ErrorCode::JobsFailed).exit_code : 0;
     };

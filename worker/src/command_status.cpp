@@ -16,8 +16,9 @@
 namespace csgtile::worker::detail {
 
 void register_status(CLI::App& app, Action& action) {
-  auto* cmd = app.add_subcommand("status", "Show a run's queue: jobs per state, dead jobs with "
-                                           "their reasons, progress");
+  auto* cmd = app.add_subcommand("status",
+                                 "Show a run's queue: jobs per state, dead jobs with "
+                                 "their reasons, progress");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
@@ -57,26 +58,27 @@ void register_status(CLI::App& app, Action& action) {
         out["run"] = cfg.run.name;
         out["queue"] = where;
         out["jobs"] = {{"queued", c.queued}, {"running", c.running}, {"retry", c.retry},
-                       {"done", c.done}, {"dead", c.dead}, {"total", total}};
+                       {"done", c.done},     {"dead", c.dead},       {"total", total}};
         out["finished"] = c.unfinished() == 0;
         if (city) {
-          out["city"] = {{"tiles", city->tiles},       {"fits_done", city->fits_done},
-                         {"fits_dead", city->fits_dead}, {"cells", city->cells},
+          out["city"] = {{"tiles", city->tiles},           {"fits_done", city->fits_done},
+                         {"fits_dead", city->fits_dead},   {"cells", city->cells},
                          {"cells_done", city->cells_done}, {"cells_dead", city->cells_dead},
-                         {"indexed", city->indexed},   {"index_dead", city->index_dead}};
+                         {"indexed", city->indexed},       {"index_dead", city->index_dead}};
         }
         out["dead"] = nlohmann::ordered_json::array();
         for (const DeadJob& d : dead) {
-          out["dead"].push_back({{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
+          out["dead"].push_back(
+              {{"key", d.key}, {"attempts", d.attempts}, {"error", d.last_error}});
         }
         std::cout << out.dump() << "\n";
       } else {
-        std::cout << "run " << cfg.run.name << " (" << where << "): " << c.done + c.dead << " of " << total
-                  << " job(s) finished — queued " << c.queued << ", running " << c.running << ", retry "
-                  << c.retry << ", done " << c.done << ", dead " << c.dead << "\n";
+        std::cout << "run " << cfg.run.name << " (" << where << "): " << c.done + c.dead << " of "
+                  << total << " job(s) finished — queued " << c.queued << ", running " << c.running
+                  << ", retry " << c.retry << ", done " << c.done << ", dead " << c.dead << "\n";
         if (city) {
-          std::cout << "  fit       " << city->fits_done << " of " << city->tiles << " tile(s) done, "
-                    << city->fits_dead << " dead\n";
+          std::cout << "  fit       " << city->fits_done << " of " << city->tiles
+                    << " tile(s) done, " << city->fits_dead << " dead\n";
           std::cout << "  assemble  ";
           if (city->fits_done + city->fits_dead < city->tiles) {
             std::cout << "waiting for the fits\n";
@@ -85,10 +87,14 @@ void register_status(CLI::App& app, Action& action) {
                       << city->cells_dead << " dead\n";
           }
           std::cout << "  index     "
-                    << (city->indexed ? "done" : city->index_dead ? "dead" : "not yet") << "\n";
+                    << (city->indexed      ? "done"
+                        : city->index_dead ? "dead"
+                                           : "not yet")
+                    << "\n";
         }
         for (const DeadJob& d : dead) {
-          std::cout << "  dead " << d.key << " after " << d.attempts << " attempt(s): " << d.last_error << "\n";
+          std::cout << "  dead " << d.key << " after " << d.attempts
+                    << " attempt(s): " << d.last_error << "\n";
         }
       }
       return 0;

@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "fetch/fetch.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/worker/errors.h"
+#include "fetch/fetch.h"
 
 namespace csgtile::worker::detail {
 

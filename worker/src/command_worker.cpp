@@ -5,8 +5,8 @@
 
 #include <chrono>
 #include <iostream>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "commands.h"
 #include "csgtile/worker/run.h"
@@ -16,8 +16,9 @@
 namespace csgtile::worker::detail {
 
 void register_enqueue(CLI::App& app, Action& action) {
-  auto* cmd = app.add_subcommand("enqueue", "Add a run's jobs (one per input) to the config's queue; "
-                                            "jobs already there are left as they are");
+  auto* cmd = app.add_subcommand("enqueue",
+                                 "Add a run's jobs (one per input) to the config's queue; "
+                                 "jobs already there are left as they are");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
@@ -36,8 +37,11 @@ void register_enqueue(CLI::App& app, Action& action) {
         return error_info(failure.code).exit_code;
       }
       if (*json) {
-        std::cout << nlohmann::ordered_json{{"run", cfg->run.name}, {"added", added},
-                                            {"inputs", cfg->run.inputs.size()}}.dump() << "\n";
+        std::cout << nlohmann::ordered_json{{"run", cfg->run.name},
+                                            {"added", added},
+                                            {"inputs", cfg->run.inputs.size()}}
+                         .dump()
+                  << "\n";
       } else {
         std::cout << "run " << cfg->run.name << ": " << added << " job(s) added ("
                   << cfg->run.inputs.size() - added << " already queued)\n";
@@ -48,14 +52,17 @@ void register_enqueue(CLI::App& app, Action& action) {
 }
 
 void register_worker(CLI::App& app, Action& action) {
-  auto* cmd = app.add_subcommand("worker", "Work the config's queue: claim, run and complete jobs until "
-                                           "SIGTERM (or, with --exit-when-idle, until the queue is finished); "
-                                           "publish the run when the queue is finished");
+  auto* cmd =
+      app.add_subcommand("worker",
+                         "Work the config's queue: claim, run and complete jobs until "
+                         "SIGTERM (or, with --exit-when-idle, until the queue is finished); "
+                         "publish the run when the queue is finished");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   auto idle = std::make_shared<bool>(false);
   cmd->add_option("CONFIG", *file, "YAML config file")->required();
-  cmd->add_flag("--exit-when-idle", *idle, "Exit once no job is unfinished (after publishing the run)");
+  cmd->add_flag("--exit-when-idle", *idle,
+                "Exit once no job is unfinished (after publishing the run)");
   cmd->add_flag("--json", *json, "Print one JSON summary object at exit");
   auto listen = std::make_shared<std::string>();
   auto* listen_option = cmd->add_option(
@@ -91,12 +98,17 @@ void register_worker(CLI::App& app, Action& action) {
       // A job released at shutdown ends the process in work_queue: say so first.
       options.on_forced_exit = [&](const std::string& job, bool released) {
         if (*json) {
-          std::cout << nlohmann::ordered_json{{"run", cfg.run.name}, {"stopped", true},
-                                              {"published", published}, {"job", job},
-                                              {"released", released}}.dump() << "\n";
+          std::cout << nlohmann::ordered_json{{"run", cfg.run.name},
+                                              {"stopped", true},
+                                              {"published", published},
+                                              {"job", job},
+                                              {"released", released}}
+                           .dump()
+                    << "\n";
         } else {
           std::cout << "worker stopped: run " << cfg.run.name << "; job " << job
-                    << (released ? " released to the queue" : " not released (its lease will expire)")
+                    << (released ? " released to the queue"
+                                 : " not released (its lease will expire)")
                     << " at the end of the grace period\n";
         }
       };
@@ -119,14 +131,17 @@ void register_worker(CLI::App& app, Action& action) {
       }
       const QueueCounts c = queue->counts(failure);
       if (*json) {
-        nlohmann::ordered_json out{{"run", cfg.run.name}, {"stopped", work.stopped}, {"published", published},
-                                   {"done", c.done}, {"dead", c.dead}, {"unfinished", c.unfinished()}};
+        nlohmann::ordered_json out{{"run", cfg.run.name},    {"stopped", work.stopped},
+                                   {"published", published}, {"done", c.done},
+                                   {"dead", c.dead},         {"unfinished", c.unfinished()}};
         if (published) out["manifest"] = summary.manifest.string();
         std::cout << out.dump() << "\n";
       } else {
-        std::cout << "worker " << (work.stopped ? "stopped" : "finished") << ": run " << cfg.run.name << " "
-                  << c.done << " done, " << c.dead << " dead, " << c.unfinished() << " unfinished"
-                  << (published ? "; published " + summary.manifest.string() : std::string()) << "\n";
+        std::cout << "worker " << (work.stopped ? "stopped" : "finished") << ": run "
+                  << cfg.run.name << " " << c.done << " done, " << c.dead << " dead, "
+                  << c.unfinished() << " unfinished"
+                  << (published ? "; published " + summary.manifest.string() : std::string())
+                  << "\n";
       }
       return 0;
     };

@@ -42,8 +42,10 @@ ErrorCode from_kernel(kernel::ErrorCode code) {
     case kernel::ErrorCode::DegenerateGeometry:
     case kernel::ErrorCode::InvalidShape:
       return ErrorCode::GeometryInvalid;
-    case kernel::ErrorCode::IoError: return ErrorCode::Io;
-    case kernel::ErrorCode::Unsupported: return ErrorCode::Unsupported;
+    case kernel::ErrorCode::IoError:
+      return ErrorCode::Io;
+    case kernel::ErrorCode::Unsupported:
+      return ErrorCode::Unsupported;
   }
   return ErrorCode::Internal;
 }

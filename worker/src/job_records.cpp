@@ -17,8 +17,8 @@ std::string with_timings(const std::string& result, const StageTimings& timings,
   if (!record.is_object()) return result;
   ordered_json stages = ordered_json::object();
   for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
-  record[kTimingsKey] = {{"stages", stages}, {"seconds", seconds}, {"worker", worker_id},
-                         {"attempt", attempt}};
+  record[kTimingsKey] = {
+      {"stages", stages}, {"seconds", seconds}, {"worker", worker_id}, {"attempt", attempt}};
   return record.dump();
 }
 
@@ -50,8 +50,9 @@ Failure write_timings(const std::filesystem::path& run_dir, const std::string& r
                       const JobRecords& records) {
   const ordered_json file = {
       {"run", run},
-      {"note", "wall-clock seconds of the attempt that produced each job's result; not "
-               "deterministic, unlike manifest.json"},
+      {"note",
+       "wall-clock seconds of the attempt that produced each job's result; not "
+       "deterministic, unlike manifest.json"},
       {"jobs", records.timings}};
   return write_file_atomic(run_dir / "timings.json", file.dump(2) + "\n");
 }

@@ -44,9 +44,8 @@ Failure write_file_atomic(const std::filesystem::path& path, std::string_view by
   if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
   // A unique temporary name: concurrent writers of the same key never share a temp file.
   std::random_device rd;
-  const std::filesystem::path tmp =
-      dir / ("." + path.filename().string() + ".tmp." + std::to_string(getpid()) + "." +
-             std::to_string(rd()));
+  const std::filesystem::path tmp = dir / ("." + path.filename().string() + ".tmp." +
+                                           std::to_string(getpid()) + "." + std::to_string(rd()));
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return io_error("cannot create", tmp, errno);
   std::size_t written = 0;

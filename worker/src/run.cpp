@@ -6,9 +6,10 @@
 #include <chrono>
 #include <fstream>
 #include <future>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
+#include "city/city_jobs.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
@@ -17,16 +18,15 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
-#include "city/city_jobs.h"
 #include "export/cityjson_seq.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
 #include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "job_records.h"
-#include "publish/publish_run.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
+#include "publish/publish_run.h"
 #include "queue/heartbeat.h"
 #include "stop_signal.h"
 
@@ -38,8 +38,10 @@ using nlohmann::ordered_json;
 ordered_json topology_json(const kernel::Shape& s) {
   const auto c = kernel::count_shapes(s);
   auto n = [&](kernel::ShapeKind k) { return c[static_cast<int>(k)]; };
-  return {{"solids", n(kernel::ShapeKind::Solid)}, {"shells", n(kernel::ShapeKind::Shell)},
-          {"faces", n(kernel::ShapeKind::Face)},   {"edges", n(kernel::ShapeKind::Edge)},
+  return {{"solids", n(kernel::ShapeKind::Solid)},
+          {"shells", n(kernel::ShapeKind::Shell)},
+          {"faces", n(kernel::ShapeKind::Face)},
+          {"edges", n(kernel::ShapeKind::Edge)},
           {"vertices", n(kernel::ShapeKind::Vertex)}};
 }
 }  // namespace
@@ -54,9 +56,11 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   clock.enter("read");
   auto scene = geo::read_scene(local.path.string());
   if (!scene.ok()) {
-    const std::string where = local.fetched ? input + " (fetched to " + local.path.string() + "): " : "";
-    return {scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
-            where + scene.error().message};
+    const std::string where =
+        local.fetched ? input + " (fetched to " + local.path.string() + "): " : "";
+    return {
+        scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+        where + scene.error().message};
   }
   ordered_json record;
   record["input"] = input;
@@ -155,7 +159,8 @@ std::string output_config_sha256(const config::Config& config) {
   return sha256_hex(config::to_json(hashed));
 }
 
-Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log, std::size_t& added) {
+Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                    std::size_t& added) {
   Failure failure;
   added = 0;
   if (is_city_run(config)) {
@@ -170,8 +175,10 @@ Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger&
     std::size_t next = 0;  // a run enqueued again after its fits finished goes on
     if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) return f;
     added += next;
-    log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
-                                 {"queue", describe_queue(config)}});
+    log.info("run", "enqueued",
+             {{"run", config.run.name},
+              {"jobs", std::to_string(added)},
+              {"queue", describe_queue(config)}});
     return failure;
   }
   for (const std::string& input : config.run.inputs) {
@@ -180,8 +187,10 @@ Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger&
     if (queue.enqueue(key, "build", payload, failure)) ++added;
     if (!failure.ok()) return failure;
   }
-  log.info("run", "enqueued", {{"run", config.run.name}, {"jobs", std::to_string(added)},
-                               {"queue", describe_queue(config)}});
+  log.info("run", "enqueued",
+           {{"run", config.run.name},
+            {"jobs", std::to_string(added)},
+            {"queue", describe_queue(config)}});
   return failure;
 }
 
@@ -204,10 +213,10 @@ std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
     hold_stop_signals();  // delivered to the loop's threads, never interrupting the job's I/O
     const LogJobScope log_scope(config.run.name, job.key, job.attempts);  // thread-local
     RunOutcome out;
-    out.failure = job.kind == "build"
-                      ? run_build_job(job, run_dir, config, out.result, &out.timings)
-                      : city::run_city_job(job, run_dir, config, queue, log, out.result,
-                                           &out.timings);
+    out.failure =
+        job.kind == "build"
+            ? run_build_job(job, run_dir, config, out.result, &out.timings)
+            : city::run_city_job(job, run_dir, config, queue, log, out.result, &out.timings);
     return out;
   });
   outcome = task.get_future();
@@ -240,8 +249,10 @@ bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seco
 
 Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& log,
                    const WorkOptions& options, WorkSummary& work) {
-  const std::filesystem::path run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
-  const std::string worker_id = options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
+  const std::filesystem::path run_dir =
+      std::filesystem::path(config.run.output) / "runs" / config.run.name;
+  const std::string worker_id =
+      options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
   // Looked at once: it lists input directories, and the loop polls every few milliseconds.
   const bool city_run = is_city_run(config);
   Failure failure;
@@ -283,7 +294,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     ops::metrics().job_claimed(job->attempts);
     const LogJobScope log_scope(config.run.name, job->key, job->attempts);  // run/job in logs
     // The lease is renewed every third of its length while the job runs.
-    LeaseHeartbeat heartbeat(queue, *job, std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
+    LeaseHeartbeat heartbeat(queue, *job,
+                             std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
     std::future<RunOutcome> outcome;
     std::thread runner = start_job(*job, run_dir, config, queue, log, outcome);
     if (!wait_within_grace(outcome, std::chrono::seconds(config.queue.grace_seconds))) {
@@ -294,8 +306,9 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       Failure released_failure;
       const bool released = queue.release(*job, released_failure);
       if (released) {
-        log.info("job", "released at shutdown",
-                 {{"job", job->key}, {"grace_seconds", std::to_string(config.queue.grace_seconds)}});
+        log.info(
+            "job", "released at shutdown",
+            {{"job", job->key}, {"grace_seconds", std::to_string(config.queue.grace_seconds)}});
       } else {
         // Lost already, or the queue is unreachable: the lease expires and another worker
         // takes the job over (this attempt then counts).
@@ -311,16 +324,19 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     heartbeat.stop();
     const RunOutcome ran = outcome.get();
     const Failure& job_failure = ran.failure;
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
     if (heartbeat.lost()) {
       // Another worker holds the job now (fencing): this attempt's outcome is not recorded.
       ops::metrics().job_finished(ops::JobOutcome::LeaseLost, seconds);
-      log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+      log.error("job", "lease lost; outcome discarded",
+                {{"job", job->key}, {"seconds", std::to_string(seconds)}});
       continue;
     }
     if (job_failure.ok()) {
-      const std::string record = with_timings(ran.result, ran.timings, seconds, worker_id, job->attempts);
+      const std::string record =
+          with_timings(ran.result, ran.timings, seconds, worker_id, job->attempts);
       const bool completed = queue.complete(*job, record, failure);
       if (failure.ok()) {
         ops::metrics().job_finished(completed ? ops::JobOutcome::Done : ops::JobOutcome::LeaseLost,
@@ -336,15 +352,19 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
         }
       } else if (failure.ok()) {
         // The lease expired between the last renewal and the completion (fencing).
-        log.error("job", "lease lost; outcome discarded", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
+        log.error("job", "lease lost; outcome discarded",
+                  {{"job", job->key}, {"seconds", std::to_string(seconds)}});
       }
     } else {
       const ErrorInfo& info = error_info(job_failure.code);
-      queue.fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable, failure);
+      queue.fail(*job, std::string(info.name) + ": " + job_failure.message, info.retryable,
+                 failure);
       const bool dead = !info.retryable || job->attempts >= config.queue.max_attempts;
       ops::metrics().job_finished(dead ? ops::JobOutcome::Dead : ops::JobOutcome::Retry, seconds);
-      log.error("job", "failed", {{"job", job->key}, {"error", info.name},
-                                  {"reason", job_failure.message}});  // attempt: LogJobScope
+      log.error("job", "failed",
+                {{"job", job->key},
+                 {"error", info.name},
+                 {"reason", job_failure.message}});  // attempt: LogJobScope
     }
     if (!failure.ok()) return failure;
     // Progress of the whole queue after each job (the run's progress display in the logs).
@@ -398,8 +418,10 @@ bool already_published(const std::filesystem::path& manifest_path, const ordered
   for (const auto& [key, value] : head.items()) {
     if (!manifest.contains(key) || manifest[key] != value) return false;
   }
-  auto present = [&](const ordered_json& entry, const char* key, const char* sha, const char* bytes) {
-    if (!entry.is_object() || !entry.contains(key) || !entry.contains(sha) || !entry.contains(bytes))
+  auto present = [&](const ordered_json& entry, const char* key, const char* sha,
+                     const char* bytes) {
+    if (!entry.is_object() || !entry.contains(key) || !entry.contains(sha) ||
+        !entry.contains(bytes))
       return false;
     std::string hex;
     std::uint64_t size = 0;
@@ -422,7 +444,8 @@ bool already_published(const std::filesystem::path& manifest_path, const ordered
 
 }  // namespace
 
-Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Logger& log, RunSummary& summary) {
+Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Logger& log,
+                    RunSummary& summary) {
   summary.run_dir = std::filesystem::path(config.run.output) / "runs" / config.run.name;
   const ops::LongStepScope long_step(ops::metrics(), "publish");  // live while publishing
   JobQueue* queue = &queue_ref;
@@ -431,7 +454,9 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   // A queue may hold several runs (one PostgreSQL database for a cluster, or one SQLite file
   // for runs sharing an output folder): a run publishes only its own jobs, whose keys are
   // "<kind>:<run name>:..." (run names have no ':').
-  auto of_this_run = [&config](const std::string& key) { return is_job_of_run(key, config.run.name); };
+  auto of_this_run = [&config](const std::string& key) {
+    return is_job_of_run(key, config.run.name);
+  };
   summary.dead.clear();
   for (DeadJob& d : queue->dead_jobs(failure)) {
     if (of_this_run(d.key)) summary.dead.push_back(std::move(d));
@@ -470,8 +495,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   }
   // The run's exports (export/), published before the manifest names them.
   RunObjects objects;
-  if (Failure f = collect_run_objects(config, results, summary.run_dir, objects); !f.ok())
-    return f;
+  if (Failure f = collect_run_objects(config, results, summary.run_dir, objects); !f.ok()) return f;
   RunIndexReport index;
   if (Failure f = write_run_index(config, objects, summary.run_dir, index); !f.ok()) return f;
   log.info("index", "written",
@@ -481,8 +505,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
             {"seconds", std::to_string(index.seconds)}});
   for (const std::string& w : index.stats.warnings) log.info("index", w);
   CityJsonReport cityjson;
-  if (Failure f = write_run_cityjson(config, objects, summary.run_dir, cityjson); !f.ok())
-    return f;
+  if (Failure f = write_run_cityjson(config, objects, summary.run_dir, cityjson); !f.ok()) return f;
   log.info("cityjson", "written",
            {{"key", cityjson.key},
             {"features", std::to_string(cityjson.stats.features)},

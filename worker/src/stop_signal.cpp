@@ -21,7 +21,8 @@ static_assert(std::atomic<int>::is_always_lock_free, "signal handlers need lock-
 // CLOCK_MONOTONIC nanoseconds of the first signal (std::chrono::steady_clock's clock on Linux;
 // clock_gettime is async-signal-safe, steady_clock::now() is not promised to be).
 std::atomic<std::int64_t> g_stop_ns{0};
-static_assert(std::atomic<std::int64_t>::is_always_lock_free, "signal handlers need lock-free atomics");
+static_assert(std::atomic<std::int64_t>::is_always_lock_free,
+              "signal handlers need lock-free atomics");
 
 extern "C" void on_stop_signal(int signal) {
   if (g_stop.load() != 0) {

@@ -16,8 +16,8 @@ void hold_stop_signals();
 /// install_stop_signals() ran (commands other than run and worker).
 void release_stop_signals();
 
-/// Installs the handlers (idempotent), then releases held signals. A second signal of either kind restores the default
-/// action, so a third one ends the process at once.
+/// Installs the handlers (idempotent), then releases held signals. A second signal of either kind
+/// restores the default action, so a third one ends the process at once.
 void install_stop_signals();
 
 /// Whether a stop was asked for since install_stop_signals().

@@ -167,10 +167,10 @@ std::optional<Proposal> propose_extrusion(const ProposalInput& in,
 /// standing on the roof (`above_roof`) or under 4 m² filled, its boundary traced, simplified,
 /// its edges snapped to the principal directions and moved onto the outermost points.
 struct RoofOutline {
-  kernel::Vec2 u{1.0, 0.0}, v{0.0, 1.0};    ///< principal frame: (a, b) = (p·u, p·v)
-  double cell = 0.0;                         ///< occupancy grid cell (1.5 × the spacing)
-  std::size_t seen_cells = 0;                ///< cells holding a roof point
-  std::vector<kernel::Vec2> profile;         ///< outer ring in (a, b), counter-clockwise
+  kernel::Vec2 u{1.0, 0.0}, v{0.0, 1.0};         ///< principal frame: (a, b) = (p·u, p·v)
+  double cell = 0.0;                             ///< occupancy grid cell (1.5 × the spacing)
+  std::size_t seen_cells = 0;                    ///< cells holding a roof point
+  std::vector<kernel::Vec2> profile;             ///< outer ring in (a, b), counter-clockwise
   std::vector<std::vector<kernel::Vec2>> holes;  ///< courtyards in (a, b), clockwise
 };
 /// nullopt when the points make no outline (too narrow, too large a grid; `why` says so
@@ -183,7 +183,7 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in,
 /// The outline's footprint in world x, y, its centre, and the terrain under it: the lowest
 /// level around it (lowest_ground_under), else the median level near it; NaN without ground.
 struct OutlineGround {
-  std::vector<kernel::Vec2> footprint;   ///< the outer ring in world x, y
+  std::vector<kernel::Vec2> footprint;         ///< the outer ring in world x, y
   kernel::Vec2 centre = kernel::Vec2::Zero();  ///< in the outline's (a, b) frame
   kernel::Vec2 world_centre = kernel::Vec2::Zero();
   double ground = NAN;

@@ -174,9 +174,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   const bool classified =
       classes.size() == points.size() &&
       std::any_of(classes.begin(), classes.end(), [](std::uint8_t c) { return c > 1; });
-  const bool by_keep = classified && std::any_of(classes.begin(), classes.end(), [&](std::uint8_t c) {
-                         return listed(options.classes.keep, c);
-                       });
+  const bool by_keep =
+      classified && std::any_of(classes.begin(), classes.end(),
+                                [&](std::uint8_t c) { return listed(options.classes.keep, c); });
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
     if (!ground[i] && classified &&

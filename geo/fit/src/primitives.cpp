@@ -293,7 +293,7 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   }
   const double coverage = coverage_of(points_, members, cell_, area);
   if (std::string why = detail::unsupported(spec, kernel::bounding_box(solid.value()), coverage,
-                                           region_box_, cell_, o_);
+                                            region_box_, cell_, o_);
       !why.empty()) {
     out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
     return;

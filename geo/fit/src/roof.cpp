@@ -131,8 +131,7 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
             ny = static_cast<int>((b1 - b0) / cell) + 5;
   const double ga = a0 - 2.0 * cell, gb = b0 - 2.0 * cell;  // grid origin (two empty cells)
   auto index = [&](int i, int j) {
-    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
-           static_cast<std::size_t>(i);
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i);
   };
   // Clamped in double to one cell outside the grid, so any finite point converts safely.
   auto cell_of = [&](const Vec2& p) {
@@ -287,9 +286,8 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
         const std::size_t prev = (k + m - 1) % m;
         const double det = normal[prev].x() * normal[k].y() - normal[prev].y() * normal[k].x();
         if (std::abs(det) > std::sin(10.0 * std::numbers::pi / 180.0)) {
-          refined.emplace_back(
-              (offset[prev] * normal[k].y() - offset[k] * normal[prev].y()) / det,
-              (normal[prev].x() * offset[k] - normal[k].x() * offset[prev]) / det);
+          refined.emplace_back((offset[prev] * normal[k].y() - offset[k] * normal[prev].y()) / det,
+                               (normal[prev].x() * offset[k] - normal[k].x() * offset[prev]) / det);
         } else {
           const Vec2 p = simple[k];
           refined.push_back(p + (offset[k] - p.dot(normal[k])) * normal[k]);
@@ -351,8 +349,8 @@ OutlineGround outline_ground(const RoofOutline& outline, const GroundGrid& groun
   if (!std::isfinite(out.ground)) {
     double radius = 0.0;
     for (const auto& q : outline.profile) radius = std::max(radius, (q - out.centre).norm());
-    out.ground = ground.median_near(out.world_centre.x(), out.world_centre.y(),
-                                    radius + 2.0 * ground.cell);
+    out.ground =
+        ground.median_near(out.world_centre.x(), out.world_centre.y(), radius + 2.0 * ground.cell);
   }
   return out;
 }

@@ -215,9 +215,10 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
   const auto& ha = a.datum.to_wgs84;
   const auto& hb = b.datum.to_wgs84;
   if (a.datum.to_wgs84_pipeline != b.datum.to_wgs84_pipeline) {
-    return both("datum transformation to WGS 84 (PROJ)",
-                a.datum.to_wgs84_pipeline.empty() ? a.datum.to_wgs84_source : a.datum.to_wgs84_pipeline,
-                b.datum.to_wgs84_pipeline.empty() ? b.datum.to_wgs84_source : b.datum.to_wgs84_pipeline);
+    return both(
+        "datum transformation to WGS 84 (PROJ)",
+        a.datum.to_wgs84_pipeline.empty() ? a.datum.to_wgs84_source : a.datum.to_wgs84_pipeline,
+        b.datum.to_wgs84_pipeline.empty() ? b.datum.to_wgs84_source : b.datum.to_wgs84_pipeline);
   }
   if (ha.has_value() != hb.has_value()) {
     return both("datum shift to WGS 84", ha ? a.datum.to_wgs84_source : "unknown",

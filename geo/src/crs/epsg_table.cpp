@@ -154,13 +154,12 @@ Crs japan_plane_rectangular(int code, int zone) {
       {36, 0, 136, 0},  {36, 0, 137, 10}, {36, 0, 138, 30}, {36, 0, 139, 50}, {40, 0, 140, 50},
       {44, 0, 140, 15}, {44, 0, 142, 15}, {44, 0, 144, 15}, {26, 0, 142, 0},  {26, 0, 127, 30},
       {26, 0, 124, 0},  {26, 0, 131, 0},  {20, 0, 136, 0},  {26, 0, 154, 0}};
-  static const char* const kRoman[19] = {"I",    "II",  "III", "IV",   "V",     "VI", "VII",
-                                         "VIII", "IX",  "X",   "XI",   "XII",   "XIII", "XIV",
+  static const char* const kRoman[19] = {"I",    "II",  "III",  "IV",    "V",   "VI",   "VII",
+                                         "VIII", "IX",  "X",    "XI",    "XII", "XIII", "XIV",
                                          "XV",   "XVI", "XVII", "XVIII", "XIX"};
   const auto& o = kOrigins[zone - 1];
-  return projected(code,
-                   std::string("JGD2011 / Japan Plane Rectangular CS ") + kRoman[zone - 1], 6668,
-                   tm(dms(o[0], o[1]), dms(o[2], o[3]), 0.9999, 0, 0));
+  return projected(code, std::string("JGD2011 / Japan Plane Rectangular CS ") + kRoman[zone - 1],
+                   6668, tm(dms(o[0], o[1]), dms(o[2], o[3]), 0.9999, 0, 0));
 }
 
 std::optional<Crs> projected_from_epsg(int code) {

@@ -43,8 +43,8 @@ std::string proj_string_of(const Crs& crs) {
              " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
     case ProjectionMethod::LambertConicConformal1SP:
       return "+proj=lcc +lat_1=" + n(p.latitude_of_origin_deg) +
-             " +lat_0=" + n(p.latitude_of_origin_deg) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k_0=" + n(p.scale_factor) + origin;
+             " +lat_0=" + n(p.latitude_of_origin_deg) + " +lon_0=" + n(p.longitude_of_origin_deg) +
+             " +k_0=" + n(p.scale_factor) + origin;
     case ProjectionMethod::LambertConicConformal2SP:
       return "+proj=lcc +lat_1=" + n(p.standard_parallel_1_deg) +
              " +lat_2=" + n(p.standard_parallel_2_deg) + " +lat_0=" + n(p.latitude_of_origin_deg) +

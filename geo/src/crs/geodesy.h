@@ -66,8 +66,8 @@ class CrsMath {
   Crs crs_;
   std::unique_ptr<ProjectionEngine> engine_;  // null for geographic and geocentric CRSs
   std::shared_ptr<const GeographicLib::Geocentric> earth_;  // geocentric CRSs: the ellipsoid
-  double xy_to_metres_ = 1.0;                 // projected
-  double xy_to_degrees_ = 1.0;                // geographic
+  double xy_to_metres_ = 1.0;                               // projected
+  double xy_to_degrees_ = 1.0;                              // geographic
   double z_to_metres_ = 1.0;
   double prime_meridian_deg_ = 0.0;
 };

@@ -524,8 +524,7 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
           deg({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}).value_or(0.0);
       const double fe = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
       const double fn = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
-      const std::string common =
-          " +lon_0=" + n(lon0) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
+      const std::string common = " +lon_0=" + n(lon0) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
       std::string text;
       switch (ct) {
         case 7:
@@ -549,8 +548,8 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
                              "ProjCoordTransGeoKey 11 (Albers) needs ProjStdParallel1GeoKey "
                              "(3078) and ProjStdParallel2GeoKey (3079)");
           }
-          text = "+proj=aea +lat_1=" + n(*sp1) + " +lat_2=" + n(*sp2) + " +lat_0=" + n(lat0) +
-                 common;
+          text =
+              "+proj=aea +lat_1=" + n(*sp1) + " +lat_2=" + n(*sp2) + " +lat_0=" + n(lat0) + common;
           p.method_name = "Albers Equal Area";
           break;
         }
@@ -559,8 +558,9 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
           p.method_name = "Azimuthal Equidistant";
           break;
         case 14:
-          text = "+proj=stere +lat_0=" + n(lat0) + " +k_0=" +
-                 n(keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0)) + common;
+          text = "+proj=stere +lat_0=" + n(lat0) +
+                 " +k_0=" + n(keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0)) +
+                 common;
           p.method_name = "Stereographic";
           break;
         case 17:

@@ -8,9 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <GeographicLib/Geocentric.hpp>

@@ -9,11 +9,11 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
-#include <string_view>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <string>
+#include <string_view>
 
 #include "crs/crs_internal.h"
 #include "crs/proj_context.h"
@@ -73,8 +73,7 @@ bool best_shift_to_wgs84(const PJ* geodetic, double values[7], std::string& pipe
       // Not a Helmert: keep PROJ's own pipeline when it can run here (its grids found).
       if (proj_coordoperation_is_instantiable(ctx, op.p) == 0) continue;
       Object normal(proj_normalize_for_visualization(ctx, op.p));
-      const char* text =
-          normal ? proj_as_proj_string(ctx, normal.p, PJ_PROJ_5, nullptr) : nullptr;
+      const char* text = normal ? proj_as_proj_string(ctx, normal.p, PJ_PROJ_5, nullptr) : nullptr;
       if (text == nullptr) continue;
       pipeline = text;
       found = true;
@@ -171,7 +170,8 @@ kernel::Result<Crs> projected_by_proj(const PJ* crs, const std::string& what) {
   const std::string name = text_of(proj_get_name(crs));
   Object geodetic(proj_crs_get_geodetic_crs(ctx, crs));
   if (!geodetic) {
-    return kernel::Error{kernel::ErrorCode::Unsupported, what + " (" + name + ") has no base geodetic CRS"};
+    return kernel::Error{kernel::ErrorCode::Unsupported,
+                         what + " (" + name + ") has no base geodetic CRS"};
   }
   auto base = crs_from_wkt_own(wkt1_of(geodetic.p));
   if (!base.ok()) {
@@ -184,14 +184,16 @@ kernel::Result<Crs> projected_by_proj(const PJ* crs, const std::string& what) {
   double factor = 0.0;
   const char* unit_name = nullptr;
   const char* unit_code = nullptr;
-  if (!cs || proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name,
-                                   nullptr, &unit_code) == 0 ||
+  if (!cs ||
+      proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
+                            &unit_code) == 0 ||
       !(factor > 0) || !std::isfinite(factor)) {
     return kernel::Error{kernel::ErrorCode::Unsupported,
                          what + " (" + name + "): PROJ gives no unit for its axes"};
   }
   out.linear_unit = linear_unit_from_size(text_of(unit_name), factor);
-  if (unit_code != nullptr && out.linear_unit.epsg == 0) out.linear_unit.epsg = std::atoi(unit_code);
+  if (unit_code != nullptr && out.linear_unit.epsg == 0)
+    out.linear_unit.epsg = std::atoi(unit_code);
   Object conversion(proj_crs_get_coordoperation(ctx, crs));
   const char* method = nullptr;
   if (conversion) proj_coordoperation_get_method_info(ctx, conversion.p, &method, nullptr, nullptr);
@@ -209,7 +211,8 @@ kernel::Result<Crs> projected_by_proj(const PJ* crs, const std::string& what) {
   out.epsg = 0;
   const char* auth = proj_get_id_auth_name(crs, 0);
   const char* code = proj_get_id_code(crs, 0);
-  if (auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG") out.epsg = std::atoi(code);
+  if (auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG")
+    out.epsg = std::atoi(code);
   out.projection = std::move(p);
   out.angular_unit = degree_unit();
   return out;
@@ -224,14 +227,16 @@ kernel::Result<Crs> geocentric_of(const PJ* crs, const std::string& what) {
   out.name = text_of(proj_get_name(crs));
   const char* auth = proj_get_id_auth_name(crs, 0);
   const char* code = proj_get_id_code(crs, 0);
-  out.epsg = auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG" ? std::atoi(code) : 0;
+  out.epsg =
+      auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG" ? std::atoi(code) : 0;
   Object datum(proj_crs_get_datum_forced(ctx, crs));
   Object ellipsoid(proj_get_ellipsoid(ctx, crs));
   double a = 0, b = 0, rf = 0;
   int computed = 0;
   if (!datum || !ellipsoid ||
       proj_ellipsoid_get_parameters(ctx, ellipsoid.p, &a, &b, &computed, &rf) == 0) {
-    return kernel::Error{kernel::ErrorCode::Unsupported, what + " (" + out.name + "): PROJ gives no datum"};
+    return kernel::Error{kernel::ErrorCode::Unsupported,
+                         what + " (" + out.name + "): PROJ gives no datum"};
   }
   const char* datum_code = proj_get_id_code(datum.p, 0);
   if (auto known = datum_code != nullptr ? datum_from_epsg(std::atoi(datum_code)) : std::nullopt) {
@@ -262,10 +267,12 @@ kernel::Result<Crs> geocentric_of(const PJ* crs, const std::string& what) {
   Object cs(proj_crs_get_coordinate_system(ctx, crs));
   double factor = 0.0;
   const char* unit_name = nullptr;
-  if (!cs || proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name,
-                                   nullptr, nullptr) == 0 ||
+  if (!cs ||
+      proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
+                            nullptr) == 0 ||
       !(factor > 0)) {
-    return kernel::Error{kernel::ErrorCode::Unsupported, what + " (" + out.name + "): PROJ gives no unit"};
+    return kernel::Error{kernel::ErrorCode::Unsupported,
+                         what + " (" + out.name + "): PROJ gives no unit"};
   }
   out.linear_unit = linear_unit_from_size(text_of(unit_name), factor);
   out.source = what;
@@ -288,9 +295,9 @@ kernel::Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
                      type == PJ_TYPE_GEOGRAPHIC_3D_CRS || type == PJ_TYPE_GEODETIC_CRS ||
                      type == PJ_TYPE_COMPOUND_CRS;
   if (!known) {
-    return kernel::Error{kernel::ErrorCode::Unsupported,
-                         what + " (" + name +
-                             ") is no geographic, projected, geocentric or compound CRS"};
+    return kernel::Error{
+        kernel::ErrorCode::Unsupported,
+        what + " (" + name + ") is no geographic, projected, geocentric or compound CRS"};
   }
   auto parsed = crs_from_wkt_own(wkt1_of(crs));
   if (parsed.ok()) {
@@ -305,12 +312,14 @@ kernel::Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
   if (type == PJ_TYPE_COMPOUND_CRS) {
     Object horizontal(proj_crs_get_sub_crs(ctx, crs, 0));
     Object vertical(proj_crs_get_sub_crs(ctx, crs, 1));
-    if (!horizontal) return kernel::Error{kernel::ErrorCode::Unsupported, what + ": empty compound CRS"};
+    if (!horizontal)
+      return kernel::Error{kernel::ErrorCode::Unsupported, what + ": empty compound CRS"};
     auto h = crs_from_pj(horizontal.p, what);
     if (!h.ok()) return h;
     Crs out = std::move(h).value();
     if (out.kind == CrsKind::Geocentric) {
-      return kernel::Error{kernel::ErrorCode::Unsupported, what + ": a geocentric CRS in a compound CRS"};
+      return kernel::Error{kernel::ErrorCode::Unsupported,
+                           what + ": a geocentric CRS in a compound CRS"};
     }
     if (vertical && proj_get_type(vertical.p) == PJ_TYPE_VERTICAL_CRS) {
       const char* vcode = proj_get_id_code(vertical.p, 0);
@@ -320,8 +329,9 @@ kernel::Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
       Object cs(proj_crs_get_coordinate_system(ctx, vertical.p));
       double factor = 0.0;
       const char* unit_name = nullptr;
-      if (cs && proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor,
-                                      &unit_name, nullptr, nullptr) != 0 &&
+      if (cs &&
+          proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name,
+                                nullptr, nullptr) != 0 &&
           factor > 0) {
         v.unit = linear_unit_from_size(text_of(unit_name), factor);
       }
@@ -412,7 +422,8 @@ std::string proj_projected_wkt1(const Crs& crs) {
                                         : " +a=" + format_number(e.semi_major_m) +
                                               " +rf=" + format_number(e.inverse_flattening);
   }
-  if (crs.datum.prime_meridian_deg != 0.0) text += " +pm=" + format_number(crs.datum.prime_meridian_deg);
+  if (crs.datum.prime_meridian_deg != 0.0)
+    text += " +pm=" + format_number(crs.datum.prime_meridian_deg);
   if (crs.datum.to_wgs84 && !crs.datum.to_wgs84->is_null()) {
     const Helmert7& h = *crs.datum.to_wgs84;  // +towgs84 is position vector: negate rotations
     text += " +towgs84=" + format_number(h.tx_m) + "," + format_number(h.ty_m) + "," +

@@ -58,7 +58,8 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
     const int n = degree + 1;
     // Values at the Chebyshev nodes.
     std::vector<double> nodes(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) nodes[static_cast<std::size_t>(i)] = std::cos(std::numbers::pi * (i + 0.5) / n);
+    for (int i = 0; i < n; ++i)
+      nodes[static_cast<std::size_t>(i)] = std::cos(std::numbers::pi * (i + 0.5) / n);
     std::vector<std::array<double, kComponents>> values(static_cast<std::size_t>(n * n));
     for (int l = 0; l < n; ++l) {
       for (int i = 0; i < n; ++i) {
@@ -66,9 +67,11 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
         const double y = m.cy_ + hy * nodes[static_cast<std::size_t>(l)];
         // P and Q from the two ends of the z range: rounding noise is not amplified by z.
         auto f0 = exact(x, y, z0);
-        if (!f0.ok()) return Error{ErrorCode::InvalidArgument, "tile mapping: " + f0.error().message};
+        if (!f0.ok())
+          return Error{ErrorCode::InvalidArgument, "tile mapping: " + f0.error().message};
         auto f1 = exact(x, y, z1);
-        if (!f1.ok()) return Error{ErrorCode::InvalidArgument, "tile mapping: " + f1.error().message};
+        if (!f1.ok())
+          return Error{ErrorCode::InvalidArgument, "tile mapping: " + f1.error().message};
         const Vec3 q = (f1.value() - f0.value()) / (z1 - z0);
         const Vec3 p = f0.value() - z0 * q;
         values[static_cast<std::size_t>(l * n + i)] = {p.x(), p.y(), p.z(), q.x(), q.y(), q.z()};
@@ -79,7 +82,8 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
     for (int i = 0; i < n; ++i) {
       std::vector<double> t(static_cast<std::size_t>(n));
       chebyshev(nodes[static_cast<std::size_t>(i)], degree, t.data());
-      for (int j = 0; j < n; ++j) tx[static_cast<std::size_t>(j * n + i)] = t[static_cast<std::size_t>(j)];
+      for (int j = 0; j < n; ++j)
+        tx[static_cast<std::size_t>(j * n + i)] = t[static_cast<std::size_t>(j)];
     }
     m.degree_ = degree;
     m.coefficients_.assign(static_cast<std::size_t>(n * n * kComponents), 0.0);
@@ -91,7 +95,8 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
           for (int l = 0; l < n; ++l) {
             for (int i = 0; i < n; ++i) {
               sum += values[static_cast<std::size_t>(l * n + i)][static_cast<std::size_t>(c)] *
-                     tx[static_cast<std::size_t>(j * n + i)] * tx[static_cast<std::size_t>(k * n + l)];
+                     tx[static_cast<std::size_t>(j * n + i)] *
+                     tx[static_cast<std::size_t>(k * n + l)];
             }
           }
           m.coefficients_[static_cast<std::size_t>((k * n + j) * kComponents + c)] = weight * sum;
@@ -107,7 +112,8 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
         const double y = box.min.y() + (box.max.y() - box.min.y()) * b / g;
         for (double z : {box.min.z(), box.max.z()}) {
           auto e = exact(x, y, z);
-          if (!e.ok()) return Error{ErrorCode::InvalidArgument, "tile mapping: " + e.error().message};
+          if (!e.ok())
+            return Error{ErrorCode::InvalidArgument, "tile mapping: " + e.error().message};
           worst = std::max(worst, (m.evaluate(Vec3(x, y, z)) - e.value()).norm());
         }
       }
@@ -117,9 +123,9 @@ Result<TileMapping> TileMapping::fit(const Georeferencer& georeferencer, const B
       return m;
     }
   }
-  return Error{ErrorCode::Unsupported,
-               "tile mapping: degree " + std::to_string(kMaxDegree) + " does not reach " +
-                   std::to_string(max_error_m) + " m over this box; use smaller tiles"};
+  return Error{ErrorCode::Unsupported, "tile mapping: degree " + std::to_string(kMaxDegree) +
+                                           " does not reach " + std::to_string(max_error_m) +
+                                           " m over this box; use smaller tiles"};
 }
 
 Vec3 TileMapping::evaluate(const Vec3& p) const {
@@ -136,7 +142,9 @@ Vec3 TileMapping::evaluate(const Vec3& p) const {
       for (int q = 0; q < kComponents; ++q) row[static_cast<std::size_t>(q)] += c[q] * t;
       c += kComponents;
     }
-    for (int q = 0; q < kComponents; ++q) acc[static_cast<std::size_t>(q)] += row[static_cast<std::size_t>(q)] * tt[static_cast<std::size_t>(k)];
+    for (int q = 0; q < kComponents; ++q)
+      acc[static_cast<std::size_t>(q)] +=
+          row[static_cast<std::size_t>(q)] * tt[static_cast<std::size_t>(k)];
   }
   return Vec3(acc[0] + p.z() * acc[3], acc[1] + p.z() * acc[4], acc[2] + p.z() * acc[5]);
 }
@@ -159,9 +167,9 @@ Status TileMapping::to_local(std::span<const Vec3> in, std::span<Vec3> out) cons
     out[i] = to_local(in[i]);
     if (!out[i].allFinite()) {
       auto checked = georeferencer_.to_local_checked(in[i]);
-      return Status(ErrorCode::InvalidArgument,
-                    "point " + std::to_string(i) + ": " +
-                        (checked.ok() ? std::string("non-finite result") : checked.error().message));
+      return Status(ErrorCode::InvalidArgument, "point " + std::to_string(i) + ": " +
+                                                    (checked.ok() ? std::string("non-finite result")
+                                                                  : checked.error().message));
     }
   }
   return Status();

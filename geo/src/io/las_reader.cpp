@@ -181,10 +181,10 @@ struct Parsed {
   std::vector<LasRecord> evlrs;
   LasCrsRecords crs;
   Decoding decoding;
-  std::uint64_t readable = 0;  // complete records that will be read
+  std::uint64_t readable = 0;                    // complete records that will be read
   std::unique_ptr<detail::laz::LazRecords> laz;  // compressed point data (LAZ, COPC)
-  std::optional<CopcInfo> copc;                   // COPC files
-  std::optional<std::size_t> copc_nodes_read;     // a COPC query: nodes selected
+  std::optional<CopcInfo> copc;                  // COPC files
+  std::optional<std::size_t> copc_nodes_read;    // a COPC query: nodes selected
 };
 
 // The chunks of the COPC nodes a region (and a depth) selects, renumbered as one run of
@@ -382,8 +382,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   }
   const bool compressed = laszip != nullptr;
   if (laszip != nullptr && !compressed_bit) {
-    warnings.push_back(name + ": a laszip VLR without the compression bit in the point format "
-                              "id; read as LAZ");
+    warnings.push_back(name +
+                       ": a laszip VLR without the compression bit in the point format "
+                       "id; read as LAZ");
   }
 
   // Point format and record length.
@@ -669,7 +670,9 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     }
   }
   info.format = PointFileFormat::Las;
-  info.description = std::string(copc ? "COPC (LAZ " : compressed ? "LAZ (LAS " : "LAS ") +
+  info.description = std::string(copc         ? "COPC (LAZ "
+                                 : compressed ? "LAZ (LAS "
+                                              : "LAS ") +
                      num(h.version_major) + "." + num(h.version_minor) + (compressed ? ")" : "") +
                      " point format " + num(h.point_format);
   if (compressed) info.description += ", " + s.laz->spec().describe();

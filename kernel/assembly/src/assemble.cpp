@@ -36,7 +36,8 @@ struct Components {
   explicit Components(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
   int root(int x) {
     while (parent[static_cast<std::size_t>(x)] != x) {
-      parent[static_cast<std::size_t>(x)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
+      parent[static_cast<std::size_t>(x)] =
+          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(x)])];
       x = parent[static_cast<std::size_t>(x)];
     }
     return x;
@@ -50,14 +51,16 @@ struct Components {
 
 kernel::Status check_options(const AssemblyOptions& o) {
   if (!(o.voxel_size > 0) || !std::isfinite(o.voxel_size)) {
-    return kernel::Status(ErrorCode::InvalidArgument, "assembly: voxel size must be finite and > 0");
+    return kernel::Status(ErrorCode::InvalidArgument,
+                          "assembly: voxel size must be finite and > 0");
   }
   if (!(o.tolerance > 0) || !std::isfinite(o.tolerance)) {
     return kernel::Status(ErrorCode::InvalidArgument, "assembly: tolerance must be finite and > 0");
   }
   if (o.cell) {
     if (!(o.cell->size > 0) || !std::isfinite(o.cell->size)) {
-      return kernel::Status(ErrorCode::InvalidArgument, "assembly: cell size must be finite and > 0");
+      return kernel::Status(ErrorCode::InvalidArgument,
+                            "assembly: cell size must be finite and > 0");
     }
     if (!(o.cell->halo >= 0) || !std::isfinite(o.cell->halo)) {
       return kernel::Status(ErrorCode::InvalidArgument, "assembly: halo must be finite and >= 0");
@@ -188,7 +191,8 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   std::vector<std::string> verdict_error(survivors.size());
   tbb::parallel_for(std::size_t{0}, survivors.size(), [&](std::size_t k) {
     const auto [a, b] = survivors[k];
-    auto r = kernel::solid_interference(shapes[static_cast<std::size_t>(a)], shapes[static_cast<std::size_t>(b)], bopt);
+    auto r = kernel::solid_interference(shapes[static_cast<std::size_t>(a)],
+                                        shapes[static_cast<std::size_t>(b)], bopt);
     if (r.ok()) {
       verdict[k] = r.value();
     } else {
@@ -275,14 +279,16 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     }
     if (o.reaches_past_halo) {
       ++st.objects_past_halo;
-      out.problems.push_back("object " + o.id + " reaches past the halo: widen the halo or the cell");
+      out.problems.push_back("object " + o.id +
+                             " reaches past the halo: widen the halo or the cell");
     }
   }
   for (const Contact& c : contacts) {
     if (published[static_cast<std::size_t>(c.a)]) out.contacts.push_back(c);
   }
-  std::sort(out.contacts.begin(), out.contacts.end(),
-            [](const Contact& x, const Contact& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+  std::sort(out.contacts.begin(), out.contacts.end(), [](const Contact& x, const Contact& y) {
+    return std::tie(x.a, x.b) < std::tie(y.a, y.b);
+  });
   st.objects = static_cast<long long>(out.objects.size());
   st.seconds_fuse = seconds_since(t0);
   st.seconds_total = seconds_since(t_start);

@@ -12,7 +12,8 @@ std::vector<std::pair<int, int>> overlapping_boxes(const std::vector<kernel::Bou
     if (!boxes[i].empty()) order.push_back(static_cast<int>(i));
   }
   std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const double xa = boxes[static_cast<std::size_t>(a)].min.x(), xb = boxes[static_cast<std::size_t>(b)].min.x();
+    const double xa = boxes[static_cast<std::size_t>(a)].min.x(),
+                 xb = boxes[static_cast<std::size_t>(b)].min.x();
     return xa < xb || (xa == xb && a < b);
   });
   std::vector<std::pair<int, int>> pairs;
@@ -21,7 +22,8 @@ std::vector<std::pair<int, int>> overlapping_boxes(const std::vector<kernel::Bou
     for (std::size_t m = k + 1; m < order.size(); ++m) {
       const kernel::BoundingBox& b = boxes[static_cast<std::size_t>(order[m])];
       if (b.min.x() > a.max.x()) break;
-      if (a.intersects(b)) pairs.emplace_back(std::min(order[k], order[m]), std::max(order[k], order[m]));
+      if (a.intersects(b))
+        pairs.emplace_back(std::min(order[k], order[m]), std::max(order[k], order[m]));
     }
   }
   std::sort(pairs.begin(), pairs.end());

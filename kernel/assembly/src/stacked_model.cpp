@@ -26,8 +26,8 @@ kernel::Result<CsgModel> stacked_model(const std::vector<const CsgModel*>& model
     for (std::size_t f = 0; f < faces.size(); ++f) {
       const std::size_t before = known.size();
       if (known.add(faces[f]) != before) continue;
-      std::vector<kernel::FaceSource> list = f < m->face_sources.size() ? m->face_sources[f]
-                                                                        : std::vector<kernel::FaceSource>{};
+      std::vector<kernel::FaceSource> list =
+          f < m->face_sources.size() ? m->face_sources[f] : std::vector<kernel::FaceSource>{};
       for (kernel::FaceSource& s : list) s.node += offset;
       sources.push_back(std::move(list));
     }

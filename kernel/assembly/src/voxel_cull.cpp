@@ -34,8 +34,8 @@ void initialise_openvdb() {
 
 // The point of triangle (a, b, c) closest to p (by the Voronoi regions of its vertices,
 // edges and face).
-kernel::Vec3 closest_on_triangle(const kernel::Vec3& p, const kernel::Vec3& a, const kernel::Vec3& b,
-                                 const kernel::Vec3& c) {
+kernel::Vec3 closest_on_triangle(const kernel::Vec3& p, const kernel::Vec3& a,
+                                 const kernel::Vec3& b, const kernel::Vec3& c) {
   const kernel::Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return a;
@@ -50,7 +50,8 @@ kernel::Vec3 closest_on_triangle(const kernel::Vec3& p, const kernel::Vec3& a, c
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
   const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
   const double denom = 1.0 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
@@ -68,9 +69,9 @@ struct VoxelCuller::Impl {
   double chordal = 0.1;
   double margin = 0.0;
   openvdb::math::Transform::Ptr transform;
-  std::vector<kernel::BoundingBox> boxes;     // exact boxes, enlarged by the tolerance
-  std::vector<ShellGrid::Ptr> masks;  // null: not voxelised
-  std::vector<char> whole;                    // could not be voxelised: may meet anything
+  std::vector<kernel::BoundingBox> boxes;  // exact boxes, enlarged by the tolerance
+  std::vector<ShellGrid::Ptr> masks;       // null: not voxelised
+  std::vector<char> whole;                 // could not be voxelised: may meet anything
 };
 
 VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_unique<Impl>()) {
@@ -80,7 +81,8 @@ VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_
   impl_->chordal = impl_->voxel / 4;
   // Half a voxel diagonal (a contact point to its voxel's centre) + the mesh's distance from
   // the exact surface + the contact tolerance + 1% of a voxel for rounding.
-  impl_->margin = std::sqrt(3.0) / 2 * impl_->voxel + impl_->chordal + tolerance + 0.01 * impl_->voxel;
+  impl_->margin =
+      std::sqrt(3.0) / 2 * impl_->voxel + impl_->chordal + tolerance + 0.01 * impl_->voxel;
   impl_->transform = openvdb::math::Transform::createLinearTransform(impl_->voxel);
 }
 
@@ -88,14 +90,16 @@ VoxelCuller::~VoxelCuller() = default;
 VoxelCuller::VoxelCuller(VoxelCuller&&) noexcept = default;
 VoxelCuller& VoxelCuller::operator=(VoxelCuller&&) noexcept = default;
 
-void VoxelCuller::build(const std::vector<kernel::Shape>& shapes, const std::vector<std::pair<int, int>>& pairs) {
+void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
+                        const std::vector<std::pair<int, int>>& pairs) {
   Impl& d = *impl_;
   const std::size_t n = shapes.size();
   d.masks.assign(n, nullptr);
   d.whole.assign(n, 0);
   d.boxes.assign(n, kernel::BoundingBox{});
   std::vector<char> used(n, 0);
-  for (const auto& [a, b] : pairs) used[static_cast<std::size_t>(a)] = used[static_cast<std::size_t>(b)] = 1;
+  for (const auto& [a, b] : pairs)
+    used[static_cast<std::size_t>(a)] = used[static_cast<std::size_t>(b)] = 1;
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     if (!used[i] || shapes[i].is_null()) return;
     d.boxes[i] = kernel::bounding_box(shapes[i]);
@@ -134,7 +138,8 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes, const std::vec
     auto access = mask->getAccessor();
     const double h = d.voxel, m2 = d.margin * d.margin;
     for (const auto& t : mesh->triangles) {
-      const kernel::Vec3 &p0 = mesh->vertices[t[0]], &p1 = mesh->vertices[t[1]], &p2 = mesh->vertices[t[2]];
+      const kernel::Vec3 &p0 = mesh->vertices[t[0]], &p1 = mesh->vertices[t[1]],
+                         &p2 = mesh->vertices[t[2]];
       kernel::BoundingBox tb;
       tb.add(p0);
       tb.add(p1);
@@ -143,9 +148,11 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes, const std::vec
       for (const kernel::BoundingBox& r : regions[i]) {
         if (!r.intersects(tb)) continue;
         const kernel::Vec3 lo = tb.min.cwiseMax(r.min), hi = tb.max.cwiseMin(r.max);
-        const openvdb::Coord c0(static_cast<int>(std::ceil(lo.x() / h)), static_cast<int>(std::ceil(lo.y() / h)),
+        const openvdb::Coord c0(static_cast<int>(std::ceil(lo.x() / h)),
+                                static_cast<int>(std::ceil(lo.y() / h)),
                                 static_cast<int>(std::ceil(lo.z() / h)));
-        const openvdb::Coord c1(static_cast<int>(std::floor(hi.x() / h)), static_cast<int>(std::floor(hi.y() / h)),
+        const openvdb::Coord c1(static_cast<int>(std::floor(hi.x() / h)),
+                                static_cast<int>(std::floor(hi.y() / h)),
                                 static_cast<int>(std::floor(hi.z() / h)));
         for (int x = c0.x(); x <= c1.x(); ++x) {
           for (int y = c0.y(); y <= c1.y(); ++y) {
@@ -153,7 +160,8 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes, const std::vec
               const openvdb::Coord c(x, y, z);
               if (access.isValueOn(c)) continue;
               const kernel::Vec3 q(x * h, y * h, z * h);
-              if ((closest_on_triangle(q, p0, p1, p2) - q).squaredNorm() <= m2) access.setValueOn(c);
+              if ((closest_on_triangle(q, p0, p1, p2) - q).squaredNorm() <= m2)
+                access.setValueOn(c);
             }
           }
         }

@@ -70,7 +70,8 @@ Result<PreparedArgument> prepare_argument(const Shape& argument, const BooleanOp
   auto traced_solid = [&](const Shape& solid) {
     Traced t{solid, {}};
     const ShapeIndex faces = map_child_shapes(solid, ShapeKind::Face);
-    for (const Shape& f : faces.shapes()) t.faces.push_back({static_cast<int>(argument_faces.find(f))});
+    for (const Shape& f : faces.shapes())
+      t.faces.push_back({static_cast<int>(argument_faces.find(f))});
     return t;
   };
   auto fuse = [&](const Traced& x, const Traced& y) -> Result<Traced> {
@@ -124,7 +125,8 @@ void restate_origins(std::vector<std::vector<FaceOrigin>>& origins, const Prepar
         restated.push_back(o);
         continue;
       }
-      for (int f : from.faces.at(static_cast<std::size_t>(o.face))) restated.push_back({o.operand, f});
+      for (int f : from.faces.at(static_cast<std::size_t>(o.face)))
+        restated.push_back({o.operand, f});
     }
     std::sort(restated.begin(), restated.end());
     restated.erase(std::unique(restated.begin(), restated.end()), restated.end());

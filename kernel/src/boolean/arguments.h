@@ -14,11 +14,13 @@ namespace csgtile::kernel::detail {
 
 /// The engine on arguments that are already prepared (primitives, Boolean results, and
 /// whatever prepare_argument returns). `origins` is filled when not null.
-Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options,
+Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op,
+                         const BooleanOptions& options,
                          std::vector<std::vector<FaceOrigin>>* origins);
 
 /// The engine's contact test of two prepared shapes (solid_interference without the box test).
-Result<Interference> run_interference(const Shape& a, const Shape& b, const BooleanOptions& options);
+Result<Interference> run_interference(const Shape& a, const Shape& b,
+                                      const BooleanOptions& options);
 
 /// An argument ready for the engine.
 struct PreparedArgument {

@@ -3,8 +3,8 @@
 #include "csgtile/kernel/boolean.h"
 
 #include <algorithm>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -25,10 +25,10 @@
 #include "boolean/tolerance.h"
 #include "boolean/uv_geometry.h"
 #include "check/check_internal.h"
-#include "mass/mass_internal.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "mass/mass_internal.h"
 #include "mesh/polygon_triangulation.h"
 #include "predicates/predicates.h"
 
@@ -36,9 +36,12 @@ namespace csgtile::kernel {
 
 const char* boolean_op_name(BooleanOp op) {
   switch (op) {
-    case BooleanOp::Fuse: return "fuse";
-    case BooleanOp::Common: return "common";
-    case BooleanOp::Cut: return "cut";
+    case BooleanOp::Fuse:
+      return "fuse";
+    case BooleanOp::Common:
+      return "common";
+    case BooleanOp::Cut:
+      return "cut";
   }
   return "unknown";
 }
@@ -48,7 +51,8 @@ namespace {
 using namespace detail;
 
 const char* surface_name(SurfaceKind k) {
-  static const char* kNames[] = {"plane", "cylinder", "cone", "sphere", "torus", "extrusion", "revolution"};
+  static const char* kNames[] = {"plane", "cylinder",  "cone",      "sphere",
+                                 "torus", "extrusion", "revolution"};
   return kNames[static_cast<int>(k)];
 }
 
@@ -60,8 +64,10 @@ Curve2dPtr aligned_fit(const BEdge& edge, const Surface& surface, const Vec3& po
   if (!pc) return nullptr;
   const Vec2 new_uv = pc->point(edge.curve->closest_parameter(point, edge.t0, edge.t1));
   Vec2 offset = Vec2::Zero();
-  if (surface.u_period() > 0) offset.x() = surface.u_period() * std::round((old_uv.x() - new_uv.x()) / surface.u_period());
-  if (surface.v_period() > 0) offset.y() = surface.v_period() * std::round((old_uv.y() - new_uv.y()) / surface.v_period());
+  if (surface.u_period() > 0)
+    offset.x() = surface.u_period() * std::round((old_uv.x() - new_uv.x()) / surface.u_period());
+  if (surface.v_period() > 0)
+    offset.y() = surface.v_period() * std::round((old_uv.y() - new_uv.y()) / surface.v_period());
   return shift_pcurve(pc, offset);
 }
 
@@ -87,7 +93,8 @@ class BooleanEngine {
     if (auto s = import_operand(model_, b_, 1); !s.ok()) return s.error();
     reframe_spheres();
     polygons_.resize(model_.faces.size());
-    for (std::size_t i = 0; i < model_.faces.size(); ++i) polygons_[i] = face_polygon(model_, model_.faces[i]);
+    for (std::size_t i = 0; i < model_.faces.size(); ++i)
+      polygons_[i] = face_polygon(model_, model_.faces[i]);
     unify_shared_edges();
     split_at_touching_vertices();
     if (auto s = intersect_faces(); !s.ok()) return s.error();
@@ -108,12 +115,14 @@ class BooleanEngine {
     // Vertices within tolerance of each other are one model vertex: one used by both
     // operands is a contact point.
     const std::vector<int> operand_of_vertex = operand_of_vertices();
-    if (std::find(operand_of_vertex.begin(), operand_of_vertex.end(), 2) != operand_of_vertex.end()) {
+    if (std::find(operand_of_vertex.begin(), operand_of_vertex.end(), 2) !=
+        operand_of_vertex.end()) {
       return Interference::BoundariesMeet;
     }
     reframe_spheres();
     polygons_.resize(model_.faces.size());
-    for (std::size_t i = 0; i < model_.faces.size(); ++i) polygons_[i] = face_polygon(model_, model_.faces[i]);
+    for (std::size_t i = 0; i < model_.faces.size(); ++i)
+      polygons_[i] = face_polygon(model_, model_.faces[i]);
     split_at_touching_vertices();
     if (auto s = intersect_faces(); !s.ok()) return s.error();
     for (const BFace& f : model_.faces) {
@@ -125,7 +134,8 @@ class BooleanEngine {
       if (vertices.begin() == vertices.end()) continue;
       auto classifier = SolidClassifier::create(*outer, options_.tolerance);
       if (!classifier.ok()) return classifier.error();
-      if (classifier->classify(vertex_point(*vertices.begin())) != Containment::Outside) return Interference::Nested;
+      if (classifier->classify(vertex_point(*vertices.begin())) != Containment::Outside)
+        return Interference::Nested;
     }
     return Interference::Disjoint;
   }
@@ -198,12 +208,14 @@ class BooleanEngine {
     const double tol = options_.tolerance;
     for (std::size_t f = 0; f < model_.faces.size(); ++f) {
       BFace& face = model_.faces[f];
-      if (face.surface->kind() != SurfaceKind::Sphere || face.loops.size() != 1 || face.loops[0].size() != 4) continue;
+      if (face.surface->kind() != SurfaceKind::Sphere || face.loops.size() != 1 ||
+          face.loops[0].size() != 4)
+        continue;
       const auto& sphere = static_cast<const SphereSurface&>(*face.surface);
       const Vec3 center = sphere.frame().origin;
       const double r = sphere.radius();
       // Constraints from the overlapping faces of the other operand.
-      std::vector<Vec3> axes;         // must be the sphere's axis (sphere centres, revolution axes)
+      std::vector<Vec3> axes;  // must be the sphere's axis (sphere centres, revolution axes)
       std::vector<std::pair<Vec3, bool>> planes;  // normal, passes through the centre
       bool impossible = false;
       const std::size_t lo = face.operand == 0 ? first_b_face_ : 0;
@@ -229,9 +241,11 @@ class BooleanEngine {
           case SurfaceKind::Cylinder:
           case SurfaceKind::Cone:
           case SurfaceKind::Torus: {
-            const Frame& of = other.kind() == SurfaceKind::Cylinder ? static_cast<const CylinderSurface&>(other).frame()
-                              : other.kind() == SurfaceKind::Cone   ? static_cast<const ConeSurface&>(other).frame()
-                                                                    : static_cast<const TorusSurface&>(other).frame();
+            const Frame& of = other.kind() == SurfaceKind::Cylinder
+                                  ? static_cast<const CylinderSurface&>(other).frame()
+                              : other.kind() == SurfaceKind::Cone
+                                  ? static_cast<const ConeSurface&>(other).frame()
+                                  : static_cast<const TorusSurface&>(other).frame();
             const Vec3 w = center - of.origin;
             if ((w - w.dot(of.z) * of.z).norm() > tol) impossible = true;
             axes.push_back(of.z);
@@ -280,7 +294,8 @@ class BooleanEngine {
         const Vec3 x = std::cos(phi) * base.x + std::sin(phi) * base.y;
         double score = 1.0;
         for (const auto& [n, through_center] : planes) {
-          if (through_center && across.perpendicular(n, *z)) score = std::min(score, std::abs(x.dot(n)));
+          if (through_center && across.perpendicular(n, *z))
+            score = std::min(score, std::abs(x.dot(n)));
         }
         if (score > best_score + kSeamPreference) {
           best_score = score;
@@ -308,7 +323,7 @@ class BooleanEngine {
     auto box_distance = [](const BoundingBox& b, const Vec3& p) {
       return (p - p.cwiseMax(b.min).cwiseMin(b.max)).norm();
     };
-    const Vec3 directions[] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1},  {1, -1, 1},
+    const Vec3 directions[] = {{0, 0, 1},  {1, 0, 0},  {0, 1, 0}, {1, 1, 1},  {1, -1, 1},
                                {-1, 1, 1}, {1, 1, -1}, {1, 1, 0}, {1, -1, 0}, {1, 0, 1},
                                {1, 0, -1}, {0, 1, 1},  {0, 1, -1}};
     std::vector<Vec3> candidates{sphere.frame().z};  // the current frame wins ties
@@ -355,7 +370,8 @@ class BooleanEngine {
     pole_s.v0 = pole_s.v1 = south;
     pole_n.v0 = pole_n.v1 = north;
     pole_s.tolerance = pole_n.tolerance = options_.tolerance;
-    const int es = model_.add_edge(seam), ps = model_.add_edge(pole_s), pn = model_.add_edge(pole_n);
+    const int es = model_.add_edge(seam), ps = model_.add_edge(pole_s),
+              pn = model_.add_edge(pole_n);
     face.loops = {{{ps, true, std::make_shared<Line2d>(Vec2(0, -kHalfPi), Vec2(1, 0))},
                    {es, true, std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1))},
                    {pn, false, std::make_shared<Line2d>(Vec2(0, kHalfPi), Vec2(1, 0))},
@@ -398,7 +414,9 @@ class BooleanEngine {
       box.enlarge(tol);
       for (std::size_t v = 0; v < model_.vertices.size(); ++v) {
         const int o = operand_of_vertex[v];
-        if (o == operand_of_edge[ei] || o < 0 || static_cast<int>(v) == e.v0 || static_cast<int>(v) == e.v1) continue;
+        if (o == operand_of_edge[ei] || o < 0 || static_cast<int>(v) == e.v0 ||
+            static_cast<int>(v) == e.v1)
+          continue;
         const Vec3& p = model_.vertices[v].point;
         if (!box.contains(p)) continue;
         const double t = e.curve->closest_parameter(p, e.t0, e.t1);
@@ -443,7 +461,8 @@ class BooleanEngine {
           for (int j = -kv; j <= kv; ++j) {
             if (crossing_boxes_apart(curve_box, use_box, Vec2(i * pu, j * pv), tol)) continue;
             Curve2dPtr shifted = shift_pcurve(u.pcurve, Vec2(i * pu, j * pv));
-            for (const Crossing& c : intersect_pcurves(pc, t0, t1, curve_points, *shifted, e.t0, e.t1, tol)) {
+            for (const Crossing& c :
+                 intersect_pcurves(pc, t0, t1, curve_points, *shifted, e.t0, e.t1, tol)) {
               hits.push_back({c.t, u.edge, c.s});
             }
           }
@@ -455,7 +474,8 @@ class BooleanEngine {
   // Crossing boxes of face f's boundary uses (loop order), kept while intersect_faces runs
   // (the loops do not change before split_edges).
   const std::vector<CrossingBox>& boundary_boxes(std::size_t f) {
-    if (boundary_boxes_.size() != model_.faces.size()) boundary_boxes_.assign(model_.faces.size(), {});
+    if (boundary_boxes_.size() != model_.faces.size())
+      boundary_boxes_.assign(model_.faces.size(), {});
     std::vector<CrossingBox>& boxes = boundary_boxes_[f];
     if (boxes.empty()) {
       for (const BLoop& loop : model_.faces[f].loops) {
@@ -488,7 +508,8 @@ class BooleanEngine {
       }
     }
     const double fit_tol = fit_tolerance(options_.tolerance);
-    Curve2dPtr pa = hint_a ? hint_a : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
+    Curve2dPtr pa =
+        hint_a ? hint_a : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
     Curve2dPtr pb = existing >= 0 ? nullptr
                     : hint_b      ? hint_b
                                   : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
@@ -502,7 +523,8 @@ class BooleanEngine {
           const Vec3 pole = sp.frame().origin + sign * sp.radius() * sp.frame().z;
           const double t = curve->closest_parameter(pole, t0, t1);
           const double span = param_slack(t1 - t0);
-          if ((curve->point(t) - pole).norm() <= options_.tolerance && t > t0 + span && t < t1 - span) {
+          if ((curve->point(t) - pole).norm() <= options_.tolerance && t > t0 + span &&
+              t < t1 - span) {
             folds.push_back(t);
           }
         }
@@ -531,10 +553,11 @@ class BooleanEngine {
                              std::make_shared<Polyline2d>(std::move(traced->uv_b)), deviation);
         }
       }
-      return Status(ErrorCode::Unsupported,
-                    std::string("the section of a ") + surface_name(model_.faces[fa].surface->kind()) +
-                        " and a " + surface_name(model_.faces[fb].surface->kind()) +
-                        " has no exact pcurve in this version");
+      return Status(ErrorCode::Unsupported, std::string("the section of a ") +
+                                                surface_name(model_.faces[fa].surface->kind()) +
+                                                " and a " +
+                                                surface_name(model_.faces[fb].surface->kind()) +
+                                                " has no exact pcurve in this version");
     }
     std::vector<Hit> hits;
     boundary_hits(fa, *pa, t0, t1, -1, hits);
@@ -543,7 +566,8 @@ class BooleanEngine {
     if (existing < 0 && curve->kind() == CurveKind::Polyline) {
       snap_traced_crossings(fa, fb, curve, pa, pb, t0, t1, hits, hits_on_a,
                             std::max(edge_tolerance, options_.tolerance));
-      edge_tolerance = std::max(edge_tolerance, static_cast<const PolylineCurve&>(*curve).tolerance());
+      edge_tolerance =
+          std::max(edge_tolerance, static_cast<const PolylineCurve&>(*curve).tolerance());
     }
     std::vector<double> cuts{t0, t1};
     for (const Hit& h : hits) cuts.push_back(h.t);
@@ -555,7 +579,8 @@ class BooleanEngine {
       const double mid = 0.5 * (c0 + c1);
       auto shift_a = polygons_[fa].shift_inside(pa->point(mid), uv_margin(fa) * kInsideUvSlacks);
       std::optional<Vec2> shift_b = Vec2::Zero();
-      if (existing < 0) shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * kInsideUvSlacks);
+      if (existing < 0)
+        shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * kInsideUvSlacks);
       if (existing < 0 && shift_a.has_value() != shift_b.has_value()) {
         // The piece runs inside one face along an edge of the other (an edge lying in a
         // face): that edge, or the part of it the piece covers, splits the first face.
@@ -570,8 +595,9 @@ class BooleanEngine {
       const int v1 = vertex_on_curve(*curve, c1, hits);
       int edge_id = existing;
       if (edge_id < 0) {
-        edge_id = find_edge(v0, v1, {curve->point(c0 + 0.25 * (c1 - c0)), curve->point(mid),
-                                     curve->point(c0 + 0.75 * (c1 - c0))});
+        edge_id = find_edge(v0, v1,
+                            {curve->point(c0 + 0.25 * (c1 - c0)), curve->point(mid),
+                             curve->point(c0 + 0.75 * (c1 - c0))});
         if (edge_id < 0) {
           BEdge e;
           e.curve = curve;
@@ -601,7 +627,8 @@ class BooleanEngine {
         }
       }
       add_extra(fa, edge_id, refit_for(edge_id, fa, shift_pcurve(pa, *shift_a), curve));
-      if (existing < 0) add_extra(fb, edge_id, refit_for(edge_id, fb, shift_pcurve(pb, *shift_b), curve));
+      if (existing < 0)
+        add_extra(fb, edge_id, refit_for(edge_id, fb, shift_pcurve(pb, *shift_b), curve));
     }
     return {};
   }
@@ -653,11 +680,13 @@ class BooleanEngine {
     // traced section is that far off the surfaces it joins); the polyline's deviation then
     // grows to cover it.
     double deviation = static_cast<const PolylineCurve&>(*curve).tolerance();
-    auto on_surface = [&](const Surface& s, const Vec3& p, const Vec2& near, double allowed) -> std::optional<Vec2> {
+    auto on_surface = [&](const Surface& s, const Vec3& p, const Vec2& near,
+                          double allowed) -> std::optional<Vec2> {
       Vec2 uv = s.closest_parameters(p);
       uv.x() = nearest_periodic(uv.x(), near.x(), s.u_period());
       uv.y() = nearest_periodic(uv.y(), near.y(), s.v_period());
-      if (!ToleranceModel{allowed, allowed}.negligible((s.point(uv.x(), uv.y()) - p).norm())) return std::nullopt;
+      if (!ToleranceModel{allowed, allowed}.negligible((s.point(uv.x(), uv.y()) - p).norm()))
+        return std::nullopt;
       return uv;
     };
     struct Snap {
@@ -697,7 +726,8 @@ class BooleanEngine {
     if (snaps.empty()) return;
     std::vector<std::size_t> order(snaps.size());
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return snaps[x].t < snaps[y].t; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t x, std::size_t y) { return snaps[x].t < snaps[y].t; });
     // The new polyline: old vertices, with each snap inserted in its chord, or in place of
     // a vertex it falls on. `knots` maps old parameters to new ones (piecewise linear).
     std::vector<Vec3> new_points;
@@ -728,8 +758,9 @@ class BooleanEngine {
       }
     }
     auto remap = [&](double t) {
-      auto it = std::upper_bound(knots.begin(), knots.end(), t,
-                                 [](double x, const std::pair<double, double>& k) { return x < k.first; });
+      auto it = std::upper_bound(
+          knots.begin(), knots.end(), t,
+          [](double x, const std::pair<double, double>& k) { return x < k.first; });
       if (it == knots.begin()) return knots.front().second;
       if (it == knots.end()) return knots.back().second;
       const auto& [x0, y0] = *(it - 1);
@@ -771,7 +802,8 @@ class BooleanEngine {
   // start vertex is added as its two pieces.
   void add_edge_part(std::size_t f, int e_id, const Vec3& p0, const Vec3& p1, const Vec3& through) {
     const BEdge& e = model_.edges[static_cast<std::size_t>(e_id)];
-    double a = e.curve->closest_parameter(p0, e.t0, e.t1), b = e.curve->closest_parameter(p1, e.t0, e.t1);
+    double a = e.curve->closest_parameter(p0, e.t0, e.t1),
+           b = e.curve->closest_parameter(p1, e.t0, e.t1);
     if (a > b) std::swap(a, b);
     const double span = param_slack(e.t1 - e.t0);
     if (e.v0 == e.v1 && !e.degenerate()) {
@@ -798,12 +830,15 @@ class BooleanEngine {
     for (double t : {a, b}) {
       if (t > e.t0 + span && t < e.t1 - span) {
         const int v = model_.vertex_at(e.curve->point(t));
-        if (v != e.v0 && v != e.v1) model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
+        if (v != e.v0 && v != e.v1)
+          model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
       }
     }
-    auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface, fit_tolerance(options_.tolerance));
+    auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface,
+                         fit_tolerance(options_.tolerance));
     if (!pc) return;
-    auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * kInsideUvSlacks);
+    auto shift =
+        polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * kInsideUvSlacks);
     if (!shift) return;
     pc = shift_pcurve(pc, *shift);
     if (a <= e.t0 + span && b >= e.t1 - span) {
@@ -819,9 +854,11 @@ class BooleanEngine {
     const BEdge& e = model_.edges[static_cast<std::size_t>(edge)];
     if (e.curve == curve) return pc;
     const Vec3 mid = e.curve->point(0.5 * (e.t0 + e.t1));
-    const double lo = curve->period() > 0 ? 0.0 : -1e300, hi = curve->period() > 0 ? curve->period() : 1e300;
+    const double lo = curve->period() > 0 ? 0.0 : -1e300,
+                 hi = curve->period() > 0 ? curve->period() : 1e300;
     const Vec2 old_uv = pc->point(curve->closest_parameter(mid, lo, hi));
-    auto fitted = aligned_fit(e, *model_.faces[f].surface, mid, old_uv, fit_tolerance(options_.tolerance));
+    auto fitted =
+        aligned_fit(e, *model_.faces[f].surface, mid, old_uv, fit_tolerance(options_.tolerance));
     return fitted ? fitted : pc;
   }
 
@@ -903,14 +940,18 @@ class BooleanEngine {
         BoundingBox clip;
         clip.min = ba.min.cwiseMax(bb.min);
         clip.max = ba.max.cwiseMin(bb.max);
-        const SsiResult ssi = intersect_surfaces(*model_.faces[fa].surface, *model_.faces[fb].surface, clip, tol);
+        const SsiResult ssi =
+            intersect_surfaces(*model_.faces[fa].surface, *model_.faces[fb].surface, clip, tol);
         if (ssi.kind == SsiKind::Unsupported) return Status(ErrorCode::Unsupported, ssi.reason);
         if (ssi.kind == SsiKind::Coincident) {
           coincident_.emplace_back(fa, fb);
           continue;
         }
         for (const SectionCurve& c : ssi.curves) {
-          if (auto s = add_section(fa, fb, c.curve, c.first, c.last, -1, c.pcurve_a, c.pcurve_b, c.deviation); !s.ok()) return s;
+          if (auto s = add_section(fa, fb, c.curve, c.first, c.last, -1, c.pcurve_a, c.pcurve_b,
+                                   c.deviation);
+              !s.ok())
+            return s;
         }
       }
     }
@@ -941,8 +982,10 @@ class BooleanEngine {
       std::vector<CrossingBox> boxes;
       for (const BUse& u : extra) {
         const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
-        points.push_back(e.degenerate() ? std::vector<Vec2>{} : crossing_points(*u.pcurve, e.t0, e.t1));
-        boxes.push_back(e.degenerate() ? CrossingBox{} : crossing_box(*u.pcurve, e.t0, e.t1, points.back()));
+        points.push_back(e.degenerate() ? std::vector<Vec2>{}
+                                        : crossing_points(*u.pcurve, e.t0, e.t1));
+        boxes.push_back(e.degenerate() ? CrossingBox{}
+                                       : crossing_box(*u.pcurve, e.t0, e.t1, points.back()));
       }
       for (std::size_t i = 0; i < extra.size(); ++i) {
         for (std::size_t j = i + 1; j < extra.size(); ++j) {
@@ -950,14 +993,17 @@ class BooleanEngine {
           const BEdge& b = model_.edges[static_cast<std::size_t>(extra[j].edge)];
           if (a.degenerate() || b.degenerate()) continue;
           if (crossing_boxes_apart(boxes[i], boxes[j], Vec2::Zero(), tol)) continue;
-          for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, points[i], *extra[j].pcurve, b.t0, b.t1, tol)) {
+          for (const Crossing& c : intersect_pcurves(*extra[i].pcurve, a.t0, a.t1, points[i],
+                                                     *extra[j].pcurve, b.t0, b.t1, tol)) {
             const double sa = param_slack(a.t1 - a.t0), sb = param_slack(b.t1 - b.t0);
             const bool inner_a = c.t > a.t0 + sa && c.t < a.t1 - sa;
             const bool inner_b = c.s > b.t0 + sb && c.s < b.t1 - sb;
             if (!inner_a && !inner_b) continue;
             const int v = model_.vertex_at(a.curve->point(c.t));
-            if (inner_a && v != a.v0 && v != a.v1) model_.edges[static_cast<std::size_t>(extra[i].edge)].splits.emplace_back(c.t, v);
-            if (inner_b && v != b.v0 && v != b.v1) model_.edges[static_cast<std::size_t>(extra[j].edge)].splits.emplace_back(c.s, v);
+            if (inner_a && v != a.v0 && v != a.v1)
+              model_.edges[static_cast<std::size_t>(extra[i].edge)].splits.emplace_back(c.t, v);
+            if (inner_b && v != b.v0 && v != b.v1)
+              model_.edges[static_cast<std::size_t>(extra[j].edge)].splits.emplace_back(c.s, v);
           }
         }
       }
@@ -1037,8 +1083,8 @@ class BooleanEngine {
         // Name the face: which argument, which of its faces, on what surface.
         const BFace& face = model_.faces[f];
         return Error{regions.error().code,
-                     regions.error().message + " in face " + std::to_string(face.source) +
-                         " (" + surface_name(face.surface->kind()) + ") of the " +
+                     regions.error().message + " in face " + std::to_string(face.source) + " (" +
+                         surface_name(face.surface->kind()) + ") of the " +
                          (face.operand == 0 ? "first" : "second") + " argument"};
       }
       for (Region& r : regions.value()) pieces.push_back({static_cast<int>(f), std::move(r)});
@@ -1059,9 +1105,12 @@ class BooleanEngine {
     outline.surface = face.surface;
     outline.loops = piece.region.loops;
     const FacePolygon exact = face_polygon(model_, outline);
-    const double margin = uv_slack(std::max(exact.max.x() - exact.min.x(), exact.max.y() - exact.min.y())) * kInsideUvSlacks;
+    const double margin =
+        uv_slack(std::max(exact.max.x() - exact.min.x(), exact.max.y() - exact.min.y())) *
+        kInsideUvSlacks;
     std::vector<Vec2> found, unchecked;  // unchecked: the first outline's points (if none pass)
-    for (int samples = kInteriorSamples; found.size() < count && samples <= kInteriorSamplesMax; samples *= kInteriorRefine) {
+    for (int samples = kInteriorSamples; found.size() < count && samples <= kInteriorSamplesMax;
+         samples *= kInteriorRefine) {
       std::vector<std::vector<Vec2>> loops;
       for (const BLoop& loop : piece.region.loops) {
         std::vector<Vec2> pts;
@@ -1084,8 +1133,10 @@ class BooleanEngine {
                        [](const auto& x, const auto& y) { return x.first > y.first; });
       found.clear();
       for (std::size_t i = 0; i < by_area.size() && found.size() < count; ++i) {
-        if (samples == kInteriorSamples && unchecked.size() < count) unchecked.push_back(by_area[i].second);
-        if (exact.inside(by_area[i].second, margin).value_or(false)) found.push_back(by_area[i].second);
+        if (samples == kInteriorSamples && unchecked.size() < count)
+          unchecked.push_back(by_area[i].second);
+        if (exact.inside(by_area[i].second, margin).value_or(false))
+          found.push_back(by_area[i].second);
       }
     }
     if (found.empty()) found = unchecked;
@@ -1188,10 +1239,12 @@ void absorb_origins(RFace& into, RFace& from) {
 }
 
 // Positions of a use of `edge` in a face: (loop, index).
-std::optional<std::pair<std::size_t, std::size_t>> find_use(const RFace& f, int edge, bool forward) {
+std::optional<std::pair<std::size_t, std::size_t>> find_use(const RFace& f, int edge,
+                                                            bool forward) {
   for (std::size_t l = 0; l < f.loops.size(); ++l) {
     for (std::size_t i = 0; i < f.loops[l].size(); ++i) {
-      if (f.loops[l][i].edge == edge && f.loops[l][i].forward == forward) return std::make_pair(l, i);
+      if (f.loops[l][i].edge == edge && f.loops[l][i].forward == forward)
+        return std::make_pair(l, i);
     }
   }
   return std::nullopt;
@@ -1212,7 +1265,9 @@ void splice(RFace& f, std::size_t la, std::size_t ia, std::size_t lb, std::size_
     BLoop loop = rotated_to_end(f.loops[la], ia);  // ... , e
     // Now find the opposite use in the rotated loop.
     std::size_t j = 0;
-    while (j < loop.size() && !(loop[j].edge == f.loops[la][ia].edge && loop[j].forward != f.loops[la][ia].forward)) ++j;
+    while (j < loop.size() &&
+           !(loop[j].edge == f.loops[la][ia].edge && loop[j].forward != f.loops[la][ia].forward))
+      ++j;
     BLoop first(loop.begin(), loop.begin() + static_cast<std::ptrdiff_t>(j));
     BLoop second(loop.begin() + static_cast<std::ptrdiff_t>(j) + 1, loop.end() - 1);
     f.loops.erase(f.loops.begin() + static_cast<std::ptrdiff_t>(la));
@@ -1238,7 +1293,8 @@ bool same_plane(const Surface& x, bool xr, const Surface& y, bool yr, const Tole
   const Frame& fx = static_cast<const PlaneSurface&>(x).frame();
   const Frame& fy = static_cast<const PlaneSurface&>(y).frame();
   const Vec3 nx = xr ? Vec3(-fx.z) : fx.z, ny = yr ? Vec3(-fy.z) : fy.z;
-  return predicates::dot_sign(nx, ny) > 0 && d.parallel(nx, ny) && d.negligible((fy.origin - fx.origin).dot(fx.z));
+  return predicates::dot_sign(nx, ny) > 0 && d.parallel(nx, ny) &&
+         d.negligible((fy.origin - fx.origin).dot(fx.z));
 }
 
 }  // namespace
@@ -1249,14 +1305,19 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   for (const Piece& p : pieces) {
     if (!p.keep) continue;
     const BFace& f = model_.faces[static_cast<std::size_t>(p.face)];
-    faces.push_back({p.face, f.surface, f.reversed != p.flip, p.region.loops, true,
+    faces.push_back({p.face,
+                     f.surface,
+                     f.reversed != p.flip,
+                     p.region.loops,
+                     true,
                      {FaceOrigin{f.operand, f.source}}});
   }
   // 1. Pieces of one periodic face that meet across its seam become one face.
   for (std::size_t i = 0; i < faces.size(); ++i) {
     for (std::size_t j = 0; j < faces.size(); ++j) {
       if (i == j || !faces[i].alive || !faces[j].alive) continue;
-      if (faces[i].source_face != faces[j].source_face || faces[i].surface->u_period() <= 0) continue;
+      if (faces[i].source_face != faces[j].source_face || faces[i].surface->u_period() <= 0)
+        continue;
       // Pieces that also meet along a real edge (a tangent line other faces use too) stay
       // two faces: only an edge that bounds nothing else may disappear.
       bool share_other = false;
@@ -1282,7 +1343,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
             // Shift j's pcurves by whole periods so the shared seam coincides.
             const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
             const double tm = 0.5 * (e.t0 + e.t1);
-            const Vec2 offset = u.pcurve->point(tm) - faces[j].loops[other->first][other->second].pcurve->point(tm);
+            const Vec2 offset =
+                u.pcurve->point(tm) - faces[j].loops[other->first][other->second].pcurve->point(tm);
             for (BLoop& loop : faces[j].loops) {
               for (BUse& w : loop) w.pcurve = shift_pcurve(w.pcurve, offset);
             }
@@ -1306,7 +1368,9 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (!f.alive) continue;
     const double pu = f.surface->u_period(), pv = f.surface->v_period();
     if (pu <= 0 && pv <= 0) continue;
-    auto whole_periods = [](double offset, double period) { return period > 0 ? std::round(offset / period) : 0.0; };
+    auto whole_periods = [](double offset, double period) {
+      return period > 0 ? std::round(offset / period) : 0.0;
+    };
     bool spliced = true;
     while (spliced) {
       spliced = false;
@@ -1318,7 +1382,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
           const auto other = find_use(f, u.edge, !u.forward);
           if (!other) continue;
           const double tm = 0.5 * (e.t0 + e.t1);
-          const Vec2 offset = u.pcurve->point(tm) - f.loops[other->first][other->second].pcurve->point(tm);
+          const Vec2 offset =
+              u.pcurve->point(tm) - f.loops[other->first][other->second].pcurve->point(tm);
           if (whole_periods(offset.x(), pu) != 0 || whole_periods(offset.y(), pv) != 0) continue;
           splice(f, l, k, other->first, other->second);
           spliced = true;
@@ -1357,7 +1422,9 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       const UseList& list = uses[edge_index];  // as at the start of the pass
       if (list.size() != 2 || list[0].second == list[1].second) continue;
       const std::size_t i = list[0].first, j = list[1].first;
-      if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed, planes)) continue;
+      if (!same_plane(*faces[i].surface, faces[i].reversed, *faces[j].surface, faces[j].reversed,
+                      planes))
+        continue;
       touch(i);
       if (i != j) {
         touch(j);
@@ -1396,15 +1463,18 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       }
     }
     std::sort(touched_edges.begin(), touched_edges.end());
-    touched_edges.erase(std::unique(touched_edges.begin(), touched_edges.end()), touched_edges.end());
+    touched_edges.erase(std::unique(touched_edges.begin(), touched_edges.end()),
+                        touched_edges.end());
     for (const int e : touched_edges) {
       UseList& list = uses[static_cast<std::size_t>(e)];
       UseList next;
       for (const auto& entry : list) {
         if (!std::binary_search(touched.begin(), touched.end(), entry.first)) next.push_back(entry);
       }
-      if (auto it = fresh.find(e); it != fresh.end()) next.insert(next.end(), it->second.begin(), it->second.end());
-      std::stable_sort(next.begin(), next.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      if (auto it = fresh.find(e); it != fresh.end())
+        next.insert(next.end(), it->second.begin(), it->second.end());
+      std::stable_sort(next.begin(), next.end(),
+                       [](const auto& x, const auto& y) { return x.first < y.first; });
       list = std::move(next);
     }
   }
@@ -1428,7 +1498,9 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       const int e1 = *edges.begin(), e2 = *edges.rbegin();
       const BEdge& x = model_.edges[static_cast<std::size_t>(e1)];
       const BEdge& y = model_.edges[static_cast<std::size_t>(e2)];
-      if (x.degenerate() || y.degenerate() || x.curve->kind() != CurveKind::Line || y.curve->kind() != CurveKind::Line) continue;
+      if (x.degenerate() || y.degenerate() || x.curve->kind() != CurveKind::Line ||
+          y.curve->kind() != CurveKind::Line)
+        continue;
       const int xa = x.v0 == v ? x.v1 : x.v0, yb = y.v0 == v ? y.v1 : y.v0;
       if (xa == yb) continue;
       const Vec3 pa = model_.vertices[static_cast<std::size_t>(xa)].point;
@@ -1461,7 +1533,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
             const BEdge& m = model_.edges[static_cast<std::size_t>(id)];
             const BEdge& old = model_.edges[static_cast<std::size_t>(u.edge)];
             const double old_mid = 0.5 * (old.t0 + old.t1);
-            auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid), u.pcurve->point(old_mid), fit_tolerance(tol));
+            auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid),
+                                  u.pcurve->point(old_mid), fit_tolerance(tol));
             out.push_back({id, forward, pc ? pc : u.pcurve});
           }
           loop = std::move(out);
@@ -1486,14 +1559,19 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     for (int end = 0; end < 2; ++end) {
       const int v = end == 0 ? e.v0 : e.v1;
       double gap = 0;
-      if (!e.degenerate()) gap = (e.curve->point(end == 0 ? e.t0 : e.t1) - model_.vertices[static_cast<std::size_t>(v)].point).norm();
-      vertex_tol[static_cast<std::size_t>(v)] = std::max({vertex_tol[static_cast<std::size_t>(v)], gap * 1.01, e.tolerance});
+      if (!e.degenerate())
+        gap = (e.curve->point(end == 0 ? e.t0 : e.t1) -
+               model_.vertices[static_cast<std::size_t>(v)].point)
+                  .norm();
+      vertex_tol[static_cast<std::size_t>(v)] =
+          std::max({vertex_tol[static_cast<std::size_t>(v)], gap * 1.01, e.tolerance});
     }
   }
   std::map<int, Shape> vertex_shapes, edge_shapes;
   auto vertex_shape = [&](int v) -> Result<Shape> {
     if (auto it = vertex_shapes.find(v); it != vertex_shapes.end()) return it->second;
-    auto s = ShapeFactory::vertex(model_.vertices[static_cast<std::size_t>(v)].point, vertex_tol[static_cast<std::size_t>(v)]);
+    auto s = ShapeFactory::vertex(model_.vertices[static_cast<std::size_t>(v)].point,
+                                  vertex_tol[static_cast<std::size_t>(v)]);
     if (s.ok()) vertex_shapes.emplace(v, s.value());
     return s;
   };
@@ -1504,8 +1582,10 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     auto v1 = vertex_shape(e.v1);
     if (!v0.ok()) return v0;
     if (!v1.ok()) return v1;
-    Result<Shape> s = e.degenerate() ? ShapeFactory::degenerate_edge(v0.value(), e.t0, e.t1, e.tolerance)
-                                     : ShapeFactory::edge(e.curve, e.t0, e.t1, v0.value(), v1.value(), e.tolerance);
+    Result<Shape> s =
+        e.degenerate()
+            ? ShapeFactory::degenerate_edge(v0.value(), e.t0, e.t1, e.tolerance)
+            : ShapeFactory::edge(e.curve, e.t0, e.t1, v0.value(), v1.value(), e.tolerance);
     if (s.ok()) edge_shapes.emplace(id, s.value());
     return s;
   };
@@ -1537,7 +1617,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     }
     auto face = ShapeFactory::face(f.surface, std::move(wires), std::move(pcurves), tol);
     if (!face.ok()) return face.error();
-    face_shapes.push_back(face.value().oriented(f.reversed ? Orientation::Reversed : Orientation::Forward));
+    face_shapes.push_back(
+        face.value().oriented(f.reversed ? Orientation::Reversed : Orientation::Forward));
     face_of_shape.push_back(i);
   }
 
@@ -1545,7 +1626,9 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   // four faces is where two solids touch: it joins nothing).
   std::vector<std::size_t> parent(face_shapes.size());
   std::iota(parent.begin(), parent.end(), 0);
-  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) { return parent[x] == x ? x : parent[x] = root(parent[x]); };
+  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) {
+    return parent[x] == x ? x : parent[x] = root(parent[x]);
+  };
   std::map<int, std::vector<std::size_t>> edge_users;
   for (std::size_t k = 0; k < face_shapes.size(); ++k) {
     std::set<int> mine;
@@ -1587,7 +1670,8 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       auto cls = SolidClassifier::create(ShapeFactory::solid({outer[k].shell}).value(), tol);
       if (!cls.ok()) continue;
       if (cls->classify(p) != Containment::Inside) continue;
-      if (best < 0 || outer[k].volume < outer[static_cast<std::size_t>(best)].volume) best = static_cast<int>(k);
+      if (best < 0 || outer[k].volume < outer[static_cast<std::size_t>(best)].volume)
+        best = static_cast<int>(k);
     }
     if (best < 0) return Error{ErrorCode::InvalidShape, "a cavity of the result lies in no solid"};
     solid_shells[static_cast<std::size_t>(best)].push_back(c.shell);
@@ -1627,15 +1711,20 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
 
 const char* interference_name(Interference i) {
   switch (i) {
-    case Interference::Disjoint: return "disjoint";
-    case Interference::BoundariesMeet: return "boundaries_meet";
-    case Interference::Nested: return "nested";
+    case Interference::Disjoint:
+      return "disjoint";
+    case Interference::BoundariesMeet:
+      return "boundaries_meet";
+    case Interference::Nested:
+      return "nested";
   }
   return "?";
 }
 
-Result<Interference> solid_interference(const Shape& a, const Shape& b, const BooleanOptions& options) {
-  if (a.is_null() || b.is_null()) return Error{ErrorCode::InvalidArgument, "solid_interference: null shape"};
+Result<Interference> solid_interference(const Shape& a, const Shape& b,
+                                        const BooleanOptions& options) {
+  if (a.is_null() || b.is_null())
+    return Error{ErrorCode::InvalidArgument, "solid_interference: null shape"};
   BoundingBox ba = bounding_box(a), bb = bounding_box(b);
   ba.enlarge(options.tolerance);
   if (!ba.intersects(bb)) return Interference::Disjoint;
@@ -1648,11 +1737,13 @@ Result<Interference> solid_interference(const Shape& a, const Shape& b, const Bo
 
 namespace detail {
 
-Result<Interference> run_interference(const Shape& a, const Shape& b, const BooleanOptions& options) {
+Result<Interference> run_interference(const Shape& a, const Shape& b,
+                                      const BooleanOptions& options) {
   return BooleanEngine(a, b, BooleanOp::Common, options).interference();
 }
 
-Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op, const BooleanOptions& options,
+Result<Shape> run_engine(const Shape& a, const Shape& b, BooleanOp op,
+                         const BooleanOptions& options,
                          std::vector<std::vector<FaceOrigin>>* origins) {
   BooleanEngine engine(a, b, op, options);
   auto shape = engine.run();
@@ -1703,7 +1794,9 @@ std::vector<std::vector<std::size_t>> fuse_groups(const std::vector<Shape>& shap
   });
   std::vector<std::size_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
-  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) { return parent[x] == x ? x : parent[x] = root(parent[x]); };
+  std::function<std::size_t(std::size_t)> root = [&](std::size_t x) {
+    return parent[x] == x ? x : parent[x] = root(parent[x]);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t a = order[i];
     for (std::size_t j = i + 1; j < n && boxes[order[j]].min.x() <= boxes[a].max.x(); ++j) {

@@ -310,7 +310,7 @@ Result<FaceQuery> FaceQuery::create(const Shape& face) {
 
   BoundingBox local = q.surface_->bounds(q.parameter_box_);
   local.enlarge(kBoundsPadRelative * (1.0 + local.size().norm() + local.max.cwiseAbs().maxCoeff() +
-                        local.min.cwiseAbs().maxCoeff()));
+                                      local.min.cwiseAbs().maxCoeff()));
   q.local_bounds_ = local;
   q.world_bounds_ = moved_box(local, q.location_);
   return q;

@@ -83,7 +83,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   std::vector<Node> nodes;
   auto node_of = [&](int vertex, const Vec2& uv) {
     for (std::size_t i = 0; i < nodes.size(); ++i) {
-      if (nodes[i].vertex == vertex && (nodes[i].uv - uv).norm() <= node_tol) return static_cast<int>(i);
+      if (nodes[i].vertex == vertex && (nodes[i].uv - uv).norm() <= node_tol)
+        return static_cast<int>(i);
     }
     nodes.push_back({vertex, uv});
     return static_cast<int>(nodes.size()) - 1;
@@ -107,7 +108,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
     for (HalfEdge& h : half) {
       if (!h.alive || h.boundary) continue;
       // A section edge contributes 2 to each end (both directions); a free end has exactly that.
-      if (h.from != h.to && (degree[static_cast<std::size_t>(h.from)] <= 2 || degree[static_cast<std::size_t>(h.to)] <= 2)) {
+      if (h.from != h.to && (degree[static_cast<std::size_t>(h.from)] <= 2 ||
+                             degree[static_cast<std::size_t>(h.to)] <= 2)) {
         h.alive = false;
         changed = true;
       }
@@ -115,7 +117,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   }
   std::vector<std::vector<int>> outgoing(nodes.size());
   for (std::size_t i = 0; i < half.size(); ++i) {
-    if (half[i].alive) outgoing[static_cast<std::size_t>(half[i].from)].push_back(static_cast<int>(i));
+    if (half[i].alive)
+      outgoing[static_cast<std::size_t>(half[i].from)].push_back(static_cast<int>(i));
   }
   std::vector<bool> used(half.size(), false);
   std::vector<BLoop> outers, holes;
@@ -134,8 +137,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
       int best = -1;
       for (int o : outgoing[static_cast<std::size_t>(cur.to)]) {
         const Vec2& d = half[static_cast<std::size_t>(o)].out_dir;
-        if (best < 0 ||
-            predicates::clockwise_before(cur.in_dir, d, half[static_cast<std::size_t>(best)].out_dir)) {
+        if (best < 0 || predicates::clockwise_before(
+                            cur.in_dir, d, half[static_cast<std::size_t>(best)].out_dir)) {
           best = o;
         }
       }
@@ -168,7 +171,8 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
     int best = -1;
     for (std::size_t i = 0; i < outers.size(); ++i) {
       const bool shares_edge = std::any_of(hole.begin(), hole.end(), [&](const BUse& h) {
-        return std::any_of(outers[i].begin(), outers[i].end(), [&](const BUse& o) { return o.edge == h.edge; });
+        return std::any_of(outers[i].begin(), outers[i].end(),
+                           [&](const BUse& o) { return o.edge == h.edge; });
       });
       if (shares_edge) continue;
       FacePolygon poly;

@@ -36,7 +36,8 @@ Result<T> fuse_tree(const std::vector<T>& items, const Fuse& fuse) {
   while (level.size() > 1) {
     std::vector<int> next;
     for (std::size_t i = 0; i + 1 < level.size(); i += 2) {
-      auto fused = fuse_into(fuse_into, nodes[static_cast<std::size_t>(level[i])].value, level[i + 1]);
+      auto fused =
+          fuse_into(fuse_into, nodes[static_cast<std::size_t>(level[i])].value, level[i + 1]);
       if (!fused.ok()) return fused;
       nodes.push_back({std::move(fused).value(), level[i], level[i + 1]});
       next.push_back(static_cast<int>(nodes.size()) - 1);

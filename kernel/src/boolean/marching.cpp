@@ -19,14 +19,14 @@ namespace {
 using Vector4d = Eigen::Vector4d;
 
 // Limits of the tracer (not geometric tolerances: counts and ratios).
-constexpr int kLatticeCells = 16;        // lattice spacing = region diagonal / this
-constexpr int kMaxLattice = 17;          // points per axis at most
-constexpr int kPullIterations = 40;      // minimum-norm Newton steps for a seed
-constexpr int kCorrectIterations = 12;   // corrector steps per march step
-constexpr int kMaxSteps = 50000;         // per branch direction
-constexpr double kMaxTurn = 0.9659;      // cos 15°: largest tangent turn in one step
-constexpr double kNewtonFraction = 1e-3; // Newton stops at this fraction of the tolerance
-constexpr double kTangentSine = 1e-7;    // |n_a × n_b| below this: tangent surfaces
+constexpr int kLatticeCells = 16;         // lattice spacing = region diagonal / this
+constexpr int kMaxLattice = 17;           // points per axis at most
+constexpr int kPullIterations = 40;       // minimum-norm Newton steps for a seed
+constexpr int kCorrectIterations = 12;    // corrector steps per march step
+constexpr int kMaxSteps = 50000;          // per branch direction
+constexpr double kMaxTurn = 0.9659;       // cos 15°: largest tangent turn in one step
+constexpr double kNewtonFraction = 1e-3;  // Newton stops at this fraction of the tolerance
+constexpr double kTangentSine = 1e-7;     // |n_a × n_b| below this: tangent surfaces
 
 class Pair {
  public:
@@ -137,9 +137,7 @@ class PointHash {
             static_cast<long long>(std::floor(p.y() / cell_)),
             static_cast<long long>(std::floor(p.z() / cell_))};
   }
-  static long long hash(long long x, long long y, long long z) {
-    return cell_hash(x, y, z);
-  }
+  static long long hash(long long x, long long y, long long z) { return cell_hash(x, y, z); }
   long long key(const Vec3& p) const {
     const auto c = coords(p);
     return hash(c[0], c[1], c[2]);
@@ -206,7 +204,8 @@ class Tracer {
       }
       const double length = (x_next - x).norm();
       // Closed: this chord passes the start again after a real journey.
-      if (traveled > 2.0 * length && distance_to_segment(x_start, x, x_next) <= 0.5 * length + sag_) {
+      if (traveled > 2.0 * length &&
+          distance_to_segment(x_start, x, x_next) <= 0.5 * length + sag_) {
         Vector4d closing = start;
         for (int k = 0; k < 4; ++k) closing[k] = nearest_periodic(start[k], next[k], period(k));
         const double closing_deviation = chord_deviation(w, closing, x, x_start);
@@ -215,7 +214,8 @@ class Tracer {
           // a surface's parameters are singular (a sphere's pole, a cone's apex).
           const double jump = (closing - next).norm(), step_size = (next - w).norm();
           if (jump > 10.0 * step_size || (x_start - x).norm() <= 4 * h_min_) {
-            reason = "the intersection passes a singular point of a surface's parameters (pole or apex)";
+            reason =
+                "the intersection passes a singular point of a surface's parameters (pole or apex)";
             return false;
           }
           // Approach the start in shorter steps.
@@ -248,17 +248,22 @@ class Tracer {
 
   double period(int k) const {
     switch (k) {
-      case 0: return pair_.u_period_a();
-      case 1: return pair_.v_period_a();
-      case 2: return pair_.u_period_b();
-      default: return pair_.v_period_b();
+      case 0:
+        return pair_.u_period_a();
+      case 1:
+        return pair_.v_period_a();
+      case 2:
+        return pair_.u_period_b();
+      default:
+        return pair_.v_period_b();
     }
   }
 
  private:
   // Distance from the exact curve and from each pcurve segment's image to the chord, at the
   // middle of the step (where it is largest for smooth curves).
-  double chord_deviation(const Vector4d& w0, const Vector4d& w1, const Vec3& x0, const Vec3& x1) const {
+  double chord_deviation(const Vector4d& w0, const Vector4d& w1, const Vec3& x0,
+                         const Vec3& x1) const {
     const Vector4d mid = 0.5 * (w0 + w1);
     const Vec3 chord = 0.5 * (x0 + x1);
     double d = std::max((pair_.pa(mid) - chord).norm(), (pair_.pb(mid) - chord).norm());
@@ -309,7 +314,8 @@ MarchResult march_intersection(const Surface& a, const Surface& b, const Boundin
         const Vec2 ua = a.closest_parameters(p), ub = b.closest_parameters(p);
         // Every point of the region is within half a lattice diagonal of a lattice point, so
         // a lattice point farther than that from either surface seeds nothing new.
-        if ((a.point(ua.x(), ua.y()) - p).norm() > reach || (b.point(ub.x(), ub.y()) - p).norm() > reach) {
+        if ((a.point(ua.x(), ua.y()) - p).norm() > reach ||
+            (b.point(ub.x(), ub.y()) - p).norm() > reach) {
           continue;
         }
         Vector4d w(ua.x(), ua.y(), ub.x(), ub.y());
@@ -381,7 +387,8 @@ std::optional<MarchedCurve> sample_section(const Curve& c, double t0, double t1,
     for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
       const Vec3 p0 = c.point(ts[i]), p1 = c.point(ts[i + 1]);
       const Vec3 chord = 0.5 * (p0 + p1);
-      const Vec2 ma = 0.5 * (out.uv_a[i] + out.uv_a[i + 1]), mb = 0.5 * (out.uv_b[i] + out.uv_b[i + 1]);
+      const Vec2 ma = 0.5 * (out.uv_a[i] + out.uv_a[i + 1]),
+                 mb = 0.5 * (out.uv_b[i] + out.uv_b[i + 1]);
       const double d = std::max({(c.point(0.5 * (ts[i] + ts[i + 1])) - chord).norm(),
                                  (a.point(ma.x(), ma.y()) - chord).norm(),
                                  (b.point(mb.x(), mb.y()) - chord).norm()});

@@ -47,12 +47,18 @@ Curve2dPtr carried_pcurve(const Curve2dPtr& pcurve, SurfaceKind kind, double sca
   if (scale == 1.0) return pcurve;
   double su = 1.0, sv = 1.0;
   switch (kind) {
-    case SurfaceKind::Plane: su = sv = scale; break;
+    case SurfaceKind::Plane:
+      su = sv = scale;
+      break;
     case SurfaceKind::Cylinder:
-    case SurfaceKind::Cone: sv = scale; break;
+    case SurfaceKind::Cone:
+      sv = scale;
+      break;
     case SurfaceKind::Sphere:
-    case SurfaceKind::Torus: break;
-    default: return nullptr;
+    case SurfaceKind::Torus:
+      break;
+    default:
+      return nullptr;
   }
   std::vector<Vec2> points = static_cast<const Polyline2d&>(*pcurve).points();
   for (Vec2& p : points) p = Vec2(p.x() * su, p.y() * sv);
@@ -64,9 +70,9 @@ Curve2dPtr carried_pcurve(const Curve2dPtr& pcurve, SurfaceKind kind, double sca
 Status import_operand(BModel& model, const Shape& shape, int operand) {
   if (shape.is_null()) return Status(ErrorCode::InvalidArgument, "a Boolean argument is null");
   if (map_child_shapes(shape, ShapeKind::Solid).size() == 0) {
-    return Status(ErrorCode::InvalidArgument,
-                  std::string("a Boolean argument must hold solids, got a ") +
-                      shape_kind_name(shape.kind()));
+    return Status(
+        ErrorCode::InvalidArgument,
+        std::string("a Boolean argument must hold solids, got a ") + shape_kind_name(shape.kind()));
   }
   const double fit_tolerance = model.tolerance() * 1e-2;
   ShapeIndex edge_index;
@@ -97,7 +103,8 @@ Status import_operand(BModel& model, const Shape& shape, int operand) {
   for (std::size_t fi = 0; fi < faces.size(); ++fi) {
     // Faces are taken once each; their orientation comes from the first use in the walk.
     const Shape& face = faces[fi];
-    if (face.orientation() != Orientation::Forward && face.orientation() != Orientation::Reversed) continue;
+    if (face.orientation() != Orientation::Forward && face.orientation() != Orientation::Reversed)
+      continue;
     const FaceData& fd = *face.body().face();
     BFace bf;
     bf.surface = fd.surface->transformed(face.location());
@@ -118,20 +125,23 @@ Status import_operand(BModel& model, const Shape& shape, int operand) {
         if (e.degenerate()) {
           // A pole or apex: u runs with the parameter, v is fixed where the point is.
           const auto& old = static_cast<const Line2d&>(*fd.pcurves[w][k]);
-          const Vec2 at = bf.surface->closest_parameters(model.vertices[static_cast<std::size_t>(e.v0)].point);
+          const Vec2 at =
+              bf.surface->closest_parameters(model.vertices[static_cast<std::size_t>(e.v0)].point);
           use.pcurve = std::make_shared<Line2d>(Vec2(old.origin().x(), at.y()), old.direction());
         } else {
           use.pcurve = fit_pcurve(*e.curve, e.t0, e.t1, *bf.surface, fit_tolerance);
           if (!use.pcurve) {
             // A traced section edge (polyline) keeps the face's own pcurve, carried into the
             // world frame and accepted within the edge's tolerance.
-            Curve2dPtr own = carried_pcurve(fd.pcurves[w][k], bf.surface->kind(), face.location().scale());
+            Curve2dPtr own =
+                carried_pcurve(fd.pcurves[w][k], bf.surface->kind(), face.location().scale());
             if (own && pcurve_deviation(*e.curve, *own, e.t0, e.t1, *bf.surface) <= e.tolerance) {
               use.pcurve = std::move(own);
               loop.push_back(std::move(use));
               continue;
             }
-            return Status(ErrorCode::Unsupported, "an edge of an argument has no exact pcurve on its face");
+            return Status(ErrorCode::Unsupported,
+                          "an edge of an argument has no exact pcurve on its face");
           }
           // Keep the face's own (u, v) window (a seam is used at u = 0 and at u = 2π): shift
           // the refitted pcurve by whole periods onto the original one.

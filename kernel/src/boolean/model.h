@@ -41,8 +41,8 @@ struct BFace {
   SurfacePtr surface;
   bool reversed = false;  // outward side is −normal
   std::vector<BLoop> loops;
-  int operand = 0;        // 0 = first argument, 1 = second
-  int source = 0;         // index of the face in its operand (child-map order)
+  int operand = 0;  // 0 = first argument, 1 = second
+  int source = 0;   // index of the face in its operand (child-map order)
   BoundingBox box;
   std::vector<BUse> extra;  // section edges inside the face (used in both directions)
 };
@@ -66,9 +66,7 @@ class BModel {
  private:
   double tolerance_;
   std::unordered_map<long long, std::vector<int>> grid_;
-  long long cell_key(long long x, long long y, long long z) const {
-    return cell_hash(x, y, z);
-  }
+  long long cell_key(long long x, long long y, long long z) const { return cell_hash(x, y, z); }
 };
 
 /// Start / end vertex of a use, following its direction.

@@ -21,7 +21,9 @@ bool is_angular_curve(const Curve& c) { return c.period() > 0; }
 // Affine image of a curve in a plane's (u, v) coordinates: exact for lines and trig curves.
 Curve2dPtr project_on_plane(const Curve& curve, const PlaneSurface& plane) {
   const Frame& f = plane.frame();
-  auto point2 = [&](const Vec3& p) { return Vec2((p - f.origin).dot(f.x), (p - f.origin).dot(f.y)); };
+  auto point2 = [&](const Vec3& p) {
+    return Vec2((p - f.origin).dot(f.x), (p - f.origin).dot(f.y));
+  };
   auto vec2 = [&](const Vec3& v) { return Vec2(v.dot(f.x), v.dot(f.y)); };
   switch (curve.kind()) {
     case CurveKind::Line: {
@@ -60,7 +62,6 @@ double nearest_periodic(double value, double reference, double period) {
   if (period <= 0) return value;
   return value + period * std::round((reference - value) / period);
 }
-
 
 double pcurve_deviation(const Curve& curve, const Curve2d& pcurve, double t0, double t1,
                         const Surface& surface, int samples) {

@@ -213,8 +213,14 @@ class Sections {
       t_max = std::min(t_max, leave);
     }
     if (!(t_max - t_min > decide_.length)) return;
-    curves_.push_back(
-        {std::make_shared<LineCurve>(origin, direction), t_min, t_max, false, tangent, {}, {}, 0.0});
+    curves_.push_back({std::make_shared<LineCurve>(origin, direction),
+                       t_min,
+                       t_max,
+                       false,
+                       tangent,
+                       {},
+                       {},
+                       0.0});
   }
 
   /// The closed curve center + cos t·a + sin t·b, unless its exact bounds miss the region.

@@ -65,7 +65,8 @@ std::optional<int> arc_side(const FacePolygon::Arc& arc, const Vec2& uv, double 
     }
   }
   const double t = 0.5 * (lo + hi);
-  if (t <= first + kEndFraction * (last - first) || t >= last - kEndFraction * (last - first)) return std::nullopt;
+  if (t <= first + kEndFraction * (last - first) || t >= last - kEndFraction * (last - first))
+    return std::nullopt;
   const Vec2 offset = uv - arc.curve->point(t);
   if (offset.norm() <= margin) return 0;
   const Vec2 tangent = arc.curve->derivative(t) * (arc.t1 >= arc.t0 ? 1.0 : -1.0);
@@ -91,7 +92,8 @@ FacePolygon face_polygon(const BModel& m, const BFace& face) {
     std::vector<FacePolygon::Arc> arcs;
     for (const BUse& use : loop) {
       const std::vector<double> ts = sample_parameters(m, use, 48);
-      const bool straight = use.pcurve->kind() == Curve2dKind::Line || use.pcurve->kind() == Curve2dKind::Polyline;
+      const bool straight =
+          use.pcurve->kind() == Curve2dKind::Line || use.pcurve->kind() == Curve2dKind::Polyline;
       for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
         const Vec2 a = use.pcurve->point(ts[i]), b = use.pcurve->point(ts[i + 1]);
         pts.push_back(a);
@@ -100,7 +102,9 @@ FacePolygon face_polygon(const BModel& m, const BFace& face) {
           // The bulge seen at three points, doubled: the arcs are short stretches of smooth
           // curves, whose distance from the chord is largest near the middle.
           for (const double f : {0.25, 0.5, 0.75}) {
-            arc.bulge = std::max(arc.bulge, segment_distance(use.pcurve->point(ts[i] + f * (ts[i + 1] - ts[i])), a, b));
+            arc.bulge = std::max(
+                arc.bulge,
+                segment_distance(use.pcurve->point(ts[i] + f * (ts[i + 1] - ts[i])), a, b));
           }
           arc.bulge *= kArcBulgeSafety;
           arc.curve = use.pcurve;
@@ -231,7 +235,8 @@ bool crossing_boxes_apart(const CrossingBox& a, const CrossingBox& b, const Vec2
                            shift_b.cwiseAbs().maxCoeff();
   const double gap = tolerance + a.reach + b.reach + kRoundingPad * (1.0 + magnitude);
   for (int k = 0; k < 2; ++k) {
-    if (a.min[k] - gap > b.max[k] + shift_b[k] || b.min[k] + shift_b[k] - gap > a.max[k]) return true;
+    if (a.min[k] - gap > b.max[k] + shift_b[k] || b.min[k] + shift_b[k] - gap > a.max[k])
+      return true;
   }
   return false;
 }
@@ -333,14 +338,16 @@ std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1,
       if (j % kBlock == 0) {
         const Block& block = blocks[static_cast<std::size_t>(j / kBlock)];
         const double grow = grow_a + block.growth;
-        if ((amin.array() - grow > block.max.array()).any() || (block.min.array() - grow > amax.array()).any()) {
+        if ((amin.array() - grow > block.max.array()).any() ||
+            (block.min.array() - grow > amax.array()).any()) {
           j += kBlock - 1;
           continue;
         }
       }
       const Vec2 bmin = pb[j].cwiseMin(pb[j + 1]), bmax = pb[j].cwiseMax(pb[j + 1]);
       const double grow = grow_a + kCrossingBoxGrowth * (pb[j + 1] - pb[j]).norm();
-      if ((amin.array() - grow > bmax.array()).any() || (bmin.array() - grow > amax.array()).any()) {
+      if ((amin.array() - grow > bmax.array()).any() ||
+          (bmin.array() - grow > amax.array()).any()) {
         continue;
       }
       // Start from the segments' own intersection (or their midpoints) and refine.
@@ -381,7 +388,8 @@ std::vector<Crossing> intersect_pcurves(const Curve2d& a, double t0, double t1,
       accept(t, s, false);
     }
   }
-  std::sort(found.begin(), found.end(), [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
+  std::sort(found.begin(), found.end(),
+            [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
   // A tangential contact comes back as a cluster of crossings along the stretch where the
   // curves stay within the tolerance of each other (Newton lands anywhere on it): within the
   // tolerance that stretch is one contact point, at the middle of the cluster.

@@ -36,7 +36,9 @@ class PolyhedronBuilder {
     const Vec3 origin = points_[rings[0][0]];
     const Frame frame = Frame::from_z(origin, n, points_[rings[0][1]] - origin);
     auto surface = std::make_shared<PlaneSurface>(frame);
-    auto uv = [&](const Vec3& p) { return Vec2((p - origin).dot(frame.x), (p - origin).dot(frame.y)); };
+    auto uv = [&](const Vec3& p) {
+      return Vec2((p - origin).dot(frame.x), (p - origin).dot(frame.y));
+    };
 
     std::vector<Shape> wires;
     std::vector<std::vector<Curve2dPtr>> pcurves;
@@ -50,8 +52,8 @@ class PolyhedronBuilder {
         const std::size_t lo = std::min(a, b), hi = std::max(a, b);
         const double length = (points_[hi] - points_[lo]).norm();
         edges.push_back(a == lo ? edge.value() : edge.value().reversed());
-        curves.push_back(std::make_shared<Line2d>(
-            uv(points_[lo]), (uv(points_[hi]) - uv(points_[lo])) / length));
+        curves.push_back(std::make_shared<Line2d>(uv(points_[lo]),
+                                                  (uv(points_[hi]) - uv(points_[lo])) / length));
       }
       auto wire = ShapeFactory::wire(std::move(edges));
       if (!wire.ok()) return wire.error();
@@ -126,7 +128,8 @@ Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
   for (std::size_t r = 0; r < rings.size(); ++r) {
     const std::string name = r == 0 ? "outer ring" : "hole " + std::to_string(r - 1);
     for (const Vec2& p : rings[r]) {
-      if (!p.allFinite()) return Error{ErrorCode::InvalidArgument, name + " has a non-finite point"};
+      if (!p.allFinite())
+        return Error{ErrorCode::InvalidArgument, name + " has a non-finite point"};
     }
     if (rings[r].size() < 3 || std::abs(detail::signed_area2(rings[r])) <= tolerance * tolerance) {
       return Error{ErrorCode::DegenerateGeometry, name + " has no area"};
@@ -140,7 +143,8 @@ Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
     if (r > 0) {
       if (detail::rings_intersect(rings[0], rings[r]) ||
           !detail::point_in_ring(rings[r][0], rings[0])) {
-        return Error{ErrorCode::DegenerateGeometry, name + " is not strictly inside the outer ring"};
+        return Error{ErrorCode::DegenerateGeometry,
+                     name + " is not strictly inside the outer ring"};
       }
       for (std::size_t s = 1; s < r; ++s) {
         if (detail::rings_intersect(rings[s], rings[r]) ||

@@ -19,7 +19,8 @@ Result<Shape> apply_clips(Shape solid, const std::vector<Eigen::Vector4d>& clips
     const Vec3 n = clips[k].head<3>();
     const double d = clips[k].w();
     if (!n.allFinite() || !std::isfinite(d) || std::abs(n.norm() - 1.0) > 1e-9) {
-      return Error{ErrorCode::DegenerateGeometry, which + ": not a unit normal and a finite offset"};
+      return Error{ErrorCode::DegenerateGeometry,
+                   which + ": not a unit normal and a finite offset"};
     }
     Vec3 e1 = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
     e1 = (e1 - e1.dot(n) * n).normalized();
@@ -71,13 +72,20 @@ Result<Shape> apply_clips(Shape solid, const std::vector<Eigen::Vector4d>& clips
 
 const char* primitive_type_name(PrimitiveType type) {
   switch (type) {
-    case PrimitiveType::Box: return "box";
-    case PrimitiveType::Cylinder: return "cylinder";
-    case PrimitiveType::Cone: return "cone";
-    case PrimitiveType::Sphere: return "sphere";
-    case PrimitiveType::Torus: return "torus";
-    case PrimitiveType::Extrusion: return "extrusion";
-    case PrimitiveType::Revolution: return "revolution";
+    case PrimitiveType::Box:
+      return "box";
+    case PrimitiveType::Cylinder:
+      return "cylinder";
+    case PrimitiveType::Cone:
+      return "cone";
+    case PrimitiveType::Sphere:
+      return "sphere";
+    case PrimitiveType::Torus:
+      return "torus";
+    case PrimitiveType::Extrusion:
+      return "extrusion";
+    case PrimitiveType::Revolution:
+      return "revolution";
   }
   return "unknown";
 }
@@ -85,14 +93,20 @@ const char* primitive_type_name(PrimitiveType type) {
 Result<Shape> build_primitive(const PrimitiveSpec& spec, double tolerance) {
   Result<Shape> local = [&]() -> Result<Shape> {
     switch (spec.type) {
-      case PrimitiveType::Box: return make_box(spec.size.x(), spec.size.y(), spec.size.z(), tolerance);
-      case PrimitiveType::Cylinder: return make_cylinder(spec.radius, spec.height, tolerance);
-      case PrimitiveType::Cone: return make_cone(spec.radius, spec.radius2, spec.height, tolerance);
-      case PrimitiveType::Sphere: return make_sphere(spec.radius, tolerance);
-      case PrimitiveType::Torus: return make_torus(spec.radius, spec.radius2, tolerance);
+      case PrimitiveType::Box:
+        return make_box(spec.size.x(), spec.size.y(), spec.size.z(), tolerance);
+      case PrimitiveType::Cylinder:
+        return make_cylinder(spec.radius, spec.height, tolerance);
+      case PrimitiveType::Cone:
+        return make_cone(spec.radius, spec.radius2, spec.height, tolerance);
+      case PrimitiveType::Sphere:
+        return make_sphere(spec.radius, tolerance);
+      case PrimitiveType::Torus:
+        return make_torus(spec.radius, spec.radius2, tolerance);
       case PrimitiveType::Extrusion:
         return make_extrusion(spec.profile, spec.holes, spec.height, tolerance);
-      case PrimitiveType::Revolution: return make_revolution(spec.profile, spec.angle, tolerance);
+      case PrimitiveType::Revolution:
+        return make_revolution(spec.profile, spec.angle, tolerance);
     }
     return Error{ErrorCode::InvalidArgument, "unknown primitive type"};
   }();

@@ -32,8 +32,7 @@ struct EdgeUse {
 class RevolutionBuilder {
  public:
   RevolutionBuilder(std::vector<Vec2> profile, double angle, double tolerance)
-      : profile_(std::move(profile)), angle_(angle), tol_(tolerance),
-        full_(angle >= kTwoPi) {}
+      : profile_(std::move(profile)), angle_(angle), tol_(tolerance), full_(angle >= kTwoPi) {}
 
   Result<Shape> build() {
     const std::size_t n = profile_.size();
@@ -66,7 +65,8 @@ class RevolutionBuilder {
     const int slot = (on_axis || full_ || u == 0.0) ? 0 : 1;
     const auto key = std::make_pair(i, slot);
     if (auto it = vertices_.find(key); it != vertices_.end()) return it->second;
-    auto v = ShapeFactory::vertex(p.x() * radial(slot == 0 ? 0.0 : angle_) + p.y() * Vec3::UnitZ(), tol_);
+    auto v = ShapeFactory::vertex(p.x() * radial(slot == 0 ? 0.0 : angle_) + p.y() * Vec3::UnitZ(),
+                                  tol_);
     if (!v.ok()) return v;
     vertices_.emplace(key, v.value());
     return v;
@@ -342,14 +342,13 @@ Result<Shape> make_sphere(double r, double tolerance) {
   if (!south_pole.ok()) return south_pole;
   if (!north_pole.ok()) return north_pole;
   // Counter-clockwise around [0, 2π] × [-π/2, π/2].
-  auto wire = ShapeFactory::wire({south_pole.value(), seam.value(), north_pole.value().reversed(),
-                                  seam.value().reversed()});
+  auto wire = ShapeFactory::wire(
+      {south_pole.value(), seam.value(), north_pole.value().reversed(), seam.value().reversed()});
   if (!wire.ok()) return wire;
-  std::vector<Curve2dPtr> pcurves{
-      std::make_shared<Line2d>(Vec2(0, -kHalfPi), Vec2(1, 0)),
-      std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1)),
-      std::make_shared<Line2d>(Vec2(0, kHalfPi), Vec2(1, 0)),
-      std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))};
+  std::vector<Curve2dPtr> pcurves{std::make_shared<Line2d>(Vec2(0, -kHalfPi), Vec2(1, 0)),
+                                  std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1)),
+                                  std::make_shared<Line2d>(Vec2(0, kHalfPi), Vec2(1, 0)),
+                                  std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))};
   auto face = ShapeFactory::face(std::make_shared<SphereSurface>(Frame(), r), {wire.value()},
                                  {pcurves}, tolerance);
   if (!face.ok()) return face;
@@ -380,11 +379,10 @@ Result<Shape> make_torus(double major_radius, double minor_radius, double tolera
   auto wire = ShapeFactory::wire({equator.value(), meridian_edge.value(),
                                   equator.value().reversed(), meridian_edge.value().reversed()});
   if (!wire.ok()) return wire;
-  std::vector<Curve2dPtr> pcurves{
-      std::make_shared<Line2d>(Vec2(0, 0), Vec2(1, 0)),
-      std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1)),
-      std::make_shared<Line2d>(Vec2(0, kTwoPi), Vec2(1, 0)),
-      std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))};
+  std::vector<Curve2dPtr> pcurves{std::make_shared<Line2d>(Vec2(0, 0), Vec2(1, 0)),
+                                  std::make_shared<Line2d>(Vec2(kTwoPi, 0), Vec2(0, 1)),
+                                  std::make_shared<Line2d>(Vec2(0, kTwoPi), Vec2(1, 0)),
+                                  std::make_shared<Line2d>(Vec2(0, 0), Vec2(0, 1))};
   auto face = ShapeFactory::face(std::make_shared<TorusSurface>(Frame(), big, small),
                                  {wire.value()}, {pcurves}, tolerance);
   if (!face.ok()) return face;

@@ -13,19 +13,32 @@ namespace csgtile::kernel {
 
 const char* check_status_name(CheckStatus status) {
   switch (status) {
-    case CheckStatus::NullShape: return "null_shape";
-    case CheckStatus::InvalidLocation: return "invalid_location";
-    case CheckStatus::ToleranceOrder: return "tolerance_order";
-    case CheckStatus::VertexOffCurve: return "vertex_off_curve";
-    case CheckStatus::EdgeOffFace: return "edge_off_face";
-    case CheckStatus::OpenWire: return "open_wire";
-    case CheckStatus::SelfIntersection: return "self_intersection";
-    case CheckStatus::FreeEdge: return "free_edge";
-    case CheckStatus::OpenShell: return "open_shell";
-    case CheckStatus::EdgeSameOrientationTwice: return "edge_same_orientation_twice";
-    case CheckStatus::NonManifoldEdge: return "non_manifold_edge";
-    case CheckStatus::BadFaceOrientation: return "bad_face_orientation";
-    case CheckStatus::EulerPoincareMismatch: return "euler_poincare_mismatch";
+    case CheckStatus::NullShape:
+      return "null_shape";
+    case CheckStatus::InvalidLocation:
+      return "invalid_location";
+    case CheckStatus::ToleranceOrder:
+      return "tolerance_order";
+    case CheckStatus::VertexOffCurve:
+      return "vertex_off_curve";
+    case CheckStatus::EdgeOffFace:
+      return "edge_off_face";
+    case CheckStatus::OpenWire:
+      return "open_wire";
+    case CheckStatus::SelfIntersection:
+      return "self_intersection";
+    case CheckStatus::FreeEdge:
+      return "free_edge";
+    case CheckStatus::OpenShell:
+      return "open_shell";
+    case CheckStatus::EdgeSameOrientationTwice:
+      return "edge_same_orientation_twice";
+    case CheckStatus::NonManifoldEdge:
+      return "non_manifold_edge";
+    case CheckStatus::BadFaceOrientation:
+      return "bad_face_orientation";
+    case CheckStatus::EulerPoincareMismatch:
+      return "euler_poincare_mismatch";
   }
   return "unknown";
 }
@@ -102,7 +115,8 @@ class Checker {
  public:
   Checker(CheckReport& report, const std::vector<std::pair<Shape, double>>& known_volumes)
       : report_(report) {
-    for (const auto& [solid, v] : known_volumes) known_volumes_.emplace(solid.body_id(), std::pair{solid, v});
+    for (const auto& [solid, v] : known_volumes)
+      known_volumes_.emplace(solid.body_id(), std::pair{solid, v});
   }
 
   void run(const Shape& root) {
@@ -133,15 +147,17 @@ class Checker {
       ++visited;
       const Location& l = s.location();
       const double dev = (l.rotation().transpose() * l.rotation() - Eigen::Matrix3d::Identity())
-                             .cwiseAbs().maxCoeff();
+                             .cwiseAbs()
+                             .maxCoeff();
       if (!(l.scale() > 0) || dev > 1e-9 || l.rotation().determinant() < 0) {
-        add(CheckStatus::InvalidLocation,
-            std::string("a ") + shape_kind_name(s.kind()) + " has a location that is not a similarity");
+        add(CheckStatus::InvalidLocation, std::string("a ") + shape_kind_name(s.kind()) +
+                                              " has a location that is not a similarity");
         return;
       }
       for (std::size_t i = 0; i < s.child_count(); ++i) {
         if (s.body().children()[i].is_null()) {
-          add(CheckStatus::NullShape, std::string("a ") + shape_kind_name(s.kind()) + " has a null child");
+          add(CheckStatus::NullShape,
+              std::string("a ") + shape_kind_name(s.kind()) + " has a null child");
           return;
         }
         stack.push_back(s.child(i));
@@ -157,8 +173,8 @@ class Checker {
       const Shape v = edge.child(k);
       const double vt = tolerance(v);
       if (vt < et) {
-        add(CheckStatus::ToleranceOrder, name + ": tolerance " + num(et) +
-                                             " exceeds its vertex tolerance " + num(vt));
+        add(CheckStatus::ToleranceOrder,
+            name + ": tolerance " + num(et) + " exceeds its vertex tolerance " + num(vt));
       }
       if (d.degenerate()) continue;
       const double t = k == 0 ? d.first : d.last;
@@ -190,13 +206,15 @@ class Checker {
               name + ": tolerance " + num(ft) + " exceeds an edge tolerance " + num(et));
         }
         if (!end_vertex(edge).is_same(start_vertex(wire.child((e + 1) % n)))) {
-          add(CheckStatus::OpenWire, name + ": wire " + std::to_string(w) + " is open after edge " +
-                                         std::to_string(e));
+          add(CheckStatus::OpenWire,
+              name + ": wire " + std::to_string(w) + " is open after edge " + std::to_string(e));
         }
         // The pcurve must follow the 3D curve within the edge tolerance.
         const Curve2d& pc = *d.pcurves[w][e];
         const int samples = pc.kind() == Curve2dKind::Line && !ed.degenerate() &&
-                                    ed.curve->kind() == CurveKind::Line ? 2 : 16;
+                                    ed.curve->kind() == CurveKind::Line
+                                ? 2
+                                : 16;
         double worst = 0.0;
         std::vector<Vec2> pts;
         std::vector<double> ts;
@@ -245,7 +263,8 @@ class Checker {
       int end_side = 0;
       for (std::size_t j = i + 1; j < chords.size(); ++j) {
         const Chord& y = chords[j];
-        const int start_side = j > i + 1 && y.a == chords[j - 1].b ? end_side : orient(x.a, x.b, y.a);
+        const int start_side =
+            j > i + 1 && y.a == chords[j - 1].b ? end_side : orient(x.a, x.b, y.a);
         end_side = orient(x.a, x.b, y.b);
         if (start_side * end_side >= 0) continue;
         if (chords_cross(x, y, kChordDepth, budget)) {
@@ -277,14 +296,16 @@ class Checker {
       bool closed = true;
       for (std::size_t k = 0; k < uses.size(); ++k) {
         const int total = uses[k].forward + uses[k].reversed;
-        const std::string where = name + " shell " + std::to_string(s) + " edge " + std::to_string(k);
+        const std::string where =
+            name + " shell " + std::to_string(s) + " edge " + std::to_string(k);
         if (total == 1) {
           add(CheckStatus::FreeEdge, where + " bounds one face only");
           closed = false;
         } else if (total > 2) {
           add(CheckStatus::NonManifoldEdge, where + " bounds " + std::to_string(total) + " faces");
         } else if (uses[k].forward != 1) {
-          add(CheckStatus::EdgeSameOrientationTwice, where + " is used twice in the same direction");
+          add(CheckStatus::EdgeSameOrientationTwice,
+              where + " is used twice in the same direction");
         }
       }
       if (!closed) {
@@ -299,8 +320,8 @@ class Checker {
       const long chi = v - e + f - (l - f);
       if (chi % 2 != 0 || chi > 2) {
         add(CheckStatus::EulerPoincareMismatch,
-            name + " shell " + std::to_string(s) + ": V - E + F - (L - F) = " + std::to_string(chi) +
-                " is not 2(1 - genus)");
+            name + " shell " + std::to_string(s) +
+                ": V - E + F - (L - F) = " + std::to_string(chi) + " is not 2(1 - genus)");
       }
     }
     if (!report_.has(CheckStatus::OpenShell) && volume(solid) <= 0.0) {

@@ -17,9 +17,12 @@ namespace {
 
 CsgNodeKind node_kind(BooleanOp op) {
   switch (op) {
-    case BooleanOp::Fuse: return CsgNodeKind::Fuse;
-    case BooleanOp::Common: return CsgNodeKind::Common;
-    case BooleanOp::Cut: return CsgNodeKind::Cut;
+    case BooleanOp::Fuse:
+      return CsgNodeKind::Fuse;
+    case BooleanOp::Common:
+      return CsgNodeKind::Common;
+    case BooleanOp::Cut:
+      return CsgNodeKind::Cut;
   }
   return CsgNodeKind::Fuse;
 }
@@ -131,10 +134,14 @@ Result<Tracked> tracked_fold(std::vector<Tracked> items, BooleanOp op,
 
 const char* csg_node_kind_name(CsgNodeKind kind) {
   switch (kind) {
-    case CsgNodeKind::Primitive: return "primitive";
-    case CsgNodeKind::Fuse: return "fuse";
-    case CsgNodeKind::Common: return "common";
-    case CsgNodeKind::Cut: return "cut";
+    case CsgNodeKind::Primitive:
+      return "primitive";
+    case CsgNodeKind::Fuse:
+      return "fuse";
+    case CsgNodeKind::Common:
+      return "common";
+    case CsgNodeKind::Cut:
+      return "cut";
   }
   return "unknown";
 }

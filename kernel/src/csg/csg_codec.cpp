@@ -160,8 +160,8 @@ std::optional<Error> decode(ByteReader& in, CsgModel& m) {
       for (std::size_t k = 0; k < children && !in.failed(); ++k) {
         const std::uint64_t delta = in.varint();
         if (delta == 0 || delta > i) {
-          in.fail("CSG node " + std::to_string(i) + " has a child delta " +
-                  std::to_string(delta) + " that is not an earlier node");
+          in.fail("CSG node " + std::to_string(i) + " has a child delta " + std::to_string(delta) +
+                  " that is not an earlier node");
           break;
         }
         node.children.push_back(static_cast<int>(i - delta));
@@ -184,11 +184,12 @@ std::optional<Error> decode(ByteReader& in, CsgModel& m) {
       m.face_sources[f].push_back({static_cast<int>(node), static_cast<int>(face)});
     }
   }
-  if (in.failed()) return Error{ErrorCode::CorruptData, "native format: csg section: " + in.error()};
+  if (in.failed())
+    return Error{ErrorCode::CorruptData, "native format: csg section: " + in.error()};
   if (!in.at_end()) {
-    return Error{ErrorCode::CorruptData, "native format: csg section: " +
-                                             std::to_string(in.remaining()) +
-                                             " bytes after its end"};
+    return Error{
+        ErrorCode::CorruptData,
+        "native format: csg section: " + std::to_string(in.remaining()) + " bytes after its end"};
   }
   return std::nullopt;
 }

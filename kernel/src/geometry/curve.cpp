@@ -407,9 +407,7 @@ namespace csgtile::kernel {
 
 Vec3 TrigCurve::point(double t) const { return center_ + std::cos(t) * a_ + std::sin(t) * b_; }
 Vec3 TrigCurve::derivative(double t) const { return -std::sin(t) * a_ + std::cos(t) * b_; }
-Vec3 TrigCurve::second_derivative(double t) const {
-  return -std::cos(t) * a_ - std::sin(t) * b_;
-}
+Vec3 TrigCurve::second_derivative(double t) const { return -std::cos(t) * a_ - std::sin(t) * b_; }
 double TrigCurve::period() const { return detail::kTwoPi; }
 
 double TrigCurve::closest_parameter(const Vec3& p, double t0, double t1) const {

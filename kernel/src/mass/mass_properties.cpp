@@ -67,11 +67,13 @@ class SurfaceEvaluator {
   SurfacePoint evaluate_cylinder(double c, double s, double v) const {
     const Vec3 radial = c * frame_.x + s * frame_.y;
     const Vec3 radial_derivative = -s * frame_.x + c * frame_.y;
-    return placed({frame_.origin + radius_ * radial + v * frame_.z, radius_ * radial_derivative, frame_.z});
+    return placed(
+        {frame_.origin + radius_ * radial + v * frame_.z, radius_ * radial_derivative, frame_.z});
   }
 
   SurfacePoint evaluate(double u, double v) const {
-    if (kind_ == Kind::Plane) return placed({frame_.origin + u * frame_.x + v * frame_.y, frame_.x, frame_.y});
+    if (kind_ == Kind::Plane)
+      return placed({frame_.origin + u * frame_.x + v * frame_.y, frame_.x, frame_.y});
     if (kind_ == Kind::Cylinder) return evaluate_cylinder(std::cos(u), std::sin(u), v);
     return placed({surface_.point(u, v), surface_.du(u, v), surface_.dv(u, v)});
   }
@@ -80,7 +82,8 @@ class SurfaceEvaluator {
   enum class Kind { Plane, Cylinder, Other };
   SurfacePoint placed(const SurfacePoint& local) const {
     if (identity_) return local;
-    return {location_.apply_point(local.p), location_.apply_vector(local.su), location_.apply_vector(local.sv)};
+    return {location_.apply_point(local.p), location_.apply_vector(local.su),
+            location_.apply_vector(local.sv)};
   }
 
   const Surface& surface_;
@@ -152,7 +155,8 @@ class FaceIntegrator {
         const Vec2 d = pcurve.derivative(t0);
         if (d.y() == 0.0) return M{};  // constant v: no contribution
         const double span_u = d.x() * (t1 - t0), span_v = d.y() * (t1 - t0);
-        const int panels = std::max(panel_count(span_u, angular_u_), panel_count(span_v, angular_v_));
+        const int panels =
+            std::max(panel_count(span_u, angular_u_), panel_count(span_v, angular_v_));
         return integrate_panels<M>(g, t0, t1, panels);
       }
       case Curve2dKind::Circle:
@@ -205,7 +209,7 @@ class FaceIntegrator {
   M sampled_term(const Polyline2d& pcurve, double t0, double t1, double tolerance) const {
     static constexpr double kNode = 0.7745966692414834;  // sqrt(3/5)
     static constexpr double kWeights[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
-    static constexpr double kSpacingRatio = 0.1;  // smallest gap / largest gap of a stencil
+    static constexpr double kSpacingRatio = 0.1;          // smallest gap / largest gap of a stencil
     static constexpr long long kStencils[3] = {8, 6, 4};  // points per stencil, tried in turn
     static constexpr long long kReach = 8;                // vertices beyond [t0, t1] used at most
     static constexpr double kStraySafety = 4.0;           // tolerances the interpolant may stray
@@ -221,7 +225,8 @@ class FaceIntegrator {
     Vec3 previous = evaluator_.evaluate(at(k0).x(), at(k0).y()).p;
     for (long long k = k0 + 1; k <= k1; ++k) {
       const Vec3 x = evaluator_.evaluate(at(k).x(), at(k).y()).p;
-      arc[static_cast<std::size_t>(k - k0)] = arc[static_cast<std::size_t>(k - k0 - 1)] + (x - previous).norm();
+      arc[static_cast<std::size_t>(k - k0)] =
+          arc[static_cast<std::size_t>(k - k0 - 1)] + (x - previous).norm();
       previous = x;
     }
     auto s_of = [&](long long k) { return arc[static_cast<std::size_t>(k - k0)]; };
@@ -237,13 +242,15 @@ class FaceIntegrator {
     };
     M total{};
     for (long long seg = first; seg < last; ++seg) {
-      const double a = std::max(static_cast<double>(seg), t0), b = std::min(static_cast<double>(seg + 1), t1);
+      const double a = std::max(static_cast<double>(seg), t0),
+                   b = std::min(static_cast<double>(seg + 1), t1);
       if (b <= a) continue;
       // The stencil: the most central evenly spaced one of the largest size that has one.
       long long start = -1, size = 0;
       for (long long stencil : kStencils) {
         for (long long shift = 0; shift + 1 < stencil && start < 0; ++shift) {
-          const long long candidate = seg - (stencil / 2 - 1) + (shift % 2 == 0 ? shift / 2 : -(shift + 1) / 2);
+          const long long candidate =
+              seg - (stencil / 2 - 1) + (shift % 2 == 0 ? shift / 2 : -(shift + 1) / 2);
           if (stable(candidate, stencil)) start = candidate;
         }
         if (start >= 0) {
@@ -279,7 +286,9 @@ class FaceIntegrator {
       Vec2 unused;
       if (start >= 0) {
         const Vec2 middle = smooth(seg + 0.5, unused), chord = 0.5 * (p0 + p1);
-        const double stray = (evaluator_.evaluate(middle.x(), middle.y()).p - evaluator_.evaluate(chord.x(), chord.y()).p).norm();
+        const double stray = (evaluator_.evaluate(middle.x(), middle.y()).p -
+                              evaluator_.evaluate(chord.x(), chord.y()).p)
+                                 .norm();
         if (!(stray <= kStraySafety * tolerance)) start = -1;
       }
       const double xa = a - static_cast<double>(seg), xb = b - static_cast<double>(seg);
@@ -409,14 +418,17 @@ M face_moments(const Shape& face) {
       // exact (a polygon).
       double sampled_tolerance = 0.0;
       if (ed.curve && ed.curve->kind() == CurveKind::Polyline) {
-        sampled_tolerance = static_cast<const PolylineCurve&>(*ed.curve).tolerance() * face.location().scale();
+        sampled_tolerance =
+            static_cast<const PolylineCurve&>(*ed.curve).tolerance() * face.location().scale();
       }
       M m = integrator.edge_term(*data.pcurves[w][e], ed.first, ed.last, sampled_tolerance);
       total += scaled(m, o == Orientation::Forward ? 1.0 : -1.0);
     }
   }
   const Orientation fo = face.orientation();
-  const double flux_sign = fo == Orientation::Forward ? 1.0 : fo == Orientation::Reversed ? -1.0 : 0.0;
+  const double flux_sign = fo == Orientation::Forward    ? 1.0
+                           : fo == Orientation::Reversed ? -1.0
+                                                         : 0.0;
   M out = scaled(total, flux_sign);
   if constexpr (!std::is_same_v<M, VolumeMoment>) out[0] = std::abs(total[0]);
   return out;
@@ -492,7 +504,8 @@ namespace detail {
 double solid_volume(const Shape& shape) {
   if (shape.is_null()) return 0.0;
   VolumeMoment total{};
-  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<VolumeMoment>(face);
+  for (const Shape& face : Explorer(shape, ShapeKind::Face))
+    total += face_moments<VolumeMoment>(face);
   return total[0];
 }
 

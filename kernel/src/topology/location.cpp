@@ -46,11 +46,13 @@ Result<Location> Location::from_matrix(const Matrix34& q) {
   // Condition (2): Q3 = Q2 / cbrt(d) is orthogonal.
   const double s = std::cbrt(d);
   const Eigen::Matrix3d q3 = q2 / s;
-  const double deviation = (q3.transpose() * q3 - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  const double deviation =
+      (q3.transpose() * q3 - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (deviation > kSimilarityTolerance) {
     return Error{ErrorCode::InvalidLocation,
                  "location matrix is not a similarity (rotation x uniform scale): "
-                 "|Q3^T Q3 - I| = " + format_double(deviation)};
+                 "|Q3^T Q3 - I| = " +
+                     format_double(deviation)};
   }
   // Nearest rotation (polar decomposition) so that composition does not drift.
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(q3, Eigen::ComputeFullU | Eigen::ComputeFullV);

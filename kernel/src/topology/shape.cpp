@@ -7,14 +7,22 @@ namespace csgtile::kernel {
 
 const char* shape_kind_name(ShapeKind kind) {
   switch (kind) {
-    case ShapeKind::Compound: return "compound";
-    case ShapeKind::CompSolid: return "compsolid";
-    case ShapeKind::Solid: return "solid";
-    case ShapeKind::Shell: return "shell";
-    case ShapeKind::Face: return "face";
-    case ShapeKind::Wire: return "wire";
-    case ShapeKind::Edge: return "edge";
-    case ShapeKind::Vertex: return "vertex";
+    case ShapeKind::Compound:
+      return "compound";
+    case ShapeKind::CompSolid:
+      return "compsolid";
+    case ShapeKind::Solid:
+      return "solid";
+    case ShapeKind::Shell:
+      return "shell";
+    case ShapeKind::Face:
+      return "face";
+    case ShapeKind::Wire:
+      return "wire";
+    case ShapeKind::Edge:
+      return "edge";
+    case ShapeKind::Vertex:
+      return "vertex";
   }
   return "unknown";
 }
@@ -89,8 +97,8 @@ Result<Shape> ShapeFactory::edge(CurvePtr curve, double first, double last, cons
     }
     const double vt = kernel::tolerance(v);
     if (tolerance > vt) {
-      return Error{ErrorCode::InvalidArgument, "edge tolerance " + num(tolerance) +
-                                                   " exceeds its vertex tolerance " + num(vt)};
+      return Error{ErrorCode::InvalidArgument,
+                   "edge tolerance " + num(tolerance) + " exceeds its vertex tolerance " + num(vt)};
     }
     const double gap = (curve->point(params[i]) - vertex_point(v)).norm();
     if (gap > vt) {
@@ -116,8 +124,7 @@ Result<Shape> ShapeFactory::degenerate_edge(const Shape& vertex, double first, d
   }
   auto body = std::make_shared<ShapeBody>();
   body->kind_ = ShapeKind::Edge;
-  body->children_ = {vertex.oriented(Orientation::Forward),
-                     vertex.oriented(Orientation::Reversed)};
+  body->children_ = {vertex.oriented(Orientation::Forward), vertex.oriented(Orientation::Reversed)};
   body->edge_ = std::make_unique<EdgeData>(EdgeData{nullptr, first, last, tolerance});
   return Shape(std::move(body), Location(), Orientation::Forward);
 }
@@ -162,8 +169,8 @@ Result<Shape> ShapeFactory::face(SurfacePtr surface, std::vector<Shape> wires,
       if (!pcurves[w][e]) return Error{ErrorCode::InvalidArgument, "face has a null pcurve"};
       const double et = kernel::tolerance(wires[w].child(e));
       if (tolerance > et) {
-        return Error{ErrorCode::InvalidArgument, "face tolerance " + num(tolerance) +
-                                                     " exceeds an edge tolerance " + num(et)};
+        return Error{ErrorCode::InvalidArgument,
+                     "face tolerance " + num(tolerance) + " exceeds an edge tolerance " + num(et)};
       }
     }
   }
@@ -186,7 +193,8 @@ Result<Shape> ShapeFactory::compsolid(std::vector<Shape> solids) {
 }
 Result<Shape> ShapeFactory::compound(std::vector<Shape> shapes) {
   for (const Shape& s : shapes) {
-    if (s.is_null()) return Error{ErrorCode::InvalidArgument, "a compound cannot hold a null shape"};
+    if (s.is_null())
+      return Error{ErrorCode::InvalidArgument, "a compound cannot hold a null shape"};
   }
   auto body = std::make_shared<ShapeBody>();
   body->kind_ = ShapeKind::Compound;

@@ -48,7 +48,8 @@ TEST(BroadPhase, FindsExactlyTheOverlappingBoxes) {
   std::set<std::pair<int, int>> brute;
   for (int i = 0; i < 400; ++i) {
     for (int j = i + 1; j < 400; ++j) {
-      if (boxes[static_cast<std::size_t>(i)].intersects(boxes[static_cast<std::size_t>(j)])) brute.insert({i, j});
+      if (boxes[static_cast<std::size_t>(i)].intersects(boxes[static_cast<std::size_t>(j)]))
+        brute.insert({i, j});
     }
   }
   const auto pairs = detail::overlapping_boxes(boxes);
@@ -62,8 +63,9 @@ TEST(BroadPhase, FindsExactlyTheOverlappingBoxes) {
 // random rotation (sizes 0.5–3).
 PrimitiveSpec random_part(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  static const PrimitiveType types[] = {PrimitiveType::Box, PrimitiveType::Cylinder, PrimitiveType::Sphere,
-                                        PrimitiveType::Extrusion, PrimitiveType::Cone};
+  static const PrimitiveType types[] = {PrimitiveType::Box, PrimitiveType::Cylinder,
+                                        PrimitiveType::Sphere, PrimitiveType::Extrusion,
+                                        PrimitiveType::Cone};
   PrimitiveSpec s;
   s.type = types[std::uniform_int_distribution<int>(0, 4)(rng)];
   s.size = Vec3(0.5 + 2.5 * u(rng), 0.5 + 2.5 * u(rng), 0.5 + 2.5 * u(rng));
@@ -94,16 +96,16 @@ TEST(VoxelCulling, NeverCullsAPairInContact) {
     Vec3 dir(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
     dir.normalize();
     // b moved by t·dir: in contact at t = 0 (centres together), apart at t = 20.
-    auto at = [&](double t) {
-      return sb0.value().moved(kernel::Location::translation(dir * t));
-    };
+    auto at = [&](double t) { return sb0.value().moved(kernel::Location::translation(dir * t)); };
     double lo = 0, hi = 20;
     bool ok = true;
     for (int it = 0; it < 18 && ok; ++it) {
       const double mid = 0.5 * (lo + hi);
       auto r = kernel::solid_interference(sa.value(), at(mid), bopt);
-      if (!r.ok()) ok = false;
-      else (r.value() == Interference::Disjoint ? hi : lo) = mid;
+      if (!r.ok())
+        ok = false;
+      else
+        (r.value() == Interference::Disjoint ? hi : lo) = mid;
     }
     if (!ok) {
       ++skipped;
@@ -129,8 +131,9 @@ TEST(VoxelCulling, NeverCullsAPairInContact) {
     }
     if (verdict.value() != Interference::Disjoint) {
       ++in_contact;
-      EXPECT_TRUE(culler.may_meet(0, 1)) << "pair " << k << " in contact (" << kernel::interference_name(verdict.value())
-                                         << ") was culled at voxel " << voxel;
+      EXPECT_TRUE(culler.may_meet(0, 1))
+          << "pair " << k << " in contact (" << kernel::interference_name(verdict.value())
+          << ") was culled at voxel " << voxel;
     }
     ++apart;
     apart_culled += culler.may_meet(0, 2) ? 0 : 1;
@@ -165,7 +168,8 @@ double union_volume(const std::vector<PrimitiveSpec>& boxes) {
   for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
     for (std::size_t j = 0; j + 1 < ys.size(); ++j) {
       for (std::size_t k = 0; k + 1 < zs.size(); ++k) {
-        const Vec3 c(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]), 0.5 * (zs[k] + zs[k + 1]));
+        const Vec3 c(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]),
+                     0.5 * (zs[k] + zs[k + 1]));
         for (const auto& b : bb) {
           if (b.contains(c)) {
             volume += (xs[i + 1] - xs[i]) * (ys[j + 1] - ys[j]) * (zs[k + 1] - zs[k]);
@@ -210,7 +214,9 @@ bool inside(const PrimitiveSpec& s, const Vec3& world) {
       const auto& poly = s.profile;
       for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
         if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
-            p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x()) {
+            p.x() <
+                (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) +
+                    poly[i].x()) {
           in = !in;
         }
       }
@@ -239,7 +245,8 @@ TEST(Assembly, MixedCityVolumeMatchesMonteCarlo) {
     ++multi;
     // Samples in the object's box: the share inside any of its primitives.
     const BoundingBox& b = obj.box;
-    std::uniform_real_distribution<double> ux(b.min.x(), b.max.x()), uy(b.min.y(), b.max.y()), uz(b.min.z(), b.max.z());
+    std::uniform_real_distribution<double> ux(b.min.x(), b.max.x()), uy(b.min.y(), b.max.y()),
+        uz(b.min.z(), b.max.z());
     const int samples = 40000;
     int hits = 0;
     for (int k = 0; k < samples; ++k) {
@@ -272,7 +279,8 @@ TEST(Assembly, OutputDoesNotDependOnThreadsOrCulling) {
   two.threads = 2;
   nocull.voxel_culling = false;
   nobroad.broad_phase = false;
-  auto a1 = assemble(prims, one), a2 = assemble(prims, two), a3 = assemble(prims, nocull), a4 = assemble(prims, nobroad);
+  auto a1 = assemble(prims, one), a2 = assemble(prims, two), a3 = assemble(prims, nocull),
+       a4 = assemble(prims, nobroad);
   ASSERT_TRUE(a1.ok() && a2.ok() && a3.ok() && a4.ok());
   const std::string bytes = model_bytes(a1->objects);
   EXPECT_EQ(bytes, model_bytes(a2->objects));
@@ -287,7 +295,8 @@ TEST(Assembly, OutputDoesNotDependOnThreadsOrCulling) {
 }
 
 // Object identity for comparing assemblies: id, primitives, volume bits.
-std::map<std::string, std::pair<std::vector<int>, double>> by_id(const std::vector<AssembledObject>& objects) {
+std::map<std::string, std::pair<std::vector<int>, double>> by_id(
+    const std::vector<AssembledObject>& objects) {
   std::map<std::string, std::pair<std::vector<int>, double>> out;
   for (const auto& o : objects) out[o.id] = {o.primitives, o.volume};
   return out;
@@ -299,7 +308,8 @@ TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
   ASSERT_TRUE(whole.ok());
   const auto expected = by_id(whole->objects);
   double max_extent = 0;
-  for (const auto& o : whole->objects) max_extent = std::max({max_extent, o.box.size().x(), o.box.size().y()});
+  for (const auto& o : whole->objects)
+    max_extent = std::max({max_extent, o.box.size().x(), o.box.size().y()});
   for (double size : {25.0, 40.0, 95.0}) {
     CellSpec grid;
     grid.size = size;
@@ -321,7 +331,8 @@ TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
         EXPECT_EQ(cell->stats.objects_past_halo, 0);
         for (const auto& o : cell->objects) {
           ++published;
-          EXPECT_TRUE(got.emplace(o.id, std::make_pair(o.primitives, o.volume)).second) << o.id << " published twice";
+          EXPECT_TRUE(got.emplace(o.id, std::make_pair(o.primitives, o.volume)).second)
+              << o.id << " published twice";
           const auto [ci, cj] = cell_of(grid, o.box.min.x(), o.box.min.y());
           EXPECT_EQ(ci, i);
           EXPECT_EQ(cj, j);
@@ -399,7 +410,8 @@ TEST(Assembly, CityModelKeepsEveryObjectsTree) {
 
 TEST(Interference, NamesDisjointTouchingOverlappingAndNested) {
   auto box = [](double x, double s) {
-    return kernel::make_box(s, s, s).value().moved(kernel::Location::translation(Vec3(x, x < 2 ? x : 0, x < 2 ? x : 0)));
+    return kernel::make_box(s, s, s).value().moved(
+        kernel::Location::translation(Vec3(x, x < 2 ? x : 0, x < 2 ? x : 0)));
   };
   auto check = [&](double x, double s, Interference want) {
     auto r = kernel::solid_interference(box(0, 2), box(x, s));
@@ -407,10 +419,11 @@ TEST(Interference, NamesDisjointTouchingOverlappingAndNested) {
     EXPECT_EQ(r.value(), want) << x << " " << s;
   };
   check(3, 1, Interference::Disjoint);
-  check(2, 1, Interference::BoundariesMeet);  // face contact
+  check(2, 1, Interference::BoundariesMeet);    // face contact
   check(1.5, 1, Interference::BoundariesMeet);  // overlap
-  check(0.5, 0.5, Interference::Nested);      // strictly inside
-  auto sphere = kernel::make_sphere(0.5).value().moved(kernel::Location::translation(Vec3(1, 1, 1)));
+  check(0.5, 0.5, Interference::Nested);        // strictly inside
+  auto sphere =
+      kernel::make_sphere(0.5).value().moved(kernel::Location::translation(Vec3(1, 1, 1)));
   auto r = kernel::solid_interference(box(0, 2), sphere);
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r.value(), Interference::Nested);

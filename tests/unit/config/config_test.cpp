@@ -52,15 +52,22 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
                                    ? ""
                                    : format_problem(result.source, result.problems.front()));
   Config expected;
-  expected.run = {"demo", {"scenes/pavilion.json", "scenes/courtyard_block.json"}, "out/demo", 42, 4,
-                  "EPSG:28992+5709"};
+  expected.run = {"demo",     {"scenes/pavilion.json", "scenes/courtyard_block.json"},
+                  "out/demo", 42,
+                  4,          "EPSG:28992+5709"};
   expected.kernel = {1.0e-7, 0.005};
-  expected.queue = {QueueBackend::Sqlite, "", "host=localhost dbname=csgtile", 3, 120, 20,
-                    "verify-full", "/etc/ssl/certs/csgtile-db-ca.pem"};
+  expected.queue = {QueueBackend::Sqlite,
+                    "",
+                    "host=localhost dbname=csgtile",
+                    3,
+                    120,
+                    20,
+                    "verify-full",
+                    "/etc/ssl/certs/csgtile-db-ca.pem"};
   expected.log = {LogLevel::Debug, LogFormat::Json};
   expected.metrics = {"127.0.0.1:9464"};
-  expected.fetch = {{"https", "s3"}, 10, 900, 1024, 30, 4294967296ull, 3, 3, "", "/var/cache/csgtile",
-                    "", "eu-west-1"};
+  expected.fetch = {{"https", "s3"},      10, 900,        1024, 30, 4294967296ull, 3, 3, "",
+                    "/var/cache/csgtile", "", "eu-west-1"};
   expected.city = {250.0, 50.0, 0.5};
   expected.fit.classes.keep = {6, 26};  // the example's only fit value that is not a default
   expected.publish = {""};
@@ -286,21 +293,24 @@ TEST(ConfigProblems, BadIndentationIsASyntaxError) {
 }
 
 TEST(ConfigProblems, TopLevelMustBeAMapping) {
-  EXPECT_THAT(problems_of("- run\n- log\n"),
-              ElementsAre(Problem{"", 1,
-                                  "the top level must be a mapping of sections (city, fetch, fit, kernel, "
-                                  "log, metrics, publish, queue, run), got a list"}));
+  EXPECT_THAT(
+      problems_of("- run\n- log\n"),
+      ElementsAre(Problem{"", 1,
+                          "the top level must be a mapping of sections (city, fetch, fit, kernel, "
+                          "log, metrics, publish, queue, run), got a list"}));
   EXPECT_THAT(problems_of("just text\n"), ElementsAre(testing::Field(&Problem::line, 1)));
 }
 
 TEST(ConfigProblems, CityHaloMustBeSmallerThanTheCell) {
   EXPECT_THAT(problems_of("city:\n  cell_size: 100\n  halo: 100\n"),
-              ElementsAre(Problem{"city.halo", 0, "must be smaller than city.cell_size (100.0), got 100.0"}));
+              ElementsAre(Problem{"city.halo", 0,
+                                  "must be smaller than city.cell_size (100.0), got 100.0"}));
   EXPECT_EQ(config_of("city:\n  cell_size: 100\n  halo: 20\n").city.halo, 20.0);
 }
 
 TEST(ConfigProblems, PublishUrlMustBeAnS3Prefix) {
-  EXPECT_EQ(config_of("publish:\n  url: s3://city-bucket/runs\n").publish.url, "s3://city-bucket/runs");
+  EXPECT_EQ(config_of("publish:\n  url: s3://city-bucket/runs\n").publish.url,
+            "s3://city-bucket/runs");
   EXPECT_EQ(problems_of("publish:\n  url: http://example.org/x\n").size(), 1u);
 }
 
@@ -391,8 +401,8 @@ TEST(ConfigEnvironment, StringValuesAreTakenAsWritten) {
 
 TEST(ConfigMetrics, ListenAddressFormsAndOverride) {
   EXPECT_EQ(config_of("").metrics.listen, "");  // off by default
-  for (const char* ok : {"off", "127.0.0.1:9464", "0.0.0.0:9464", ":9464", "9464", "[::1]:9464",
-                         "localhost:0"}) {
+  for (const char* ok :
+       {"off", "127.0.0.1:9464", "0.0.0.0:9464", ":9464", "9464", "[::1]:9464", "localhost:0"}) {
     EXPECT_EQ(config_of(std::string("metrics:\n  listen: \"") + ok + "\"\n").metrics.listen, ok);
   }
   EXPECT_EQ(config_of("", {{"CSGTILE_METRICS__LISTEN", "127.0.0.1:9500"}}).metrics.listen,
@@ -406,7 +416,8 @@ TEST(ConfigMetrics, ListenAddressFormsAndOverride) {
 
 TEST(ConfigFetch, SchemesAreCheckedAndOverridable) {
   EXPECT_EQ(config_of("").fetch.schemes, (std::vector<std::string>{"file", "http", "https", "s3"}));
-  EXPECT_EQ(config_of("fetch:\n  schemes: [https]\n").fetch.schemes, std::vector<std::string>{"https"});
+  EXPECT_EQ(config_of("fetch:\n  schemes: [https]\n").fetch.schemes,
+            std::vector<std::string>{"https"});
   EXPECT_THAT(problems_of("fetch:\n  schemes: [https, gopher]\n"),
               ElementsAre(testing::Field(&Problem::path, "fetch.schemes[1]")));
   EXPECT_THAT(problems_of("fetch:\n  schemes: [s3, s3]\n"),
@@ -527,40 +538,42 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 }
 
 TEST(ConfigJson, DefaultsAsCanonicalText) {
-  EXPECT_EQ(to_json(Config{}),
-            R"({"city":{"cell_size":250.0,"halo":50.0,"voxel_size":0.5},)"
-            R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
-            R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
-            R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
-            R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
-            R"("fit":{"classes":{"drop":[3,4,5,7,9,18],"keep":[6]},"clusters":{"min_points":40,"tolerance":0.0},)"
-            R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
-            R"("window":30.0},"normals":{"neighbours":16},)"
-            R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
-            R"("primitives":{"angle_tolerance_deg":5.0,"blocks":true,"boxes":true,"extrusions":true,)"
-            R"("max_box_depth":40.0,"max_overreach":0.25,"min_angular_span_deg":90.0,)"
-            R"("min_box_thickness":0.04,"min_building_height":2.0,"min_building_width":1.0,)"
-            R"("min_curved_coverage":0.05,"min_seed_coverage":0.6,)"
-            R"("revolutions":true,"roof_parts":true},)"
-            R"("ransac":{"cluster_epsilon":0.0,"epsilon":0.02,"max_candidates":2000000,)"
-            R"("max_radius":30.0,"min_points":40,"normal_deviation_deg":25.0,"probability":0.99,)"
-            R"("shapes":["plane","sphere","cylinder","cone","torus"]},)"
-            R"("regions":{"curvature":1.0,"enabled":false,"min_points":40,"neighbours":16,)"
-            R"("smoothness_deg":10.0},"voxel":{"size":0.0}},)"
-            R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
-            R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
-            R"("publish":{"url":""},)"
-            R"("queue":{"backend":"sqlite","grace_seconds":25,"lease_seconds":60,"max_attempts":5,)"
-            R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
-            R"("sqlite_path":""},)"
-            R"("run":{"crs":"","inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
+  EXPECT_EQ(
+      to_json(Config{}),
+      R"({"city":{"cell_size":250.0,"halo":50.0,"voxel_size":0.5},)"
+      R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
+      R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
+      R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"
+      R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
+      R"("fit":{"classes":{"drop":[3,4,5,7,9,18],"keep":[6]},"clusters":{"min_points":40,"tolerance":0.0},)"
+      R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
+      R"("window":30.0},"normals":{"neighbours":16},)"
+      R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
+      R"("primitives":{"angle_tolerance_deg":5.0,"blocks":true,"boxes":true,"extrusions":true,)"
+      R"("max_box_depth":40.0,"max_overreach":0.25,"min_angular_span_deg":90.0,)"
+      R"("min_box_thickness":0.04,"min_building_height":2.0,"min_building_width":1.0,)"
+      R"("min_curved_coverage":0.05,"min_seed_coverage":0.6,)"
+      R"("revolutions":true,"roof_parts":true},)"
+      R"("ransac":{"cluster_epsilon":0.0,"epsilon":0.02,"max_candidates":2000000,)"
+      R"("max_radius":30.0,"min_points":40,"normal_deviation_deg":25.0,"probability":0.99,)"
+      R"("shapes":["plane","sphere","cylinder","cone","torus"]},)"
+      R"("regions":{"curvature":1.0,"enabled":false,"min_points":40,"neighbours":16,)"
+      R"("smoothness_deg":10.0},"voxel":{"size":0.0}},)"
+      R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
+      R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
+      R"("publish":{"url":""},)"
+      R"("queue":{"backend":"sqlite","grace_seconds":25,"lease_seconds":60,"max_attempts":5,)"
+      R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
+      R"("sqlite_path":""},)"
+      R"("run":{"crs":"","inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");
 }
 
 TEST(ConfigFit, SectionLoadsWithLinesAndOverrides) {
   const LoadResult loaded = load_string(
       "fit:\n  classes:\n    keep: [6, 26]\n  ransac:\n    epsilon: 0.05\n"
       "    shapes: [plane, cylinder]\n  primitives:\n    min_building_height: 3\n",
-      "fit.yaml", {{"CSGTILE_FIT__VOXEL__SIZE", "0.25"}, {"CSGTILE_FIT__RANSAC__MIN_POINTS", "12"}});
+      "fit.yaml",
+      {{"CSGTILE_FIT__VOXEL__SIZE", "0.25"}, {"CSGTILE_FIT__RANSAC__MIN_POINTS", "12"}});
   ASSERT_TRUE(loaded.ok());
   const FitConfig& fit = loaded.config->fit;
   EXPECT_EQ(fit.classes.keep, (std::vector<int>{6, 26}));

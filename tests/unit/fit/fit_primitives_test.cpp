@@ -206,8 +206,8 @@ TEST(FitPrimitives, BeamContinuedByFacePointsWithStraddlingNormalsIsOneBox) {
 TEST(FitPrimitives, PostsInARowBeyondABeamDoNotLengthenIt) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 lx(2.0, 0.0, 0.0), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 41);        // side y = 0
-  c.append(testing::rectangle_cloud(corner, lx, ly, 0.015, 0.002, 42));       // underside
+  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 41);       // side y = 0
+  c.append(testing::rectangle_cloud(corner, lx, ly, 0.015, 0.002, 42));      // underside
   c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002, 43));  // side y = 0.2
   for (int k = 0; k < 4; ++k) {
     c.append(testing::cylinder_cloud(Vec3(2.3 + 0.45 * k, -0.165, 3.2), Vec3::UnitZ(), 0.15, 1.3,
@@ -248,8 +248,8 @@ TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
     for (const double y : {-0.1, 0.1}) {
       c.append(testing::rectangle_cloud(Vec3(x0, y, 3.7), 1.4 * ex, lz, 0.01, 0.002, seed++));
     }
-    c.append(testing::rectangle_cloud(Vec3(x0, -0.1, 3.7), 1.4 * ex, 0.2 * ey, 0.015, 0.002,
-                                      seed++));
+    c.append(
+        testing::rectangle_cloud(Vec3(x0, -0.1, 3.7), 1.4 * ex, 0.2 * ey, 0.015, 0.002, seed++));
   }
   // Boxes only: the node's cross-shaped section would otherwise be one extrusion, which is
   // not what this test is about.
@@ -273,9 +273,8 @@ TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
   std::string why;
   for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
   ASSERT_EQ(boxes.size(), 3U) << why;
-  std::sort(boxes.begin(), boxes.end(), [](const auto& a, const auto& b) {
-    return box_centre(a).x() < box_centre(b).x();
-  });
+  std::sort(boxes.begin(), boxes.end(),
+            [](const auto& a, const auto& b) { return box_centre(a).x() < box_centre(b).x(); });
   EXPECT_LT((box_centre(boxes[0]) - Vec3(-0.8, 0.0, 3.85)).norm(), 0.02);
   EXPECT_LT((box_centre(boxes[1]) - Vec3(0.0, 0.0, 3.85)).norm(), 0.02);
   EXPECT_LT((box_centre(boxes[2]) - Vec3(0.8, 0.0, 3.85)).norm(), 0.02);
@@ -436,8 +435,8 @@ TEST(FitPrimitives, GiantSphereOverAFewRoofPointsIsRejectedAsUnsupported) {
   s.point = centre;
   s.radius = 21.7;
   const RansacOptions o;
-  const FittedPrimitives f =
-      primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.5), PrimitiveOptions{}, o, 0);
+  const FittedPrimitives f = primitives_from_shapes(
+      c.points, {}, one_shape(s, c.points.size(), 0.5), PrimitiveOptions{}, o, 0);
   EXPECT_TRUE(f.primitives.empty());
   ASSERT_EQ(f.rejected.size(), 1U);
   EXPECT_EQ(f.rejected[0].reason.rfind("unsupported: ", 0), 0U) << f.rejected[0].reason;
@@ -455,8 +454,8 @@ TEST(FitPrimitives, SphereReachingFarBelowItsPointsIsRejectedAsUnsupported) {
   s.radius = 6.0;
   PrimitiveOptions po;
   po.min_curved_coverage = 0.0;
-  const FittedPrimitives f =
-      primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.1), po, RansacOptions{}, 0);
+  const FittedPrimitives f = primitives_from_shapes(
+      c.points, {}, one_shape(s, c.points.size(), 0.1), po, RansacOptions{}, 0);
   EXPECT_TRUE(f.primitives.empty());
   ASSERT_EQ(f.rejected.size(), 1U);
   EXPECT_NE(f.rejected[0].reason.find("beyond the points of its region"), std::string::npos)
@@ -470,8 +469,8 @@ TEST(FitPrimitives, WellSeenBallIsKept) {
   s.type = ShapeType::Sphere;
   s.point = centre;
   s.radius = 0.5;
-  const FittedPrimitives f = primitives_from_shapes(c.points, {}, one_shape(s, c.points.size(), 0.05),
-                                                    PrimitiveOptions{}, RansacOptions{}, 0);
+  const FittedPrimitives f = primitives_from_shapes(
+      c.points, {}, one_shape(s, c.points.size(), 0.05), PrimitiveOptions{}, RansacOptions{}, 0);
   ASSERT_EQ(f.primitives.size(), 1U) << (f.rejected.empty() ? "" : f.rejected[0].reason);
   EXPECT_GT(f.primitives[0].quality->coverage, 0.5);
 }

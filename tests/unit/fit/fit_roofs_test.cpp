@@ -13,8 +13,8 @@
 
 #include "csgtile/fit/fit.h"
 #include "csgtile/kernel/mass_properties.h"
-#include "fit_internal.h"
 #include "fit_clouds.h"
+#include "fit_internal.h"
 
 namespace csgtile::fit {
 namespace {

@@ -8,18 +8,18 @@
 #include <cmath>
 #include <numbers>
 
-#include "csgtile/geo/scene.h"
 #include "csgtile/fit/segment.h"
+#include "csgtile/geo/scene.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "fit_clouds.h"
 
 namespace csgtile::fit {
 namespace {
 
-using kernel::PrimitiveType;
-using kernel::Vec3;
 using geo::Scene;
 using geo::scene_to_json;
+using kernel::PrimitiveType;
+using kernel::Vec3;
 using testing::Cloud;
 
 TEST(FitSegment, StatisticalOutliersAreRemoved) {
@@ -302,7 +302,8 @@ TEST(FitSegment, PipelineOptionsAreChecked) {
 // percentile of its heights. The same points unclassified (a tree could look like this) make
 // no block.
 TEST(FitSegment, BuildingPointsNoSurfaceExplainsBecomeAnLod12Block) {
-  Cloud c = testing::rectangle_cloud(Vec3(-15, -15, 0), Vec3(40, 0, 0), Vec3(0, 40, 0), 0.3, 0.01, 31);
+  Cloud c =
+      testing::rectangle_cloud(Vec3(-15, -15, 0), Vec3(40, 0, 0), Vec3(0, 40, 0), 0.3, 0.01, 31);
   const std::size_t ground = c.points.size();
   std::vector<double> heights;
   for (double x = 0.0; x < 10.0; x += 0.3) {
@@ -314,7 +315,8 @@ TEST(FitSegment, BuildingPointsNoSurfaceExplainsBecomeAnLod12Block) {
     }
   }
   std::sort(heights.begin(), heights.end());
-  const double p70 = heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
+  const double p70 =
+      heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
   std::vector<std::uint8_t> classes(c.points.size(), 6);
   std::fill(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(ground), 2);
   FitPipelineOptions o;
@@ -326,7 +328,8 @@ TEST(FitSegment, BuildingPointsNoSurfaceExplainsBecomeAnLod12Block) {
     if (p.spec.type == PrimitiveType::Extrusion && p.spec.clips.empty()) block = &p;
   }
   std::string found;
-  for (const auto& p : out->primitives) found += std::string(kernel::primitive_type_name(p.spec.type)) + " ";
+  for (const auto& p : out->primitives)
+    found += std::string(kernel::primitive_type_name(p.spec.type)) + " ";
   for (const auto& r : out->rejected) found += "| " + r.what + ": " + r.reason + " ";
   ASSERT_NE(block, nullptr) << found;
   const auto solid = kernel::build_primitive(block->spec);

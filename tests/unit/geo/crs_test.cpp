@@ -212,11 +212,12 @@ TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
     const char* name_part;
     ProjectionMethod method;
   };
-  for (const Case& c : {Case{3067, "TM35FIN", ProjectionMethod::TransverseMercator},
-                        Case{31370, "Belgian Lambert 72", ProjectionMethod::LambertConicConformal2SP},
-                        Case{2180, "CS92", ProjectionMethod::TransverseMercator},
-                        Case{3006, "SWEREF99 TM", ProjectionMethod::TransverseMercator},
-                        Case{7856, "MGA zone 56", ProjectionMethod::TransverseMercator}}) {
+  for (const Case& c :
+       {Case{3067, "TM35FIN", ProjectionMethod::TransverseMercator},
+        Case{31370, "Belgian Lambert 72", ProjectionMethod::LambertConicConformal2SP},
+        Case{2180, "CS92", ProjectionMethod::TransverseMercator},
+        Case{3006, "SWEREF99 TM", ProjectionMethod::TransverseMercator},
+        Case{7856, "MGA zone 56", ProjectionMethod::TransverseMercator}}) {
     SCOPED_TRACE(c.code);
     auto crs = crs_from_epsg(c.code);
     ASSERT_TRUE(crs.ok()) << crs.error().message;
@@ -239,9 +240,12 @@ TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
   EXPECT_NE(finland.value().vertical->name.find("N2000"), std::string::npos);
   EXPECT_FALSE(mentions(finland.value().warnings, "EPSG:3900"));
   // Methods our engines do not compute are PROJ's; geocentric CRSs are read too.
-  for (const auto& [code, method] : std::vector<std::pair<int, std::string>>{
-           {2056, "Oblique Mercator"}, {5514, "Krovak"}, {3857, "Pseudo Mercator"},
-           {3035, "Lambert Azimuthal Equal Area"}, {3577, "Albers"}}) {
+  for (const auto& [code, method] :
+       std::vector<std::pair<int, std::string>>{{2056, "Oblique Mercator"},
+                                                {5514, "Krovak"},
+                                                {3857, "Pseudo Mercator"},
+                                                {3035, "Lambert Azimuthal Equal Area"},
+                                                {3577, "Albers"}}) {
     auto crs = crs_from_epsg(code);
     ASSERT_TRUE(crs.ok()) << code << ": " << crs.error().message;
     ASSERT_TRUE(crs.value().projection.has_value());

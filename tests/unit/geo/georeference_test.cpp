@@ -232,8 +232,8 @@ TEST(GeoProjectionVsCs2cs, MethodsComputedByProj) {
   expect_family({"WGS 84 / Pseudo-Mercator", 3857, 4326, false, -80.0, 80.0, -179.0, 179.0});
   expect_family({"WGS 84 / World Mercator", 3395, 4326, false, -80.0, 80.0, -179.0, 179.0});
   // PROJ 9.1 inverts LAEA with a truncated authalic-latitude series: about 1 mm, for cs2cs too.
-  expect_family({"ETRS89-extended / LAEA Europe", 3035, 4258, true, 35.0, 70.0, -10.0, 30.0},
-                2e-3, 2e-3);
+  expect_family({"ETRS89-extended / LAEA Europe", 3035, 4258, true, 35.0, 70.0, -10.0, 30.0}, 2e-3,
+                2e-3);
   expect_family({"GDA94 / Australian Albers", 3577, 4283, false, -40.0, -12.0, 115.0, 150.0});
   expect_family({"GDM2000 / Peninsula RSO", 3375, 4742, false, 1.3, 6.7, 99.7, 104.5});
   const Crs krovak = epsg(5514);
@@ -272,7 +272,8 @@ TEST(GeoProjectionVsCs2cs, BulkTransformOfAProjCrsMatchesOnePointAtATime) {
   in[1234] = Vec3(std::nan(""), -1043000.0, 0.0);
   auto refused = geo.value().to_local(in, bulk);
   ASSERT_FALSE(refused.ok());
-  EXPECT_NE(refused.error().message.find("point 1234"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("point 1234"), std::string::npos)
+      << refused.error().message;
 }
 
 // Geocentric coordinates (EPSG:4978, WGS 84 ECEF) are a CRS too: a point's ECEF gives the
@@ -285,7 +286,8 @@ TEST(GeoGeographic, GeocentricCrsPlacesEcefPoints) {
   auto a = Georeferencer::create(ecef, origin);
   auto b = Georeferencer::create(wgs84, origin);
   ASSERT_TRUE(a.ok() && b.ok()) << (a.ok() ? "" : a.error().message);
-  for (const GeodeticPoint& g : {GeodeticPoint{52.001, 4.361, 55.0}, GeodeticPoint{51.99, 4.35, -3.0}}) {
+  for (const GeodeticPoint& g :
+       {GeodeticPoint{52.001, 4.361, 55.0}, GeodeticPoint{51.99, 4.35, -3.0}}) {
     const Vec3 via_geodetic = b.value().to_local(Vec3(g.longitude_deg, g.latitude_deg, g.height_m));
     const Vec3 e = geodetic_to_ecef(Ellipsoid{}, g);
     EXPECT_LT((a.value().to_local(e) - via_geodetic).norm(), 1e-6);
@@ -313,19 +315,28 @@ TEST(GeoProjectionVsCs2cs, GeoTiffUserDefinedMethodsComputedByProj) {
        {k(3075, 11), k(3078, 29.5), k(3079, 45.5), k(3081, 23), k(3080, -96), k(3082, 0),
         k(3083, 0)},
        "+proj=aea +lat_1=29.5 +lat_2=45.5 +lat_0=23 +lon_0=-96 +x_0=0 +y_0=0 +ellps=GRS80",
-       38.0, -100.0},
+       38.0,
+       -100.0},
       {"LAEA (Europe)",
        {k(3075, 10), k(3089, 52), k(3088, 10), k(3082, 4321000), k(3083, 3210000)},
-       "+proj=laea +lat_0=52 +lon_0=10 +x_0=4321000 +y_0=3210000 +ellps=GRS80", 48.0, 2.0},
+       "+proj=laea +lat_0=52 +lon_0=10 +x_0=4321000 +y_0=3210000 +ellps=GRS80",
+       48.0,
+       2.0},
       {"Mercator 1SP",
        {k(3075, 7), k(3080, 110), k(3092, 0.997), k(3082, 3900000), k(3083, 900000)},
-       "+proj=merc +lon_0=110 +k_0=0.997 +x_0=3900000 +y_0=900000 +ellps=GRS80", -5.0, 112.0},
+       "+proj=merc +lon_0=110 +k_0=0.997 +x_0=3900000 +y_0=900000 +ellps=GRS80",
+       -5.0,
+       112.0},
       {"Cassini-Soldner",
        {k(3075, 18), k(3081, 10.44), k(3080, -61.33), k(3082, 86501.46), k(3083, 65379.0)},
-       "+proj=cass +lat_0=10.44 +lon_0=-61.33 +x_0=86501.46 +y_0=65379 +ellps=GRS80", 10.6,
+       "+proj=cass +lat_0=10.44 +lon_0=-61.33 +x_0=86501.46 +y_0=65379 +ellps=GRS80",
+       10.6,
        -61.2},
-      {"Equirectangular", {k(3075, 17), k(3078, 30), k(3080, 0)},
-       "+proj=eqc +lat_ts=30 +lon_0=0 +x_0=0 +y_0=0 +ellps=GRS80", 40.0, 20.0},
+      {"Equirectangular",
+       {k(3075, 17), k(3078, 30), k(3080, 0)},
+       "+proj=eqc +lat_ts=30 +lon_0=0 +x_0=0 +y_0=0 +ellps=GRS80",
+       40.0,
+       20.0},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -525,11 +536,11 @@ TEST(ProjDatumShift, GridShiftsPROJChoosesAreApplied) {
   for (std::size_t i = 0; i < points.size(); ++i) {
     auto w = transform_point(gk3, wgs84, Vec3(points[i][0], points[i][1], 0.0));
     ASSERT_TRUE(w.ok()) << w.error().message;
-    worst = std::max(worst, geodetic_gap_m(w.value().y(), w.value().x(), (*oracle)[i][0],
-                                           (*oracle)[i][1]));
+    worst = std::max(
+        worst, geodetic_gap_m(w.value().y(), w.value().x(), (*oracle)[i][0], (*oracle)[i][1]));
   }
-  std::cout << "[agreement] DHDN GK3 -> WGS 84 (" << gk3.datum.to_wgs84_source
-            << ") vs cs2cs: max " << worst * 1e3 << " mm\n";
+  std::cout << "[agreement] DHDN GK3 -> WGS 84 (" << gk3.datum.to_wgs84_source << ") vs cs2cs: max "
+            << worst * 1e3 << " mm\n";
   EXPECT_LT(worst, 1e-3);
   // And back through the pipeline's inverse.
   auto back = transform_point(wgs84, gk3, Vec3(9.0, 49.0, 0.0));

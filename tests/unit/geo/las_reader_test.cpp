@@ -385,7 +385,7 @@ TEST(SharedLas, CrsRecordsResolveToTheirCrs) {
   SKIP_WITHOUT_DATA();
   struct Case {
     const char* file;
-    int epsg;               // 0: user-defined
+    int epsg;              // 0: user-defined
     const char* contains;  // in describe_crs
     int vertical;
   };

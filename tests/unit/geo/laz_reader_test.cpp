@@ -322,10 +322,10 @@ TEST(LazByteStream, LayersTakenAcrossRefilledWindowsKeepTheirBytes) {
   for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(i * 7 + 1);
   auto source = detail::memory_source("chunk", bytes);
   detail::laz::ByteStream chunk(*source, 10, 80, 16);  // windows of 16 bytes
-  (void)chunk.get();                                     // byte 10
-  detail::laz::ByteStream a = chunk.take(30);            // bytes 11-40, across three windows
-  detail::laz::ByteStream b = chunk.take(5);             // bytes 41-45
-  detail::laz::ByteStream c = chunk.take(60);            // 44 bytes left: 16 past the end
+  (void)chunk.get();                                   // byte 10
+  detail::laz::ByteStream a = chunk.take(30);          // bytes 11-40, across three windows
+  detail::laz::ByteStream b = chunk.take(5);           // bytes 41-45
+  detail::laz::ByteStream c = chunk.take(60);          // 44 bytes left: 16 past the end
   for (std::size_t i = 11; i <= 40; ++i) ASSERT_EQ(a.get(), bytes[i]) << i;
   for (std::size_t i = 41; i <= 45; ++i) ASSERT_EQ(b.get(), bytes[i]) << i;
   for (std::size_t i = 46; i < 90; ++i) ASSERT_EQ(c.get(), bytes[i]) << i;

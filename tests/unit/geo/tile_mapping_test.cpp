@@ -14,8 +14,8 @@ using kernel::Vec3;
 
 struct TileCase {
   int epsg;
-  Vec3 centre;      // source CRS units
-  double half;      // half-width of the tile, CRS units
+  Vec3 centre;  // source CRS units
+  double half;  // half-width of the tile, CRS units
 };
 
 BoundingBox tile_box(const TileCase& c, double z0, double z1) {
@@ -64,7 +64,8 @@ TEST(TileMapping, PointsOutsideTheBoxTakeTheExactPath) {
   ASSERT_TRUE(geo.ok());
   auto mapping = TileMapping::fit(geo.value(), tile_box(c, 0, 100));
   ASSERT_TRUE(mapping.ok());
-  for (const Vec3& p : {Vec3(c.centre.x() + 2000, c.centre.y(), 10), Vec3(c.centre.x(), c.centre.y(), 500)}) {
+  for (const Vec3& p :
+       {Vec3(c.centre.x() + 2000, c.centre.y(), 10), Vec3(c.centre.x(), c.centre.y(), 500)}) {
     EXPECT_EQ(mapping->to_local(p), geo->to_local(p));
   }
 }
@@ -79,7 +80,8 @@ TEST(TileMapping, BulkMatchesSingleAndIsDeterministic) {
   auto b = TileMapping::fit(geo.value(), tile_box(c, 0, 50));
   ASSERT_TRUE(a.ok() && b.ok());
   std::vector<Vec3> in, out(100);
-  for (int i = 0; i < 100; ++i) in.emplace_back(c.centre.x() - 400 + 8 * i, c.centre.y() + 3 * i, i * 0.5);
+  for (int i = 0; i < 100; ++i)
+    in.emplace_back(c.centre.x() - 400 + 8 * i, c.centre.y() + 3 * i, i * 0.5);
   ASSERT_TRUE(a->to_local(in, out).ok());
   for (int i = 0; i < 100; ++i) {
     EXPECT_EQ(out[static_cast<std::size_t>(i)], a->to_local(in[static_cast<std::size_t>(i)]));

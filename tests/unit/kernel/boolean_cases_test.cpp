@@ -47,10 +47,11 @@ TEST_P(BooleanCase, MatchesClosedForm) {
   if (kNotYetSupported.count(name)) {
     ASSERT_FALSE(result.ok()) << name << " now succeeds: take it off kNotYetSupported";
     EXPECT_FALSE(result.error().message.empty());
-    GTEST_SKIP() << name << ": not supported yet (" << error_code_name(result.error().code)
-                 << ": " << result.error().message << ")";
+    GTEST_SKIP() << name << ": not supported yet (" << error_code_name(result.error().code) << ": "
+                 << result.error().message << ")";
   }
-  ASSERT_TRUE(result.ok()) << error_code_name(result.error().code) << ": " << result.error().message;
+  ASSERT_TRUE(result.ok()) << error_code_name(result.error().code) << ": "
+                           << result.error().message;
   const CheckReport report = check_shape(result.value());
   EXPECT_TRUE(report.valid()) << (report.valid() ? "" : report.issues.front().message);
   const auto& ex = *scene->expected;

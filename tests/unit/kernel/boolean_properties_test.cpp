@@ -8,8 +8,8 @@
 
 #include <tuple>
 
-#include <numbers>
 #include <cstdio>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -31,7 +31,8 @@ Shape valid(Result<Shape> r, const std::string& what) {
   EXPECT_TRUE(r.ok()) << what << ": " << (r.ok() ? "" : r.error().message);
   if (!r.ok()) return Shape();
   const CheckReport report = check_shape(r.value());
-  EXPECT_TRUE(report.valid()) << what << ": " << (report.valid() ? "" : report.issues.front().message);
+  EXPECT_TRUE(report.valid()) << what << ": "
+                              << (report.valid() ? "" : report.issues.front().message);
   return r.value();
 }
 
@@ -68,12 +69,15 @@ TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
     const Vec3 ta = 0.5 * Vec3(v[6], v[7], v[8]), tb = 0.5 * Vec3(v[9], v[10], v[11]);
     const Location la = Location::translation(ta);
     // Half the cases turn B about Z by a multiple of π/4 (oblique faces).
-    const Location lb = Location::translation(tb) *
-                        Location::rotation(Vec3::Zero(), Vec3::UnitZ(), v[12] * std::numbers::pi / 4);
+    const Location lb =
+        Location::translation(tb) *
+        Location::rotation(Vec3::Zero(), Vec3::UnitZ(), v[12] * std::numbers::pi / 4);
     const Shape a = box_at(sa, la), b = box_at(sb, lb);
     char buf[256];
-    std::snprintf(buf, sizeof buf, "case %d: A %gx%gx%g at (%g,%g,%g); B %gx%gx%g at (%g,%g,%g) turned %g*pi/4", i,
-                  sa.x(), sa.y(), sa.z(), ta.x(), ta.y(), ta.z(), sb.x(), sb.y(), sb.z(), tb.x(), tb.y(), tb.z(), v[12]);
+    std::snprintf(buf, sizeof buf,
+                  "case %d: A %gx%gx%g at (%g,%g,%g); B %gx%gx%g at (%g,%g,%g) turned %g*pi/4", i,
+                  sa.x(), sa.y(), sa.z(), ta.x(), ta.y(), ta.z(), sb.x(), sb.y(), sb.z(), tb.x(),
+                  tb.y(), tb.z(), v[12]);
     const std::string tag = buf;
     const auto fuse = boolean_operation(a, b, BooleanOp::Fuse);
     const auto common = boolean_operation(a, b, BooleanOp::Common);
@@ -109,8 +113,9 @@ TEST(BooleanProperty, BoxPairsSatisfyInclusionExclusion) {
 // fuse and common (manifold) are valid and their volumes add up.
 TEST(BooleanDegenerate, CutWhoseHoleTouchesTheOuterFaceAlongALine) {
   const Shape slab = box_at(Vec3(5, 5, 1), Location::translation(Vec3(0.5, 1.5, 0.5)));
-  const Shape bar = box_at(Vec3(1, 1, 3), Location::translation(Vec3(1.5, 1.5, 0.5)) *
-                                              Location::rotation(Vec3::Zero(), Vec3::UnitZ(), std::numbers::pi / 4));
+  const Shape bar = box_at(
+      Vec3(1, 1, 3), Location::translation(Vec3(1.5, 1.5, 0.5)) *
+                         Location::rotation(Vec3::Zero(), Vec3::UnitZ(), std::numbers::pi / 4));
   const auto cut = boolean_operation(slab, bar, BooleanOp::Cut);
   EXPECT_TRUE(is_named_non_manifold_refusal(cut)) << (cut.ok() ? "a solid" : cut.error().message);
   const Shape u = valid(boolean_operation(slab, bar, BooleanOp::Fuse), "fuse");
@@ -122,10 +127,12 @@ TEST(BooleanDegenerate, CutWhoseHoleTouchesTheOuterFaceAlongALine) {
 TEST(BooleanProperty, SelfOperationsOfEveryPrimitive) {
   std::mt19937_64 rng(11);
   for (int i = 0; i < 3 * kPrimitiveTypeCount; ++i) {
-    PrimitiveSpec spec = test::random_primitive(rng, static_cast<PrimitiveType>(i % kPrimitiveTypeCount));
+    PrimitiveSpec spec =
+        test::random_primitive(rng, static_cast<PrimitiveType>(i % kPrimitiveTypeCount));
     spec.placement = test::random_similarity(rng);
     const Shape a = build_primitive(spec).value();
-    const std::string tag = std::string(primitive_type_name(spec.type)) + " case " + std::to_string(i);
+    const std::string tag =
+        std::string(primitive_type_name(spec.type)) + " case " + std::to_string(i);
     const double va = volume(a);
     const Shape empty = valid(boolean_operation(a, a, BooleanOp::Cut), tag + " A-A");
     const Shape same = valid(boolean_operation(a, a, BooleanOp::Common), tag + " A&A");
@@ -150,8 +157,9 @@ TEST(BooleanProperty, SimilarityScalesVolumeByTheCube) {
     const Shape s = make_sphere(0.5).value().moved(Location::translation(Vec3(1, 1.5, 1.3)));
     const Location m = test::random_similarity(rng);
     const double s3 = std::pow(m.scale(), 3);
-    for (const auto& [x, y, op] : {std::tuple{a, b, BooleanOp::Cut}, std::tuple{a, s, BooleanOp::Fuse},
-                                   std::tuple{a, s, BooleanOp::Common}}) {
+    for (const auto& [x, y, op] :
+         {std::tuple{a, b, BooleanOp::Cut}, std::tuple{a, s, BooleanOp::Fuse},
+          std::tuple{a, s, BooleanOp::Common}}) {
       auto base = boolean_operation(x, y, op);
       auto moved = boolean_operation(x.moved(m), y.moved(m), op);
       ASSERT_TRUE(base.ok()) << base.error().message;
@@ -206,7 +214,8 @@ TEST(BooleanGeoreferenced, BoxesAtNationalGridCoordinatesFuse) {
 
 TEST(BooleanDegenerate, IdenticalSolids) {
   const Shape a = make_cylinder(1, 2).value();
-  EXPECT_NEAR(volume(valid(boolean_operation(a, a, BooleanOp::Fuse), "fuse")), 2 * std::numbers::pi, 1e-12);
+  EXPECT_NEAR(volume(valid(boolean_operation(a, a, BooleanOp::Fuse), "fuse")), 2 * std::numbers::pi,
+              1e-12);
   EXPECT_EQ(solids(valid(boolean_operation(a, a, BooleanOp::Cut), "cut")), 0u);
 }
 
@@ -223,7 +232,8 @@ TEST(BooleanDegenerate, TangentCylinderOnABoxTouchesAlongALine) {
   const Shape box = make_box(2, 2, 1).value();
   // Cylinder axis along X at height 1.5, radius 0.5: it touches the box top along y = 1.
   const Shape cyl = make_cylinder(0.5, 2).value().moved(
-      Location::translation(Vec3(0, 1, 1.5)) * Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
+      Location::translation(Vec3(0, 1, 1.5)) *
+      Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
   const Shape u = valid(boolean_operation(box, cyl, BooleanOp::Fuse), "fuse");
   EXPECT_EQ(solids(u), 2u);
   EXPECT_NEAR(volume(u), 4 + 0.25 * std::numbers::pi * 2, 1e-12);
@@ -233,7 +243,8 @@ TEST(BooleanDegenerate, EdgeLyingInAFace) {
   // B's bottom edge y = 1 lies in A's top face (z = 1) without crossing anything.
   const Shape a = make_box(2, 2, 1).value();
   const Shape b = make_box(1, 1, 1).value().moved(
-      Location::translation(Vec3(0.5, 1, 1)) * Location::rotation(Vec3::Zero(), Vec3::UnitX(), std::numbers::pi / 4));
+      Location::translation(Vec3(0.5, 1, 1)) *
+      Location::rotation(Vec3::Zero(), Vec3::UnitX(), std::numbers::pi / 4));
   const Shape u = valid(boolean_operation(a, b, BooleanOp::Fuse), "fuse");
   EXPECT_NEAR(volume(u), 4 + 1, 1e-12);
   EXPECT_EQ(solids(u), 2u);  // they touch along the edge only
@@ -282,7 +293,8 @@ TEST(BooleanArguments, CompoundsAndCompsolidsOfSolids) {
   const Shape shifted = box_at(Vec3(2, 2, 2), Location::translation(Vec3(1, 0, 0)));
   const Shape overlapping = ShapeFactory::compound({left, shifted}).value();
   const Shape cap = box_at(Vec3(3, 2, 1), Location::translation(Vec3(0, 0, 2)));
-  const Shape fused = valid(boolean_operation(overlapping, cap, BooleanOp::Fuse), "overlapping | cap");
+  const Shape fused =
+      valid(boolean_operation(overlapping, cap, BooleanOp::Fuse), "overlapping | cap");
   EXPECT_EQ(solids(fused), 1u);
   EXPECT_NEAR(volume(fused), 3 * 2 * 2 + 6.0, 1e-9);
   // The history names the faces of the compound as given (12: six per box): all but the two
@@ -317,7 +329,8 @@ TEST(BooleanArguments, CompoundsAndCompsolidsOfSolids) {
 TEST(BooleanDegenerate, ThinSliverOverlaps) {
   for (const double overlap : {1e-5, 1e-6}) {
     const Shape a = make_box(1, 1, 1).value();
-    const Shape b = make_box(1, 2, 0.5).value().moved(Location::translation(Vec3(1 - overlap, -0.5, 0)));
+    const Shape b =
+        make_box(1, 2, 0.5).value().moved(Location::translation(Vec3(1 - overlap, -0.5, 0)));
     const std::string tag = "overlap " + std::to_string(overlap);
     const Shape common = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
     const Shape fused = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
@@ -329,9 +342,10 @@ TEST(BooleanDegenerate, ThinSliverOverlaps) {
   }
   // The pair that stopped the 5 000-primitive city block: a wing reaching 1.47e-5 m into
   // the next lot's building.
-  const Shape wing = make_box(6.6292096027534084, 3.6506327375602359, 6.9238456727485289)
-                         .value()
-                         .moved(Location::translation(Vec3(137.37080510626652, 193.1226471622326, 0)));
+  const Shape wing =
+      make_box(6.6292096027534084, 3.6506327375602359, 6.9238456727485289)
+          .value()
+          .moved(Location::translation(Vec3(137.37080510626652, 193.1226471622326, 0)));
   const Shape next = make_box(8.5239486272709151, 6.1964382036476851, 5.2537412253205069)
                          .value()
                          .moved(Location::translation(Vec3(144, 192, 0)));
@@ -348,11 +362,13 @@ TEST(BooleanDegenerate, ThinSliverOverlaps) {
 // complementary arc.
 TEST(BooleanDegenerate, ClosedEdgePartAcrossItsVertex) {
   const Shape column = make_cylinder(0.15, 4).value();
-  const Shape beam = make_box(6, 0.2, 0.3).value().moved(Location::translation(Vec3(-3, -0.1, 3.7)));
+  const Shape beam =
+      make_box(6, 0.2, 0.3).value().moved(Location::translation(Vec3(-3, -0.1, 3.7)));
   const Shape fused = valid(boolean_operation(column, beam, BooleanOp::Fuse), "fuse");
   const Shape common = valid(boolean_operation(column, beam, BooleanOp::Common), "common");
   if (!fused.is_null() && !common.is_null()) {
-    EXPECT_NEAR(volume(fused) + volume(common), volume(column) + volume(beam), 1e-9 * volume(fused));
+    EXPECT_NEAR(volume(fused) + volume(common), volume(column) + volume(beam),
+                1e-9 * volume(fused));
   }
 }
 
@@ -367,10 +383,12 @@ TEST(BooleanDegenerate, DomeOnItsDrumSharesTheRim) {
     const Shape drum = make_cylinder(r, h).value().moved(at);
     const Shape dome = make_sphere(r).value().moved(at * Location::translation(Vec3(0, 0, h)));
     const double pi = std::numbers::pi, hemisphere = 2.0 / 3.0 * pi * r * r * r;
-    const double below = h < r ? pi * (r - h) * (r - h) * (3 * r - (r - h)) / 3 : 0.0;  // cap under z = 0
-    const std::tuple<BooleanOp, double> expected[] = {{BooleanOp::Fuse, pi * r * r * h + hemisphere + below},
-                                                      {BooleanOp::Common, hemisphere - below},
-                                                      {BooleanOp::Cut, pi * r * r * h - hemisphere + below}};
+    const double below =
+        h < r ? pi * (r - h) * (r - h) * (3 * r - (r - h)) / 3 : 0.0;  // cap under z = 0
+    const std::tuple<BooleanOp, double> expected[] = {
+        {BooleanOp::Fuse, pi * r * r * h + hemisphere + below},
+        {BooleanOp::Common, hemisphere - below},
+        {BooleanOp::Cut, pi * r * r * h - hemisphere + below}};
     for (const auto& [op, want] : expected) {
       const Shape result = valid(boolean_operation(drum, dome, op), boolean_op_name(op));
       ASSERT_FALSE(result.is_null());
@@ -385,17 +403,20 @@ TEST(BooleanTraced, UnequalCrossingCylinders) {
   const double r = 0.5;
   const Shape c1 = make_cylinder(1, 4).value().moved(Location::translation(Vec3(0, 0, -2)));
   const Shape c2 = make_cylinder(r, 4).value().moved(
-      Location::translation(Vec3(-2, 0, 0.3)) * Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
+      Location::translation(Vec3(-2, 0, 0.3)) *
+      Location::rotation(Vec3::Zero(), Vec3::UnitY(), std::numbers::pi / 2));
   // With y = r sin θ the integrand is smooth and periodic: the midpoint rule reaches rounding.
   double common = 0;
   const int n = 4000;
   for (int i = 0; i < n; ++i) {
-    const double theta = std::numbers::pi * ((i + 0.5) / n - 0.5), c = std::cos(theta), y = r * std::sin(theta);
+    const double theta = std::numbers::pi * ((i + 0.5) / n - 0.5), c = std::cos(theta),
+                 y = r * std::sin(theta);
     common += 4 * std::sqrt(1 - y * y) * r * r * c * c * (std::numbers::pi / n);
   }
   const double v1 = std::numbers::pi * 4, v2 = std::numbers::pi * r * r * 4;
-  const std::tuple<BooleanOp, double> expected[] = {
-      {BooleanOp::Common, common}, {BooleanOp::Fuse, v1 + v2 - common}, {BooleanOp::Cut, v1 - common}};
+  const std::tuple<BooleanOp, double> expected[] = {{BooleanOp::Common, common},
+                                                    {BooleanOp::Fuse, v1 + v2 - common},
+                                                    {BooleanOp::Cut, v1 - common}};
   for (const auto& [op, volume_expected] : expected) {
     SCOPED_TRACE(boolean_op_name(op));
     const Shape result = valid(boolean_operation(c1, c2, op), boolean_op_name(op));
@@ -423,8 +444,10 @@ struct RandomPair {
 class RandomPairs {
  public:
   RandomPair next() {
-    PrimitiveSpec sa = test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
-    PrimitiveSpec sb = test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
+    PrimitiveSpec sa =
+        test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
+    PrimitiveSpec sb =
+        test::random_primitive(rng_, static_cast<PrimitiveType>(rng_() % kPrimitiveTypeCount));
     sa.placement = test::random_similarity(rng_);
     sb.placement = test::random_similarity(rng_);
     const Shape a = build_primitive(sa).value();
@@ -452,7 +475,8 @@ class RandomPairs {
 
 // Fuse, common and cut of a and b are valid, with V(A ∪ B) + V(A ∩ B) = V(A) + V(B) and
 // V(A − B) = V(A) − V(A ∩ B) to `relative` of the volumes.
-void expect_valid_operations(const Shape& a, const Shape& b, double relative, const std::string& tag) {
+void expect_valid_operations(const Shape& a, const Shape& b, double relative,
+                             const std::string& tag) {
   const Shape fused = valid(boolean_operation(a, b, BooleanOp::Fuse), tag + " fuse");
   const Shape common = valid(boolean_operation(a, b, BooleanOp::Common), tag + " common");
   const Shape cut = valid(boolean_operation(a, b, BooleanOp::Cut), tag + " cut");
@@ -471,8 +495,11 @@ void expect_valid_operations(const Shape& a, const Shape& b, double relative, co
 TEST(BooleanTraced, TracedSectionsEndWhereTheBoundaryEdgePiercesTheSurface) {
   const Shape ball = make_sphere(1).value();
   for (const double angle : {0.7, 1.9}) {
-    const Shape corner = make_box(0.8, 0.8, 0.8).value().moved(
-        Location::translation(Vec3(0.1, 0.05, 0.2)) * Location::rotation(Vec3::Zero(), Vec3(1, 2, 3).normalized(), angle));
+    const Shape corner =
+        make_box(0.8, 0.8, 0.8)
+            .value()
+            .moved(Location::translation(Vec3(0.1, 0.05, 0.2)) *
+                   Location::rotation(Vec3::Zero(), Vec3(1, 2, 3).normalized(), angle));
     expect_valid_operations(ball, corner, 1e-6, "box corner turned " + std::to_string(angle));
   }
   for (const int index : {68, 80}) {
@@ -503,18 +530,22 @@ TEST(BooleanDegenerate, LensCutOffAFaceIsAHoleOfTheRest) {
 // chords of the two cap circles are shorter than the caps' sampled boundary polygons are
 // coarse, so their middles lay outside the polygons (between a side and its arc) and the
 // chords were dropped as outside the caps (free edges). Volumes in closed form (the circular
-// segment of depth d, to 1e-9 of the operands' volumes). Then the seeded pair that failed so (box–cylinder 458).
+// segment of depth d, to 1e-9 of the operands' volumes). Then the seeded pair that failed so
+// (box–cylinder 458).
 TEST(BooleanDegenerate, PlaneShavingACylinderRim) {
   const Shape column = make_cylinder(1, 1).value();
   for (const double depth : {1e-3, 1e-4}) {
     for (const double turn : {std::numbers::pi / 48, 0.3}) {
       SCOPED_TRACE("depth " + std::to_string(depth) + " turn " + std::to_string(turn));
-      const Shape slab = make_box(2, 4, 3).value().moved(Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) *
-                                                         Location::translation(Vec3(1 - depth, -2, -1)));
-      const double segment = std::acos(1 - depth) - (1 - depth) * std::sqrt(2 * depth - depth * depth);
-      const std::tuple<BooleanOp, double> expected[] = {{BooleanOp::Common, segment},
-                                                        {BooleanOp::Fuse, std::numbers::pi + 24 - segment},
-                                                        {BooleanOp::Cut, std::numbers::pi - segment}};
+      const Shape slab =
+          make_box(2, 4, 3).value().moved(Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) *
+                                          Location::translation(Vec3(1 - depth, -2, -1)));
+      const double segment =
+          std::acos(1 - depth) - (1 - depth) * std::sqrt(2 * depth - depth * depth);
+      const std::tuple<BooleanOp, double> expected[] = {
+          {BooleanOp::Common, segment},
+          {BooleanOp::Fuse, std::numbers::pi + 24 - segment},
+          {BooleanOp::Cut, std::numbers::pi - segment}};
       for (const auto& [op, want] : expected) {
         const Shape result = valid(boolean_operation(column, slab, op), boolean_op_name(op));
         // Relative to the operands: the sliver's own volume is too small to be a scale.
@@ -540,8 +571,10 @@ TEST(BooleanDegenerate, BoxEdgePiercingACapJustInsideItsRim) {
     for (const double at : {-std::numbers::pi / 2, -1.3}) {
       const Vec3 corner = (1 - depth) * Vec3(std::cos(at), std::sin(at), 0) + Vec3(0, 0, -1);
       const Shape box = make_box(3, 3, 3).value().moved(
-          Location::translation(corner) * Location::rotation(Vec3::Zero(), Vec3::UnitZ(), at + 3 * std::numbers::pi / 4));
-      expect_valid_operations(column, box, 1e-9, "depth " + std::to_string(depth) + " at " + std::to_string(at));
+          Location::translation(corner) *
+          Location::rotation(Vec3::Zero(), Vec3::UnitZ(), at + 3 * std::numbers::pi / 4));
+      expect_valid_operations(column, box, 1e-9,
+                              "depth " + std::to_string(depth) + " at " + std::to_string(at));
     }
   }
 }
@@ -556,9 +589,12 @@ TEST(BooleanTraced, BoxAcrossATorusRingAtItsSeam) {
   const Shape ring = make_torus(2, 0.5).value();
   for (const double width : {0.5, 1.0}) {
     for (const double turn : {0.0, -0.3}) {
-      const Shape box = make_box(2, 2 * width, 2).value().moved(
-          Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) * Location::translation(Vec3(1, -width, -0.3)));
-      expect_valid_operations(ring, box, 1e-6, "width " + std::to_string(width) + " turn " + std::to_string(turn));
+      const Shape box = make_box(2, 2 * width, 2)
+                            .value()
+                            .moved(Location::rotation(Vec3::Zero(), Vec3::UnitZ(), turn) *
+                                   Location::translation(Vec3(1, -width, -0.3)));
+      expect_valid_operations(ring, box, 1e-6,
+                              "width " + std::to_string(width) + " turn " + std::to_string(turn));
     }
   }
   const RandomPair pair = RandomPairs::at(245);
@@ -577,7 +613,8 @@ TEST(BooleanDegenerate, PostTangentToTheNextBoxInARow) {
   };
   auto post = [](int i) {
     const double s = 1.0 + (i % 7) * 0.1;
-    return make_cylinder(0.3, 3.0).value().moved(Location::translation(Vec3(0.8 * i + s / 2, s / 2, 0)));
+    return make_cylinder(0.3, 3.0).value().moved(
+        Location::translation(Vec3(0.8 * i + s / 2, s / 2, 0)));
   };
   auto row = boolean_fold({box(6), box(7), post(6), post(7)}, BooleanOp::Fuse);
   ASSERT_TRUE(row.ok()) << row.error().message;
@@ -617,11 +654,13 @@ struct FittedDomeOnDrum {
 FittedDomeOnDrum fitted_dome_on_drum() {
   auto placement = [](const Matrix34& q) { return Location::from_matrix(q).value(); };
   Matrix34 at_sphere, at_cylinder, at_box;
-  at_sphere << 1, 0, 0, -29.99943028174119, 0, 1, 0, -28.000344938053328, 0, 0, 1, 7.8816162696813326;
-  at_cylinder << 0.0, -0.99999999999964, 8.48306231319794e-07, -30.000309323890782,  //
+  at_sphere << 1, 0, 0, -29.99943028174119, 0, 1, 0, -28.000344938053328, 0, 0, 1,
+      7.8816162696813326;
+  at_cylinder << 0.0, -0.99999999999964, 8.48306231319794e-07, -30.000309323890782,             //
       0.9999999971636876, -6.389173218268596e-11, -7.531682617000976e-05, -27.998776430569333,  //
       7.531682617003686e-05, 8.483062289137327e-07, 0.999999997163328, 0.021334388087503653;
-  at_box << 0.0029924589106082866, -0.9999955110593851, -0.00015182472599372567, -17.330947527181905,  //
+  at_box << 0.0029924589106082866, -0.9999955110593851, -0.00015182472599372567,
+      -17.330947527181905,                                                                  //
       0.99999551723348, 0.0029924745670348862, -0.0001029995650836516, -34.00755006998817,  //
       0.00010345343435590388, -0.00015151582343260378, 0.999999983170171, -0.03330779933615702;
   FittedDomeOnDrum out;
@@ -630,10 +669,13 @@ FittedDomeOnDrum fitted_dome_on_drum() {
   out.height = 7.240023420636517;
   out.dome = make_sphere(out.r).value().moved(placement(at_sphere));
   out.drum = make_cylinder(out.radius, out.height).value().moved(placement(at_cylinder));
-  out.wall = make_box(11.960695736228683, 4.61288088172738, 8.033080367949282).value().moved(placement(at_box));
+  out.wall = make_box(11.960695736228683, 4.61288088172738, 8.033080367949282)
+                 .value()
+                 .moved(placement(at_box));
   const Location cylinder_at = placement(at_cylinder);
   const Vec3 axis = cylinder_at.apply_direction(Vec3::UnitZ());
-  const double h1 = axis.dot(cylinder_at.translation() - placement(at_sphere).translation()), h2 = h1 + out.height;
+  const double h1 = axis.dot(cylinder_at.translation() - placement(at_sphere).translation()),
+               h2 = h1 + out.height;
   out.slab = std::numbers::pi * (out.r * out.r * (h2 - h1) - (h2 * h2 * h2 - h1 * h1 * h1) / 3);
   return out;
 }
@@ -652,9 +694,11 @@ TEST(BooleanTraced, DomeOnADrumMeetingItsCapJustInsideTheRim) {
     EXPECT_NEAR(volume(result), want, 1e-6 * (vs + vc)) << boolean_op_name(op);
     if (op == BooleanOp::Fuse) dome_on_drum = result;
   }
-  const Shape against_wall = valid(boolean_operation(dome_on_drum, wall, BooleanOp::Common), "wall ∩ (dome ∪ drum)");
+  const Shape against_wall =
+      valid(boolean_operation(dome_on_drum, wall, BooleanOp::Common), "wall ∩ (dome ∪ drum)");
   const Shape scene = valid(boolean_fuse_all({wall, dome, drum}), "wall, dome and drum");
-  const Shape folded = valid(boolean_operation(dome_on_drum, wall, BooleanOp::Fuse), "(dome ∪ drum) ∪ wall");
+  const Shape folded =
+      valid(boolean_operation(dome_on_drum, wall, BooleanOp::Fuse), "(dome ∪ drum) ∪ wall");
   ASSERT_FALSE(against_wall.is_null() || scene.is_null() || folded.is_null());
   EXPECT_EQ(solids(scene), 1u);
   const double parts = vb + vs + vc - slab - volume(against_wall);
@@ -663,11 +707,14 @@ TEST(BooleanTraced, DomeOnADrumMeetingItsCapJustInsideTheRim) {
   // The same, coaxial and untilted: closed-form sections; the annulus alone was the fault.
   const Location at = Location::translation(Vec3(-30, -28, 0));
   const Shape upright = make_cylinder(radius, height).value().moved(at);
-  const Shape centred = make_sphere(r).value().moved(at * Location::translation(Vec3(0, 0, height + 0.62)));
+  const Shape centred =
+      make_sphere(r).value().moved(at * Location::translation(Vec3(0, 0, height + 0.62)));
   const double g1 = -(height + 0.62), g2 = -0.62;
-  const double exact_slab = std::numbers::pi * (r * r * (g2 - g1) - (g2 * g2 * g2 - g1 * g1 * g1) / 3);
+  const double exact_slab =
+      std::numbers::pi * (r * r * (g2 - g1) - (g2 * g2 * g2 - g1 * g1 * g1) / 3);
   expect_valid_operations(upright, centred, 1e-9, "coaxial dome on drum");
-  const Shape common = valid(boolean_operation(upright, centred, BooleanOp::Common), "coaxial common");
+  const Shape common =
+      valid(boolean_operation(upright, centred, BooleanOp::Common), "coaxial common");
   if (!common.is_null()) {
     EXPECT_NEAR(volume(common), exact_slab, 1e-9 * exact_slab);
   }
@@ -684,7 +731,8 @@ TEST(BooleanTraced, DomeOnADrumMeetingItsCapJustInsideTheRim) {
 TEST(BooleanTraced, FittedDomeOnDrumVolumesMatchTheClosedForm) {
   const FittedDomeOnDrum fit = fitted_dome_on_drum();
   const Location far = Location::translation(Vec3(700, -650, 300)) *
-                       Location::rotation(Vec3::Zero(), Vec3(1, 2, 3).normalized(), 0.7) * Location::scaling(2.5);
+                       Location::rotation(Vec3::Zero(), Vec3(1, 2, 3).normalized(), 0.7) *
+                       Location::scaling(2.5);
   for (const Location& m : {Location(), far}) {
     const double s3 = std::pow(m.scale(), 3);
     const Shape dome = fit.dome.moved(m), drum = fit.drum.moved(m);
@@ -763,9 +811,11 @@ TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
     EXPECT_TRUE(check_shape(fused.value()).valid()) << tag;
     EXPECT_TRUE(check_shape(common.value()).valid()) << tag;
     const double va = volume(a), vb = volume(b);
-    const double error = std::abs(volume(fused.value()) + volume(common.value()) - (va + vb)) / (va + vb);
+    const double error =
+        std::abs(volume(fused.value()) + volume(common.value()) - (va + vb)) / (va + vb);
     EXPECT_LE(error, kRelative) << tag;
-    const std::string traced = traced_edges(fused.value()) + traced_edges(common.value()) > 0 ? " (traced)" : "";
+    const std::string traced =
+        traced_edges(fused.value()) + traced_edges(common.value()) > 0 ? " (traced)" : "";
     errors.push_back({error, tag + traced});
     // Inclusion–exclusion is blind to the accuracy of the section curves (fuse and common
     // share them, and their errors cancel): the common of the pair moved by a similarity,
@@ -776,7 +826,8 @@ TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
       auto moved = boolean_operation(a.moved(m), b.moved(m), BooleanOp::Common);
       if (moved.ok()) {
         EXPECT_TRUE(check_shape(moved.value()).valid()) << tag << " moved";
-        const double moved_error = std::abs(volume(moved.value()) / std::pow(m.scale(), 3) - vc) / vc;
+        const double moved_error =
+            std::abs(volume(moved.value()) / std::pow(m.scale(), 3) - vc) / vc;
         EXPECT_LE(moved_error, kMovedRelative) << tag << " moved";
         moved_errors.push_back({moved_error, tag + traced});
       } else {
@@ -788,27 +839,31 @@ TEST(BooleanTraced, RandomPairsAreValidOrNamedErrors) {
     }
     ++succeeded;
   }
-  std::cout << "[traced pairs] " << succeeded << " of " << kPairs << " random pairs valid, " << named
-            << " named errors; " << moved_errors.size() << " moved commons checked, " << moved_refused
-            << " refused by name\n";
+  std::cout << "[traced pairs] " << succeeded << " of " << kPairs << " random pairs valid, "
+            << named << " named errors; " << moved_errors.size() << " moved commons checked, "
+            << moved_refused << " refused by name\n";
   // The moved commons must be checked, not refused wholesale (at most 1 % refused).
   EXPECT_LE(100 * moved_refused, std::max<std::size_t>(1, moved_errors.size()))
       << moved_refused << " moved commons refused";
-  for (auto [list, what] : {std::pair{&errors, "V(A ∪ B) + V(A ∩ B) against V(A) + V(B)"},
-                            std::pair{&moved_errors, "V(A ∩ B) moved by a similarity against s³ V(A ∩ B)"}}) {
+  for (auto [list, what] :
+       {std::pair{&errors, "V(A ∪ B) + V(A ∩ B) against V(A) + V(B)"},
+        std::pair{&moved_errors, "V(A ∩ B) moved by a similarity against s³ V(A ∩ B)"}}) {
     if (list->empty()) continue;
     std::sort(list->begin(), list->end());
-    const auto above = std::count_if(list->begin(), list->end(), [](const auto& e) { return e.first > 1e-7; });
+    const auto above =
+        std::count_if(list->begin(), list->end(), [](const auto& e) { return e.first > 1e-7; });
     const std::size_t p99 = std::min(list->size() - 1, list->size() * 99 / 100);
-    std::cout << "[traced pairs] relative error of " << what << " over " << list->size() << " pairs: max "
-              << list->back().first << " (" << list->back().second << "), 99th percentile " << (*list)[p99].first
-              << ", " << above << " above 1e-7; largest:\n";
+    std::cout << "[traced pairs] relative error of " << what << " over " << list->size()
+              << " pairs: max " << list->back().first << " (" << list->back().second
+              << "), 99th percentile " << (*list)[p99].first << ", " << above
+              << " above 1e-7; largest:\n";
     for (std::size_t i = list->size(); i-- > 0 && list->size() - i <= 6;) {
       std::cout << "[traced pairs]   " << (*list)[i].first << "  " << (*list)[i].second << "\n";
     }
   }
   EXPECT_GE(100 * succeeded, 99 * kPairs) << "fewer random pairs valid than before: a regression";
-  const auto moved_above = std::count_if(moved_errors.begin(), moved_errors.end(), [](const auto& e) { return e.first > 1e-7; });
+  const auto moved_above = std::count_if(moved_errors.begin(), moved_errors.end(),
+                                         [](const auto& e) { return e.first > 1e-7; });
   EXPECT_LE(moved_above, std::max<long>(1, static_cast<long>(moved_errors.size()) / 100))
       << "more than 1 % of the moved commons off by 1e-7";
 }

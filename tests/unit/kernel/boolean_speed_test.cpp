@@ -53,10 +53,12 @@ TEST(SpeedShortcuts, SolidVolumeIsTheMassPropertiesVolumeToRounding) {
   auto column = make_cylinder(0.7, 5);
   ASSERT_TRUE(box.ok() && column.ok());
   for (const BooleanOp op : {BooleanOp::Fuse, BooleanOp::Common, BooleanOp::Cut}) {
-    auto r = boolean_operation(box.value(), column.value().moved(Location::translation(Vec3(1.5, 1.2, -1))), op);
+    auto r = boolean_operation(box.value(),
+                               column.value().moved(Location::translation(Vec3(1.5, 1.2, -1))), op);
     ASSERT_TRUE(r.ok()) << r.error().message;
     const MassProperties mp = mass_properties(r.value());
-    EXPECT_TRUE(same_volume(solid_volume(r.value()), mp.volume, mp.bounds.size().norm())) << boolean_op_name(op);
+    EXPECT_TRUE(same_volume(solid_volume(r.value()), mp.volume, mp.bounds.size().norm()))
+        << boolean_op_name(op);
     ++checked;
   }
   EXPECT_EQ(checked, kPrimitiveTypeCount * 24 + 3);
@@ -76,8 +78,8 @@ TestCurve random_curve(std::mt19937_64& rng) {
       return {std::make_shared<Line2d>(point(), point()), 0.0, 1.0 + u(rng) * 0.5};
     case 1: {
       const double a = std::numbers::pi * u(rng);
-      return {std::make_shared<Circle2d>(point(), 0.1 + 0.5 * std::abs(u(rng)), rng() % 2 ? 1 : -1), a,
-              a + 0.3 + 2.0 * std::abs(u(rng))};
+      return {std::make_shared<Circle2d>(point(), 0.1 + 0.5 * std::abs(u(rng)), rng() % 2 ? 1 : -1),
+              a, a + 0.3 + 2.0 * std::abs(u(rng))};
     }
     case 2: {
       const double a = std::numbers::pi * u(rng);
@@ -101,7 +103,8 @@ TEST(SpeedShortcuts, CurvesWhoseCrossingBoxesAreApartDoNotCross) {
     const TestCurve a = random_curve(rng), b = random_curve(rng);
     // Shifts from far away down to the boxes just touching (where the cull must hold back),
     // some by whole periods as the engine shifts boundary uses.
-    const double reach = std::array<double, 4>{3.0, 1.0, 0.3, 1e-6}[static_cast<std::size_t>(k % 4)];
+    const double reach =
+        std::array<double, 4>{3.0, 1.0, 0.3, 1e-6}[static_cast<std::size_t>(k % 4)];
     const Vec2 shift = k % 8 == 0 ? Vec2(2 * std::numbers::pi * std::round(2 * u(rng)), 0.0)
                                   : Vec2(reach * u(rng), reach * u(rng));
     const double tolerance = k % 3 == 0 ? 1e-3 : 1e-9;
@@ -111,7 +114,8 @@ TEST(SpeedShortcuts, CurvesWhoseCrossingBoxesAreApartDoNotCross) {
     const auto crossings = intersect_pcurves(*a.curve, a.t0, a.t1, *shifted, b.t0, b.t1, tolerance);
     if (crossing_boxes_apart(box_a, box_b, shift, tolerance)) {
       ++apart;
-      EXPECT_TRUE(crossings.empty()) << "case " << k << ": culled, yet " << crossings.size() << " crossings";
+      EXPECT_TRUE(crossings.empty())
+          << "case " << k << ": culled, yet " << crossings.size() << " crossings";
     } else {
       ++near;
       if (!crossings.empty()) ++crossing;

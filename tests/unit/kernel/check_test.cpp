@@ -72,7 +72,8 @@ TEST(Check, WireWithAGapIsOpen) {
   const FaceData& d = *face.body().face();
   std::vector<std::vector<Curve2dPtr>> pcurves = d.pcurves;
   std::swap(pcurves[0][0], pcurves[0][1]);
-  Shape bad_face = ShapeFactory::face(d.surface, {ShapeFactory::wire(edges).value()}, pcurves, 1e-7).value();
+  Shape bad_face =
+      ShapeFactory::face(d.surface, {ShapeFactory::wire(edges).value()}, pcurves, 1e-7).value();
   EXPECT_TRUE(check_shape(bad_face).has(CheckStatus::OpenWire));
 }
 
@@ -96,14 +97,16 @@ TEST(Check, CrossingLoopsAreASelfIntersection) {
     for (int i = 0; i < 4; ++i) {
       const Vec3 a = c[i], d = c[(i + 1) % 4] - c[i];
       es.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(a, d), 0, d.norm(), vs[i],
-                                      vs[(i + 1) % 4], 1e-7).value());
+                                      vs[(i + 1) % 4], 1e-7)
+                       .value());
       pcs.push_back(std::make_shared<Line2d>(Vec2(a.x(), a.y()), Vec2(d.x(), d.y()) / d.norm()));
     }
     return std::make_pair(ShapeFactory::wire(es).value(), pcs);
   };
   auto [w1, p1] = loop(0, 0);
   auto [w2, p2] = loop(0.5, 0.5);
-  Shape face = ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()), {w1, w2}, {p1, p2}, 1e-7).value();
+  Shape face =
+      ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()), {w1, w2}, {p1, p2}, 1e-7).value();
   EXPECT_TRUE(check_shape(face).has(CheckStatus::SelfIntersection));
 }
 
@@ -115,16 +118,20 @@ TEST(Check, CrossingLoopsAreASelfIntersection) {
 TEST(Check, LoopsNearAnArcAreCheckedAgainstTheArcNotItsChords) {
   auto disc_with_hole = [](double corner_radius) {
     const Shape start = ShapeFactory::vertex(Vec3(1, 0, 0), 1e-7).value();
-    const Shape rim = ShapeFactory::edge(std::make_shared<CircleCurve>(Frame(), 1.0), 0, 2 * std::numbers::pi,
-                                         start, start, 1e-7).value();
+    const Shape rim = ShapeFactory::edge(std::make_shared<CircleCurve>(Frame(), 1.0), 0,
+                                         2 * std::numbers::pi, start, start, 1e-7)
+                          .value();
     const double a = std::numbers::pi / 16;  // between the samples at 0 and π/8
-    const Vec3 c[3] = {{corner_radius * std::cos(a), corner_radius * std::sin(a), 0}, {0, -0.3, 0}, {0, 0.3, 0}};
+    const Vec3 c[3] = {
+        {corner_radius * std::cos(a), corner_radius * std::sin(a), 0}, {0, -0.3, 0}, {0, 0.3, 0}};
     std::vector<Shape> vs, es;
     std::vector<Curve2dPtr> pcs;
     for (const Vec3& p : c) vs.push_back(ShapeFactory::vertex(p, 1e-7).value());
     for (int i = 0; i < 3; ++i) {
       const Vec3 o = c[i], d = c[(i + 1) % 3] - c[i];
-      es.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(o, d), 0, d.norm(), vs[i], vs[(i + 1) % 3], 1e-7).value());
+      es.push_back(ShapeFactory::edge(std::make_shared<LineCurve>(o, d), 0, d.norm(), vs[i],
+                                      vs[(i + 1) % 3], 1e-7)
+                       .value());
       pcs.push_back(std::make_shared<Line2d>(Vec2(o.x(), o.y()), Vec2(d.x(), d.y()) / d.norm()));
     }
     return ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()),
@@ -138,7 +145,8 @@ TEST(Check, LoopsNearAnArcAreCheckedAgainstTheArcNotItsChords) {
 
 TEST(Check, EulerPoincareAcceptsGenusOneAndRejectsTwoComponentsInOneShell) {
   // A torus-like extrusion (square with a hole) has genus 1: V-E+F-(L-F) = 0 is accepted.
-  auto ring = make_extrusion({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {{{1, 1}, {2, 1}, {2, 2}, {1, 2}}}, 1);
+  auto ring =
+      make_extrusion({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {{{1, 1}, {2, 1}, {2, 2}, {1, 2}}}, 1);
   ASSERT_TRUE(ring.ok());
   EXPECT_TRUE(check_shape(ring.value()).valid());
   // One shell holding the faces of two disjoint boxes is closed but has V-E+F = 4 > 2.

@@ -66,9 +66,8 @@ void expect_sources_on_surfaces(const CsgModel& m) {
     const std::size_t f = mesh->triangle_face[t];
     const double own = distance_to(*world_surface(faces[f]), c);
     for (const FaceSource& s : m.face_sources[f]) {
-      const double d = distance_to(*primitive_faces[static_cast<std::size_t>(s.node)]
-                                                   [static_cast<std::size_t>(s.face)],
-                                   c);
+      const double d = distance_to(
+          *primitive_faces[static_cast<std::size_t>(s.node)][static_cast<std::size_t>(s.face)], c);
       EXPECT_LE(d, own + 1e-6) << "face " << f << " source (" << s.node << ", " << s.face << ")";
     }
   }
@@ -243,7 +242,8 @@ TEST(CsgNative, RoundTripKeepsTreeSourcesAndBytes) {
     EXPECT_EQ(back->nodes[i].children, r->nodes[i].children);
     EXPECT_EQ(back->nodes[i].primitive.profile, r->nodes[i].primitive.profile);
     EXPECT_EQ(back->nodes[i].primitive.holes, r->nodes[i].primitive.holes);
-    EXPECT_EQ(back->nodes[i].primitive.placement.matrix(), r->nodes[i].primitive.placement.matrix());
+    EXPECT_EQ(back->nodes[i].primitive.placement.matrix(),
+              r->nodes[i].primitive.placement.matrix());
   }
   EXPECT_EQ(write_native_model(back.value()), bytes);
   // Shape-only readers skip the optional section; shape-only files have no history.

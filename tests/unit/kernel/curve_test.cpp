@@ -14,8 +14,8 @@
 #include <numbers>
 #include <random>
 
-#include "random_geometry.h"
 #include <vector>
+#include "random_geometry.h"
 
 #include "csgtile/kernel/curve2d.h"
 #include "csgtile/kernel/frame.h"

@@ -53,7 +53,8 @@ void expect_traced(const MarchResult& r, const Surface& a, const Surface& b) {
 TEST(Marching, UnequalCrossingCylindersGiveTwoLoops) {
   const CylinderSurface big(Frame::from_z(Vec3(0, 0, -3), Vec3::UnitZ()), 1.0);
   const CylinderSurface small(Frame::from_z(Vec3(-3, 0, 0), Vec3::UnitX()), 0.6);
-  const MarchResult r = march_intersection(big, small, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
+  const MarchResult r =
+      march_intersection(big, small, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
   expect_traced(r, big, small);
   ASSERT_EQ(r.curves.size(), 2u);
   for (const auto& c : r.curves) {
@@ -66,7 +67,8 @@ TEST(Marching, SkewCylindersGiveOneLoop) {
   // Axes 0.5 apart: the thinner cylinder bites into the side of the thicker one.
   const CylinderSurface a(Frame::from_z(Vec3(0, 0, -3), Vec3::UnitZ()), 1.0);
   const CylinderSurface b(Frame::from_z(Vec3(-3, 0.9, 0), Vec3::UnitX()), 0.5);
-  const MarchResult r = march_intersection(a, b, box({-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}), kTol, kSag);
+  const MarchResult r =
+      march_intersection(a, b, box({-1.5, -1.5, -1.5}, {1.5, 1.5, 1.5}), kTol, kSag);
   expect_traced(r, a, b);
   ASSERT_EQ(r.curves.size(), 1u);
   EXPECT_TRUE(r.curves[0].closed);
@@ -108,7 +110,8 @@ TEST(Marching, SphereAndOffAxisCylinder) {
   // A thin tilted drill through the sphere, well inside it at the equator: a loop where it
   // enters and one where it leaves.
   const CylinderSurface cyl(Frame::from_z(Vec3(0.3, 0, -3), Vec3(0.1, 0, 1)), 0.3);
-  const MarchResult r = march_intersection(sphere, cyl, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
+  const MarchResult r =
+      march_intersection(sphere, cyl, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
   expect_traced(r, sphere, cyl);
   EXPECT_EQ(r.curves.size(), 2u);
 }
@@ -116,7 +119,8 @@ TEST(Marching, SphereAndOffAxisCylinder) {
 TEST(Marching, DisjointSurfacesGiveNothing) {
   const SphereSurface a(Frame(), 1.0);
   const CylinderSurface b(Frame::from_z(Vec3(3, 0, -3), Vec3::UnitZ()), 0.5);
-  const MarchResult r = march_intersection(a, b, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
+  const MarchResult r =
+      march_intersection(a, b, box({-1.2, -1.2, -1.2}, {1.2, 1.2, 1.2}), kTol, kSag);
   ASSERT_TRUE(r.ok);
   EXPECT_TRUE(r.curves.empty());
 }
@@ -128,7 +132,8 @@ TEST(Marching, Deterministic) {
   const MarchResult a = march_intersection(big, small, region, kTol, kSag);
   const MarchResult b = march_intersection(big, small, region, kTol, kSag);
   ASSERT_EQ(a.curves.size(), b.curves.size());
-  for (std::size_t i = 0; i < a.curves.size(); ++i) EXPECT_EQ(a.curves[i].points, b.curves[i].points);
+  for (std::size_t i = 0; i < a.curves.size(); ++i)
+    EXPECT_EQ(a.curves[i].points, b.curves[i].points);
 }
 
 }  // namespace

@@ -30,8 +30,8 @@ struct PrimitiveCase {
 Counts counts_of(const Shape& s) {
   const auto c = count_shapes(s);
   auto n = [&](ShapeKind k) { return c[static_cast<int>(k)]; };
-  return {n(ShapeKind::Solid), n(ShapeKind::Shell), n(ShapeKind::Face), n(ShapeKind::Wire),
-          n(ShapeKind::Edge),  n(ShapeKind::Vertex)};
+  return {n(ShapeKind::Solid), n(ShapeKind::Shell), n(ShapeKind::Face),
+          n(ShapeKind::Wire),  n(ShapeKind::Edge),  n(ShapeKind::Vertex)};
 }
 
 // Frustum r1=2, r2=1, h=3: V = πh/3 (r1² + r1 r2 + r2²), lateral = π (r1 + r2) √(h² + (r1-r2)²).
@@ -42,35 +42,82 @@ const double kFrustumCentroidZ = 3 * (4 + 2 * 2 + 3 * 1) / (4.0 * (4 + 2 + 1));
 const double kConeArea = kPi * 4 + kPi * 2 * std::sqrt(9 + 4);
 // Revolution of the unit-ish trapezoid profile (1,0),(3,0),(2,2),(1,2): Pappus: V = 2π·A·ρ̄.
 const double kTrapezoidArea = 0.5 * (2 + 1) * 2;
-const double kTrapezoidRhoBar = (  // centroid rho of the trapezoid: square [1,2]x[0,2] + triangle (2,0),(3,0),(2,2)
-    2.0 * 1.5 + 1.0 * (7.0 / 3)) / kTrapezoidArea;
+const double kTrapezoidRhoBar =
+    (  // centroid rho of the trapezoid: square [1,2]x[0,2] + triangle (2,0),(3,0),(2,2)
+        2.0 * 1.5 + 1.0 * (7.0 / 3)) /
+    kTrapezoidArea;
 
 const PrimitiveCase kCases[] = {
     {"box", [] { return make_box(1, 2, 3); }, {1, 1, 6, 6, 12, 8}, 6, 22, {0.5, 1, 1.5}},
-    {"cylinder", [] { return make_cylinder(2, 3); }, {1, 1, 3, 3, 3, 2}, kPi * 12,
-     2 * kPi * 4 + 2 * kPi * 2 * 3, {0, 0, 1.5}},
-    {"frustum", [] { return make_cone(2, 1, 3); }, {1, 1, 3, 3, 3, 2}, kFrustumVolume,
-     kFrustumArea, {0, 0, kFrustumCentroidZ}},
-    {"cone_apex_up", [] { return make_cone(2, 0, 3); }, {1, 1, 2, 2, 3, 2}, kPi * 4, kConeArea,
+    {"cylinder",
+     [] { return make_cylinder(2, 3); },
+     {1, 1, 3, 3, 3, 2},
+     kPi * 12,
+     2 * kPi * 4 + 2 * kPi * 2 * 3,
+     {0, 0, 1.5}},
+    {"frustum",
+     [] { return make_cone(2, 1, 3); },
+     {1, 1, 3, 3, 3, 2},
+     kFrustumVolume,
+     kFrustumArea,
+     {0, 0, kFrustumCentroidZ}},
+    {"cone_apex_up",
+     [] { return make_cone(2, 0, 3); },
+     {1, 1, 2, 2, 3, 2},
+     kPi * 4,
+     kConeArea,
      {0, 0, 0.75}},
-    {"cone_apex_down", [] { return make_cone(0, 2, 3); }, {1, 1, 2, 2, 3, 2}, kPi * 4, kConeArea,
+    {"cone_apex_down",
+     [] { return make_cone(0, 2, 3); },
+     {1, 1, 2, 2, 3, 2},
+     kPi * 4,
+     kConeArea,
      {0, 0, 2.25}},
-    {"sphere", [] { return make_sphere(2); }, {1, 1, 1, 1, 3, 2}, 4.0 / 3 * kPi * 8, 4 * kPi * 4,
+    {"sphere",
+     [] { return make_sphere(2); },
+     {1, 1, 1, 1, 3, 2},
+     4.0 / 3 * kPi * 8,
+     4 * kPi * 4,
      {0, 0, 0}},
-    {"torus", [] { return make_torus(3, 1); }, {1, 1, 1, 1, 2, 1}, 2 * kPi * kPi * 3,
-     4 * kPi * kPi * 3, {0, 0, 0}},
+    {"torus",
+     [] { return make_torus(3, 1); },
+     {1, 1, 1, 1, 2, 1},
+     2 * kPi* kPi * 3,
+     4 * kPi* kPi * 3,
+     {0, 0, 0}},
     {"extrusion_L_with_hole",
      [] {
        return make_extrusion({{0, 0}, {4, 0}, {4, 1}, {1, 1}, {1, 4}, {0, 4}}, {}, 2);
      },
-     {1, 1, 8, 8, 18, 12}, 14, 2 * 7 + 2 * 16, {0, 0, 0}},
+     {1, 1, 8, 8, 18, 12},
+     14,
+     2 * 7 + 2 * 16,
+     {0, 0, 0}},
     {"extrusion_square_hole",
-     [] { return make_extrusion({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {{{1, 1}, {1, 2}, {2, 2}, {2, 1}}}, 2); },
-     {1, 1, 10, 12, 24, 16}, 30, 2 * 15 + 2 * 16 + 2 * 4, {0, 0, 0}},
-    {"revolution_trapezoid", [] { return make_revolution({{1, 0}, {3, 0}, {2, 2}, {1, 2}}, 2 * kPi); },
-     {1, 1, 4, 6, 6, 4}, 2 * kPi * kTrapezoidArea * kTrapezoidRhoBar, 0, {0, 0, 0}},
-    {"revolution_quarter_box", [] { return make_revolution({{0, 0}, {2, 0}, {2, 1}, {0, 1}}, kPi / 2); },
-     {1, 1, 5, 5, 9, 6}, kPi / 4 * 4, 2 * 2 + kPi + 2 * kPi, {0, 0, 0}},
+     [] {
+       return make_extrusion({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {{{1, 1}, {1, 2}, {2, 2}, {2, 1}}},
+                             2);
+     },
+     {1, 1, 10, 12, 24, 16},
+     30,
+     2 * 15 + 2 * 16 + 2 * 4,
+     {0, 0, 0}},
+    {"revolution_trapezoid",
+     [] {
+       return make_revolution({{1, 0}, {3, 0}, {2, 2}, {1, 2}}, 2 * kPi);
+     },
+     {1, 1, 4, 6, 6, 4},
+     2 * kPi* kTrapezoidArea* kTrapezoidRhoBar,
+     0,
+     {0, 0, 0}},
+    {"revolution_quarter_box",
+     [] {
+       return make_revolution({{0, 0}, {2, 0}, {2, 1}, {0, 1}}, kPi / 2);
+     },
+     {1, 1, 5, 5, 9, 6},
+     kPi / 4 * 4,
+     2 * 2 + kPi + 2 * kPi,
+     {0, 0, 0}},
 };
 
 class Primitive : public ::testing::TestWithParam<PrimitiveCase> {};
@@ -81,7 +128,8 @@ TEST_P(Primitive, IsValidWithDocumentedCountsAndClosedFormMassProperties) {
   ASSERT_TRUE(built.ok()) << built.error().message;
   const Shape& s = built.value();
   const CheckReport report = check_shape(s);
-  for (const auto& issue : report.issues) ADD_FAILURE() << check_status_name(issue.status) << ": " << issue.message;
+  for (const auto& issue : report.issues)
+    ADD_FAILURE() << check_status_name(issue.status) << ": " << issue.message;
   const Counts n = counts_of(s);
   EXPECT_EQ(n.solids, c.counts.solids);
   EXPECT_EQ(n.shells, c.counts.shells);
@@ -126,11 +174,13 @@ TEST(Primitive, RejectsBadParametersWithNamedErrors) {
   EXPECT_NE(bowtie.error().message.find("intersects itself"), std::string::npos);
   auto collinear = make_extrusion({{0, 0}, {1, 0}, {2, 0}}, {}, 1);
   EXPECT_EQ(collinear.error().code, ErrorCode::DegenerateGeometry);
-  auto outside_hole = make_extrusion({{0, 0}, {1, 0}, {1, 1}, {0, 1}}, {{{2, 2}, {3, 2}, {3, 3}}}, 1);
+  auto outside_hole =
+      make_extrusion({{0, 0}, {1, 0}, {1, 1}, {0, 1}}, {{{2, 2}, {3, 2}, {3, 3}}}, 1);
   EXPECT_EQ(outside_hole.error().code, ErrorCode::DegenerateGeometry);
   auto crossing_axis = make_revolution({{-1, 0}, {1, 0}, {1, 1}}, kPi);
   EXPECT_EQ(crossing_axis.error().code, ErrorCode::DegenerateGeometry);
-  EXPECT_EQ(make_revolution({{1, 0}, {2, 0}, {2, 1}}, 7.0).error().code, ErrorCode::InvalidArgument);
+  EXPECT_EQ(make_revolution({{1, 0}, {2, 0}, {2, 1}}, 7.0).error().code,
+            ErrorCode::InvalidArgument);
 }
 
 TEST(Primitive, ProfileOrientationDoesNotMatter) {
@@ -147,7 +197,8 @@ TEST(Primitive, BuildPrimitiveAppliesThePlacement) {
   spec.radius = 1;
   spec.height = 2;
   spec.placement = Location::translation(Vec3(10, 0, 0)) *
-                   Location::rotation(Vec3::Zero(), Vec3::UnitX(), kPi / 2) * Location::scaling(2.0);
+                   Location::rotation(Vec3::Zero(), Vec3::UnitX(), kPi / 2) *
+                   Location::scaling(2.0);
   auto s = build_primitive(spec);
   ASSERT_TRUE(s.ok());
   const MassProperties mp = mass_properties(s.value());

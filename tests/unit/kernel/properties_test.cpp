@@ -41,8 +41,8 @@ TEST(Property, SimilarityScalesVolumeByCubeAndKeepsCounts) {
     EXPECT_TRUE(b.centroid.isApprox(spec.placement.apply_point(a.centroid), 1e-9)) << "case " << i;
     EXPECT_EQ(count_shapes(local.value()), count_shapes(placed.value())) << "case " << i;
     const CheckReport report = check_shape(placed.value());
-    EXPECT_TRUE(report.valid()) << "case " << i << " (" << primitive_type_name(type) << "): "
-                                << (report.valid() ? "" : report.issues.front().message);
+    EXPECT_TRUE(report.valid()) << "case " << i << " (" << primitive_type_name(type)
+                                << "): " << (report.valid() ? "" : report.issues.front().message);
   }
 }
 
@@ -51,7 +51,8 @@ TEST(Property, ExplorerChildMapAndAncestorsAgreeWithBruteForce) {
   for (int i = 0; i < 40; ++i) {
     std::vector<Shape> solids;
     for (int k = 0; k < 3; ++k) {
-      PrimitiveSpec spec = test::random_primitive(rng, static_cast<PrimitiveType>((i + k) % kPrimitiveTypeCount));
+      PrimitiveSpec spec =
+          test::random_primitive(rng, static_cast<PrimitiveType>((i + k) % kPrimitiveTypeCount));
       spec.placement = test::random_similarity(rng);
       solids.push_back(build_primitive(spec).value());
     }

@@ -246,7 +246,8 @@ TEST(SurfaceIntersection, PlaneCone) {
         1},
        {"through the apex only", plane(Vec3(0, 0, 2), Vec3(0.2, 0, 1)), k, SsiKind::Curves, 0},
        {"beyond the apex, tilted", plane(Vec3(0, 0, 2.5), Vec3(0.1, 0, 1)), k, SsiKind::Curves, 0},
-       {"oblique conic", plane(Vec3(0, 0, 0.5), Vec3(0.3, 0, 1)), k, SsiKind::Curves, kAnyCount, 0, 0, 4.0, true}},
+       {"oblique conic", plane(Vec3(0, 0, 0.5), Vec3(0.3, 0, 1)), k, SsiKind::Curves, kAnyCount, 0,
+        0, 4.0, true}},
       301);
 }
 
@@ -273,7 +274,8 @@ TEST(SurfaceIntersection, PlaneTorus) {
        {"through the axis: two meridians", plane(kO, Vec3(1, 2, 0)), t, SsiKind::Curves, 2, 2},
        {"parallel to the axis, apart", plane(Vec3(3, 0, 0), kX), t, SsiKind::Curves, 0},
        {"tilted, apart", plane(Vec3(0, 0, 1.5), Vec3(0.3, 0, 1)), t, SsiKind::Curves, 0},
-       {"parallel to the axis: spiric", plane(Vec3(1, 0, 0), kX), t, SsiKind::Curves, kAnyCount, 0, 0, 4.0, true},
+       {"parallel to the axis: spiric", plane(Vec3(1, 0, 0), kX), t, SsiKind::Curves, kAnyCount, 0,
+        0, 4.0, true},
        {"oblique", plane(kO, Vec3(0.1, 0, 1)), t, SsiKind::Curves, 2, 0, 0, 4.0, true}},
       501);
 }
@@ -358,28 +360,29 @@ TEST(SurfaceIntersection, SphereSphere) {
 }
 
 TEST(SurfaceIntersection, OffAxisPairs) {
-  check_scenes({// The sphere's poles lie on the cylinder: its pcurve would have to jump there.
-                {"cylinder–sphere through the poles", cylinder(kO, kZ, 1.0),
-                 sphere(Vec3(1, 0, 0), 0.5), SsiKind::Unsupported},
-                {"cylinder–sphere off the axis", cylinder(kO, kZ, 1.0), sphere(Vec3(1.2, 0, 0), 0.5),
-                 SsiKind::Curves, 1, 0, 0, 4.0, true},
-                {"cylinder–sphere, apart", cylinder(kO, kZ, 1.0), sphere(Vec3(3, 0, 0), 0.5),
-                 SsiKind::Curves, 0},
-                {"cylinder–sphere, ball inside", cylinder(kO, kZ, 1.0),
-                 sphere(Vec3(0.3, 0, 0), 0.5), SsiKind::Curves, 0},
-                {"sphere–torus off the axis", sphere(Vec3(2, 0, 0), 0.7), torus(kO, kZ, 2.0, 0.5),
-                 SsiKind::Curves, kAnyCount, 0, 0, 4.0, true},
-                {"sphere–torus, ball inside the tube", sphere(Vec3(2, 0, 0.1), 0.2),
-                 torus(kO, kZ, 2.0, 0.5), SsiKind::Curves, 0},
-                {"sphere–torus, torus inside the ball", sphere(Vec3(0.5, 0, 0), 3.5),
-                 torus(kO, kZ, 2.0, 0.5), SsiKind::Curves, 0, 0, 0, 6.0},
-                {"cone–cylinder, skew", narrowing_cone(), cylinder(Vec3(0, 0, 1), kX, 0.5),
-                 SsiKind::Curves, kAnyCount, 0, 0, 4.0, true},
-                {"torus–torus, linked (tubes apart)", torus(kO, kZ, 2.0, 0.5),
-                 torus(Vec3(2, 0, 0), kY, 2.0, 0.5), SsiKind::Curves, 0, 0, 0, 4.0, true},
-                {"torus–torus, tubes crossing", torus(kO, kZ, 2.0, 0.5),
-                 torus(Vec3(2, 0, 0), kY, 0.6, 0.3), SsiKind::Curves, kAnyCount, 0, 0, 4.0, true}},
-               901);
+  check_scenes(
+      {// The sphere's poles lie on the cylinder: its pcurve would have to jump there.
+       {"cylinder–sphere through the poles", cylinder(kO, kZ, 1.0), sphere(Vec3(1, 0, 0), 0.5),
+        SsiKind::Unsupported},
+       {"cylinder–sphere off the axis", cylinder(kO, kZ, 1.0), sphere(Vec3(1.2, 0, 0), 0.5),
+        SsiKind::Curves, 1, 0, 0, 4.0, true},
+       {"cylinder–sphere, apart", cylinder(kO, kZ, 1.0), sphere(Vec3(3, 0, 0), 0.5),
+        SsiKind::Curves, 0},
+       {"cylinder–sphere, ball inside", cylinder(kO, kZ, 1.0), sphere(Vec3(0.3, 0, 0), 0.5),
+        SsiKind::Curves, 0},
+       {"sphere–torus off the axis", sphere(Vec3(2, 0, 0), 0.7), torus(kO, kZ, 2.0, 0.5),
+        SsiKind::Curves, kAnyCount, 0, 0, 4.0, true},
+       {"sphere–torus, ball inside the tube", sphere(Vec3(2, 0, 0.1), 0.2), torus(kO, kZ, 2.0, 0.5),
+        SsiKind::Curves, 0},
+       {"sphere–torus, torus inside the ball", sphere(Vec3(0.5, 0, 0), 3.5),
+        torus(kO, kZ, 2.0, 0.5), SsiKind::Curves, 0, 0, 0, 6.0},
+       {"cone–cylinder, skew", narrowing_cone(), cylinder(Vec3(0, 0, 1), kX, 0.5), SsiKind::Curves,
+        kAnyCount, 0, 0, 4.0, true},
+       {"torus–torus, linked (tubes apart)", torus(kO, kZ, 2.0, 0.5),
+        torus(Vec3(2, 0, 0), kY, 2.0, 0.5), SsiKind::Curves, 0, 0, 0, 4.0, true},
+       {"torus–torus, tubes crossing", torus(kO, kZ, 2.0, 0.5), torus(Vec3(2, 0, 0), kY, 0.6, 0.3),
+        SsiKind::Curves, kAnyCount, 0, 0, 4.0, true}},
+      901);
 }
 
 TEST(SurfaceIntersection, SurfacesWithoutClosedFormsAreTracedOrNamed) {

@@ -15,10 +15,10 @@
 #include <numbers>
 #include <random>
 
-#include "random_geometry.h"
 #include <string>
 #include <tuple>
 #include <vector>
+#include "random_geometry.h"
 
 namespace csgtile::kernel {
 namespace {

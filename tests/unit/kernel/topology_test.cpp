@@ -30,13 +30,15 @@ Square make_square() {
   std::vector<Curve2dPtr> pcurves;
   for (int i = 0; i < 4; ++i) {
     const Vec3 a = corners[i], b = corners[(i + 1) % 4];
-    sq.edges.push_back(unwrap(ShapeFactory::edge(std::make_shared<LineCurve>(a, b - a), 0.0,
-                                                 (b - a).norm(), sq.vertices[i],
-                                                 sq.vertices[(i + 1) % 4], 1e-7)));
-    pcurves.push_back(std::make_shared<Line2d>(Vec2(a.x(), a.y()), Vec2(b.x() - a.x(), b.y() - a.y())));
+    sq.edges.push_back(
+        unwrap(ShapeFactory::edge(std::make_shared<LineCurve>(a, b - a), 0.0, (b - a).norm(),
+                                  sq.vertices[i], sq.vertices[(i + 1) % 4], 1e-7)));
+    pcurves.push_back(
+        std::make_shared<Line2d>(Vec2(a.x(), a.y()), Vec2(b.x() - a.x(), b.y() - a.y())));
   }
   Shape wire = unwrap(ShapeFactory::wire(sq.edges));
-  sq.face = unwrap(ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()), {wire}, {pcurves}, 1e-7));
+  sq.face =
+      unwrap(ShapeFactory::face(std::make_shared<PlaneSurface>(Frame()), {wire}, {pcurves}, 1e-7));
   return sq;
 }
 
@@ -206,7 +208,8 @@ TEST(AncestorIndex, BoxEdgesHaveTwoFacesAndVerticesThreeEdges) {
   ASSERT_EQ(vertex_edges.size(), 8u);
   for (std::size_t i = 0; i < 12; ++i) EXPECT_EQ(edge_faces.ancestors(i).size(), 2u);
   for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(vertex_edges.ancestors(i).size(), 3u);
-  for (std::size_t i = 0; i < face_solids.size(); ++i) EXPECT_EQ(face_solids.ancestors(i).size(), 1u);
+  for (std::size_t i = 0; i < face_solids.size(); ++i)
+    EXPECT_EQ(face_solids.ancestors(i).size(), 1u);
   EXPECT_TRUE(edge_faces.ancestors_of(Shape()).empty());
 }
 
@@ -222,7 +225,8 @@ TEST(AncestorIndex, SeamEdgeListsItsFaceOnce) {
 
 TEST(ChildMap, SameSolidAtTwoLocationsCountsTwice) {
   Shape box = unwrap(make_box(1, 1, 1));
-  Shape pair = unwrap(ShapeFactory::compound({box, box.moved(Location::translation(Vec3(3, 0, 0)))}));
+  Shape pair =
+      unwrap(ShapeFactory::compound({box, box.moved(Location::translation(Vec3(3, 0, 0)))}));
   EXPECT_EQ(map_child_shapes(pair, ShapeKind::Solid).size(), 2u);
   EXPECT_EQ(map_child_shapes(pair, ShapeKind::Edge).size(), 24u);
   Shape twice = unwrap(ShapeFactory::compound({box, box.reversed()}));
@@ -235,8 +239,8 @@ TEST(ChildMap, SameSolidAtTwoLocationsCountsTwice) {
 TEST(ShapeFactory, EnforcesKindsAndToleranceOrder) {
   Shape v = unwrap(ShapeFactory::vertex(Vec3::Zero(), 1e-7));
   Shape w = unwrap(ShapeFactory::vertex(Vec3(1, 0, 0), 1e-7));
-  auto too_loose = ShapeFactory::edge(std::make_shared<LineCurve>(Vec3::Zero(), Vec3::UnitX()),
-                                      0, 1, v, w, 1e-3);
+  auto too_loose = ShapeFactory::edge(std::make_shared<LineCurve>(Vec3::Zero(), Vec3::UnitX()), 0,
+                                      1, v, w, 1e-3);
   ASSERT_FALSE(too_loose.ok());
   EXPECT_NE(too_loose.error().message.find("exceeds"), std::string::npos);
   auto far = ShapeFactory::edge(std::make_shared<LineCurve>(Vec3::Zero(), Vec3::UnitX()), 0, 2, v,

@@ -414,11 +414,11 @@ TEST(CityJsonSeq, TrianglesThatCollapseAfterQuantisationAreLeftOutAndCounted) {
 TEST(CityJsonSeq, NoTwoVerticesWithinAUnitAndNoTriangleOnALine) {
   // Fitted parts of one building standing 0.6 mm apart (their bases and tops), and a pipe
   // through them: at 1 mm, the steps' vertices are a unit apart.
-  const std::vector<IndexObject> parts = {object(
-      "parts", combine({leaf(box({0, 0, 0}, {1, 1, 1}), "a"),
-                        leaf(box({0.5, 0.5, 0.0006}, {1, 1, 0.9998}), "b"),
-                        leaf(cylinder({0.25, 0.25, 0.0003}, 0.1, 1.2), "c")},
-                       kernel::BooleanOp::Fuse))};
+  const std::vector<IndexObject> parts = {
+      object("parts", combine({leaf(box({0, 0, 0}, {1, 1, 1}), "a"),
+                               leaf(box({0.5, 0.5, 0.0006}, {1, 1, 0.9998}), "b"),
+                               leaf(cylinder({0.25, 0.25, 0.0003}, 0.1, 1.2), "c")},
+                              kernel::BooleanOp::Fuse))};
   CityJsonOptions options;
   options.scale = 0.001;
   options.chordal_tolerance = 0.0001;

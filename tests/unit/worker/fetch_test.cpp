@@ -44,7 +44,8 @@ std::size_t regular_files(const fs::path& dir) {
 
 std::string payload(std::size_t n) {
   std::string text;
-  for (std::size_t i = 0; i < n; ++i) text.push_back(static_cast<char>('a' + (i * 7 + i / 13) % 26));
+  for (std::size_t i = 0; i < n; ++i)
+    text.push_back(static_cast<char>('a' + (i * 7 + i / 13) % 26));
   return text;
 }
 
@@ -60,7 +61,8 @@ TEST(SigV4, MatchesTheAwsDocumentedGetObjectExample) {
   r.amz_date = "20130524T000000Z";
   r.region = "us-east-1";
   r.extra_headers = {{"Range", "bytes=0-9"}};
-  const auto s = fetch::sign_v4(r, "AKIAIOSFODNN7EXAMPLE", "wJalrXUtnFEMI/K7MDENG/bPxRfiCYEXAMPLEKEY");
+  const auto s =
+      fetch::sign_v4(r, "AKIAIOSFODNN7EXAMPLE", "wJalrXUtnFEMI/K7MDENG/bPxRfiCYEXAMPLEKEY");
   EXPECT_EQ(s.signature, "f0e8bdb87c964420e857bd35b5d6ed310bd44f0170aba48dd91039c6036bdb41");
   EXPECT_NE(s.authorization.find("SignedHeaders=host;range;x-amz-content-sha256;x-amz-date"),
             std::string::npos);
@@ -132,7 +134,8 @@ TEST_F(FetchFile, SchemesOutsideThePolicyAreRefused) {
   EXPECT_EQ(f.code, ErrorCode::FetchRefused) << f.message;
   f = fetch::fetch({"http://user:hunter2@127.0.0.1:9/x", {}, {}}, {}, tmp.path(), result);
   EXPECT_EQ(f.code, ErrorCode::FetchRefused);
-  EXPECT_EQ(f.message.find("hunter2"), std::string::npos) << "credentials never in messages: " << f.message;
+  EXPECT_EQ(f.message.find("hunter2"), std::string::npos)
+      << "credentials never in messages: " << f.message;
   f = fetch::fetch({"http://127.0.0.1:9/x\r\nHost: evil", {}, {}}, {}, tmp.path(), result);
   EXPECT_EQ(f.code, ErrorCode::InputInvalid) << f.message;
 }
@@ -142,8 +145,9 @@ class FetchHttp : public ::testing::Test {
   void SetUp() override {
     write_text(tmp.path() / "tile.las", text);
     server = std::make_unique<BackgroundProcess>(
-        "exec python3 " + quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/fault_http_server.py") +
-        " " + quoted(tmp.path()));
+        "exec python3 " +
+        quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/fault_http_server.py") + " " +
+        quoted(tmp.path()));
     ASSERT_TRUE(server->running()) << server->problem();
     base = "http://127.0.0.1:" + server->first_line();
     policy.retry_delay_ms = 10;
@@ -306,7 +310,8 @@ TEST_F(FetchS3, CredentialsComeFromAFileWhenNotInTheEnvironment) {
   write_text(tmp.path() / "credentials",
              "[default]\naws_access_key_id = nobody\naws_secret_access_key = x\n"
              "[csgtile]\naws_access_key_id = S3RVER\naws_secret_access_key = S3RVER\n");
-  ScopedEnv env({{"AWS_ACCESS_KEY_ID", ""}, {"AWS_SECRET_ACCESS_KEY", ""},
+  ScopedEnv env({{"AWS_ACCESS_KEY_ID", ""},
+                 {"AWS_SECRET_ACCESS_KEY", ""},
                  {"AWS_SHARED_CREDENTIALS_FILE", (tmp.path() / "credentials").string()},
                  {"AWS_PROFILE", "csgtile"}});
   ASSERT_TRUE(fetch::s3_put("s3://tiles/p.las", "profile", policy).ok());
@@ -318,7 +323,8 @@ TEST_F(FetchS3, CredentialsComeFromAFileWhenNotInTheEnvironment) {
 TEST_F(FetchS3, UnsafeKeysAndBucketsAreRefusedBeforeAnyRequest) {
   ScopedEnv env({{"AWS_ACCESS_KEY_ID", "S3RVER"}, {"AWS_SECRET_ACCESS_KEY", "S3RVER"}});
   fetch::Result r;
-  for (const std::string url : {"s3://tiles/a/../b.las", "s3://tiles//b.las", "s3://tiles/", "s3://T!/x.las"}) {
+  for (const std::string url :
+       {"s3://tiles/a/../b.las", "s3://tiles//b.las", "s3://tiles/", "s3://T!/x.las"}) {
     const Failure f = fetch::fetch({url, {}, {}}, policy, tmp.path() / "cache", r);
     EXPECT_EQ(f.code, ErrorCode::InputInvalid) << url << ": " << f.message;
   }

@@ -290,8 +290,8 @@ TEST_F(PostgresQueueTest, NotBeforeIsServerTime) {
   q->enqueue("later", "build", "{}", f,
              test::at_priority(0, std::chrono::system_clock::now() + std::chrono::minutes(10)));
   ASSERT_TRUE(f.ok()) << f.message;
-  const std::string minutes = backend_.query(
-      "SELECT round(extract(epoch FROM run_after - now()) / 60) FROM csgtile_jobs");
+  const std::string minutes =
+      backend_.query("SELECT round(extract(epoch FROM run_after - now()) / 60) FROM csgtile_jobs");
   EXPECT_EQ(minutes, "10");
   EXPECT_FALSE(q->claim("w", f));
 }

@@ -242,7 +242,8 @@ TYPED_TEST(JobQueueTest, HeartbeatKeepsALongJobLeasedAndNoticesALostLease) {
   Job stale = *job;
   stale.lease_token = "taken-over";
   LeaseHeartbeat lost(*q, stale, std::chrono::milliseconds(20));
-  for (int wait = 0; wait < 100 && !lost.lost(); ++wait) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int wait = 0; wait < 100 && !lost.lost(); ++wait)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_TRUE(lost.lost());
   EXPECT_TRUE(q->complete(*job, "{}", f));
   EXPECT_TRUE(f.ok()) << f.message;
@@ -449,7 +450,8 @@ INSERT INTO jobs (key, kind, payload, created_ms, updated_ms) VALUES ('old-queue
   }
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
   sqlite3_stmt* statement = nullptr;
-  sqlite3_prepare_v2(db, "SELECT group_concat(version) FROM schema_version", -1, &statement, nullptr);
+  sqlite3_prepare_v2(db, "SELECT group_concat(version) FROM schema_version", -1, &statement,
+                     nullptr);
   ASSERT_EQ(sqlite3_step(statement), SQLITE_ROW);
   EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(statement, 0)), "2");
   sqlite3_finalize(statement);

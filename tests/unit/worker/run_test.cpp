@@ -4,8 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "csgtile/worker/publish.h"
 #include "csgtile/worker/run.h"
@@ -19,8 +19,9 @@ namespace fs = std::filesystem;
 class RunTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("csgtile-run-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("csgtile-run-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -43,12 +44,14 @@ class RunTest : public ::testing::Test {
 TEST_F(RunTest, BadInputsEndDeadWithReasonsAndTheRestIsPublished) {
   const std::string good = (test::source_dir() / "config/examples/scenes/pavilion.json").string();
   const std::string broken = write("broken.json", "{\"primitives\": [{\"type\": \"box\"}]}");
-  const std::string degenerate =
-      write("flat.json", "{\"primitives\": [{\"type\": \"extrusion\", \"profile\": [[0,0],[1,0],[2,0]], \"h\": 1}]}");
+  const std::string degenerate = write(
+      "flat.json",
+      "{\"primitives\": [{\"type\": \"extrusion\", \"profile\": [[0,0],[1,0],[2,0]], \"h\": 1}]}");
   const std::string missing = (dir_ / "missing.json").string();
   Logger log(config::LogLevel::Error, config::LogFormat::Json, stderr);
   RunSummary summary;
-  const Failure f = run_embedded(make_config("out", {good, broken, degenerate, missing}), log, summary);
+  const Failure f =
+      run_embedded(make_config("out", {good, broken, degenerate, missing}), log, summary);
   ASSERT_TRUE(f.ok()) << f.message;
   EXPECT_EQ(summary.counts.done, 1);
   EXPECT_EQ(summary.counts.dead, 3);
@@ -66,7 +69,8 @@ TEST_F(RunTest, BadInputsEndDeadWithReasonsAndTheRestIsPublished) {
 }
 
 TEST_F(RunTest, SameInputsGiveByteIdenticalOutputs) {
-  const std::string scene = (test::source_dir() / "config/examples/scenes/courtyard_block.json").string();
+  const std::string scene =
+      (test::source_dir() / "config/examples/scenes/courtyard_block.json").string();
   Logger log(config::LogLevel::Error, config::LogFormat::Json, stderr);
   RunSummary a, b;
   ASSERT_TRUE(run_embedded(make_config("a", {scene}), log, a).ok());
@@ -101,7 +105,8 @@ TEST(Publish, KeysWithTraversalOrOddCharactersAreRefused) {
 }
 
 TEST(Publish, AtomicWriteLeavesNoTemporaryAndReplacesWhole) {
-  const fs::path dir = fs::temp_directory_path() / ("csgtile-publish-" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("csgtile-publish-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   ASSERT_TRUE(write_file_atomic(dir / "sub" / "f.txt", "first").ok());
   ASSERT_TRUE(write_file_atomic(dir / "sub" / "f.txt", "second").ok());

@@ -57,17 +57,21 @@ PublishPlan make_run(const fs::path& root, const std::string& version, int extra
   for (const std::string cell : {"0_0", "0_1"}) {
     add("cells/" + cell + "/model.glb", "glTF cell " + cell + " " + version);
     add("cells/" + cell + "/model.csgt", "csgt object a " + version);  // same as objects/a1.csgt
-    write_file(root / "cells" / cell / "manifest.json", "{\"cell\":\"" + cell + "\",\"v\":\"" + version + "\"}");
+    write_file(root / "cells" / cell / "manifest.json",
+               "{\"cell\":\"" + cell + "\",\"v\":\"" + version + "\"}");
     plan.manifests.push_back("cells/" + cell + "/manifest.json");
   }
-  for (int i = 0; i < extra; ++i) add("objects/x" + std::to_string(i) + ".csgt", version + " extra " + std::to_string(i));
+  for (int i = 0; i < extra; ++i)
+    add("objects/x" + std::to_string(i) + ".csgt", version + " extra " + std::to_string(i));
   write_file(root / "manifest.json", "{\"run\":\"" + version + "\"}");
   plan.manifests.push_back("manifest.json");
   return plan;
 }
 
 // Distinct contents in a plan made by make_run: every path but the shared cell .csgt copies.
-std::size_t distinct_files(const PublishPlan& plan) { return plan.objects.size() + plan.manifests.size() - 2; }
+std::size_t distinct_files(const PublishPlan& plan) {
+  return plan.objects.size() + plan.manifests.size() - 2;
+}
 
 std::size_t regular_files(const fs::path& dir) {
   std::size_t n = 0;
@@ -94,14 +98,16 @@ class S3Publish : public ::testing::Test {
   // s3rver's access key with `secret`; the environment is restored after the test.
   void use_secret(const std::string& secret) {
     credentials_.reset();
-    credentials_.emplace(std::map<std::string, std::string>{
-        {"AWS_ACCESS_KEY_ID", "S3RVER"}, {"AWS_SECRET_ACCESS_KEY", secret}, {"AWS_SESSION_TOKEN", ""}});
+    credentials_.emplace(std::map<std::string, std::string>{{"AWS_ACCESS_KEY_ID", "S3RVER"},
+                                                            {"AWS_SECRET_ACCESS_KEY", secret},
+                                                            {"AWS_SESSION_TOKEN", ""}});
   }
   // A fault proxy in front of s3rver running `plan` (see fault_tcp_proxy.py).
   fetch::Policy through_proxy(const std::string& plan) {
     proxy = std::make_unique<BackgroundProcess>(
-        "exec python3 " + quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/fault_tcp_proxy.py") + " " +
-        s3_port + " " + plan);
+        "exec python3 " +
+        quoted(fs::path(CSGTILE_SOURCE_DIR) / "tests/support/fault_tcp_proxy.py") + " " + s3_port +
+        " " + plan);
     EXPECT_TRUE(proxy->running()) << proxy->problem();
     fetch::Policy p = policy;
     p.s3.endpoint = "http://127.0.0.1:" + proxy->first_line();
@@ -111,7 +117,8 @@ class S3Publish : public ::testing::Test {
   std::optional<std::string> get(const std::string& key) {
     fetch::S3Object object;
     std::string bytes;
-    const Failure f = fetch::s3_get("s3://" + std::string(kBucket) + "/" + key, policy, object, bytes);
+    const Failure f =
+        fetch::s3_get("s3://" + std::string(kBucket) + "/" + key, policy, object, bytes);
     EXPECT_TRUE(f.ok()) << f.message;
     if (!object.exists) return std::nullopt;
     return bytes;
@@ -119,14 +126,16 @@ class S3Publish : public ::testing::Test {
 
   // Follows the pointer of `run` under `prefix` as a reader would and checks that everything
   // it names is there with its SHA-256 and size. Returns a problem, or "" (and the manifest).
-  std::string follow(const std::string& prefix, const std::string& run, nlohmann::json* manifest_out = nullptr) {
+  std::string follow(const std::string& prefix, const std::string& run,
+                     nlohmann::json* manifest_out = nullptr) {
     const std::string base = prefix.empty() ? "" : prefix + "/";
     const auto pointer_text = get(base + "runs/" + run + "/CURRENT");
     if (!pointer_text) return "no pointer";
     const auto pointer = nlohmann::json::parse(*pointer_text);
     const auto manifest_text = get(base + pointer.at("manifest").get<std::string>());
     if (!manifest_text) return "the pointer names a missing manifest";
-    if (sha256_hex(*manifest_text) != pointer.at("sha256")) return "manifest SHA-256 differs from the pointer's";
+    if (sha256_hex(*manifest_text) != pointer.at("sha256"))
+      return "manifest SHA-256 differs from the pointer's";
     const auto manifest = nlohmann::json::parse(*manifest_text);
     if (manifest.at("run") != run || manifest.at("scope") != "") return "not the run's manifest";
     for (const auto& [path, entry] : manifest.at("files").items()) {
@@ -141,11 +150,14 @@ class S3Publish : public ::testing::Test {
     }
     for (const auto& cell : manifest.at("cells")) {
       const auto cell_text = get(base + cell.at("key").get<std::string>());
-      if (!cell_text || sha256_hex(*cell_text) != cell.at("sha256")) return "cell manifest missing or changed";
+      if (!cell_text || sha256_hex(*cell_text) != cell.at("sha256"))
+        return "cell manifest missing or changed";
       const auto cell_manifest = nlohmann::json::parse(*cell_text);
       for (const auto& [path, entry] : cell_manifest.at("files").items()) {
-        if (path.rfind(cell.at("scope").get<std::string>() + "/", 0) != 0) return path + " outside its cell";
-        if (manifest.at("files").value(path, nlohmann::json()) != entry) return path + " differs between manifests";
+        if (path.rfind(cell.at("scope").get<std::string>() + "/", 0) != 0)
+          return path + " outside its cell";
+        if (manifest.at("files").value(path, nlohmann::json()) != entry)
+          return path + " differs between manifests";
       }
     }
     if (manifest_out != nullptr) *manifest_out = manifest;
@@ -174,7 +186,8 @@ TEST_F(S3Publish, AReaderFollowingThePointerFindsEveryFileWithItsHash) {
   PublishReport report;
   const Failure f = publish::publish_run_to_s3(plan, "s3://pub/city", "berlin", policy, report);
   ASSERT_TRUE(f.ok()) << f.message;
-  EXPECT_EQ(report.uploaded, distinct_files(plan) + 3) << "objects, two cell manifests, the run manifest";
+  EXPECT_EQ(report.uploaded, distinct_files(plan) + 3)
+      << "objects, two cell manifests, the run manifest";
   EXPECT_EQ(report.skipped_existing, 0u);
   EXPECT_TRUE(report.pointer_changed);
   EXPECT_EQ(report.pointer_key, "city/runs/berlin/CURRENT");
@@ -188,7 +201,8 @@ TEST_F(S3Publish, AReaderFollowingThePointerFindsEveryFileWithItsHash) {
   EXPECT_EQ(manifest.at("cells")[0].at("scope"), "cells/0_0");
   const auto& glb = manifest.at("files").at("tiles/model.glb");
   EXPECT_EQ(glb.at("key"), "objects/" + glb.at("sha256").get<std::string>() + ".glb");
-  EXPECT_EQ(manifest.at("files").at("model.city.jsonl").at("key").get<std::string>().substr(72), ".jsonl");
+  EXPECT_EQ(manifest.at("files").at("model.city.jsonl").at("key").get<std::string>().substr(72),
+            ".jsonl");
   // The stored object is byte-identical to the local file.
   std::ifstream in(plan.root / "tiles/model.glb", std::ios::binary);
   const std::string local{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -218,7 +232,8 @@ TEST_F(S3Publish, RepublishingUploadsNothingNew) {
 
 TEST_F(S3Publish, ANewVersionOfTheRunMovesThePointerAndKeepsTheOldManifest) {
   PublishReport first, second;
-  ASSERT_TRUE(publish::publish_run_to_s3(make_run(tmp / "a", "v1"), "s3://pub", "r", policy, first).ok());
+  ASSERT_TRUE(
+      publish::publish_run_to_s3(make_run(tmp / "a", "v1"), "s3://pub", "r", policy, first).ok());
   const PublishPlan v2 = make_run(tmp / "b", "v2");
   ASSERT_TRUE(publish::publish_run_to_s3(v2, "s3://pub", "r", policy, second).ok());
   EXPECT_NE(second.manifest_key, first.manifest_key);
@@ -253,7 +268,10 @@ TEST_F(S3Publish, AManifestKeyHoldingOtherBytesIsRefusedNotOverwritten) {
 
   // The same for a content-addressed object whose key holds something of another size.
   const std::string object = "c/" + nlohmann::json::parse(get(report.manifest_key).value())
-                                        .at("files").at("index.gpkg").at("key").get<std::string>();
+                                        .at("files")
+                                        .at("index.gpkg")
+                                        .at("key")
+                                        .get<std::string>();
   ASSERT_TRUE(fetch::s3_put("s3://pub/" + object, "short", policy).ok());
   const Failure g = publish::publish_run_to_s3(plan, "s3://pub/c", "r", policy, refused);
   EXPECT_EQ(g.code, ErrorCode::ResultInvalid) << g.message;
@@ -308,8 +326,10 @@ TEST_F(S3Publish, UnsafePlansAreRefusedBeforeAnyRequest) {
   PublishPlan no_manifest = plan;
   no_manifest.manifests.clear();
   PublishReport report;
-  EXPECT_EQ(publish::publish_run_to_s3(no_manifest, "s3://pub", "r", policy, report).code, ErrorCode::InputInvalid);
-  EXPECT_EQ(regular_files(tmp.path() / "s3" / kBucket), 0u) << "nothing uploaded by any refused plan";
+  EXPECT_EQ(publish::publish_run_to_s3(no_manifest, "s3://pub", "r", policy, report).code,
+            ErrorCode::InputInvalid);
+  EXPECT_EQ(regular_files(tmp.path() / "s3" / kBucket), 0u)
+      << "nothing uploaded by any refused plan";
 }
 
 TEST_F(S3Publish, TransientResetsAreRetried) {
@@ -356,7 +376,9 @@ TEST_F(S3Publish, AFailureMidwayLeavesNoPointerAndARerunCompletes) {
 // a complete manifest: the old one until the pointer moves, the new one after.
 TEST_F(S3Publish, ConcurrentReadersAlwaysFindACompleteRun) {
   PublishReport first;
-  ASSERT_TRUE(publish::publish_run_to_s3(make_run(tmp / "v1", "v1", 10), "s3://pub", "r", policy, first).ok());
+  ASSERT_TRUE(
+      publish::publish_run_to_s3(make_run(tmp / "v1", "v1", 10), "s3://pub", "r", policy, first)
+          .ok());
   const PublishPlan v2 = make_run(tmp / "v2", "v2", 40);
 
   std::atomic<bool> publishing{true};
@@ -373,7 +395,8 @@ TEST_F(S3Publish, ConcurrentReadersAlwaysFindACompleteRun) {
         problems.push_back(problem);
         continue;
       }
-      (manifest.at("files").size() == v2.objects.size() + v2.manifests.size() ? saw_new : saw_old)++;
+      (manifest.at("files").size() == v2.objects.size() + v2.manifests.size() ? saw_new
+                                                                              : saw_old)++;
     }
   });
   PublishReport second;
@@ -383,7 +406,8 @@ TEST_F(S3Publish, ConcurrentReadersAlwaysFindACompleteRun) {
   ASSERT_TRUE(f.ok()) << f.message;
   RecordProperty("reads", static_cast<int>(reads));
   RecordProperty("reads_of_the_old_version", static_cast<int>(saw_old));
-  EXPECT_TRUE(problems.empty()) << problems.size() << " of " << reads << " reads, first: " << problems.front();
+  EXPECT_TRUE(problems.empty()) << problems.size() << " of " << reads
+                                << " reads, first: " << problems.front();
   EXPECT_GE(saw_old, 1u) << "the reader ran while the new version was being published";
   EXPECT_GE(saw_new, 1u) << "the last read sees the new version";
 }

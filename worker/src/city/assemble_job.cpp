@@ -37,8 +37,7 @@ ordered_json quality_json(const std::optional<geo::FitQuality>& q) {
 }  // namespace
 
 Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
-                         const config::Config& config, std::string& result,
-                         StageTimings* timings) {
+                         const config::Config& config, std::string& result, StageTimings* timings) {
   ops::StageClock clock(timings);
   clock.enter("read");
   const auto payload = ordered_json::parse(job.payload, nullptr, false);
@@ -145,23 +144,25 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                               {"type", kernel::primitive_type_name(p.primitive.spec.type)},
                               {"quality", quality_json(p.quality)}});
     }
-    io.primitives = model_primitives(object->model, [&by_label](const std::string& label) -> std::optional<geo::FitQuality> {
-      const auto it = by_label.find(label);
-      return it == by_label.end() ? std::nullopt : it->second->quality;
-    });
+    io.primitives = model_primitives(
+        object->model, [&by_label](const std::string& label) -> std::optional<geo::FitQuality> {
+          const auto it = by_label.find(label);
+          return it == by_label.end() ? std::nullopt : it->second->quality;
+        });
     const std::string bytes = kernel::write_native_model(object->model);
     const std::string sha = sha256_hex(bytes);
     const std::string key = "objects/" + sha + ".csgt";
     if (Failure f = publish_object(run_dir, key, bytes); !f.ok()) return f;
     if (!object->fused) ++invalid;
-    object_records.push_back({{"id", object->id},
-                              {"key", key},
-                              {"sha256", sha},
-                              {"bytes", bytes.size()},
-                              {"fused", object->fused},
-                              {"error", object->fused ? ordered_json() : ordered_json(object->error)},
-                              {"volume", object->volume},
-                              {"primitives", prim_records}});
+    object_records.push_back(
+        {{"id", object->id},
+         {"key", key},
+         {"sha256", sha},
+         {"bytes", bytes.size()},
+         {"fused", object->fused},
+         {"error", object->fused ? ordered_json() : ordered_json(object->error)},
+         {"volume", object->volume},
+         {"primitives", prim_records}});
     objects.objects.push_back(std::move(io));
     kept_objects.push_back(*object);
   }
@@ -182,7 +183,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   const std::filesystem::path cell_dir = run_dir / dir_key;
   auto city = assembly::city_model(kept_objects);
   if (!city.ok()) return {from_kernel(city.error().code), name + ": " + city.error().message};
-  if (Failure f = write_file_atomic(cell_dir / "model.csgt", kernel::write_native_model(city.value()));
+  if (Failure f =
+          write_file_atomic(cell_dir / "model.csgt", kernel::write_native_model(city.value()));
       !f.ok()) {
     return f;
   }
@@ -229,13 +231,14 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   manifest["files"] = files;
   manifest["objects"] = object_records;
   manifest["stats"] = stats;
-  manifest["index"] = {{"objects", index.stats.objects}, {"shapes", index.stats.shapes},
+  manifest["index"] = {{"objects", index.stats.objects},
+                       {"shapes", index.stats.shapes},
                        {"relations", index.stats.relations}};
   manifest["cityjson"] = {{"features", cityjson.stats.features},
                           {"open_objects", cityjson.stats.open_objects}};
-  manifest["tiles"] = tiles.written ? ordered_json({{"objects", tiles.objects},
-                                                    {"triangles", tiles.triangles}})
-                                    : ordered_json({{"skipped", tiles.skipped}});
+  manifest["tiles"] =
+      tiles.written ? ordered_json({{"objects", tiles.objects}, {"triangles", tiles.triangles}})
+                    : ordered_json({{"skipped", tiles.skipped}});
   manifest["problems"] = problems;
   const std::string manifest_text = manifest.dump(2) + "\n";
   if (Failure f = write_file_atomic(cell_dir / "manifest.json", manifest_text); !f.ok()) return f;

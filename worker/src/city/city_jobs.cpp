@@ -13,18 +13,16 @@
 
 #include "city/city_internal.h"
 #include "csgtile/geo/las.h"
-#include "fetch/fetch.h"
-#include "fetch/input.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/worker/publish.h"
+#include "fetch/fetch.h"
+#include "fetch/input.h"
 
 namespace csgtile::worker::city {
 
 namespace detail {
 
-std::string Cell::name() const {
-  return "c" + std::to_string(column) + "_r" + std::to_string(row);
-}
+std::string Cell::name() const { return "c" + std::to_string(column) + "_r" + std::to_string(row); }
 
 Cell cell_of(double x, double y, double size) {
   return {static_cast<std::int64_t>(std::floor(x / size)),
@@ -266,7 +264,8 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
     // The first enqueue fixes the run's tile list.
     std::vector<Tile> expanded;
     if (Failure f = expand_tile_inputs(config, expanded); !f.ok()) return f;
-    nlohmann::ordered_json doc = {{"run", config.run.name}, {"tiles", nlohmann::ordered_json::array()}};
+    nlohmann::ordered_json doc = {{"run", config.run.name},
+                                  {"tiles", nlohmann::ordered_json::array()}};
     for (const Tile& t : expanded) {
       if (t.cell) {
         doc["tiles"].push_back({{"input", t.input}, {"cell", {t.cell->column, t.cell->row}}});
@@ -307,7 +306,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   std::set<std::string> done;
   for (const auto& r : results) done.insert(r.first);
   std::map<std::string, ordered_json> fits;
-  for (auto& [key, record] : detail::done_records(results, "fit", run)) fits[key] = std::move(record);
+  for (auto& [key, record] : detail::done_records(results, "fit", run))
+    fits[key] = std::move(record);
   std::size_t finished = 0;
   for (const Tile& t : tiles) {
     const std::string key = fit_key(run, t.id);
@@ -330,8 +330,9 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
     if (tile_crs != *crs) continue;
     for (const auto& name : record.at("anchor_cells")) {
       const auto& c = name;
-      cells.emplace(c.at("name").get<std::string>(),
-                    detail::Cell{c.at("column").get<std::int64_t>(), c.at("row").get<std::int64_t>()});
+      cells.emplace(
+          c.at("name").get<std::string>(),
+          detail::Cell{c.at("column").get<std::int64_t>(), c.at("row").get<std::int64_t>()});
     }
   }
   for (const auto& [name, cell] : cells) {
@@ -388,7 +389,8 @@ Failure advance_city_run(const config::Config& config, JobQueue& queue, const Lo
   try {
     return advance(config, queue, log, enqueued);
   } catch (const nlohmann::json::exception& e) {
-    return {ErrorCode::Internal, "run " + config.run.name + ": a fit record is malformed: " + e.what()};
+    return {ErrorCode::Internal,
+            "run " + config.run.name + ": a fit record is malformed: " + e.what()};
   } catch (const std::exception& e) {
     return {ErrorCode::Internal, "run " + config.run.name + ": " + e.what()};
   }
@@ -422,7 +424,8 @@ Failure city_progress(const config::Config& config, JobQueue& queue, CityProgres
     std::set<std::string> cells;
     try {
       for (const auto& [key, record] : detail::done_records(results, "fit", run)) {
-        for (const auto& c : record.at("anchor_cells")) cells.insert(c.at("name").get<std::string>());
+        for (const auto& c : record.at("anchor_cells"))
+          cells.insert(c.at("name").get<std::string>());
       }
     } catch (const nlohmann::json::exception& e) {
       return {ErrorCode::Internal, "run " + run + ": a fit record is malformed: " + e.what()};
@@ -436,7 +439,8 @@ namespace {
 Failure run_job(const Job& job, const std::filesystem::path& run_dir, const config::Config& config,
                 JobQueue& queue, const Logger& log, std::string& result, StageTimings* timings) {
   if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings);
-  if (job.kind == "assemble") return detail::run_assemble_job(job, run_dir, config, result, timings);
+  if (job.kind == "assemble")
+    return detail::run_assemble_job(job, run_dir, config, result, timings);
   if (job.kind == "index") {
     return detail::run_index_job(job, run_dir, config, queue, log, result, timings);
   }
@@ -451,7 +455,8 @@ Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
   try {
     return run_job(job, run_dir, config, queue, log, result, timings);
   } catch (const nlohmann::json::exception& e) {
-    return {ErrorCode::Internal, "job " + job.key + ": a payload or record is malformed: " + e.what()};
+    return {ErrorCode::Internal,
+            "job " + job.key + ": a payload or record is malformed: " + e.what()};
   } catch (const std::filesystem::filesystem_error& e) {
     return {ErrorCode::Io, "job " + job.key + ": " + e.what()};
   }

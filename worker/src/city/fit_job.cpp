@@ -53,8 +53,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     input = payload["input"].get<std::string>();
     if (fetch::is_url(input) && input.rfind("file://", 0) != 0) {
       auto stats = std::make_shared<fetch::RangeStats>();
-      if (Failure f = fetch::open_range_source(input, fetch::policy_of(config.fetch),
-                                               source.remote, stats);
+      if (Failure f =
+              fetch::open_range_source(input, fetch::policy_of(config.fetch), source.remote, stats);
           !f.ok()) {
         return f;
       }
@@ -71,7 +71,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   clock.enter("fit");
   const fit::FitPipelineOptions options = fit_options(config);
   FittedTile tile;
-  std::string name = std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
+  std::string name =
+      std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
   if (only_cell) name += "_" + only_cell->name();
   if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile); !f.ok()) {
     // A range read that failed in transit keeps its own code (Network: the job is retried).
@@ -104,7 +105,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     std::string reason;
     if (!solid.ok()) {
       reason = solid.error().message;
-    } else if (const kernel::CheckReport check = kernel::check_shape(solid.value()); !check.valid()) {
+    } else if (const kernel::CheckReport check = kernel::check_shape(solid.value());
+               !check.valid()) {
       reason = std::string(kernel::check_status_name(check.issues.front().status)) + ": " +
                check.issues.front().message;
     }
@@ -129,7 +131,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<geo::ScenePrimitive> in_cell;
   for (const geo::ScenePrimitive& p : published->primitives) {
     const kernel::BoundingBox box = primitive_crs_box(p.spec, o, config.kernel.linear_tolerance);
-    if (box.empty()) return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
+    if (box.empty())
+      return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
     const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
     if (only_cell && (cell.column != only_cell->column || cell.row != only_cell->row)) {
       ++other_cells;  // anchored in a neighbour cell: that cell's job keeps it
@@ -186,10 +189,10 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   for (const auto& r : fit.rejected) reasons[r.reason] += 1;
   record["rejected"] = reasons;
   record["invalid_primitives"] = invalid;
-  record["bounds"] = bounds.empty() ? ordered_json()
-                                    : ordered_json::array({bounds.min.x(), bounds.min.y(),
-                                                           bounds.min.z(), bounds.max.x(),
-                                                           bounds.max.y(), bounds.max.z()});
+  record["bounds"] = bounds.empty()
+                         ? ordered_json()
+                         : ordered_json::array({bounds.min.x(), bounds.min.y(), bounds.min.z(),
+                                                bounds.max.x(), bounds.max.y(), bounds.max.z()});
   ordered_json cells = ordered_json::array();
   for (const auto& [cell_name, cell] : anchors) {
     cells.push_back({{"name", cell_name}, {"column", cell.column}, {"row", cell.row}});

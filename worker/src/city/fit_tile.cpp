@@ -61,9 +61,9 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     if (given && own.ok()) {
       // The run's CRS is for tiles without one; a tile that says otherwise is an error.
       if (auto diff = geo::crs_difference(own.value(), *given)) {
-        return {ErrorCode::InputInvalid,
-                "the tile's CRS (" + geo::describe_crs(own.value()) + ") differs from run.crs (" +
-                    crs_override + ": " + geo::describe_crs(*given) + "): " + *diff};
+        return {ErrorCode::InputInvalid, "the tile's CRS (" + geo::describe_crs(own.value()) +
+                                             ") differs from run.crs (" + crs_override + ": " +
+                                             geo::describe_crs(*given) + "): " + *diff};
       }
     } else if (!given && own.ok()) {
       crs_text = crs_label(own.value());
@@ -93,7 +93,8 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   }
   const kernel::Vec3 o(origin[0], origin[1], origin[2]);
   for (auto& p : raw) p -= o;
-  out.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.read_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   auto fitted = fit::fit_point_cloud(raw, classes, options);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};

@@ -36,8 +36,8 @@ struct FittedTile {
 /// range requests); with a region, only the points inside it (a COPC file reads only the
 /// octree nodes that meet it).
 struct TileSource {
-  std::filesystem::path path;                ///< used when `remote` is null
-  std::unique_ptr<geo::ByteSource> remote;   ///< LAS/LAZ/COPC over ranges
+  std::filesystem::path path;               ///< used when `remote` is null
+  std::unique_ptr<geo::ByteSource> remote;  ///< LAS/LAZ/COPC over ranges
   std::optional<geo::Bounds3> region;
 };
 

@@ -9,13 +9,13 @@
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/native_format.h"
-#include "csgtile/worker/publish.h"
 #include "csgtile/kernel/tessellation.h"
+#include "csgtile/worker/publish.h"
 #include "export/report.h"
 #include "export/run_index.h"
 #include "job_records.h"
-#include "publish/publish_run.h"
 #include "ops/stage_clock.h"
+#include "publish/publish_run.h"
 
 namespace csgtile::worker::city::detail {
 
@@ -157,7 +157,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       io.id = entry.at("id").get<std::string>();
       io.cell = record.at("cell").get<std::string>();
       io.model = std::move(model).value();
-      if (!offset.isZero(0.0)) io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
+      if (!offset.isZero(0.0))
+        io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
       std::map<std::string, geo::FitQuality> quality;
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");
@@ -166,17 +167,19 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                                                      q.at("rms").get<double>(),
                                                      q.at("coverage").get<double>()};
       }
-      io.primitives = model_primitives(io.model, [&quality](const std::string& label) -> std::optional<geo::FitQuality> {
-        const auto it = quality.find(label);
-        if (it == quality.end()) return std::nullopt;
-        return it->second;
-      });
+      io.primitives = model_primitives(
+          io.model, [&quality](const std::string& label) -> std::optional<geo::FitQuality> {
+            const auto it = quality.find(label);
+            if (it == quality.end()) return std::nullopt;
+            return it->second;
+          });
       objects.objects.push_back(std::move(io));
     }
   }
   RunIndexReport index;
   if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;
-  log.info("index", "written", {{"key", index.key}, {"objects", std::to_string(index.stats.objects)}});
+  log.info("index", "written",
+           {{"key", index.key}, {"objects", std::to_string(index.stats.objects)}});
 
   clock.enter("publish");
   std::string tileset;
@@ -214,7 +217,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     primitives += record.value("primitives", 0LL);
     points += record.value("points", 0LL);
     assigned += record.value("assigned_points", 0LL);
-    for (const auto& [type, n] : record.at("per_type").items()) per_type[type] += n.get<long long>();
+    for (const auto& [type, n] : record.at("per_type").items())
+      per_type[type] += n.get<long long>();
   }
   ordered_json cell_list = ordered_json::array();
   long long object_count = 0;
@@ -229,9 +233,9 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     }
   }
   for (const auto& t : tiles_left_out) problems.push_back(t);
-  manifest["totals"] = {{"tiles", fits.size()},   {"points", points},
+  manifest["totals"] = {{"tiles", fits.size()},        {"points", points},
                         {"assigned_points", assigned}, {"primitives", primitives},
-                        {"per_type", per_type},   {"cells", cells.size()},
+                        {"per_type", per_type},        {"cells", cells.size()},
                         {"objects", object_count}};
   manifest["cells"] = cell_list;
   manifest["index"] = {{"key", index.key},
@@ -283,7 +287,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     }
     if (record.contains("tiles") && record["tiles"].is_string()) {
       const std::string tiles_key = record["tiles"].get<std::string>();
-      rc.glb_path = (run_dir / std::filesystem::path(tiles_key).parent_path() / "model.glb").string();
+      rc.glb_path =
+          (run_dir / std::filesystem::path(tiles_key).parent_path() / "model.glb").string();
     }
     for (const auto& p : record.at("problems")) rc.validation.push_back(p.get<std::string>());
     report.cells.push_back(std::move(rc));
@@ -304,7 +309,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       stage_totals[stage] += seconds.get<double>();
     }
   }
-  for (const std::string& stage : stage_order) report.stage_seconds.emplace_back(stage, stage_totals[stage]);
+  for (const std::string& stage : stage_order)
+    report.stage_seconds.emplace_back(stage, stage_totals[stage]);
   ReportFiles report_files;
   if (Failure f = write_run_report(report, run_dir, report_files); !f.ok()) return f;
   ordered_json report_entries = ordered_json::array();
@@ -313,7 +319,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     if (Failure f = describe_file(run_dir, key, entry); !f.ok()) return f;
     report_entries.push_back(std::move(entry));
   }
-  manifest["report"] = {{"key", "report/index.html"}, {"files", report_entries},
+  manifest["report"] = {{"key", "report/index.html"},
+                        {"files", report_entries},
                         {"not_deterministic", report_files.nondeterministic_keys}};
   const std::string manifest_text = manifest.dump(2) + "\n";
   if (Failure f = write_file_atomic(run_dir / "manifest.json", manifest_text); !f.ok()) return f;
@@ -323,7 +330,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   if (tile_children > 0) listed.insert("tiles/tileset.json");
   for (const auto& entry : report_entries) listed.insert(entry.at("key").get<std::string>());
   for (const std::string& key : report_files.nondeterministic_keys) listed.insert(key);
-  for (const auto& [key, record] : fits) listed.insert(record.at("scene").at("key").get<std::string>());
+  for (const auto& [key, record] : fits)
+    listed.insert(record.at("scene").at("key").get<std::string>());
   for (const auto& [key, record] : cells) {
     const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
     listed.insert(cell_manifest);
@@ -331,8 +339,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) return f;
     const ordered_json cm = ordered_json::parse(text);
     const std::string dir = std::filesystem::path(cell_manifest).parent_path().string();
-    for (const auto& file : cm.at("files")) listed.insert(dir + "/" + file.at("key").get<std::string>());
-    for (const auto& object : record.at("objects")) listed.insert(object.at("key").get<std::string>());
+    for (const auto& file : cm.at("files"))
+      listed.insert(dir + "/" + file.at("key").get<std::string>());
+    for (const auto& object : record.at("objects"))
+      listed.insert(object.at("key").get<std::string>());
   }
   if (Failure f = publish::publish_run_directory(config, run_dir, log, &listed); !f.ok()) return f;
 

@@ -110,7 +110,8 @@ std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel
       for (std::size_t n = 0; n < model.nodes.size(); ++n) {
         if (model.nodes[n].kind != kernel::CsgNodeKind::Primitive) continue;
         if (solids.size() > 1 && !contributing.count(static_cast<int>(n))) continue;
-        object.primitives.push_back(scene_primitive_info(static_cast<int>(n), model.nodes[n], labels));
+        object.primitives.push_back(
+            scene_primitive_info(static_cast<int>(n), model.nodes[n], labels));
       }
     }
     out.push_back(std::move(object));

@@ -68,7 +68,9 @@ struct UrlHandle {
 bool split_url(const std::string& url, UrlParts& parts) {
   UrlHandle u;
   if (u.h == nullptr) return false;
-  if (curl_url_set(u.h, CURLUPART_URL, url.c_str(), CURLU_NON_SUPPORT_SCHEME | CURLU_PATH_AS_IS | CURLU_ALLOW_SPACE) != CURLUE_OK) return false;
+  if (curl_url_set(u.h, CURLUPART_URL, url.c_str(),
+                   CURLU_NON_SUPPORT_SCHEME | CURLU_PATH_AS_IS | CURLU_ALLOW_SPACE) != CURLUE_OK)
+    return false;
   parts.scheme = lower(u.get(CURLUPART_SCHEME));
   parts.user = u.get(CURLUPART_USER);
   parts.password = u.get(CURLUPART_PASSWORD);
@@ -101,11 +103,11 @@ bool has_control(const std::string& text) {
 
 // ---- address policy (opensocket callback) -----------------------------------------------
 
-bool refused_v4(std::uint32_t a) {  // host byte order
-  return (a >> 24) == 0 ||                    // 0.0.0.0/8 "this network"
+bool refused_v4(std::uint32_t a) {             // host byte order
+  return (a >> 24) == 0 ||                     // 0.0.0.0/8 "this network"
          (a >> 16) == ((169u << 8) | 254u) ||  // 169.254.0.0/16 link-local (metadata)
-         (a >> 28) == 0xE ||                  // 224.0.0.0/4 multicast
-         a == 0xFFFFFFFFu;                    // broadcast
+         (a >> 28) == 0xE ||                   // 224.0.0.0/4 multicast
+         a == 0xFFFFFFFFu;                     // broadcast
 }
 
 std::string describe_refusal(const curl_sockaddr* address) {
@@ -270,9 +272,10 @@ Attempt transfer_once(const std::string& url, const std::vector<std::string>& he
   const CURLcode code = curl_easy_perform(c);
   const std::string where = redacted(url);
   if (!sink.refused_address.empty()) {
-    attempt.failure = {ErrorCode::FetchRefused,
-                       where + ": connection to " + sink.refused_address +
-                           " refused (link-local, multicast and unspecified addresses are never fetched)"};
+    attempt.failure = {
+        ErrorCode::FetchRefused,
+        where + ": connection to " + sink.refused_address +
+            " refused (link-local, multicast and unspecified addresses are never fetched)"};
     return attempt;
   }
   if (sink.over_cap || code == CURLE_FILESIZE_EXCEEDED) {
@@ -287,10 +290,10 @@ Attempt transfer_once(const std::string& url, const std::vector<std::string>& he
   if (code != CURLE_OK) {
     const std::string detail = error_text[0] != '\0' ? error_text : curl_easy_strerror(code);
     attempt.outcome = transient_curl(code) ? Outcome::Transient : Outcome::Permanent;
-    const ErrorCode kind = attempt.outcome == Outcome::Transient ? ErrorCode::Network
-                           : code == CURLE_UNSUPPORTED_PROTOCOL ? ErrorCode::FetchRefused
+    const ErrorCode kind = attempt.outcome == Outcome::Transient  ? ErrorCode::Network
+                           : code == CURLE_UNSUPPORTED_PROTOCOL   ? ErrorCode::FetchRefused
                            : code == CURLE_FILE_COULDNT_READ_FILE ? ErrorCode::InputInvalid
-                           : code == CURLE_URL_MALFORMAT ? ErrorCode::InputInvalid
+                           : code == CURLE_URL_MALFORMAT          ? ErrorCode::InputInvalid
                                                                   : ErrorCode::Network;
     attempt.failure = {kind, where + ": " + detail};
     // TLS and other non-transient transport errors are not worth retrying in this fetch,
@@ -357,19 +360,22 @@ Failure s3_target(const UrlParts& parts, const std::string& original, const Poli
   }
   if (!valid_key(key)) {
     return {ErrorCode::InputInvalid,
-            redacted(original) + ": not a valid S3 key (empty, '.', '..' or empty segments, or control characters)"};
+            redacted(original) +
+                ": not a valid S3 key (empty, '.', '..' or empty segments, or control characters)"};
   }
   std::string endpoint = policy.s3.endpoint;
   if (endpoint.empty()) endpoint = "https://s3." + policy.s3.region + ".amazonaws.com";
   UrlParts ep;
-  if (!split_url(endpoint, ep) || (ep.scheme != "http" && ep.scheme != "https") || ep.host.empty()) {
+  if (!split_url(endpoint, ep) || (ep.scheme != "http" && ep.scheme != "https") ||
+      ep.host.empty()) {
     return {ErrorCode::ConfigInvalid, "S3 endpoint " + endpoint + " is not an http(s) URL"};
   }
   const Credentials credentials = s3_credentials();
   if (credentials.access_key.empty() || credentials.secret_key.empty()) {
     return {ErrorCode::FetchRefused,
-            redacted(original) + ": no S3 credentials (set AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY, "
-                                 "or AWS_SHARED_CREDENTIALS_FILE)"};
+            redacted(original) +
+                ": no S3 credentials (set AWS_ACCESS_KEY_ID and AWS_SECRET_ACCESS_KEY, "
+                "or AWS_SHARED_CREDENTIALS_FILE)"};
   }
   const std::string host = ep.port.empty() ? ep.host : ep.host + ":" + ep.port;
   SigV4Request request;
@@ -411,7 +417,6 @@ std::string finish_hex(EVP_MD_CTX* ctx) {
   return hex;
 }
 
-
 }  // namespace
 
 namespace transport {
@@ -425,7 +430,8 @@ bool transient(CURLcode code) { return transient_curl(code); }
 
 Failure resolve(const std::string& text, const Policy& policy, Target& target) {
   const std::string where = redacted(text);
-  if (has_control(text)) return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
+  if (has_control(text))
+    return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
   UrlParts parts;
   if (!split_url(text, parts)) return {ErrorCode::InputInvalid, where + ": not a valid URL"};
   if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) ==
@@ -495,9 +501,9 @@ Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::ui
 bool is_url(const std::string& text) {
   const std::size_t colon = text.find("://");
   if (colon == std::string::npos || colon == 0) return false;
-  return std::all_of(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(colon), [](unsigned char c) {
-    return std::isalnum(c) || c == '+' || c == '-' || c == '.';
-  });
+  return std::all_of(
+      text.begin(), text.begin() + static_cast<std::ptrdiff_t>(colon),
+      [](unsigned char c) { return std::isalnum(c) || c == '+' || c == '-' || c == '.'; });
 }
 
 Failure parse_request(const std::string& text, Request& request) {
@@ -516,7 +522,8 @@ Failure parse_request(const std::string& text, Request& request) {
     if (name == "sha256" && is_hex64(lower(value))) {
       request.sha256 = lower(value);
     } else if (name == "size" && !value.empty() && value.size() <= 19 &&
-               std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); })) {
+               std::all_of(value.begin(), value.end(),
+                           [](unsigned char c) { return std::isdigit(c); })) {
       request.size = std::stoull(value);
     } else {
       return {ErrorCode::InputInvalid,
@@ -575,18 +582,21 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   global_init();
   result = {};
   const std::string where = redacted(request.url);
-  if (has_control(request.url)) return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
+  if (has_control(request.url))
+    return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
   UrlParts parts;
   if (!split_url(request.url, parts)) return {ErrorCode::InputInvalid, where + ": not a valid URL"};
-  if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) == policy.schemes.end()) {
+  if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) ==
+      policy.schemes.end()) {
     std::string allowed;
     for (const std::string& s : policy.schemes) allowed += (allowed.empty() ? "" : ", ") + s;
     return {ErrorCode::FetchRefused,
             where + ": scheme '" + parts.scheme + "' is not allowed (allowed: " + allowed + ")"};
   }
   if (!parts.user.empty() || !parts.password.empty()) {
-    return {ErrorCode::FetchRefused,
-            where + ": credentials in the URL are refused (use the environment or a credentials file)"};
+    return {
+        ErrorCode::FetchRefused,
+        where + ": credentials in the URL are refused (use the environment or a credentials file)"};
   }
 
   std::string url = request.url;
@@ -610,11 +620,13 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
 
   // The cache slot: a directory per URL (by its hash), the file keeps the URL's name so that
   // readers that go by extension see it.
-  const std::filesystem::path dir = cache_dir / sha256_hex(request.url.substr(0, request.url.find('#'))).substr(0, 24);
+  const std::filesystem::path dir =
+      cache_dir / sha256_hex(request.url.substr(0, request.url.find('#'))).substr(0, 24);
   const std::filesystem::path final_path = dir / safe_file_name(parts.path);
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return {ErrorCode::Io, "cannot create cache directory " + dir.string() + ": " + ec.message()};
+  if (ec)
+    return {ErrorCode::Io, "cannot create cache directory " + dir.string() + ": " + ec.message()};
 
   if (request.sha256 && std::filesystem::is_regular_file(final_path, ec)) {
     std::string hex;
@@ -627,9 +639,8 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   }
 
   std::random_device rd;
-  const std::filesystem::path tmp =
-      dir / ("." + final_path.filename().string() + ".part." + std::to_string(getpid()) + "." +
-             std::to_string(rd()));
+  const std::filesystem::path tmp = dir / ("." + final_path.filename().string() + ".part." +
+                                           std::to_string(getpid()) + "." + std::to_string(rd()));
   Sink sink;
   sink.file = std::fopen(tmp.c_str(), "w+b");
   if (sink.file == nullptr) return {ErrorCode::Io, "cannot create " + tmp.string()};
@@ -654,7 +665,8 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
       done = true;
     } else if (a.outcome == Outcome::Redirect) {
       if (parts.scheme == "s3") {
-        failure = {ErrorCode::FetchRefused, where + ": S3 answered with a redirect (wrong region or endpoint?)"};
+        failure = {ErrorCode::FetchRefused,
+                   where + ": S3 answered with a redirect (wrong region or endpoint?)"};
         break;
       }
       if (++redirects > policy.max_redirects) {
@@ -664,16 +676,17 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
       }
       UrlParts next;
       if (!split_url(a.location, next) || (next.scheme != "http" && next.scheme != "https") ||
-          std::find(policy.schemes.begin(), policy.schemes.end(), next.scheme) == policy.schemes.end()) {
-        failure = {ErrorCode::FetchRefused,
-                   where + ": redirect to " + redacted(a.location) + " refused (only allowed http(s) targets)"};
+          std::find(policy.schemes.begin(), policy.schemes.end(), next.scheme) ==
+              policy.schemes.end()) {
+        failure = {ErrorCode::FetchRefused, where + ": redirect to " + redacted(a.location) +
+                                                " refused (only allowed http(s) targets)"};
         break;
       }
       UrlParts current;
       split_url(url, current);
       if (current.scheme == "https" && next.scheme == "http") {
-        failure = {ErrorCode::FetchRefused,
-                   where + ": redirect from https to plain http (" + redacted(a.location) + ") refused"};
+        failure = {ErrorCode::FetchRefused, where + ": redirect from https to plain http (" +
+                                                redacted(a.location) + ") refused"};
         break;
       }
       if (!next.user.empty() || !next.password.empty()) {
@@ -706,12 +719,13 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   const std::string hex = finish_hex(sink.sha);
   if (request.size && *request.size != sink.bytes) {
     discard();
-    return {ErrorCode::FetchRefused, where + ": got " + std::to_string(sink.bytes) + " bytes, expected " +
-                                         std::to_string(*request.size)};
+    return {ErrorCode::FetchRefused, where + ": got " + std::to_string(sink.bytes) +
+                                         " bytes, expected " + std::to_string(*request.size)};
   }
   if (request.sha256 && *request.sha256 != hex) {
     discard();
-    return {ErrorCode::FetchRefused, where + ": SHA-256 " + hex + " does not match the expected " + *request.sha256};
+    return {ErrorCode::FetchRefused,
+            where + ": SHA-256 " + hex + " does not match the expected " + *request.sha256};
   }
   if (std::fflush(sink.file) != 0 || fsync(fileno(sink.file)) != 0) {
     discard();
@@ -722,7 +736,8 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   std::filesystem::rename(tmp, final_path, ec);
   if (ec) {
     std::filesystem::remove(tmp, ec);
-    return {ErrorCode::Io, "cannot move the download to " + final_path.string() + ": " + ec.message()};
+    return {ErrorCode::Io,
+            "cannot move the download to " + final_path.string() + ": " + ec.message()};
   }
   const int attempts = result.attempts;
   result = {final_path, sink.bytes, hex, false, attempts};
@@ -734,9 +749,9 @@ namespace {
 // ---- signed S3 requests: PUT, HEAD, GET into memory ---------------------------------------
 
 struct S3Exchange {
-  std::string method;                ///< "PUT", "HEAD" or "GET"
-  std::string_view upload;           ///< the PUT body
-  std::string* download = nullptr;   ///< where a GET body goes (capped by policy.max_bytes)
+  std::string method;               ///< "PUT", "HEAD" or "GET"
+  std::string_view upload;          ///< the PUT body
+  std::string* download = nullptr;  ///< where a GET body goes (capped by policy.max_bytes)
 };
 
 struct S3Reply {
@@ -787,7 +802,8 @@ Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3
     b->offset += n;
     return n;
   };
-  auto on_receive = +[](char* data, std::size_t size, std::size_t count, void* user) -> std::size_t {
+  auto on_receive =
+      +[](char* data, std::size_t size, std::size_t count, void* user) -> std::size_t {
     auto* b = static_cast<Body*>(user);
     const std::size_t n = size * count;
     if (b->download == nullptr) return n;  // error documents and PUT answers are not kept
@@ -819,7 +835,8 @@ Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3
   curl_easy_setopt(c, CURLOPT_HTTPHEADER, list.get());
   const CURLcode code = curl_easy_perform(c);
   if (!sink.refused_address.empty()) {
-    attempt.failure = {ErrorCode::FetchRefused, where + ": connection to " + sink.refused_address + " refused"};
+    attempt.failure = {ErrorCode::FetchRefused,
+                       where + ": connection to " + sink.refused_address + " refused"};
     return attempt;
   }
   if (body.over_cap) {
@@ -829,8 +846,9 @@ Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3
   }
   if (code != CURLE_OK) {
     attempt.outcome = transient_curl(code) ? Outcome::Transient : Outcome::Permanent;
-    attempt.failure = {ErrorCode::Network, where + ": " + exchange.method + " failed: " +
-                                               (error_text[0] != '\0' ? error_text : curl_easy_strerror(code))};
+    attempt.failure = {ErrorCode::Network,
+                       where + ": " + exchange.method + " failed: " +
+                           (error_text[0] != '\0' ? error_text : curl_easy_strerror(code))};
     return attempt;
   }
   curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &reply.status);

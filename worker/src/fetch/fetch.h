@@ -39,9 +39,9 @@ struct Policy {
   long low_speed_seconds = 30;             ///< ... for this long
   std::uint64_t max_bytes = 8ull << 30;
   int max_redirects = 5;
-  int attempts = 3;            ///< tries per fetch for transient failures (resets, 5xx, timeouts)
-  long retry_delay_ms = 200;   ///< first back-off; doubled per attempt
-  std::string ca_bundle;       ///< CA file; empty → the system's
+  int attempts = 3;           ///< tries per fetch for transient failures (resets, 5xx, timeouts)
+  long retry_delay_ms = 200;  ///< first back-off; doubled per attempt
+  std::string ca_bundle;      ///< CA file; empty → the system's
   S3Settings s3;
 };
 
@@ -62,9 +62,9 @@ bool is_url(const std::string& text);
 struct Result {
   std::filesystem::path path;  ///< the cached file
   std::uint64_t bytes = 0;
-  std::string sha256;          ///< lower-case hex of the content
-  bool from_cache = false;     ///< an earlier verified download was reused
-  int attempts = 0;            ///< transfer attempts made
+  std::string sha256;       ///< lower-case hex of the content
+  bool from_cache = false;  ///< an earlier verified download was reused
+  int attempts = 0;         ///< transfer attempts made
 };
 
 /// Fetches `request` into `cache_dir` (created when missing). A verified cached copy is

@@ -16,9 +16,9 @@ namespace csgtile::worker::fetch {
 
 struct LocalInput {
   std::filesystem::path path;
-  std::string sha256;       ///< of the content (inputs are identified by it in records)
+  std::string sha256;  ///< of the content (inputs are identified by it in records)
   std::uint64_t bytes = 0;
-  bool fetched = false;     ///< came through the fetcher (else a local path)
+  bool fetched = false;  ///< came through the fetcher (else a local path)
   bool from_cache = false;
 };
 

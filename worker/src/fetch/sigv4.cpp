@@ -27,7 +27,8 @@ std::string hmac_sha256(const std::string& key, const std::string& data) {
   unsigned char mac[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   if (HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
-           reinterpret_cast<const unsigned char*>(data.data()), data.size(), mac, &length) == nullptr) {
+           reinterpret_cast<const unsigned char*>(data.data()), data.size(), mac,
+           &length) == nullptr) {
     throw std::runtime_error("HMAC-SHA256 failed");
   }
   return std::string(reinterpret_cast<const char*>(mac), length);
@@ -53,7 +54,8 @@ std::string uri_encode(const std::string& text, bool keep_slash) {
   std::string out;
   out.reserve(text.size());
   for (unsigned char c : text) {
-    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~' || (keep_slash && c == '/')) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~' ||
+        (keep_slash && c == '/')) {
       out.push_back(static_cast<char>(c));
     } else {
       out.push_back('%');
@@ -80,7 +82,8 @@ SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,
       {"host", trim(request.host)},
       {"x-amz-content-sha256", request.payload_sha256},
       {"x-amz-date", request.amz_date}};
-  for (const auto& [name, value] : request.extra_headers) headers.emplace_back(lower(name), trim(value));
+  for (const auto& [name, value] : request.extra_headers)
+    headers.emplace_back(lower(name), trim(value));
   std::sort(headers.begin(), headers.end());
 
   std::string canonical_headers;

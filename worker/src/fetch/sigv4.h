@@ -15,12 +15,12 @@ namespace csgtile::worker::fetch {
 
 struct SigV4Request {
   std::string method = "GET";
-  std::string host;            ///< as sent in Host: "bucket.s3.amazonaws.com" or "127.0.0.1:4569"
-  std::string canonical_path;  ///< percent-encoded once, starting with '/'
-  std::string canonical_query; ///< "a=1&b=2", keys sorted, percent-encoded; empty when none
-  std::string payload_sha256;  ///< lower-case hex SHA-256 of the body, or "UNSIGNED-PAYLOAD"
-  std::string amz_date;        ///< "YYYYMMDDTHHMMSSZ"
-  std::string region;          ///< e.g. "us-east-1"
+  std::string host;             ///< as sent in Host: "bucket.s3.amazonaws.com" or "127.0.0.1:4569"
+  std::string canonical_path;   ///< percent-encoded once, starting with '/'
+  std::string canonical_query;  ///< "a=1&b=2", keys sorted, percent-encoded; empty when none
+  std::string payload_sha256;   ///< lower-case hex SHA-256 of the body, or "UNSIGNED-PAYLOAD"
+  std::string amz_date;         ///< "YYYYMMDDTHHMMSSZ"
+  std::string region;           ///< e.g. "us-east-1"
   std::string service = "s3";
   /// Further headers to sign (name, value), e.g. x-amz-security-token, range.
   std::vector<std::pair<std::string, std::string>> extra_headers;

@@ -41,14 +41,16 @@ struct Location {
   std::string key(const std::string& relative) const {
     return prefix.empty() ? relative : prefix + "/" + relative;
   }
-  std::string url(const std::string& relative) const { return "s3://" + bucket + "/" + key(relative); }
+  std::string url(const std::string& relative) const {
+    return "s3://" + bucket + "/" + key(relative);
+  }
 };
 
 Failure parse_location(const std::string& s3_prefix, Location& location) {
   constexpr std::string_view kScheme = "s3://";
   if (s3_prefix.rfind(kScheme, 0) != 0) {
-    return {ErrorCode::InputInvalid,
-            "publish prefix '" + printable(s3_prefix) + "' is not of the form s3://bucket[/prefix]"};
+    return {ErrorCode::InputInvalid, "publish prefix '" + printable(s3_prefix) +
+                                         "' is not of the form s3://bucket[/prefix]"};
   }
   std::string rest = s3_prefix.substr(kScheme.size());
   if (!rest.empty() && rest.back() == '/') rest.pop_back();
@@ -61,12 +63,14 @@ Failure parse_location(const std::string& s3_prefix, Location& location) {
         return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '.';
       });
   if (!bucket_ok) {
-    return {ErrorCode::InputInvalid, "publish prefix '" + printable(s3_prefix) +
-                                         "': '" + printable(location.bucket) + "' is not a valid bucket name"};
+    return {ErrorCode::InputInvalid, "publish prefix '" + printable(s3_prefix) + "': '" +
+                                         printable(location.bucket) +
+                                         "' is not a valid bucket name"};
   }
   if (slash != std::string::npos && !is_safe_key(location.prefix)) {
     return {ErrorCode::InputInvalid,
-            "publish prefix '" + printable(s3_prefix) + "': unsafe key prefix '" + printable(location.prefix) +
+            "publish prefix '" + printable(s3_prefix) + "': unsafe key prefix '" +
+                printable(location.prefix) +
                 "' (no '..', '.', empty segments or characters outside [A-Za-z0-9._-])"};
   }
   return {};
@@ -82,8 +86,8 @@ Failure check_run_name(const std::string& run_name) {
 
 // A file of the plan, hashed, with the key of its content-addressed object.
 struct LocalFile {
-  std::string path;        // relative, as in the plan
-  fs::path resolved;       // canonical, inside the root
+  std::string path;   // relative, as in the plan
+  fs::path resolved;  // canonical, inside the root
   std::string sha256;
   std::uint64_t size = 0;
   std::string object_key;  // relative to the publication prefix
@@ -94,16 +98,17 @@ struct LocalFile {
 std::string extension_of(const std::string& path) {
   const std::string name = path.substr(path.rfind('/') + 1);
   const std::size_t dot = name.rfind('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == name.size() || name.size() - dot > 16) return {};
+  if (dot == std::string::npos || dot == 0 || dot + 1 == name.size() || name.size() - dot > 16)
+    return {};
   return name.substr(dot);
 }
 
 Failure resolve_file(const fs::path& root, const std::string& path, LocalFile& file) {
   if (!is_safe_key(path)) {
-    return {ErrorCode::InputInvalid,
-            "unsafe relative path '" + printable(path) +
-                "' in the publish plan (no '..', leading '/', empty or '.' segments, control characters "
-                "or characters outside [A-Za-z0-9._-])"};
+    return {ErrorCode::InputInvalid, "unsafe relative path '" + printable(path) +
+                                         "' in the publish plan (no '..', leading '/', empty or "
+                                         "'.' segments, control characters "
+                                         "or characters outside [A-Za-z0-9._-])"};
   }
   std::error_code ec;
   file.path = path;
@@ -111,8 +116,8 @@ Failure resolve_file(const fs::path& root, const std::string& path, LocalFile& f
   if (ec) return {ErrorCode::Io, "cannot resolve " + (root / path).string() + ": " + ec.message()};
   const fs::path inside = file.resolved.lexically_relative(root);
   if (inside.empty() || *inside.begin() == "..") {
-    return {ErrorCode::InputInvalid,
-            "'" + path + "' resolves to " + file.resolved.string() + ", outside the run directory " + root.string()};
+    return {ErrorCode::InputInvalid, "'" + path + "' resolves to " + file.resolved.string() +
+                                         ", outside the run directory " + root.string()};
   }
   if (!fs::is_regular_file(file.resolved, ec)) {
     return {ErrorCode::InputInvalid, "'" + path + "' in the publish plan is not a regular file"};
@@ -129,8 +134,8 @@ Failure conflict(const std::string& url, const std::string& what) {
 
 // Reads the bytes at `url` when it exists with exactly `expected_size` bytes (HEAD, then a GET
 // capped at that size): `same` tells whether they equal `bytes`.
-Failure compare_existing(const std::string& url, std::string_view bytes, const fetch::Policy& policy,
-                         bool& exists, bool& same) {
+Failure compare_existing(const std::string& url, std::string_view bytes,
+                         const fetch::Policy& policy, bool& exists, bool& same) {
   fetch::S3Object head;
   if (Failure f = fetch::s3_head(url, policy, head); !f.ok()) return f;
   exists = head.exists;
@@ -181,8 +186,9 @@ Failure upload_object(const Location& location, const LocalFile& file, const fet
     return {};
   }
   if (head.exists) {
-    return conflict(url, "exists with " + std::to_string(head.size) + " bytes, but its content (SHA-256 " +
-                             file.sha256 + ") has " + std::to_string(file.size));
+    return conflict(url, "exists with " + std::to_string(head.size) +
+                             " bytes, but its content (SHA-256 " + file.sha256 + ") has " +
+                             std::to_string(file.size));
   }
   std::ifstream in(file.resolved, std::ios::binary);
   std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -201,8 +207,8 @@ std::string scope_of(const std::string& manifest_path) {
 }
 
 bool in_scope(const std::string& path, const std::string& scope) {
-  return scope.empty() || (path.size() > scope.size() && path.compare(0, scope.size(), scope) == 0 &&
-                           path[scope.size()] == '/');
+  return scope.empty() || (path.size() > scope.size() &&
+                           path.compare(0, scope.size(), scope) == 0 && path[scope.size()] == '/');
 }
 
 nlohmann::json file_entries(const std::vector<LocalFile>& files, const std::string& scope) {
@@ -230,9 +236,11 @@ Failure plan_run_directory(const std::filesystem::path& root, PublishPlan& plan)
       if (it->is_directory(ec)) it.disable_recursion_pending();
       continue;
     }
-    if (it->is_regular_file(ec)) paths.push_back(it->path().lexically_relative(root).generic_string());
+    if (it->is_regular_file(ec))
+      paths.push_back(it->path().lexically_relative(root).generic_string());
   }
-  if (ec) return {ErrorCode::Io, "cannot list the run directory " + root.string() + ": " + ec.message()};
+  if (ec)
+    return {ErrorCode::Io, "cannot list the run directory " + root.string() + ": " + ec.message()};
   std::sort(paths.begin(), paths.end());
   bool has_run_manifest = false;
   for (const std::string& path : paths) {
@@ -298,7 +306,8 @@ Failure publish_run_to_s3(const PublishPlan& plan, const std::string& s3_prefix,
 
   // ---- (2) publication manifests: cells first, the run last ----
   auto local_of = [&](const std::string& path) -> const LocalFile& {
-    return *std::find_if(files.begin(), files.end(), [&](const LocalFile& f) { return f.path == path; });
+    return *std::find_if(files.begin(), files.end(),
+                         [&](const LocalFile& f) { return f.path == path; });
   };
   nlohmann::json cells = nlohmann::json::array();
   std::string run_manifest_key;
@@ -321,7 +330,8 @@ Failure publish_run_to_s3(const PublishPlan& plan, const std::string& s3_prefix,
       run_manifest_key = key;
       run_manifest_sha = sha;
     } else {
-      cells.push_back({{"local_manifest", local.path}, {"scope", scope}, {"key", key}, {"sha256", sha}});
+      cells.push_back(
+          {{"local_manifest", local.path}, {"scope", scope}, {"key", key}, {"sha256", sha}});
     }
   }
   report.manifest_key = location.key(run_manifest_key);

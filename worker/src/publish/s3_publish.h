@@ -28,7 +28,8 @@
 ///       "local_manifest": "cells/3_4/manifest.json",
 ///       "files": { "<relative path>": {"key": "objects/<sha>.glb", "sha256": "<hex>",
 ///                                       "size": 123}, ... },
-///       "cells": [ {"local_manifest": "...", "scope": "...", "key": "runs/<run>/manifests/<sha>.json",
+///       "cells": [ {"local_manifest": "...", "scope": "...", "key":
+///       "runs/<run>/manifests/<sha>.json",
 ///                   "sha256": "<hex>"}, ... ] }     // run manifest only, in plan order
 ///
 /// A cell's `files` are the plan's paths under its scope (the directory holding its local

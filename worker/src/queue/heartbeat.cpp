@@ -5,7 +5,9 @@
 namespace csgtile::worker {
 
 LeaseHeartbeat::LeaseHeartbeat(JobQueue& queue, Job job, std::chrono::milliseconds period)
-    : queue_(queue), job_(std::move(job)), period_(std::max(period, std::chrono::milliseconds(10))) {
+    : queue_(queue),
+      job_(std::move(job)),
+      period_(std::max(period, std::chrono::milliseconds(10))) {
   thread_ = std::thread([this] { run(); });
 }
 

@@ -146,11 +146,12 @@ std::unique_ptr<PostgresConnection> PostgresConnection::open(const std::string& 
   // TCP keepalives and a user timeout by default (the string may override them): a worker cut
   // off from the server notices within about 30 s instead of the kernel's ~15 minutes, while
   // it holds the queue (a heartbeat renewal blocked on a dead link).
-  std::vector<const char*> keywords{"connect_timeout", "application_name", "keepalives",
-                                    "keepalives_idle", "keepalives_interval", "keepalives_count",
-                                    "tcp_user_timeout", "dbname", "client_encoding"};
-  std::vector<const char*> values{"10", "csgtile", "1", "10", "5", "3", "30000",
-                                  conninfo.c_str(), "UTF8"};
+  std::vector<const char*> keywords{
+      "connect_timeout",     "application_name", "keepalives",       "keepalives_idle",
+      "keepalives_interval", "keepalives_count", "tcp_user_timeout", "dbname",
+      "client_encoding"};
+  std::vector<const char*> values{"10",    "csgtile",        "1",   "10", "5", "3",
+                                  "30000", conninfo.c_str(), "UTF8"};
   const auto add = [&](const char* keyword, const std::string& value) {
     if (value.empty()) return;
     keywords.push_back(keyword);

@@ -217,7 +217,8 @@ class PostgresQueue final : public JobQueue {
     const PgResult result = connection_->exec(
         "enqueue",
         "INSERT INTO csgtile_jobs (key, kind, payload, priority, run_after) "
-        "VALUES ($1, $2, $3, $4::integer, now() + greatest($5::bigint, 0) * interval '1 millisecond') "
+        "VALUES ($1, $2, $3, $4::integer, now() + greatest($5::bigint, 0) * interval '1 "
+        "millisecond') "
         "ON CONFLICT (key) DO NOTHING",
         {key, kind, payload, std::to_string(options.priority), std::to_string(delay_ms)}, failure);
     return result && changed_one_row(result);

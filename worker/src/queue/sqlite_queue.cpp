@@ -11,11 +11,16 @@ namespace csgtile::worker {
 
 const char* job_state_name(JobState state) {
   switch (state) {
-    case JobState::Queued: return "queued";
-    case JobState::Running: return "running";
-    case JobState::Done: return "done";
-    case JobState::Retry: return "retry";
-    case JobState::Dead: return "dead";
+    case JobState::Queued:
+      return "queued";
+    case JobState::Running:
+      return "running";
+    case JobState::Done:
+      return "done";
+    case JobState::Retry:
+      return "retry";
+    case JobState::Dead:
+      return "dead";
   }
   return "unknown";
 }
@@ -90,7 +95,9 @@ bool on_network_filesystem(const std::filesystem::path& dir) {
 // A prepared statement that finalizes itself.
 class Statement {
  public:
-  Statement(sqlite3* db, const char* sql) { rc_ = sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr); }
+  Statement(sqlite3* db, const char* sql) {
+    rc_ = sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr);
+  }
   ~Statement() { sqlite3_finalize(stmt_); }
   Statement(const Statement&) = delete;
   Statement& operator=(const Statement&) = delete;
@@ -107,7 +114,8 @@ class Statement {
   std::int64_t int64(int col) const { return sqlite3_column_int64(stmt_, col); }
   std::string text(int col) const {
     const auto* p = sqlite3_column_text(stmt_, col);
-    return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col)))
+    return p ? std::string(reinterpret_cast<const char*>(p),
+                           static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col)))
              : std::string();
   }
 
@@ -118,7 +126,8 @@ class Statement {
 
 class SqliteQueue final : public JobQueue {
  public:
-  SqliteQueue(sqlite3* db, const QueuePolicy& policy) : db_(db), policy_(policy), random_(policy.seed) {}
+  SqliteQueue(sqlite3* db, const QueuePolicy& policy)
+      : db_(db), policy_(policy), random_(policy.seed) {}
   ~SqliteQueue() override { sqlite3_close(db_); }
 
   bool exec(const char* sql, Failure& failure) {
@@ -153,10 +162,10 @@ class SqliteQueue final : public JobQueue {
       version = static_cast<int>(read.int64(0));
     }
     if (version > kSchemaVersion) {
-      failure = {ErrorCode::Unsupported,
-                 "the SQLite queue's schema is version " + std::to_string(version) +
-                     "; this csgtile knows versions up to " + std::to_string(kSchemaVersion) +
-                     " (upgrade csgtile)"};
+      failure = {ErrorCode::Unsupported, "the SQLite queue's schema is version " +
+                                             std::to_string(version) +
+                                             "; this csgtile knows versions up to " +
+                                             std::to_string(kSchemaVersion) + " (upgrade csgtile)"};
       return abandon();
     }
     for (const Migration& migration : kMigrations) {
@@ -166,8 +175,9 @@ class SqliteQueue final : public JobQueue {
     // One row, as files made before migrations hold.
     if (version < kSchemaVersion &&
         (!exec("DELETE FROM schema_version", failure) ||
-         !exec(("INSERT INTO schema_version VALUES (" + std::to_string(kSchemaVersion) + ")").c_str(),
-               failure))) {
+         !exec(
+             ("INSERT INTO schema_version VALUES (" + std::to_string(kSchemaVersion) + ")").c_str(),
+             failure))) {
       return abandon();
     }
     return exec("COMMIT", failure) || abandon();
@@ -195,7 +205,9 @@ class SqliteQueue final : public JobQueue {
                    "UPDATE jobs SET state='dead', last_error=?3, lease_token=NULL, "
                    "lease_expires_ms=NULL, updated_ms=?1 "
                    "WHERE state='running' AND lease_expires_ms < ?1 AND attempts >= ?2");
-    bury.bind(1, now).bind(2, static_cast<std::int64_t>(policy_.max_attempts)).bind(3, std::string(kLeaseLost));
+    bury.bind(1, now)
+        .bind(2, static_cast<std::int64_t>(policy_.max_attempts))
+        .bind(3, std::string(kLeaseLost));
     if (bury.step() != SQLITE_DONE) {
       error(failure);
       exec("ROLLBACK", failure);
@@ -226,9 +238,12 @@ class SqliteQueue final : public JobQueue {
     Statement lease(db_,
                     "UPDATE jobs SET state='running', attempts=?2, lease_token=?3, "
                     "lease_expires_ms=?4, worker=?5, updated_ms=?6 WHERE id=?1");
-    lease.bind(1, job.id).bind(2, static_cast<std::int64_t>(job.attempts)).bind(3, job.lease_token)
+    lease.bind(1, job.id)
+        .bind(2, static_cast<std::int64_t>(job.attempts))
+        .bind(3, job.lease_token)
         .bind(4, now + std::chrono::duration_cast<std::chrono::milliseconds>(policy_.lease).count())
-        .bind(5, worker_id).bind(6, now);
+        .bind(5, worker_id)
+        .bind(6, now);
     if (lease.step() != SQLITE_DONE) {
       error(failure);
       exec("ROLLBACK", failure);
@@ -250,9 +265,11 @@ class SqliteQueue final : public JobQueue {
 
   bool renew(const Job& job, Failure& failure) override {
     const std::int64_t now = now_ms();
-    Statement st(db_, "UPDATE jobs SET lease_expires_ms=?3, updated_ms=?4 "
-                      "WHERE id=?1 AND state='running' AND lease_token=?2");
-    st.bind(1, job.id).bind(2, job.lease_token)
+    Statement st(db_,
+                 "UPDATE jobs SET lease_expires_ms=?3, updated_ms=?4 "
+                 "WHERE id=?1 AND state='running' AND lease_token=?2");
+    st.bind(1, job.id)
+        .bind(2, job.lease_token)
         .bind(3, now + std::chrono::duration_cast<std::chrono::milliseconds>(policy_.lease).count())
         .bind(4, now);
     if (st.step() != SQLITE_DONE) return error(failure);
@@ -267,8 +284,12 @@ class SqliteQueue final : public JobQueue {
                  "lease_expires_ms=NULL, updated_ms=?6 "
                  "WHERE id=?1 AND state='running' AND lease_token=?2");
     const std::int64_t now = now_ms();
-    st.bind(1, job.id).bind(2, job.lease_token).bind(3, std::string(dead ? "dead" : "retry"))
-        .bind(4, message).bind(5, now + delay).bind(6, now);
+    st.bind(1, job.id)
+        .bind(2, job.lease_token)
+        .bind(3, std::string(dead ? "dead" : "retry"))
+        .bind(4, message)
+        .bind(5, now + delay)
+        .bind(6, now);
     if (st.step() != SQLITE_DONE) return error(failure);
     return sqlite3_changes(db_) > 0;
   }
@@ -280,11 +301,16 @@ class SqliteQueue final : public JobQueue {
     while ((rc = st.step()) == SQLITE_ROW) {
       const std::string s = st.text(0);
       const std::int64_t n = st.int64(1);
-      if (s == "queued") c.queued = n;
-      else if (s == "running") c.running = n;
-      else if (s == "done") c.done = n;
-      else if (s == "retry") c.retry = n;
-      else if (s == "dead") c.dead = n;
+      if (s == "queued")
+        c.queued = n;
+      else if (s == "running")
+        c.running = n;
+      else if (s == "done")
+        c.done = n;
+      else if (s == "retry")
+        c.retry = n;
+      else if (s == "dead")
+        c.dead = n;
     }
     if (rc != SQLITE_DONE) error(failure);
     return c;
@@ -292,7 +318,9 @@ class SqliteQueue final : public JobQueue {
 
   std::vector<DeadJob> dead_jobs(Failure& failure) override {
     std::vector<DeadJob> out;
-    Statement st(db_, "SELECT key, COALESCE(last_error,''), attempts FROM jobs WHERE state='dead' ORDER BY key");
+    Statement st(
+        db_,
+        "SELECT key, COALESCE(last_error,''), attempts FROM jobs WHERE state='dead' ORDER BY key");
     int rc;
     while ((rc = st.step()) == SQLITE_ROW) {
       out.push_back({st.text(0), st.text(1), static_cast<int>(st.int64(2))});
@@ -326,8 +354,12 @@ class SqliteQueue final : public JobQueue {
                  "INSERT OR IGNORE INTO jobs (key, kind, payload, priority, run_after_ms, "
                  "created_ms, updated_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?6)");
     if (!st.ok()) return error(failure);
-    st.bind(1, key).bind(2, kind).bind(3, payload)
-        .bind(4, static_cast<std::int64_t>(options.priority)).bind(5, run_after).bind(6, now);
+    st.bind(1, key)
+        .bind(2, kind)
+        .bind(3, payload)
+        .bind(4, static_cast<std::int64_t>(options.priority))
+        .bind(5, run_after)
+        .bind(6, now);
     if (st.step() != SQLITE_DONE) return error(failure);
     return sqlite3_changes(db_) > 0;
   }
@@ -351,7 +383,8 @@ std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
   const auto dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   std::filesystem::create_directories(dir, ec);
   if (ec) {
-    failure = {ErrorCode::Io, "cannot create queue directory " + dir.string() + ": " + ec.message()};
+    failure = {ErrorCode::Io,
+               "cannot create queue directory " + dir.string() + ": " + ec.message()};
     return nullptr;
   }
   if (on_network_filesystem(dir)) {
@@ -361,7 +394,8 @@ std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
     return nullptr;
   }
   sqlite3* db = nullptr;
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+  if (sqlite3_open_v2(path.c_str(), &db,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
     failure = {ErrorCode::Io, "cannot open queue " + path.string() + ": " +
                                   (db ? sqlite3_errmsg(db) : "out of memory")};

@@ -79,8 +79,8 @@ struct MetricsConfig {
 /// `fetch:` — how inputs named by URL (file://, http(s)://, s3://) are downloaded.
 struct FetchConfig {
   std::vector<std::string> schemes{"file", "http", "https", "s3"};  ///< allowed URL schemes
-  int connect_timeout_seconds = 10;       ///< 1..600
-  int timeout_seconds = 600;              ///< whole transfer; 1..86400
+  int connect_timeout_seconds = 10;                                 ///< 1..600
+  int timeout_seconds = 600;                                        ///< whole transfer; 1..86400
   int low_speed_bytes_per_second = 1024;  ///< abort when slower than this ... (0 = never)
   int low_speed_seconds = 30;             ///< ... for this long; 1..3600
   std::uint64_t max_bytes = 8589934592;   ///< size cap of one download; 1..2^53
@@ -100,7 +100,7 @@ struct CityConfig {
   /// Band around a cell whose primitives are read with it; an object reaching past it is
   /// reported. [0, cell_size)
   double halo = 50.0;
-  double voxel_size = 0.5;   ///< OpenVDB culling voxel edge (m); (0, 100]
+  double voxel_size = 0.5;  ///< OpenVDB culling voxel edge (m); (0, 100]
   bool operator==(const CityConfig&) const = default;
 };
 

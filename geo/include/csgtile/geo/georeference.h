@@ -32,15 +32,16 @@
 /// are installed: a Helmert, or PROJ's own pipeline (a grid shift such as BETA2007 for DHDN).
 ///
 /// RD New (EPSG:28992). The oblique stereographic projection is PROJ's sterea (EPSG method
-/// 9809, the formulas of Guidance Note 7-2) on Bessel 1841, and the datum shift is the EPSG:9281 Helmert
-/// "Amersfoort to ETRS89 (8)", the 7-parameter part of RDNAPTRANS(TM)2018 published by
+/// 9809, the formulas of Guidance Note 7-2) on Bessel 1841, and the datum shift is the EPSG:9281
+/// Helmert "Amersfoort to ETRS89 (8)", the 7-parameter part of RDNAPTRANS(TM)2018 published by
 /// Kadaster/NSGI (stated accuracy 0.25 m). The RDNAPTRANS correction grid is not applied
 /// (its grid file is not available here): positions on ETRS89 differ from the full
 /// RDNAPTRANS result by up to about 0.25 m.
 ///
 /// Errors: kernel::ErrorCode::InvalidArgument for points outside a projection's domain
-/// (PROJ's reason, or ours, kept in the message) and bad options; Unsupported for a datum with no known relation to WGS 84.
-/// Thread-safety: every type here is an immutable value; all const calls may run concurrently.
+/// (PROJ's reason, or ours, kept in the message) and bad options; Unsupported for a datum with no
+/// known relation to WGS 84. Thread-safety: every type here is an immutable value; all const calls
+/// may run concurrently.
 
 #include <memory>
 #include <optional>

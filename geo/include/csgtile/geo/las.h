@@ -21,10 +21,10 @@
 #include <string_view>
 #include <vector>
 
-#include "csgtile/geo/crs.h"
-#include "csgtile/geo/point.h"
 #include "csgtile/geo/byte_source.h"
 #include "csgtile/geo/copc.h"
+#include "csgtile/geo/crs.h"
+#include "csgtile/geo/point.h"
 #include "csgtile/geo/point_reader.h"
 #include "csgtile/kernel/result.h"
 

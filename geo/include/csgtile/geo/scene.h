@@ -28,7 +28,7 @@ struct FitQuality {
 
 struct ScenePrimitive {
   kernel::PrimitiveSpec spec;
-  std::string id;                     ///< may be empty
+  std::string id;  ///< may be empty
   std::optional<FitQuality> quality;
 };
 

@@ -30,8 +30,7 @@ class TileMapping {
   /// for an empty or non-finite box, a bound <= 0, or a box reaching outside the projection's
   /// domain; Unsupported when degree 12 does not reach the bound (a box far too large).
   static kernel::Result<TileMapping> fit(const Georeferencer& georeferencer,
-                                         const kernel::BoundingBox& box,
-                                         double max_error_m = 1e-7);
+                                         const kernel::BoundingBox& box, double max_error_m = 1e-7);
 
   /// Source → local: the polynomial inside the box (x, y within, z anywhere within the box's
   /// z range), the exact path elsewhere (NaNs outside the domain, as Georeferencer).

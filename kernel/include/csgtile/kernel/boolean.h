@@ -23,8 +23,8 @@ enum class BooleanOp { Fuse, Common, Cut };
 const char* boolean_op_name(BooleanOp op);  ///< "fuse", "common", "cut"
 
 struct BooleanOptions {
-  double tolerance = 1e-7;  ///< linear tolerance (world units) of every decision and new edge
-  bool check_result = true; ///< run the validity checker on the result (InvalidShape if bad)
+  double tolerance = 1e-7;   ///< linear tolerance (world units) of every decision and new edge
+  bool check_result = true;  ///< run the validity checker on the result (InvalidShape if bad)
 };
 
 /// a ∪ b, a ∩ b or a − b. Arguments: solids, or compounds/compsolids of solids (treated as
@@ -81,7 +81,8 @@ Result<Interference> solid_interference(const Shape& a, const Shape& b,
 /// groups are gathered in one compound. Solids that touch nothing pass through unchanged (an
 /// input compound whose own solids meet is first replaced by their union, as in
 /// boolean_operation). Deterministic. Errors as boolean_operation.
-Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes, const BooleanOptions& options = {});
+Result<Shape> boolean_fuse_all(const std::vector<Shape>& shapes,
+                               const BooleanOptions& options = {});
 
 /// fuse: union of all; common: intersection of all; cut: the first minus all the others.
 Result<Shape> boolean_fold(const std::vector<Shape>& shapes, BooleanOp op,

@@ -14,12 +14,23 @@ struct BoundingBox {
   Vec3 max = Vec3::Constant(-std::numeric_limits<double>::infinity());
 
   bool empty() const { return min.x() > max.x(); }
-  void add(const Vec3& p) { min = min.cwiseMin(p); max = max.cwiseMax(p); }
+  void add(const Vec3& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
   void add(const BoundingBox& b) {
-    if (!b.empty()) { min = min.cwiseMin(b.min); max = max.cwiseMax(b.max); }
+    if (!b.empty()) {
+      min = min.cwiseMin(b.min);
+      max = max.cwiseMax(b.max);
+    }
   }
   /// Grows the box by `d` on every side.
-  void enlarge(double d) { if (!empty()) { min.array() -= d; max.array() += d; } }
+  void enlarge(double d) {
+    if (!empty()) {
+      min.array() -= d;
+      max.array() += d;
+    }
+  }
   bool intersects(const BoundingBox& b) const {
     return !empty() && !b.empty() && (min.array() <= b.max.array()).all() &&
            (b.min.array() <= max.array()).all();

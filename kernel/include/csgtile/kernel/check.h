@@ -11,19 +11,19 @@ namespace csgtile::kernel {
 
 /// Every defect the checker names.
 enum class CheckStatus {
-  NullShape,                ///< the shape (or a child) is null
-  InvalidLocation,          ///< a composed location is no longer a similarity
-  ToleranceOrder,           ///< face tolerance > edge tolerance, or edge > vertex
-  VertexOffCurve,           ///< an edge end is farther from its vertex than the tolerance
-  EdgeOffFace,              ///< an edge's pcurve on a face strays from its 3D curve
-  OpenWire,                 ///< consecutive edges of a wire do not share a vertex
-  SelfIntersection,         ///< boundary loops of a face cross in its parameter plane
-  FreeEdge,                 ///< an edge of a solid's shell is used by one face only
-  OpenShell,                ///< a shell of a solid is not closed (it has free edges)
-  EdgeSameOrientationTwice, ///< two faces use an edge in the same direction
-  NonManifoldEdge,          ///< an edge used by more than two faces of one shell
-  BadFaceOrientation,       ///< a solid's outer shell encloses negative volume
-  EulerPoincareMismatch,    ///< V − E + F − (L − F) of a closed shell is odd or above 2
+  NullShape,                 ///< the shape (or a child) is null
+  InvalidLocation,           ///< a composed location is no longer a similarity
+  ToleranceOrder,            ///< face tolerance > edge tolerance, or edge > vertex
+  VertexOffCurve,            ///< an edge end is farther from its vertex than the tolerance
+  EdgeOffFace,               ///< an edge's pcurve on a face strays from its 3D curve
+  OpenWire,                  ///< consecutive edges of a wire do not share a vertex
+  SelfIntersection,          ///< boundary loops of a face cross in its parameter plane
+  FreeEdge,                  ///< an edge of a solid's shell is used by one face only
+  OpenShell,                 ///< a shell of a solid is not closed (it has free edges)
+  EdgeSameOrientationTwice,  ///< two faces use an edge in the same direction
+  NonManifoldEdge,           ///< an edge used by more than two faces of one shell
+  BadFaceOrientation,        ///< a solid's outer shell encloses negative volume
+  EulerPoincareMismatch,     ///< V − E + F − (L − F) of a closed shell is odd or above 2
 };
 
 /// Stable snake_case name, e.g. "open_shell".

@@ -3,8 +3,8 @@
 /// Curves in a surface's (u, v) parameter plane ("pcurves"). A face stores one for every
 /// edge use, parametrised like the edge's 3D curve: pcurve(t) is the (u, v) of C(t).
 
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>

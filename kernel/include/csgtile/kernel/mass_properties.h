@@ -8,10 +8,10 @@
 namespace csgtile::kernel {
 
 struct MassProperties {
-  double volume = 0.0;   ///< signed sum over the faces (positive for valid solids)
-  double area = 0.0;     ///< total area of the faces
+  double volume = 0.0;           ///< signed sum over the faces (positive for valid solids)
+  double area = 0.0;             ///< total area of the faces
   Vec3 centroid = Vec3::Zero();  ///< of the volume (bounding-box centre when the volume is 0)
-  BoundingBox bounds;    ///< exact for primitives; conservative for trimmed curved faces
+  BoundingBox bounds;            ///< exact for primitives; conservative for trimmed curved faces
 };
 
 /// Integrates over every face of `shape` (located and oriented as seen through it): the

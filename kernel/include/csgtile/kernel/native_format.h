@@ -9,9 +9,10 @@
 /// A section is tag (varint) + payload length (varint) + payload. Tag bit 0 marks an optional
 /// section: readers skip optional sections they do not know and refuse unknown required
 /// ones (UnsupportedVersion), so later versions add sections (e.g. CSG history) without
-/// breaking older readers; the CSG history is such a section (write_native_model). Numbers are IEEE doubles, written once in a number table (short
-/// mantissas shortened) and referenced by index or by position in a window of recently used
-/// numbers; counts and indices are LEB128 varints; geometry is shared by pointer identity.
+/// breaking older readers; the CSG history is such a section (write_native_model). Numbers are IEEE
+/// doubles, written once in a number table (short mantissas shortened) and referenced by index or
+/// by position in a window of recently used numbers; counts and indices are LEB128 varints;
+/// geometry is shared by pointer identity.
 
 #include <cstdint>
 #include <filesystem>

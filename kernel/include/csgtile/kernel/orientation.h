@@ -19,9 +19,12 @@ enum class Orientation : std::uint8_t { Forward = 0, Reversed = 1, Internal = 2,
 /// Forward <-> Reversed; Internal and External are their own reverse.
 constexpr Orientation reversed(Orientation o) {
   switch (o) {
-    case Orientation::Forward: return Orientation::Reversed;
-    case Orientation::Reversed: return Orientation::Forward;
-    default: return o;
+    case Orientation::Forward:
+      return Orientation::Reversed;
+    case Orientation::Reversed:
+      return Orientation::Forward;
+    default:
+      return o;
   }
 }
 
@@ -30,9 +33,12 @@ constexpr Orientation reversed(Orientation o) {
 /// the parent's orientation (an embedded or outside parent makes all its children so).
 constexpr Orientation compose(Orientation parent, Orientation child) {
   switch (parent) {
-    case Orientation::Forward: return child;
-    case Orientation::Reversed: return reversed(child);
-    default: return parent;
+    case Orientation::Forward:
+      return child;
+    case Orientation::Reversed:
+      return reversed(child);
+    default:
+      return parent;
   }
 }
 

@@ -47,8 +47,9 @@ Result<Shape> make_torus(double major_radius, double minor_radius,
 /// by h. Errors: DegenerateGeometry for fewer than 3 distinct points, zero area,
 /// self-intersecting rings, holes outside the outer ring or overlapping each other;
 /// InvalidArgument for h <= 0.
-Result<Shape> make_extrusion(const std::vector<Vec2>& outer, const std::vector<std::vector<Vec2>>& holes,
-                             double h, double tolerance = kDefaultTolerance);
+Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
+                             const std::vector<std::vector<Vec2>>& holes, double h,
+                             double tolerance = kDefaultTolerance);
 
 /// Revolution about Z of a closed profile polygon given as (rho, z) points with rho >= 0
 /// (any orientation), by `angle` in (0, 2π]. A profile segment becomes a cylinder (rho
@@ -66,7 +67,13 @@ Result<Shape> make_revolution(const std::vector<Vec2>& profile, double angle,
 namespace csgtile::kernel {
 
 enum class PrimitiveType : std::uint8_t {
-  Box = 0, Cylinder = 1, Cone = 2, Sphere = 3, Torus = 4, Extrusion = 5, Revolution = 6
+  Box = 0,
+  Cylinder = 1,
+  Cone = 2,
+  Sphere = 3,
+  Torus = 4,
+  Extrusion = 5,
+  Revolution = 6
 };
 inline constexpr int kPrimitiveTypeCount = 7;
 
@@ -77,11 +84,11 @@ const char* primitive_type_name(PrimitiveType type);
 /// solid is built from (and that CSG history and the native format keep).
 struct PrimitiveSpec {
   PrimitiveType type = PrimitiveType::Box;
-  Vec3 size = Vec3::Ones();        ///< box: dx, dy, dz
-  double radius = 0.0;             ///< cylinder r, cone r1, sphere r, torus R (major)
-  double radius2 = 0.0;            ///< cone r2, torus r (minor)
-  double height = 0.0;             ///< cylinder, cone, extrusion h
-  std::vector<Vec2> profile;       ///< extrusion outer ring (x, y); revolution (rho, z)
+  Vec3 size = Vec3::Ones();              ///< box: dx, dy, dz
+  double radius = 0.0;                   ///< cylinder r, cone r1, sphere r, torus R (major)
+  double radius2 = 0.0;                  ///< cone r2, torus r (minor)
+  double height = 0.0;                   ///< cylinder, cone, extrusion h
+  std::vector<Vec2> profile;             ///< extrusion outer ring (x, y); revolution (rho, z)
   std::vector<std::vector<Vec2>> holes;  ///< extrusion holes
   double angle = 6.283185307179586;      ///< revolution angle
   /// Half-spaces the primitive is cut by, in its local frame: the part where n·p <= d is

@@ -19,7 +19,14 @@ namespace csgtile::kernel {
 /// Paper Table 1, from the most complex kind to the simplest. A shape's children are of a
 /// strictly simpler kind, except compounds (anything) and compsolids (solids).
 enum class ShapeKind : std::uint8_t {
-  Compound = 0, CompSolid = 1, Solid = 2, Shell = 3, Face = 4, Wire = 5, Edge = 6, Vertex = 7
+  Compound = 0,
+  CompSolid = 1,
+  Solid = 2,
+  Shell = 3,
+  Face = 4,
+  Wire = 5,
+  Edge = 6,
+  Vertex = 7
 };
 inline constexpr int kShapeKindCount = 8;
 

@@ -14,7 +14,13 @@
 namespace csgtile::kernel {
 
 enum class SurfaceKind : std::uint8_t {
-  Plane = 0, Cylinder = 1, Cone = 2, Sphere = 3, Torus = 4, Extrusion = 5, Revolution = 6
+  Plane = 0,
+  Cylinder = 1,
+  Cone = 2,
+  Sphere = 3,
+  Torus = 4,
+  Extrusion = 5,
+  Revolution = 6
 };
 
 /// A rectangle of the (u, v) parameter plane.

@@ -12,17 +12,17 @@ namespace csgtile::worker {
 
 enum class ErrorCode {
   Ok,
-  Usage,               ///< bad command line
-  ConfigInvalid,       ///< config file fails parsing or validation
-  InputInvalid,        ///< an input (scene, tile) is malformed
-  GeometryInvalid,     ///< geometry cannot be built or fails the validity checker
-  Unsupported,         ///< a valid request this build does not handle yet
-  Io,                  ///< the operating system refused a read or write
-  Internal,            ///< a bug: an invariant of csgtile itself failed
-  ResultInvalid,       ///< the command ran, but its result fails validation
-  JobsFailed,          ///< a run finished with some jobs dead
-  Network,             ///< a transfer failed in a way that may pass (timeout, reset, HTTP 5xx)
-  FetchRefused,        ///< a fetch the policy or the server refuses (scheme, address, size, 4xx)
+  Usage,            ///< bad command line
+  ConfigInvalid,    ///< config file fails parsing or validation
+  InputInvalid,     ///< an input (scene, tile) is malformed
+  GeometryInvalid,  ///< geometry cannot be built or fails the validity checker
+  Unsupported,      ///< a valid request this build does not handle yet
+  Io,               ///< the operating system refused a read or write
+  Internal,         ///< a bug: an invariant of csgtile itself failed
+  ResultInvalid,    ///< the command ran, but its result fails validation
+  JobsFailed,       ///< a run finished with some jobs dead
+  Network,          ///< a transfer failed in a way that may pass (timeout, reset, HTTP 5xx)
+  FetchRefused,     ///< a fetch the policy or the server refuses (scheme, address, size, 4xx)
 };
 
 struct ErrorInfo {

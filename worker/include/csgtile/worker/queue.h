@@ -65,7 +65,7 @@ struct QueuePolicy {
   int max_attempts = 5;
   std::chrono::seconds lease{60};
   std::chrono::milliseconds backoff_base{500};  ///< retry delay = base · 2^(attempt-1) · jitter
-  std::uint64_t seed = 1;                        ///< seeds the jitter
+  std::uint64_t seed = 1;                       ///< seeds the jitter
 };
 
 class JobQueue {

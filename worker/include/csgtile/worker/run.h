@@ -23,8 +23,8 @@ namespace csgtile::worker {
 
 struct RunSummary {
   QueueCounts counts;
-  std::filesystem::path run_dir;    ///< <run.output>/runs/<run.name>
-  std::filesystem::path manifest;   ///< run_dir/manifest.json
+  std::filesystem::path run_dir;   ///< <run.output>/runs/<run.name>
+  std::filesystem::path manifest;  ///< run_dir/manifest.json
   std::vector<DeadJob> dead;
   /// A stop signal ended the run early (after its running job): no index or manifest yet;
   /// running the same config again resumes.
@@ -44,13 +44,14 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
 
 /// Adds one build job per input of `config` (a no-op for jobs already in the queue);
 /// `added` counts the new ones.
-Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log, std::size_t& added);
+Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                    std::size_t& added);
 
 struct WorkOptions {
-  bool exit_when_idle = false;  ///< return once the queue has no unfinished job
+  bool exit_when_idle = false;          ///< return once the queue has no unfinished job
   std::chrono::milliseconds poll{100};  ///< wait between claims when nothing is runnable
-  std::string worker_id;        ///< default "local-<pid>"
-  ForcedExitReport on_forced_exit;  ///< may be empty
+  std::string worker_id;                ///< default "local-<pid>"
+  ForcedExitReport on_forced_exit;      ///< may be empty
 };
 
 struct WorkSummary {
@@ -66,7 +67,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
 
 /// Publishes the run from the queue's done jobs: topology index, CityJSONSeq, 3D Tiles, then
 /// the manifest naming them. Deterministic, so publishing twice writes the same bytes.
-Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log, RunSummary& summary);
+Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log,
+                    RunSummary& summary);
 
 /// SHA-256 of the settings that shape a run's outputs, as manifests record it: the config
 /// without where outputs and the queue are (run.output, queue), how many threads work

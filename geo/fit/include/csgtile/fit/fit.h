@@ -166,10 +166,10 @@ struct FittedPrimitives {
 /// whose traces close a profile, then from flat roofs' outlines over the ground grid, each
 /// kept only when its description length (points unexplained + λ·parameters) beats the box
 /// around its profile (so a plain box stays a box); then pitched roofs (one tilted plane, or
-/// two rising to a ridge) as extrusions down to the ground grid; then boxes from planes (a seed plane
-/// well covered by its points; its depth from the region's points facing like it at the opposite
-/// face or across it on its long edges, whether or not the RANSAC made planes of them; its length
-/// grown over the points of its faces up to whatever else stands in its cross-section),
+/// two rising to a ridge) as extrusions down to the ground grid; then boxes from planes (a seed
+/// plane well covered by its points; its depth from the region's points facing like it at the
+/// opposite face or across it on its long edges, whether or not the RANSAC made planes of them; its
+/// length grown over the points of its faces up to whatever else stands in its cross-section),
 /// cylinders and cones bounded by their inliers along the axis, spheres and tori as they are.
 /// Each primitive is built as a kernel solid and checked; invalid ones are rejected with the
 /// kernel's reason. `region` becomes part of the ids. `normals` are those given to

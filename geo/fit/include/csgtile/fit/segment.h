@@ -160,7 +160,7 @@ struct FitOutput {
   std::array<long long, kernel::kPrimitiveTypeCount> per_type{};
   long long input_points = 0;
   long long ground_points = 0;
-  long long other_class_points = 0;    ///< non-ground points of classes not kept
+  long long other_class_points = 0;  ///< non-ground points of classes not kept
   long long outlier_points = 0;
   long long fitted_points = 0;         ///< points given to the RANSAC (after downsampling)
   long long assigned_points = 0;       ///< of those, explained by an output primitive

@@ -42,7 +42,7 @@ std::pair<long long, long long> cell_of(const CellSpec& grid, double x, double y
 
 struct AssemblyOptions {
   double tolerance = kernel::kDefaultTolerance;  ///< contact tolerance, world units
-  double voxel_size = 0.5;    ///< OpenVDB voxel edge, world units
+  double voxel_size = 0.5;                       ///< OpenVDB voxel edge, world units
   bool voxel_culling = true;  ///< false: every candidate pair gets the exact test
   bool broad_phase = true;    ///< false: every pair of solids is a candidate
   int threads = 0;            ///< worker threads; 0 = all cores
@@ -50,17 +50,17 @@ struct AssemblyOptions {
 };
 
 struct AssemblyStats {
-  long long primitives = 0;           ///< in the input
-  long long primitives_read = 0;      ///< in the cell and its halo (all without a cell)
-  long long primitives_failed = 0;    ///< that could not be built (see Assembly::problems)
-  long long candidate_pairs = 0;      ///< from the broad phase (all pairs without it)
-  long long culled_pairs = 0;         ///< of those, dropped by the OpenVDB masks
-  long long exact_tests = 0;          ///< pairs given the exact test
-  long long interacting_pairs = 0;    ///< of those, overlapping or touching
-  long long objects = 0;              ///< published (anchored in the cell)
-  long long objects_failed = 0;       ///< whose fuse failed (kept unfused, with the reason)
-  long long objects_past_halo = 0;    ///< reaching past the halo (reported, see problems)
-  long long active_voxels = 0;        ///< in all masks
+  long long primitives = 0;         ///< in the input
+  long long primitives_read = 0;    ///< in the cell and its halo (all without a cell)
+  long long primitives_failed = 0;  ///< that could not be built (see Assembly::problems)
+  long long candidate_pairs = 0;    ///< from the broad phase (all pairs without it)
+  long long culled_pairs = 0;       ///< of those, dropped by the OpenVDB masks
+  long long exact_tests = 0;        ///< pairs given the exact test
+  long long interacting_pairs = 0;  ///< of those, overlapping or touching
+  long long objects = 0;            ///< published (anchored in the cell)
+  long long objects_failed = 0;     ///< whose fuse failed (kept unfused, with the reason)
+  long long objects_past_halo = 0;  ///< reaching past the halo (reported, see problems)
+  long long active_voxels = 0;      ///< in all masks
   double seconds_build = 0, seconds_broad = 0, seconds_voxel = 0, seconds_exact = 0,
          seconds_fuse = 0, seconds_total = 0;
 };

@@ -4,10 +4,11 @@
 /// lies inside the other — and then its bounding box lies inside the other's. So each solid
 /// is voxelised as a shell: the voxels whose centres lie within a margin of its boundary
 /// (of its tessellation, by exact point–triangle distances), kept in a sparse OpenVDB mask
-/// and only where candidate partners' boxes are; the margin covers half a voxel diagonal, the tessellation error and
-/// the contact tolerance. A pair may meet when the shells share a voxel or one box holds
-/// the other. Culling is conservative by construction: a point common to both boundaries
-/// lies in a voxel whose centre is within half a diagonal of both, so both shells hold it.
+/// and only where candidate partners' boxes are; the margin covers half a voxel diagonal, the
+/// tessellation error and the contact tolerance. A pair may meet when the shells share a voxel or
+/// one box holds the other. Culling is conservative by construction: a point common to both
+/// boundaries lies in a voxel whose centre is within half a diagonal of both, so both shells hold
+/// it.
 
 #include <cstddef>
 #include <memory>
@@ -29,7 +30,8 @@ class VoxelCuller {
   /// Voxelises, in parallel, each shape that takes part in a candidate pair (indices into
   /// `shapes`), where its partners' boxes are. A shape that cannot be tessellated is kept
   /// whole (it may meet anything).
-  void build(const std::vector<kernel::Shape>& shapes, const std::vector<std::pair<int, int>>& pairs);
+  void build(const std::vector<kernel::Shape>& shapes,
+             const std::vector<std::pair<int, int>>& pairs);
 
   /// False only when shapes i and j cannot be in contact (see the file comment).
   bool may_meet(std::size_t i, std::size_t j) const;
