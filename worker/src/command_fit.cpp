@@ -102,7 +102,7 @@ int run_fit(const FitCommand& c) {
   city::FittedTile tile;
   city::TileSource source;
   source.path = c.input;
-  if (fetch::is_url(c.input) && c.input.rfind("file://", 0) != 0) {
+  if (fetch::is_remote_url(c.input)) {
     // A LAS/LAZ/COPC URL (http, https, s3): read by range requests under the config's policy.
     if (Failure f =
             fetch::open_range_source(c.input, fetch::policy_of(config.fetch), source.remote);

@@ -144,21 +144,19 @@ int run_info(const InfoOptions& o) {
   std::unique_ptr<geo::PointReader> reader;
   geo::LasReader* las = nullptr;
   std::shared_ptr<fetch::RangeStats> fetched;
-  const bool remote = fetch::is_url(o.file) && o.file.rfind("file://", 0) != 0;
+  const bool remote = fetch::is_remote_url(o.file);
   auto format = remote ? kernel::Result<geo::PointFileFormat>(geo::PointFileFormat::Las)
                        : geo::detect_point_format(o.file);
   if (!format.ok()) return fail(from_kernel(format.error().code), format.error().message);
   if (remote) {
     // A URL (http, https, s3): LAS, LAZ or COPC read by range requests, only what is shown.
-    std::unique_ptr<geo::ByteSource> source;
     fetched = std::make_shared<fetch::RangeStats>();
-    if (Failure f = fetch::open_range_source(o.file, fetch::Policy{}, source, fetched); !f.ok()) {
+    std::unique_ptr<geo::LasReader> opened;
+    if (Failure f = fetch::open_las(o.file, fetch::Policy{}, opened, fetched); !f.ok()) {
       return fail(f.code, f.message);
     }
-    auto opened = geo::LasReader::open_source(std::move(source));
-    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
-    las = opened.value().get();
-    reader = std::move(opened).value();
+    las = opened.get();
+    reader = std::move(opened);
   } else if (format.value() == geo::PointFileFormat::Las) {
     auto opened = geo::LasReader::open(o.file);
     if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);

@@ -51,20 +51,12 @@ int run_tile(const TileCommand& c) {
     return error_info(code).exit_code;
   };
   if (!(c.size > 0) || !std::isfinite(c.size)) return fail(ErrorCode::Usage, "--size must be > 0");
-  kernel::Result<std::unique_ptr<geo::LasReader>> opened =
-      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
-  if (fetch::is_url(c.input) && c.input.rfind("file://", 0) != 0) {
-    // A LAS/LAZ/COPC URL (http, https, s3): read by range requests.
-    std::unique_ptr<geo::ByteSource> source;
-    if (Failure f = fetch::open_range_source(c.input, fetch::Policy{}, source); !f.ok()) {
-      return fail(f.code, f.message);
-    }
-    opened = geo::LasReader::open_source(std::move(source));
-  } else {
-    opened = geo::LasReader::open(c.input);
+  // A path, or a LAS/LAZ/COPC URL (http, https, s3) read by range requests.
+  std::unique_ptr<geo::LasReader> opened;
+  if (Failure f = fetch::open_las(c.input, fetch::Policy{}, opened); !f.ok()) {
+    return fail(f.code, f.message);
   }
-  if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
-  geo::LasReader& reader = *opened.value();
+  geo::LasReader& reader = *opened;
   const geo::LasHeader& h = reader.header();
   std::error_code ec;
   // Tiles of an earlier cut (another size) beside the new ones would be read twice by a run

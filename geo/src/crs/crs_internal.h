@@ -48,6 +48,9 @@ kernel::Result<Crs> crs_from_proj_text(std::string_view text, const std::string&
 /// WKT 1 of a projected CRS computed by PROJ whose projection came as a bare PROJ string
 /// (GeoTIFF keys): PROJ writes it from the string, the ellipsoid, the Helmert and the unit.
 std::string proj_projected_wkt1(const Crs& crs);
+/// `proj_string` with the ellipsoid as PROJ parameters ("+a=… +rf=…", a sphere "+R=…")
+/// appended, unless it already names one (+ellps, +a, +R or +datum).
+std::string with_earth(const std::string& proj_string, const Ellipsoid& ellipsoid);
 /// Our own WKT reader alone (crs_from_wkt falls back to PROJ for what it refuses).
 kernel::Result<Crs> crs_from_wkt_own(std::string_view wkt);
 /// A vertical CRS's name and unit from PROJ's database; nullopt when it is none.

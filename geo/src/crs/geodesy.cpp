@@ -25,18 +25,12 @@ using kernel::Result;
 // metres with longitudes relative to the CRS's prime meridian; the domain rules PROJ does
 // not apply are ours, checked around it (DomainChecks).
 
-std::string earth_of(const Ellipsoid& e) {
-  return e.inverse_flattening == 0.0 ? "+R=" + format_number(e.semi_major_m)
-                                     : "+a=" + format_number(e.semi_major_m) +
-                                           " +rf=" + format_number(e.inverse_flattening);
-}
-
 // The PROJ string of a projection (EPSG method → PROJ operation).
 std::string proj_string_of(const Crs& crs) {
   const Projection& p = *crs.projection;
   auto n = [](double v) { return format_number(v); };
-  const std::string origin = " +x_0=" + n(p.false_easting_m) + " +y_0=" + n(p.false_northing_m) +
-                             " " + earth_of(crs.datum.ellipsoid);
+  const std::string origin = with_earth(
+      " +x_0=" + n(p.false_easting_m) + " +y_0=" + n(p.false_northing_m), crs.datum.ellipsoid);
   switch (p.method) {
     case ProjectionMethod::TransverseMercator:  // PROJ's exact (Poder/Engsager) algorithm
       return "+proj=tmerc +lat_0=" + n(p.latitude_of_origin_deg) +
@@ -59,14 +53,8 @@ std::string proj_string_of(const Crs& crs) {
     case ProjectionMethod::ObliqueStereographic:  // PROJ's sterea: EPSG 9809 (GN 7-2)
       return "+proj=sterea +lat_0=" + n(p.latitude_of_origin_deg) +
              " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::ComputedByProj: {
-      // A string made from GeoTIFF keys names no ellipsoid: the datum's.
-      const bool has_earth = p.proj_string.find("+ellps=") != std::string::npos ||
-                             p.proj_string.find("+a=") != std::string::npos ||
-                             p.proj_string.find("+R=") != std::string::npos ||
-                             p.proj_string.find("+datum=") != std::string::npos;
-      return has_earth ? p.proj_string : p.proj_string + " " + earth_of(crs.datum.ellipsoid);
-    }
+    case ProjectionMethod::ComputedByProj:  // from GeoTIFF keys it names no ellipsoid
+      return with_earth(p.proj_string, crs.datum.ellipsoid);
   }
   return std::string();
 }

@@ -117,6 +117,45 @@ std::string wkt1_of(const PJ* crs) {
   return text_of(proj_as_wkt(context(), crs, PJ_WKT1_GDAL, options));
 }
 
+// "EPSG" code of a PROJ object's first identifier; 0 when it has none from EPSG.
+int epsg_of(const PJ* object) {
+  const char* auth = proj_get_id_auth_name(object, 0);
+  const char* code = proj_get_id_code(object, 0);
+  return auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG" ? std::atoi(code)
+                                                                                : 0;
+}
+
+// The unit of a CRS's first axis (snapped to metre / foot / US survey foot, its EPSG code
+// kept); nullopt when PROJ gives none.
+std::optional<LinearUnit> axis_unit(const PJ* crs) {
+  PJ_CONTEXT* ctx = context();
+  Object cs(proj_crs_get_coordinate_system(ctx, crs));
+  double factor = 0.0;
+  const char* unit_name = nullptr;
+  const char* unit_code = nullptr;
+  if (!cs ||
+      proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
+                            &unit_code) == 0 ||
+      !(factor > 0) || !std::isfinite(factor)) {
+    return std::nullopt;
+  }
+  LinearUnit unit = linear_unit_from_size(text_of(unit_name), factor);
+  if (unit_code != nullptr && unit.epsg == 0) unit.epsg = std::atoi(unit_code);
+  return unit;
+}
+
+// A vertical CRS's name, code and unit; nullopt when `crs` is none.
+std::optional<VerticalCrs> vertical_of(const PJ* crs) {
+  if (crs == nullptr || proj_get_type(crs) != PJ_TYPE_VERTICAL_CRS) return std::nullopt;
+  const auto unit = axis_unit(crs);
+  if (!unit) return std::nullopt;
+  VerticalCrs v;
+  v.epsg = epsg_of(crs);
+  v.name = text_of(proj_get_name(crs));
+  v.unit = *unit;
+  return v;
+}
+
 // The projection part of a projected CRS's PROJ string: the projection and its ellipsoid,
 // in metres; what CrsMath does itself (units, prime meridian) and what is no projection
 // (datum shifts, grids, the CRS marker) removed.
@@ -127,24 +166,13 @@ std::string projection_string(const PJ* crs, const Ellipsoid& ellipsoid, std::st
     return std::string();
   }
   std::istringstream in(raw);
-  std::string token;
   std::string out;
-  bool has_ellipsoid = false;
-  bool has_datum = false;
   for (std::string t; in >> t;) {
     const std::string key = t.substr(0, t.find('='));
     if (key == "+type" || key == "+no_defs" || key == "+towgs84" || key == "+nadgrids" ||
         key == "+geoidgrids" || key == "+units" || key == "+to_meter" || key == "+vunits" ||
-        key == "+vto_meter" || key == "+pm" || key == "+wktext") {
+        key == "+vto_meter" || key == "+pm" || key == "+wktext" || key == "+datum") {
       continue;
-    }
-    if (key == "+datum") {
-      has_datum = true;
-      continue;
-    }
-    if (key == "+ellps" || key == "+a" || key == "+R" || key == "+b" || key == "+rf" ||
-        key == "+f") {
-      has_ellipsoid = true;
     }
     out += (out.empty() ? "" : " ") + t;
   }
@@ -152,15 +180,8 @@ std::string projection_string(const PJ* crs, const Ellipsoid& ellipsoid, std::st
     *why = "its PROJ string '" + std::string(raw) + "' is not a projection";
     return std::string();
   }
-  if (!has_ellipsoid || has_datum) {
-    if (!has_ellipsoid) {
-      out += ellipsoid.inverse_flattening == 0.0
-                 ? " +R=" + format_number(ellipsoid.semi_major_m)
-                 : " +a=" + format_number(ellipsoid.semi_major_m) +
-                       " +rf=" + format_number(ellipsoid.inverse_flattening);
-    }
-  }
-  return out;
+  // A +datum named the ellipsoid: without it, the base CRS's.
+  return with_earth(out, ellipsoid);
 }
 
 // A projected CRS whose method our engines do not compute: its base geographic CRS read by
@@ -180,20 +201,12 @@ kernel::Result<Crs> projected_by_proj(const PJ* crs, const std::string& what) {
   }
   Crs out = std::move(base).value();
   settle_datum(crs, out);
-  Object cs(proj_crs_get_coordinate_system(ctx, crs));
-  double factor = 0.0;
-  const char* unit_name = nullptr;
-  const char* unit_code = nullptr;
-  if (!cs ||
-      proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
-                            &unit_code) == 0 ||
-      !(factor > 0) || !std::isfinite(factor)) {
+  const auto unit = axis_unit(crs);
+  if (!unit) {
     return kernel::Error{kernel::ErrorCode::Unsupported,
                          what + " (" + name + "): PROJ gives no unit for its axes"};
   }
-  out.linear_unit = linear_unit_from_size(text_of(unit_name), factor);
-  if (unit_code != nullptr && out.linear_unit.epsg == 0)
-    out.linear_unit.epsg = std::atoi(unit_code);
+  out.linear_unit = *unit;
   Object conversion(proj_crs_get_coordoperation(ctx, crs));
   const char* method = nullptr;
   if (conversion) proj_coordoperation_get_method_info(ctx, conversion.p, &method, nullptr, nullptr);
@@ -208,11 +221,7 @@ kernel::Result<Crs> projected_by_proj(const PJ* crs, const std::string& what) {
   p.wkt1 = wkt1_of(crs);
   out.kind = CrsKind::Projected;
   out.name = name;
-  out.epsg = 0;
-  const char* auth = proj_get_id_auth_name(crs, 0);
-  const char* code = proj_get_id_code(crs, 0);
-  if (auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG")
-    out.epsg = std::atoi(code);
+  out.epsg = epsg_of(crs);
   out.projection = std::move(p);
   out.angular_unit = degree_unit();
   return out;
@@ -225,10 +234,7 @@ kernel::Result<Crs> geocentric_of(const PJ* crs, const std::string& what) {
   Crs out;
   out.kind = CrsKind::Geocentric;
   out.name = text_of(proj_get_name(crs));
-  const char* auth = proj_get_id_auth_name(crs, 0);
-  const char* code = proj_get_id_code(crs, 0);
-  out.epsg =
-      auth != nullptr && code != nullptr && std::string_view(auth) == "EPSG" ? std::atoi(code) : 0;
+  out.epsg = epsg_of(crs);
   Object datum(proj_crs_get_datum_forced(ctx, crs));
   Object ellipsoid(proj_get_ellipsoid(ctx, crs));
   double a = 0, b = 0, rf = 0;
@@ -260,21 +266,16 @@ kernel::Result<Crs> geocentric_of(const PJ* crs, const std::string& what) {
     }
   }
   Object pm(proj_get_prime_meridian(ctx, crs));
-  double longitude = 0, unit = 0;
-  if (pm && proj_prime_meridian_get_parameters(ctx, pm.p, &longitude, &unit, nullptr) != 0) {
-    out.datum.prime_meridian_deg = longitude * unit / kDegree;
+  double longitude = 0, angle_unit = 0;
+  if (pm && proj_prime_meridian_get_parameters(ctx, pm.p, &longitude, &angle_unit, nullptr) != 0) {
+    out.datum.prime_meridian_deg = longitude * angle_unit / kDegree;
   }
-  Object cs(proj_crs_get_coordinate_system(ctx, crs));
-  double factor = 0.0;
-  const char* unit_name = nullptr;
-  if (!cs ||
-      proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
-                            nullptr) == 0 ||
-      !(factor > 0)) {
+  const auto unit = axis_unit(crs);
+  if (!unit) {
     return kernel::Error{kernel::ErrorCode::Unsupported,
                          what + " (" + out.name + "): PROJ gives no unit"};
   }
-  out.linear_unit = linear_unit_from_size(text_of(unit_name), factor);
+  out.linear_unit = *unit;
   out.source = what;
   return out;
 }
@@ -322,19 +323,8 @@ kernel::Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
                            what + ": a geocentric CRS in a compound CRS"};
     }
     if (vertical && proj_get_type(vertical.p) == PJ_TYPE_VERTICAL_CRS) {
-      const char* vcode = proj_get_id_code(vertical.p, 0);
-      VerticalCrs v;
-      v.name = text_of(proj_get_name(vertical.p));
-      v.epsg = vcode != nullptr ? std::atoi(vcode) : 0;
-      Object cs(proj_crs_get_coordinate_system(ctx, vertical.p));
-      double factor = 0.0;
-      const char* unit_name = nullptr;
-      if (cs &&
-          proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name,
-                                nullptr, nullptr) != 0 &&
-          factor > 0) {
-        v.unit = linear_unit_from_size(text_of(unit_name), factor);
-      }
+      VerticalCrs v{epsg_of(vertical.p), text_of(proj_get_name(vertical.p)), metre_unit()};
+      if (auto read = vertical_of(vertical.p)) v = *read;
       out.vertical = v;
     }
     out.name = name;
@@ -414,14 +404,7 @@ kernel::Result<Crs> crs_from_proj_text(std::string_view text, const std::string&
 std::string proj_projected_wkt1(const Crs& crs) {
   if (!crs.projection) return std::string();
   const Projection& p = *crs.projection;
-  std::string text = p.proj_string;
-  const Ellipsoid& e = crs.datum.ellipsoid;
-  if (text.find("+ellps=") == std::string::npos && text.find("+a=") == std::string::npos &&
-      text.find("+R=") == std::string::npos && text.find("+datum=") == std::string::npos) {
-    text += e.inverse_flattening == 0.0 ? " +R=" + format_number(e.semi_major_m)
-                                        : " +a=" + format_number(e.semi_major_m) +
-                                              " +rf=" + format_number(e.inverse_flattening);
-  }
+  std::string text = with_earth(p.proj_string, crs.datum.ellipsoid);
   if (crs.datum.prime_meridian_deg != 0.0)
     text += " +pm=" + format_number(crs.datum.prime_meridian_deg);
   if (crs.datum.to_wgs84 && !crs.datum.to_wgs84->is_null()) {
@@ -437,26 +420,21 @@ std::string proj_projected_wkt1(const Crs& crs) {
 }
 
 std::optional<VerticalCrs> vertical_from_proj_database(int code) {
-  PJ_CONTEXT* ctx = context();
   Object crs = from_database(code);
-  if (!crs || proj_get_type(crs.p) != PJ_TYPE_VERTICAL_CRS) return std::nullopt;
-  Object cs(proj_crs_get_coordinate_system(ctx, crs.p));
-  if (!cs) return std::nullopt;
-  const char* unit_name = nullptr;
-  const char* unit_code = nullptr;
-  double factor = 0;
-  if (proj_cs_get_axis_info(ctx, cs.p, 0, nullptr, nullptr, nullptr, &factor, &unit_name, nullptr,
-                            &unit_code) == 0 ||
-      !(factor > 0)) {
-    return std::nullopt;
-  }
-  VerticalCrs v;
-  v.epsg = code;
-  v.name = proj_get_name(crs.p) != nullptr ? proj_get_name(crs.p) : label(code);
-  v.unit.name = unit_name != nullptr ? unit_name : "metre";
-  v.unit.metres = factor;
-  v.unit.epsg = unit_code != nullptr ? std::atoi(unit_code) : 0;
+  auto v = vertical_of(crs.p);
+  if (v) v->epsg = code;
   return v;
+}
+
+std::string with_earth(const std::string& proj_string, const Ellipsoid& ellipsoid) {
+  for (const char* key : {"+ellps=", "+a=", "+R=", "+datum="}) {
+    if (proj_string.find(key) != std::string::npos) return proj_string;
+  }
+  const std::string earth = ellipsoid.inverse_flattening == 0.0
+                                ? "+R=" + format_number(ellipsoid.semi_major_m)
+                                : "+a=" + format_number(ellipsoid.semi_major_m) +
+                                      " +rf=" + format_number(ellipsoid.inverse_flattening);
+  return proj_string.empty() ? earth : proj_string + " " + earth;
 }
 
 }  // namespace csgtile::geo::detail

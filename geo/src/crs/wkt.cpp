@@ -804,11 +804,10 @@ std::string unit_wkt(const LinearUnit& u) {
   return "UNIT[" + quoted(u.name) + "," + num(u.metres) + authority(u.epsg) + "]";
 }
 
-std::string geogcs_wkt(const Crs& crs) {
-  const GeodeticDatum& d = crs.datum;
+// DATUM[...] with its SPHEROID, TOWGS84 (when the datum has a Helmert) and AUTHORITY.
+std::string datum_wkt(const GeodeticDatum& d) {
   const Ellipsoid& e = d.ellipsoid;
-  std::string s = "GEOGCS[" + quoted(crs.kind == CrsKind::Geographic ? crs.name : d.name) +
-                  ",DATUM[" + quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," +
+  std::string s = "DATUM[" + quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," +
                   num(e.semi_major_m) + "," + num(e.inverse_flattening) + authority(e.epsg) + "]";
   if (d.to_wgs84 && d.epsg != 6326) {
     const Helmert7& h = *d.to_wgs84;  // WKT 1 TOWGS84 is position vector: negate rotations
@@ -816,10 +815,22 @@ std::string geogcs_wkt(const Crs& crs) {
          num(-h.rx_arcsec + 0.0) + "," + num(-h.ry_arcsec + 0.0) + "," + num(-h.rz_arcsec + 0.0) +
          "," + num(h.scale_ppm) + "]";
   }
-  const AngularUnit& a = crs.angular_unit;  // WKT 1 gives the prime meridian in the GEOGCS unit
-  s += authority(d.epsg) + "],PRIMEM[" +
-       quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
-       num(d.prime_meridian_deg * detail::kDegree / a.radians) + "],";
+  return s + authority(d.epsg) + "]";
+}
+
+// PRIMEM[...] of the datum, its longitude given as `longitude` (WKT 1 writes it in the
+// GEOGCS's angular unit, a GEOCCS in degrees).
+std::string primem_wkt(const GeodeticDatum& d, double longitude) {
+  return "PRIMEM[" + quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
+         num(longitude) + "]";
+}
+
+std::string geogcs_wkt(const Crs& crs) {
+  const GeodeticDatum& d = crs.datum;
+  const AngularUnit& a = crs.angular_unit;
+  std::string s = "GEOGCS[" + quoted(crs.kind == CrsKind::Geographic ? crs.name : d.name) + "," +
+                  datum_wkt(d) + "," +
+                  primem_wkt(d, d.prime_meridian_deg * detail::kDegree / a.radians) + ",";
   s += "UNIT[" + quoted(a.name) + "," + num(a.radians) + authority(a.epsg == 9102 ? 9122 : a.epsg) +
        "]";
   if (crs.kind == CrsKind::Geographic)
@@ -827,23 +838,11 @@ std::string geogcs_wkt(const Crs& crs) {
   return s + "]";
 }
 
-// DATUM, PRIMEM, UNIT and AXIS of a WKT 1 GEOCCS.
+// DATUM, PRIMEM (degrees), UNIT and AXIS of a WKT 1 GEOCCS.
 std::string geocentric_body_wkt(const Crs& crs) {
-  const GeodeticDatum& d = crs.datum;
-  const Ellipsoid& e = d.ellipsoid;
-  std::string s = "DATUM[" + quoted(d.name) + ",SPHEROID[" + quoted(e.name) + "," +
-                  num(e.semi_major_m) + "," + num(e.inverse_flattening) + authority(e.epsg) + "]";
-  if (d.to_wgs84 && d.epsg != 6326) {
-    const Helmert7& h = *d.to_wgs84;
-    s += ",TOWGS84[" + num(h.tx_m) + "," + num(h.ty_m) + "," + num(h.tz_m) + "," +
-         num(-h.rx_arcsec + 0.0) + "," + num(-h.ry_arcsec + 0.0) + "," + num(-h.rz_arcsec + 0.0) +
-         "," + num(h.scale_ppm) + "]";
-  }
-  s += authority(d.epsg) + "],PRIMEM[" +
-       quoted(d.prime_meridian_deg == 0.0 ? "Greenwich" : "user-defined") + "," +
-       num(d.prime_meridian_deg) + "]," + unit_wkt(crs.linear_unit) +
-       ",AXIS[\"Geocentric X\",OTHER],AXIS[\"Geocentric Y\",OTHER],AXIS[\"Geocentric Z\",NORTH]";
-  return s;
+  return datum_wkt(crs.datum) + "," + primem_wkt(crs.datum, crs.datum.prime_meridian_deg) + "," +
+         unit_wkt(crs.linear_unit) +
+         ",AXIS[\"Geocentric X\",OTHER],AXIS[\"Geocentric Y\",OTHER],AXIS[\"Geocentric Z\",NORTH]";
 }
 
 }  // namespace

@@ -187,12 +187,43 @@ struct Parsed {
   std::optional<std::size_t> copc_nodes_read;    // a COPC query: nodes selected
 };
 
+// A file's bytes with the EVLR payloads already loaded served from memory: the COPC hierarchy
+// EVLR is loaded with the other records, so its pages are not read again (over HTTP: not
+// fetched twice).
+class LoadedRecordsSource final : public ByteSource {
+ public:
+  LoadedRecordsSource(ByteSource& file, const std::vector<LasRecord>& records)
+      : ByteSource(file.name()), file_(file), records_(records) {}
+  std::uint64_t size() const override { return file_.size(); }
+  kernel::Status read_at(std::uint64_t offset, std::span<std::uint8_t> out) override {
+    for (const LasRecord& r : records_) {
+      if (r.data && offset >= r.payload_offset && out.size() <= r.data->size() &&
+          offset - r.payload_offset <= r.data->size() - out.size()) {
+        std::copy_n(r.data->begin() + static_cast<std::ptrdiff_t>(offset - r.payload_offset),
+                    out.size(), out.begin());
+        return kernel::Status();
+      }
+    }
+    return file_.read_at(offset, out);
+  }
+
+ private:
+  ByteSource& file_;
+  const std::vector<LasRecord>& records_;
+};
+
+kernel::Result<std::vector<CopcNode>> copc_nodes(ByteSource& file, const CopcInfo& info,
+                                                 const std::vector<LasRecord>& evlrs) {
+  LoadedRecordsSource source(file, evlrs);
+  return read_copc_hierarchy(source, info);
+}
+
 // The chunks of the COPC nodes a region (and a depth) selects, renumbered as one run of
 // points; each node must be a chunk of the chunk table (same offset, size and count).
 kernel::Result<std::vector<detail::laz::Chunk>> copc_chunks(
-    detail::ByteSource& src, const CopcInfo& info, const std::vector<detail::laz::Chunk>& all,
-    const PointReadOptions& options) {
-  auto nodes = read_copc_hierarchy(src, info);
+    detail::ByteSource& src, const CopcInfo& info, const std::vector<LasRecord>& evlrs,
+    const std::vector<detail::laz::Chunk>& all, const PointReadOptions& options) {
+  auto nodes = copc_nodes(src, info, evlrs);
   if (!nodes.ok()) return nodes.error();
   CopcQuery query;
   query.box = options.region;
@@ -516,7 +547,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
       if (!parsed_info.ok()) return parsed_info.error();
       s.copc = parsed_info.value();
       if (options.region || options.copc_max_depth >= 0) {
-        auto selected = copc_chunks(src, *s.copc, chunks.value(), options);
+        auto selected = copc_chunks(src, *s.copc, s.evlrs, chunks.value(), options);
         if (!selected.ok()) return selected.error();
         s.copc_nodes_read = selected.value().size();
         s.readable = 0;
@@ -758,7 +789,7 @@ kernel::Result<std::vector<CopcNode>> LasReader::copc_hierarchy() {
   if (!state_->file.copc) {
     return Error{ErrorCode::InvalidArgument, name() + ": not a COPC file (no copc info VLR)"};
   }
-  return read_copc_hierarchy(*state_->file.source, *state_->file.copc);
+  return copc_nodes(*state_->file.source, *state_->file.copc, state_->file.evlrs);
 }
 
 kernel::Status LasReader::seek(std::uint64_t index) {

@@ -152,22 +152,11 @@ bool is_copc_name(const std::string& input) {
 Failure copc_cells(const std::string& input, const config::Config& config,
                    std::vector<detail::Cell>& cells) {
   cells.clear();
-  kernel::Result<std::unique_ptr<geo::LasReader>> reader =
-      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
-  const bool remote = fetch::is_url(input) && input.rfind("file://", 0) != 0;
-  if (remote) {
-    std::unique_ptr<geo::ByteSource> source;
-    if (Failure f = fetch::open_range_source(input, fetch::policy_of(config.fetch), source);
-        !f.ok()) {
-      return f;
-    }
-    reader = geo::LasReader::open_source(std::move(source));
-  } else {
-    const std::string path = input.rfind("file://", 0) == 0 ? input.substr(7) : input;
-    reader = geo::LasReader::open(path.substr(0, path.find('#')));
+  std::unique_ptr<geo::LasReader> reader;
+  if (Failure f = fetch::open_las(input, fetch::policy_of(config.fetch), reader); !f.ok()) {
+    return f;
   }
-  if (!reader.ok()) return {from_kernel(reader.error().code), reader.error().message};
-  const geo::LasHeader& h = reader.value()->header();
+  const geo::LasHeader& h = reader->header();
   const double size = config.city.cell_size;
   if (!(h.min[0] <= h.max[0]) || !(h.min[1] <= h.max[1])) return {};  // no points
   const detail::Cell low = detail::cell_of(h.min[0], h.min[1], size);

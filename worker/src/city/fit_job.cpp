@@ -51,7 +51,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
                   corner[1] + config.city.cell_size + config.city.halo, INFINITY};
     source.region = region;
     input = payload["input"].get<std::string>();
-    if (fetch::is_url(input) && input.rfind("file://", 0) != 0) {
+    if (fetch::is_remote_url(input)) {
       auto stats = std::make_shared<fetch::RangeStats>();
       if (Failure f =
               fetch::open_range_source(input, fetch::policy_of(config.fetch), source.remote, stats);

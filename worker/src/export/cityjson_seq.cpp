@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
@@ -92,8 +94,15 @@ class Welder {
   }
 
  private:
-  std::set<Point> representatives_;
-  std::map<Point, Point> seen_;
+  struct Hash {
+    std::size_t operator()(const Point& p) const {
+      std::uint64_t h = 1469598103934665603ULL;
+      for (std::int64_t v : p) h = (h ^ static_cast<std::uint64_t>(v)) * 1099511628211ULL;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  std::unordered_set<Point, Hash> representatives_;
+  std::unordered_map<Point, Point, Hash> seen_;
 };
 
 // Consecutive repeats removed, the ring read cyclically.

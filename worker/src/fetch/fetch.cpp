@@ -428,7 +428,7 @@ void set_options(CURL* c, const Policy& policy, std::string& refused_address, ch
 }
 bool transient(CURLcode code) { return transient_curl(code); }
 
-Failure resolve(const std::string& text, const Policy& policy, Target& target) {
+Failure resolve(const std::string& text, const Policy& policy, bool allow_file, Target& target) {
   const std::string where = redacted(text);
   if (has_control(text))
     return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
@@ -436,12 +436,18 @@ Failure resolve(const std::string& text, const Policy& policy, Target& target) {
   if (!split_url(text, parts)) return {ErrorCode::InputInvalid, where + ": not a valid URL"};
   if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) ==
       policy.schemes.end()) {
-    return {ErrorCode::FetchRefused, where + ": scheme '" + parts.scheme + "' is not allowed"};
+    std::string allowed;
+    for (const std::string& s : policy.schemes) allowed += (allowed.empty() ? "" : ", ") + s;
+    return {ErrorCode::FetchRefused,
+            where + ": scheme '" + parts.scheme + "' is not allowed (allowed: " + allowed + ")"};
   }
   if (!parts.user.empty() || !parts.password.empty()) {
-    return {ErrorCode::FetchRefused, where + ": credentials in the URL are refused"};
+    return {
+        ErrorCode::FetchRefused,
+        where + ": credentials in the URL are refused (use the environment or a credentials file)"};
   }
   target = {};
+  target.path = parts.path;
   target.s3 = parts.scheme == "s3";
   if (target.s3) {
     S3Target signed_target;
@@ -453,26 +459,34 @@ Failure resolve(const std::string& text, const Policy& policy, Target& target) {
     target.protocols = "http,https";
     return {};
   }
-  if (parts.scheme != "http" && parts.scheme != "https") {
-    return {ErrorCode::FetchRefused, where + ": range requests need http, https or s3"};
+  if (parts.scheme != "http" && parts.scheme != "https" &&
+      !(allow_file && parts.scheme == "file")) {
+    return {ErrorCode::FetchRefused,
+            where + ": scheme '" + parts.scheme + "' is not supported" +
+                (allow_file ? "" : " for range requests (http, https, s3)")};
   }
   target.url = text.substr(0, text.find('#'));
   target.protocols = parts.scheme;
   return {};
 }
 
-Failure redirect_target(const std::string& from, const std::string& location, const Policy& policy,
+Failure redirect_target(const std::string& where, const std::string& location, const Policy& policy,
                         Target& target) {
   UrlParts next;
-  UrlParts current;
-  if (!split_url(location, next) || !split_url(from, current) ||
-      (next.scheme != "http" && next.scheme != "https") ||
+  if (!split_url(location, next) || (next.scheme != "http" && next.scheme != "https") ||
       std::find(policy.schemes.begin(), policy.schemes.end(), next.scheme) ==
-          policy.schemes.end() ||
-      (current.scheme == "https" && next.scheme == "http") || !next.user.empty() ||
-      !next.password.empty()) {
-    return {ErrorCode::FetchRefused, redacted(from) + ": redirect to " + redacted(location) +
-                                         " refused (only http(s), never https to http)"};
+          policy.schemes.end()) {
+    return {ErrorCode::FetchRefused, where + ": redirect to " + redacted(location) +
+                                         " refused (only allowed http(s) targets)"};
+  }
+  UrlParts current;
+  split_url(target.url, current);
+  if (current.scheme == "https" && next.scheme == "http") {
+    return {ErrorCode::FetchRefused,
+            where + ": redirect from https to plain http (" + redacted(location) + ") refused"};
+  }
+  if (!next.user.empty() || !next.password.empty()) {
+    return {ErrorCode::FetchRefused, where + ": redirect to a URL with credentials refused"};
   }
   target.url = location;
   target.protocols = next.scheme;
@@ -582,47 +596,14 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   global_init();
   result = {};
   const std::string where = redacted(request.url);
-  if (has_control(request.url))
-    return {ErrorCode::InputInvalid, where + ": control characters in the URL"};
-  UrlParts parts;
-  if (!split_url(request.url, parts)) return {ErrorCode::InputInvalid, where + ": not a valid URL"};
-  if (std::find(policy.schemes.begin(), policy.schemes.end(), parts.scheme) ==
-      policy.schemes.end()) {
-    std::string allowed;
-    for (const std::string& s : policy.schemes) allowed += (allowed.empty() ? "" : ", ") + s;
-    return {ErrorCode::FetchRefused,
-            where + ": scheme '" + parts.scheme + "' is not allowed (allowed: " + allowed + ")"};
-  }
-  if (!parts.user.empty() || !parts.password.empty()) {
-    return {
-        ErrorCode::FetchRefused,
-        where + ": credentials in the URL are refused (use the environment or a credentials file)"};
-  }
-
-  std::string url = request.url;
-  std::vector<std::string> headers;
-  std::string protocols;
-  if (parts.scheme == "s3") {
-    S3Target target;
-    if (Failure f = s3_target(parts, request.url, policy, "GET", sha256_hex(""), target); !f.ok()) {
-      return f;
-    }
-    url = target.url;
-    headers = target.headers;
-    protocols = "http,https";
-  } else if (parts.scheme == "file" || parts.scheme == "http" || parts.scheme == "https") {
-    protocols = parts.scheme;
-    const std::size_t hash = url.find('#');
-    if (hash != std::string::npos) url.resize(hash);
-  } else {
-    return {ErrorCode::FetchRefused, where + ": scheme '" + parts.scheme + "' is not supported"};
-  }
+  transport::Target target;
+  if (Failure f = transport::resolve(request.url, policy, true, target); !f.ok()) return f;
 
   // The cache slot: a directory per URL (by its hash), the file keeps the URL's name so that
   // readers that go by extension see it.
   const std::filesystem::path dir =
       cache_dir / sha256_hex(request.url.substr(0, request.url.find('#'))).substr(0, 24);
-  const std::filesystem::path final_path = dir / safe_file_name(parts.path);
+  const std::filesystem::path final_path = dir / safe_file_name(target.path);
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -660,11 +641,11 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   for (int attempt = 1; attempt <= std::max(1, policy.attempts) && !done;) {
     sink.reset();
     result.attempts++;
-    const Attempt a = transfer_once(url, headers, policy, protocols, sink);
+    const Attempt a = transfer_once(target.url, target.headers, policy, target.protocols, sink);
     if (a.outcome == Outcome::Done) {
       done = true;
     } else if (a.outcome == Outcome::Redirect) {
-      if (parts.scheme == "s3") {
+      if (target.s3) {
         failure = {ErrorCode::FetchRefused,
                    where + ": S3 answered with a redirect (wrong region or endpoint?)"};
         break;
@@ -674,27 +655,10 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
                    where + ": more than " + std::to_string(policy.max_redirects) + " redirects"};
         break;
       }
-      UrlParts next;
-      if (!split_url(a.location, next) || (next.scheme != "http" && next.scheme != "https") ||
-          std::find(policy.schemes.begin(), policy.schemes.end(), next.scheme) ==
-              policy.schemes.end()) {
-        failure = {ErrorCode::FetchRefused, where + ": redirect to " + redacted(a.location) +
-                                                " refused (only allowed http(s) targets)"};
+      if (Failure f = transport::redirect_target(where, a.location, policy, target); !f.ok()) {
+        failure = f;
         break;
       }
-      UrlParts current;
-      split_url(url, current);
-      if (current.scheme == "https" && next.scheme == "http") {
-        failure = {ErrorCode::FetchRefused, where + ": redirect from https to plain http (" +
-                                                redacted(a.location) + ") refused"};
-        break;
-      }
-      if (!next.user.empty() || !next.password.empty()) {
-        failure = {ErrorCode::FetchRefused, where + ": redirect to a URL with credentials refused"};
-        break;
-      }
-      url = a.location;
-      protocols = next.scheme;
     } else if (a.outcome == Outcome::Transient && attempt < policy.attempts) {
       failure = a.failure;
       ++attempt;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "csgtile/geo/byte_source.h"
+#include "csgtile/geo/las.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::fetch {
@@ -127,6 +128,15 @@ struct RangeStats {
 /// memory (at most policy.max_bytes). Same policy as fetch(): schemes, address rules, TLS,
 /// timeouts, retries of transient failures, redirects one by one, S3 signed per request.
 /// Errors: as fetch(); a read that fails later is an IoError of the reader naming the range.
+/// True for a URL that is read remotely (http, https, s3): any URL but file://.
+bool is_remote_url(const std::string& text);
+
+/// Opens a LAS/LAZ/COPC input: a path (or file:// URL) in place, an http(s)/s3 URL by range
+/// requests (`stats` counts them). Errors: as open_range_source and the reader's.
+Failure open_las(const std::string& input, const Policy& policy,
+                 std::unique_ptr<geo::LasReader>& reader,
+                 std::shared_ptr<RangeStats> stats = nullptr);
+
 Failure open_range_source(const std::string& url, const Policy& policy,
                           std::unique_ptr<geo::ByteSource>& source,
                           std::shared_ptr<RangeStats> stats = nullptr,

@@ -85,12 +85,12 @@ class HttpRangeSource final : public geo::ByteSource {
         url_(std::move(url)),
         policy_(std::move(policy)),
         stats_(std::move(stats)),
-        kBlock(std::max<std::uint64_t>(block, 512)) {}
+        block_(std::max<std::uint64_t>(block, 512)) {}
 
   // The first request: the first block, and the object's size from Content-Range.
   Failure open() {
     Reply reply;
-    const std::uint64_t first = std::min<std::uint64_t>(kBlock, kFirstBlock);
+    const std::uint64_t first = std::min<std::uint64_t>(block_, kFirstBlock);
     if (Failure f = get(0, first, reply); !f.ok()) return f;
     if (reply.status == 200) {  // no range support: the whole object came
       whole_ = std::make_unique<std::string>(std::move(reply.body));
@@ -116,7 +116,7 @@ class HttpRangeSource final : public geo::ByteSource {
     }
     // Blocks of a small object stay small (at most 1/16 of it), so that reading a part of
     // it never means fetching all of it.
-    kBlock = std::max<std::uint64_t>(512, std::min(kBlock, size_ / 16));
+    block_ = std::max<std::uint64_t>(512, std::min(block_, size_ / 16));
     first_ = std::move(reply.body);
     return {};
   }
@@ -142,15 +142,15 @@ class HttpRangeSource final : public geo::ByteSource {
       std::memcpy(out.data(), first_.data() + offset, done);
       if (done == out.size()) return kernel::Status();
     }
-    if (out.size() - done >= kBlock) return fetch_exact(offset + done, out.subspan(done));
+    if (out.size() - done >= block_) return fetch_exact(offset + done, out.subspan(done));
     // Small reads (headers, VLRs, records): whole aligned blocks, a few kept.
     while (done < out.size()) {
       const std::uint64_t at = offset + done;
-      const std::uint64_t start = at / kBlock * kBlock;
+      const std::uint64_t start = at / block_ * block_;
       const std::string* block = find(start);
       if (block == nullptr) {
         Reply reply;
-        const std::uint64_t n = std::min(kBlock, size_ - start);
+        const std::uint64_t n = std::min(block_, size_ - start);
         if (Failure f = get(start, n, reply); !f.ok()) return as_status(f);
         if (Failure f = check(reply, start, n); !f.ok()) return as_status(f);
         block = &keep(start, std::move(reply.body));
@@ -205,13 +205,13 @@ class HttpRangeSource final : public geo::ByteSource {
   // redirects followed one by one under the policy.
   Failure get(std::uint64_t offset, std::uint64_t n, Reply& reply) {
     transport::Target target;
-    if (Failure f = transport::resolve(url_, policy_, target); !f.ok()) return f;
+    if (Failure f = transport::resolve(url_, policy_, false, target); !f.ok()) return f;
     long delay = policy_.retry_delay_ms;
     int redirects = 0;
     Failure last;
     for (int attempt = 1; attempt <= std::max(1, policy_.attempts);) {
-      if (target.s3) {
-        if (Failure f = transport::resolve(url_, policy_, target); !f.ok()) return f;
+      if (target.s3 && attempt > 1) {  // a retry of S3 carries a fresh signature
+        if (Failure f = transport::resolve(url_, policy_, false, target); !f.ok()) return f;
       }
       bool transient = false;
       last = once(target, offset, n, reply, transient);
@@ -221,8 +221,7 @@ class HttpRangeSource final : public geo::ByteSource {
           return {ErrorCode::FetchRefused,
                   name() + ": more than " + std::to_string(policy_.max_redirects) + " redirects"};
         }
-        const std::string from = target.url;
-        if (Failure f = transport::redirect_target(from, reply.location, policy_, target);
+        if (Failure f = transport::redirect_target(name(), reply.location, policy_, target);
             !f.ok()) {
           return f;
         }
@@ -310,7 +309,7 @@ class HttpRangeSource final : public geo::ByteSource {
   std::vector<std::pair<std::uint64_t, std::string>> blocks_;
   std::string first_;  // the first bytes (header, VLRs), from the first request
   static constexpr std::uint64_t kFirstBlock = 16 * 1024;
-  std::uint64_t kBlock;  // small reads are served from aligned blocks this size
+  std::uint64_t block_;  // small reads are served from aligned blocks this size
 };
 
 }  // namespace
@@ -320,11 +319,33 @@ Failure open_range_source(const std::string& url, const Policy& policy,
                           std::shared_ptr<RangeStats> stats, std::uint64_t block_bytes) {
   transport::init();
   source.reset();
-  transport::Target target;
-  if (Failure f = transport::resolve(url, policy, target); !f.ok()) return f;
   auto made = std::make_unique<HttpRangeSource>(url, policy, std::move(stats), block_bytes);
   if (Failure f = made->open(); !f.ok()) return f;
   source = std::move(made);
+  return {};
+}
+
+bool is_remote_url(const std::string& text) {
+  return is_url(text) && text.rfind("file://", 0) != 0;
+}
+
+Failure open_las(const std::string& input, const Policy& policy,
+                 std::unique_ptr<geo::LasReader>& reader, std::shared_ptr<RangeStats> stats) {
+  reader.reset();
+  kernel::Result<std::unique_ptr<geo::LasReader>> opened =
+      kernel::Error{kernel::ErrorCode::InvalidArgument, "unopened"};
+  if (is_remote_url(input)) {
+    std::unique_ptr<geo::ByteSource> source;
+    if (Failure f = open_range_source(input, policy, source, std::move(stats)); !f.ok()) return f;
+    opened = geo::LasReader::open_source(std::move(source));
+  } else if (input.rfind("file://", 0) == 0) {
+    const std::string path = input.substr(7);
+    opened = geo::LasReader::open(path.substr(0, path.find('#')));
+  } else {
+    opened = geo::LasReader::open(input);
+  }
+  if (!opened.ok()) return {from_kernel(opened.error().code), opened.error().message};
+  reader = std::move(opened).value();
   return {};
 }
 

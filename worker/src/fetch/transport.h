@@ -13,10 +13,12 @@
 namespace csgtile::worker::fetch::transport {
 
 /// A GET ready to send: the URL to ask, its headers (S3: signed), the protocols allowed.
+/// Shared by fetch() and the range reader: one set of URL rules for both.
 struct Target {
   std::string url;
   std::vector<std::string> headers;
   std::string protocols;
+  std::string path;  ///< the path of the URL as written (the cache names files by it)
   bool s3 = false;
 };
 
@@ -26,10 +28,12 @@ void init();
 std::string redact(const std::string& url);
 /// Checks `url` against the policy (scheme allowed, no credentials, no control characters)
 /// and builds its GET (S3: path-style on the endpoint, signed now; sign again per request).
-/// Only http, https and s3. Errors: InputInvalid, FetchRefused, ConfigInvalid.
-Failure resolve(const std::string& url, const Policy& policy, Target& target);
-/// The target of a redirect from `from` to `location` (http(s) only, never https → http).
-Failure redirect_target(const std::string& from, const std::string& location, const Policy& policy,
+/// http, https and s3, and file when `allow_file`. Errors: InputInvalid, FetchRefused,
+/// ConfigInvalid.
+Failure resolve(const std::string& url, const Policy& policy, bool allow_file, Target& target);
+/// Moves `target` to a redirect's `location` (an allowed http(s) URL without credentials,
+/// never from https to http); errors name the input as `where`.
+Failure redirect_target(const std::string& where, const std::string& location, const Policy& policy,
                         Target& target);
 /// Timeouts, TLS verification, user agent, error buffer and the address policy (a refused
 /// address is written to `refused_address`).
