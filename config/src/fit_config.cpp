@@ -29,6 +29,7 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "outliers", "std_ratio", fit.outliers.std_ratio);
   take(f, "voxel", "size", fit.voxel.size);
   take(f, "normals", "neighbours", fit.normals.neighbours);
+  take(f, "normals", "sharp", fit.normals.sharp);
   take(f, "ground", "enabled", fit.ground.enabled);
   take(f, "ground", "use_classification", fit.ground.use_classification);
   take(f, "ground", "cell", fit.ground.cell);
@@ -49,6 +50,8 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "ransac", "max_radius", fit.ransac.max_radius);
   take(f, "ransac", "shapes", fit.ransac.shapes);
   take(f, "ransac", "max_candidates", fit.ransac.max_candidates);
+  take(f, "ransac", "relabel", fit.ransac.relabel);
+  take(f, "ransac", "by_evidence", fit.ransac.by_evidence);
   take(f, "primitives", "boxes", fit.primitives.boxes);
   take(f, "primitives", "max_box_depth", fit.primitives.max_box_depth);
   take(f, "primitives", "min_box_thickness", fit.primitives.min_box_thickness);
@@ -72,7 +75,7 @@ json fit_to_json(const FitConfig& fit) {
                      {"neighbours", fit.outliers.neighbours},
                      {"std_ratio", fit.outliers.std_ratio}};
   out["voxel"] = {{"size", fit.voxel.size}};
-  out["normals"] = {{"neighbours", fit.normals.neighbours}};
+  out["normals"] = {{"neighbours", fit.normals.neighbours}, {"sharp", fit.normals.sharp}};
   out["ground"] = {{"enabled", fit.ground.enabled},
                    {"use_classification", fit.ground.use_classification},
                    {"cell", fit.ground.cell},
@@ -92,7 +95,9 @@ json fit_to_json(const FitConfig& fit) {
                    {"probability", fit.ransac.probability},
                    {"max_radius", fit.ransac.max_radius},
                    {"shapes", fit.ransac.shapes},
-                   {"max_candidates", fit.ransac.max_candidates}};
+                   {"max_candidates", fit.ransac.max_candidates},
+                   {"relabel", fit.ransac.relabel},
+                   {"by_evidence", fit.ransac.by_evidence}};
   out["primitives"] = {{"boxes", fit.primitives.boxes},
                        {"max_box_depth", fit.primitives.max_box_depth},
                        {"min_box_thickness", fit.primitives.min_box_thickness},

@@ -38,6 +38,7 @@ struct FitCommand {
   std::string out;
   std::string crs;
   std::string dump_shapes;
+  std::string segments;
   std::uint64_t seed = 1;
   bool seed_given = false;
   bool json = false;
@@ -64,6 +65,70 @@ bool write_detections(const std::string& path, const std::vector<fit::RegionDete
     }
   }
   return std::fclose(f) == 0;
+}
+
+Json vec_json(const kernel::Vec3& v) { return Json::array({v.x(), v.y(), v.z()}); }
+
+// The segmentation: PREFIX.i32, one little-endian int32 per input point in input order (its
+// surface's id, -1 for none), and PREFIX.json, the surfaces with their parameters in the
+// scene's frame (tile-local: add `origin` for CRS coordinates).
+Failure write_segments(const std::string& prefix, const fit::FitOutput& f,
+                       const std::array<double, 3>& origin) {
+  std::string bytes;
+  bytes.resize(f.point_segment.size() * 4);
+  for (std::size_t i = 0; i < f.point_segment.size(); ++i) {
+    const auto v = static_cast<std::uint32_t>(f.point_segment[i]);
+    for (int b = 0; b < 4; ++b) bytes[i * 4 + b] = static_cast<char>((v >> (8 * b)) & 0xFFu);
+  }
+  std::vector<long long> points(f.segments.size(), 0);
+  for (auto s : f.point_segment) {
+    if (s >= 0) ++points[static_cast<std::size_t>(s)];
+  }
+  Json surfaces = Json::array();
+  for (std::size_t i = 0; i < f.segments.size(); ++i) {
+    const fit::Segment& seg = f.segments[i];
+    const fit::Surface& q = seg.surface;
+    Json j;
+    j["id"] = static_cast<long long>(i);
+    j["type"] = fit::shape_type_name(q.type);
+    j["region"] = seg.region;
+    switch (q.type) {
+      case fit::ShapeType::Plane:
+        j["point"] = vec_json(q.point);
+        j["normal"] = vec_json(q.axis);
+        break;
+      case fit::ShapeType::Sphere:
+        j["center"] = vec_json(q.point);
+        j["radius"] = q.radius;
+        break;
+      case fit::ShapeType::Cylinder:
+        j["point"] = vec_json(q.point);
+        j["axis"] = vec_json(q.axis);
+        j["radius"] = q.radius;
+        break;
+      case fit::ShapeType::Cone:
+        j["apex"] = vec_json(q.point);
+        j["axis"] = vec_json(q.axis);
+        j["half_angle_deg"] = q.angle * 180.0 / 3.14159265358979323846;
+        break;
+      case fit::ShapeType::Torus:
+        j["center"] = vec_json(q.point);
+        j["axis"] = vec_json(q.axis);
+        j["major_radius"] = q.radius;
+        j["minor_radius"] = q.radius2;
+        break;
+    }
+    j["inliers"] = seg.inliers;
+    j["points"] = points[i];
+    j["rms"] = seg.rms;
+    surfaces.push_back(std::move(j));
+  }
+  Json doc;
+  doc["points"] = static_cast<long long>(f.point_segment.size());
+  doc["origin"] = Json::array({origin[0], origin[1], origin[2]});
+  doc["surfaces"] = std::move(surfaces);
+  if (Failure w = write_file_atomic(prefix + ".i32", bytes); !w.ok()) return w;
+  return write_file_atomic(prefix + ".json", doc.dump(1) + "\n");
 }
 
 double since(std::chrono::steady_clock::time_point t) {
@@ -96,6 +161,7 @@ int run_fit(const FitCommand& c) {
   const std::string crs = c.crs.empty() ? config.run.crs : c.crs;
   fit::FitPipelineOptions options = city::fit_options(config);
   options.keep_detections = !c.dump_shapes.empty();
+  options.keep_segments = !c.segments.empty();
   if (!c.crs.empty() && !geo::crs_from_config(c.crs).ok()) {
     return fail(ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message);
   }
@@ -122,6 +188,11 @@ int run_fit(const FitCommand& c) {
 
   if (!c.dump_shapes.empty() && !write_detections(c.dump_shapes, f.detections)) {
     return fail(ErrorCode::Io, c.dump_shapes + ": cannot write");
+  }
+  if (!c.segments.empty()) {
+    if (Failure w = write_segments(c.segments, f, tile.origin); !w.ok()) {
+      return fail(w.code, w.message);
+    }
   }
 
   Json per_type = Json::object();
@@ -154,6 +225,8 @@ int run_fit(const FitCommand& c) {
     regions.push_back(Json{{"points", r.points},
                            {"spacing", r.spacing},
                            {"cluster_epsilon", r.cluster_epsilon},
+                           {"epsilon", r.epsilon},
+                           {"min_points", r.min_points},
                            {"shapes", r.shapes},
                            {"primitives", r.primitives},
                            {"candidates", r.candidates}});
@@ -161,6 +234,10 @@ int run_fit(const FitCommand& c) {
   out["region_stats"] = regions;
   out["candidates"] = f.candidates;
   out["primitives"] = static_cast<long long>(f.primitives.size());
+  if (!c.segments.empty()) {
+    out["surfaces"] = static_cast<long long>(f.segments.size());
+    out["segments"] = c.segments;
+  }
   out["per_type"] = per_type;
   out["rejected"] = rejected;
   out["seed"] = options.ransac.seed;
@@ -213,6 +290,10 @@ void register_fit(CLI::App& app, Action& action) {
   cmd->add_option("--dump-shapes", c->dump_shapes,
                   "Diagnostics: write every region's points, normals and RANSAC shapes to this "
                   "text file (tests/bench/beam_causes.py reads it)");
+  cmd->add_option("--segments", c->segments,
+                  "Write the segmentation: PREFIX.i32 (one little-endian int32 per input point, "
+                  "in input order: its detected surface's id, -1 for none) and PREFIX.json "
+                  "(per surface: id, type, parameters, inliers, RMS)");
   cmd->callback([&action, c, cmd] {
     c->seed_given = cmd->count("--seed") > 0;
     action = [c] { return run_fit(*c); };

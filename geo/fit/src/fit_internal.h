@@ -69,11 +69,24 @@ double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint3
 double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                        double quantile);
 
+/// The `quantile` of the RMS distance of a point's neighbourhood (it and its 16 nearest) to
+/// their least-squares plane, over the same sample: the noise of the scan where its surfaces
+/// are flat at the scale of a neighbourhood (a low quantile: curvature and edges raise the
+/// others); 0 for fewer than 17 points.
+double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                      double quantile);
+
+/// For each query point, the index of the nearest of `targets` (PCL kd-tree; ties as PCL
+/// breaks them, deterministically); -1 for a non-finite query or when there is no target.
+std::vector<std::int32_t> nearest_of(std::span<const Vec3> queries, std::span<const Vec3> targets);
+
 /// Normals as estimate_normals gives them and, from the same neighbourhoods, the curvature
 /// (surface variation λ0/(λ0+λ1+λ2)); 1/3, the largest, where there is no normal. Both are
 /// resized to the number of points.
+/// `sharp`: where a neighbourhood straddles an edge, the normal of the face the point lies on
+/// (NormalOptions::sharp), not their average.
 void normals_and_curvature(std::span<const Vec3> points, int neighbours, std::vector<Vec3>& normals,
-                           std::vector<double>& curvature);
+                           std::vector<double>& curvature, bool sharp = false);
 
 /// Candidates from samples with unit normals (index 0 is the seed). Each returns nullopt when
 /// the samples are degenerate for the type; the caller verifies the candidate on the samples.

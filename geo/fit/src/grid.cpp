@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
+
 #include "fit_internal.h"
 
 namespace csgtile::fit::detail {
@@ -84,8 +86,12 @@ namespace {
 // the sample; empty when the points are too few or all duplicates).
 constexpr std::size_t kNeighbours = 16;
 
+// With `residuals`: also, per sampled point found, the RMS distance of its neighbourhood (the
+// point and its 16 nearest) to their least-squares plane — the scan's noise where the surface
+// is flat, more on curved parts and edges.
 std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
-                                            std::span<const std::uint32_t> members) {
+                                            std::span<const std::uint32_t> members,
+                                            std::vector<double>* residuals = nullptr) {
   if (members.size() <= kNeighbours) return {};
   Vec3 lo = points[members[0]], hi = lo;
   for (auto i : members) {
@@ -99,11 +105,14 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
   for (int attempt = 0; attempt < 16; ++attempt) {
     const PointGrid grid(points, members, cell, 0);
     std::vector<double> found;
+    if (residuals != nullptr) residuals->clear();
     std::array<double, kNeighbours> best{};
+    std::array<std::uint32_t, kNeighbours> who{};
     for (std::size_t k = 0; k < samples; ++k) {
       const std::uint32_t i = members[k * stride];
       const auto& c = grid.coords(grid.cell_of(i));
       best.fill(INFINITY);
+      who.fill(i);
       for (int dx = -1; dx <= 1; ++dx) {
         for (int dy = -1; dy <= 1; ++dy) {
           for (int dz = -1; dz <= 1; ++dz) {
@@ -113,13 +122,32 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
               if (j == i) continue;
               const double d = (points[j] - points[i]).norm();
               if (!(d > 0.0) || d >= best.back()) continue;
-              best.back() = d;
-              std::sort(best.begin(), best.end());
+              // Insertion keeps the distances sorted and the indices beside them.
+              std::size_t at = kNeighbours - 1;
+              while (at > 0 && best[at - 1] > d) {
+                best[at] = best[at - 1];
+                who[at] = who[at - 1];
+                --at;
+              }
+              best[at] = d;
+              who[at] = j;
             }
           }
         }
       }
-      if (best.back() <= cell) found.push_back(best.back());
+      if (best.back() <= cell) {
+        found.push_back(best.back());
+        if (residuals != nullptr) {
+          Vec3 mean = points[i];
+          for (auto j : who) mean += points[j];
+          mean /= static_cast<double>(kNeighbours + 1);
+          Eigen::Matrix3d cov = (points[i] - mean) * (points[i] - mean).transpose();
+          for (auto j : who) cov += (points[j] - mean) * (points[j] - mean).transpose();
+          cov /= static_cast<double>(kNeighbours + 1);
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov, Eigen::EigenvaluesOnly);
+          residuals->push_back(std::sqrt(std::max(eig.eigenvalues()(0), 0.0)));
+        }
+      }
     }
     if (found.size() * 2 >= samples) return found;
     cell *= 2.0;
@@ -147,6 +175,13 @@ double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint3
 double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                        double quantile) {
   return quantile_of(kth_neighbour_distances(points, members), quantile);
+}
+
+double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                      double quantile) {
+  std::vector<double> residuals;
+  kth_neighbour_distances(points, members, &residuals);
+  return quantile_of(std::move(residuals), quantile);
 }
 
 }  // namespace csgtile::fit::detail

@@ -141,6 +141,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   const auto ground = ground_mask(points, classes, options.ground);
   std::vector<Vec3> above;
   above.reserve(points.size());
+  std::vector<std::uint32_t> above_index;  // input index of each point of `above`
   // Terrain heights (lowest ground point per cell) for roofs seen from the air.
   GroundGrid terrain;
   {
@@ -198,6 +199,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       }
     } else {
       above.push_back(points[i]);
+      above_index.push_back(static_cast<std::uint32_t>(i));
     }
   }
   for (std::size_t c = 0; c < terrain.mean.size(); ++c) {
@@ -212,10 +214,14 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
 
   start = std::chrono::steady_clock::now();
   std::vector<Vec3> clean;
+  std::vector<std::uint32_t> clean_index;  // input index of each point of `clean`
   {
     const auto kept = remove_statistical_outliers(above, options.outliers);
     clean.reserve(kept.size());
-    for (auto i : kept) clean.push_back(above[i]);
+    for (auto i : kept) {
+      clean.push_back(above[i]);
+      clean_index.push_back(above_index[i]);
+    }
     out.outlier_points = static_cast<long long>(above.size() - kept.size());
   }
   out.seconds.emplace_back("outliers", seconds_since(start));
@@ -228,7 +234,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   std::vector<Vec3> normals;
   std::vector<double> curvature;
-  detail::normals_and_curvature(cloud, options.normals.neighbours, normals, curvature);
+  detail::normals_and_curvature(cloud, options.normals.neighbours, normals, curvature,
+                                options.normals.sharp);
   out.seconds.emplace_back("normals", seconds_since(start));
 
   start = std::chrono::steady_clock::now();
@@ -277,6 +284,10 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   }
   out.regions = static_cast<int>(clusters.size());
 
+  // Segments: each point of the fitted cloud gets its surface (numbered across regions).
+  std::vector<std::int32_t> cloud_segment;
+  if (options.keep_segments) cloud_segment.assign(cloud.size(), -1);
+
   start = std::chrono::steady_clock::now();
   double primitives_seconds = 0.0;
   for (std::size_t r = 0; r < clusters.size(); ++r) {
@@ -291,12 +302,29 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
     auto detected = detect_shapes(p, n, ransac);
     if (!detected.ok()) return detected.error();
+    // Options the region derived from its points (0 in the options) are the primitives' too.
+    if (detected.value().epsilon > 0.0) ransac.epsilon = detected.value().epsilon;
+    if (detected.value().min_points > 0) ransac.min_points = detected.value().min_points;
+    if (detected.value().max_radius > 0.0) ransac.max_radius = detected.value().max_radius;
     out.candidates += detected.value().candidates;
     if (options.keep_detections) out.detections.push_back({p, n, detected.value()});
+    if (options.keep_segments) {
+      const auto first = static_cast<std::int32_t>(out.segments.size());
+      for (const auto& shape : detected.value().shapes) {
+        out.segments.push_back({static_cast<int>(r), shape.surface,
+                                static_cast<long long>(shape.inliers.size()), shape.rms});
+      }
+      const auto& assignment = detected.value().assignment;
+      for (std::size_t k = 0; k < clusters[r].size() && k < assignment.size(); ++k) {
+        if (assignment[k] >= 0) cloud_segment[clusters[r][k]] = first + assignment[k];
+      }
+    }
     FitRegion stats;
     stats.points = static_cast<long long>(p.size());
     stats.spacing = detected.value().spacing;
     stats.cluster_epsilon = detected.value().cluster_epsilon;
+    stats.epsilon = ransac.epsilon;
+    stats.min_points = ransac.min_points;
     stats.shapes = static_cast<int>(detected.value().shapes.size());
     stats.candidates = detected.value().candidates;
     out.region_stats.push_back(stats);
@@ -323,6 +351,18 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // each other stand on one base (no sliver steps when they are fused).
   if (options.ground.enabled) detail::snap_extrusion_bases(out.primitives, options.ground.height);
   out.unassigned_points = out.fitted_points - out.assigned_points;
+  if (options.keep_segments) {
+    // Input point → fitted-cloud point: the same point when nothing was downsampled (or
+    // dropped), else the nearest downsampled one.
+    out.point_segment.assign(points.size(), -1);
+    const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
+    const std::vector<std::int32_t> nearest =
+        same ? std::vector<std::int32_t>{} : detail::nearest_of(clean, cloud);
+    for (std::size_t k = 0; k < clean.size(); ++k) {
+      const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
+      if (c >= 0) out.point_segment[clean_index[k]] = cloud_segment[static_cast<std::size_t>(c)];
+    }
+  }
   out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);
   out.seconds.emplace_back("primitives", primitives_seconds);
   return out;

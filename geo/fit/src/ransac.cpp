@@ -20,6 +20,8 @@
 #include <numbers>
 #include <queue>
 
+#include <Eigen/Dense>
+
 #include "fit_internal.h"
 #include "synth/random.h"
 
@@ -71,6 +73,9 @@ class Detector {
   bool extract(const Candidate& c);
   std::vector<std::uint32_t> exact_inliers(const Surface& s, std::span<const std::uint32_t> near);
   std::optional<Surface> simpler(const Surface& s, std::span<const std::uint32_t> inliers);
+  std::optional<Surface> by_evidence(const Surface& s, std::span<const std::uint32_t> inliers);
+  double criterion(const Surface& s, std::span<const std::uint32_t> inliers) const;
+  std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
   double probability(double n, std::uint64_t draws) const {
     const double remaining = static_cast<double>(std::max<std::size_t>(remaining_count_, 1));
     // A good minimal sample needs the seed in the shape, the right level, and the other
@@ -82,12 +87,36 @@ class Detector {
     return 1.0 - std::exp(static_cast<double>(draws) * std::log1p(-p));
   }
   void compact_remaining();
+  void relabel();
+  // Starts a new visit of the connectivity grid (no cell visited yet).
+  void new_visit() {
+    if (++stamp_ == 0) {
+      std::fill(cell_stamp_.begin(), cell_stamp_.end(), 0);
+      stamp_ = 1;
+    }
+  }
+  // Calls `f(next)` for each cell of the 3×3×3 block around `cell` not visited yet, marking it.
+  template <typename F>
+  void for_unvisited_neighbours(int cell, F&& f) {
+    const auto& c = grid_->coords(cell);
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const int next = grid_->find(c[0] + dx, c[1] + dy, c[2] + dz);
+          if (next < 0 || cell_stamp_[static_cast<std::size_t>(next)] == stamp_) continue;
+          cell_stamp_[static_cast<std::size_t>(next)] = stamp_;
+          f(next);
+        }
+      }
+    }
+  }
 
   std::span<const Vec3> points_;
   std::span<const Vec3> normals_;
   RansacOptions o_;
   geo::detail::Random random_;
   double cos_alpha_ = 0.0;
+  double noise_ = 0.0;  // estimated noise (derived epsilon), else 0
   std::vector<char> has_normal_;
   std::vector<int> assignment_;
   std::vector<std::uint32_t> remaining_;  // may hold assigned points until compacted
@@ -104,10 +133,7 @@ class Detector {
 
 double Detector::component(const Surface& s, std::span<const int> starts, bool sampled,
                            std::vector<std::uint32_t>* out) {
-  if (++stamp_ == 0) {
-    std::fill(cell_stamp_.begin(), cell_stamp_.end(), 0);
-    stamp_ = 1;
-  }
+  new_visit();
   std::vector<std::uint32_t> best, current;
   double first_score = -1.0;
   std::vector<int> queue;
@@ -132,17 +158,7 @@ double Detector::component(const Surface& s, std::span<const int> starts, bool s
       if (hits == 0) continue;
       score +=
           static_cast<double>(hits) * static_cast<double>(pts.size()) / static_cast<double>(tested);
-      const auto& c = grid_->coords(cell);
-      for (int dx = -1; dx <= 1; ++dx) {
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dz = -1; dz <= 1; ++dz) {
-            const int next = grid_->find(c[0] + dx, c[1] + dy, c[2] + dz);
-            if (next < 0 || cell_stamp_[static_cast<std::size_t>(next)] == stamp_) continue;
-            cell_stamp_[static_cast<std::size_t>(next)] = stamp_;
-            queue.push_back(next);
-          }
-        }
-      }
+      for_unvisited_neighbours(cell, [&](int next) { queue.push_back(next); });
     }
     if (first_score < 0.0) first_score = score;
     if (out != nullptr && current.size() > best.size()) best.swap(current);
@@ -214,12 +230,112 @@ void Detector::draw() {
   }
 }
 
-std::optional<Surface> Detector::simpler(const Surface& s, std::span<const std::uint32_t> inliers) {
-  // A simpler surface replaces a curved one when it keeps nearly all of its points: fewer
-  // parameters at equal error (a plane patch is also a large-radius cylinder).
+// Bayesian information criterion of a surface on points: n·ln(RSS/n) + k·ln(n), k its
+// parameter count, the residual floored at the noise (or a twentieth of epsilon on exact
+// points), so that on noisy points the simpler surface wins at equal error and on exact ones
+// the surface whose error is clearly smaller does.
+double Detector::criterion(const Surface& s, std::span<const std::uint32_t> inliers) const {
+  static constexpr int kParameters[kShapeTypeCount] = {3, 4, 5, 6, 7};
+  const double n = static_cast<double>(std::max<std::size_t>(inliers.size(), 1));
+  double rss = 0.0;
+  for (auto i : inliers) {
+    const double d = surface_distance(s, points_[i]);
+    rss += d * d;
+  }
+  const double floor = std::max(noise_, 0.05 * o_.epsilon);
+  return n * std::log(std::max(rss / n, floor * floor)) +
+         kParameters[static_cast<int>(s.type)] * std::log(n);
+}
+
+// A cylinder through points with normals: its axis is the direction the normals avoid (the
+// least principal direction of their scatter), its circle the least-squares one of the points
+// projected across the axis; refined by least squares. nullopt for too few normals.
+std::optional<Surface> Detector::cylinder_from_normals(
+    std::span<const std::uint32_t> inliers) const {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  std::size_t count = 0;
+  for (auto i : inliers) {
+    if (!has_normal_[i]) continue;
+    scatter += normals_[i] * normals_[i].transpose();
+    ++count;
+  }
+  if (count < 5) return std::nullopt;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  if (eig.info() != Eigen::Success) return std::nullopt;
+  const Vec3 axis = eig.eigenvectors().col(0).normalized();
+  Vec3 e1, e2;
+  detail::orthonormal_basis(axis, e1, e2);
+  // Kåsa circle fit in the plane across the axis: x² + y² + D x + E y + F = 0.
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  const Vec3 origin = points_[inliers[0]];
+  for (auto i : inliers) {
+    const Vec3 d = points_[i] - origin;
+    const double x = d.dot(e1), y = d.dot(e2);
+    const Eigen::Vector3d row(x, y, 1.0);
+    a += row * row.transpose();
+    b -= row * (x * x + y * y);
+  }
+  const Eigen::Vector3d sol = a.ldlt().solve(b);
+  if (!sol.allFinite()) return std::nullopt;
+  const double cx = -0.5 * sol(0), cy = -0.5 * sol(1);
+  const double r2 = cx * cx + cy * cy - sol(2);
+  if (!(r2 > 0.0)) return std::nullopt;
+  Surface s;
+  s.type = ShapeType::Cylinder;
+  s.axis = detail::canonical_axis(axis);
+  s.point = origin + cx * e1 + cy * e2;
+  s.radius = std::sqrt(r2);
+  if (!(s.radius < o_.max_radius)) return std::nullopt;
+  return detail::refine_surface(s, points_, inliers);
+}
+
+// Type selection by evidence: the plane and the cylinder that fit the same points are
+// compared by the criterion above; another type replaces the shape when it keeps nearly all
+// of its points and scores clearly better.
+std::optional<Surface> Detector::by_evidence(const Surface& s,
+                                             std::span<const std::uint32_t> inliers) {
   auto keeps = [&](const Surface& alt) {
     std::size_t kept = 0;
     for (auto i : inliers) kept += compatible(alt, i) ? 1 : 0;
+    return static_cast<double>(kept) >= 0.97 * static_cast<double>(inliers.size());
+  };
+  // A plane stays a plane: edge points it took from its neighbours would bend a cylinder
+  // towards them (simpler() already turned planar curved shapes into planes).
+  if (s.type == ShapeType::Plane) return std::nullopt;
+  std::vector<Surface> options;
+  {
+    if (auto plane = detail::fit_plane(points_, inliers)) options.push_back(*plane);
+  }
+  if (s.type != ShapeType::Cylinder && o_.shapes[static_cast<int>(ShapeType::Cylinder)]) {
+    if (auto cylinder = cylinder_from_normals(inliers)) options.push_back(*cylinder);
+  }
+  double best = criterion(s, inliers) - 2.0 * std::log(static_cast<double>(inliers.size()));
+  std::optional<Surface> chosen;
+  for (const Surface& alt : options) {
+    if ((alt.type == ShapeType::Cylinder || alt.type == ShapeType::Sphere) &&
+        !(alt.radius < o_.max_radius)) {
+      continue;
+    }
+    if (!keeps(alt)) continue;
+    const double score = criterion(alt, inliers);
+    if (score < best) {
+      best = score;
+      chosen = alt;
+    }
+  }
+  return chosen;
+}
+
+std::optional<Surface> Detector::simpler(const Surface& s, std::span<const std::uint32_t> inliers) {
+  // A simpler surface replaces a curved one when it keeps nearly all of its points: fewer
+  // parameters at equal error (a plane patch is also a large-radius cylinder). With
+  // `by_evidence`, only when it also scores no worse by the information criterion (on exact
+  // points a fillet's plane keeps its points but not its error).
+  auto keeps = [&](const Surface& alt) {
+    std::size_t kept = 0;
+    for (auto i : inliers) kept += compatible(alt, i) ? 1 : 0;
+    if (o_.by_evidence && criterion(alt, inliers) > criterion(s, inliers)) return false;
     return static_cast<double>(kept) >= 0.97 * static_cast<double>(inliers.size());
   };
   if (s.type != ShapeType::Plane) {
@@ -283,6 +399,15 @@ bool Detector::extract(const Candidate& c) {
       }
     }
   }
+  if (o_.by_evidence) {
+    if (auto alt = by_evidence(surface, inliers)) {
+      auto again = exact_inliers(*alt, inliers);
+      if (again.size() * 100 >= inliers.size() * 97) {
+        surface = *alt;
+        inliers = std::move(again);
+      }
+    }
+  }
   if (static_cast<long long>(inliers.size()) < o_.min_points) return false;
   if ((surface.type == ShapeType::Cylinder || surface.type == ShapeType::Sphere) &&
       surface.radius >= o_.max_radius) {
@@ -303,6 +428,102 @@ bool Detector::extract(const Candidate& c) {
   ++extractions_;
   if (remaining_.size() > 2 * remaining_count_ + 64) compact_remaining();
   return true;
+}
+
+// After detection, every point goes to the shape that explains it best among the shapes whose
+// inliers reach its cell's neighbourhood: a shape found first no longer keeps the points of a
+// neighbour it took at their shared edge (smaller distance wins; a point keeps its shape on a
+// tie), and points no shape took join one they lie on (within epsilon; their normal, often
+// spoilt at an edge, is not asked). Shapes whose points changed are refitted (twice at most);
+// a shape left with fewer than min_points is dissolved and its points labelled again. The
+// last labelling is made with the final surfaces, so labels and surfaces agree.
+void Detector::relabel() {
+  const std::size_t n = points_.size();
+  std::vector<double> best(n);
+  std::vector<int> label(n);
+  for (int refits = 0;;) {
+    std::fill(best.begin(), best.end(), INFINITY);
+    std::fill(label.begin(), label.end(), -1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int a = assignment_[i];
+      if (a >= 0) {
+        best[i] =
+            std::abs(surface_distance(shapes_[static_cast<std::size_t>(a)].surface, points_[i]));
+        label[i] = a;
+      }
+    }
+    for (std::size_t s = 0; s < shapes_.size(); ++s) {
+      const Surface& surface = shapes_[s].surface;
+      new_visit();
+      for (auto i : shapes_[s].inliers) {
+        const int cell = grid_->cell_of(i);
+        if (cell < 0) continue;
+        for_unvisited_neighbours(cell, [&](int next) {
+          for (auto j : grid_->points(next)) {
+            if (label[j] == static_cast<int>(s)) continue;
+            const double d = std::abs(surface_distance(surface, points_[j]));
+            if (d > o_.epsilon || !(d < best[j])) continue;
+            // A point of another shape must face like this one; a free point need not.
+            if (label[j] >= 0 && has_normal_[j] &&
+                std::abs(surface_normal(surface, points_[j]).dot(normals_[j])) < cos_alpha_) {
+              continue;
+            }
+            best[j] = d;
+            label[j] = static_cast<int>(s);
+          }
+        });
+      }
+    }
+    std::vector<std::vector<std::uint32_t>> members(shapes_.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      if (label[i] >= 0) {
+        members[static_cast<std::size_t>(label[i])].push_back(static_cast<std::uint32_t>(i));
+      }
+    }
+    bool changed = false, dissolved = false;
+    for (std::size_t s = 0; s < shapes_.size(); ++s) {
+      changed = changed || members[s] != shapes_[s].inliers;
+      dissolved = dissolved || static_cast<long long>(members[s].size()) < o_.min_points;
+    }
+    if (!changed) break;
+    const bool refit = !dissolved && refits < 2;
+    std::vector<DetectedShape> kept;
+    std::vector<int> renumber(shapes_.size(), -1);
+    for (std::size_t s = 0; s < shapes_.size(); ++s) {
+      if (static_cast<long long>(members[s].size()) < o_.min_points) continue;
+      DetectedShape shape = std::move(shapes_[s]);
+      if (refit && members[s] != shape.inliers) {
+        if (auto better = detail::refine_surface(shape.surface, points_, members[s])) {
+          // Kept only when it keeps every point it was refitted to.
+          std::size_t within = 0;
+          for (auto i : members[s])
+            within += std::abs(surface_distance(*better, points_[i])) <= o_.epsilon ? 1 : 0;
+          if (within == members[s].size()) shape.surface = *better;
+        }
+      }
+      shape.inliers = std::move(members[s]);
+      renumber[s] = static_cast<int>(kept.size());
+      kept.push_back(std::move(shape));
+    }
+    shapes_ = std::move(kept);
+    for (std::size_t i = 0; i < n; ++i) {
+      assignment_[i] = label[i] >= 0 ? renumber[static_cast<std::size_t>(label[i])] : -1;
+    }
+    if (refit) {
+      ++refits;
+    } else if (!dissolved) {
+      break;  // labelled with the final surfaces
+    }
+  }
+  for (auto& shape : shapes_) {
+    double sum = 0.0;
+    for (auto i : shape.inliers) {
+      const double d = surface_distance(shape.surface, points_[i]);
+      sum += d * d;
+    }
+    shape.rms =
+        std::sqrt(sum / static_cast<double>(std::max<std::size_t>(shape.inliers.size(), 1)));
+  }
 }
 
 RansacResult Detector::run() {
@@ -330,6 +551,27 @@ RansacResult Detector::run() {
     return result;
   }
   result.spacing = detail::estimate_spacing(points_, members);
+  Vec3 lo = points_[members[0]], hi = lo;
+  for (auto i : members) {
+    lo = lo.cwiseMin(points_[i]);
+    hi = hi.cwiseMax(points_[i]);
+  }
+  // Options left to the cloud (0): from its own spacing, noise, size and extent.
+  if (!(o_.epsilon > 0.0)) {
+    // The noise where the region is flattest (a low quantile: curvature and edges raise the
+    // others), and a tenth of the spacing for exact points.
+    result.noise = detail::estimate_noise(points_, members, 0.05);
+    o_.epsilon = std::max(3.0 * result.noise, 0.1 * result.spacing);
+    if (!(o_.epsilon > 0.0)) o_.epsilon = 1e-6 * std::max((hi - lo).maxCoeff(), 1e-9);
+  }
+  if (o_.min_points <= 0) {
+    o_.min_points = std::max<long long>(8, static_cast<long long>(members.size() / 1000));
+  }
+  if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
+  noise_ = result.noise;
+  result.epsilon = o_.epsilon;
+  result.min_points = o_.min_points;
+  result.max_radius = o_.max_radius;
   // Connectivity: three typical spacings, but enough for the sparser parts of the cloud too
   // (terrestrial scans mix dense near surfaces with sparse far ones).
   double beta = o_.cluster_epsilon > 0.0 ? o_.cluster_epsilon
@@ -339,11 +581,6 @@ RansacResult Detector::run() {
   result.cluster_epsilon = beta;
   grid_ = std::make_unique<PointGrid>(points_, members, beta, o_.seed);
   cell_stamp_.assign(grid_->cell_count(), 0);
-  Vec3 lo = points_[members[0]], hi = lo;
-  for (auto i : members) {
-    lo = lo.cwiseMin(points_[i]);
-    hi = hi.cwiseMax(points_[i]);
-  }
   const double extent = std::max((hi - lo).maxCoeff(), beta);
   for (double cell = 2.0 * beta; levels_.size() < 10; cell *= 2.0) {
     levels_.push_back(
@@ -380,6 +617,7 @@ RansacResult Detector::run() {
       break;
     if (draws_ >= o_.max_candidates) break;
   }
+  if (o_.relabel && !shapes_.empty()) relabel();
   result.candidates = draws_;
   result.assignment = assignment_;
   result.shapes = std::move(shapes_);
@@ -405,8 +643,9 @@ kernel::Result<RansacResult> detect_shapes(std::span<const Vec3> points,
   if (points.size() >= (std::size_t{1} << 31)) {
     return kernel::Error{ErrorCode::InvalidArgument, "detect_shapes: more than 2^31 points"};
   }
-  if (!(options.epsilon > 0.0) || !std::isfinite(options.epsilon)) {
-    return kernel::Error{ErrorCode::InvalidArgument, "fit option epsilon must be > 0"};
+  if (!(options.epsilon >= 0.0) || !std::isfinite(options.epsilon)) {
+    return kernel::Error{ErrorCode::InvalidArgument,
+                         "fit option epsilon must be >= 0 (0: from the cloud)"};
   }
   if (!(options.normal_deviation_deg > 0.0 && options.normal_deviation_deg < 90.0)) {
     return kernel::Error{ErrorCode::InvalidArgument,
@@ -415,14 +654,16 @@ kernel::Result<RansacResult> detect_shapes(std::span<const Vec3> points,
   if (!(options.cluster_epsilon >= 0.0) || !std::isfinite(options.cluster_epsilon)) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option cluster_epsilon must be >= 0"};
   }
-  if (options.min_points < 3) {
-    return kernel::Error{ErrorCode::InvalidArgument, "fit option min_points must be >= 3"};
+  if (options.min_points != 0 && options.min_points < 3) {
+    return kernel::Error{ErrorCode::InvalidArgument,
+                         "fit option min_points must be >= 3 (or 0: from the cloud)"};
   }
   if (!(options.probability > 0.0 && options.probability < 1.0)) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option probability must be in (0, 1)"};
   }
-  if (!(options.max_radius > 0.0)) {
-    return kernel::Error{ErrorCode::InvalidArgument, "fit option max_radius must be > 0"};
+  if (!(options.max_radius >= 0.0) || !std::isfinite(options.max_radius)) {
+    return kernel::Error{ErrorCode::InvalidArgument,
+                         "fit option max_radius must be >= 0 (0: from the cloud)"};
   }
   Detector detector(points, normals, options);
   return detector.run();

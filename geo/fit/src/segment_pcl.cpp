@@ -107,8 +107,95 @@ std::vector<Vec3> voxel_downsample(std::span<const Vec3> points, const VoxelOpti
   return out;
 }
 
+std::vector<std::int32_t> detail::nearest_of(std::span<const Vec3> queries,
+                                             std::span<const Vec3> targets) {
+  std::vector<std::int32_t> out(queries.size(), -1);
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(targets, index);
+  if (cloud->empty()) return out;
+  pcl::search::KdTree<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  pcl::Indices found;
+  std::vector<float> distances;
+  for (std::size_t q = 0; q < queries.size(); ++q) {
+    const Vec3& p = queries[q];
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e30) continue;
+    const pcl::PointXYZ at(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                           static_cast<float>(p.z()));
+    if (tree.nearestKSearch(at, 1, found, distances) == 1) {
+      out[q] = static_cast<std::int32_t>(index[static_cast<std::size_t>(found[0])]);
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// The normal of the face a point lies on, where its neighbourhood straddles an edge: of the
+// planes through the point and two of its nearest neighbours (every pair of the ten nearest),
+// the one most neighbours lie on (within 5 % of the neighbourhood's radius; ties: the smaller
+// sum of squared distances), refined by principal components of those neighbours. `near`
+// holds the neighbours' positions relative to the point, nearest first. Zero when no pair
+// spans a plane.
+Vec3 face_normal(std::span<const Vec3> near) {
+  if (near.size() < 2) return Vec3::Zero();
+  const double radius = near.back().norm();
+  const double tol = 0.05 * radius;
+  const std::size_t m = std::min<std::size_t>(near.size(), 10);
+  Vec3 best_n = Vec3::Zero();
+  std::size_t best_count = 0;
+  double best_sum = INFINITY;
+  for (std::size_t a = 0; a < m; ++a) {
+    for (std::size_t b = a + 1; b < m; ++b) {
+      Vec3 n = near[a].cross(near[b]);
+      const double len = n.norm();
+      // Nearly collinear with the point: no plane.
+      if (!(len > 0.2 * near[a].norm() * near[b].norm())) continue;
+      n /= len;
+      std::size_t count = 0;
+      double sum = 0.0;
+      for (const Vec3& q : near) {
+        const double d = std::abs(n.dot(q));
+        if (d <= tol) {
+          ++count;
+          sum += d * d;
+        }
+      }
+      if (count > best_count || (count == best_count && sum < best_sum)) {
+        best_count = count;
+        best_sum = sum;
+        best_n = n;
+      }
+    }
+  }
+  if (best_count < 2) return best_n;
+  // Principal components of the point and the neighbours on that plane.
+  Vec3 mean = Vec3::Zero();
+  std::size_t used = 1;
+  for (const Vec3& q : near) {
+    if (std::abs(best_n.dot(q)) <= tol) {
+      mean += q;
+      ++used;
+    }
+  }
+  mean /= static_cast<double>(used);
+  Eigen::Matrix3d cov = mean * mean.transpose();  // the point itself, at the origin
+  for (const Vec3& q : near) {
+    if (std::abs(best_n.dot(q)) <= tol) cov += (q - mean) * (q - mean).transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  if (eig.info() != Eigen::Success) return best_n;
+  const auto& values = eig.eigenvalues();
+  if (!(values(1) > 1e-4 * values(2))) return best_n;
+  const Vec3 n = eig.eigenvectors().col(0);
+  return n.allFinite() ? Vec3(n.normalized()) : best_n;
+}
+
+}  // namespace
+
 void detail::normals_and_curvature(std::span<const Vec3> points, int neighbours,
-                                   std::vector<Vec3>& normals, std::vector<double>& curvature) {
+                                   std::vector<Vec3>& normals, std::vector<double>& curvature,
+                                   bool sharp) {
   normals.assign(points.size(), Vec3::Zero());
   curvature.assign(points.size(), 1.0 / 3.0);
   std::vector<std::uint32_t> index;
@@ -121,6 +208,7 @@ void detail::normals_and_curvature(std::span<const Vec3> points, int neighbours,
   const int k = std::min<int>(neighbours, static_cast<int>(cloud->size()));
   pcl::Indices found;
   std::vector<float> distances;
+  std::vector<Vec3> near;
   for (std::size_t q = 0; q < cloud->size(); ++q) {
     if (tree.nearestKSearch(static_cast<pcl::index_t>(q), k, found, distances) < 3) continue;
     const Vec3& centre = points[index[q]];
@@ -136,8 +224,16 @@ void detail::normals_and_curvature(std::span<const Vec3> points, int neighbours,
     if (eig.info() != Eigen::Success) continue;
     const auto& values = eig.eigenvalues();
     if (!(values(2) > 0.0) || !(values(1) > 1e-4 * values(2))) continue;
-    const Vec3 n = eig.eigenvectors().col(0);
+    Vec3 n = eig.eigenvectors().col(0);
     if (!n.allFinite()) continue;
+    if (sharp) {
+      near.clear();
+      for (auto f : found) {
+        const Vec3 d = points[index[static_cast<std::size_t>(f)]] - centre;
+        if (d.squaredNorm() > 0.0) near.push_back(d);
+      }
+      if (const Vec3 face = face_normal(near); face.squaredNorm() > 0.0) n = face;
+    }
     normals[index[q]] = n.normalized();
     curvature[index[q]] =
         std::max(0.0, values(0)) / (std::max(0.0, values(0)) + values(1) + values(2));
@@ -147,7 +243,7 @@ void detail::normals_and_curvature(std::span<const Vec3> points, int neighbours,
 std::vector<Vec3> estimate_normals(std::span<const Vec3> points, const NormalOptions& options) {
   std::vector<Vec3> normals;
   std::vector<double> curvature;
-  detail::normals_and_curvature(points, options.neighbours, normals, curvature);
+  detail::normals_and_curvature(points, options.neighbours, normals, curvature, options.sharp);
   return normals;
 }
 

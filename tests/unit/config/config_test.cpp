@@ -547,16 +547,16 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
       R"("schemes":["file","http","https","s3"],"timeout_seconds":600},)"
       R"("fit":{"classes":{"drop":[3,4,5,7,9,18],"keep":[6]},"clusters":{"min_points":40,"tolerance":0.0},)"
       R"("ground":{"cell":1.0,"enabled":true,"height":0.3,"use_classification":true,)"
-      R"("window":30.0},"normals":{"neighbours":16},)"
+      R"("window":30.0},"normals":{"neighbours":16,"sharp":false},)"
       R"("outliers":{"enabled":true,"neighbours":12,"std_ratio":3.0},)"
       R"("primitives":{"angle_tolerance_deg":5.0,"blocks":true,"boxes":true,"extrusions":true,)"
       R"("max_box_depth":40.0,"max_overreach":0.25,"min_angular_span_deg":90.0,)"
       R"("min_box_thickness":0.04,"min_building_height":2.0,"min_building_width":1.0,)"
       R"("min_curved_coverage":0.05,"min_seed_coverage":0.6,)"
       R"("revolutions":true,"roof_parts":true},)"
-      R"("ransac":{"cluster_epsilon":0.0,"epsilon":0.02,"max_candidates":2000000,)"
+      R"("ransac":{"by_evidence":false,"cluster_epsilon":0.0,"epsilon":0.02,"max_candidates":2000000,)"
       R"("max_radius":30.0,"min_points":40,"normal_deviation_deg":25.0,"probability":0.99,)"
-      R"("shapes":["plane","sphere","cylinder","cone","torus"]},)"
+      R"("relabel":false,"shapes":["plane","sphere","cylinder","cone","torus"]},)"
       R"("regions":{"curvature":1.0,"enabled":false,"min_points":40,"neighbours":16,)"
       R"("smoothness_deg":10.0},"voxel":{"size":0.0}},)"
       R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
@@ -598,6 +598,26 @@ TEST(ConfigFit, EveryProblemWithItsKeyAndLine) {
   EXPECT_THAT(paths, ::testing::IsSupersetOf({"fit.ransac.epsilom@3", "fit.ransac.min_points@4",
                                               "fit.ransac.shapes[1]@5", "fit.classes.keep[1]@7",
                                               "fit.outliers.neighbours@9"}));
+}
+
+// Scale-dependent RANSAC options may be 0 (derived from the cloud); other small or negative
+// values stay errors.
+TEST(ConfigFit, ZeroLeavesTheScaleToTheCloud) {
+  const LoadResult zero = load_string(
+      "fit:\n  ransac:\n    epsilon: 0\n    min_points: 0\n    max_radius: 0\n    relabel: true\n",
+      "cad.yaml");
+  ASSERT_TRUE(zero.ok());
+  EXPECT_EQ(zero.config->fit.ransac.epsilon, 0.0);
+  EXPECT_EQ(zero.config->fit.ransac.min_points, 0);
+  EXPECT_EQ(zero.config->fit.ransac.max_radius, 0.0);
+  EXPECT_TRUE(zero.config->fit.ransac.relabel);
+  const LoadResult bad = load_string(
+      "fit:\n  ransac:\n    epsilon: -0.1\n    min_points: 1\n    max_radius: -3\n", "bad.yaml");
+  ASSERT_FALSE(bad.ok());
+  std::vector<std::string> paths;
+  for (const auto& p : bad.problems) paths.push_back(p.path + "@" + std::to_string(p.line));
+  EXPECT_THAT(paths, ::testing::IsSupersetOf({"fit.ransac.epsilon@3", "fit.ransac.min_points@4",
+                                              "fit.ransac.max_radius@5"}));
 }
 
 TEST(ConfigFit, ASectionOneLevelTooHighSaysWhereItBelongs) {

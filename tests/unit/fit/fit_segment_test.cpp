@@ -353,3 +353,112 @@ TEST(FitSegment, BuildingPointsNoSurfaceExplainsBecomeAnLod12Block) {
 
 }  // namespace
 }  // namespace csgtile::fit
+
+namespace csgtile::fit {
+namespace {
+
+// The segmentation as an output (issue #24 item 4): one label per input point, in input
+// order; ground points have none; every labelled point lies on its surface, and each surface's
+// labelled points are its inliers; with voxel downsampling every fitted input point still gets
+// the surface of its voxel's point.
+TEST(FitSegment, SegmentsLabelEveryInputPointWithItsSurface) {
+  const testing::Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  o.keep_segments = true;
+  // The ground plane (the first cloud of small_scene) classified as such: ground by class.
+  const std::size_t ground = 10 * 10 * 100;
+  std::vector<std::uint8_t> classes(c.points.size(), 1);
+  std::fill(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(ground), 2);
+  const auto out = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  ASSERT_EQ(out->point_segment.size(), c.points.size());
+  ASSERT_GE(out->segments.size(), 3U);
+  std::vector<long long> count(out->segments.size(), 0);
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    const int s = out->point_segment[i];
+    ASSERT_GE(s, -1);
+    ASSERT_LT(s, static_cast<int>(out->segments.size()));
+    if (i < ground) {
+      EXPECT_EQ(s, -1) << "ground point " << i;
+    }
+    if (s < 0) continue;
+    ++count[static_cast<std::size_t>(s)];
+    EXPECT_LE(
+        std::abs(surface_distance(out->segments[static_cast<std::size_t>(s)].surface, c.points[i])),
+        0.01 + 1e-9);
+  }
+  for (std::size_t s = 0; s < count.size(); ++s) EXPECT_EQ(count[s], out->segments[s].inliers);
+  // The sphere's points (the last 5 000) are one sphere surface.
+  const int sphere = out->point_segment[c.points.size() - 1];
+  ASSERT_GE(sphere, 0);
+  EXPECT_EQ(out->segments[static_cast<std::size_t>(sphere)].surface.type, ShapeType::Sphere);
+  long long on_sphere = 0;
+  for (std::size_t i = c.points.size() - 5000; i < c.points.size(); ++i)
+    on_sphere += out->point_segment[i] == sphere ? 1 : 0;
+  EXPECT_GT(on_sphere, 4500);
+  // Without keep_segments nothing is kept.
+  o.keep_segments = false;
+  const auto plain = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_TRUE(plain->point_segment.empty());
+  EXPECT_TRUE(plain->segments.empty());
+  // Downsampled: the labels still cover the input, and the sphere is still labelled.
+  o.keep_segments = true;
+  o.voxel.size = 0.03;
+  const auto coarse = fit_point_cloud(c.points, classes, o);
+  ASSERT_TRUE(coarse.ok());
+  ASSERT_EQ(coarse->point_segment.size(), c.points.size());
+  const int s2 = coarse->point_segment[c.points.size() - 1];
+  ASSERT_GE(s2, 0);
+  EXPECT_EQ(coarse->segments[static_cast<std::size_t>(s2)].surface.type, ShapeType::Sphere);
+  for (std::size_t i = 0; i < ground; ++i) {
+    EXPECT_EQ(coarse->point_segment[i], -1);
+  }
+}
+
+// Scale-aware options (issue #24 item 1): with epsilon, min_points and max_radius left to the
+// cloud (0), the same object in metres and in millimetres gives the same shapes — the same
+// types and, point for point, nearly the same labels — with no setting changed.
+TEST(FitSegment, DerivedOptionsGiveTheSameShapesInAnyUnit) {
+  testing::Cloud c =
+      testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 1, 0), 0.03, 0.0, 31);
+  c.append(testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 0, 1), 0.03, 0.0, 32));
+  c.append(testing::cylinder_cloud(Vec3(1, 0.5, 0), Vec3::UnitZ(), 0.2, 0.8, 0.0,
+                                   2.0 * std::numbers::pi, 1500, 0.0, 33));
+  FitPipelineOptions o;
+  o.ground.enabled = false;
+  o.outliers.enabled = false;
+  o.ransac.epsilon = 0.0;
+  o.ransac.min_points = 0;
+  o.ransac.max_radius = 0.0;
+  o.keep_segments = true;
+  const auto metres = fit_point_cloud(c.points, {}, o);
+  ASSERT_TRUE(metres.ok()) << metres.error().message;
+  std::vector<Vec3> mm = c.points;
+  for (auto& p : mm) p *= 1000.0;
+  const auto millimetres = fit_point_cloud(mm, {}, o);
+  ASSERT_TRUE(millimetres.ok()) << millimetres.error().message;
+  ASSERT_GE(metres->segments.size(), 3U);
+  ASSERT_EQ(metres->segments.size(), millimetres->segments.size());
+  for (std::size_t s = 0; s < metres->segments.size(); ++s) {
+    EXPECT_EQ(metres->segments[s].surface.type, millimetres->segments[s].surface.type);
+  }
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < c.points.size(); ++i)
+    same += metres->point_segment[i] == millimetres->point_segment[i] ? 1 : 0;
+  EXPECT_GE(static_cast<double>(same), 0.99 * static_cast<double>(c.points.size()));
+  // The derived inlier distance scales with the cloud.
+  ASSERT_FALSE(metres->region_stats.empty());
+  EXPECT_NEAR(millimetres->region_stats[0].spacing, 1000.0 * metres->region_stats[0].spacing,
+              1e-6 * millimetres->region_stats[0].spacing);
+  // The cylinder is found as one.
+  const int cyl = metres->point_segment[c.points.size() - 1];
+  ASSERT_GE(cyl, 0);
+  EXPECT_EQ(metres->segments[static_cast<std::size_t>(cyl)].surface.type, ShapeType::Cylinder);
+}
+
+}  // namespace
+}  // namespace csgtile::fit

@@ -21,12 +21,13 @@ fit:
   classes: {keep: [6, 26], drop: [7]}
   outliers: {enabled: false, neighbours: 9, std_ratio: 2.5}
   voxel: {size: 0.3}
-  normals: {neighbours: 11}
+  normals: {neighbours: 11, sharp: true}
   ground: {enabled: false, use_classification: false, cell: 2, window: 50, height: 0.4}
   clusters: {tolerance: 0.7, min_points: 15}
   regions: {enabled: true, neighbours: 12, smoothness_deg: 8, curvature: 0.5, min_points: 20}
   ransac: {epsilon: 0.05, normal_deviation_deg: 20, cluster_epsilon: 0.3, min_points: 25,
-           probability: 0.95, max_radius: 12, shapes: [plane, cone], max_candidates: 1000}
+           probability: 0.95, max_radius: 12, shapes: [plane, cone], max_candidates: 1000,
+           relabel: true, by_evidence: true}
   primitives: {boxes: false, max_box_depth: 20, min_box_thickness: 0.1, min_seed_coverage: 0.5,
                angle_tolerance_deg: 3, min_angular_span_deg: 120, min_building_height: 3,
                min_building_width: 2, extrusions: false, revolutions: false,
@@ -46,6 +47,7 @@ fit:
   EXPECT_FALSE(o.outliers.enabled);
   EXPECT_EQ(o.voxel.size, 0.3);
   EXPECT_EQ(o.normals.neighbours, 11);
+  EXPECT_TRUE(o.normals.sharp);
   EXPECT_FALSE(o.ground.enabled);
   EXPECT_FALSE(o.ground.use_classification);
   EXPECT_EQ(o.ground.cell, 2.0);
@@ -65,6 +67,8 @@ fit:
   EXPECT_EQ(o.ransac.probability, 0.95);
   EXPECT_EQ(o.ransac.max_radius, 12.0);
   EXPECT_EQ(o.ransac.max_candidates, 1000u);
+  EXPECT_TRUE(o.ransac.relabel);
+  EXPECT_TRUE(o.ransac.by_evidence);
   EXPECT_EQ(o.ransac.seed, 77u);  // run.seed, the one seed rule
   EXPECT_EQ(o.ransac.shapes,
             (std::array<bool, fit::kShapeTypeCount>{true, false, false, true, false}));

@@ -16,6 +16,7 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.outliers.std_ratio = c.outliers.std_ratio;
   o.voxel.size = c.voxel.size;
   o.normals.neighbours = c.normals.neighbours;
+  o.normals.sharp = c.normals.sharp;
   o.ground.enabled = c.ground.enabled;
   o.ground.use_classification = c.ground.use_classification;
   o.ground.cell = c.ground.cell;
@@ -35,6 +36,8 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.ransac.probability = c.ransac.probability;
   o.ransac.max_radius = c.ransac.max_radius;
   o.ransac.max_candidates = c.ransac.max_candidates;
+  o.ransac.relabel = c.ransac.relabel;
+  o.ransac.by_evidence = c.ransac.by_evidence;
   o.ransac.seed = config.run.seed;
   for (int t = 0; t < fit::kShapeTypeCount; ++t) {
     const std::string name = fit::shape_type_name(static_cast<fit::ShapeType>(t));

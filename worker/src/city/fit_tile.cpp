@@ -99,6 +99,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   auto fitted = fit::fit_point_cloud(raw, classes, options);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
+  out.origin = origin;
   out.scene.name = name;
   out.scene.seed = options.ransac.seed;
   if (!crs_text.empty() || las != nullptr) out.scene.frame = geo::SceneFrame{crs_text, origin};

@@ -4,6 +4,7 @@
 /// run.seed, kernel.linear_tolerance) and the read → segment → fit step shared by `csgtile
 /// fit` and the run's fit jobs. Internal to the worker.
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -28,7 +29,8 @@ struct FittedTile {
   /// The primitives in the tile-local frame: origin = the LAS offset (the floor of the
   /// smallest x and y for other formats), CRS from the file or the override; the seed.
   geo::Scene scene;
-  fit::FitOutput output;  ///< counts, rejections, stage seconds
+  fit::FitOutput output;           ///< counts, rejections, stage seconds
+  std::array<double, 3> origin{};  ///< of the tile-local frame, whether the scene has one or not
   double read_seconds = 0.0;
 };
 

@@ -31,6 +31,7 @@ struct FitVoxelConfig {
 
 struct FitNormalsConfig {
   int neighbours = 16;  ///< 3..1000
+  bool sharp = false;   ///< the normal of the face a point lies on at sharp edges
   bool operator==(const FitNormalsConfig&) const = default;
 };
 
@@ -68,6 +69,8 @@ struct FitRansacConfig {
   /// Surface types detected: "plane", "sphere", "cylinder", "cone", "torus".
   std::vector<std::string> shapes{"plane", "sphere", "cylinder", "cone", "torus"};
   std::uint64_t max_candidates = 2000000;
+  bool relabel = false;      ///< each point to the neighbouring shape it fits best, then refit
+  bool by_evidence = false;  ///< shape types chosen by an information criterion
   bool operator==(const FitRansacConfig&) const = default;
 };
 

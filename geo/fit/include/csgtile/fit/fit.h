@@ -47,17 +47,31 @@ double surface_distance(const Surface& s, const kernel::Vec3& p);
 /// Unit normal of the surface at the foot of `p` (unoriented for a plane: its axis).
 kernel::Vec3 surface_normal(const Surface& s, const kernel::Vec3& p);
 
-/// Options of the RANSAC. Lengths in metres.
+/// Options of the RANSAC. Lengths in metres (in the cloud's units). The scale-dependent ones
+/// may be 0: then each region derives them from its own points (see RansacResult), so that
+/// one setting serves a CAD object in millimetres and a city tile in metres alike.
 struct RansacOptions {
-  double epsilon = 0.02;               ///< inlier distance
+  /// Inlier distance; 0: the larger of 3 × the region's noise (the 5 % quantile of its
+  /// neighbourhoods' RMS distance to their plane) and 0.1 × its point spacing.
+  double epsilon = 0.02;
   double normal_deviation_deg = 25.0;  ///< largest angle between a point's normal and the surface's
   double cluster_epsilon = 0.0;        ///< connectivity (grid cell) size; 0: from the spacing
-  long long min_points = 40;           ///< smallest shape
-  double probability = 0.99;           ///< of not having missed a shape of min_points
-  double max_radius = 30.0;            ///< larger radii are treated as planes
+  /// Smallest shape; 0: 1 ‰ of the region's points, at least 8 (exact points need few).
+  long long min_points = 40;
+  double probability = 0.99;  ///< of not having missed a shape of min_points
+  /// Larger radii are treated as planes; 0: ten times the region's largest extent.
+  double max_radius = 30.0;
   std::uint64_t seed = 1;
   std::array<bool, kShapeTypeCount> shapes{true, true, true, true, true};  ///< by ShapeType
   std::uint64_t max_candidates = 2000000;  ///< hard cap on minimal samples drawn
+  /// After detection, each point goes to the neighbouring shape it fits best (not to the one
+  /// found first), free points join a shape they lie on, changed shapes are refitted.
+  bool relabel = false;
+  /// Each extracted shape's type is chosen by evidence: the plane, cylinder or sphere fitting
+  /// the same points replaces it when it keeps them and scores better by an information
+  /// criterion (n·ln(RSS/n) + k·ln n, the residual floored at the noise); a simpler surface
+  /// replaces a curved one only when it also scores no worse.
+  bool by_evidence = false;
   bool operator==(const RansacOptions&) const = default;
 };
 
@@ -74,6 +88,10 @@ struct RansacResult {
   std::uint64_t candidates = 0;       ///< minimal samples drawn
   double spacing = 0.0;               ///< median of 1/sqrt(local density)
   double cluster_epsilon = 0.0;       ///< connectivity size used
+  double epsilon = 0.0;               ///< inlier distance used (the option, or derived)
+  long long min_points = 0;           ///< smallest shape used
+  double max_radius = 0.0;            ///< largest radius used
+  double noise = 0.0;                 ///< estimated when epsilon was derived, else 0
   std::string reason;                 ///< why nothing was found (empty when shapes were)
 };
 

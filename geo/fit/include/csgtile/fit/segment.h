@@ -45,6 +45,11 @@ std::vector<kernel::Vec3> voxel_downsample(std::span<const kernel::Vec3> points,
 /// (collinear or duplicated points).
 struct NormalOptions {
   int neighbours = 16;
+  /// At sharp edges, the normal of the face the point lies on: of the planes through the point
+  /// and two of its ten nearest neighbours, the one most neighbours lie on (within 5 % of the
+  /// neighbourhood's radius), refined by their principal components. For exact or nearly exact
+  /// clouds (CAD objects), whose small features a normal averaged over an edge hides.
+  bool sharp = false;
   bool operator==(const NormalOptions&) const = default;
 };
 std::vector<kernel::Vec3> estimate_normals(std::span<const kernel::Vec3> points,
@@ -132,6 +137,7 @@ struct FitPipelineOptions {
   RansacOptions ransac;
   PrimitiveOptions primitives;
   bool keep_detections = false;  ///< diagnostics: fill FitOutput::detections
+  bool keep_segments = false;    ///< fill FitOutput::segments and ::point_segment
   bool operator==(const FitPipelineOptions&) const = default;
 };
 
@@ -140,6 +146,8 @@ struct FitRegion {
   long long points = 0;
   double spacing = 0.0;          ///< estimated point spacing
   double cluster_epsilon = 0.0;  ///< connectivity size used
+  double epsilon = 0.0;          ///< inlier distance used (the option, or derived)
+  long long min_points = 0;      ///< smallest shape used
   int shapes = 0;                ///< surfaces detected
   int primitives = 0;            ///< primitives kept
   std::uint64_t candidates = 0;
@@ -151,6 +159,15 @@ struct RegionDetection {
   std::vector<kernel::Vec3> points;
   std::vector<kernel::Vec3> normals;
   RansacResult shapes;
+};
+
+/// One detected surface of the segmentation: the RANSAC's shapes of every region, numbered
+/// region by region in extraction order.
+struct Segment {
+  int region = 0;
+  Surface surface;
+  long long inliers = 0;  ///< points of the fitted cloud on it
+  double rms = 0.0;       ///< of their distances to the surface
 };
 
 /// What the pipeline found and how long each stage took.
@@ -172,6 +189,12 @@ struct FitOutput {
   std::uint64_t candidates = 0;
   std::vector<std::pair<std::string, double>> seconds;  ///< per stage, in order
   std::vector<RegionDetection> detections;  ///< per region, when keep_detections was set
+  /// When keep_segments was set: every detected surface, and per input point (input order)
+  /// the index of its surface, -1 for none (ground, other classes, outliers, small clusters,
+  /// unassigned). With voxel downsampling an input point takes the surface of the nearest
+  /// downsampled point.
+  std::vector<Segment> segments;
+  std::vector<std::int32_t> point_segment;
 };
 
 /// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
