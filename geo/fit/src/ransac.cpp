@@ -88,11 +88,24 @@ class Detector {
   }
   void compact_remaining();
   void relabel();
+  void give_edges_to_smaller();
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
     if (++stamp_ == 0) {
       std::fill(cell_stamp_.begin(), cell_stamp_.end(), 0);
       stamp_ = 1;
+    }
+  }
+  // Calls `f(j)` once for each point of the cells next to (or holding) one of `inliers`.
+  template <typename F>
+  void for_points_near(std::span<const std::uint32_t> inliers, F&& f) {
+    new_visit();
+    for (auto i : inliers) {
+      const int cell = grid_->cell_of(i);
+      if (cell < 0) continue;
+      for_unvisited_neighbours(cell, [&](int next) {
+        for (auto j : grid_->points(next)) f(j);
+      });
     }
   }
   // Calls `f(next)` for each cell of the 3×3×3 block around `cell` not visited yet, marking it.
@@ -454,25 +467,18 @@ void Detector::relabel() {
     }
     for (std::size_t s = 0; s < shapes_.size(); ++s) {
       const Surface& surface = shapes_[s].surface;
-      new_visit();
-      for (auto i : shapes_[s].inliers) {
-        const int cell = grid_->cell_of(i);
-        if (cell < 0) continue;
-        for_unvisited_neighbours(cell, [&](int next) {
-          for (auto j : grid_->points(next)) {
-            if (label[j] == static_cast<int>(s)) continue;
-            const double d = std::abs(surface_distance(surface, points_[j]));
-            if (d > o_.epsilon || !(d < best[j])) continue;
-            // A point of another shape must face like this one; a free point need not.
-            if (label[j] >= 0 && has_normal_[j] &&
-                std::abs(surface_normal(surface, points_[j]).dot(normals_[j])) < cos_alpha_) {
-              continue;
-            }
-            best[j] = d;
-            label[j] = static_cast<int>(s);
-          }
-        });
-      }
+      for_points_near(shapes_[s].inliers, [&](std::uint32_t j) {
+        if (label[j] == static_cast<int>(s)) return;
+        const double d = std::abs(surface_distance(surface, points_[j]));
+        if (d > o_.epsilon || !(d < best[j])) return;
+        // A point of another shape must face like this one; a free point need not.
+        if (label[j] >= 0 && has_normal_[j] &&
+            std::abs(surface_normal(surface, points_[j]).dot(normals_[j])) < cos_alpha_) {
+          return;
+        }
+        best[j] = d;
+        label[j] = static_cast<int>(s);
+      });
     }
     std::vector<std::vector<std::uint32_t>> members(shapes_.size());
     for (std::size_t i = 0; i < n; ++i) {
@@ -523,6 +529,47 @@ void Detector::relabel() {
     }
     shape.rms =
         std::sqrt(sum / static_cast<double>(std::max<std::size_t>(shape.inliers.size(), 1)));
+  }
+}
+
+// Edges: a point within epsilon of two neighbouring shapes lies on both (at their shared edge
+// its normal belongs to neither); it goes to the smallest of them that has at most half the
+// points of its present one — once, among the points next to that shape's inliers (growing
+// further would run along the line where the two unbounded surfaces meet, past the feature) —,
+// since a small feature (a hole's wall, a fillet, a boss) needs its rims while a large face loses
+// nothing to speak of. No shape is left under min_points: a shape that would be keeps its points.
+void Detector::give_edges_to_smaller() {
+  const std::size_t n = points_.size();
+  std::vector<int> moved(assignment_);
+  auto size_of = [&](int s) { return shapes_[static_cast<std::size_t>(s)].inliers.size(); };
+  for (std::size_t s = 0; s < shapes_.size(); ++s) {
+    const int self = static_cast<int>(s);
+    for_points_near(shapes_[s].inliers, [&](std::uint32_t j) {
+      const int now = assignment_[j];
+      if (now < 0 || now == self || 2 * size_of(self) > size_of(now)) return;
+      if (std::abs(surface_distance(shapes_[s].surface, points_[j])) > o_.epsilon) return;
+      // The smallest candidate wins; on equal sizes the shape found first.
+      if (moved[j] != now && size_of(moved[j]) <= size_of(self)) return;
+      moved[j] = self;
+    });
+  }
+  std::vector<long long> left(shapes_.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (moved[i] >= 0) ++left[static_cast<std::size_t>(moved[i])];
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const int from = assignment_[i];
+    if (from >= 0 && moved[i] != from && left[static_cast<std::size_t>(from)] < o_.min_points) {
+      moved[i] = from;  // its shape would fall under min_points: it stays
+    }
+  }
+  assignment_ = std::move(moved);
+  for (auto& shape : shapes_) shape.inliers.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (assignment_[i] >= 0) {
+      shapes_[static_cast<std::size_t>(assignment_[i])].inliers.push_back(
+          static_cast<std::uint32_t>(i));
+    }
   }
 }
 
@@ -618,6 +665,7 @@ RansacResult Detector::run() {
     if (draws_ >= o_.max_candidates) break;
   }
   if (o_.relabel && !shapes_.empty()) relabel();
+  if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
   result.candidates = draws_;
   result.assignment = assignment_;
   result.shapes = std::move(shapes_);

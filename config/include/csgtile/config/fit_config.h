@@ -69,8 +69,9 @@ struct FitRansacConfig {
   /// Surface types detected: "plane", "sphere", "cylinder", "cone", "torus".
   std::vector<std::string> shapes{"plane", "sphere", "cylinder", "cone", "torus"};
   std::uint64_t max_candidates = 2000000;
-  bool relabel = false;      ///< each point to the neighbouring shape it fits best, then refit
-  bool by_evidence = false;  ///< shape types chosen by an information criterion
+  bool relabel = false;           ///< each point to the neighbouring shape it fits best, then refit
+  bool by_evidence = false;       ///< shape types chosen by an information criterion
+  bool edges_to_smaller = false;  ///< a point on two shapes to the smaller (exact clouds)
   bool operator==(const FitRansacConfig&) const = default;
 };
 

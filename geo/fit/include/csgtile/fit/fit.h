@@ -67,6 +67,11 @@ struct RansacOptions {
   /// After detection, each point goes to the neighbouring shape it fits best (not to the one
   /// found first), free points join a shape they lie on, changed shapes are refitted.
   bool relabel = false;
+  /// Then (with or without relabel) a point on two neighbouring shapes (within epsilon of
+  /// both: their shared edge, on exact points) goes to the smaller one when that has at most
+  /// half the other's points — a hole's or fillet's rim, not the face's. For exact clouds; on
+  /// noisy ones epsilon is wide and small shapes would take a face's points.
+  bool edges_to_smaller = false;
   /// Each extracted shape's type is chosen by evidence: the plane, cylinder or sphere fitting
   /// the same points replaces it when it keeps them and scores better by an information
   /// criterion (n·ln(RSS/n) + k·ln n, the residual floored at the noise); a simpler surface
