@@ -32,10 +32,6 @@ import sys
 import tempfile
 import time
 
-TYPES = {"plane": "plane", "cylinder": "cylinder", "cone": "cone", "sphere": "sphere",
-         "torus": "torus"}
-
-
 def read_points(path):
     """The cloud's points: every [x, y, z] triple of the file, in order."""
     text = open(path).read()
@@ -114,7 +110,7 @@ def read_segments(prefix, count):
         raise ValueError("%s.i32: %d bytes for %d points" % (prefix, len(raw), count))
     labels = list(struct.unpack("<%di" % count, raw))
     doc = json.load(open(prefix + ".json"))
-    seg_types = {s["id"]: TYPES.get(s["type"], s["type"]) for s in doc["surfaces"]}
+    seg_types = {s["id"]: s["type"] for s in doc["surfaces"]}
     return labels, seg_types
 
 

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 
 #include "city/fit_tile.h"
@@ -109,7 +110,7 @@ Failure write_segments(const std::string& prefix, const fit::FitOutput& f,
       case fit::ShapeType::Cone:
         j["apex"] = vec_json(q.point);
         j["axis"] = vec_json(q.axis);
-        j["half_angle_deg"] = q.angle * 180.0 / 3.14159265358979323846;
+        j["half_angle_deg"] = q.angle * 180.0 / std::numbers::pi;
         break;
       case fit::ShapeType::Torus:
         j["center"] = vec_json(q.point);

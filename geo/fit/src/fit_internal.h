@@ -101,6 +101,9 @@ std::optional<Surface> cone_from_samples(std::span<const Vec3> p, std::span<cons
 std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
                                           double max_radius);
 
+/// Parameters of a surface of the type: plane 3, sphere 4, cylinder 5, cone 6, torus 7.
+int parameter_count(ShapeType type);
+
 /// Least-squares plane through the points (centroid and smallest principal direction).
 std::optional<Surface> fit_plane(std::span<const Vec3> points,
                                  std::span<const std::uint32_t> subset);

@@ -5,8 +5,6 @@
 #include <cmath>
 #include <numbers>
 
-#include <Eigen/Eigenvalues>
-
 #include "fit_internal.h"
 
 namespace csgtile::fit::detail {
@@ -138,14 +136,18 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
       if (best.back() <= cell) {
         found.push_back(best.back());
         if (residuals != nullptr) {
-          Vec3 mean = points[i];
-          for (auto j : who) mean += points[j];
-          mean /= static_cast<double>(kNeighbours + 1);
-          Eigen::Matrix3d cov = (points[i] - mean) * (points[i] - mean).transpose();
-          for (auto j : who) cov += (points[j] - mean) * (points[j] - mean).transpose();
-          cov /= static_cast<double>(kNeighbours + 1);
-          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov, Eigen::EigenvaluesOnly);
-          residuals->push_back(std::sqrt(std::max(eig.eigenvalues()(0), 0.0)));
+          std::array<std::uint32_t, kNeighbours + 1> hood{};
+          hood[0] = i;
+          std::copy(who.begin(), who.end(), hood.begin() + 1);
+          // A neighbourhood that spans no plane (collinear) says nothing of the noise.
+          if (const auto plane = fit_plane(points, hood)) {
+            double sum = 0.0;
+            for (auto j : hood) {
+              const double d = (points[j] - plane->point).dot(plane->axis);
+              sum += d * d;
+            }
+            residuals->push_back(std::sqrt(sum / static_cast<double>(hood.size())));
+          }
         }
       }
     }

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
+
 namespace csgtile::fit::detail {
 
 double ring_area(const std::vector<Vec2>& ring) {
@@ -138,6 +140,21 @@ std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec
   auto loc = kernel::Location::from_matrix(q);
   if (!loc.ok()) return std::nullopt;
   return loc.value();
+}
+
+std::optional<Circle2> fit_circle(const std::vector<Vec2>& points) {
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Vec2& q : points) {
+    const Eigen::Vector3d row(q.x(), q.y(), 1.0);
+    normal_matrix += row * row.transpose();
+    rhs -= row * q.squaredNorm();
+  }
+  const Eigen::Vector3d abc = normal_matrix.ldlt().solve(rhs);
+  const Vec2 centre(-0.5 * abc.x(), -0.5 * abc.y());
+  const double r2 = centre.squaredNorm() - abc.z();
+  if (!(r2 > 0.0) || !std::isfinite(r2)) return std::nullopt;
+  return Circle2{centre, std::sqrt(r2)};
 }
 
 }  // namespace csgtile::fit::detail

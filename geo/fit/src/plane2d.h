@@ -77,4 +77,12 @@ Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z);
 /// The location with that rotation and origin; nullopt when the kernel refuses the matrix.
 std::optional<kernel::Location> place(const Eigen::Matrix3d& rotation, const Vec3& origin);
 
+/// The algebraic (Kåsa) least-squares circle x² + y² + D·x + E·y + F = 0 through the points
+/// (normal equations, solved by LDLᵀ); nullopt when they fix no circle (collinear, too few).
+struct Circle2 {
+  Vec2 centre;
+  double radius = 0.0;
+};
+std::optional<Circle2> fit_circle(const std::vector<Vec2>& points);
+
 }  // namespace csgtile::fit::detail

@@ -565,8 +565,6 @@ bool Builder::round_section(const std::vector<std::uint32_t>& members, const Pla
                             const std::array<double, 4>& section) const {
   if (members.size() < 8) return false;
   const auto [v0, v1, c0, c1] = section;
-  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   std::vector<Vec2> flat;
   flat.reserve(members.size());
   double box_sum = 0.0;
@@ -580,19 +578,13 @@ bool Builder::round_section(const std::vector<std::uint32_t>& members, const Pla
     const double e = (ox > 0.0 || oy > 0.0) ? std::hypot(std::max(ox, 0.0), std::max(oy, 0.0))
                                             : std::min(-ox, -oy);
     box_sum += e * e;
-    const Eigen::Vector3d row(q.x(), q.y(), 1.0);
-    normal_matrix += row * row.transpose();
-    rhs -= row * q.squaredNorm();
   }
-  const Eigen::Vector3d abc = normal_matrix.ldlt().solve(rhs);
-  const Vec2 centre(-0.5 * abc.x(), -0.5 * abc.y());
-  const double r2 = centre.squaredNorm() - abc.z();
-  if (!(r2 > 0.0) || !std::isfinite(r2)) return false;
-  const double radius = std::sqrt(r2);
-  if (radius > ransac_.max_radius) return false;
+  const auto circle = detail::fit_circle(flat);
+  if (!circle) return false;
+  if (circle->radius > ransac_.max_radius) return false;
   double circle_sum = 0.0;
   for (const auto& q : flat) {
-    const double e = (q - centre).norm() - radius;
+    const double e = (q - circle->centre).norm() - circle->radius;
     circle_sum += e * e;
   }
   // Clearly better: the circle's error well under the rectangle's and well within epsilon (a

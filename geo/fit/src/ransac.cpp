@@ -23,6 +23,7 @@
 #include <Eigen/Dense>
 
 #include "fit_internal.h"
+#include "plane2d.h"
 #include "synth/random.h"
 
 namespace csgtile::fit {
@@ -75,6 +76,21 @@ class Detector {
   std::optional<Surface> simpler(const Surface& s, std::span<const std::uint32_t> inliers);
   std::optional<Surface> by_evidence(const Surface& s, std::span<const std::uint32_t> inliers);
   double criterion(const Surface& s, std::span<const std::uint32_t> inliers) const;
+  // At least 97 % of `inliers` are compatible with `alt`: it may stand for the shape.
+  bool keeps_most(const Surface& alt, std::span<const std::uint32_t> inliers) const {
+    std::size_t kept = 0;
+    for (auto i : inliers) kept += compatible(alt, i) ? 1 : 0;
+    return static_cast<double>(kept) >= 0.97 * static_cast<double>(inliers.size());
+  }
+  // RMS of the inliers' distances to the surface.
+  double rms_of(const Surface& s, std::span<const std::uint32_t> inliers) const {
+    double sum = 0.0;
+    for (auto i : inliers) {
+      const double d = surface_distance(s, points_[i]);
+      sum += d * d;
+    }
+    return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
+  }
   std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
   double probability(double n, std::uint64_t draws) const {
     const double remaining = static_cast<double>(std::max<std::size_t>(remaining_count_, 1));
@@ -88,6 +104,8 @@ class Detector {
   }
   void compact_remaining();
   void relabel();
+  std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
+  void derive_scale(std::span<const std::uint32_t> members, RansacResult& result);
   void give_edges_to_smaller();
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
@@ -248,7 +266,6 @@ void Detector::draw() {
 // points), so that on noisy points the simpler surface wins at equal error and on exact ones
 // the surface whose error is clearly smaller does.
 double Detector::criterion(const Surface& s, std::span<const std::uint32_t> inliers) const {
-  static constexpr int kParameters[kShapeTypeCount] = {3, 4, 5, 6, 7};
   const double n = static_cast<double>(std::max<std::size_t>(inliers.size(), 1));
   double rss = 0.0;
   for (auto i : inliers) {
@@ -257,7 +274,7 @@ double Detector::criterion(const Surface& s, std::span<const std::uint32_t> inli
   }
   const double floor = std::max(noise_, 0.05 * o_.epsilon);
   return n * std::log(std::max(rss / n, floor * floor)) +
-         kParameters[static_cast<int>(s.type)] * std::log(n);
+         detail::parameter_count(s.type) * std::log(n);
 }
 
 // A cylinder through points with normals: its axis is the direction the normals avoid (the
@@ -278,27 +295,21 @@ std::optional<Surface> Detector::cylinder_from_normals(
   const Vec3 axis = eig.eigenvectors().col(0).normalized();
   Vec3 e1, e2;
   detail::orthonormal_basis(axis, e1, e2);
-  // Kåsa circle fit in the plane across the axis: x² + y² + D x + E y + F = 0.
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  // The circle of the points seen along the axis.
   const Vec3 origin = points_[inliers[0]];
+  std::vector<kernel::Vec2> across;
+  across.reserve(inliers.size());
   for (auto i : inliers) {
     const Vec3 d = points_[i] - origin;
-    const double x = d.dot(e1), y = d.dot(e2);
-    const Eigen::Vector3d row(x, y, 1.0);
-    a += row * row.transpose();
-    b -= row * (x * x + y * y);
+    across.emplace_back(d.dot(e1), d.dot(e2));
   }
-  const Eigen::Vector3d sol = a.ldlt().solve(b);
-  if (!sol.allFinite()) return std::nullopt;
-  const double cx = -0.5 * sol(0), cy = -0.5 * sol(1);
-  const double r2 = cx * cx + cy * cy - sol(2);
-  if (!(r2 > 0.0)) return std::nullopt;
+  const auto circle = detail::fit_circle(across);
+  if (!circle) return std::nullopt;
   Surface s;
   s.type = ShapeType::Cylinder;
   s.axis = detail::canonical_axis(axis);
-  s.point = origin + cx * e1 + cy * e2;
-  s.radius = std::sqrt(r2);
+  s.point = origin + circle->centre.x() * e1 + circle->centre.y() * e2;
+  s.radius = circle->radius;
   if (!(s.radius < o_.max_radius)) return std::nullopt;
   return detail::refine_surface(s, points_, inliers);
 }
@@ -308,29 +319,18 @@ std::optional<Surface> Detector::cylinder_from_normals(
 // of its points and scores clearly better.
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
-  auto keeps = [&](const Surface& alt) {
-    std::size_t kept = 0;
-    for (auto i : inliers) kept += compatible(alt, i) ? 1 : 0;
-    return static_cast<double>(kept) >= 0.97 * static_cast<double>(inliers.size());
-  };
   // A plane stays a plane: edge points it took from its neighbours would bend a cylinder
   // towards them (simpler() already turned planar curved shapes into planes).
   if (s.type == ShapeType::Plane) return std::nullopt;
   std::vector<Surface> options;
-  {
-    if (auto plane = detail::fit_plane(points_, inliers)) options.push_back(*plane);
-  }
+  if (auto plane = detail::fit_plane(points_, inliers)) options.push_back(*plane);
   if (s.type != ShapeType::Cylinder && o_.shapes[static_cast<int>(ShapeType::Cylinder)]) {
     if (auto cylinder = cylinder_from_normals(inliers)) options.push_back(*cylinder);
   }
   double best = criterion(s, inliers) - 2.0 * std::log(static_cast<double>(inliers.size()));
   std::optional<Surface> chosen;
   for (const Surface& alt : options) {
-    if ((alt.type == ShapeType::Cylinder || alt.type == ShapeType::Sphere) &&
-        !(alt.radius < o_.max_radius)) {
-      continue;
-    }
-    if (!keeps(alt)) continue;
+    if (!keeps_most(alt, inliers)) continue;
     const double score = criterion(alt, inliers);
     if (score < best) {
       best = score;
@@ -345,11 +345,10 @@ std::optional<Surface> Detector::simpler(const Surface& s, std::span<const std::
   // parameters at equal error (a plane patch is also a large-radius cylinder). With
   // `by_evidence`, only when it also scores no worse by the information criterion (on exact
   // points a fillet's plane keeps its points but not its error).
+  const double own = o_.by_evidence ? criterion(s, inliers) : 0.0;
   auto keeps = [&](const Surface& alt) {
-    std::size_t kept = 0;
-    for (auto i : inliers) kept += compatible(alt, i) ? 1 : 0;
-    if (o_.by_evidence && criterion(alt, inliers) > criterion(s, inliers)) return false;
-    return static_cast<double>(kept) >= 0.97 * static_cast<double>(inliers.size());
+    if (o_.by_evidence && criterion(alt, inliers) > own) return false;
+    return keeps_most(alt, inliers);
   };
   if (s.type != ShapeType::Plane) {
     if (auto plane = detail::fit_plane(points_, inliers); plane && keeps(*plane)) return plane;
@@ -428,13 +427,8 @@ bool Detector::extract(const Candidate& c) {
   }
   DetectedShape shape;
   shape.surface = surface;
-  double sum = 0.0;
-  for (auto i : inliers) {
-    const double d = surface_distance(surface, points_[i]);
-    sum += d * d;
-    assignment_[i] = static_cast<int>(shapes_.size());
-  }
-  shape.rms = std::sqrt(sum / static_cast<double>(inliers.size()));
+  for (auto i : inliers) assignment_[i] = static_cast<int>(shapes_.size());
+  shape.rms = rms_of(surface, inliers);
   remaining_count_ -= inliers.size();
   shape.inliers = std::move(inliers);
   shapes_.push_back(std::move(shape));
@@ -521,15 +515,7 @@ void Detector::relabel() {
       break;  // labelled with the final surfaces
     }
   }
-  for (auto& shape : shapes_) {
-    double sum = 0.0;
-    for (auto i : shape.inliers) {
-      const double d = surface_distance(shape.surface, points_[i]);
-      sum += d * d;
-    }
-    shape.rms =
-        std::sqrt(sum / static_cast<double>(std::max<std::size_t>(shape.inliers.size(), 1)));
-  }
+  for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
 // Edges: a point within epsilon of two neighbouring shapes lies on both (at their shared edge
@@ -571,6 +557,38 @@ void Detector::give_edges_to_smaller() {
           static_cast<std::uint32_t>(i));
     }
   }
+  for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
+}
+
+std::pair<Vec3, Vec3> Detector::bounds(std::span<const std::uint32_t> members) const {
+  if (members.empty()) return {Vec3::Zero(), Vec3::Zero()};
+  Vec3 lo = points_[members[0]], hi = lo;
+  for (auto i : members) {
+    lo = lo.cwiseMin(points_[i]);
+    hi = hi.cwiseMax(points_[i]);
+  }
+  return {lo, hi};
+}
+
+// Options left to the cloud (0) from its own spacing (result.spacing), noise, size and
+// extent; the options used go to `result`.
+void Detector::derive_scale(std::span<const std::uint32_t> members, RansacResult& result) {
+  const auto [lo, hi] = bounds(members);
+  if (!(o_.epsilon > 0.0)) {
+    // The noise where the region is flattest (a low quantile: curvature and edges raise the
+    // others), and a tenth of the spacing for exact points.
+    result.noise = detail::estimate_noise(points_, members, 0.05);
+    o_.epsilon = std::max(3.0 * result.noise, 0.1 * result.spacing);
+    if (!(o_.epsilon > 0.0)) o_.epsilon = 1e-6 * std::max((hi - lo).maxCoeff(), 1e-9);
+  }
+  if (o_.min_points <= 0) {
+    o_.min_points = std::max<long long>(8, static_cast<long long>(members.size() / 1000));
+  }
+  if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
+  noise_ = result.noise;
+  result.epsilon = o_.epsilon;
+  result.min_points = o_.min_points;
+  result.max_radius = o_.max_radius;
 }
 
 RansacResult Detector::run() {
@@ -595,30 +613,17 @@ RansacResult Detector::run() {
                                     : "too few points with normals for a shape of " +
                                           std::to_string(o_.min_points) + " points (" +
                                           std::to_string(seeds) + " with normals)";
+    // Even a region too small to search reports the options it stands for, so that no 0
+    // (derived) reaches the steps after the detection.
+    if (!members.empty() && o_.epsilon == 0.0) {
+      result.spacing = detail::estimate_spacing(points_, members);
+    }
+    derive_scale(members, result);
     return result;
   }
   result.spacing = detail::estimate_spacing(points_, members);
-  Vec3 lo = points_[members[0]], hi = lo;
-  for (auto i : members) {
-    lo = lo.cwiseMin(points_[i]);
-    hi = hi.cwiseMax(points_[i]);
-  }
-  // Options left to the cloud (0): from its own spacing, noise, size and extent.
-  if (!(o_.epsilon > 0.0)) {
-    // The noise where the region is flattest (a low quantile: curvature and edges raise the
-    // others), and a tenth of the spacing for exact points.
-    result.noise = detail::estimate_noise(points_, members, 0.05);
-    o_.epsilon = std::max(3.0 * result.noise, 0.1 * result.spacing);
-    if (!(o_.epsilon > 0.0)) o_.epsilon = 1e-6 * std::max((hi - lo).maxCoeff(), 1e-9);
-  }
-  if (o_.min_points <= 0) {
-    o_.min_points = std::max<long long>(8, static_cast<long long>(members.size() / 1000));
-  }
-  if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
-  noise_ = result.noise;
-  result.epsilon = o_.epsilon;
-  result.min_points = o_.min_points;
-  result.max_radius = o_.max_radius;
+  derive_scale(members, result);
+  const auto [lo, hi] = bounds(members);
   // Connectivity: three typical spacings, but enough for the sparser parts of the cloud too
   // (terrestrial scans mix dense near surfaces with sparse far ones).
   double beta = o_.cluster_epsilon > 0.0 ? o_.cluster_epsilon

@@ -314,8 +314,6 @@ std::optional<Surface> fit_plane(std::span<const Vec3> points,
   return s;
 }
 
-namespace {
-
 int parameter_count(ShapeType type) {
   switch (type) {
     case ShapeType::Plane:
@@ -331,6 +329,8 @@ int parameter_count(ShapeType type) {
   }
   return 0;
 }
+
+namespace {
 
 // The surface moved by a small parameter step. Axes turn in the tangent plane of the current
 // axis (e1, e2), so the step has no redundant direction.
