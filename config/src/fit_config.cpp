@@ -64,6 +64,7 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "primitives", "extrusions", fit.primitives.extrusions);
   take(f, "primitives", "revolutions", fit.primitives.revolutions);
   take(f, "primitives", "roof_parts", fit.primitives.roof_parts);
+  take(f, "primitives", "roof_partition", fit.primitives.roof_partition);
   take(f, "primitives", "blocks", fit.primitives.blocks);
   take(f, "primitives", "min_curved_coverage", fit.primitives.min_curved_coverage);
   take(f, "primitives", "max_overreach", fit.primitives.max_overreach);
@@ -111,6 +112,7 @@ json fit_to_json(const FitConfig& fit) {
                        {"extrusions", fit.primitives.extrusions},
                        {"revolutions", fit.primitives.revolutions},
                        {"roof_parts", fit.primitives.roof_parts},
+                       {"roof_partition", fit.primitives.roof_partition},
                        {"blocks", fit.primitives.blocks},
                        {"min_curved_coverage", fit.primitives.min_curved_coverage},
                        {"max_overreach", fit.primitives.max_overreach}};

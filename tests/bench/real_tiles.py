@@ -788,12 +788,48 @@ def measure_tile(name, spec, args, out_dir):
             res["footprints_error"] = "%s: no polygons" % rel
     inside = footprint_test(buildings, origin) if spec["footprints"] and not args.no_footprints \
         and buildings else None
-    res["top_surface"] = top_surface.measure_top_surface(prims, pts, args.top_cell, inside)
+    grid = {}
+    res["top_surface"] = top_surface.measure_top_surface(prims, pts, args.top_cell, inside, grid)
+    residual_png = os.path.join(out_dir, name + "_residuals.png")
+    write_residual_view(residual_png, grid, args.pixel)
+    res["residual_image"] = residual_png
     png = os.path.join(out_dir, name + "_top.png")
     width, height, distinct = write_top_view(png, raster, args.pixel)
     res["image"] = {"path": png, "width": width, "height": height, "colours": distinct,
                     "bytes": os.path.getsize(png), "metres_per_pixel": args.cell / args.pixel}
     return res
+
+
+def write_residual_view(path, grid, px):
+    """Top view of the issue #18 measure, one --top-cell per px pixels, north up: per cell the
+    median of its building points' z - top of the model: white within 0.3 m, red where the
+    points lie above the model (deeper up to 3 m), blue where the model is too high, black
+    where building points have no model over them, yellow where the model covers no
+    building point (false area), grey elsewhere."""
+    nx, ny, tops, res = grid["nx"], grid["ny"], grid["tops"], grid.get("residuals", {})
+    width, height = nx * px, ny * px
+    rgb = bytearray(width * height * 3)
+    for j in range(ny):
+        for i in range(nx):
+            r = res.get((i, j))
+            if r is None:
+                colour = (230, 200, 40) if (i, j) in tops else (90, 90, 90)
+            else:
+                covered = sorted(v for v in r if v is not None)
+                if not covered:
+                    colour = (0, 0, 0)
+                else:
+                    m = covered[len(covered) // 2]
+                    depth = min(1.0, (abs(m) - 0.3) / 2.7) if abs(m) > 0.3 else 0.0
+                    fade = int(235 - 200 * depth)
+                    colour = (250, 250, 250) if depth == 0.0 else \
+                        ((235, fade, fade) if m > 0 else (fade, fade, 235))
+            for dy in range(px):
+                row = (height - 1 - (j * px + dy)) * width
+                for dx in range(px):
+                    k = (row + i * px + dx) * 3
+                    rgb[k:k + 3] = bytes(colour)
+    write_png(path, width, height, rgb)
 
 
 def self_test():

@@ -225,9 +225,11 @@ def _figures(dist, count):
     return out
 
 
-def measure_top_surface(prims, pts, cell=0.5, inside=None):
+def measure_top_surface(prims, pts, cell=0.5, inside=None, cells=None):
     """The figures of the module comment. `pts` = (xs, ys, zs, cls) in the fit frame;
-    `inside(x, y)` (optional) tells whether a point lies in a published footprint."""
+    `inside(x, y)` (optional) tells whether a point lies in a published footprint. `cells`
+    (optional dict) receives the grid: "x0", "y0", "nx", "ny", "tops" {(i, j): top} and
+    "residuals" {(i, j): [z - top of each building point there, None over no model]}."""
     xs, ys, zs, cls = pts
     building = [i for i in range(len(xs)) if cls[i] == 6]
     if not building:
@@ -247,12 +249,17 @@ def measure_top_surface(prims, pts, cell=0.5, inside=None):
         occupied.add(key)
         top = tops.get(key)
         d = None if top is None else abs(zs[i] - top)
+        if cells is not None:
+            cells.setdefault("residuals", {}).setdefault(key, []).append(
+                None if top is None else zs[i] - top)
         whole.append(d)
         if inside is not None and inside(xs[i], ys[i]):
             inner.append(d)
     out = {"cell_m": cell, "whole_tile": _figures(whole, len(whole))}
     if inside is not None:
         out["inside_footprints"] = _figures(inner, len(inner))
+    if cells is not None:
+        cells.update({"x0": x0, "y0": y0, "nx": nx, "ny": ny, "tops": tops})
     out["model_cells"] = len(tops)
     out["false_area"] = (sum(1 for k in tops if k not in occupied) / len(tops)) if tops else 0.0
     return out

@@ -239,6 +239,14 @@ std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
 /// share no point; reasons for planes that make none are appended to `rejected`.
 std::vector<Proposal> propose_roof_parts(const ProposalInput& in, std::vector<Rejection>& rejected);
 
+/// The roof partition of a building (roof_partition.cpp): the outline of the region's unused
+/// points as grid cells, each labelled with the roof plane that explains its points (or a
+/// flat piece at the 70th percentile of points no plane explains), smoothed; each part is
+/// the extrusion of its polygon from the building's ground, clipped under its plane. The
+/// parts share their boundaries exactly. Needs PrimitiveOptions::ground and roof_partition.
+std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
+                                             std::vector<Rejection>& rejected);
+
 /// LoD1.2 blocks (blocks.cpp) of the points no kept primitive explains (`explained` false):
 /// pieces of one height, each its outline extruded from the terrain to the 70th percentile of
 /// its heights. Needs PrimitiveOptions::ground and blocks. Proposals share no point.
@@ -250,7 +258,8 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
 /// `box` and whose inliers cover `coverage` of its surface is supported by the points of its
 /// region (bounding box `region`, connectivity `cell`), else the reason: a curved primitive
 /// covered below PrimitiveOptions::min_curved_coverage, or any primitive reaching beyond the
-/// region (below: beyond the terrain too) by more than max_overreach of its extent.
+/// region (below: beyond the terrain under and around the region too) by more than
+/// max_overreach of its extent.
 std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::BoundingBox& box,
                         double coverage, const kernel::BoundingBox& region, double cell,
                         const PrimitiveOptions& o);

@@ -157,4 +157,22 @@ std::optional<Circle2> fit_circle(const std::vector<Vec2>& points) {
   return Circle2{centre, std::sqrt(r2)};
 }
 
+std::optional<PrincipalFrame> principal_frame(const std::vector<Vec2>& points) {
+  const auto hull = convex_hull(points);
+  if (hull.size() < 3) return std::nullopt;
+  const auto rectangle = smallest_rectangle(hull, 1e-9);
+  PrincipalFrame f;
+  f.u = rectangle ? rectangle->dir : Vec2(1, 0);
+  f.v = Vec2(-f.u.y(), f.u.x());
+  f.a0 = f.b0 = INFINITY;
+  f.a1 = f.b1 = -INFINITY;
+  for (const auto& p : points) {
+    f.a0 = std::min(f.a0, p.dot(f.u));
+    f.a1 = std::max(f.a1, p.dot(f.u));
+    f.b0 = std::min(f.b0, p.dot(f.v));
+    f.b1 = std::max(f.b1, p.dot(f.v));
+  }
+  return f;
+}
+
 }  // namespace csgtile::fit::detail

@@ -70,6 +70,15 @@ struct OrientedRectangle {
 /// nullopt when no edge has a length.
 std::optional<OrientedRectangle> smallest_rectangle(const std::vector<Vec2>& polygon, double slack);
 
+/// The frame of the smallest rectangle around the points' convex hull (u along one of its
+/// sides, v = u turned left; u = x when the hull has no edge) and the points' extent in it:
+/// a = p·u in [a0, a1], b = p·v in [b0, b1]. nullopt when the hull has fewer than 3 points.
+struct PrincipalFrame {
+  Vec2 u{1.0, 0.0}, v{0.0, 1.0};
+  double a0 = 0.0, a1 = 0.0, b0 = 0.0, b1 = 0.0;
+};
+std::optional<PrincipalFrame> principal_frame(const std::vector<Vec2>& points);
+
 /// Rotation whose columns are: x made orthogonal to z, z × x, and z (all unit, right-handed).
 /// x only needs a component across z; its length does not matter but enters the rounding.
 Eigen::Matrix3d frame_of(const Vec3& x, const Vec3& z);

@@ -910,6 +910,19 @@ FittedPrimitives Builder::run() {
   if (o_.revolutions) {
     for (const auto& p : detail::propose_revolutions(in, out_.rejected)) take(p);
   }
+  if (o_.extrusions && o_.roof_partition) {
+    const auto parts = detail::propose_roof_partition(in, out_.rejected);
+    for (const auto& p : parts) take(p);
+    if (!parts.empty()) {
+      // Shapes most of whose points the parts took make nothing of their own.
+      for (std::size_t s = 0; s < shapes_.shapes.size(); ++s) {
+        const auto& inl = shapes_.shapes[s].inliers;
+        std::size_t taken = 0;
+        for (auto i : inl) taken += used_[i] ? 1 : 0;
+        if (2 * taken >= inl.size()) absorbed_[s] = 1;
+      }
+    }
+  }
   if (o_.extrusions) {
     // One at a time: each kept extrusion takes its walls, the next is sought among the rest.
     for (int k = 0; k < 8; ++k) {

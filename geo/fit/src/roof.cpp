@@ -18,6 +18,7 @@
 #include <numbers>
 
 #include "fit_internal.h"
+#include "partition.h"
 #include "plane2d.h"
 
 namespace csgtile::fit::detail {
@@ -111,18 +112,10 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
   const double spacing = in.shapes->spacing;
   if (!(spacing > 0.0)) return std::nullopt;
   // Principal frame: the smallest rectangle around the roof's hull.
-  const auto hull = convex_hull(flat);
-  if (hull.size() < 3) return std::nullopt;
-  const auto rectangle = smallest_rectangle(hull, 1e-9);
-  const Vec2 u = rectangle ? rectangle->dir : Vec2(1, 0);
-  const Vec2 v(-u.y(), u.x());
-  double a0 = INFINITY, b0 = INFINITY, a1 = -INFINITY, b1 = -INFINITY;
-  for (const auto& p : flat) {
-    a0 = std::min(a0, p.dot(u));
-    a1 = std::max(a1, p.dot(u));
-    b0 = std::min(b0, p.dot(v));
-    b1 = std::max(b1, p.dot(v));
-  }
+  const auto frame = principal_frame(flat);
+  if (!frame) return std::nullopt;
+  const Vec2 u = frame->u, v = frame->v;
+  const double a0 = frame->a0, a1 = frame->a1, b0 = frame->b0, b1 = frame->b1;
   if (std::min(a1 - a0, b1 - b0) < o.min_building_width) return std::nullopt;
   const double cell = 1.5 * spacing;
   const double cells = ((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0);
@@ -146,26 +139,7 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
     occ[index(c[0], c[1])] = 1;
   }
   const std::size_t seen_cells = static_cast<std::size_t>(std::count(occ.begin(), occ.end(), 1));
-  // Closing (3 × 3 dilation, then erosion) over the gaps between scan lines.
-  auto morph = [&](bool dilate) {
-    std::vector<char> out = occ;
-    for (int j = 1; j + 1 < ny; ++j) {
-      for (int i = 1; i + 1 < nx; ++i) {
-        bool any = false, all = true;
-        for (int dj = -1; dj <= 1; ++dj) {
-          for (int di = -1; di <= 1; ++di) {
-            const bool c = occ[index(i + di, j + dj)] != 0;
-            any = any || c;
-            all = all && c;
-          }
-        }
-        out[index(i, j)] = dilate ? any : all;
-      }
-    }
-    occ = std::move(out);
-  };
-  morph(true);
-  morph(false);
+  close_cells(occ, nx, ny);  // over the gaps between scan lines
   // Empty components not reaching the border are holes: small ones (under 4 m²) and those
   // under something standing on the roof are filled.
   {

@@ -17,7 +17,7 @@ using kernel::Vec3;
 //    than min_curved_coverage of its surface (the 20 m sphere over 49 points of a roof);
 //  - any primitive reaching beyond the points of its region by more than max_overreach of
 //    the region's extent (at least three connectivity cells) — above, beside, or below both
-//    the region and the terrain under it.
+//    the region and the terrain under and around it.
 std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& box, double coverage,
                         const kernel::BoundingBox& region, double cell, const PrimitiveOptions& o) {
   const bool curved = spec.type != PrimitiveType::Box && spec.type != PrimitiveType::Extrusion;
@@ -33,8 +33,10 @@ std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& bo
   const double margin = std::max(3.0 * cell, o.max_overreach * extent.maxCoeff());
   double floor = region.min.z();
   if (o.ground != nullptr) {
-    const Vec3 c = 0.5 * (box.min + box.max);
-    const double reach = 0.5 * Vec3(box.size().x(), box.size().y(), 0.0).norm() + margin;
+    // The terrain around the region (a part in the middle of a large building sees none of
+    // its own: the roof hides it).
+    const Vec3 c = 0.5 * (region.min + region.max);
+    const double reach = 0.5 * Vec3(extent.x(), extent.y(), 0.0).norm() + margin;
     const double low = o.ground->lowest_near(c.x(), c.y(), reach);
     if (std::isfinite(low)) floor = std::min(floor, low);
   }

@@ -154,6 +154,13 @@ struct PrimitiveOptions {
   /// points' outline from the terrain, clipped by the half-space under the plane (needs
   /// `ground`; issue #18).
   bool roof_parts = true;
+  /// Buildings seen from the air as a roof partition (issue #18 item 3): the outline of a
+  /// region's points is partitioned among its roof planes (each cell of a grid to the plane
+  /// that explains its points, smoothed; points no plane explains as flat LoD1.2 pieces), each
+  /// part the extrusion of its polygon from the terrain clipped under its plane, the parts
+  /// sharing their walls exactly. Runs after the revolutions and before every other
+  /// building step, which then see only the points it left (needs `ground`).
+  bool roof_partition = false;
   /// Points of a region no primitive explains become LoD1.2 blocks (their outline extruded
   /// from the terrain to the 70th percentile of their heights; needs `ground`). The fit
   /// pipeline makes blocks only of classified building points (ClassOptions::keep found).

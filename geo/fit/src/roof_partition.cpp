@@ -1,0 +1,484 @@
+// The roof partition of a building seen from the air (issue #18 item 3): the building's
+// outline, as cells of a grid in its principal frame, is partitioned among its roof planes —
+// each cell labelled with the plane that explains its points best, smoothed so that
+// neighbouring cells prefer one label (iterated conditional modes on a Potts energy), cells
+// no plane explains grouped into flat pieces of one height (LoD1.2: the 70th percentile of
+// their points) — and each part (cells of one label) becomes the linear extrusion of its
+// polygon from the building's ground up past its roof, cut by the half-space under its
+// plane. The parts' polygons share their boundaries exactly (partition.cpp), so the parts
+// tile the outline and the assembly fuses them into one solid without gaps or overlaps.
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+
+#include "fit_internal.h"
+#include "partition.h"
+#include "plane2d.h"
+
+namespace csgtile::fit::detail {
+
+namespace {
+
+// A roof label: the plane n·p = d (n.z > 0), from a detected shape, or flat at a height.
+struct RoofPlane {
+  Vec3 n = Vec3::UnitZ();
+  double d = 0.0;
+  int shape = -1;  // −1: a flat piece of points no plane explains
+  double z(double x, double y) const { return (d - n.x() * x - n.y() * y) / n.z(); }
+};
+
+constexpr int kFree = -2;  // a cell no plane explains (yet): becomes part of a flat piece
+
+}  // namespace
+
+std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
+                                             std::vector<Rejection>& rejected) {
+  std::vector<Proposal> out;
+  const PrimitiveOptions& o = *in.options;
+  if (o.ground == nullptr || !o.roof_partition) return out;
+  const double spacing = in.shapes->spacing;
+  if (!(spacing > 0.0)) return out;
+  const auto& shapes = in.shapes->shapes;
+  const double cos_wall = std::cos(75.0 * std::numbers::pi / 180.0);
+  // Points on walls take no part in the roof's heights.
+  std::vector<char> wall(in.points.size(), 0);
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    if (shapes[s].surface.type != ShapeType::Plane ||
+        std::abs(shapes[s].surface.axis.z()) >= cos_wall) {
+      continue;
+    }
+    for (auto i : shapes[s].inliers) wall[i] = 1;
+  }
+  std::vector<std::uint32_t> pts;
+  std::vector<Vec2> flat;
+  for (std::uint32_t i = 0; i < in.points.size(); ++i) {
+    if ((*in.used)[i] || !in.points[i].allFinite()) continue;
+    pts.push_back(i);
+    flat.emplace_back(in.points[i].x(), in.points[i].y());
+  }
+  if (static_cast<long long>(pts.size()) < std::max<long long>(in.ransac->min_points, 8)) {
+    return out;
+  }
+  // The grid, in the principal frame of the points (walls along its axes stay straight).
+  const auto frame = principal_frame(flat);
+  if (!frame) return out;
+  const Vec2 u = frame->u, v = frame->v;
+  const double a0 = frame->a0, a1 = frame->a1, b0 = frame->b0, b1 = frame->b1;
+  if (std::min(a1 - a0, b1 - b0) < o.min_building_width) return out;
+  const double cell = 1.5 * spacing;
+  if (((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0) > 4e6) {
+    rejected.push_back({"roof partition", "too large an outline for its grid",
+                        static_cast<long long>(pts.size())});
+    return out;
+  }
+  LabelGrid grid;
+  grid.nx = static_cast<int>((a1 - a0) / cell) + 5;
+  grid.ny = static_cast<int>((b1 - b0) / cell) + 5;
+  const int nx = grid.nx, ny = grid.ny;
+  const auto ncell = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const double ga = a0 - 2.0 * cell, gb = b0 - 2.0 * cell;
+  auto cell_of = [&](const Vec2& p) {
+    const int i = std::clamp(static_cast<int>(std::floor((p.dot(u) - ga) / cell)), 0, nx - 1);
+    const int j = std::clamp(static_cast<int>(std::floor((p.dot(v) - gb) / cell)), 0, ny - 1);
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i);
+  };
+  // Points per cell (all, and those not on walls), as index lists.
+  std::vector<std::size_t> home(pts.size());
+  std::vector<std::vector<std::uint32_t>> in_cell(ncell), roof_in_cell(ncell);
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    home[k] = cell_of(flat[k]);
+    in_cell[home[k]].push_back(pts[k]);
+    if (!wall[pts[k]]) roof_in_cell[home[k]].push_back(pts[k]);
+  }
+  // A free cell's cost and the height band of a point at the top of its cell.
+  const double tau = std::max(0.25, 2.5 * in.ransac->epsilon);
+  // The outline: cells holding points, closed over the gaps between scan lines (3 × 3), with
+  // holes under 4 m² filled (larger ones are courtyards).
+  std::vector<char> mask(ncell, 0);
+  for (std::size_t c = 0; c < ncell; ++c) mask[c] = in_cell[c].empty() ? 0 : 1;
+  close_cells(mask, nx, ny);
+  {
+    LabelGrid empty{nx, ny, std::vector<int>(ncell, -1)};
+    for (std::size_t c = 0; c < ncell; ++c) empty.label[c] = mask[c] ? -1 : 0;
+    const Components holes = label_components(empty);
+    std::vector<long long> size(static_cast<std::size_t>(holes.count), 0);
+    std::vector<char> border(static_cast<std::size_t>(holes.count), 0);
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const int h = holes.of[static_cast<std::size_t>(j * nx + i)];
+        if (h < 0) continue;
+        ++size[static_cast<std::size_t>(h)];
+        if (i == 0 || j == 0 || i == nx - 1 || j == ny - 1) border[static_cast<std::size_t>(h)] = 1;
+      }
+    }
+    for (std::size_t c = 0; c < ncell; ++c) {
+      const int h = holes.of[c];
+      if (h >= 0 && !border[static_cast<std::size_t>(h)] &&
+          static_cast<double>(size[static_cast<std::size_t>(h)]) * cell * cell < 4.0) {
+        mask[c] = 1;
+      }
+    }
+  }
+  auto world = [&](double a, double b) { return Vec2(a * u + b * v); };
+  // A structure seen from the side or from below (a gate, a frame of beams scanned from the
+  // ground) is no building seen from the air: the air sees no ground under a roof. Over the
+  // outline's interior (cells farther than a terrain cell from its edge), the terrain grid
+  // must be mostly empty; a region with no such interior is left to the other steps.
+  {
+    const GroundGrid& t = *o.ground;
+    const int margin = static_cast<int>(std::ceil(t.cell / cell)) + 1;
+    std::vector<char> inner = mask;
+    for (int pass = 0; pass < margin; ++pass) {
+      std::vector<char> next = inner;
+      for (int j = 0; j < ny; ++j) {
+        for (int i = 0; i < nx; ++i) {
+          const auto c = static_cast<std::size_t>(j * nx + i);
+          if (!inner[c]) continue;
+          const bool edge = i == 0 || j == 0 || i == nx - 1 || j == ny - 1 || !inner[c - 1] ||
+                            !inner[c + 1] || !inner[c - static_cast<std::size_t>(nx)] ||
+                            !inner[c + static_cast<std::size_t>(nx)];
+          if (edge) next[c] = 0;
+        }
+      }
+      inner = std::move(next);
+    }
+    long long interior = 0, seen_ground = 0;
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        if (!inner[static_cast<std::size_t>(j * nx + i)]) continue;
+        ++interior;
+        const Vec2 w = world(ga + (i + 0.5) * cell, gb + (j + 0.5) * cell);
+        const double gi = std::floor((w.x() - t.x0) / t.cell),
+                     gj = std::floor((w.y() - t.y0) / t.cell);
+        if (gi < 0 || gj < 0 || gi >= t.nx || gj >= t.ny) continue;
+        const double h = t.z[static_cast<std::size_t>(gj) * static_cast<std::size_t>(t.nx) +
+                             static_cast<std::size_t>(gi)];
+        seen_ground += std::isfinite(h) ? 1 : 0;
+      }
+    }
+    if (interior == 0 || 2 * seen_ground > interior) {
+      rejected.push_back({"roof partition",
+                          interior == 0
+                              ? std::string("no outline wider than the terrain grid")
+                              : "the ground is seen under " + std::to_string(seen_ground) + " of " +
+                                    std::to_string(interior) +
+                                    " cells of its interior (not a building seen from the air)",
+                          static_cast<long long>(pts.size())});
+      return out;
+    }
+  }
+
+  // The terrain under the building: the lowest level around its outline.
+  double g = lowest_ground_under(*o.ground, convex_hull(flat));
+  if (!std::isfinite(g)) {
+    const Vec2 mid = world(0.5 * (a0 + a1), 0.5 * (b0 + b1));
+    g = o.ground->median_near(mid.x(), mid.y(), 0.5 * std::hypot(a1 - a0, b1 - b0));
+  }
+  if (!std::isfinite(g)) return out;
+  // Candidate planes: the roof planes (not walls), each over the cells of its inliers grown
+  // by two cells.
+  std::vector<RoofPlane> planes;
+  std::vector<std::vector<int>> candidates(ncell);
+  for (std::size_t s = 0; s < shapes.size(); ++s) {
+    const Surface& sf = shapes[s].surface;
+    if (sf.type != ShapeType::Plane || (*in.absorbed)[s] || std::abs(sf.axis.z()) < cos_wall) {
+      continue;
+    }
+    RoofPlane p;
+    p.n = sf.axis.z() > 0.0 ? sf.axis : Vec3(-sf.axis);
+    p.d = p.n.dot(sf.point);
+    p.shape = static_cast<int>(s);
+    const int id = static_cast<int>(planes.size());
+    planes.push_back(p);
+    std::vector<char> mark(ncell, 0);
+    for (auto i : shapes[s].inliers) {
+      if ((*in.used)[i]) continue;
+      const std::size_t c = cell_of(Vec2(in.points[i].x(), in.points[i].y()));
+      const int ci = static_cast<int>(c % static_cast<std::size_t>(nx)),
+                cj = static_cast<int>(c / static_cast<std::size_t>(nx));
+      for (int dj = -2; dj <= 2; ++dj) {
+        for (int di = -2; di <= 2; ++di) {
+          const int x = ci + di, y = cj + dj;
+          if (x < 0 || y < 0 || x >= nx || y >= ny) continue;
+          const auto k = static_cast<std::size_t>(y * nx + x);
+          if (mark[k]) continue;
+          mark[k] = 1;
+          candidates[k].push_back(id);
+        }
+      }
+    }
+  }
+  // Data cost: the mean vertical residual of a cell's roof points under a label, each capped;
+  // a free cell costs `tau`; a cell without roof points costs nothing under any label.
+  const double cap = 2.0 * tau;
+  const double lambda = 0.3 * tau;
+  auto cost = [&](std::size_t c, int label) {
+    const auto& list = roof_in_cell[c];
+    if (list.empty()) return 0.0;
+    if (label == kFree) return tau;
+    const RoofPlane& p = planes[static_cast<std::size_t>(label)];
+    double sum = 0.0;
+    for (auto i : list) {
+      const Vec3& q = in.points[i];
+      sum += std::min(std::abs(q.z() - p.z(q.x(), q.y())), cap);
+    }
+    return sum / static_cast<double>(list.size());
+  };
+  std::vector<int> label(ncell, -1);
+  std::vector<std::size_t> queue;
+  for (std::size_t c = 0; c < ncell; ++c) {
+    if (!mask[c]) continue;
+    if (roof_in_cell[c].empty()) continue;
+    int best = kFree;
+    double best_cost = tau;
+    for (int l : candidates[c]) {
+      const double e = cost(c, l);
+      if (e < best_cost) {
+        best_cost = e;
+        best = l;
+      }
+    }
+    label[c] = best;
+    queue.push_back(c);
+  }
+  if (queue.empty()) return out;
+  // Cells without roof points take a neighbour's label (breadth first, in cell order).
+  for (std::size_t h = 0; h < queue.size(); ++h) {
+    const std::size_t c = queue[h];
+    const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
+              j = static_cast<int>(c / static_cast<std::size_t>(nx));
+    const std::array<std::array<int, 2>, 4> nb{{{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
+    for (const auto& q : nb) {
+      if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+      const auto k = static_cast<std::size_t>(q[1] * nx + q[0]);
+      if (!mask[k] || label[k] != -1) continue;
+      label[k] = label[c];
+      queue.push_back(k);
+    }
+  }
+  for (std::size_t c = 0; c < ncell; ++c) {
+    if (mask[c] && label[c] == -1) mask[c] = 0;
+  }
+  // Smoothing: each cell takes the label of least cost + λ per 4-neighbour labelled otherwise.
+  auto neighbours = [&](std::size_t c) {
+    const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
+              j = static_cast<int>(c / static_cast<std::size_t>(nx));
+    std::array<int, 4> l{-1, -1, -1, -1};
+    const std::array<std::array<int, 2>, 4> nb{{{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
+    for (std::size_t k = 0; k < 4; ++k) {
+      const auto& q = nb[k];
+      if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+      const auto x = static_cast<std::size_t>(q[1] * nx + q[0]);
+      if (mask[x]) l[k] = label[x];
+    }
+    return l;
+  };
+  for (int sweep = 0; sweep < 6; ++sweep) {
+    bool changed = false;
+    for (std::size_t c = 0; c < ncell; ++c) {
+      if (!mask[c]) continue;
+      const auto nb = neighbours(c);
+      std::vector<int> options{label[c], kFree};
+      options.insert(options.end(), candidates[c].begin(), candidates[c].end());
+      for (int l : nb) {
+        if (l != -1) options.push_back(l);
+      }
+      auto energy = [&](int l) {
+        double e = cost(c, l);
+        for (int m : nb) e += (m != -1 && m != l) ? lambda : 0.0;
+        return e;
+      };
+      int best = label[c];
+      double best_e = energy(best);
+      for (int l : options) {
+        const double e = energy(l);
+        if (e < best_e - 1e-12) {
+          best_e = e;
+          best = l;
+        }
+      }
+      if (best != label[c]) {
+        label[c] = best;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  // Free cells become flat pieces: connected cells whose highest roof points differ by less
+  // than a step, each at the 70th percentile of its points' heights.
+  {
+    const double step = std::max(1.0, 0.25 * o.min_building_height);
+    std::vector<double> top(ncell, NAN);  // of all points: a wall's cell is as high as it
+    for (std::size_t c = 0; c < ncell; ++c) {
+      for (auto i : in_cell[c]) {
+        top[c] = std::isnan(top[c]) ? in.points[i].z() : std::max(top[c], in.points[i].z());
+      }
+    }
+    std::vector<char> seen(ncell, 0);
+    for (std::size_t start = 0; start < ncell; ++start) {
+      if (!mask[start] || label[start] != kFree || seen[start]) continue;
+      std::vector<std::size_t> piece{start};
+      seen[start] = 1;
+      for (std::size_t h = 0; h < piece.size(); ++h) {
+        const std::size_t c = piece[h];
+        if (std::isnan(top[c])) continue;  // an empty cell joins a piece but bridges none
+        const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
+                  j = static_cast<int>(c / static_cast<std::size_t>(nx));
+        const std::array<std::array<int, 2>, 4> nb{
+            {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
+        for (const auto& q : nb) {
+          if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+          const auto k = static_cast<std::size_t>(q[1] * nx + q[0]);
+          if (!mask[k] || label[k] != kFree || seen[k]) continue;
+          if (!std::isnan(top[k]) && std::abs(top[c] - top[k]) >= step) {
+            continue;
+          }
+          seen[k] = 1;
+          piece.push_back(k);
+        }
+      }
+      std::vector<double> z;
+      for (auto c : piece) {
+        for (auto i : roof_in_cell[c]) z.push_back(in.points[i].z());
+      }
+      RoofPlane p;
+      if (!z.empty()) {
+        std::sort(z.begin(), z.end());
+        p.d = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
+      } else {
+        p.d = NAN;  // no points: taken by a neighbour below
+      }
+      const int id = static_cast<int>(planes.size());
+      planes.push_back(p);
+      for (auto c : piece) label[c] = id;
+    }
+  }
+  grid.label = label;
+  for (std::size_t c = 0; c < ncell; ++c) {
+    if (!mask[c]) grid.label[c] = -1;
+  }
+  auto pointless = [&](int l) { return std::isnan(planes[static_cast<std::size_t>(l)].d); };
+  // Small parts (under a square metre, or four cells) and pieces without points join the
+  // neighbour they share most of their boundary with; pinches are joined through a cell.
+  const long long min_cells =
+      std::max<long long>(4, static_cast<long long>(std::ceil(1.0 / (cell * cell))));
+  for (int round = 0; round < 32; ++round) {
+    bool changed = false;
+    const Components comp = label_components(grid);
+    std::vector<long long> size(static_cast<std::size_t>(comp.count), 0);
+    for (std::size_t c = 0; c < ncell; ++c) {
+      if (comp.of[c] >= 0) ++size[static_cast<std::size_t>(comp.of[c])];
+    }
+    std::vector<std::map<int, long long>> border(static_cast<std::size_t>(comp.count));
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const int k = comp.of[static_cast<std::size_t>(j * nx + i)];
+        if (k < 0) continue;
+        const std::array<std::array<int, 2>, 4> nb{
+            {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
+        for (const auto& q : nb) {
+          const int l = grid.at(q[0], q[1]);
+          if (l < 0 || l == grid.at(i, j) || pointless(l)) continue;
+          ++border[static_cast<std::size_t>(k)][l];
+        }
+      }
+    }
+    for (std::size_t c = 0; c < ncell; ++c) {
+      const int k = comp.of[c];
+      if (k < 0) continue;
+      const bool empty = pointless(grid.label[c]);
+      if (!empty && size[static_cast<std::size_t>(k)] >= min_cells) continue;
+      int target = -1;
+      long long most = 0;
+      for (const auto& [l, n] : border[static_cast<std::size_t>(k)]) {
+        if (n > most) {
+          most = n;
+          target = l;
+        }
+      }
+      if (target == -1 && !empty) continue;  // a small island: kept as it is
+      grid.label[c] = target;                // -1: dropped (no neighbour, no points)
+      changed = true;
+    }
+    changed = unpinch(grid) > 0 || changed;
+    if (!changed) break;
+  }
+  // The parts' polygons, then their solids.
+  const auto parts = partition_polygons(grid, 0.9);
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const PartPolygon& part = parts[k];
+    if (part.outer.size() < 3 || part.label < 0) continue;
+    const RoofPlane& plane = planes[static_cast<std::size_t>(part.label)];
+    const std::string what = "roof partition part " + std::to_string(k) +
+                             (plane.shape >= 0 ? " of plane " + std::to_string(plane.shape)
+                                               : std::string(" (flat, LoD1.2)"));
+    Proposal p;
+    for (auto c : part.cells) {
+      p.members.insert(p.members.end(), in_cell[static_cast<std::size_t>(c)].begin(),
+                       in_cell[static_cast<std::size_t>(c)].end());
+    }
+    std::sort(p.members.begin(), p.members.end());
+    RoofOutline outline;
+    outline.u = u;
+    outline.v = v;
+    outline.cell = cell;
+    outline.seen_cells = part.cells.size();
+    for (const auto& q : part.outer)
+      outline.profile.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+    for (const auto& h : part.holes) {
+      std::vector<Vec2> hole;
+      for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+      outline.holes.push_back(std::move(hole));
+    }
+    OutlineGround under;
+    for (const auto& q : outline.profile) {
+      under.footprint.push_back(world(q.x(), q.y()));
+      under.centre += q / static_cast<double>(outline.profile.size());
+    }
+    under.world_centre = world(under.centre.x(), under.centre.y());
+    under.ground = g;
+    double low = INFINITY, high = -INFINITY;
+    for (const auto& q : under.footprint) {
+      const double z = plane.z(q.x(), q.y());
+      low = std::min(low, z);
+      high = std::max(high, z);
+    }
+    const bool tilted = plane.shape >= 0 && low - g >= 0.5 * o.min_building_height;
+    double roof = high;
+    if (!tilted) {
+      // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th percentile.
+      std::vector<double> z;
+      for (auto i : p.members) {
+        if (!wall[i]) z.push_back(in.points[i].z());
+      }
+      if (z.empty()) continue;
+      std::sort(z.begin(), z.end());
+      roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
+    }
+    if (roof - g < 0.5 * o.min_building_height) {
+      rejected.push_back({what, "not a building's height above the terrain",
+                          static_cast<long long>(p.members.size())});
+      continue;
+    }
+    auto spec = outline_extrusion(outline, under, tilted ? high - g + 1.0 : roof - g);
+    if (!spec) continue;
+    p.spec = std::move(*spec);
+    if (tilted) {
+      const kernel::Location loc = p.spec.placement;
+      const Vec3 nl = loc.rotation().transpose() * plane.n;
+      p.spec.clips.push_back(
+          Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
+      p.shapes = {plane.shape};
+    }
+    const double area = polygon_area(outline.profile, outline.holes);
+    p.area = area / (tilted ? plane.n.z() : 1.0) +
+             polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - g);
+    p.what = what;
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+}  // namespace csgtile::fit::detail
