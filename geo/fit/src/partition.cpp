@@ -194,13 +194,20 @@ int unpinch(LabelGrid& grid) {
                   s = grid.at(i + 1, j + 1);
         const bool ps = p == s && q != p && r != p;
         const bool qr = q == r && p != q && s != q;
-        if (!ps && !qr) continue;
+        const bool four = p != q && p != r && p != s && q != r && q != s && r != s;
+        if (!ps && !qr && !four) continue;
         auto set = [&](int ci, int cj, int l) {
+          if (l < 0 && !(ps || qr)) return false;
           if (ci < 0 || cj < 0 || ci >= grid.nx || cj >= grid.ny) return false;
           grid.cell(ci, cj) = l;
           return true;
         };
         bool done = false;
+        if (four) {
+          // A cell takes the label of a neighbour in the block: three parts meet (a T).
+          done = set(i + 1, j, p) || set(i, j + 1, p) || set(i, j, q) || set(i + 1, j + 1, q) ||
+                 set(i, j, r) || set(i + 1, j + 1, r) || set(i + 1, j, s) || set(i, j + 1, s);
+        }
         if (ps && p >= 0) done = set(i + 1, j, p) || set(i, j + 1, p);
         if (!done && qr && q >= 0) done = set(i, j, q) || set(i + 1, j + 1, q);
         if (!done && ps) done = set(i, j, q >= 0 ? q : r) || set(i + 1, j + 1, q >= 0 ? q : r);

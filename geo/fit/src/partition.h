@@ -43,7 +43,10 @@ Components label_components(const LabelGrid& grid);
 /// corner, the other two cells of the 2 × 2 block holding something else. A pinch would make
 /// a part's ring touch itself, or two parts meet along a line only (a non-manifold union).
 /// The block is joined through one of the other cells (a labelled diagonal takes it; an
-/// outside diagonal gives it the other diagonal's first label). Returns the cells changed.
+/// outside diagonal gives it the other diagonal's first label). Also four-way junctions: four
+/// labels (the outside one of them) around a corner, where two opposite parts higher than
+/// the other two would meet along a vertical line only; a cell takes its neighbour's label,
+/// so that three meet. Returns the cells changed.
 int unpinch(LabelGrid& grid);
 
 /// One part: its component, label, outer ring (counter-clockwise) and holes (clockwise), in

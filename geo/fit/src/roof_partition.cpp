@@ -25,7 +25,8 @@ namespace {
 struct RoofPlane {
   Vec3 n = Vec3::UnitZ();
   double d = 0.0;
-  int shape = -1;  // −1: a flat piece of points no plane explains
+  int shape = -1;           // −1: a flat piece of points no plane explains
+  std::vector<int> merged;  // the detected shapes it stands for (ascending after sort)
   double z(double x, double y) const { return (d - n.x() * x - n.y() * y) / n.z(); }
 };
 
@@ -177,24 +178,80 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     g = o.ground->median_near(mid.x(), mid.y(), 0.5 * std::hypot(a1 - a0, b1 - b0));
   }
   if (!std::isfinite(g)) return out;
-  // Candidate planes: the roof planes (not walls), each over the cells of its inliers grown
-  // by two cells.
+  // Candidate planes: the roof planes (not walls), regularised — near-coplanar ones (normals
+  // within the angle tolerance, each through the other's centroid within half of `tau`)
+  // merged and refitted, near-horizontal ones made horizontal at their median height — each
+  // over the cells of its inliers grown by two cells.
   std::vector<RoofPlane> planes;
-  std::vector<std::vector<int>> candidates(ncell);
-  for (std::size_t s = 0; s < shapes.size(); ++s) {
-    const Surface& sf = shapes[s].surface;
-    if (sf.type != ShapeType::Plane || (*in.absorbed)[s] || std::abs(sf.axis.z()) < cos_wall) {
-      continue;
+  std::vector<std::vector<std::uint32_t>> plane_points;
+  {
+    const double cos_tol = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
+    std::vector<int> roofs;
+    for (std::size_t s = 0; s < shapes.size(); ++s) {
+      const Surface& sf = shapes[s].surface;
+      if (sf.type == ShapeType::Plane && !(*in.absorbed)[s] && std::abs(sf.axis.z()) >= cos_wall) {
+        roofs.push_back(static_cast<int>(s));
+      }
     }
-    RoofPlane p;
-    p.n = sf.axis.z() > 0.0 ? sf.axis : Vec3(-sf.axis);
-    p.d = p.n.dot(sf.point);
-    p.shape = static_cast<int>(s);
-    const int id = static_cast<int>(planes.size());
-    planes.push_back(p);
+    std::stable_sort(roofs.begin(), roofs.end(), [&](int x, int y) {
+      return shapes[static_cast<std::size_t>(x)].inliers.size() >
+             shapes[static_cast<std::size_t>(y)].inliers.size();
+    });
+    auto centroid = [&](const std::vector<std::uint32_t>& list) {
+      Vec3 c = Vec3::Zero();
+      for (auto i : list) c += in.points[i];
+      return Vec3(c / static_cast<double>(std::max<std::size_t>(1, list.size())));
+    };
+    for (int s : roofs) {
+      const Surface& sf = shapes[static_cast<std::size_t>(s)].surface;
+      RoofPlane p;
+      p.n = sf.axis.z() > 0.0 ? sf.axis : Vec3(-sf.axis);
+      p.d = p.n.dot(sf.point);
+      p.shape = s;
+      std::vector<std::uint32_t> mine;
+      for (auto i : shapes[static_cast<std::size_t>(s)].inliers) {
+        if (!(*in.used)[i]) mine.push_back(i);
+      }
+      if (mine.empty()) continue;
+      const Vec3 c = centroid(mine);
+      bool merged = false;
+      for (std::size_t k = 0; k < planes.size() && !merged; ++k) {
+        RoofPlane& q = planes[k];
+        const Vec3 cq = centroid(plane_points[k]);
+        if (q.n.dot(p.n) < cos_tol || std::abs(q.z(c.x(), c.y()) - c.z()) > 0.5 * tau ||
+            std::abs(p.z(cq.x(), cq.y()) - cq.z()) > 0.5 * tau) {
+          continue;
+        }
+        auto& list = plane_points[k];
+        list.insert(list.end(), mine.begin(), mine.end());
+        std::sort(list.begin(), list.end());
+        list.erase(std::unique(list.begin(), list.end()), list.end());
+        if (const auto refit = fit_plane(in.points, list)) {
+          q.n = refit->axis.z() > 0.0 ? refit->axis : Vec3(-refit->axis);
+          q.d = q.n.dot(refit->point);
+        }
+        q.merged.push_back(s);
+        merged = true;
+      }
+      if (!merged) {
+        p.merged = {s};
+        planes.push_back(p);
+        plane_points.push_back(std::move(mine));
+      }
+    }
+    for (std::size_t k = 0; k < planes.size(); ++k) {
+      if (planes[k].n.z() < cos_tol) continue;
+      std::vector<double> z;
+      for (auto i : plane_points[k]) z.push_back(in.points[i].z());
+      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+      planes[k].n = Vec3::UnitZ();
+      planes[k].d = z[z.size() / 2];
+    }
+  }
+  std::vector<std::vector<int>> candidates(ncell);
+  for (std::size_t id = 0; id < planes.size(); ++id) {
     std::vector<char> mark(ncell, 0);
-    for (auto i : shapes[s].inliers) {
-      if ((*in.used)[i]) continue;
+    for (auto i : plane_points[id]) {
       const std::size_t c = cell_of(Vec2(in.points[i].x(), in.points[i].y()));
       const int ci = static_cast<int>(c % static_cast<std::size_t>(nx)),
                 cj = static_cast<int>(c / static_cast<std::size_t>(nx));
@@ -205,7 +262,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
           const auto k = static_cast<std::size_t>(y * nx + x);
           if (mark[k]) continue;
           mark[k] = 1;
-          candidates[k].push_back(id);
+          candidates[k].push_back(static_cast<int>(id));
         }
       }
     }
@@ -470,7 +527,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       const Vec3 nl = loc.rotation().transpose() * plane.n;
       p.spec.clips.push_back(
           Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
-      p.shapes = {plane.shape};
+      p.shapes = plane.merged;
+      std::sort(p.shapes.begin(), p.shapes.end());
     }
     const double area = polygon_area(outline.profile, outline.holes);
     p.area = area / (tilted ? plane.n.z() : 1.0) +

@@ -120,6 +120,7 @@ TEST(FitPartition, PinchesAreJoined) {
       const int p = g.at(i, j), q = g.at(i + 1, j), r = g.at(i, j + 1), s = g.at(i + 1, j + 1);
       EXPECT_FALSE(p == s && q != p && r != p) << i << "," << j;
       EXPECT_FALSE(q == r && p != q && s != q) << i << "," << j;
+      EXPECT_FALSE(p != q && p != r && p != s && q != r && q != s && r != s) << i << "," << j;
     }
   }
   // Without simplification the polygons are exactly the cells of each part.
