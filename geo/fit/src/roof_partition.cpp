@@ -12,6 +12,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <set>
 
 #include "fit_internal.h"
 #include "partition.h"
@@ -464,6 +465,58 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   }
   // The parts' polygons, then their solids.
   const auto parts = partition_polygons(grid, 0.9);
+  // The terrain under each part: the lowest ground around its outline; a part inside a large
+  // roof (no ground seen near it) stands on the highest of its neighbours' (repeatedly: never
+  // below the terrain any neighbour sees), else on the building's lowest level. Bases within the
+  // ground filter's tolerance are snapped to one level after the fit (bases.cpp).
+  std::vector<double> bases(parts.size(), NAN);
+  {
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      std::vector<Vec2> footprint;
+      for (const auto& q : parts[k].outer) {
+        footprint.push_back(world(ga + q.x() * cell, gb + q.y() * cell));
+      }
+      bases[k] = lowest_ground_under(*o.ground, footprint);
+    }
+    const Components comp = label_components(grid);
+    std::vector<std::set<int>> next_to(parts.size());
+    auto touch = [&](int x, int y) {
+      if (x < 0 || y < 0 || x == y) return;
+      next_to[static_cast<std::size_t>(x)].insert(y);
+      next_to[static_cast<std::size_t>(y)].insert(x);
+    };
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const auto c = static_cast<std::size_t>(j * nx + i);
+        if (i + 1 < nx) touch(comp.of[c], comp.of[c + 1]);
+        if (j + 1 < ny) touch(comp.of[c], comp.of[c + static_cast<std::size_t>(nx)]);
+      }
+    }
+    for (bool changed = true; changed;) {
+      changed = false;
+      std::vector<double> next = bases;
+      for (std::size_t k = 0; k < parts.size(); ++k) {
+        if (std::isfinite(bases[k]) || k >= next_to.size()) continue;
+        for (int n : next_to[k]) {
+          const double b = bases[static_cast<std::size_t>(n)];
+          if (std::isfinite(b) && !(next[k] >= b)) next[k] = b;
+        }
+        changed = changed || std::isfinite(next[k]);
+      }
+      bases = std::move(next);
+    }
+    for (auto& b : bases) {
+      if (!std::isfinite(b)) b = g;
+    }
+    // A building on terrain level within a metre stands on one level, at most half a metre
+    // under the terrain around any part and at most half a metre above it: its parts'
+    // bottoms are one face (steps of a few decimetres under a roof are no terrain a model
+    // should follow, and they burden the fuse with slivers).
+    const auto [lo, hi] = std::minmax_element(bases.begin(), bases.end());
+    if (lo != bases.end() && *hi - *lo <= 1.0) {
+      std::fill(bases.begin(), bases.end(), std::max(*lo, *hi - 0.5));
+    }
+  }
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const PartPolygon& part = parts[k];
     if (part.outer.size() < 3 || part.label < 0) continue;
@@ -495,14 +548,15 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       under.centre += q / static_cast<double>(outline.profile.size());
     }
     under.world_centre = world(under.centre.x(), under.centre.y());
-    under.ground = g;
+    under.ground = bases[k];
+    const double base = under.ground;
     double low = INFINITY, high = -INFINITY;
     for (const auto& q : under.footprint) {
       const double z = plane.z(q.x(), q.y());
       low = std::min(low, z);
       high = std::max(high, z);
     }
-    const bool tilted = plane.shape >= 0 && low - g >= 0.5 * o.min_building_height;
+    const bool tilted = plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
     double roof = high;
     if (!tilted) {
       // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th percentile.
@@ -514,12 +568,12 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       std::sort(z.begin(), z.end());
       roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
     }
-    if (roof - g < 0.5 * o.min_building_height) {
+    if (roof - base < 0.5 * o.min_building_height) {
       rejected.push_back({what, "not a building's height above the terrain",
                           static_cast<long long>(p.members.size())});
       continue;
     }
-    auto spec = outline_extrusion(outline, under, tilted ? high - g + 1.0 : roof - g);
+    auto spec = outline_extrusion(outline, under, tilted ? high - base + 1.0 : roof - base);
     if (!spec) continue;
     p.spec = std::move(*spec);
     if (tilted) {
@@ -532,7 +586,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
     const double area = polygon_area(outline.profile, outline.holes);
     p.area = area / (tilted ? plane.n.z() : 1.0) +
-             polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - g);
+             polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
     p.what = what;
     out.push_back(std::move(p));
   }

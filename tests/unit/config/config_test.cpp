@@ -553,7 +553,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
       R"("max_box_depth":40.0,"max_overreach":0.25,"min_angular_span_deg":90.0,)"
       R"("min_box_thickness":0.04,"min_building_height":2.0,"min_building_width":1.0,)"
       R"("min_curved_coverage":0.05,"min_seed_coverage":0.6,)"
-      R"("revolutions":true,"roof_partition":false,"roof_parts":true},)"
+      R"("revolutions":true,"roof_partition":true,"roof_parts":true},)"
       R"("ransac":{"by_evidence":false,"cluster_epsilon":0.0,"edges_to_smaller":false,"epsilon":0.02,)"
       R"("max_candidates":2000000,)"
       R"("max_radius":30.0,"min_points":40,"normal_deviation_deg":25.0,"probability":0.99,)"

@@ -32,7 +32,7 @@ fit:
                angle_tolerance_deg: 3, min_angular_span_deg: 120, min_building_height: 3,
                min_building_width: 2, extrusions: false, revolutions: false,
                min_curved_coverage: 0.2, max_overreach: 0.5, roof_parts: false,
-               roof_partition: true, blocks: false}
+               roof_partition: false, blocks: false}
 )",
                                           "every.yaml");
   ASSERT_TRUE(loaded.ok()) << (loaded.problems.empty() ? "" : loaded.problems[0].message);
@@ -87,7 +87,7 @@ fit:
   EXPECT_EQ(o.primitives.max_overreach, 0.5);
   EXPECT_FALSE(o.primitives.roof_parts);
   EXPECT_NE(o.primitives.roof_partition, d.primitives.roof_partition);
-  EXPECT_TRUE(o.primitives.roof_partition);
+  EXPECT_FALSE(o.primitives.roof_partition);
   EXPECT_FALSE(o.primitives.blocks);
   EXPECT_EQ(o.primitives.linear_tolerance, 1.0e-6);  // kernel.linear_tolerance
 }

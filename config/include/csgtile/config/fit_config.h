@@ -87,7 +87,7 @@ struct FitPrimitivesConfig {
   bool extrusions = true;
   bool revolutions = true;
   bool roof_parts = true;
-  bool roof_partition = false;
+  bool roof_partition = true;
   bool blocks = true;
   double min_curved_coverage = 0.05;
   double max_overreach = 0.25;

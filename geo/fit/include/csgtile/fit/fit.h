@@ -160,7 +160,7 @@ struct PrimitiveOptions {
   /// part the extrusion of its polygon from the terrain clipped under its plane, the parts
   /// sharing their walls exactly. Runs after the revolutions and before every other
   /// building step, which then see only the points it left (needs `ground`).
-  bool roof_partition = false;
+  bool roof_partition = true;
   /// Points of a region no primitive explains become LoD1.2 blocks (their outline extruded
   /// from the terrain to the 70th percentile of their heights; needs `ground`). The fit
   /// pipeline makes blocks only of classified building points (ClassOptions::keep found).
