@@ -288,6 +288,24 @@ TEST_F(CityJsonSeqTest, OneFeaturePerObjectWithItsIdAttributesAndIntegerVertices
   EXPECT_FALSE(city_object(feature("block"))["attributes"].contains("fit_rms"));
 }
 
+TEST_F(CityJsonSeqTest, BuildingsCarryTheirGroundAndRoofHeights) {
+  // The 2 × 3 × 4 box from z = 0 in a file whose origin is at 2.5 m: ground 2.5, roof 6.5.
+  const Json& block = city_object(feature("block"))["attributes"];
+  EXPECT_DOUBLE_EQ(block["h_ground"].get<double>(), 2.5);
+  for (const char* key : {"h_roof_min", "h_roof_50p", "h_roof_70p", "h_roof_max"}) {
+    EXPECT_DOUBLE_EQ(block[key].get<double>(), 6.5) << key;
+  }
+  EXPECT_EQ(block["roof_surfaces"], 1);
+  for (const Json& f : sequence_->features) {
+    const Json& a = city_object(f)["attributes"];
+    ASSERT_TRUE(a.contains("h_roof_max")) << f["id"];
+    EXPECT_LE(a["h_ground"].get<double>(), a["h_roof_min"].get<double>());
+    EXPECT_LE(a["h_roof_min"].get<double>(), a["h_roof_50p"].get<double>());
+    EXPECT_LE(a["h_roof_50p"].get<double>(), a["h_roof_70p"].get<double>());
+    EXPECT_LE(a["h_roof_70p"].get<double>(), a["h_roof_max"].get<double>());
+  }
+}
+
 // ---- geometry --------------------------------------------------------------------------------
 
 TEST_F(CityJsonSeqTest, ShellsAreClosedAndOutwardOnTheQuantisedVertices) {

@@ -505,7 +505,76 @@ Json geometry_json(const ObjectGeometry& g, FeatureVertices& vertices) {
   return out;
 }
 
-Json attributes_json(const IndexObject& object, const std::optional<ObjectGeometry>& geometry) {
+// Heights of a building's model, as 3D city models publish them (issue #18 item 6): the
+// ground (lowest vertex of its ground surfaces) and its roof — lowest and highest roof
+// vertex, and the 50th and 70th percentiles of the roof's height over its footprint (each
+// roof polygon at the height of its centroid, weighted by its area seen from above) — in the
+// file's CRS heights; the number of roof surfaces. Nothing when it has no roof.
+struct RoofHeights {
+  double ground = 0.0, min = 0.0, p50 = 0.0, p70 = 0.0, max = 0.0;
+  std::size_t surfaces = 0;
+};
+
+std::optional<RoofHeights> roof_heights(const ObjectGeometry& g, const CityJsonOptions& options) {
+  auto z_of = [&](const Point& p) {
+    return static_cast<double>(p[2]) * options.scale + options.origin.z();
+  };
+  RoofHeights h;
+  h.ground = INFINITY;
+  h.min = INFINITY;
+  h.max = -INFINITY;
+  std::vector<std::pair<double, double>> samples;  // (centroid height, area from above)
+  for (const SolidShells& solid : g.solids) {
+    for (const ShellSurfaces& shell : solid) {
+      for (const Surface& s : shell) {
+        if (s.semantic == Semantic::Ground) {
+          for (const Ring& r : s.rings) {
+            for (const Point& p : r) h.ground = std::min(h.ground, z_of(p));
+          }
+        }
+        if (s.semantic != Semantic::Roof) continue;
+        ++h.surfaces;
+        double area = 0.0, moment = 0.0;
+        for (const Ring& r : s.rings) {
+          for (const Point& p : r) {
+            h.min = std::min(h.min, z_of(p));
+            h.max = std::max(h.max, z_of(p));
+          }
+          // Fan triangles from the ring's first vertex: signed areas from above, so that
+          // holes (turning the other way) subtract and concave rings add up exactly.
+          for (std::size_t k = 1; k + 1 < r.size(); ++k) {
+            const Point &a = r[0], &b = r[k], &c = r[k + 1];
+            const double t =
+                0.5 * (static_cast<double>(b[0] - a[0]) * static_cast<double>(c[1] - a[1]) -
+                       static_cast<double>(b[1] - a[1]) * static_cast<double>(c[0] - a[0]));
+            area += t;
+            moment += t * (z_of(a) + z_of(b) + z_of(c)) / 3.0;
+          }
+        }
+        if (std::abs(area) > 0.0) samples.emplace_back(moment / area, std::abs(area));
+      }
+    }
+  }
+  if (h.surfaces == 0 || samples.empty()) return std::nullopt;
+  std::sort(samples.begin(), samples.end());
+  double total = 0.0;
+  for (const auto& [z, w] : samples) total += w;
+  auto percentile = [&](double q) {
+    double run = 0.0;
+    for (const auto& [z, w] : samples) {
+      run += w;
+      if (run >= q * total) return z;
+    }
+    return samples.back().first;
+  };
+  h.p50 = percentile(0.5);
+  h.p70 = percentile(0.7);
+  if (!std::isfinite(h.ground)) h.ground = h.min;
+  return h;
+}
+
+Json attributes_json(const IndexObject& object, const std::optional<ObjectGeometry>& geometry,
+                     const CityJsonOptions& options) {
   std::set<std::string> types;
   for (const PrimitiveInfo& p : object.primitives) types.insert(p.type);
   const kernel::MassProperties mp = kernel::mass_properties(object.model.shape);
@@ -522,6 +591,14 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   if (geometry) {
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;
+    if (const auto h = roof_heights(*geometry, options)) {
+      a["h_ground"] = h->ground;
+      a["h_roof_min"] = h->min;
+      a["h_roof_50p"] = h->p50;
+      a["h_roof_70p"] = h->p70;
+      a["h_roof_max"] = h->max;
+      a["roof_surfaces"] = h->surfaces;
+    }
   }
   return a;
 }
@@ -617,7 +694,7 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
     // CityJSON's Building admits no MultiSolid: an object of several solids (a group whose
     // fuse failed, or a result in pieces) is a GenericCityObject.
     city_object["type"] = g && g->solids.size() > 1 ? "GenericCityObject" : "Building";
-    city_object["attributes"] = attributes_json(object, g);
+    city_object["attributes"] = attributes_json(object, g, options);
     if (g) {
       city_object["geometry"] = Json::array({geometry_json(*g, vertices)});
       st.collapsed_triangles += g->collapsed_triangles;
