@@ -226,6 +226,10 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
   std::vector<PartPolygon> parts(static_cast<std::size_t>(comp.count));
   if (comp.count == 0) return parts;
   const int nx = grid.nx, ny = grid.ny;
+  // Vertex ids are packed two to a 64-bit key.
+  if ((static_cast<double>(nx) + 1.0) * (static_cast<double>(ny) + 1.0) >= 4294967296.0) {
+    return parts;
+  }
   auto comp_at = [&](int i, int j) {
     if (i < 0 || j < 0 || i >= nx || j >= ny) return -1;
     return comp.of[static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) +
@@ -511,6 +515,9 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
       }
     }
     if (bad.empty()) break;
+    if (round == 63) {  // out of rounds: every chain keeps its cell edges
+      for (std::size_t c = 0; c < chains.size(); ++c) bad.insert(c);
+    }
     for (auto c : bad) {
       raw_only[c] = 1;
       chains[c].simplified = without_collinear(chains[c].raw);

@@ -63,7 +63,8 @@ struct PartPolygon {
 /// (Douglas–Peucker within `tolerance` cells, its ends fixed) and used by both sides, so that
 /// neighbouring polygons share it exactly. Where a simplified chain would cross or touch
 /// another, leave a hole outside its ring, or change a part's area by a quarter or more, the
-/// chains concerned keep their cell edges (collinear vertices removed). Deterministic.
+/// chains concerned keep their cell edges (collinear vertices removed). Deterministic. A grid
+/// of 2³² vertices or more gives the parts without polygons.
 std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolerance);
 
 }  // namespace csgtile::fit::detail

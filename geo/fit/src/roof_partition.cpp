@@ -219,15 +219,16 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       for (std::size_t k = 0; k < planes.size() && !merged; ++k) {
         RoofPlane& q = planes[k];
         const Vec3 cq = centroid(plane_points[k]);
-        if (q.n.dot(p.n) < cos_tol || std::abs(q.z(c.x(), c.y()) - c.z()) > 0.5 * tau ||
-            std::abs(p.z(cq.x(), cq.y()) - cq.z()) > 0.5 * tau) {
+        if (!(q.n.dot(p.n) >= cos_tol && std::abs(q.z(c.x(), c.y()) - c.z()) <= 0.5 * tau &&
+              std::abs(p.z(cq.x(), cq.y()) - cq.z()) <= 0.5 * tau)) {
           continue;
         }
         auto& list = plane_points[k];
         list.insert(list.end(), mine.begin(), mine.end());
         std::sort(list.begin(), list.end());
         list.erase(std::unique(list.begin(), list.end()), list.end());
-        if (const auto refit = fit_plane(in.points, list)) {
+        if (const auto refit = fit_plane(in.points, list);
+            refit && std::abs(refit->axis.z()) >= cos_wall) {  // else the plane stays
           q.n = refit->axis.z() > 0.0 ? refit->axis : Vec3(-refit->axis);
           q.d = q.n.dot(refit->point);
         }
@@ -429,6 +430,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     for (std::size_t c = 0; c < ncell; ++c) {
       if (comp.of[c] >= 0) ++size[static_cast<std::size_t>(comp.of[c])];
     }
+    // Border lengths with each neighbouring part (by component, so that a target is known
+    // by its size).
     std::vector<std::map<int, long long>> border(static_cast<std::size_t>(comp.count));
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
@@ -437,31 +440,53 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         const std::array<std::array<int, 2>, 4> nb{
             {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
         for (const auto& q : nb) {
-          const int l = grid.at(q[0], q[1]);
-          if (l < 0 || l == grid.at(i, j) || pointless(l)) continue;
-          ++border[static_cast<std::size_t>(k)][l];
+          if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
+          const int m = comp.of[static_cast<std::size_t>(q[1] * nx + q[0])];
+          if (m < 0 || m == k || pointless(grid.at(q[0], q[1]))) continue;
+          ++border[static_cast<std::size_t>(k)][m];
         }
+      }
+    }
+    // A small part joins a neighbour larger than itself (ties: the lower component), so that
+    // two small neighbours never swap labels; a piece without points joins any neighbour.
+    std::vector<int> target(static_cast<std::size_t>(comp.count), -2);  // -2: stays
+    std::vector<int> comp_label(static_cast<std::size_t>(comp.count), -1);
+    for (std::size_t c = 0; c < ncell; ++c) {
+      if (comp.of[c] >= 0) comp_label[static_cast<std::size_t>(comp.of[c])] = grid.label[c];
+    }
+    for (int k = 0; k < comp.count; ++k) {
+      const auto ks = static_cast<std::size_t>(k);
+      const bool empty = pointless(comp_label[ks]);
+      if (!empty && size[ks] >= min_cells) continue;
+      long long most = 0;
+      int best = -1;
+      for (const auto& [m, n] : border[ks]) {
+        const auto ms = static_cast<std::size_t>(m);
+        const bool larger = size[ms] > size[ks] || (size[ms] == size[ks] && m < k);
+        if ((empty || larger) && n > most) {
+          most = n;
+          best = m;
+        }
+      }
+      if (best >= 0) {
+        target[ks] = comp_label[static_cast<std::size_t>(best)];
+      } else if (empty) {
+        target[ks] = -1;  // no neighbour, no points: dropped
       }
     }
     for (std::size_t c = 0; c < ncell; ++c) {
       const int k = comp.of[c];
-      if (k < 0) continue;
-      const bool empty = pointless(grid.label[c]);
-      if (!empty && size[static_cast<std::size_t>(k)] >= min_cells) continue;
-      int target = -1;
-      long long most = 0;
-      for (const auto& [l, n] : border[static_cast<std::size_t>(k)]) {
-        if (n > most) {
-          most = n;
-          target = l;
-        }
-      }
-      if (target == -1 && !empty) continue;  // a small island: kept as it is
-      grid.label[c] = target;                // -1: dropped (no neighbour, no points)
+      if (k < 0 || target[static_cast<std::size_t>(k)] == -2) continue;
+      grid.label[c] = target[static_cast<std::size_t>(k)];
       changed = true;
     }
     changed = unpinch(grid) > 0 || changed;
     if (!changed) break;
+  }
+  if (unpinch(grid) > 0 && unpinch(grid) > 0) {
+    rejected.push_back({"roof partition", "its parts could not be made free of pinches",
+                        static_cast<long long>(pts.size())});
+    return out;
   }
   // The parts' polygons, then their solids.
   const auto parts = partition_polygons(grid, 0.9);
