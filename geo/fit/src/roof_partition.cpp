@@ -582,6 +582,32 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       high = std::max(high, z);
     }
     const bool tilted = plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
+    if (tilted && !part.holes.empty()) {
+      // A tilted roof around an inner part that stands higher (a chimney, a dormer, a tower)
+      // is not cut around it: the two overlap and the fuse joins them. Its face then has no
+      // inner ring lying on the lines of its outer one (grid lines), which the mesher's hole
+      // bridging cannot always tell apart in the roof's tilted parameter plane.
+      outline.holes.clear();
+      for (const auto& h : part.holes) {
+        const Eigen::Vector2d d = h[1] - h[0];
+        const Eigen::Vector2d inside =
+            0.5 * (h[0] + h[1]) + 1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized();
+        bool filled_higher = false;
+        for (std::size_t m = 0; m < parts.size() && !filled_higher; ++m) {
+          if (m == k || parts[m].label < 0 || parts[m].outer.size() < 3 ||
+              !inside_ring(inside, parts[m].outer)) {
+            continue;
+          }
+          const Vec2 w = world(ga + inside.x() * cell, gb + inside.y() * cell);
+          const RoofPlane& other = planes[static_cast<std::size_t>(parts[m].label)];
+          filled_higher = !std::isnan(other.d) && other.z(w.x(), w.y()) >= plane.z(w.x(), w.y());
+        }
+        if (filled_higher) continue;
+        std::vector<Vec2> hole;
+        for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+        outline.holes.push_back(std::move(hole));
+      }
+    }
     double roof = high;
     if (!tilted) {
       // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th percentile.
