@@ -323,6 +323,31 @@ TEST(FitRoofPartition, HipRoofOverAnLIsPartitionedAlongItsHipsAndValley) {
   EXPECT_GE(within, 0.9 * total) << within << " of " << total;
 }
 
+TEST(FitRoofPartition, AChimneyOnASlopeIsAPartTheSlopeIsNotCutAround) {
+  // A shed roof (6 m at y = 0 rising to 9 m at y = 10) over 14 × 10 m with a 2 × 2 m
+  // chimney standing to 10.5 m in its middle: the chimney is a part of its own, the slope's
+  // part has no hole (the two overlap; the fuse joins them), and the top is right on both.
+  const GroundGrid ground = ground_around(0, 0, 14, 10);
+  Cloud c = roof(Vec3(0, 0, 6), Vec3(14, 0, 0), Vec3(0, 4, 1.2), 41);
+  c.append(roof(Vec3(0, 4, 7.2), Vec3(6, 0, 0), Vec3(0, 2, 0.6), 42));
+  c.append(roof(Vec3(8, 4, 7.2), Vec3(6, 0, 0), Vec3(0, 2, 0.6), 43));
+  c.append(roof(Vec3(0, 6, 7.8), Vec3(14, 0, 0), Vec3(0, 4, 1.2), 44));
+  c.append(
+      testing::rectangle_cloud(Vec3(6, 4, 10.5), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.15, 0.01, 45));
+  const auto p = partition(c, ground);
+  ASSERT_GE(p.parts.size(), 2U);
+  for (const auto& part : p.parts) {
+    if (!part.spec.clips.empty()) {
+      EXPECT_TRUE(part.spec.holes.empty()) << part.what;
+    }
+  }
+  EXPECT_NEAR(top_at(p, 7.0, 5.0), 10.5, 0.2);  // the chimney
+  for (double x : {2.0, 12.0}) {
+    for (double y : {2.0, 5.0, 8.0})
+      EXPECT_NEAR(top_at(p, x, y), 6.0 + 0.3 * y, 0.3) << x << "," << y;
+  }
+}
+
 TEST(FitRoofPartition, FlatRoofWithAParapetKeepsTheRoofLevel) {
   // A 16 × 12 m flat roof at 10 m inside a 0.4 m wide parapet at 11 m.
   const GroundGrid ground = ground_around(0, 0, 16, 12);
