@@ -694,6 +694,23 @@ def measure_footprints(res, raster, buildings, origin):
     }
 
 
+def write_cells_png(path, nx, ny, px, colour_of):
+    """A PNG of nx × ny cells, px × px pixels each, north up (row j = 0 at the bottom), cell
+    (i, j) in colour_of(i, j); returns (width, height, rgb)."""
+    width, height = nx * px, ny * px
+    rgb = bytearray(width * height * 3)
+    for j in range(ny):
+        row = ny - 1 - j
+        line = bytearray()
+        for i in range(nx):
+            line += bytes(colour_of(i, j)) * px
+        for r in range(px):
+            o = (row * px + r) * width * 3
+            rgb[o:o + width * 3] = line
+    write_png(path, width, height, rgb)
+    return width, height, rgb
+
+
 def write_top_view(path, raster, px):
     """The PNG described in the module docstring; returns (width, height, distinct colours)."""
     nx, ny, top, extent = raster.nx, raster.ny, raster.top, raster.extent
@@ -709,31 +726,24 @@ def write_top_view(path, raster, px):
                 for ii in (i - 1, i, i + 1):
                     if 0 <= ii < nx and 0 <= jj < ny and top[jj * nx + ii] > shown[k]:
                         shown[k] = top[jj * nx + ii]
-    width, height = nx * px, ny * px
-    rgb = bytearray(width * height * 3)
     colours = [None] + list(TYPE_COLOURS.values())
-    for j in range(ny):
-        row = ny - 1 - j  # north up
-        line = bytearray()
-        for i in range(nx):
-            k = j * nx + i
-            if shown[k] == -math.inf:
-                g = 255 if extent[k] else 235
-            else:
-                g = int(100 + 140 * (shown[k] - zlo) / max(zhi - zlo, 1e-9))
-            c = (g, g, g)
-            if raster.model_type[k]:
-                t = colours[raster.model_type[k]]
-                c = tuple(int(0.45 * c[q] + 0.55 * t[q]) for q in range(3))
-            if raster.missed[k]:
-                c = (0, 0, 0)
-            if raster.outline[k]:
-                c = (220, 0, 0)
-            line += bytes(c) * px
-        for r in range(px):
-            o = (row * px + r) * width * 3
-            rgb[o:o + width * 3] = line
-    write_png(path, width, height, rgb)
+
+    def colour_of(i, j):
+        k = j * nx + i
+        if shown[k] == -math.inf:
+            g = 255 if extent[k] else 235
+        else:
+            g = int(100 + 140 * (shown[k] - zlo) / max(zhi - zlo, 1e-9))
+        c = (g, g, g)
+        if raster.model_type[k]:
+            t = colours[raster.model_type[k]]
+            c = tuple(int(0.45 * c[q] + 0.55 * t[q]) for q in range(3))
+        if raster.missed[k]:
+            c = (0, 0, 0)
+        if raster.outline[k]:
+            c = (220, 0, 0)
+        return c
+    width, height, rgb = write_cells_png(path, nx, ny, px, colour_of)
     return width, height, len({bytes(rgb[o:o + 3]) for o in range(0, len(rgb), 3 * px)})
 
 
@@ -807,29 +817,21 @@ def write_residual_view(path, grid, px):
     where building points have no model over them, yellow where the model covers no
     building point (false area), grey elsewhere."""
     nx, ny, tops, res = grid["nx"], grid["ny"], grid["tops"], grid.get("residuals", {})
-    width, height = nx * px, ny * px
-    rgb = bytearray(width * height * 3)
-    for j in range(ny):
-        for i in range(nx):
-            r = res.get((i, j))
-            if r is None:
-                colour = (230, 200, 40) if (i, j) in tops else (90, 90, 90)
-            else:
-                covered = sorted(v for v in r if v is not None)
-                if not covered:
-                    colour = (0, 0, 0)
-                else:
-                    m = covered[len(covered) // 2]
-                    depth = min(1.0, (abs(m) - 0.3) / 2.7) if abs(m) > 0.3 else 0.0
-                    fade = int(235 - 200 * depth)
-                    colour = (250, 250, 250) if depth == 0.0 else \
-                        ((235, fade, fade) if m > 0 else (fade, fade, 235))
-            for dy in range(px):
-                row = (height - 1 - (j * px + dy)) * width
-                for dx in range(px):
-                    k = (row + i * px + dx) * 3
-                    rgb[k:k + 3] = bytes(colour)
-    write_png(path, width, height, rgb)
+
+    def colour_of(i, j):
+        r = res.get((i, j))
+        if r is None:
+            return (230, 200, 40) if (i, j) in tops else (90, 90, 90)
+        covered = sorted(v for v in r if v is not None)
+        if not covered:
+            return (0, 0, 0)
+        m = covered[len(covered) // 2]
+        depth = min(1.0, (abs(m) - 0.3) / 2.7) if abs(m) > 0.3 else 0.0
+        fade = int(235 - 200 * depth)
+        if depth == 0.0:
+            return (250, 250, 250)
+        return (235, fade, fade) if m > 0 else (fade, fade, 235)
+    write_cells_png(path, nx, ny, px, colour_of)
 
 
 def self_test():

@@ -9,6 +9,8 @@
 
 #include "partition.h"
 
+#include "plane2d.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -55,34 +57,6 @@ bool conflict(const P& a, const P& b, const P& c, const P& d) {
   const long long dot = ((*other1)[0] - (*shared)[0]) * ((*other2)[0] - (*shared)[0]) +
                         ((*other1)[1] - (*shared)[1]) * ((*other2)[1] - (*shared)[1]);
   return dot > 0;
-}
-
-double point_segment(const P& p, const P& a, const P& b) {
-  const double ax = static_cast<double>(b[0] - a[0]), ay = static_cast<double>(b[1] - a[1]);
-  const double px = static_cast<double>(p[0] - a[0]), py = static_cast<double>(p[1] - a[1]);
-  const double l2 = ax * ax + ay * ay;
-  double t = l2 > 0.0 ? (px * ax + py * ay) / l2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  const double dx = px - t * ax, dy = py - t * ay;
-  return std::sqrt(dx * dx + dy * dy);
-}
-
-void douglas_peucker(const std::vector<P>& v, std::size_t i, std::size_t j, double tol,
-                     std::vector<char>& keep) {
-  if (j <= i + 1) return;
-  double worst = -1.0;
-  std::size_t at = i;
-  for (std::size_t k = i + 1; k < j; ++k) {
-    const double d = point_segment(v[k], v[i], v[j]);
-    if (d > worst) {
-      worst = d;
-      at = k;
-    }
-  }
-  if (worst <= tol) return;
-  keep[at] = 1;
-  douglas_peucker(v, i, at, tol, keep);
-  douglas_peucker(v, at, j, tol, keep);
 }
 
 // The chain's vertices without those collinear with their neighbours (ends kept).
@@ -247,11 +221,23 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
   auto vid = [&](const P& p) { return p[1] * (nx + 1) + p[0]; };
   // Undirected boundary edges and each boundary vertex's edges.
   std::vector<std::array<P, 2>> edges;
+  std::vector<std::set<int>> next_to(parts.size());
+  auto boundary = [&](int x, int y, const P& a, const P& b) {
+    if (x == y) return;
+    edges.push_back({a, b});
+    if (x >= 0 && y >= 0) {
+      next_to[static_cast<std::size_t>(x)].insert(y);
+      next_to[static_cast<std::size_t>(y)].insert(x);
+    }
+  };
   for (int j = 0; j <= ny; ++j) {
     for (int i = 0; i <= nx; ++i) {
-      if (j < ny && comp_at(i - 1, j) != comp_at(i, j)) edges.push_back({P{i, j}, P{i, j + 1}});
-      if (i < nx && comp_at(i, j - 1) != comp_at(i, j)) edges.push_back({P{i, j}, P{i + 1, j}});
+      if (j < ny) boundary(comp_at(i - 1, j), comp_at(i, j), P{i, j}, P{i, j + 1});
+      if (i < nx) boundary(comp_at(i, j - 1), comp_at(i, j), P{i, j}, P{i + 1, j});
     }
+  }
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    parts[k].neighbours.assign(next_to[k].begin(), next_to[k].end());
   }
   std::unordered_map<long long, std::vector<std::size_t>> at_vertex;
   for (std::size_t e = 0; e < edges.size(); ++e) {
@@ -422,9 +408,13 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
   // chains around a part whose rings turned the wrong way or lost a hole, until none is left.
   std::vector<char> raw_only(chains.size(), 0);
   for (std::size_t c = 0; c < chains.size(); ++c) {
+    std::vector<Vec2> at;  // grid vertices are small integers: exact as doubles
+    for (const P& q : chains[c].raw) {
+      at.emplace_back(static_cast<double>(q[0]), static_cast<double>(q[1]));
+    }
     std::vector<char> keep(chains[c].raw.size(), 0);
     keep.front() = keep.back() = 1;
-    douglas_peucker(chains[c].raw, 0, chains[c].raw.size() - 1, tolerance, keep);
+    douglas_peucker(at, 0, at.size() - 1, tolerance, keep);
     for (std::size_t k = 0; k < keep.size(); ++k) {
       if (keep[k]) chains[c].simplified.push_back(chains[c].raw[k]);
     }
@@ -531,12 +521,9 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
       r.emplace_back(static_cast<double>(p[0]), static_cast<double>(p[1]));
     }
     auto& part = parts[static_cast<std::size_t>(cyc.comp)];
-    if (ring_area2(ring) > 0 && (part.outer.empty() || ring_area2(ring) > 0)) {
-      if (part.outer.empty()) {
-        part.outer = std::move(r);
-      } else {
-        part.holes.push_back(std::move(r));  // a second positive ring: not expected
-      }
+    // One counter-clockwise ring per 4-connected part: its outline; the others are holes.
+    if (ring_area2(ring) > 0 && part.outer.empty()) {
+      part.outer = std::move(r);
     } else {
       part.holes.push_back(std::move(r));
     }

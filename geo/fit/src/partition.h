@@ -50,12 +50,13 @@ Components label_components(const LabelGrid& grid);
 int unpinch(LabelGrid& grid);
 
 /// One part: its component, label, outer ring (counter-clockwise) and holes (clockwise), in
-/// grid units (vertex (i, j) is the corner (i, j) of the cells), and its cells.
+/// grid units (vertex (i, j) is the corner (i, j) of the cells), its cells and neighbours.
 struct PartPolygon {
   int label = -1;
   std::vector<Eigen::Vector2d> outer;
   std::vector<std::vector<Eigen::Vector2d>> holes;
-  std::vector<int> cells;  ///< ascending cell indices
+  std::vector<int> cells;       ///< ascending cell indices
+  std::vector<int> neighbours;  ///< the parts sharing a cell edge with it, ascending
 };
 
 /// The polygons of every component of a pinch-free grid (unpinch). Each boundary between two

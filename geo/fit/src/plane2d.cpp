@@ -36,6 +36,25 @@ double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
   return (p - (a + t * ab)).norm();
 }
 
+void douglas_peucker(const std::vector<Vec2>& points, std::size_t i, std::size_t j, double tol,
+                     std::vector<char>& keep) {
+  const std::size_t n = points.size();
+  if ((j + n - i) % n < 2) return;
+  double worst = -1.0;
+  std::size_t at = i;
+  for (std::size_t k = (i + 1) % n; k != j; k = (k + 1) % n) {
+    const double d = segment_distance(points[k], points[i], points[j]);
+    if (d > worst) {
+      worst = d;
+      at = k;
+    }
+  }
+  if (worst <= tol) return;
+  keep[at] = 1;
+  douglas_peucker(points, i, at, tol, keep);
+  douglas_peucker(points, at, j, tol, keep);
+}
+
 bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
                     const std::vector<std::vector<Vec2>>& holes) {
   bool in = inside_ring(p, outer);

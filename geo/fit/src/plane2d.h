@@ -34,6 +34,12 @@ bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring);
 /// Distance from `p` to the segment a–b (to `a` when the segment has no length).
 double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b);
 
+/// Douglas–Peucker on the chain points[i..j] (indices modulo points.size(), so a ring's arc
+/// wraps round): marks in `keep` the vertices a simplification within `tol` keeps between
+/// the ends (the ends themselves are the caller's).
+void douglas_peucker(const std::vector<Vec2>& points, std::size_t i, std::size_t j, double tol,
+                     std::vector<char>& keep);
+
 /// Whether `p` lies inside `outer` and in none of the `holes`.
 bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
                     const std::vector<std::vector<Vec2>>& holes);

@@ -28,26 +28,6 @@ namespace {
 using kernel::PrimitiveType;
 using kernel::Vec2;
 
-// Douglas–Peucker on the open chain ring[i..j] (indices modulo n), marking kept vertices.
-void simplify(const std::vector<Vec2>& ring, std::size_t i, std::size_t j, double tol,
-              std::vector<char>& keep) {
-  const std::size_t n = ring.size();
-  if ((j + n - i) % n < 2) return;
-  double worst = -1.0;
-  std::size_t at = i;
-  for (std::size_t k = (i + 1) % n; k != j; k = (k + 1) % n) {
-    const double d = segment_distance(ring[k], ring[i], ring[j]);
-    if (d > worst) {
-      worst = d;
-      at = k;
-    }
-  }
-  if (worst <= tol) return;
-  keep[at] = 1;
-  simplify(ring, i, at, tol, keep);
-  simplify(ring, at, j, tol, keep);
-}
-
 // The boundary loops of the occupied cells of a grid (nx × ny, a one-cell empty border),
 // with the occupied side on the left: outer rings counter-clockwise, holes clockwise. At a
 // vertex where two loops touch diagonally the trace turns left, keeping them apart.
@@ -195,8 +175,8 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       if ((ring[k] - ring[0]).norm() > (ring[far] - ring[0]).norm()) far = k;
     }
     keep[0] = keep[far] = 1;
-    simplify(ring, 0, far, 1.0 * cell, keep);
-    simplify(ring, far, 0, 1.0 * cell, keep);
+    douglas_peucker(ring, 0, far, 1.0 * cell, keep);
+    douglas_peucker(ring, far, 0, 1.0 * cell, keep);
     std::vector<Vec2> simple;
     for (std::size_t k = 0; k < ring.size(); ++k) {
       if (keep[k]) simple.push_back(ring[k]);

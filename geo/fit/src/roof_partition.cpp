@@ -9,10 +9,10 @@
 // tile the outline and the assembly fuses them into one solid without gaps or overlaps.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
-#include <set>
 
 #include "fit_internal.h"
 #include "partition.h"
@@ -87,13 +87,21 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(i);
   };
   // Points per cell (all, and those not on walls), as index lists.
-  std::vector<std::size_t> home(pts.size());
   std::vector<std::vector<std::uint32_t>> in_cell(ncell), roof_in_cell(ncell);
   for (std::size_t k = 0; k < pts.size(); ++k) {
-    home[k] = cell_of(flat[k]);
-    in_cell[home[k]].push_back(pts[k]);
-    if (!wall[pts[k]]) roof_in_cell[home[k]].push_back(pts[k]);
+    const std::size_t c = cell_of(flat[k]);
+    in_cell[c].push_back(pts[k]);
+    if (!wall[pts[k]]) roof_in_cell[c].push_back(pts[k]);
   }
+  // The 4-neighbours of cell c inside the grid, as cell indices.
+  auto for_each_neighbour = [&](std::size_t c, const auto& visit) {
+    const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
+              j = static_cast<int>(c / static_cast<std::size_t>(nx));
+    if (i + 1 < nx) visit(c + 1);
+    if (i > 0) visit(c - 1);
+    if (j + 1 < ny) visit(c + static_cast<std::size_t>(nx));
+    if (j > 0) visit(c - static_cast<std::size_t>(nx));
+  };
   // A free cell's cost and the height band of a point at the top of its cell.
   const double tau = std::max(0.25, 2.5 * in.ransac->epsilon);
   // The outline: cells holding points, closed over the gaps between scan lines (3 × 3), with
@@ -134,15 +142,11 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     std::vector<char> inner = mask;
     for (int pass = 0; pass < margin; ++pass) {
       std::vector<char> next = inner;
-      for (int j = 0; j < ny; ++j) {
-        for (int i = 0; i < nx; ++i) {
-          const auto c = static_cast<std::size_t>(j * nx + i);
-          if (!inner[c]) continue;
-          const bool edge = i == 0 || j == 0 || i == nx - 1 || j == ny - 1 || !inner[c - 1] ||
-                            !inner[c + 1] || !inner[c - static_cast<std::size_t>(nx)] ||
-                            !inner[c + static_cast<std::size_t>(nx)];
-          if (edge) next[c] = 0;
-        }
+      for (std::size_t c = 0; c < ncell; ++c) {
+        if (!inner[c]) continue;
+        int inside = 0;  // 4-neighbours in the grid and in the interior
+        for_each_neighbour(c, [&](std::size_t k) { inside += inner[k] ? 1 : 0; });
+        if (inside < 4) next[c] = 0;
       }
       inner = std::move(next);
     }
@@ -251,8 +255,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
   }
   std::vector<std::vector<int>> candidates(ncell);
+  std::vector<int> marked(ncell, -1);  // the last plane that listed the cell
   for (std::size_t id = 0; id < planes.size(); ++id) {
-    std::vector<char> mark(ncell, 0);
     for (auto i : plane_points[id]) {
       const std::size_t c = cell_of(Vec2(in.points[i].x(), in.points[i].y()));
       const int ci = static_cast<int>(c % static_cast<std::size_t>(nx)),
@@ -262,8 +266,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
           const int x = ci + di, y = cj + dj;
           if (x < 0 || y < 0 || x >= nx || y >= ny) continue;
           const auto k = static_cast<std::size_t>(y * nx + x);
-          if (mark[k]) continue;
-          mark[k] = 1;
+          if (marked[k] == static_cast<int>(id)) continue;
+          marked[k] = static_cast<int>(id);
           candidates[k].push_back(static_cast<int>(id));
         }
       }
@@ -306,32 +310,23 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   // Cells without roof points take a neighbour's label (breadth first, in cell order).
   for (std::size_t h = 0; h < queue.size(); ++h) {
     const std::size_t c = queue[h];
-    const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
-              j = static_cast<int>(c / static_cast<std::size_t>(nx));
-    const std::array<std::array<int, 2>, 4> nb{{{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
-    for (const auto& q : nb) {
-      if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
-      const auto k = static_cast<std::size_t>(q[1] * nx + q[0]);
-      if (!mask[k] || label[k] != -1) continue;
+    for_each_neighbour(c, [&](std::size_t k) {
+      if (!mask[k] || label[k] != -1) return;
       label[k] = label[c];
       queue.push_back(k);
-    }
+    });
   }
   for (std::size_t c = 0; c < ncell; ++c) {
     if (mask[c] && label[c] == -1) mask[c] = 0;
   }
   // Smoothing: each cell takes the label of least cost + λ per 4-neighbour labelled otherwise.
   auto neighbours = [&](std::size_t c) {
-    const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
-              j = static_cast<int>(c / static_cast<std::size_t>(nx));
     std::array<int, 4> l{-1, -1, -1, -1};
-    const std::array<std::array<int, 2>, 4> nb{{{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
-    for (std::size_t k = 0; k < 4; ++k) {
-      const auto& q = nb[k];
-      if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
-      const auto x = static_cast<std::size_t>(q[1] * nx + q[0]);
-      if (mask[x]) l[k] = label[x];
-    }
+    std::size_t n = 0;
+    for_each_neighbour(c, [&](std::size_t x) {
+      if (mask[x]) l[n] = label[x];
+      ++n;
+    });
     return l;
   };
   for (int sweep = 0; sweep < 6; ++sweep) {
@@ -383,20 +378,12 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       for (std::size_t h = 0; h < piece.size(); ++h) {
         const std::size_t c = piece[h];
         if (std::isnan(top[c])) continue;  // an empty cell joins a piece but bridges none
-        const int i = static_cast<int>(c % static_cast<std::size_t>(nx)),
-                  j = static_cast<int>(c / static_cast<std::size_t>(nx));
-        const std::array<std::array<int, 2>, 4> nb{
-            {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
-        for (const auto& q : nb) {
-          if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
-          const auto k = static_cast<std::size_t>(q[1] * nx + q[0]);
-          if (!mask[k] || label[k] != kFree || seen[k]) continue;
-          if (!std::isnan(top[k]) && std::abs(top[c] - top[k]) >= step) {
-            continue;
-          }
+        for_each_neighbour(c, [&](std::size_t k) {
+          if (!mask[k] || label[k] != kFree || seen[k]) return;
+          if (!std::isnan(top[k]) && std::abs(top[c] - top[k]) >= step) return;
           seen[k] = 1;
           piece.push_back(k);
-        }
+        });
       }
       std::vector<double> z;
       for (auto c : piece) {
@@ -433,19 +420,14 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     // Border lengths with each neighbouring part (by component, so that a target is known
     // by its size).
     std::vector<std::map<int, long long>> border(static_cast<std::size_t>(comp.count));
-    for (int j = 0; j < ny; ++j) {
-      for (int i = 0; i < nx; ++i) {
-        const int k = comp.of[static_cast<std::size_t>(j * nx + i)];
-        if (k < 0) continue;
-        const std::array<std::array<int, 2>, 4> nb{
-            {{i + 1, j}, {i - 1, j}, {i, j + 1}, {i, j - 1}}};
-        for (const auto& q : nb) {
-          if (q[0] < 0 || q[1] < 0 || q[0] >= nx || q[1] >= ny) continue;
-          const int m = comp.of[static_cast<std::size_t>(q[1] * nx + q[0])];
-          if (m < 0 || m == k || pointless(grid.at(q[0], q[1]))) continue;
-          ++border[static_cast<std::size_t>(k)][m];
-        }
-      }
+    for (std::size_t c = 0; c < ncell; ++c) {
+      const int k = comp.of[c];
+      if (k < 0) continue;
+      for_each_neighbour(c, [&](std::size_t x) {
+        const int m = comp.of[x];
+        if (m < 0 || m == k || pointless(grid.label[x])) return;
+        ++border[static_cast<std::size_t>(k)][m];
+      });
     }
     // A small part joins a neighbour larger than itself (ties: the lower component), so that
     // two small neighbours never swap labels; a piece without points joins any neighbour.
@@ -503,26 +485,12 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       }
       bases[k] = lowest_ground_under(*o.ground, footprint);
     }
-    const Components comp = label_components(grid);
-    std::vector<std::set<int>> next_to(parts.size());
-    auto touch = [&](int x, int y) {
-      if (x < 0 || y < 0 || x == y) return;
-      next_to[static_cast<std::size_t>(x)].insert(y);
-      next_to[static_cast<std::size_t>(y)].insert(x);
-    };
-    for (int j = 0; j < ny; ++j) {
-      for (int i = 0; i < nx; ++i) {
-        const auto c = static_cast<std::size_t>(j * nx + i);
-        if (i + 1 < nx) touch(comp.of[c], comp.of[c + 1]);
-        if (j + 1 < ny) touch(comp.of[c], comp.of[c + static_cast<std::size_t>(nx)]);
-      }
-    }
     for (bool changed = true; changed;) {
       changed = false;
       std::vector<double> next = bases;
       for (std::size_t k = 0; k < parts.size(); ++k) {
-        if (std::isfinite(bases[k]) || k >= next_to.size()) continue;
-        for (int n : next_to[k]) {
+        if (std::isfinite(bases[k])) continue;
+        for (int n : parts[k].neighbours) {
           const double b = bases[static_cast<std::size_t>(n)];
           if (std::isfinite(b) && !(next[k] >= b)) next[k] = b;
         }

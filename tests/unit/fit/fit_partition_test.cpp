@@ -17,6 +17,7 @@
 #include "fit_internal.h"
 #include "partition.h"
 #include "plane2d.h"
+#include "proposal_input.h"
 
 namespace csgtile::fit {
 namespace {
@@ -171,18 +172,9 @@ Partitioned partition(const Cloud& c, const GroundGrid& ground) {
   PrimitiveOptions options;
   options.ground = &ground;
   options.roof_partition = true;
-  std::vector<char> used(c.points.size(), 0), absorbed(shapes->shapes.size(), 0);
-  detail::ProposalInput in;
-  in.points = c.points;
-  in.normals = c.normals;
-  in.shapes = &shapes.value();
-  in.used = &used;
-  in.absorbed = &absorbed;
-  in.options = &options;
-  in.ransac = &o;
-  in.cell = 3.0 * o.epsilon;
+  const testing::FreshProposalInput fresh(c, shapes.value(), options, o);
   Partitioned out;
-  out.parts = detail::propose_roof_partition(in, out.rejected);
+  out.parts = detail::propose_roof_partition(fresh.in, out.rejected);
   for (const auto& p : out.parts) {
     auto solid = kernel::build_primitive(p.spec);
     EXPECT_TRUE(solid.ok()) << p.what << ": " << solid.error().message;
@@ -290,24 +282,15 @@ TEST(FitRoofPartition, HipRoofOverAnLIsPartitionedAlongItsHipsAndValley) {
     return std::max(wing(x, y, 0, 10, 0, 20), wing(x, y, 0, 20, 0, 10));
   };
   Cloud c;
-  std::uint64_t state = 99;
-  auto uniform = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) * 0x1.0p-53;
-  };
+  // Points uniform over the square, on the truth with σ = 3 cm along the normal of its slope.
+  testing::Draw d(99);
   for (int k = 0; k < 3000; ++k) {
-    const double x = 20.0 * uniform(), y = 20.0 * uniform();
+    const double x = d.uniform(0.0, 20.0), y = d.uniform(0.0, 20.0), h = 1e-3;
     const double z = truth(x, y);
     if (!std::isfinite(z)) continue;
-    c.points.emplace_back(x, y, z + 0.03 * (uniform() - 0.5) * 3.4);
-    c.normals.emplace_back(0, 0, 0);
-  }
-  // Normals from the truth's slopes (the tests' clouds carry their normals).
-  for (std::size_t k = 0; k < c.points.size(); ++k) {
-    const double x = c.points[k].x(), y = c.points[k].y(), h = 1e-3;
     const double gx = (truth(x + h, y) - truth(x - h, y)) / (2 * h);
     const double gy = (truth(x, y + h) - truth(x, y - h)) / (2 * h);
-    c.normals[k] = Vec3(-gx, -gy, 1.0).normalized();
+    c.add(Vec3(x, y, z), Vec3(-gx, -gy, 1.0).normalized(), 0.03, d);
   }
   const auto p = partition(c, ground);
   EXPECT_GE(p.parts.size(), 6U);

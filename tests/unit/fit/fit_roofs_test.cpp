@@ -15,6 +15,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "fit_clouds.h"
 #include "fit_internal.h"
+#include "proposal_input.h"
 
 namespace csgtile::fit {
 namespace {
@@ -247,18 +248,9 @@ TEST(FitRoofs, RoofPartOfAShedOverAnLIsTheClippedExtrusionOfTheL) {
   ASSERT_TRUE(shapes.ok());
   PrimitiveOptions options;
   options.ground = &ground;
-  std::vector<char> used(c.points.size(), 0), absorbed(shapes->shapes.size(), 0);
-  detail::ProposalInput in;
-  in.points = c.points;
-  in.normals = c.normals;
-  in.shapes = &shapes.value();
-  in.used = &used;
-  in.absorbed = &absorbed;
-  in.options = &options;
-  in.ransac = &o;
-  in.cell = 3.0 * o.epsilon;
+  const testing::FreshProposalInput fresh(c, shapes.value(), options, o);
   std::vector<Rejection> rejected;
-  const auto parts = detail::propose_roof_parts(in, rejected);
+  const auto parts = detail::propose_roof_parts(fresh.in, rejected);
   ASSERT_FALSE(parts.empty());
   const kernel::PrimitiveSpec& s = parts[0].spec;  // the largest plane: the whole roof
   ASSERT_EQ(s.type, PrimitiveType::Extrusion);
