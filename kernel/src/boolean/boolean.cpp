@@ -921,6 +921,12 @@ class BooleanEngine {
     for (const Hit& h : hits) {
       if (std::abs(h.t - t) > param_slack(std::abs(t))) continue;
       BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
+      // Parameters this close can still name points apart on a fast curve (the section of a
+      // plane almost parallel to a cylinder's axis runs kilometres per radian): the hit is
+      // this vertex only where its point on the edge is.
+      if (!e.degenerate() &&
+          (e.curve->point(h.s) - p).norm() > std::max(options_.tolerance, e.tolerance))
+        continue;
       // A pole (degenerate edge) is split in its parameter where a meridian reaches it.
       if (!e.degenerate() && (v == e.v0 || v == e.v1)) continue;
       e.splits.emplace_back(h.s, v);

@@ -175,8 +175,9 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
                            [&](const BUse& o) { return o.edge == h.edge; });
       });
       if (shares_edge) continue;
-      FacePolygon poly;
-      poly.loops.push_back(loop_points(m, outers[i]));
+      // Against the piece's curved sides, not their chords: a hole can come closer to a
+      // circle than its sampled polygon does (a box's corner 4 mm inside an 8 m disc).
+      const FacePolygon poly = face_polygon(m, face, {outers[i]});
       auto in = poly.inside(probe, 0.0);
       if (in && *in && (best < 0 || outer_areas[i] < outer_areas[static_cast<std::size_t>(best)])) {
         best = static_cast<int>(i);

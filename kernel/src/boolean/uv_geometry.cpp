@@ -81,47 +81,57 @@ std::vector<Vec2> sample_use(const BModel& m, const BUse& use, int samples) {
   return out;
 }
 
-FacePolygon face_polygon(const BModel& m, const BFace& face) {
+namespace {
+
+void add_loop(FacePolygon& p, const BModel& m, const BLoop& loop) {
+  std::vector<Vec2> pts;
+  std::vector<FacePolygon::Arc> arcs;
+  for (const BUse& use : loop) {
+    const std::vector<double> ts = sample_parameters(m, use, 48);
+    const bool straight =
+        use.pcurve->kind() == Curve2dKind::Line || use.pcurve->kind() == Curve2dKind::Polyline;
+    for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
+      const Vec2 a = use.pcurve->point(ts[i]), b = use.pcurve->point(ts[i + 1]);
+      pts.push_back(a);
+      FacePolygon::Arc arc;
+      if (!straight) {
+        // The bulge seen at three points, doubled: the arcs are short stretches of smooth
+        // curves, whose distance from the chord is largest near the middle.
+        for (const double f : {0.25, 0.5, 0.75}) {
+          arc.bulge =
+              std::max(arc.bulge,
+                       segment_distance(use.pcurve->point(ts[i] + f * (ts[i + 1] - ts[i])), a, b));
+        }
+        arc.bulge *= kArcBulgeSafety;
+        arc.curve = use.pcurve;
+        arc.t0 = ts[i];
+        arc.t1 = ts[i + 1];
+      }
+      arcs.push_back(std::move(arc));
+    }
+  }
+  for (const Vec2& q : pts) {
+    p.min = p.min.cwiseMin(q);
+    p.max = p.max.cwiseMax(q);
+  }
+  p.loops.push_back(std::move(pts));
+  p.arcs.push_back(std::move(arcs));
+}
+
+}  // namespace
+
+FacePolygon face_polygon(const BModel& m, const BFace& face, const std::vector<BLoop>& loops) {
   FacePolygon p;
   p.u_period = face.surface->u_period();
   p.v_period = face.surface->v_period();
   p.min = Vec2::Constant(std::numeric_limits<double>::infinity());
   p.max = -p.min;
-  for (const BLoop& loop : face.loops) {
-    std::vector<Vec2> pts;
-    std::vector<FacePolygon::Arc> arcs;
-    for (const BUse& use : loop) {
-      const std::vector<double> ts = sample_parameters(m, use, 48);
-      const bool straight =
-          use.pcurve->kind() == Curve2dKind::Line || use.pcurve->kind() == Curve2dKind::Polyline;
-      for (std::size_t i = 0; i + 1 < ts.size(); ++i) {
-        const Vec2 a = use.pcurve->point(ts[i]), b = use.pcurve->point(ts[i + 1]);
-        pts.push_back(a);
-        FacePolygon::Arc arc;
-        if (!straight) {
-          // The bulge seen at three points, doubled: the arcs are short stretches of smooth
-          // curves, whose distance from the chord is largest near the middle.
-          for (const double f : {0.25, 0.5, 0.75}) {
-            arc.bulge = std::max(
-                arc.bulge,
-                segment_distance(use.pcurve->point(ts[i] + f * (ts[i + 1] - ts[i])), a, b));
-          }
-          arc.bulge *= kArcBulgeSafety;
-          arc.curve = use.pcurve;
-          arc.t0 = ts[i];
-          arc.t1 = ts[i + 1];
-        }
-        arcs.push_back(std::move(arc));
-      }
-    }
-    for (const Vec2& q : pts) {
-      p.min = p.min.cwiseMin(q);
-      p.max = p.max.cwiseMax(q);
-    }
-    p.loops.push_back(std::move(pts));
-    p.arcs.push_back(std::move(arcs));
-  }
+  for (const BLoop& loop : loops) add_loop(p, m, loop);
   return p;
+}
+
+FacePolygon face_polygon(const BModel& m, const BFace& face) {
+  return face_polygon(m, face, face.loops);
 }
 
 double FacePolygon::boundary_distance(const Vec2& uv) const {

@@ -37,6 +37,9 @@ struct FacePolygon {
   double boundary_distance(const Vec2& uv) const;
 };
 FacePolygon face_polygon(const BModel& m, const BFace& face);
+/// The polygon of some loops on `face`'s surface (e.g. one piece's outer loop while the face
+/// is being split), arcs kept as in face_polygon.
+FacePolygon face_polygon(const BModel& m, const BFace& face, const std::vector<BLoop>& loops);
 
 /// A crossing of a curve a(t) with a curve b(s) in the (u, v) plane.
 struct Crossing {

@@ -1,10 +1,12 @@
 // The closed-form Boolean cases of ../shared/cases: valid results with exact volumes, areas
 // and topology counts — or, for the cases listed in kNotYetSupported, a named error (never a
 // silently wrong solid). A listed case that starts to pass fails this test, so the list
-// shrinks as the kernel grows.
+// shrinks as the kernel grows. The cases of ../shared/cases/regressions (found failing outside
+// the tests) are each a named test of their own: valid, their volume and solid count.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -31,6 +33,12 @@ std::vector<std::string> case_names() {
   return names;
 }
 
+BooleanOp scene_op(geo::BooleanOp op) {
+  return op == geo::BooleanOp::Fuse     ? BooleanOp::Fuse
+         : op == geo::BooleanOp::Common ? BooleanOp::Common
+                                        : BooleanOp::Cut;
+}
+
 class BooleanCase : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(BooleanCase, MatchesClosedForm) {
@@ -40,10 +48,7 @@ TEST_P(BooleanCase, MatchesClosedForm) {
   ASSERT_TRUE(scene.ok()) << scene.error().message;
   std::vector<Shape> solids;
   for (const auto& p : scene->primitives) solids.push_back(build_primitive(p.spec).value());
-  const BooleanOp op = scene->op == geo::BooleanOp::Fuse     ? BooleanOp::Fuse
-                       : scene->op == geo::BooleanOp::Common ? BooleanOp::Common
-                                                             : BooleanOp::Cut;
-  auto result = boolean_fold(solids, op);
+  auto result = boolean_fold(solids, scene_op(scene->op));
   if (kNotYetSupported.count(name)) {
     ASSERT_FALSE(result.ok()) << name << " now succeeds: take it off kNotYetSupported";
     EXPECT_FALSE(result.error().message.empty());
@@ -89,6 +94,48 @@ TEST_P(BooleanCase, MatchesClosedForm) {
 INSTANTIATE_TEST_SUITE_P(SharedCases, BooleanCase, ::testing::ValuesIn(case_names()),
                          [](const auto& param_info) { return param_info.param; });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(BooleanCase);
+
+// File stems of ../shared/cases/regressions/*.json, sorted (empty where absent).
+std::vector<std::string> regression_names() {
+  std::vector<std::string> names;
+  const auto dir = test::shared_dir() / "cases" / "regressions";
+  if (!std::filesystem::is_directory(dir)) return names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+class BooleanRegression : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(BooleanRegression, IsValidWithItsVolume) {
+  const auto path = test::shared_dir() / "cases" / "regressions" / (GetParam() + ".json");
+  auto scene = geo::read_scene(path);
+  ASSERT_TRUE(scene.ok()) << scene.error().message;
+  const auto expected = nlohmann::json::parse(test::read_file(path)).at("expected");
+  std::vector<Shape> solids;
+  for (const auto& p : scene->primitives) solids.push_back(build_primitive(p.spec).value());
+  auto result = boolean_fold(solids, scene_op(scene->op));
+  ASSERT_TRUE(result.ok()) << error_code_name(result.error().code) << ": "
+                           << result.error().message;
+  const CheckReport report = check_shape(result.value());
+  EXPECT_EQ(report.valid(), expected.value("valid", true))
+      << (report.valid() ? "" : report.issues.front().message);
+  if (expected.contains("volume")) {
+    const double v = expected.at("volume").get<double>();
+    EXPECT_NEAR(mass_properties(result.value()).volume, v, 1e-7 * std::max(1.0, v));
+  }
+  if (expected.contains("solids")) {
+    EXPECT_EQ(count_shapes(result.value())[static_cast<int>(ShapeKind::Solid)],
+              expected.at("solids").get<std::size_t>());
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedRegressions, BooleanRegression,
+                         ::testing::ValuesIn(regression_names()),
+                         [](const auto& param_info) { return param_info.param; });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(BooleanRegression);
 
 }  // namespace
 }  // namespace csgtile::kernel

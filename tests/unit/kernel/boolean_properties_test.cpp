@@ -372,6 +372,36 @@ TEST(BooleanDegenerate, ClosedEdgePartAcrossItsVertex) {
   }
 }
 
+// A fitted column (tilted 1 mrad) and a fitted beam (turned 0.3 mrad) whose side faces run
+// almost parallel to the column's axis (the timber gate fitted from a scan, each primitive a
+// few millimetres off): such a face cuts the column in a section that runs kilometres per
+// radian of its angle parameter, so the two ends of a short piece (where it meets the beam's
+// top and where it meets the column's top circle, 1.3 mm apart) have parameters within the
+// parameter resolution. The column's top circle was split at the beam's corner, and the fuse
+// failed the Euler check (in 8 of 10 gates with primitives moved by up to 2 mm).
+TEST(BooleanDegenerate, FaceAlmostParallelToATiltedColumnsAxis) {
+  for (const double top : {-0.0013, 0.0, 0.0013}) {
+    for (const double dx : {-0.0003, 0.0, 0.0003}) {
+      const Shape column = make_cylinder(0.1504, 4).value().moved(
+          Location::translation(Vec3(6, 3, 0)) *
+          Location::rotation(Vec3::Zero(), Vec3::UnitY(), 0.00095));
+      const Shape beam = make_box(3, 0.2, 0.3)
+                             .value()
+                             .moved(Location::translation(Vec3(6 + dx, 2.9, 3.7 + top)) *
+                                    Location::rotation(Vec3::Zero(), Vec3::UnitZ(), 0.00034));
+      const std::string what = "top " + std::to_string(top) + " dx " + std::to_string(dx);
+      const Shape fused = valid(boolean_operation(column, beam, BooleanOp::Fuse), what + " fuse");
+      const Shape common =
+          valid(boolean_operation(column, beam, BooleanOp::Common), what + " common");
+      if (fused.is_null() || common.is_null()) continue;
+      EXPECT_EQ(solids(fused), 1u) << what;
+      EXPECT_NEAR(volume(fused) + volume(common), volume(column) + volume(beam),
+                  1e-9 * volume(fused))
+          << what;
+    }
+  }
+}
+
 // A dome on its drum: the sphere's equator is the cylinder's top rim (a closed section along
 // a closed boundary edge, whose vertices need not coincide), the drum's side tangent to the
 // sphere there. Regression: csgtile synth city-block's hall (free edges before). Volumes in
