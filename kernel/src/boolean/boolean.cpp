@@ -934,6 +934,27 @@ class BooleanEngine {
     return v;
   }
 
+  // Whether face f's boundary (its vertices and the middles of its edges) lies on face g's
+  // surface within the tolerance of each edge.
+  bool lies_on(std::size_t f, std::size_t g) const {
+    const Surface& surface = *model_.faces[g].surface;
+    auto near = [&](const Vec3& p, double allowed) {
+      const Vec2 uv = surface.closest_parameters(p);
+      return (surface.point(uv.x(), uv.y()) - p).norm() <= allowed;
+    };
+    for (const BLoop& loop : model_.faces[f].loops) {
+      for (const BUse& u : loop) {
+        const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+        if (e.degenerate()) continue;
+        const double allowed = std::max(options_.tolerance, e.tolerance);
+        if (!near(e.curve->point(e.t0), allowed) ||
+            !near(e.curve->point(0.5 * (e.t0 + e.t1)), allowed))
+          return false;
+      }
+    }
+    return true;
+  }
+
   Status intersect_faces() {
     const double tol = options_.tolerance;
     boundary_boxes_.clear();
@@ -946,8 +967,17 @@ class BooleanEngine {
         BoundingBox clip;
         clip.min = ba.min.cwiseMax(bb.min);
         clip.max = ba.max.cwiseMin(bb.max);
-        const SsiResult ssi =
+        SsiResult ssi =
             intersect_surfaces(*model_.faces[fa].surface, *model_.faces[fb].surface, clip, tol);
+        if (ssi.kind == SsiKind::Coincident && !(lies_on(fa, fb) && lies_on(fb, fa))) {
+          // One within tolerance over the sliver where the faces' boxes meet (two planes at
+          // 4° sharing one corner, their boxes touching along a line), yet apart over the
+          // faces: decided again over both faces' extent, where they cross.
+          BoundingBox whole = ba;
+          whole.add(bb);
+          ssi =
+              intersect_surfaces(*model_.faces[fa].surface, *model_.faces[fb].surface, whole, tol);
+        }
         if (ssi.kind == SsiKind::Unsupported) return Status(ErrorCode::Unsupported, ssi.reason);
         if (ssi.kind == SsiKind::Coincident) {
           coincident_.emplace_back(fa, fb);

@@ -402,6 +402,31 @@ TEST(BooleanDegenerate, FaceAlmostParallelToATiltedColumnsAxis) {
   }
 }
 
+// Two walls back to back at 4°, one block standing on the other, sharing one corner (a row
+// of houses fitted from AHN: the roof part of one house on the base of its neighbour): the
+// walls' faces meet only in that corner, where any two planes through it coincide within
+// tolerance. They were taken as one plane, every edge of one wall as lying in the other, and
+// the fuse refused ("the section of a plane and a plane has no exact pcurve").
+TEST(BooleanDegenerate, WallsAtASmallAngleSharingOneCorner) {
+  for (const double degrees : {-4.0, -0.5, 4.0}) {
+    const double angle = degrees * std::numbers::pi / 180.0;
+    const Shape lower = make_box(2, 2, 1).value();
+    const Shape upper =
+        make_box(2, 2, 1).value().moved(Location::translation(Vec3(2, 2, 1)) *
+                                        Location::rotation(Vec3::Zero(), Vec3::UnitZ(), angle));
+    // A third block across both makes the fuse one solid.
+    const Shape bridge = box_at(Vec3(1, 1, 2), Location::translation(Vec3(1.5, 1.5, 0)));
+    const std::string what = std::to_string(degrees) + "°";
+    const Shape fused = valid(boolean_fuse_all({lower, upper, bridge}), what);
+    if (fused.is_null()) continue;
+    EXPECT_EQ(solids(fused), 1u) << what;
+    const Shape both = valid(boolean_operation(lower, upper, BooleanOp::Fuse), what + " pair");
+    if (!both.is_null()) {
+      EXPECT_NEAR(volume(both), volume(lower) + volume(upper), 1e-9) << what;
+    }
+  }
+}
+
 // A dome on its drum: the sphere's equator is the cylinder's top rim (a closed section along
 // a closed boundary edge, whose vertices need not coincide), the drum's side tangent to the
 // sphere there. Regression: csgtile synth city-block's hall (free edges before). Volumes in
