@@ -5,6 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 deploy/setup.sh
+# The run report's 3D view: three and esbuild from npm, bundled into csgtile when CMake
+# configures (without them report/index.html says "3D view unavailable").
+deploy/npm-deps.sh viewer
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$(nproc)" --target csgtile
 build/csgtile run config/examples/demo.yaml

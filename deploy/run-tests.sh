@@ -14,22 +14,11 @@ deploy/setup.sh
 jobs="$(nproc)"
 
 echo "== optimised build and full test suite"
-# ajv-cli for the CityJSON schema checks, the Khronos glTF validator for the 3D Tiles checks
-# and @20minutes/s3rver for the S3 fetch tests, in build/npm; npm runs only when a package is missing or has another major version
-# (gltf-validator, three, esbuild: another version). The checks must then run, not skip.
-# The run report's 3D view: three (bundled with its GLTFLoader and OrbitControls by esbuild
-# when CMake configures, so npm runs before it) and puppeteer-core to drive Debian's chromium.
-if ! node -e '
-  for (const [name, want] of [["ajv", "8"], ["ajv-formats", "3"], ["ajv-cli", "5"],
-                              ["gltf-validator", "2.0.0-dev.3.10"], ["@20minutes/s3rver", "5"],
-                              ["three", "0.187.0"], ["esbuild", "0.28.2"], ["puppeteer-core", "24"]]) {
-    const v = require(process.argv[1] + "/node_modules/" + name + "/package.json").version;
-    if (v !== want && v.split(".")[0] !== want) process.exit(1);
-  }' "$PWD/build/npm" 2>/dev/null; then
-  npm install --no-audit --no-fund --prefix build/npm ajv@8 ajv-formats@3 ajv-cli@5 \
-      gltf-validator@2.0.0-dev.3.10 @20minutes/s3rver@5 three@0.187.0 esbuild@0.28.2 \
-      puppeteer-core@24
-fi
+# The npm packages (deploy/npm-deps.sh): the run report's 3D view (three and esbuild, bundled
+# when CMake configures, so npm runs before it) and the tests' validators and servers (ajv-cli,
+# the Khronos glTF validator, s3rver, puppeteer-core for Debian's chromium). The checks must
+# then run, not skip.
+deploy/npm-deps.sh all
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCSGTILE_WERROR=ON \
       -DCSGTILE_BUILD_TESTS=ON -DCSGTILE_BUILD_BENCH=ON >/dev/null
 cmake --build build -j"$jobs"
