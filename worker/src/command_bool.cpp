@@ -3,9 +3,11 @@
 // --out, writes the native model with its CSG tree and face history.
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "commands.h"
 #include "csgtile/geo/scene.h"
@@ -15,6 +17,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
+#include "csgtile/kernel/snap.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::detail {
@@ -28,10 +31,12 @@ struct BoolReport {
   std::array<std::size_t, kernel::kShapeKindCount> counts{};
   std::string error;
   std::vector<std::string> issues;
+  std::optional<kernel::SnapReport> snap;
 };
 
 // Runs the scene; the failure code is Ok when the scene was evaluated (valid or not).
-Failure evaluate(const std::string& path, const std::string& out, BoolReport& report) {
+Failure evaluate(const std::string& path, const std::string& out, const kernel::SnapOptions& snap,
+                 BoolReport& report) {
   const auto start = std::chrono::steady_clock::now();
   auto scene = geo::read_scene(path);
   if (!scene.ok()) {
@@ -41,11 +46,20 @@ Failure evaluate(const std::string& path, const std::string& out, BoolReport& re
   }
   report.name = scene->name;
   report.op = geo::boolean_op_name(scene->op);
+  std::vector<kernel::PrimitiveSpec> specs;
+  for (const auto& p : scene->primitives) specs.push_back(p.spec);
+  if (snap.distance > 0.0 || snap.angle > 0.0) {
+    kernel::SnapReport snapped;
+    auto moved = kernel::snap_primitives(specs, snap, &snapped);
+    if (!moved.ok()) return {ErrorCode::InputInvalid, moved.error().message};
+    specs = std::move(moved).value();
+    report.snap = snapped;
+  }
   std::vector<kernel::CsgModel> leaves;
   std::vector<kernel::Shape> solids;
   for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
     const auto& p = scene->primitives[i];
-    auto leaf = kernel::csg_primitive(p.spec, p.id);
+    auto leaf = kernel::csg_primitive(specs[i], p.id);
     if (!leaf.ok()) {
       return {from_kernel(leaf.error().code), "primitives[" + std::to_string(i) + "] (" +
                                                   kernel::primitive_type_name(p.spec.type) +
@@ -100,10 +114,20 @@ void register_bool(CLI::App& app, Action& action) {
   cmd->add_option("--out", *model_path,
                   "Write the result as a native model (.csgt) with its CSG tree and face history");
   cmd->add_flag("--json", *json, "Print one JSON object with the spec's result fields");
-  cmd->callback([&action, file, json, model_path] {
-    action = [file, json, model_path] {
+  auto snap = std::make_shared<kernel::SnapOptions>();
+  auto snap_degrees = std::make_shared<double>(0.0);
+  cmd->add_option("--snap-distance", snap->distance,
+                  "Fuzzy mode for fitted primitives: plane faces whose planes lie this close "
+                  "(world units) become one plane before the operation (kernel/snap.h)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--snap-angle", *snap_degrees,
+                  "Fuzzy mode: primitive axes within this angle (degrees) become one direction")
+      ->check(CLI::Range(0.0, 45.0));
+  cmd->callback([&action, file, json, model_path, snap, snap_degrees] {
+    snap->angle = *snap_degrees * M_PI / 180.0;
+    action = [file, json, model_path, snap] {
       BoolReport r;
-      const Failure failure = evaluate(*file, *model_path, r);
+      const Failure failure = evaluate(*file, *model_path, *snap, r);
       auto count = [&](kernel::ShapeKind k) { return r.counts[static_cast<int>(k)]; };
       if (*json) {
         nlohmann::ordered_json out;
@@ -118,6 +142,14 @@ void register_bool(CLI::App& app, Action& action) {
                            {"edges", count(kernel::ShapeKind::Edge)},
                            {"vertices", count(kernel::ShapeKind::Vertex)}};
         out["seconds"] = r.seconds;
+        if (r.snap) {
+          out["snap"] = {{"directions", r.snap->directions},
+                         {"axes_snapped", r.snap->axes_snapped},
+                         {"planes", r.snap->planes},
+                         {"faces_snapped", r.snap->faces_snapped},
+                         {"max_turn_degrees", r.snap->max_turn * 180.0 / M_PI},
+                         {"max_move", r.snap->max_move}};
+        }
         if (!failure.ok()) {
           out["error"] = std::string(error_info(failure.code).name) + ": " + failure.message;
         } else if (!r.valid) {

@@ -1,0 +1,274 @@
+#include "csgtile/kernel/snap.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+
+namespace csgtile::kernel {
+
+namespace {
+
+// The local axes of a primitive whose direction matters: all three of a box's, the axis (z)
+// of the others; none for a sphere.
+std::vector<int> snapped_axes(const PrimitiveSpec& p) {
+  switch (p.type) {
+    case PrimitiveType::Box:
+      return {0, 1, 2};
+    case PrimitiveType::Sphere:
+      return {};
+    default:
+      return {2};
+  }
+}
+
+// The local point a primitive turns about: the middle of its extent.
+Vec3 local_centre(const PrimitiveSpec& p) {
+  switch (p.type) {
+    case PrimitiveType::Box:
+      return 0.5 * p.size;
+    case PrimitiveType::Cylinder:
+    case PrimitiveType::Cone:
+      return Vec3(0, 0, 0.5 * p.height);
+    case PrimitiveType::Extrusion: {
+      if (p.profile.empty()) return Vec3(0, 0, 0.5 * p.height);
+      Vec2 lo = p.profile.front(), hi = lo;
+      for (const Vec2& q : p.profile) {
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+      }
+      const Vec2 mid = 0.5 * (lo + hi);
+      return Vec3(mid.x(), mid.y(), 0.5 * p.height);
+    }
+    default:
+      return Vec3::Zero();
+  }
+}
+
+// The extent along local axis k whose two end faces are planes: a box's size, the height of a
+// cylinder, cone or extrusion (base at local 0). Null for the others.
+double* planar_extent(PrimitiveSpec& p, int k) {
+  switch (p.type) {
+    case PrimitiveType::Box:
+      return &p.size[k];
+    case PrimitiveType::Cylinder:
+    case PrimitiveType::Cone:
+    case PrimitiveType::Extrusion:
+      return k == 2 ? &p.height : nullptr;
+    default:
+      return nullptr;
+  }
+}
+
+struct Direction {
+  Vec3 sum = Vec3::Zero();
+  Vec3 rep = Vec3::Zero();
+  int count = 0;
+};
+
+// Axis k of primitive i lies along direction `cluster`, with `sign` (+1 or −1).
+struct AxisUse {
+  int cluster = -1;
+  double sign = 1.0;
+};
+
+// A plane face: primitive i, axis k, its low (0) or high (1) end, its offset along the
+// cluster's direction.
+struct Face {
+  int cluster, primitive, axis, end;
+  double offset;
+};
+
+Eigen::Matrix3d orthonormal(const Vec3& x0, const Vec3& z0) {
+  const Vec3 z = z0.normalized();
+  const Vec3 x = (x0 - x0.dot(z) * z).normalized();
+  Eigen::Matrix3d r;
+  r.col(0) = x;
+  r.col(1) = z.cross(x);
+  r.col(2) = z;
+  return r;
+}
+
+}  // namespace
+
+Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSpec>& primitives,
+                                                   const SnapOptions& options, SnapReport* report) {
+  if (!(options.distance >= 0.0) || !std::isfinite(options.distance) || !(options.angle >= 0.0) ||
+      !std::isfinite(options.angle)) {
+    return Error{ErrorCode::InvalidArgument,
+                 "snap: distance and angle must be finite and not negative"};
+  }
+  SnapReport local_report;
+  SnapReport& rep = report ? *report : local_report;
+  rep = SnapReport{};
+  std::vector<PrimitiveSpec> out = primitives;
+  const std::size_t n = out.size();
+
+  // 1. Directions: each snapped axis joins the first direction within the angle.
+  const double cos_angle = std::cos(options.angle);
+  std::vector<Direction> directions;
+  std::vector<std::array<AxisUse, 3>> uses(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Matrix3d& r = out[i].placement.rotation();
+    for (int k : snapped_axes(out[i])) {
+      const Vec3 a = r.col(k);
+      int found = -1;
+      for (std::size_t c = 0; c < directions.size() && found < 0; ++c) {
+        if (std::abs(a.dot(directions[c].rep)) >= cos_angle) found = static_cast<int>(c);
+      }
+      if (found < 0) {
+        directions.push_back({a, a, 0});
+        found = static_cast<int>(directions.size()) - 1;
+      }
+      Direction& d = directions[static_cast<std::size_t>(found)];
+      const double sign = a.dot(d.rep) >= 0.0 ? 1.0 : -1.0;
+      d.sum += sign * a;
+      d.rep = d.sum.normalized();
+      ++d.count;
+      uses[i][static_cast<std::size_t>(k)] = {found, sign};
+    }
+  }
+  // A direction within the angle of the vertical is the vertical (models are georeferenced
+  // with z up: columns, walls and floors are meant plumb and level). Directions within the
+  // angle of a right angle to a more used one (the vertical first) become orthogonal to it.
+  std::vector<bool> vertical(directions.size(), false);
+  for (std::size_t c = 0; c < directions.size(); ++c) {
+    Vec3& d = directions[c].rep;
+    if (std::abs(d.z()) >= cos_angle) {
+      d = Vec3(0, 0, d.z() > 0 ? 1.0 : -1.0);
+      vertical[c] = true;
+    }
+  }
+  std::vector<std::size_t> order(directions.size());
+  for (std::size_t c = 0; c < order.size(); ++c) order[c] = c;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (vertical[a] != vertical[b]) return static_cast<bool>(vertical[a]);
+    return directions[a].count > directions[b].count;
+  });
+  const double sin_angle = std::sin(options.angle);
+  for (std::size_t oi = 0; oi < order.size(); ++oi) {
+    Vec3& d = directions[order[oi]].rep;
+    for (std::size_t oj = 0; oj < oi; ++oj) {
+      const Vec3& e = directions[order[oj]].rep;
+      if (std::abs(d.dot(e)) <= sin_angle) d = (d - d.dot(e) * e).normalized();
+    }
+  }
+  rep.directions = static_cast<int>(directions.size());
+
+  // 2. Each primitive turned about its centre onto its axes' directions.
+  for (std::size_t i = 0; i < n; ++i) {
+    PrimitiveSpec& p = out[i];
+    const std::vector<int> axes = snapped_axes(p);
+    if (axes.empty()) continue;
+    const Location& at = p.placement;
+    const Eigen::Matrix3d& r = at.rotation();
+    auto target = [&](int k) {
+      const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
+      return Vec3(u.sign * directions[static_cast<std::size_t>(u.cluster)].rep);
+    };
+    // z onto its direction exactly; x as near as it can stay (a box's: onto its own).
+    const Eigen::Matrix3d turned =
+        orthonormal(axes.size() == 3 ? target(0) : Vec3(r.col(0)), target(2));
+    if (turned == r) continue;
+    const double turn = Eigen::AngleAxisd(turned * r.transpose()).angle();
+    if (turn == 0.0) continue;
+    rep.max_turn = std::max(rep.max_turn, turn);
+    for (int k : axes) {
+      if ((turned.col(k) - r.col(k)).norm() > 0.0) ++rep.axes_snapped;
+    }
+    const Vec3 c = local_centre(p);
+    const Vec3 centre = at.apply_point(c);
+    const Vec3 t = centre - at.scale() * (turned * c);
+    auto moved = Location::from_parts(turned, at.scale(), t);
+    if (!moved.ok()) return moved.error();
+    // Clip planes stay where they are in the world.
+    for (Eigen::Vector4d& clip : p.clips) {
+      const Vec3 normal = r * clip.head<3>();
+      const double world_d = at.scale() * clip.w() + normal.dot(at.translation());
+      clip.head<3>() = turned.transpose() * normal;
+      clip.w() = (world_d - normal.dot(t)) / at.scale();
+    }
+    p.placement = moved.value();
+  }
+
+  // 3. Plane faces along each direction: offsets within the distance become one plane.
+  std::vector<Face> faces;
+  for (std::size_t i = 0; i < n; ++i) {
+    PrimitiveSpec& p = out[i];
+    for (int k : snapped_axes(p)) {
+      const double* extent = planar_extent(p, k);
+      if (!extent) continue;
+      const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
+      const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
+      const double base = dir.dot(p.placement.translation());
+      const double far = base + u.sign * p.placement.scale() * *extent;
+      faces.push_back({u.cluster, static_cast<int>(i), k, 0, base});
+      faces.push_back({u.cluster, static_cast<int>(i), k, 1, far});
+    }
+  }
+  std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return std::tie(a.cluster, a.offset) < std::tie(b.cluster, b.offset);
+  });
+  // target offset of (primitive, axis, end)
+  std::map<std::tuple<int, int, int>, double> target;
+  for (std::size_t g = 0; g < faces.size();) {
+    std::size_t end = g + 1;
+    std::set<std::pair<int, int>> members{{faces[g].primitive, faces[g].axis}};
+    while (end < faces.size() && faces[end].cluster == faces[g].cluster &&
+           faces[end].offset - faces[g].offset <= options.distance &&
+           members.insert({faces[end].primitive, faces[end].axis}).second) {
+      ++end;
+    }
+    if (end - g >= 2) {
+      double mean = 0.0;
+      for (std::size_t f = g; f < end; ++f) mean += faces[f].offset;
+      mean /= static_cast<double>(end - g);
+      ++rep.planes;
+      for (std::size_t f = g; f < end; ++f) {
+        const Face& face = faces[f];
+        if (mean == face.offset) continue;
+        target[{face.primitive, face.axis, face.end}] = mean;
+        rep.max_move = std::max(rep.max_move, std::abs(mean - face.offset));
+        ++rep.faces_snapped;
+      }
+    }
+    g = end;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    PrimitiveSpec& p = out[i];
+    Vec3 shift = Vec3::Zero();
+    for (int k : snapped_axes(p)) {
+      double* extent = planar_extent(p, k);
+      if (!extent) continue;
+      const auto lo = target.find({static_cast<int>(i), k, 0});
+      const auto hi = target.find({static_cast<int>(i), k, 1});
+      if (lo == target.end() && hi == target.end()) continue;
+      const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
+      const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
+      const double base = dir.dot(p.placement.translation());
+      const double far = base + u.sign * p.placement.scale() * *extent;
+      const double new_base = lo != target.end() ? lo->second : base;
+      const double new_far = hi != target.end() ? hi->second : far;
+      const double new_extent = u.sign * (new_far - new_base) / p.placement.scale();
+      if (!(new_extent > 0.5 * *extent)) continue;  // a thin primitive keeps its faces
+      *extent = new_extent;
+      shift += (new_base - base) * dir;
+    }
+    if (shift.isZero(0.0)) continue;
+    const Location& at = p.placement;
+    const Vec3 t = at.translation() + shift;
+    for (Eigen::Vector4d& clip : p.clips) {
+      const Vec3 normal = at.rotation() * clip.head<3>();
+      clip.w() -= normal.dot(shift) / at.scale();
+    }
+    auto moved = Location::from_parts(at.rotation(), at.scale(), t);
+    if (!moved.ok()) return moved.error();
+    p.placement = moved.value();
+  }
+  return out;
+}
+
+}  // namespace csgtile::kernel

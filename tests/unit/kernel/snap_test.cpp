@@ -1,0 +1,152 @@
+// The fuzzy mode for fitted primitives (kernel/snap.h): near-coincidences snapped, nothing
+// else moved.
+
+#include "csgtile/kernel/snap.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <numbers>
+
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+
+namespace csgtile::kernel {
+namespace {
+
+PrimitiveSpec box(const Vec3& size, const Location& at) {
+  PrimitiveSpec p;
+  p.type = PrimitiveType::Box;
+  p.size = size;
+  p.placement = at;
+  return p;
+}
+
+PrimitiveSpec cylinder(double r, double h, const Location& at) {
+  PrimitiveSpec p;
+  p.type = PrimitiveType::Cylinder;
+  p.radius = r;
+  p.height = h;
+  p.placement = at;
+  return p;
+}
+
+Location turned(const Vec3& t, const Vec3& axis, double angle) {
+  return Location::translation(t) * Location::rotation(Vec3::Zero(), axis, angle);
+}
+
+// A fitted column (0.7 mrad off vertical) and a fitted beam whose top lies 0.1 mm under the
+// column's top: the two planes cross inside the column's top disc, and the exact fuse meets
+// a sliver 0.1 mm thin (it fails). Snapped with 5 mm and 0.5°: one direction up, one plane on
+// top, and the fuse is one valid solid.
+TEST(Snap, FittedColumnAndBeamFuseOnceSnapped) {
+  // Placements as the fit left them (rows of [R | t]).
+  auto placed = [](std::array<double, 12> m) {
+    Matrix34 q;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 4; ++j) q(i, j) = m[static_cast<std::size_t>(4 * i + j)];
+    }
+    return Location::from_matrix(q).value();
+  };
+  const PrimitiveSpec column =
+      cylinder(0.1518848301127851, 3.9995294132512806,
+               placed({1, 0, 0, 9.001867204626194, 0, 0.9999997536395747, 0.000701940731047384,
+                       0.0007465168148400713, 0, -0.000701940731047384, 0.9999997536395747,
+                       -0.001671966867296138}));
+  const PrimitiveSpec beam =
+      box(Vec3(0.19956792023612407, 3.0006137219093287, 0.2987809655545449),
+          placed({0.999999999930532, 0, 1.1787107160086285e-05, 8.898801008141323, 0, 1, 0,
+                  -0.00022804077599155735, -1.1787107160086285e-05, 0, 0.999999999930532,
+                  3.698972081854656}));
+  auto exact = boolean_operation(build_primitive(column).value(), build_primitive(beam).value(),
+                                 BooleanOp::Fuse);
+  EXPECT_FALSE(exact.ok() && check_shape(exact.value()).valid()) << "the exact fuse now holds";
+
+  SnapReport report;
+  auto snapped = snap_primitives({column, beam}, {0.005, 0.5 * std::numbers::pi / 180}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  const PrimitiveSpec& c = snapped.value()[0];
+  const PrimitiveSpec& b = snapped.value()[1];
+  const Vec3 up_c = c.placement.rotation().col(2), up_b = b.placement.rotation().col(2);
+  EXPECT_EQ(up_c, Vec3::UnitZ());  // both plumb
+  EXPECT_EQ(up_b, Vec3::UnitZ());
+  const double top_c = up_c.dot(c.placement.translation()) + c.height;
+  const double top_b = up_b.dot(b.placement.translation()) + b.size.z();
+  EXPECT_NEAR(top_c, top_b, 1e-12);
+  EXPECT_EQ(report.planes, 1);
+  EXPECT_LE(report.max_move, 0.005);
+  EXPECT_LE(report.max_turn, 0.5 * std::numbers::pi / 180);
+
+  auto fused =
+      boolean_operation(build_primitive(c).value(), build_primitive(b).value(), BooleanOp::Fuse);
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+  EXPECT_EQ(map_child_shapes(fused.value(), ShapeKind::Solid).size(), 1u);
+  // Within what the snap moved: the volume of the union changes by at most a few cm³.
+  const double before = mass_properties(build_primitive(column).value()).volume +
+                        mass_properties(build_primitive(beam).value()).volume;
+  EXPECT_LT(mass_properties(fused.value()).volume, before);
+  EXPECT_GT(mass_properties(fused.value()).volume, before - 0.05);
+}
+
+// Beyond the distance or the angle, nothing moves; the two faces of a box thinner than the
+// distance stay two faces; a sphere has no axis.
+TEST(Snap, LeavesWhatIsNotNearlyCoincident) {
+  const double angle = 0.5 * std::numbers::pi / 180;
+  const PrimitiveSpec a = box(Vec3(1, 1, 1), Location());
+  const PrimitiveSpec far = box(Vec3(1, 1, 1), Location::translation(Vec3(0.5, 0.5, 1.006)));
+  const PrimitiveSpec steep = box(Vec3(1, 1, 1), turned(Vec3(3, 0, 0), Vec3::UnitX(), 0.02));
+  const PrimitiveSpec thin = box(Vec3(1, 1, 0.003), Location::translation(Vec3(0, 3, 0)));
+  PrimitiveSpec ball;
+  ball.type = PrimitiveType::Sphere;
+  ball.radius = 1;
+  ball.placement = Location::translation(Vec3(5, 5, 5));
+  auto snapped = snap_primitives({a, far, steep, thin, ball}, {0.005, angle});
+  ASSERT_TRUE(snapped.ok());
+  const auto& s = snapped.value();
+  // `far`'s bottom is 6 mm over a's top: apart. Its x and y faces meet none of a's either.
+  EXPECT_EQ(s[1].placement, far.placement);
+  EXPECT_EQ(s[1].size, far.size);
+  EXPECT_EQ(s[2].placement, steep.placement);  // 1.1° off: its own directions
+  EXPECT_NEAR(s[3].size.z(), 0.003, 1e-15);    // thin: its two faces never merge
+  EXPECT_EQ(s[4].placement, ball.placement);
+  EXPECT_FALSE(snap_primitives({a}, {-1.0, 0.0}).ok());
+  EXPECT_FALSE(snap_primitives({a}, {0.0, std::nan("")}).ok());
+}
+
+// A clip plane (a roof) stays where it is in the world while its extrusion turns plumb and its
+// base and the ground's top meet.
+TEST(Snap, ClipPlanesStayInTheWorld) {
+  PrimitiveSpec part;
+  part.type = PrimitiveType::Extrusion;
+  part.profile = {{0, 0}, {6, 0}, {6, 4}, {0, 4}};
+  part.height = 12;
+  const Vec3 n = Vec3(0.3, 0.1, 1).normalized();
+  part.clips.push_back(Eigen::Vector4d(n.x(), n.y(), n.z(), n.dot(Vec3(3, 2, 8))));
+  part.placement = turned(Vec3(10, 0, 0.002), Vec3(1, 1, 0), 0.001);
+  const PrimitiveSpec ground = box(Vec3(30, 30, 1), Location::translation(Vec3(0, -10, -1)));
+  auto snapped = snap_primitives({part, ground}, {0.005, 0.5 * std::numbers::pi / 180});
+  ASSERT_TRUE(snapped.ok());
+  const PrimitiveSpec& p = snapped.value()[0];
+  const PrimitiveSpec& g = snapped.value()[1];
+  EXPECT_EQ(p.placement.rotation().col(2), Vec3::UnitZ());  // plumb: the vertical itself
+  EXPECT_EQ(g.placement.rotation(), ground.placement.rotation());
+  // The base (after the turn about the part's centre) and the ground's top meet halfway.
+  EXPECT_NEAR(p.placement.translation().z(), g.placement.translation().z() + g.size.z(), 1e-12);
+  EXPECT_LT(std::abs(p.placement.translation().z()), 0.005);
+  EXPECT_NE(p.placement.translation().z(), 0.0);
+  // Points of the original roof plane (in the world) lie on the snapped one.
+  auto world_plane = [](const PrimitiveSpec& s) {
+    const Vec3 normal = s.placement.rotation() * s.clips[0].head<3>();
+    return std::pair{normal, s.clips[0].w() + normal.dot(s.placement.translation())};
+  };
+  const auto [n0, d0] = world_plane(part);
+  const auto [n1, d1] = world_plane(p);
+  EXPECT_LT((n0 - n1).norm(), 1e-12);
+  EXPECT_NEAR(d0, d1, 1e-12);
+}
+
+}  // namespace
+}  // namespace csgtile::kernel
