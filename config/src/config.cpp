@@ -84,6 +84,8 @@ Config from_document(const json& document) {
   read(document, "city", "cell_size", config.city.cell_size);
   read(document, "city", "halo", config.city.halo);
   read(document, "city", "voxel_size", config.city.voxel_size);
+  read(document, "city", "snap_distance", config.city.snap_distance);
+  read(document, "city", "snap_angle_degrees", config.city.snap_angle_degrees);
   detail::read_fit(document, config.fit);
   read(document, "publish", "url", config.publish.url);
   return config;
@@ -212,7 +214,9 @@ std::string to_json(const Config& config) {
                   {"s3_region", config.fetch.s3_region}};
   out["city"] = {{"cell_size", config.city.cell_size},
                  {"halo", config.city.halo},
-                 {"voxel_size", config.city.voxel_size}};
+                 {"voxel_size", config.city.voxel_size},
+                 {"snap_distance", config.city.snap_distance},
+                 {"snap_angle_degrees", config.city.snap_angle_degrees}};
   out["fit"] = detail::fit_to_json(config.fit);
   out["publish"] = {{"url", config.publish.url}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so

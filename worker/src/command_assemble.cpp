@@ -33,6 +33,7 @@ struct AssembleArgs {
   std::string scene, out;
   bool json = false;
   double voxel = 0.5, tolerance = kernel::kDefaultTolerance;
+  double snap_distance = 0.0, snap_degrees = 0.0;
   int threads = 0;
   bool no_cull = false, no_broad = false;
   double cell_size = 0, halo = 0;
@@ -57,6 +58,9 @@ ordered_json stats_json(const assembly::AssemblyStats& s) {
   j["objects_failed"] = s.objects_failed;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
+  j["snap"] = {{"directions", s.snap.directions}, {"axes_snapped", s.snap.axes_snapped},
+               {"planes", s.snap.planes},         {"faces_snapped", s.snap.faces_snapped},
+               {"max_turn", s.snap.max_turn},     {"max_move", s.snap.max_move}};
   j["seconds"] = {{"build", s.seconds_build},         {"broad_phase", s.seconds_broad},
                   {"voxel_culling", s.seconds_voxel}, {"exact_tests", s.seconds_exact},
                   {"fuse", s.seconds_fuse},           {"total", s.seconds_total}};
@@ -143,6 +147,8 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   options.voxel_size = args.voxel;
   options.tolerance = args.tolerance;
   options.threads = args.threads;
+  options.snap.distance = args.snap_distance;
+  options.snap.angle = args.snap_degrees * M_PI / 180.0;
   options.voxel_culling = !args.no_cull;
   options.broad_phase = !args.no_broad;
   const std::filesystem::path out = args.out;
@@ -231,6 +237,13 @@ void register_assemble(CLI::App& app, Action& action) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--threads", a->threads, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--snap-distance", a->snap_distance,
+                  "Fuzzy mode for fitted primitives: plane faces this close become one plane "
+                  "before the Booleans (kernel/snap.h; default 0: off)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--snap-angle", a->snap_degrees,
+                  "Fuzzy mode: primitive axes within this angle (degrees) become one direction")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_flag("--no-cull", a->no_cull,
                 "Skip the OpenVDB culling (every candidate pair is tested exactly)");
   cmd->add_flag("--no-broad-phase", a->no_broad,

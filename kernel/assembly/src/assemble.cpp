@@ -95,6 +95,18 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   st.primitives = static_cast<long long>(primitives.size());
   kernel::BooleanOptions bopt;
   bopt.tolerance = options.tolerance;
+  // 0. The fuzzy mode: near-coincidences snapped, the snapped primitives assembled.
+  std::vector<AssemblyPrimitive> snapped_input;
+  if (options.snap.distance > 0.0 || options.snap.angle > 0.0) {
+    std::vector<kernel::PrimitiveSpec> specs;
+    specs.reserve(primitives.size());
+    for (const AssemblyPrimitive& p : primitives) specs.push_back(p.spec);
+    auto moved = kernel::snap_primitives(specs, options.snap, &st.snap);
+    if (!moved.ok()) return moved.error();
+    snapped_input = primitives;
+    for (std::size_t i = 0; i < specs.size(); ++i) snapped_input[i].spec = moved.value()[i];
+  }
+  const std::vector<AssemblyPrimitive>& input = snapped_input.empty() ? primitives : snapped_input;
 
   // 1. Solids (in parallel; a primitive that cannot be built is reported and left out).
   auto t0 = Clock::now();
@@ -116,7 +128,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   }
   std::vector<char> read(n, 0);
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    auto m = kernel::csg_primitive(primitives[i].spec, primitives[i].label, options.tolerance);
+    auto m = kernel::csg_primitive(input[i].spec, input[i].label, options.tolerance);
     if (!m.ok()) {
       leaf_error[i] = m.error().message;
       return;

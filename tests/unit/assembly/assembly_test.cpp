@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -376,6 +377,62 @@ TEST(Assembly, BadPrimitiveIsReportedAndTheRestAssembled) {
   for (const auto& o : a->objects) {
     EXPECT_EQ(std::count(o.primitives.begin(), o.primitives.end(), 3), 0);
   }
+}
+
+// The fuzzy mode (AssemblyOptions::snap): a column and a beam as a fit leaves them (the
+// column 0.7 mrad off vertical, the beam's top 0.1 mm under the column's top, the planes
+// crossing inside the column's top disc) do not fuse exactly; snapped (5 mm, 0.5°) they are
+// one valid object whose CSG leaves hold the snapped primitives, and the snap is counted.
+TEST(Assembly, FuzzyModeFusesAFittedColumnAndBeam) {
+  auto placed = [](std::array<double, 12> m) {
+    kernel::Matrix34 q;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 4; ++j) q(i, j) = m[static_cast<std::size_t>(4 * i + j)];
+    }
+    return kernel::Location::from_matrix(q).value();
+  };
+  PrimitiveSpec column;
+  column.type = PrimitiveType::Cylinder;
+  column.radius = 0.1518848301127851;
+  column.height = 3.9995294132512806;
+  column.placement = placed({1, 0, 0, 9.001867204626194, 0, 0.9999997536395747,
+                             0.000701940731047384, 0.0007465168148400713, 0, -0.000701940731047384,
+                             0.9999997536395747, -0.001671966867296138});
+  PrimitiveSpec beam;
+  beam.type = PrimitiveType::Box;
+  beam.size = Vec3(0.19956792023612407, 3.0006137219093287, 0.2987809655545449);
+  beam.placement = placed({0.999999999930532, 0, 1.1787107160086285e-05, 8.898801008141323, 0, 1, 0,
+                           -0.00022804077599155735, -1.1787107160086285e-05, 0, 0.999999999930532,
+                           3.698972081854656});
+  const auto input = labelled({column, beam});
+  auto exact = assemble(input);
+  ASSERT_TRUE(exact.ok()) << exact.error().message;
+  ASSERT_EQ(exact->objects.size(), 1u);
+  EXPECT_FALSE(exact->objects[0].fused) << "the exact fuse now holds: find a harder pair";
+  EXPECT_EQ(exact->stats.snap.faces_snapped, 0);
+
+  AssemblyOptions fuzzy;
+  fuzzy.snap = {0.005, 0.5 * M_PI / 180.0};
+  auto snapped = assemble(input, fuzzy);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  ASSERT_EQ(snapped->objects.size(), 1u);
+  const AssembledObject& o = snapped->objects[0];
+  EXPECT_TRUE(o.fused) << o.error;
+  EXPECT_EQ(kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Solid).size(), 1u);
+  EXPECT_GT(snapped->stats.snap.axes_snapped, 0);
+  EXPECT_GT(snapped->stats.snap.faces_snapped, 0);
+  EXPECT_LE(snapped->stats.snap.max_move, 0.005);
+  // The leaves are the snapped primitives: the column stands plumb.
+  bool plumb_leaf = false;
+  for (const kernel::CsgNode& n : o.model.nodes) {
+    if (n.kind == kernel::CsgNodeKind::Primitive && n.primitive.type == PrimitiveType::Cylinder)
+      plumb_leaf = n.primitive.placement.rotation().col(2) == Vec3::UnitZ();
+  }
+  EXPECT_TRUE(plumb_leaf);
+  const double separate = kernel::mass_properties(kernel::build_primitive(column).value()).volume +
+                          kernel::mass_properties(kernel::build_primitive(beam).value()).volume;
+  EXPECT_LT(o.volume, separate);
+  EXPECT_GT(o.volume, separate - 0.05);
 }
 
 TEST(Assembly, BadOptionsAreNamed) {

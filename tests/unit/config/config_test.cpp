@@ -540,7 +540,8 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(
       to_json(Config{}),
-      R"({"city":{"cell_size":250.0,"halo":50.0,"voxel_size":0.5},)"
+      R"({"city":{"cell_size":250.0,"halo":50.0,"snap_angle_degrees":0.5,"snap_distance":0.005,)"
+      R"("voxel_size":0.5},)"
       R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
       R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"
       R"("max_redirects":5,"s3_endpoint":"","s3_region":"us-east-1",)"

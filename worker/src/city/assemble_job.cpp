@@ -2,6 +2,7 @@
 // (kernel/assembly) anchored in the cell → the cell's native model, topology index,
 // CityJSONSeq, 3D Tiles and manifest (city_jobs.h).
 
+#include <cmath>
 #include <map>
 
 #include "city/city_internal.h"
@@ -90,6 +91,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.tolerance = config.kernel.linear_tolerance;
   options.voxel_size = config.city.voxel_size;
   options.threads = config.run.threads;
+  options.snap.distance = config.city.snap_distance;
+  options.snap.angle = config.city.snap_angle_degrees * M_PI / 180.0;
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
     return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
@@ -219,7 +222,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                         {"interacting_pairs", s.interacting_pairs},
                         {"objects_in_halo", s.objects},
                         {"objects", kept.size()},
-                        {"objects_unfused", invalid}};
+                        {"objects_unfused", invalid},
+                        {"snap",
+                         {{"axes_snapped", s.snap.axes_snapped},
+                          {"faces_snapped", s.snap.faces_snapped},
+                          {"max_turn", s.snap.max_turn},
+                          {"max_move", s.snap.max_move}}}};
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["cell"] = name;

@@ -101,6 +101,10 @@ struct CityConfig {
   /// reported. [0, cell_size)
   double halo = 50.0;
   double voxel_size = 0.5;  ///< OpenVDB culling voxel edge (m); (0, 100]
+  /// Fuzzy mode of the assembly for fitted primitives (kernel/snap.h): plane faces this close
+  /// (m) become one plane, axes this close (degrees) one direction; 0: off. [0, 1], [0, 10]
+  double snap_distance = 0.005;
+  double snap_angle_degrees = 0.5;
   bool operator==(const CityConfig&) const = default;
 };
 

@@ -17,6 +17,7 @@
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/primitives.h"
+#include "csgtile/kernel/snap.h"
 
 namespace csgtile::assembly {
 
@@ -47,6 +48,10 @@ struct AssemblyOptions {
   bool broad_phase = true;    ///< false: every pair of solids is a candidate
   int threads = 0;            ///< worker threads; 0 = all cores
   std::optional<CellSpec> cell;
+  /// Fuzzy mode for fitted primitives: near-coincidences of the primitives snapped before
+  /// anything is built (kernel/snap.h); the objects' CSG leaves hold the snapped primitives.
+  /// Zero (the default): the primitives as given.
+  kernel::SnapOptions snap;
 };
 
 struct AssemblyStats {
@@ -61,6 +66,7 @@ struct AssemblyStats {
   long long objects_failed = 0;     ///< whose fuse failed (kept unfused, with the reason)
   long long objects_past_halo = 0;  ///< reaching past the halo (reported, see problems)
   long long active_voxels = 0;      ///< in all masks
+  kernel::SnapReport snap;          ///< what the fuzzy mode moved (zero without it)
   double seconds_build = 0, seconds_broad = 0, seconds_voxel = 0, seconds_exact = 0,
          seconds_fuse = 0, seconds_total = 0;
 };
