@@ -107,7 +107,9 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
   std::vector<PrimitiveSpec> out = primitives;
   const std::size_t n = out.size();
 
-  // 1. Directions: each snapped axis joins the first direction within the angle.
+  // 1. Directions: each snapped axis joins the first direction whose running mean lies within
+  // the angle, so a primitive may turn by up to about twice the angle (0.85° at 0.5° on the
+  // fitted timber gate); faces move by at most the distance.
   const double cos_angle = std::cos(options.angle);
   std::vector<Direction> directions;
   std::vector<std::array<AxisUse, 3>> uses(n);
