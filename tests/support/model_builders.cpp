@@ -4,21 +4,53 @@
 
 namespace csgtile::test {
 
-kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size) {
+kernel::PrimitiveSpec box(const kernel::Vec3& size, const kernel::Location& at) {
   kernel::PrimitiveSpec s;
   s.type = kernel::PrimitiveType::Box;
   s.size = size;
-  s.placement = kernel::Location::translation(at);
+  s.placement = at;
   return s;
 }
 
-kernel::PrimitiveSpec cylinder_at(const kernel::Vec3& at, double r, double h) {
+kernel::PrimitiveSpec cylinder(double r, double h, const kernel::Location& at) {
   kernel::PrimitiveSpec s;
   s.type = kernel::PrimitiveType::Cylinder;
   s.radius = r;
   s.height = h;
-  s.placement = kernel::Location::translation(at);
+  s.placement = at;
   return s;
+}
+
+kernel::Location placement_rows(const std::array<double, 12>& rows) {
+  kernel::Matrix34 q;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) q(i, j) = rows[static_cast<std::size_t>(4 * i + j)];
+  }
+  auto at = kernel::Location::from_matrix(q);
+  EXPECT_TRUE(at.ok()) << at.error().message;
+  return at.ok() ? at.value() : kernel::Location();
+}
+
+std::pair<kernel::PrimitiveSpec, kernel::PrimitiveSpec> fitted_column_and_beam() {
+  const kernel::PrimitiveSpec column =
+      cylinder(0.1518848301127851, 3.9995294132512806,
+               placement_rows({1, 0, 0, 9.001867204626194, 0, 0.9999997536395747,
+                               0.000701940731047384, 0.0007465168148400713, 0,
+                               -0.000701940731047384, 0.9999997536395747, -0.001671966867296138}));
+  const kernel::PrimitiveSpec beam =
+      box(kernel::Vec3(0.19956792023612407, 3.0006137219093287, 0.2987809655545449),
+          placement_rows({0.999999999930532, 0, 1.1787107160086285e-05, 8.898801008141323, 0, 1, 0,
+                          -0.00022804077599155735, -1.1787107160086285e-05, 0, 0.999999999930532,
+                          3.698972081854656}));
+  return {column, beam};
+}
+
+kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size) {
+  return box(size, kernel::Location::translation(at));
+}
+
+kernel::PrimitiveSpec cylinder_at(const kernel::Vec3& at, double r, double h) {
+  return cylinder(r, h, kernel::Location::translation(at));
 }
 
 kernel::CsgModel leaf(const kernel::PrimitiveSpec& spec, const std::string& label) {

@@ -1,13 +1,28 @@
 #pragma once
 /// \file
-/// Small models for tests: axis-aligned primitives at a point, and CSG leaves.
+/// Small models for tests: primitives placed by a location or at a point, a fitted pair the
+/// exact Booleans cannot fuse, and CSG leaves.
 
+#include <array>
 #include <string>
+#include <utility>
 
 #include "csgtile/kernel/csg.h"
 
 namespace csgtile::test {
 
+/// A box of `size` placed by `at` (its minimum corner at the location's origin).
+kernel::PrimitiveSpec box(const kernel::Vec3& size, const kernel::Location& at);
+/// A cylinder of radius r and height h placed by `at` (its base centre at the location's
+/// origin, its axis the location's z).
+kernel::PrimitiveSpec cylinder(double r, double h, const kernel::Location& at);
+/// A placement as the scene format writes it: the rows of [R | t].
+kernel::Location placement_rows(const std::array<double, 12>& rows);
+/// A column and a beam of the timber gate as a fit leaves them (cut out of a gate whose
+/// primitives were moved by up to 2 mm): the column 0.7 mrad off vertical, the beam's top
+/// 0.1 mm under the column's, the two planes crossing inside the column's top disc. The exact
+/// fuse of the two fails; snapped (kernel/snap.h) they fuse.
+std::pair<kernel::PrimitiveSpec, kernel::PrimitiveSpec> fitted_column_and_beam();
 /// A box of `size` with its minimum corner at `at`.
 kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size);
 /// A vertical cylinder of radius r and height h with its base centre at `at`.

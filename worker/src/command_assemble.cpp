@@ -22,6 +22,7 @@
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/publish.h"
+#include "snap_json.h"
 
 namespace csgtile::worker::detail {
 
@@ -58,9 +59,7 @@ ordered_json stats_json(const assembly::AssemblyStats& s) {
   j["objects_failed"] = s.objects_failed;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
-  j["snap"] = {{"directions", s.snap.directions}, {"axes_snapped", s.snap.axes_snapped},
-               {"planes", s.snap.planes},         {"faces_snapped", s.snap.faces_snapped},
-               {"max_turn", s.snap.max_turn},     {"max_move", s.snap.max_move}};
+  j["snap"] = snap_report_json(s.snap);
   j["seconds"] = {{"build", s.seconds_build},         {"broad_phase", s.seconds_broad},
                   {"voxel_culling", s.seconds_voxel}, {"exact_tests", s.seconds_exact},
                   {"fuse", s.seconds_fuse},           {"total", s.seconds_total}};
@@ -147,8 +146,7 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   options.voxel_size = args.voxel;
   options.tolerance = args.tolerance;
   options.threads = args.threads;
-  options.snap.distance = args.snap_distance;
-  options.snap.angle = args.snap_degrees * M_PI / 180.0;
+  options.snap = snap_options(args.snap_distance, args.snap_degrees);
   options.voxel_culling = !args.no_cull;
   options.broad_phase = !args.no_broad;
   const std::filesystem::path out = args.out;

@@ -3,7 +3,6 @@
 // --out, writes the native model with its CSG tree and face history.
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -17,8 +16,8 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
-#include "csgtile/kernel/snap.h"
 #include "csgtile/worker/errors.h"
+#include "snap_json.h"
 
 namespace csgtile::worker::detail {
 
@@ -124,7 +123,7 @@ void register_bool(CLI::App& app, Action& action) {
                   "Fuzzy mode: primitive axes within this angle (degrees) become one direction")
       ->check(CLI::Range(0.0, 45.0));
   cmd->callback([&action, file, json, model_path, snap, snap_degrees] {
-    snap->angle = *snap_degrees * M_PI / 180.0;
+    *snap = snap_options(snap->distance, *snap_degrees);
     action = [file, json, model_path, snap] {
       BoolReport r;
       const Failure failure = evaluate(*file, *model_path, *snap, r);
@@ -142,14 +141,7 @@ void register_bool(CLI::App& app, Action& action) {
                            {"edges", count(kernel::ShapeKind::Edge)},
                            {"vertices", count(kernel::ShapeKind::Vertex)}};
         out["seconds"] = r.seconds;
-        if (r.snap) {
-          out["snap"] = {{"directions", r.snap->directions},
-                         {"axes_snapped", r.snap->axes_snapped},
-                         {"planes", r.snap->planes},
-                         {"faces_snapped", r.snap->faces_snapped},
-                         {"max_turn_degrees", r.snap->max_turn * 180.0 / M_PI},
-                         {"max_move", r.snap->max_move}};
-        }
+        if (r.snap) out["snap"] = snap_report_json(*r.snap);
         if (!failure.ok()) {
           out["error"] = std::string(error_info(failure.code).name) + ": " + failure.message;
         } else if (!r.valid) {

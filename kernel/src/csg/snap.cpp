@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <set>
 #include <tuple>
 
@@ -75,11 +74,11 @@ struct AxisUse {
   double sign = 1.0;
 };
 
-// A plane face: primitive i, axis k, its low (0) or high (1) end, its offset along the
-// cluster's direction.
+// A plane face of primitive `primitive` across its axis `axis`: its offset along the
+// direction `cluster`, and the offset of the plane it snaps to (its own when none).
 struct Face {
-  int cluster, primitive, axis, end;
-  double offset;
+  int cluster, primitive, axis;
+  double offset, to;
 };
 
 Eigen::Matrix3d orthonormal(const Vec3& x0, const Vec3& z0) {
@@ -101,9 +100,9 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     return Error{ErrorCode::InvalidArgument,
                  "snap: distance and angle must be finite and not negative"};
   }
-  SnapReport local_report;
-  SnapReport& rep = report ? *report : local_report;
-  rep = SnapReport{};
+  SnapReport local_counts;
+  SnapReport& counts = report ? *report : local_counts;
+  counts = SnapReport{};
   std::vector<PrimitiveSpec> out = primitives;
   const std::size_t n = out.size();
 
@@ -158,7 +157,7 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
       if (std::abs(d.dot(e)) <= sin_angle) d = (d - d.dot(e) * e).normalized();
     }
   }
-  rep.directions = static_cast<int>(directions.size());
+  counts.directions = static_cast<int>(directions.size());
 
   // 2. Each primitive turned about its centre onto its axes' directions.
   for (std::size_t i = 0; i < n; ++i) {
@@ -177,9 +176,9 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     if (turned == r) continue;
     const double turn = Eigen::AngleAxisd(turned * r.transpose()).angle();
     if (turn == 0.0) continue;
-    rep.max_turn = std::max(rep.max_turn, turn);
+    counts.max_turn = std::max(counts.max_turn, turn);
     for (int k : axes) {
-      if ((turned.col(k) - r.col(k)).norm() > 0.0) ++rep.axes_snapped;
+      if ((turned.col(k) - r.col(k)).norm() > 0.0) ++counts.axes_snapped;
     }
     const Vec3 c = local_centre(p);
     const Vec3 centre = at.apply_point(c);
@@ -196,7 +195,8 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     p.placement = moved.value();
   }
 
-  // 3. Plane faces along each direction: offsets within the distance become one plane.
+  // 3. Plane faces along each direction, in pairs (low end, high end) per primitive axis:
+  // offsets within the distance become one plane.
   std::vector<Face> faces;
   for (std::size_t i = 0; i < n; ++i) {
     PrimitiveSpec& p = out[i];
@@ -205,68 +205,68 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
       if (!extent) continue;
       const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
       const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
-      const double base = dir.dot(p.placement.translation());
-      const double far = base + u.sign * p.placement.scale() * *extent;
-      faces.push_back({u.cluster, static_cast<int>(i), k, 0, base});
-      faces.push_back({u.cluster, static_cast<int>(i), k, 1, far});
+      const double low = dir.dot(p.placement.translation());
+      const double high = low + u.sign * p.placement.scale() * *extent;
+      faces.push_back({u.cluster, static_cast<int>(i), k, low, low});
+      faces.push_back({u.cluster, static_cast<int>(i), k, high, high});
     }
   }
-  std::stable_sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-    return std::tie(a.cluster, a.offset) < std::tie(b.cluster, b.offset);
+  std::vector<std::size_t> by_offset(faces.size());
+  for (std::size_t f = 0; f < by_offset.size(); ++f) by_offset[f] = f;
+  std::stable_sort(by_offset.begin(), by_offset.end(), [&](std::size_t a, std::size_t b) {
+    return std::tie(faces[a].cluster, faces[a].offset) <
+           std::tie(faces[b].cluster, faces[b].offset);
   });
-  // target offset of (primitive, axis, end)
-  std::map<std::tuple<int, int, int>, double> target;
-  for (std::size_t g = 0; g < faces.size();) {
+  for (std::size_t g = 0; g < by_offset.size();) {
+    const Face& first = faces[by_offset[g]];
     std::size_t end = g + 1;
-    std::set<std::pair<int, int>> members{{faces[g].primitive, faces[g].axis}};
-    while (end < faces.size() && faces[end].cluster == faces[g].cluster &&
-           faces[end].offset - faces[g].offset <= options.distance &&
-           members.insert({faces[end].primitive, faces[end].axis}).second) {
+    std::set<std::pair<int, int>> members{{first.primitive, first.axis}};
+    while (end < by_offset.size()) {
+      const Face& next = faces[by_offset[end]];
+      if (next.cluster != first.cluster || next.offset - first.offset > options.distance ||
+          !members.insert({next.primitive, next.axis}).second)
+        break;
       ++end;
     }
     if (end - g >= 2) {
       double mean = 0.0;
-      for (std::size_t f = g; f < end; ++f) mean += faces[f].offset;
+      for (std::size_t f = g; f < end; ++f) mean += faces[by_offset[f]].offset;
       mean /= static_cast<double>(end - g);
-      ++rep.planes;
-      for (std::size_t f = g; f < end; ++f) {
-        const Face& face = faces[f];
-        if (mean == face.offset) continue;
-        target[{face.primitive, face.axis, face.end}] = mean;
-        rep.max_move = std::max(rep.max_move, std::abs(mean - face.offset));
-        ++rep.faces_snapped;
-      }
+      ++counts.planes;
+      for (std::size_t f = g; f < end; ++f) faces[by_offset[f]].to = mean;
     }
     g = end;
   }
-  for (std::size_t i = 0; i < n; ++i) {
+
+  // 4. Each primitive's faces moved: its extent along the axis and its position.
+  std::vector<Vec3> shift(n, Vec3::Zero());
+  for (std::size_t f = 0; f < faces.size(); f += 2) {
+    const Face& low = faces[f];
+    const Face& high = faces[f + 1];
+    if (low.to == low.offset && high.to == high.offset) continue;
+    const auto i = static_cast<std::size_t>(low.primitive);
     PrimitiveSpec& p = out[i];
-    Vec3 shift = Vec3::Zero();
-    for (int k : snapped_axes(p)) {
-      double* extent = planar_extent(p, k);
-      if (!extent) continue;
-      const auto lo = target.find({static_cast<int>(i), k, 0});
-      const auto hi = target.find({static_cast<int>(i), k, 1});
-      if (lo == target.end() && hi == target.end()) continue;
-      const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
-      const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
-      const double base = dir.dot(p.placement.translation());
-      const double far = base + u.sign * p.placement.scale() * *extent;
-      const double new_base = lo != target.end() ? lo->second : base;
-      const double new_far = hi != target.end() ? hi->second : far;
-      const double new_extent = u.sign * (new_far - new_base) / p.placement.scale();
-      if (!(new_extent > 0.5 * *extent)) continue;  // a thin primitive keeps its faces
-      *extent = new_extent;
-      shift += (new_base - base) * dir;
+    double* extent = planar_extent(p, low.axis);
+    const AxisUse& u = uses[i][static_cast<std::size_t>(low.axis)];
+    const double new_extent = u.sign * (high.to - low.to) / p.placement.scale();
+    if (!(new_extent > 0.5 * *extent)) continue;  // a thin primitive keeps its faces
+    *extent = new_extent;
+    shift[i] += (low.to - low.offset) * directions[static_cast<std::size_t>(u.cluster)].rep;
+    for (const Face* face : {&low, &high}) {
+      if (face->to == face->offset) continue;
+      ++counts.faces_snapped;
+      counts.max_move = std::max(counts.max_move, std::abs(face->to - face->offset));
     }
-    if (shift.isZero(0.0)) continue;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (shift[i].isZero(0.0)) continue;
+    PrimitiveSpec& p = out[i];
     const Location& at = p.placement;
-    const Vec3 t = at.translation() + shift;
     for (Eigen::Vector4d& clip : p.clips) {
       const Vec3 normal = at.rotation() * clip.head<3>();
-      clip.w() -= normal.dot(shift) / at.scale();
+      clip.w() -= normal.dot(shift[i]) / at.scale();
     }
-    auto moved = Location::from_parts(at.rotation(), at.scale(), t);
+    auto moved = Location::from_parts(at.rotation(), at.scale(), at.translation() + shift[i]);
     if (!moved.ok()) return moved.error();
     p.placement = moved.value();
   }

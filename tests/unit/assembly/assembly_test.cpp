@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -17,6 +16,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
+#include "model_builders.h"
 #include "random_city.h"
 #include "random_shapes.h"
 #include "test_support.h"
@@ -384,26 +384,7 @@ TEST(Assembly, BadPrimitiveIsReportedAndTheRestAssembled) {
 // crossing inside the column's top disc) do not fuse exactly; snapped (5 mm, 0.5°) they are
 // one valid object whose CSG leaves hold the snapped primitives, and the snap is counted.
 TEST(Assembly, FuzzyModeFusesAFittedColumnAndBeam) {
-  auto placed = [](std::array<double, 12> m) {
-    kernel::Matrix34 q;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 4; ++j) q(i, j) = m[static_cast<std::size_t>(4 * i + j)];
-    }
-    return kernel::Location::from_matrix(q).value();
-  };
-  PrimitiveSpec column;
-  column.type = PrimitiveType::Cylinder;
-  column.radius = 0.1518848301127851;
-  column.height = 3.9995294132512806;
-  column.placement = placed({1, 0, 0, 9.001867204626194, 0, 0.9999997536395747,
-                             0.000701940731047384, 0.0007465168148400713, 0, -0.000701940731047384,
-                             0.9999997536395747, -0.001671966867296138});
-  PrimitiveSpec beam;
-  beam.type = PrimitiveType::Box;
-  beam.size = Vec3(0.19956792023612407, 3.0006137219093287, 0.2987809655545449);
-  beam.placement = placed({0.999999999930532, 0, 1.1787107160086285e-05, 8.898801008141323, 0, 1, 0,
-                           -0.00022804077599155735, -1.1787107160086285e-05, 0, 0.999999999930532,
-                           3.698972081854656});
+  const auto [column, beam] = test::fitted_column_and_beam();
   const auto input = labelled({column, beam});
   auto exact = assemble(input);
   ASSERT_TRUE(exact.ok()) << exact.error().message;

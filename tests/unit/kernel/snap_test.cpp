@@ -5,33 +5,19 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <numbers>
 
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "model_builders.h"
 
 namespace csgtile::kernel {
 namespace {
 
-PrimitiveSpec box(const Vec3& size, const Location& at) {
-  PrimitiveSpec p;
-  p.type = PrimitiveType::Box;
-  p.size = size;
-  p.placement = at;
-  return p;
-}
-
-PrimitiveSpec cylinder(double r, double h, const Location& at) {
-  PrimitiveSpec p;
-  p.type = PrimitiveType::Cylinder;
-  p.radius = r;
-  p.height = h;
-  p.placement = at;
-  return p;
-}
+using test::box;
+using test::cylinder;
 
 Location turned(const Vec3& t, const Vec3& axis, double angle) {
   return Location::translation(t) * Location::rotation(Vec3::Zero(), axis, angle);
@@ -42,24 +28,7 @@ Location turned(const Vec3& t, const Vec3& axis, double angle) {
 // a sliver 0.1 mm thin (it fails). Snapped with 5 mm and 0.5°: one direction up, one plane on
 // top, and the fuse is one valid solid.
 TEST(Snap, FittedColumnAndBeamFuseOnceSnapped) {
-  // Placements as the fit left them (rows of [R | t]).
-  auto placed = [](std::array<double, 12> m) {
-    Matrix34 q;
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 4; ++j) q(i, j) = m[static_cast<std::size_t>(4 * i + j)];
-    }
-    return Location::from_matrix(q).value();
-  };
-  const PrimitiveSpec column =
-      cylinder(0.1518848301127851, 3.9995294132512806,
-               placed({1, 0, 0, 9.001867204626194, 0, 0.9999997536395747, 0.000701940731047384,
-                       0.0007465168148400713, 0, -0.000701940731047384, 0.9999997536395747,
-                       -0.001671966867296138}));
-  const PrimitiveSpec beam =
-      box(Vec3(0.19956792023612407, 3.0006137219093287, 0.2987809655545449),
-          placed({0.999999999930532, 0, 1.1787107160086285e-05, 8.898801008141323, 0, 1, 0,
-                  -0.00022804077599155735, -1.1787107160086285e-05, 0, 0.999999999930532,
-                  3.698972081854656}));
+  const auto [column, beam] = test::fitted_column_and_beam();
   auto exact = boolean_operation(build_primitive(column).value(), build_primitive(beam).value(),
                                  BooleanOp::Fuse);
   EXPECT_FALSE(exact.ok() && check_shape(exact.value()).valid()) << "the exact fuse now holds";

@@ -2,7 +2,6 @@
 // (kernel/assembly) anchored in the cell → the cell's native model, topology index,
 // CityJSONSeq, 3D Tiles and manifest (city_jobs.h).
 
-#include <cmath>
 #include <map>
 
 #include "city/city_internal.h"
@@ -17,6 +16,7 @@
 #include "export/run_index.h"
 #include "export/tileset.h"
 #include "ops/stage_clock.h"
+#include "snap_json.h"
 
 namespace csgtile::worker::city::detail {
 
@@ -91,8 +91,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.tolerance = config.kernel.linear_tolerance;
   options.voxel_size = config.city.voxel_size;
   options.threads = config.run.threads;
-  options.snap.distance = config.city.snap_distance;
-  options.snap.angle = config.city.snap_angle_degrees * M_PI / 180.0;
+  options.snap = snap_options(config.city.snap_distance, config.city.snap_angle_degrees);
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
     return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
@@ -214,20 +213,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     files.push_back(std::move(entry));
   }
   const assembly::AssemblyStats& s = a.stats;
-  ordered_json stats = {{"primitives_read", s.primitives_read},
-                        {"primitives_failed", s.primitives_failed},
-                        {"candidate_pairs", s.candidate_pairs},
-                        {"culled_pairs", s.culled_pairs},
-                        {"exact_tests", s.exact_tests},
-                        {"interacting_pairs", s.interacting_pairs},
-                        {"objects_in_halo", s.objects},
-                        {"objects", kept.size()},
-                        {"objects_unfused", invalid},
-                        {"snap",
-                         {{"axes_snapped", s.snap.axes_snapped},
-                          {"faces_snapped", s.snap.faces_snapped},
-                          {"max_turn", s.snap.max_turn},
-                          {"max_move", s.snap.max_move}}}};
+  ordered_json stats = {
+      {"primitives_read", s.primitives_read}, {"primitives_failed", s.primitives_failed},
+      {"candidate_pairs", s.candidate_pairs}, {"culled_pairs", s.culled_pairs},
+      {"exact_tests", s.exact_tests},         {"interacting_pairs", s.interacting_pairs},
+      {"objects_in_halo", s.objects},         {"objects", kept.size()},
+      {"objects_unfused", invalid},           {"snap", snap_report_json(s.snap)}};
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["cell"] = name;
