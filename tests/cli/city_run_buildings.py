@@ -6,7 +6,11 @@
     without it); every one of them is a Building with one Solid — a building whose parts the
     exact Booleans did not fuse would be a GenericCityObject MultiSolid of its parts, named in
     its cell's problems (measured: Delft 10 of 10, Amsterdam 3 of 3);
-  * val3dity (../shared/tools/val3dity) finds every building valid;
+  * every building has its model as LoD2.2 and its block as LoD1.2 (issue #18 item 5;
+    "lod_reached": "2.2"), and val3dity (../shared/tools/val3dity) finds every solid of every
+    building valid, both LoDs;
+  * each cell's GeoPackage has a lod12 layer with one feature per building, whose top is the
+    building's h_roof_70p, and the objects layer carries the LoD and the heights;
   * every building carries its heights (h_ground <= h_roof_min <= h_roof_50p <= h_roof_70p
     <= h_roof_max, within the tile's NAP range) and at least one roof surface.
 Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity is
@@ -17,6 +21,7 @@ import glob
 import json
 import os
 import shutil
+import sqlite3
 import subprocess
 import sys
 
@@ -47,29 +52,43 @@ for name, tile in tiles.items():
     for cell in glob.glob(f"{rundir}/cells/*/manifest.json"):
         for problem in json.load(open(cell)).get("problems", []):
             assert "no geometry" not in problem and "left out" not in problem, (name, problem)
-    buildings = valid = fused = 0
+    buildings = valid = fused = solids = checked = blocks = 0
     for seq in sorted(glob.glob(f"{rundir}/cells/*/model.city.jsonl")):
         with open(seq) as f:
             lines = f.readlines()[1:]
         for line in lines:
             feature = json.loads(line)
             for oid, o in feature["CityObjects"].items():
-                kinds = [g["type"] for g in o.get("geometry", [])]
-                assert kinds in (["Solid"], ["MultiSolid"]), (name, oid, kinds)
-                fused += 1 if o["type"] == "Building" and kinds == ["Solid"] else 0
+                kinds = [(g["lod"], g["type"]) for g in o.get("geometry", [])]
+                assert kinds == [("2.2", "Solid"), ("1.2", "Solid")], (name, oid, kinds)
                 a = o["attributes"]
+                fused += 1 if o["type"] == "Building" and a["lod_reached"] == "2.2" else 0
                 heights = [a[k] for k in ("h_ground", "h_roof_min", "h_roof_50p", "h_roof_70p",
                                           "h_roof_max")]
                 assert heights == sorted(heights), (name, oid, heights)
                 assert -10.0 < heights[0] and heights[-1] < 100.0, (name, oid, heights)  # NAP
                 assert a["roof_surfaces"] >= 1, (name, oid)
                 buildings += 1
+            solids += len(o["geometry"])
         report = f"{seq}.val3dity.json"
         subprocess.run([val3dity, seq, "--report", report], capture_output=True, check=True)
         r = json.load(open(report))
         valid += sum(1 for x in r["features"] if x["validity"])
+        checked += sum(p["total"] for p in r["primitives_overview"] if p["type"] == "Solid")
+        # The GeoPackage's layers per LoD: the blocks, and the LoD and heights of the objects.
+        gpkg = os.path.join(os.path.dirname(seq), "index.gpkg")
+        with sqlite3.connect(gpkg) as db:
+            rows = dict(db.execute("SELECT o.object_id, l.h_top - o.h_roof_70p FROM objects o "
+                                   "JOIN lod12 l ON l.object_id = o.object_id "
+                                   "WHERE o.lod = '2.2'").fetchall())
+            objects = db.execute("SELECT count(*) FROM objects").fetchone()[0]
+        assert len(rows) == objects and all(abs(d) < 1e-9 for d in rows.values()), (gpkg, rows)
+        blocks += len(rows)
     assert buildings > 0, f"{name}: no building published"
     assert valid == buildings, f"{name}: val3dity: {valid} of {buildings} valid"
     assert fused == buildings, f"{name}: {fused} of {buildings} fused into one solid"
-    summary[name] = {"buildings": buildings, "fused": fused, "val3dity_valid": valid}
+    assert checked == solids, f"{name}: val3dity checked {checked} of {solids} solids"
+    assert blocks == buildings, f"{name}: {blocks} LoD1.2 blocks in the GeoPackages"
+    summary[name] = {"buildings": buildings, "fused": fused, "val3dity_valid": valid,
+                     "solids_checked": checked, "lod12_blocks": blocks}
 print(json.dumps(summary))

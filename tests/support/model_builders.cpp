@@ -1,5 +1,7 @@
 #include "model_builders.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 namespace csgtile::test {
@@ -51,6 +53,27 @@ kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size) {
 
 kernel::PrimitiveSpec cylinder_at(const kernel::Vec3& at, double r, double h) {
   return cylinder(r, h, kernel::Location::translation(at));
+}
+
+kernel::PrimitiveSpec extrusion_at(std::vector<kernel::Vec2> profile, double base, double height) {
+  kernel::PrimitiveSpec s;
+  s.type = kernel::PrimitiveType::Extrusion;
+  s.profile = std::move(profile);
+  s.height = height;
+  s.placement = kernel::Location::translation(kernel::Vec3(0.0, 0.0, base));
+  return s;
+}
+
+std::vector<kernel::Vec2> rectangle(double x0, double y0, double x1, double y1) {
+  return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+}
+
+kernel::PrimitiveSpec gable_house() {
+  kernel::PrimitiveSpec s = extrusion_at(rectangle(0, 0, 10, 6), 0.0, 10.0);
+  const double r = 1.0 / std::sqrt(2.0);
+  s.clips.emplace_back(0.0, -r, r, 5.0 * r);  // z <= 5 + y
+  s.clips.emplace_back(0.0, r, r, 11.0 * r);  // z <= 11 - y
+  return s;
 }
 
 kernel::CsgModel leaf(const kernel::PrimitiveSpec& spec, const std::string& label) {

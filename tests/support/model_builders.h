@@ -6,6 +6,7 @@
 #include <array>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "csgtile/kernel/csg.h"
 
@@ -27,6 +28,14 @@ std::pair<kernel::PrimitiveSpec, kernel::PrimitiveSpec> fitted_column_and_beam()
 kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size);
 /// A vertical cylinder of radius r and height h with its base centre at `at`.
 kernel::PrimitiveSpec cylinder_at(const kernel::Vec3& at, double r, double h);
+/// A vertical extrusion of `profile` (x, y) from z = base up by `height`.
+kernel::PrimitiveSpec extrusion_at(std::vector<kernel::Vec2> profile, double base, double height);
+/// The rectangle [x0, x1] × [y0, y1], counter-clockwise.
+std::vector<kernel::Vec2> rectangle(double x0, double y0, double x1, double y1);
+/// A gable house 10 × 6 m on z = 0: eaves at 5 m, the ridge at 8 m along x over y = 3 (an
+/// extrusion cut by its two roof planes). Its roof's height is spread evenly over its area:
+/// the q-th percentile is 5 + 3q.
+kernel::PrimitiveSpec gable_house();
 /// csg_primitive(spec, label), failing the test on error.
 kernel::CsgModel leaf(const kernel::PrimitiveSpec& spec, const std::string& label);
 

@@ -68,6 +68,7 @@ std::vector<IndexObject> build_objects() {
   out.push_back(object("hollow", combine({leaf(box({30, 0, 0}, {4, 4, 4}), "outer"),
                                           leaf(box({31, 1, 1}, {2, 2, 2}), "void")},
                                          kernel::BooleanOp::Cut)));
+  add_building_lods(out, 0.01, 1e-7);
   return out;
 }
 
@@ -245,6 +246,8 @@ TEST_F(CityJsonSeqTest, OneFeaturePerObjectWithItsIdAttributesAndIntegerVertices
   EXPECT_EQ(stats_.features, sample_objects().size());
   EXPECT_EQ(stats_.open_objects, 0u);
   EXPECT_TRUE(stats_.warnings.empty());
+  EXPECT_FALSE(sample_objects()[0].lod12.has_value());  // "fused": boxes and a cylinder
+  EXPECT_TRUE(sample_objects()[1].lod12.has_value());   // "block": a box
   for (std::size_t i = 0; i < sample_objects().size(); ++i) {
     const IndexObject& o = sample_objects()[i];
     const Json& f = sequence_->features[i];
@@ -253,9 +256,14 @@ TEST_F(CityJsonSeqTest, OneFeaturePerObjectWithItsIdAttributesAndIntegerVertices
     ASSERT_EQ(f["CityObjects"].size(), 1u);
     const Json& co = city_object(f);
     EXPECT_EQ(co["type"], "Building");
-    ASSERT_EQ(co["geometry"].size(), 1u);
+    // Objects of boxes and extrusions are buildings: their model as lod 2.2 and their LoD1.2
+    // block; the others (a cylinder among their primitives) one lod-2 solid.
+    ASSERT_EQ(co["geometry"].size(), o.lod12 ? 2u : 1u) << o.id;
     EXPECT_EQ(co["geometry"][0]["type"], "Solid") << o.id;
-    EXPECT_EQ(co["geometry"][0]["lod"], "2");
+    EXPECT_EQ(co["geometry"][0]["lod"], o.lod12 ? "2.2" : "2") << o.id;
+    if (o.lod12) {
+      EXPECT_EQ(co["geometry"][1]["lod"], "1.2") << o.id;
+    }
     const Json& a = co["attributes"];
     EXPECT_EQ(a["primitive_count"], o.primitives.size());
     EXPECT_EQ(a["csg_nodes"], o.model.nodes.size());

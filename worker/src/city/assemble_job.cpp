@@ -137,6 +137,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.id = object->id;
     io.cell = name;
     io.model = object->model;
+    if (!object->fused) io.fuse_error = object->error;
     ordered_json prim_records = ordered_json::array();
     std::map<std::string, const CellPrimitive*> by_label;
     for (int i : object->primitives) {
@@ -168,6 +169,9 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     objects.objects.push_back(std::move(io));
     kept_objects.push_back(*object);
   }
+
+  add_building_lods(objects.objects, config.kernel.chordal_tolerance,
+                    config.kernel.linear_tolerance);
 
   // The cell's files, in the cell frame (origin: the cell's corner).
   const std::string crs_text = payload.value("crs", "");

@@ -157,6 +157,9 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       io.id = entry.at("id").get<std::string>();
       io.cell = record.at("cell").get<std::string>();
       io.model = std::move(model).value();
+      if (entry.contains("error") && entry.at("error").is_string()) {
+        io.fuse_error = entry.at("error").get<std::string>();
+      }
       if (!offset.isZero(0.0))
         io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
       std::map<std::string, geo::FitQuality> quality;
@@ -176,6 +179,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       objects.objects.push_back(std::move(io));
     }
   }
+  add_building_lods(objects.objects, config.kernel.chordal_tolerance,
+                    config.kernel.linear_tolerance);
   RunIndexReport index;
   if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;
   log.info("index", "written",

@@ -16,10 +16,10 @@
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/face_rings.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/publish.h"
-#include "export/face_rings.h"
 
 namespace csgtile::worker {
 
@@ -312,7 +312,6 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
   if (!meshed.ok()) return meshed.error();
   const kernel::Mesh& mesh = meshed.value();
   const kernel::ShapeIndex faces = kernel::map_child_shapes(root, ShapeKind::Face);
-  const kernel::ShapeIndex edges = kernel::map_child_shapes(root, ShapeKind::Edge);
 
   const std::vector<Vec3>& vertices = mesh.vertices;
   std::vector<Point> points;
@@ -331,14 +330,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
     if (mesh.triangle_face[i] < faces.size()) triangles_of[mesh.triangle_face[i]].push_back(i);
   }
-  const detail::EdgePoints edge_points = [&](const Shape& edge) {
-    std::vector<Vec3> out;
-    const std::size_t e = edges.find(edge);
-    if (e < mesh.edge_vertices.size()) {
-      for (std::uint32_t v : mesh.edge_vertices[e]) out.push_back(vertices[v]);
-    }
-    return out;
-  };
+  const kernel::EdgePoints edge_points = kernel::mesh_edge_points(root, mesh);
 
   ObjectGeometry geometry;
   auto add_face = [&](std::size_t f, ShellSurfaces& shell) {
@@ -348,7 +340,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
       return;  // Internal and External faces bound nothing
     }
     if (face.body().face()->surface->kind() == kernel::SurfaceKind::Plane) {
-      if (auto rings = detail::planar_face_rings(face, edge_points)) {
+      if (auto rings = kernel::planar_face_rings(face, edge_points)) {
         Surface s;
         for (const auto& ring : *rings) {
           Ring q;
@@ -452,7 +444,7 @@ Json surface_json(const Surface& s, FeatureVertices& vertices) {
 
 // Solid (one solid), MultiSolid (several) or, when a shell is open, MultiSurface; semantic
 // surfaces listed in Semantic order, those used only.
-Json geometry_json(const ObjectGeometry& g, FeatureVertices& vertices) {
+Json geometry_json(const ObjectGeometry& g, const char* lod, FeatureVertices& vertices) {
   std::array<bool, kSemanticNames.size()> used{};
   for (const SolidShells& solid : g.solids) {
     for (const ShellSurfaces& shell : solid) {
@@ -499,78 +491,10 @@ Json geometry_json(const ObjectGeometry& g, FeatureVertices& vertices) {
   }
   Json out;
   out["type"] = type;
-  out["lod"] = "2";
+  out["lod"] = lod;
   out["boundaries"] = std::move(boundaries);
   out["semantics"] = {{"surfaces", std::move(surfaces)}, {"values", std::move(values)}};
   return out;
-}
-
-// Heights of a building's model, as 3D city models publish them (issue #18 item 6): the
-// ground (lowest vertex of its ground surfaces) and its roof — lowest and highest roof
-// vertex, and the 50th and 70th percentiles of the roof's height over its footprint (each
-// roof polygon at the height of its centroid, weighted by its area seen from above) — in the
-// file's CRS heights; the number of roof surfaces. Nothing when it has no roof.
-struct RoofHeights {
-  double ground = 0.0, min = 0.0, p50 = 0.0, p70 = 0.0, max = 0.0;
-  std::size_t surfaces = 0;
-};
-
-std::optional<RoofHeights> roof_heights(const ObjectGeometry& g, const CityJsonOptions& options) {
-  auto z_of = [&](const Point& p) {
-    return static_cast<double>(p[2]) * options.scale + options.origin.z();
-  };
-  RoofHeights h;
-  h.ground = INFINITY;
-  h.min = INFINITY;
-  h.max = -INFINITY;
-  std::vector<std::pair<double, double>> samples;  // (centroid height, area from above)
-  for (const SolidShells& solid : g.solids) {
-    for (const ShellSurfaces& shell : solid) {
-      for (const Surface& s : shell) {
-        if (s.semantic == Semantic::Ground) {
-          for (const Ring& r : s.rings) {
-            for (const Point& p : r) h.ground = std::min(h.ground, z_of(p));
-          }
-        }
-        if (s.semantic != Semantic::Roof) continue;
-        ++h.surfaces;
-        double area = 0.0, moment = 0.0;
-        for (const Ring& r : s.rings) {
-          for (const Point& p : r) {
-            h.min = std::min(h.min, z_of(p));
-            h.max = std::max(h.max, z_of(p));
-          }
-          // Fan triangles from the ring's first vertex: signed areas from above, so that
-          // holes (turning the other way) subtract and concave rings add up exactly.
-          for (std::size_t k = 1; k + 1 < r.size(); ++k) {
-            const Point &a = r[0], &b = r[k], &c = r[k + 1];
-            const double t =
-                0.5 * (static_cast<double>(b[0] - a[0]) * static_cast<double>(c[1] - a[1]) -
-                       static_cast<double>(b[1] - a[1]) * static_cast<double>(c[0] - a[0]));
-            area += t;
-            moment += t * (z_of(a) + z_of(b) + z_of(c)) / 3.0;
-          }
-        }
-        if (std::abs(area) > 0.0) samples.emplace_back(moment / area, std::abs(area));
-      }
-    }
-  }
-  if (h.surfaces == 0 || samples.empty()) return std::nullopt;
-  std::sort(samples.begin(), samples.end());
-  double total = 0.0;
-  for (const auto& [z, w] : samples) total += w;
-  auto percentile = [&](double q) {
-    double run = 0.0;
-    for (const auto& [z, w] : samples) {
-      run += w;
-      if (run >= q * total) return z;
-    }
-    return samples.back().first;
-  };
-  h.p50 = percentile(0.5);
-  h.p70 = percentile(0.7);
-  if (!std::isfinite(h.ground)) h.ground = h.min;
-  return h;
 }
 
 Json attributes_json(const IndexObject& object, const std::optional<ObjectGeometry>& geometry,
@@ -591,14 +515,16 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   if (geometry) {
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;
-    if (const auto h = roof_heights(*geometry, options)) {
-      a["h_ground"] = h->ground;
-      a["h_roof_min"] = h->min;
-      a["h_roof_50p"] = h->p50;
-      a["h_roof_70p"] = h->p70;
-      a["h_roof_max"] = h->max;
-      a["roof_surfaces"] = h->surfaces;
-    }
+  }
+  // Heights (issue #18 item 6), in the file's CRS heights.
+  if (const auto& h = object.heights) {
+    const double z0 = options.origin.z();
+    a["h_ground"] = h->ground + z0;
+    a["h_roof_min"] = h->roof_min + z0;
+    a["h_roof_50p"] = h->roof_50p + z0;
+    a["h_roof_70p"] = h->roof_70p + z0;
+    a["h_roof_max"] = h->roof_max + z0;
+    a["roof_surfaces"] = h->roof_faces;
   }
   return a;
 }
@@ -689,14 +615,48 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
                             ": no geometry: " + kernel::error_code_name(geometry.error().code) +
                             ": " + geometry.error().message);
     }
+    // A building's LoD1.2 block beside its LoD2.2 model, as 3DBAG publishes both.
+    std::optional<ObjectGeometry> block;
+    std::string block_problem = object.lod12_error;
+    if (object.lod12) {
+      auto b = object_geometry(object.lod12->shape, options, true);
+      if (b.ok() && b.value().closed && b.value().solids.size() == 1) {
+        block = std::move(b).value();
+      } else {
+        block_problem = b.ok() ? "its shell is not closed after quantisation"
+                               : kernel::error_code_name(b.error().code) + std::string(": ") +
+                                     b.error().message;
+      }
+    }
+    if (!block_problem.empty()) {
+      st.warnings.push_back("CityJSON: object " + object.id + ": no LoD1.2: " + block_problem);
+    }
+    const bool building = object.lod12.has_value() || !object.lod12_error.empty();
+    const bool one_solid = g && g->solids.size() == 1;
     FeatureVertices vertices;
     Json city_object;
     // CityJSON's Building admits no MultiSolid: an object of several solids (a group whose
-    // fuse failed, or a result in pieces) is a GenericCityObject.
-    city_object["type"] = g && g->solids.size() > 1 ? "GenericCityObject" : "Building";
-    city_object["attributes"] = attributes_json(object, g, options);
+    // fuse failed, or a result in pieces) is a GenericCityObject, unless it is a building
+    // with its LoD1.2 block: then a Building of that block alone, the reason recorded.
+    city_object["type"] = g && !one_solid && !block ? "GenericCityObject" : "Building";
+    Json attributes = attributes_json(object, g, options);
+    if (building) {
+      attributes["lod_reached"] = one_solid ? Json("2.2") : block ? Json("1.2") : Json();
+      if (g && !one_solid) {
+        attributes["lod22_failure"] = object.fuse_error.empty()
+                                          ? std::string("the model is in several solids")
+                                          : object.fuse_error;
+      }
+      if (!block_problem.empty()) attributes["lod12_failure"] = block_problem;
+    }
+    city_object["attributes"] = std::move(attributes);
+    Json geometries = Json::array();
+    if (g && (one_solid || !block)) {
+      geometries.push_back(geometry_json(*g, building ? "2.2" : "2", vertices));
+    }
+    if (block) geometries.push_back(geometry_json(*block, "1.2", vertices));
+    if (!geometries.empty()) city_object["geometry"] = std::move(geometries);
     if (g) {
-      city_object["geometry"] = Json::array({geometry_json(*g, vertices)});
       st.collapsed_triangles += g->collapsed_triangles;
       st.flat_surfaces += g->flat_surfaces;
       for (const SolidShells& solid : g->solids) {

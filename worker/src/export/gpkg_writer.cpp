@@ -78,7 +78,24 @@ CREATE TABLE objects (
   max_x REAL, max_y REAL, max_z REAL,
   valid BOOLEAN NOT NULL,
   fit_rms REAL,
-  fit_coverage REAL
+  fit_coverage REAL,
+  lod TEXT,
+  h_ground REAL,
+  h_roof_min REAL,
+  h_roof_50p REAL,
+  h_roof_70p REAL,
+  h_roof_max REAL,
+  roof_surfaces INTEGER,
+  fuse_error TEXT,
+  lod12_error TEXT
+);
+CREATE TABLE lod12 (
+  fid INTEGER PRIMARY KEY AUTOINCREMENT,
+  geom MULTIPOLYGON,
+  object_id TEXT NOT NULL UNIQUE,
+  cell TEXT NOT NULL,
+  h_ground REAL NOT NULL,
+  h_top REAL NOT NULL
 );
 CREATE TABLE shapes (
   id INTEGER PRIMARY KEY,
@@ -214,6 +231,34 @@ constexpr const char* kWgs84Wkt =
     "AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\","
     "\"9122\"]],AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],AUTHORITY[\"EPSG\",\"4326\"]]";
 
+// Feature tables, their gpkg_contents descriptions and which extent they have (0: the
+// objects', 1: the blocks').
+struct FeatureTable {
+  const char* table;
+  const char* description;
+  int box;
+};
+constexpr FeatureTable kFeatureTables[] = {
+    {"objects", "csgtile: one feature per object, its boundary as MULTIPOLYGON Z", 0},
+    {"lod12",
+     "csgtile: LoD1.2 of each building, its footprint extruded from the ground to the roof's "
+     "70th percentile, as MULTIPOLYGON Z",
+     1},
+};
+
+// The R-tree statements of objects.geom for another feature table.
+std::string for_table(std::string_view sql, std::string_view table) {
+  std::string out;
+  constexpr std::string_view kObjects = "objects";
+  std::size_t at = 0;
+  for (std::size_t hit; (hit = sql.find(kObjects, at)) != std::string_view::npos;
+       at = hit + kObjects.size()) {
+    out.append(sql.substr(at, hit - at)).append(table);
+  }
+  out.append(sql.substr(at));
+  return out;
+}
+
 // Attribute tables and their gpkg_contents descriptions.
 constexpr std::pair<const char*, const char*> kAttributeTables[] = {
     {"shapes", "csgtile: distinct sub-shapes of every object (id, key, kind, tolerance)"},
@@ -285,9 +330,9 @@ std::string geopackage_multipolygon_z(const std::vector<Polygon3>& polygons, int
   return w.take();
 }
 
-kernel::BoundingBox boundary_box(const ObjectRecord& o) {
+kernel::BoundingBox boundary_box(const std::vector<Polygon3>& boundary) {
   kernel::BoundingBox box;
-  for (const Polygon3& p : o.boundary) {
+  for (const Polygon3& p : boundary) {
     for (const auto& ring : p.rings) {
       for (const kernel::Vec3& v : ring) box.add(v);
     }
@@ -336,11 +381,19 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
       db,
       "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
       "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
-      "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,"
-      "?15,?16,?17,?18)");
+      "fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max, "
+      "roof_surfaces, fuse_error, lod12_error) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,"
+      "?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,?23,?24,?25,?26,?27)");
   SqliteStatement rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)");
+  SqliteStatement block(db,
+                        "INSERT INTO lod12 (fid, geom, object_id, cell, h_ground, h_top) "
+                        "VALUES (?1,?2,?3,?4,?5,?6)");
+  SqliteStatement block_rtree(db, "INSERT INTO rtree_lod12_geom VALUES (?1,?2,?3,?4,?5)");
   CSGTILE_TRY(st.status());
   CSGTILE_TRY(rtree.status());
+  CSGTILE_TRY(block.status());
+  CSGTILE_TRY(block_rtree.status());
+  std::int64_t block_fid = 0;
   for (std::size_t i = 0; i < rows.objects.size(); ++i) {
     const ObjectRecord& o = rows.objects[i];
     const auto fid = static_cast<std::int64_t>(i + 1);
@@ -363,16 +416,23 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
     st.bind(16, static_cast<std::int64_t>(o.valid ? 1 : 0))
         .bind(17, o.fit_rms)
         .bind(18, o.fit_coverage);
+    st.bind(19, o.lod).bind(20, o.h_ground).bind(21, o.h_roof_min).bind(22, o.h_roof_50p);
+    st.bind(23, o.h_roof_70p).bind(24, o.h_roof_max).bind(25, o.roof_surfaces);
+    st.bind(26, o.fuse_error).bind(27, o.lod12_error);
     CSGTILE_TRY(st.run());
-    if (o.has_geometry) {
-      // SQLite's R-tree stores 32-bit floats, rounded outwards.
-      const kernel::BoundingBox b = boundary_box(o);
-      rtree.bind(1, fid)
-          .bind(2, b.min.x())
-          .bind(3, b.max.x())
-          .bind(4, b.min.y())
-          .bind(5, b.max.y());
-      CSGTILE_TRY(rtree.run());
+    // SQLite's R-tree stores 32-bit floats, rounded outwards.
+    auto index = [](SqliteStatement& tree, std::int64_t id, const kernel::BoundingBox& b) {
+      tree.bind(1, id).bind(2, b.min.x()).bind(3, b.max.x()).bind(4, b.min.y());
+      tree.bind(5, b.max.y());
+      return tree.run();
+    };
+    if (o.has_geometry) CSGTILE_TRY(index(rtree, fid, boundary_box(o.boundary)));
+    if (o.has_lod12 && o.h_ground && o.h_roof_70p) {
+      ++block_fid;
+      block.bind(1, block_fid).bind_blob(2, geopackage_multipolygon_z(o.lod12_boundary, srs_id));
+      block.bind(3, o.object_id).bind(4, o.cell).bind(5, *o.h_ground).bind(6, *o.h_roof_70p);
+      CSGTILE_TRY(block.run());
+      CSGTILE_TRY(index(block_rtree, block_fid, boundary_box(o.lod12_boundary)));
     }
   }
   return {};
@@ -485,9 +545,10 @@ kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptio
 }
 
 kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  kernel::BoundingBox all;
+  kernel::BoundingBox all, blocks;
   for (const ObjectRecord& o : rows.objects) {
-    if (o.has_geometry) all.add(boundary_box(o));
+    if (o.has_geometry) all.add(boundary_box(o.boundary));
+    if (o.has_lod12) blocks.add(boundary_box(o.lod12_boundary));
   }
   SqliteStatement st(
       db,
@@ -495,17 +556,19 @@ kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const Inde
       "last_change, min_x, min_y, max_x, max_y, srs_id) VALUES (?1,?2,?3,?4,?5,?6,?7,"
       "?8,?9,?10)");
   CSGTILE_TRY(st.status());
-  st.bind(1, std::string_view("objects")).bind(2, std::string_view("features"));
-  st.bind(3, std::string_view("objects"));
-  st.bind(4, std::string_view("csgtile: one feature per object, its boundary as MULTIPOLYGON Z"));
-  st.bind(5, options.last_change);
-  if (all.empty()) {
-    for (int c = 6; c <= 9; ++c) st.bind_null(c);
-  } else {
-    st.bind(6, all.min.x()).bind(7, all.min.y()).bind(8, all.max.x()).bind(9, all.max.y());
+  for (const auto& [table, description, box] : kFeatureTables) {
+    const kernel::BoundingBox& b = box == 0 ? all : blocks;
+    st.bind(1, std::string_view(table)).bind(2, std::string_view("features"));
+    st.bind(3, std::string_view(table)).bind(4, std::string_view(description));
+    st.bind(5, options.last_change);
+    if (b.empty()) {
+      for (int c = 6; c <= 9; ++c) st.bind_null(c);
+    } else {
+      st.bind(6, b.min.x()).bind(7, b.min.y()).bind(8, b.max.x()).bind(9, b.max.y());
+    }
+    st.bind(10, static_cast<std::int64_t>(options.srs.srs_id));
+    CSGTILE_TRY(st.run());
   }
-  st.bind(10, static_cast<std::int64_t>(options.srs.srs_id));
-  CSGTILE_TRY(st.run());
   for (const auto& [table, description] : kAttributeTables) {
     st.bind(1, std::string_view(table)).bind(2, std::string_view("attributes"));
     st.bind(3, std::string_view(table)).bind(4, std::string_view(description));
@@ -515,15 +578,23 @@ kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const Inde
   }
   SqliteStatement geometry(db,
                            "INSERT INTO gpkg_geometry_columns (table_name, column_name, "
-                           "geometry_type_name, srs_id, z, m) VALUES ('objects', 'geom', "
-                           "'MULTIPOLYGON', ?1, 1, 0)");
-  CSGTILE_TRY(geometry.status());
-  geometry.bind(1, static_cast<std::int64_t>(options.srs.srs_id));
-  CSGTILE_TRY(geometry.run());
-  return db.exec(
+                           "geometry_type_name, srs_id, z, m) VALUES (?1, 'geom', "
+                           "'MULTIPOLYGON', ?2, 1, 0)");
+  SqliteStatement extension(
+      db,
       "INSERT INTO gpkg_extensions (table_name, column_name, extension_name, definition, scope) "
-      "VALUES ('objects', 'geom', 'gpkg_rtree_index', "
-      "'http://www.geopackage.org/spec120/#extension_rtree', 'write-only');");
+      "VALUES (?1, 'geom', 'gpkg_rtree_index', "
+      "'http://www.geopackage.org/spec120/#extension_rtree', 'write-only')");
+  CSGTILE_TRY(geometry.status());
+  CSGTILE_TRY(extension.status());
+  for (const auto& feature_table : kFeatureTables) {
+    const std::string_view table = feature_table.table;
+    geometry.bind(1, table).bind(2, static_cast<std::int64_t>(options.srs.srs_id));
+    CSGTILE_TRY(geometry.run());
+    extension.bind(1, table);
+    CSGTILE_TRY(extension.run());
+  }
+  return {};
 }
 
 kernel::Status write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
@@ -536,11 +607,15 @@ kernel::Status write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions
   CSGTILE_TRY(db.exec(kCoreSchema));
   CSGTILE_TRY(insert_srs(db, options.srs));
   CSGTILE_TRY(db.exec(kIndexSchema));
-  CSGTILE_TRY(db.exec(kRtree));
+  for (const auto& feature_table : kFeatureTables) {
+    CSGTILE_TRY(db.exec(for_table(kRtree, feature_table.table)));
+  }
   CSGTILE_TRY(insert_objects(db, rows, options.srs.srs_id));
   CSGTILE_TRY(insert_rows(db, rows, options));
   CSGTILE_TRY(db.exec(kIndexIndexes));
-  CSGTILE_TRY(db.exec(kRtreeTriggers));
+  for (const auto& feature_table : kFeatureTables) {
+    CSGTILE_TRY(db.exec(for_table(kRtreeTriggers, feature_table.table)));
+  }
   CSGTILE_TRY(register_contents(db, rows, options));
   return db.exec("COMMIT;");
 }

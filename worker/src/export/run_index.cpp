@@ -193,6 +193,7 @@ Failure collect_run_objects(const config::Config& config,
     }
     for (IndexObject& object : mine) out.objects.push_back(std::move(object));
   }
+  add_building_lods(out.objects, config.kernel.chordal_tolerance, config.kernel.linear_tolerance);
   return {};
 }
 

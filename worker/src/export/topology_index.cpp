@@ -18,9 +18,9 @@
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/face_rings.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/tessellation.h"
-#include "export/face_rings.h"
 #include "export/index_rows.h"
 
 namespace csgtile::worker {
@@ -28,6 +28,8 @@ namespace csgtile::worker {
 namespace detail {
 namespace {
 
+using kernel::EdgePoints;
+using kernel::planar_face_rings;
 using kernel::Shape;
 using kernel::ShapeKind;
 using kernel::Vec3;
@@ -253,6 +255,46 @@ kernel::Status check_objects(const std::vector<IndexObject>& objects, const Inde
   return {};
 }
 
+// A building's columns and its LoD1.2 block's boundary: heights mapped to the SRS at the
+// centre of the object's bounds (a translation in z for the SRSs of city models).
+void add_building_columns(const IndexObject& object, const IndexOptions& options,
+                          const kernel::BoundingBox& b, ObjectRecord& o, IndexStats& stats) {
+  const bool building = object.lod12.has_value() || !object.lod12_error.empty();
+  if (!object.fuse_error.empty()) o.fuse_error = object.fuse_error;
+  if (!object.lod12_error.empty()) o.lod12_error = object.lod12_error;
+  if (const auto& h = object.heights) {
+    const Vec3 c = b.empty() ? Vec3::Zero() : Vec3(0.5 * (b.min + b.max));
+    auto z = [&](double height) { return map_point(options, Vec3(c.x(), c.y(), height)).z(); };
+    o.h_ground = z(h->ground);
+    o.h_roof_min = z(h->roof_min);
+    o.h_roof_50p = z(h->roof_50p);
+    o.h_roof_70p = z(h->roof_70p);
+    o.h_roof_max = z(h->roof_max);
+    o.roof_surfaces = static_cast<std::int64_t>(h->roof_faces);
+  }
+  if (!building) return;
+  const bool one_solid = object.fuse_error.empty() &&
+                         kernel::map_child_shapes(object.model.shape, ShapeKind::Solid).size() == 1;
+  if (object.lod12) {
+    const Shape& block = object.lod12->shape;
+    auto boundary = boundary_polygons(block, kernel::map_child_shapes(block, ShapeKind::Face),
+                                      kernel::map_child_shapes(block, ShapeKind::Edge), options);
+    if (boundary.ok()) {
+      o.lod12_boundary = std::move(boundary).value();
+      o.has_lod12 = !o.lod12_boundary.empty();
+    } else {
+      stats.warnings.push_back("object " + object.id + ": no LoD1.2 geometry: " +
+                               kernel::error_code_name(boundary.error().code) + ": " +
+                               boundary.error().message);
+    }
+  }
+  if (one_solid) {
+    o.lod = "2.2";
+  } else if (o.has_lod12) {
+    o.lod = "1.2";
+  }
+}
+
 }  // namespace
 
 kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
@@ -396,6 +438,7 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
                                kernel::error_code_name(boundary.error().code) + ": " +
                                boundary.error().message);
     }
+    add_building_columns(object, options, mp.bounds, o, stats);
     rows.objects.push_back(std::move(o));
   }
 

@@ -23,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "csgtile/assembly/block_model.h"
 #include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/result.h"
 #include "csgtile/kernel/shape.h"
@@ -47,7 +48,20 @@ struct IndexObject {
   std::string cell = "0";  ///< output cell the object belongs to
   kernel::CsgModel model;  ///< nodes and face_sources may be empty (no history)
   std::vector<PrimitiveInfo> primitives;
+  /// Heights of its model (every object with a roof seen from above) and, for a building
+  /// (an object of extrusions along +z), its LoD1.2 block model; `lod12_error` says why a
+  /// building has none. Filled by add_building_lods.
+  std::optional<assembly::BuildingHeights> heights;
+  std::string fuse_error;  ///< why its primitives are not one solid (empty: they are)
+  std::optional<kernel::CsgModel> lod12;
+  std::string lod12_error;
 };
+
+/// Fills heights, lod12 and lod12_error of every object (block_model.h) at the exporters'
+/// chordal tolerance and the Booleans' linear tolerance. Each object on its own: the result
+/// does not depend on the order or the thread count.
+void add_building_lods(std::vector<IndexObject>& objects, double chordal_tolerance,
+                       double linear_tolerance);
 
 /// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
 /// inlier counts (equal weights when no counts are known); both unset when none was fitted.

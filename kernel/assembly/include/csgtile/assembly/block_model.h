@@ -1,0 +1,54 @@
+#pragma once
+/// \file
+/// Buildings at LoD1.2 (the block model 3D city models publish beside LoD2.2, e.g. 3DBAG):
+/// the footprint of a building's solid extruded from its ground to a percentile of its roof's
+/// height, with the heights 3D city models publish. Both are derived from the LoD2.2 solid
+/// itself, so they agree with it whatever made it.
+
+#include <cstddef>
+
+#include "csgtile/kernel/csg.h"
+
+namespace csgtile::assembly {
+
+/// Heights of a solid as city models publish them (3DBAG's b3_h_*), in its z units.
+struct BuildingHeights {
+  double ground = 0.0;  ///< the lowest point of its downward faces (its base)
+  /// Its roof (faces whose outward normal points up by more than a wall's, nz > 0.2): lowest
+  /// and highest point, and percentiles of its height over its area seen from above.
+  double roof_min = 0.0, roof_50p = 0.0, roof_70p = 0.0, roof_max = 0.0;
+  double roof_area = 0.0;      ///< seen from above
+  std::size_t roof_faces = 0;  ///< faces with some roof
+};
+
+/// The heights of `shape` from its tessellation at `chordal_tolerance`: exact for planar
+/// roofs (the height is linear over each triangle and the percentiles are found on the exact
+/// area function), within the tolerance for curved ones. Errors: as kernel::tessellate;
+/// DegenerateGeometry when the shape has no roof seen from above.
+kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
+                                                 double chordal_tolerance);
+
+struct BlockModelOptions {
+  double chordal_tolerance = 0.01;  ///< of the tessellation the heights and footprint use
+  double tolerance = kernel::kDefaultTolerance;  ///< of the extrusions and their fuse
+};
+
+/// A building's LoD1.2: its footprint (every face of its solid that looks down, seen from
+/// above: the projection of the solid) extruded from heights.ground to its roof's 70th percentile,
+/// one extrusion per downward face, fused by the exact Booleans. Its history is its own CSG tree.
+struct BlockModel {
+  BuildingHeights heights;
+  kernel::CsgModel model;
+};
+
+/// The block model of `model`, a building: a solid (or a compound of solids whose fuse
+/// failed) whose CSG leaves are all extrusions or boxes, placed any way, with or without roof
+/// clips: every face is planar, and the faces that look down at all are the footprint.
+/// Errors: InvalidArgument when a leaf is a curved primitive (not a building: no block
+/// model); DegenerateGeometry when the top is not above the ground, a footprint face's rings
+/// make no extrusion or the footprint is in several pieces; the Booleans' errors;
+/// InvalidShape when the fused block fails the checker.
+kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
+                                       const BlockModelOptions& options = {});
+
+}  // namespace csgtile::assembly

@@ -1,0 +1,35 @@
+// Heights and LoD1.2 block models of the objects an export writes (topology_index.h).
+
+#include <tbb/parallel_for.h>
+
+#include "export/topology_index.h"
+
+namespace csgtile::worker {
+
+void add_building_lods(std::vector<IndexObject>& objects, double chordal_tolerance,
+                       double linear_tolerance) {
+  assembly::BlockModelOptions options;
+  options.chordal_tolerance = chordal_tolerance;
+  options.tolerance = linear_tolerance;
+  tbb::parallel_for(std::size_t{0}, objects.size(), [&](std::size_t i) {
+    IndexObject& o = objects[i];
+    o.heights.reset();
+    o.lod12.reset();
+    o.lod12_error.clear();
+    auto block = assembly::block_model(o.model, options);
+    if (block.ok()) {
+      o.heights = block.value().heights;
+      o.lod12 = std::move(block).value().model;
+      return;
+    }
+    // Not a building (another primitive among its leaves): no block, its heights still.
+    if (block.error().code != kernel::ErrorCode::InvalidArgument) {
+      o.lod12_error =
+          kernel::error_code_name(block.error().code) + std::string(": ") + block.error().message;
+    }
+    auto heights = assembly::building_heights(o.model.shape, chordal_tolerance);
+    if (heights.ok()) o.heights = heights.value();
+  });
+}
+
+}  // namespace csgtile::worker
