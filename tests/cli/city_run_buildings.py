@@ -11,7 +11,7 @@
     building valid, both LoDs;
   * each cell's GeoPackage has a lod12 layer with one feature per building, whose top is the
     building's h_roof_70p, and the objects layer carries the LoD and the heights;
-  * every building carries its heights (h_ground <= h_roof_min <= h_roof_50p <= h_roof_70p
+  * every building carries its points' RMSE to its model (fit_rms) and its heights (h_ground <= h_roof_min <= h_roof_50p <= h_roof_70p
     <= h_roof_max, within the tile's NAP range) and at least one roof surface.
 Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity is
 required when the data is present.
@@ -53,6 +53,7 @@ for name, tile in tiles.items():
         for problem in json.load(open(cell)).get("problems", []):
             assert "no geometry" not in problem and "left out" not in problem, (name, problem)
     buildings = valid = fused = solids = checked = blocks = 0
+    rmse = []
     for seq in sorted(glob.glob(f"{rundir}/cells/*/model.city.jsonl")):
         with open(seq) as f:
             lines = f.readlines()[1:]
@@ -68,6 +69,9 @@ for name, tile in tiles.items():
                 assert heights == sorted(heights), (name, oid, heights)
                 assert -10.0 < heights[0] and heights[-1] < 100.0, (name, oid, heights)  # NAP
                 assert a["roof_surfaces"] >= 1, (name, oid)
+                # Its points' RMSE to its model (issue #18 item 6), a few metres at worst.
+                assert 0.0 <= a["fit_rms"] < 5.0, (name, oid, a["fit_rms"])
+                rmse.append(a["fit_rms"])
                 buildings += 1
             solids += len(o["geometry"])
         report = f"{seq}.val3dity.json"
@@ -90,5 +94,6 @@ for name, tile in tiles.items():
     assert checked == solids, f"{name}: val3dity checked {checked} of {solids} solids"
     assert blocks == buildings, f"{name}: {blocks} LoD1.2 blocks in the GeoPackages"
     summary[name] = {"buildings": buildings, "fused": fused, "val3dity_valid": valid,
-                     "solids_checked": checked, "lod12_blocks": blocks}
+                     "solids_checked": checked, "lod12_blocks": blocks,
+                     "rmse_median": sorted(rmse)[len(rmse) // 2], "rmse_max": max(rmse)}
 print(json.dumps(summary))

@@ -264,6 +264,14 @@ std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::Boundin
                         double coverage, const kernel::BoundingBox& region, double cell,
                         const PrimitiveOptions& o);
 
+/// RMS distance of the points `members` (indices into `points`) to the boundary of `solid`,
+/// a primitive's built solid (model_distance.cpp): "the RMSE of its points to the model".
+/// Measured on its tessellation at `chordal_tolerance` (exact for planar faces, within the
+/// tolerance for curved ones). nullopt when there is no member or the solid cannot be meshed.
+std::optional<double> boundary_rms(const kernel::Shape& solid, std::span<const Vec3> points,
+                                   std::span<const std::uint32_t> members,
+                                   double chordal_tolerance);
+
 /// One ground per building (bases.cpp): vertical extrusions whose footprint boxes touch and
 /// whose bases lie within `tolerance` above the lowest of them are lowered onto it (height
 /// grown, clips moved: the top stays); returns how many moved. Deterministic.

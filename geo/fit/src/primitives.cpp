@@ -303,17 +303,24 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   p.id = "r" + std::to_string(region_) + "-" + std::to_string(out_.primitives.size());
   geo::FitQuality q;
   q.inliers = static_cast<long long>(members.size());
-  double sum = 0.0;
-  std::size_t counted = 0;
-  for (auto i : members) {
-    const int s = shapes_.assignment[i];
-    if (s < 0) continue;
-    const double d =
-        surface_distance(shapes_.shapes[static_cast<std::size_t>(s)].surface, points_[i]);
-    sum += d * d;
-    ++counted;
+  // The RMS distance of its points to its solid (the model), on a mesh finer than the fit's
+  // tolerance; when that cannot be measured, to the surfaces their RANSAC shapes found.
+  const double chordal = std::clamp(0.25 * ransac_.epsilon, 0.001, 0.05);
+  if (const auto rms = detail::boundary_rms(solid.value(), points_, members, chordal)) {
+    q.rms = *rms;
+  } else {
+    double sum = 0.0;
+    std::size_t counted = 0;
+    for (auto i : members) {
+      const int s = shapes_.assignment[i];
+      if (s < 0) continue;
+      const double d =
+          surface_distance(shapes_.shapes[static_cast<std::size_t>(s)].surface, points_[i]);
+      sum += d * d;
+      ++counted;
+    }
+    q.rms = counted > 0 ? std::sqrt(sum / static_cast<double>(counted)) : 0.0;
   }
-  q.rms = counted > 0 ? std::sqrt(sum / static_cast<double>(counted)) : 0.0;
   q.coverage = coverage;
   p.quality = q;
   ++out_.per_type[static_cast<std::size_t>(p.spec.type)];

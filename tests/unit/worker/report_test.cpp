@@ -67,8 +67,10 @@ ReportInput small_input(const fs::path& run_dir) {
        {"box", "box", "cylinder"},
        1234.5,
        true,
-       {{{10, 10}, {40, 10}, {40, 40}, {10, 40}}, {{20, 20}, {30, 20}, {30, 30}, {20, 30}}}});
-  first.objects.push_back({"shed", {"box"}, 12.0, false, {{{60, 60}, {70, 60}, {70, 70}}}});
+       {{{10, 10}, {40, 10}, {40, 40}, {10, 40}}, {{20, 20}, {30, 20}, {30, 30}, {20, 30}}},
+       std::nullopt});
+  first.objects.push_back(
+      {"shed", {"box"}, 12.0, false, {{{60, 60}, {70, 60}, {70, 70}}}, std::nullopt});
   ReportCell second;
   second.id = "1_0";
   second.bounds = {100, 0, 200, 100};
@@ -160,6 +162,39 @@ TEST(RunReport, PageShowsTheFiguresOfASmallRun) {
   }
 }
 
+// Buildings worst first: one whose parts did not fuse (LoD1.2 only, its reason shown), then
+// by fit RMS, largest first.
+TEST(RunReport, BuildingsAreListedWorstFirst) {
+  test::TempDir dir("csgtile_report_buildings_");
+  const fs::path run = dir.path() / "run";
+  ReportInput in = small_input(run);
+  ReportBuilding good{"2.2", 0.04, 1.5, 9.25, 2, ""};
+  ReportBuilding rough{"2.2", 0.31, 0.5, 12.0, 6, ""};
+  ReportBuilding failed{"1.2", 0.02, 0.0, 7.0, 3, "LoD2.2: unsupported: <no pcurve>"};
+  in.cells[0].objects[0].building = good;
+  in.cells[0].objects[1].building = rough;
+  ReportObject block{"block", {"extrusion"}, 300.0, false, {}, failed};
+  in.cells[1].objects.push_back(block);
+  ReportFiles files;
+  ASSERT_TRUE(write_run_report(in, run, files).ok());
+  const std::string page = read_file(run / "report" / "index.html");
+  const auto section = page.find("<h2 id=\"buildings\">Buildings, worst first</h2>");
+  ASSERT_NE(section, std::string::npos);
+  const std::string table = page.substr(section, page.find("</table>", section) - section);
+  EXPECT_NE(table.find("2 of 3 buildings reached LoD2.2"), std::string::npos) << table;
+  const auto first = table.find("<td>block</td>");
+  const auto second = table.find("<td>shed</td>");
+  const auto third = table.find("<td>house</td>");
+  ASSERT_NE(first, std::string::npos);
+  ASSERT_NE(second, std::string::npos);
+  ASSERT_NE(third, std::string::npos);
+  EXPECT_LT(first, second);
+  EXPECT_LT(second, third);
+  EXPECT_NE(table.find("LoD2.2: unsupported: &lt;no pcurve&gt;"), std::string::npos) << table;
+  EXPECT_NE(table.find("<td class=\"num\">0.31</td>"), std::string::npos) << table;
+  EXPECT_NE(table.find("<td class=\"num\">9.25</td>"), std::string::npos) << table;
+}
+
 TEST(RunReport, SameInputGivesSameBytesWhateverTheTimings) {
   test::TempDir dir("csgtile_report_same_");
   ReportFiles first_files, second_files;
@@ -223,12 +258,16 @@ TEST(RunReport, BadInputIsNamed) {
   EXPECT_EQ(f.code, ErrorCode::InputInvalid);
   EXPECT_NE(f.message.find("bounds"), std::string::npos) << f.message;
 
-  in.cells = {
-      {"0_0",
-       {0, 0, 1, 1},
-       {{"o", {"box"}, 1, true, {{{0, 0}, {std::numeric_limits<double>::infinity(), 0}, {0, 1}}}}},
-       "",
-       {}}};
+  in.cells = {{"0_0",
+               {0, 0, 1, 1},
+               {{"o",
+                 {"box"},
+                 1,
+                 true,
+                 {{{0, 0}, {std::numeric_limits<double>::infinity(), 0}, {0, 1}}},
+                 std::nullopt}},
+               "",
+               {}}};
   f = failure(in);
   EXPECT_EQ(f.code, ErrorCode::InputInvalid);
   EXPECT_NE(f.message.find("object o: footprint"), std::string::npos) << f.message;

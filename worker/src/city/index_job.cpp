@@ -65,6 +65,22 @@ Failure root_tileset(const std::filesystem::path& run_dir,
 
 /// The convex hull (counter-clockwise) of the xy of `shape`'s tessellation: the footprint the
 /// report draws. Empty when the shape cannot be tessellated.
+// A building's row of the report; nullopt for other objects. Heights in the CRS: the run
+// frame's origin added.
+std::optional<ReportBuilding> report_building(const IndexObject& object, double origin_z) {
+  if (!is_building(object)) return std::nullopt;
+  ReportBuilding b;
+  b.lod = lod_reached(object);
+  b.fit_rms = fit_summary(object.primitives).rms;
+  if (const auto& h = object.heights) {
+    b.h_ground = h->ground + origin_z;
+    b.h_roof_70p = h->roof_70p + origin_z;
+    b.roof_surfaces = static_cast<long long>(h->roof_faces);
+  }
+  b.problem = building_problem(object);
+  return b;
+}
+
 std::vector<std::array<double, 2>> footprint_hull(const kernel::Shape& shape, double chordal) {
   kernel::TessellationOptions options;
   options.chordal_tolerance = chordal;
@@ -284,8 +300,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       ro.valid = entry.at("fused").get<bool>();
       (ro.valid ? fused : unfused) += 1;
       if (next_object < objects.objects.size()) {
-        auto hull = footprint_hull(objects.objects[next_object].model.shape, 0.05);
+        const IndexObject& io = objects.objects[next_object];
+        auto hull = footprint_hull(io.model.shape, 0.05);
         if (!hull.empty()) ro.footprint.push_back(std::move(hull));
+        ro.building = report_building(io, objects.origin.z());
       }
       ++next_object;
       rc.objects.push_back(std::move(ro));

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "csgtile/kernel/explorer.h"
 #include "export/topology_index.h"
 
 namespace csgtile::worker {
@@ -30,6 +31,31 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
     auto heights = assembly::building_heights(o.model.shape, chordal_tolerance);
     if (heights.ok()) o.heights = heights.value();
   });
+}
+
+bool is_building(const IndexObject& object) {
+  return object.lod12.has_value() || !object.lod12_error.empty();
+}
+
+std::string lod_reached(const IndexObject& object) {
+  if (!is_building(object)) return {};
+  const bool one_solid =
+      object.fuse_error.empty() &&
+      kernel::map_child_shapes(object.model.shape, kernel::ShapeKind::Solid).size() == 1;
+  if (one_solid) return "2.2";
+  return object.lod12 ? "1.2" : "";
+}
+
+std::string building_problem(const IndexObject& object) {
+  std::string out;
+  if (is_building(object) && lod_reached(object) != "2.2") {
+    out = "LoD2.2: " + (object.fuse_error.empty() ? std::string("the model is in several solids")
+                                                  : object.fuse_error);
+  }
+  if (!object.lod12_error.empty()) {
+    out += (out.empty() ? "" : "; ") + std::string("LoD1.2: ") + object.lod12_error;
+  }
+  return out;
 }
 
 }  // namespace csgtile::worker

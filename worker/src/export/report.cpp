@@ -407,6 +407,59 @@ std::string viewer_section(const ReportInput& in, const std::vector<CellGlb>& gl
   return html;
 }
 
+// The buildings worst first: those without LoD2.2 (a problem named), then by fit RMS,
+// largest first (none known last), then by id; at most kRows rows.
+std::string buildings_table(const ReportInput& in) {
+  constexpr std::size_t kRows = 100;
+  struct Row {
+    const ReportObject* object;
+    const std::string* cell;
+  };
+  std::vector<Row> rows;
+  for (const ReportCell& cell : in.cells) {
+    for (const ReportObject& object : cell.objects) {
+      if (object.building) rows.push_back({&object, &cell.id});
+    }
+  }
+  if (rows.empty()) return "<p class=\"note\">No buildings.</p>\n";
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
+    const ReportBuilding& x = *a.object->building;
+    const ReportBuilding& y = *b.object->building;
+    const bool x_full = x.lod == "2.2", y_full = y.lod == "2.2";
+    if (x_full != y_full) return !x_full;
+    const double xr = x.fit_rms.value_or(-1.0), yr = y.fit_rms.value_or(-1.0);
+    if (xr != yr) return xr > yr;
+    return a.object->id < b.object->id;
+  });
+  std::size_t full = 0;
+  for (const Row& r : rows) full += r.object->building->lod == "2.2" ? 1 : 0;
+  std::string html = "<p>" + std::to_string(full) + " of " + count_of(rows.size(), "building") +
+                     " reached LoD2.2; every building with a block has LoD1.2 too.</p>\n";
+  html +=
+      "<table class=\"buildings\">\n<tr><th>object</th><th>cell</th><th>LoD</th><th>fit RMS "
+      "(m)</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof surfaces</th><th>problem</th>"
+      "</tr>\n";
+  auto metres = [](const std::optional<double>& v) {
+    return v && std::isfinite(*v) ? fixed(*v, 2) : std::string("n/a");
+  };
+  for (std::size_t k = 0; k < rows.size() && k < kRows; ++k) {
+    const ReportBuilding& b = *rows[k].object->building;
+    html += std::string("<tr") + (b.lod == "2.2" ? "" : " class=\"bad\"") + "><td>" +
+            escape_html(rows[k].object->id) + "</td><td>" + escape_html(*rows[k].cell) +
+            "</td><td>" + escape_html(b.lod.empty() ? "none" : b.lod) + "</td><td class=\"num\">" +
+            metres(b.fit_rms) + "</td><td class=\"num\">" + metres(b.h_ground) +
+            "</td><td class=\"num\">" + metres(b.h_roof_70p) + "</td><td class=\"num\">" +
+            std::to_string(b.roof_surfaces) + "</td><td>" + escape_html(b.problem) + "</td></tr>\n";
+  }
+  html += "</table>\n";
+  if (rows.size() > kRows) {
+    html += "<p class=\"note\">" + std::to_string(rows.size() - kRows) +
+            " more buildings, better ones, are in the GeoPackage (objects: lod, fit_rms, "
+            "heights).</p>\n";
+  }
+  return html;
+}
+
 std::string page(const ReportInput& in, const std::vector<CellGlb>& glbs, bool viewer) {
   std::size_t objects = 0, valid = 0;
   for (const ReportCell& cell : in.cells) {
@@ -474,6 +527,9 @@ std::string page(const ReportInput& in, const std::vector<CellGlb>& glbs, bool v
 
   html += "<h2 id=\"fit\">Fit residuals</h2>\n";
   html += rms_histogram(in.fit_rms);
+
+  html += "<h2 id=\"buildings\">Buildings, worst first</h2>\n";
+  html += buildings_table(in);
 
   html += "<h2 id=\"validation\">Validation</h2>\n";
   if (in.validation_counts.empty()) {

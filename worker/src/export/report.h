@@ -2,7 +2,8 @@
 /// \file
 /// The run report: one static HTML page per run (issue #9 item 6) with the figures people
 /// look at rather than read — objects per cell, primitives per type, a fit residual (RMS)
-/// histogram, validation results, dead jobs, stage timings — a top view of the cells with
+/// histogram, the buildings worst first (no LoD2.2, then the largest fit RMS), validation
+/// results, dead jobs, stage timings — a top view of the cells with
 /// the objects' footprints, and an interactive 3D view of each cell's glTF.
 ///
 /// The page works opened from file:// with no network: everything it uses is written beside
@@ -31,6 +32,7 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,6 +40,15 @@
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker {
+
+/// A building's figures (issue #18 item 6): objects with a LoD1.2 block or a reason for none.
+struct ReportBuilding {
+  std::string lod;                ///< the LoD reached: "2.2", "1.2", or empty (neither)
+  std::optional<double> fit_rms;  ///< metres, inlier-weighted over its fitted primitives
+  std::optional<double> h_ground, h_roof_70p;  ///< heights in the CRS (metres)
+  long long roof_surfaces = 0;
+  std::string problem;  ///< why LoD2.2 or LoD1.2 is missing; empty when neither is
+};
 
 struct ReportObject {
   std::string id;
@@ -47,6 +58,7 @@ struct ReportObject {
   /// Footprint rings in the run frame (metres, x east, y north), outer and holes alike
   /// (drawn even-odd); may be empty.
   std::vector<std::vector<std::array<double, 2>>> footprint;
+  std::optional<ReportBuilding> building;  ///< set for buildings
 };
 
 struct ReportCell {

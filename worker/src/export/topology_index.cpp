@@ -259,7 +259,7 @@ kernel::Status check_objects(const std::vector<IndexObject>& objects, const Inde
 // centre of the object's bounds (a translation in z for the SRSs of city models).
 void add_building_columns(const IndexObject& object, const IndexOptions& options,
                           const kernel::BoundingBox& b, ObjectRecord& o, IndexStats& stats) {
-  const bool building = object.lod12.has_value() || !object.lod12_error.empty();
+  const bool building = is_building(object);
   if (!object.fuse_error.empty()) o.fuse_error = object.fuse_error;
   if (!object.lod12_error.empty()) o.lod12_error = object.lod12_error;
   if (const auto& h = object.heights) {
@@ -273,8 +273,6 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
     o.roof_surfaces = static_cast<std::int64_t>(h->roof_faces);
   }
   if (!building) return;
-  const bool one_solid = object.fuse_error.empty() &&
-                         kernel::map_child_shapes(object.model.shape, ShapeKind::Solid).size() == 1;
   if (object.lod12) {
     const Shape& block = object.lod12->shape;
     auto boundary = boundary_polygons(block, kernel::map_child_shapes(block, ShapeKind::Face),
@@ -288,11 +286,7 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
                                boundary.error().message);
     }
   }
-  if (one_solid) {
-    o.lod = "2.2";
-  } else if (o.has_lod12) {
-    o.lod = "1.2";
-  }
+  if (std::string lod = lod_reached(object); !lod.empty()) o.lod = std::move(lod);
 }
 
 }  // namespace

@@ -63,6 +63,14 @@ struct IndexObject {
 void add_building_lods(std::vector<IndexObject>& objects, double chordal_tolerance,
                        double linear_tolerance);
 
+/// Whether add_building_lods found the object a building (it has a block, or a reason why not).
+bool is_building(const IndexObject& object);
+/// A building's LoD reached: "2.2" when its model is one solid, else "1.2" when it has its
+/// block, else empty (also for objects that are not buildings).
+std::string lod_reached(const IndexObject& object);
+/// Why a building's LoD2.2 or its block is missing ("LoD2.2: …; LoD1.2: …"); empty if neither.
+std::string building_problem(const IndexObject& object);
+
 /// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
 /// inlier counts (equal weights when no counts are known); both unset when none was fitted.
 struct FitSummary {
