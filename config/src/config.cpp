@@ -86,6 +86,7 @@ Config from_document(const json& document) {
   read(document, "city", "voxel_size", config.city.voxel_size);
   read(document, "city", "snap_distance", config.city.snap_distance);
   read(document, "city", "snap_angle_degrees", config.city.snap_angle_degrees);
+  read(document, "city", "snap_escalate_to", config.city.snap_escalate_to);
   detail::read_fit(document, config.fit);
   read(document, "publish", "url", config.publish.url);
   return config;
@@ -216,7 +217,8 @@ std::string to_json(const Config& config) {
                  {"halo", config.city.halo},
                  {"voxel_size", config.city.voxel_size},
                  {"snap_distance", config.city.snap_distance},
-                 {"snap_angle_degrees", config.city.snap_angle_degrees}};
+                 {"snap_angle_degrees", config.city.snap_angle_degrees},
+                 {"snap_escalate_to", config.city.snap_escalate_to}};
   out["fit"] = detail::fit_to_json(config.fit);
   out["publish"] = {{"url", config.publish.url}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so

@@ -34,7 +34,7 @@ struct AssembleArgs {
   std::string scene, out;
   bool json = false;
   double voxel = 0.5, tolerance = kernel::kDefaultTolerance;
-  double snap_distance = 0.0, snap_degrees = 0.0;
+  double snap_distance = 0.0, snap_degrees = 0.0, escalate_to = 0.0;
   int threads = 0;
   bool no_cull = false, no_broad = false;
   double cell_size = 0, halo = 0;
@@ -57,6 +57,7 @@ ordered_json stats_json(const assembly::AssemblyStats& s) {
   j["interacting_pairs"] = s.interacting_pairs;
   j["objects"] = s.objects;
   j["objects_failed"] = s.objects_failed;
+  j["objects_escalated"] = s.objects_escalated;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
   j["snap"] = snap_report_json(s.snap);
@@ -80,6 +81,8 @@ ordered_json result_json(const assembly::Assembly& a,
     oj["primitives"] = labels;
     oj["fused"] = o.fused;
     oj["error"] = o.fused ? ordered_json() : ordered_json(o.error);
+    oj["escalation"] = escalation_json(o.escalation ? &o.escalation->snap : nullptr,
+                                       o.escalation ? o.escalation->reason : "");
     oj["solids"] = kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Solid).size();
     oj["faces"] = kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Face).size();
     oj["volume"] = o.volume;
@@ -147,6 +150,7 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   options.tolerance = args.tolerance;
   options.threads = args.threads;
   options.snap = snap_options(args.snap_distance, args.snap_degrees);
+  options.escalate_to = args.escalate_to;
   options.voxel_culling = !args.no_cull;
   options.broad_phase = !args.no_broad;
   const std::filesystem::path out = args.out;
@@ -242,6 +246,10 @@ void register_assemble(CLI::App& app, Action& action) {
   cmd->add_option("--snap-angle", a->snap_degrees,
                   "Fuzzy mode: primitive axes within this angle (degrees) become one direction")
       ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--snap-escalate-to", a->escalate_to,
+                  "Escalation: an object whose fuse fails is snapped again at 1, 2, 5, 10 ... "
+                  "(scene units / 1000) up to this bound, until it fuses (default 0: off)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_flag("--no-cull", a->no_cull,
                 "Skip the OpenVDB culling (every candidate pair is tested exactly)");
   cmd->add_flag("--no-broad-phase", a->no_broad,

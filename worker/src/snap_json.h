@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "csgtile/kernel/snap.h"
 
@@ -24,6 +25,16 @@ inline nlohmann::ordered_json snap_report_json(const kernel::SnapReport& r) {
           {"faces_snapped", r.faces_snapped},
           {"max_turn_degrees", r.max_turn * 180.0 / M_PI},
           {"max_move", r.max_move}};
+}
+
+/// How an object fused after escalation (AssembledObject::escalation): snap_distance,
+/// snap_angle_degrees and the first fuse's error; null when it was not escalated.
+inline nlohmann::ordered_json escalation_json(const kernel::SnapOptions* snap,
+                                              const std::string& reason) {
+  if (snap == nullptr) return nullptr;
+  return {{"snap_distance", snap->distance},
+          {"snap_angle_degrees", snap->angle * 180.0 / M_PI},
+          {"reason", reason}};
 }
 
 }  // namespace csgtile::worker

@@ -18,6 +18,7 @@
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "escalation.h"
 #include "stacked_model.h"
 
 namespace csgtile::assembly {
@@ -268,8 +269,17 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       std::vector<kernel::CsgModel> parts;
       for (int i : groups[g]) parts.push_back(leaves[static_cast<std::size_t>(i)]);
       auto fused = kernel::csg_combine(parts, kernel::BooleanOp::Fuse, bopt);
+      std::optional<detail::Escalated> escalated;
+      if (!fused.ok() && options.escalate_to > 0.0) {
+        std::vector<AssemblyPrimitive> group;
+        for (int i : groups[g]) group.push_back(primitives[static_cast<std::size_t>(i)]);
+        escalated = detail::escalate_fuse(group, options);
+      }
       if (fused.ok()) {
         o.model = std::move(fused).value();
+      } else if (escalated) {
+        o.model = std::move(escalated->model);
+        o.escalation = AssembledObject::Escalation{escalated->snap, fused.error().message};
       } else {
         o.fused = false;
         o.error = fused.error().message;
@@ -285,6 +295,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   std::vector<char> published(n, 0);
   for (const AssembledObject& o : out.objects) {
     for (int i : o.primitives) published[static_cast<std::size_t>(i)] = 1;
+    if (o.escalation) ++st.objects_escalated;
     if (!o.fused) {
       ++st.objects_failed;
       out.problems.push_back("object " + o.id + " not fused: " + o.error);

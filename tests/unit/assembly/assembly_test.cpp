@@ -13,6 +13,7 @@
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/assembly/voxel_cull.h"
 #include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
@@ -414,6 +415,54 @@ TEST(Assembly, FuzzyModeFusesAFittedColumnAndBeam) {
                           kernel::mass_properties(kernel::build_primitive(beam).value()).volume;
   EXPECT_LT(o.volume, separate);
   EXPECT_GT(o.volume, separate - 0.05);
+}
+
+// Escalation: the exact fuse of the fitted pair fails; the object is fused again from its own
+// primitives snapped at growing distances, and says with which snap and why.
+TEST(Assembly, EscalationFusesAFittedPairAndRecordsTheSnapItTook) {
+  const auto [column, beam] = test::fitted_column_and_beam();
+  const auto input = labelled({column, beam});
+  AssemblyOptions options;
+  options.escalate_to = 0.02;
+  auto a = assemble(input, options);
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  ASSERT_EQ(a->objects.size(), 1u);
+  const AssembledObject& o = a->objects[0];
+  EXPECT_TRUE(o.fused) << o.error;
+  ASSERT_TRUE(o.escalation.has_value());
+  EXPECT_GT(o.escalation->snap.distance, 0.0);
+  EXPECT_LE(o.escalation->snap.distance, 0.02);
+  EXPECT_FALSE(o.escalation->reason.empty());
+  EXPECT_EQ(a->stats.objects_escalated, 1);
+  EXPECT_EQ(a->stats.objects_failed, 0);
+  EXPECT_TRUE(kernel::check_shape(o.model.shape).valid());
+  EXPECT_EQ(kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Solid).size(), 1u);
+  // The leaves keep their labels; the bound is also a tenth of the thinnest primitive, so a
+  // bound under the first step escalates nothing.
+  for (const kernel::CsgNode& n : o.model.nodes) {
+    if (n.kind == kernel::CsgNodeKind::Primitive) {
+      EXPECT_FALSE(n.label.empty());
+    }
+  }
+  options.escalate_to = 0.0005;
+  auto none = assemble(input, options);
+  ASSERT_TRUE(none.ok());
+  EXPECT_FALSE(none->objects[0].fused);
+  EXPECT_FALSE(none->objects[0].escalation.has_value());
+}
+
+// Objects that fuse as given are never escalated.
+TEST(Assembly, EscalationLeavesObjectsThatFuseAlone) {
+  AssemblyOptions options;
+  options.escalate_to = 0.05;
+  auto a =
+      assemble(labelled({test::box_at({0, 0, 0}, {1, 1, 1}), test::box_at({0.5, 0, 0}, {1, 1, 1})}),
+               options);
+  ASSERT_TRUE(a.ok());
+  ASSERT_EQ(a->objects.size(), 1u);
+  EXPECT_TRUE(a->objects[0].fused);
+  EXPECT_FALSE(a->objects[0].escalation.has_value());
+  EXPECT_EQ(a->stats.objects_escalated, 0);
 }
 
 TEST(Assembly, BadOptionsAreNamed) {

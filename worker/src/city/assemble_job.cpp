@@ -92,6 +92,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.voxel_size = config.city.voxel_size;
   options.threads = config.run.threads;
   options.snap = snap_options(config.city.snap_distance, config.city.snap_angle_degrees);
+  options.escalate_to = config.city.snap_escalate_to;
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
     return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
@@ -138,6 +139,13 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.cell = name;
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
+    const auto& e = object->escalation;
+    const ordered_json escalation = escalation_json(e ? &e->snap : nullptr, e ? e->reason : "");
+    if (e) {
+      io.escalation =
+          IndexObject::FuseEscalation{escalation["snap_distance"].get<double>(),
+                                      escalation["snap_angle_degrees"].get<double>(), e->reason};
+    }
     ordered_json prim_records = ordered_json::array();
     std::map<std::string, const CellPrimitive*> by_label;
     for (int i : object->primitives) {
@@ -164,6 +172,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
          {"bytes", bytes.size()},
          {"fused", object->fused},
          {"error", object->fused ? ordered_json() : ordered_json(object->error)},
+         {"escalation", escalation},
          {"volume", object->volume},
          {"primitives", prim_records}});
     objects.objects.push_back(std::move(io));
@@ -222,7 +231,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
       {"candidate_pairs", s.candidate_pairs}, {"culled_pairs", s.culled_pairs},
       {"exact_tests", s.exact_tests},         {"interacting_pairs", s.interacting_pairs},
       {"objects_in_halo", s.objects},         {"objects", kept.size()},
-      {"objects_unfused", invalid},           {"snap", snap_report_json(s.snap)}};
+      {"objects_unfused", invalid},           {"objects_escalated", s.objects_escalated},
+      {"snap", snap_report_json(s.snap)}};
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["cell"] = name;

@@ -176,6 +176,12 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       if (entry.contains("error") && entry.at("error").is_string()) {
         io.fuse_error = entry.at("error").get<std::string>();
       }
+      if (entry.contains("escalation") && entry.at("escalation").is_object()) {
+        const ordered_json& e = entry.at("escalation");
+        io.escalation = IndexObject::FuseEscalation{e.at("snap_distance").get<double>(),
+                                                    e.at("snap_angle_degrees").get<double>(),
+                                                    e.at("reason").get<std::string>()};
+      }
       if (!offset.isZero(0.0))
         io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
       std::map<std::string, geo::FitQuality> quality;

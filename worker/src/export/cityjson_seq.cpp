@@ -516,6 +516,11 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;
   }
+  if (const auto& e = object.escalation) {
+    a["fuse_escalation"] = {{"snap_distance", e->snap_distance},
+                            {"snap_angle_degrees", e->snap_angle_degrees},
+                            {"exact_fuse_error", e->reason}};
+  }
   // Heights (issue #18 item 6), in the file's CRS heights.
   if (const auto& h = object.heights) {
     const double z0 = options.origin.z();

@@ -53,6 +53,13 @@ struct IndexObject {
   /// building has none. Filled by add_building_lods.
   std::optional<assembly::BuildingHeights> heights;
   std::string fuse_error;  ///< why its primitives are not one solid (empty: they are)
+  /// When its primitives fused only after escalation (AssemblyOptions::escalate_to): the snap
+  /// they got and why the first fuse failed.
+  struct FuseEscalation {
+    double snap_distance = 0.0, snap_angle_degrees = 0.0;
+    std::string reason;
+  };
+  std::optional<FuseEscalation> escalation;
   std::optional<kernel::CsgModel> lod12;
   std::string lod12_error;
 };

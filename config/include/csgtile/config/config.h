@@ -105,6 +105,9 @@ struct CityConfig {
   /// (m) become one plane, axes this close (degrees) one direction; 0: off. [0, 1], [0, 10]
   double snap_distance = 0.005;
   double snap_angle_degrees = 0.5;
+  /// Escalation (AssemblyOptions::escalate_to): objects whose fuse fails snapped again at
+  /// growing distances up to this bound (m); 0: off. [0, 1]
+  double snap_escalate_to = 0.02;
   bool operator==(const CityConfig&) const = default;
 };
 

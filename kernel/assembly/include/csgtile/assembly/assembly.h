@@ -52,6 +52,12 @@ struct AssemblyOptions {
   /// anything is built (kernel/snap.h); the objects' CSG leaves hold the snapped primitives.
   /// Zero (the default): the primitives as given.
   kernel::SnapOptions snap;
+  /// Escalation (issue #20): an object whose fuse fails is fused again from its own
+  /// primitives snapped at growing distances (1, 2, 5, 10, 20, 50, 100 mm beyond snap.distance,
+  /// the angle growing alike: 0.5° per 5 mm, at least snap.angle, at most 2°) up to this bound
+  /// and to a tenth of its thinnest primitive, until it fuses; AssembledObject::escalation
+  /// records the snap that was used and why the first fuse failed. Zero (the default): none.
+  double escalate_to = 0.0;
 };
 
 struct AssemblyStats {
@@ -64,6 +70,7 @@ struct AssemblyStats {
   long long interacting_pairs = 0;  ///< of those, overlapping or touching
   long long objects = 0;            ///< published (anchored in the cell)
   long long objects_failed = 0;     ///< whose fuse failed (kept unfused, with the reason)
+  long long objects_escalated = 0;  ///< fused only after escalation
   long long objects_past_halo = 0;  ///< reaching past the halo (reported, see problems)
   long long active_voxels = 0;      ///< in all masks
   kernel::SnapReport snap;          ///< what the fuzzy mode moved (zero without it)
@@ -87,6 +94,13 @@ struct AssembledObject {
   kernel::CsgModel model;
   bool fused = true;
   std::string error;
+  /// Set when the object fused only after escalation (AssemblyOptions::escalate_to): the snap
+  /// its primitives got, and the first fuse's error.
+  struct Escalation {
+    kernel::SnapOptions snap;
+    std::string reason;
+  };
+  std::optional<Escalation> escalation;
   double volume = 0;
   kernel::BoundingBox box;
   bool reaches_past_halo = false;
