@@ -81,8 +81,7 @@ ordered_json result_json(const assembly::Assembly& a,
     oj["primitives"] = labels;
     oj["fused"] = o.fused;
     oj["error"] = o.fused ? ordered_json() : ordered_json(o.error);
-    oj["escalation"] = escalation_json(o.escalation ? &o.escalation->snap : nullptr,
-                                       o.escalation ? o.escalation->reason : "");
+    oj["escalation"] = escalation_json(o.escalation);
     oj["solids"] = kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Solid).size();
     oj["faces"] = kernel::map_child_shapes(o.model.shape, kernel::ShapeKind::Face).size();
     oj["volume"] = o.volume;

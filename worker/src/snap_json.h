@@ -5,8 +5,10 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
+#include "csgtile/assembly/assembly.h"
 #include "csgtile/kernel/snap.h"
 
 namespace csgtile::worker {
@@ -29,12 +31,12 @@ inline nlohmann::ordered_json snap_report_json(const kernel::SnapReport& r) {
 
 /// How an object fused after escalation (AssembledObject::escalation): snap_distance,
 /// snap_angle_degrees and the first fuse's error; null when it was not escalated.
-inline nlohmann::ordered_json escalation_json(const kernel::SnapOptions* snap,
-                                              const std::string& reason) {
-  if (snap == nullptr) return nullptr;
-  return {{"snap_distance", snap->distance},
-          {"snap_angle_degrees", snap->angle * 180.0 / M_PI},
-          {"reason", reason}};
+inline nlohmann::ordered_json escalation_json(
+    const std::optional<assembly::AssembledObject::Escalation>& e) {
+  if (!e) return nullptr;
+  return {{"snap_distance", e->snap.distance},
+          {"snap_angle_degrees", e->snap.angle * 180.0 / M_PI},
+          {"reason", e->reason}};
 }
 
 }  // namespace csgtile::worker

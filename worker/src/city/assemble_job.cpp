@@ -139,13 +139,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.cell = name;
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
-    const auto& e = object->escalation;
-    const ordered_json escalation = escalation_json(e ? &e->snap : nullptr, e ? e->reason : "");
-    if (e) {
-      io.escalation =
-          IndexObject::FuseEscalation{escalation["snap_distance"].get<double>(),
-                                      escalation["snap_angle_degrees"].get<double>(), e->reason};
-    }
+    io.escalation = object->escalation;
+    const ordered_json escalation = escalation_json(io.escalation);
     ordered_json prim_records = ordered_json::array();
     std::map<std::string, const CellPrimitive*> by_label;
     for (int i : object->primitives) {

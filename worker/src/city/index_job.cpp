@@ -16,6 +16,7 @@
 #include "job_records.h"
 #include "ops/stage_clock.h"
 #include "publish/publish_run.h"
+#include "snap_json.h"
 
 namespace csgtile::worker::city::detail {
 
@@ -178,9 +179,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       }
       if (entry.contains("escalation") && entry.at("escalation").is_object()) {
         const ordered_json& e = entry.at("escalation");
-        io.escalation = IndexObject::FuseEscalation{e.at("snap_distance").get<double>(),
-                                                    e.at("snap_angle_degrees").get<double>(),
-                                                    e.at("reason").get<std::string>()};
+        io.escalation = assembly::AssembledObject::Escalation{
+            snap_options(e.at("snap_distance").get<double>(),
+                         e.at("snap_angle_degrees").get<double>()),
+            e.at("reason").get<std::string>()};
       }
       if (!offset.isZero(0.0))
         io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));

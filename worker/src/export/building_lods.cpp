@@ -46,11 +46,15 @@ std::string lod_reached(const IndexObject& object) {
   return object.lod12 ? "1.2" : "";
 }
 
+std::string lod22_failure(const IndexObject& object) {
+  return object.fuse_error.empty() ? std::string("the model is in several solids")
+                                   : object.fuse_error;
+}
+
 std::string building_problem(const IndexObject& object) {
   std::string out;
   if (is_building(object) && lod_reached(object) != "2.2") {
-    out = "LoD2.2: " + (object.fuse_error.empty() ? std::string("the model is in several solids")
-                                                  : object.fuse_error);
+    out = "LoD2.2: " + lod22_failure(object);
   }
   if (!object.lod12_error.empty()) {
     out += (out.empty() ? "" : "; ") + std::string("LoD1.2: ") + object.lod12_error;

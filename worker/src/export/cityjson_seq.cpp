@@ -2,6 +2,7 @@
 // and semantics per feature, then the text.
 
 #include "export/cityjson_seq.h"
+#include "snap_json.h"
 
 #include <algorithm>
 #include <array>
@@ -516,11 +517,7 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;
   }
-  if (const auto& e = object.escalation) {
-    a["fuse_escalation"] = {{"snap_distance", e->snap_distance},
-                            {"snap_angle_degrees", e->snap_angle_degrees},
-                            {"exact_fuse_error", e->reason}};
-  }
+  if (object.escalation) a["fuse_escalation"] = escalation_json(object.escalation);
   // Heights (issue #18 item 6), in the file's CRS heights.
   if (const auto& h = object.heights) {
     const double z0 = options.origin.z();
@@ -636,7 +633,7 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
     if (!block_problem.empty()) {
       st.warnings.push_back("CityJSON: object " + object.id + ": no LoD1.2: " + block_problem);
     }
-    const bool building = object.lod12.has_value() || !object.lod12_error.empty();
+    const bool building = is_building(object);
     const bool one_solid = g && g->solids.size() == 1;
     FeatureVertices vertices;
     Json city_object;
@@ -648,9 +645,7 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
     if (building) {
       attributes["lod_reached"] = one_solid ? Json("2.2") : block ? Json("1.2") : Json();
       if (g && !one_solid) {
-        attributes["lod22_failure"] = object.fuse_error.empty()
-                                          ? std::string("the model is in several solids")
-                                          : object.fuse_error;
+        attributes["lod22_failure"] = lod22_failure(object);
       }
       if (!block_problem.empty()) attributes["lod12_failure"] = block_problem;
     }

@@ -23,6 +23,7 @@
 #include <string_view>
 #include <vector>
 
+#include "csgtile/assembly/assembly.h"
 #include "csgtile/assembly/block_model.h"
 #include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/result.h"
@@ -55,11 +56,7 @@ struct IndexObject {
   std::string fuse_error;  ///< why its primitives are not one solid (empty: they are)
   /// When its primitives fused only after escalation (AssemblyOptions::escalate_to): the snap
   /// they got and why the first fuse failed.
-  struct FuseEscalation {
-    double snap_distance = 0.0, snap_angle_degrees = 0.0;
-    std::string reason;
-  };
-  std::optional<FuseEscalation> escalation;
+  std::optional<assembly::AssembledObject::Escalation> escalation;
   std::optional<kernel::CsgModel> lod12;
   std::string lod12_error;
 };
@@ -75,6 +72,8 @@ bool is_building(const IndexObject& object);
 /// A building's LoD reached: "2.2" when its model is one solid, else "1.2" when it has its
 /// block, else empty (also for objects that are not buildings).
 std::string lod_reached(const IndexObject& object);
+/// Why a building's model is not one solid: its fuse error, or that it is in several solids.
+std::string lod22_failure(const IndexObject& object);
 /// Why a building's LoD2.2 or its block is missing ("LoD2.2: …; LoD1.2: …"); empty if neither.
 std::string building_problem(const IndexObject& object);
 
