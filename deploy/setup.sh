@@ -20,6 +20,9 @@ packages=(
   libgeographiclib-dev proj-bin
   # geo: CRS definitions and transformations (PROJ, with its data)
   libproj-dev proj-data
+  # geo: building footprints from any vector source (GDAL/OGR); roof partitions clipped to
+  # them (Boost.Geometry, headers only)
+  libgdal-dev libboost-dev
   # geo fitting: PCL 1.13 (outlier removal, voxel grid, kd-tree neighbourhoods, Euclidean
   # clustering; only common/search/kdtree/filters/segmentation are linked, with FLANN)
   libpcl-dev

@@ -87,6 +87,9 @@ Config from_document(const json& document) {
   read(document, "city", "snap_distance", config.city.snap_distance);
   read(document, "city", "snap_angle_degrees", config.city.snap_angle_degrees);
   read(document, "city", "snap_escalate_to", config.city.snap_escalate_to);
+  read(document, "city", "footprints", config.city.footprints);
+  read(document, "city", "footprints_layer", config.city.footprints_layer);
+  read(document, "city", "footprints_id", config.city.footprints_id);
   detail::read_fit(document, config.fit);
   read(document, "publish", "url", config.publish.url);
   return config;
@@ -218,7 +221,10 @@ std::string to_json(const Config& config) {
                  {"voxel_size", config.city.voxel_size},
                  {"snap_distance", config.city.snap_distance},
                  {"snap_angle_degrees", config.city.snap_angle_degrees},
-                 {"snap_escalate_to", config.city.snap_escalate_to}};
+                 {"snap_escalate_to", config.city.snap_escalate_to},
+                 {"footprints", config.city.footprints},
+                 {"footprints_layer", config.city.footprints_layer},
+                 {"footprints_id", config.city.footprints_id}};
   out["fit"] = detail::fit_to_json(config.fit);
   out["publish"] = {{"url", config.publish.url}};
   // nlohmann::json sorts object keys and prints doubles in their shortest round-trip form, so

@@ -205,6 +205,10 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
       fq.coverage = q["coverage"].get<double>();
     out.quality = fq;
   }
+  if (j.contains("building")) {
+    if (!j["building"].is_string()) return r.fail("building", "must be a string");
+    out.building = j["building"].get<std::string>();
+  }
   return out;
 }
 
@@ -358,6 +362,7 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
                     {"rms", p.quality->rms},
                     {"coverage", p.quality->coverage}};
   }
+  if (!p.building.empty()) j["building"] = p.building;
   return j;
 }
 

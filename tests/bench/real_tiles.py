@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """`csgtile fit` on real LIDAR tiles, measured (issue #6, "Real data").
 
-Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c]
+Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c] [--use-footprints]
                      [--config C] [--sigma S] [--cell 0.25] [--pixel 2]
                      [--min-share TILE=V ...] [--min-iou TILE=V ...]
                      [--min-top-within TILE=V ...] [--min-top-coverage TILE=V ...]
@@ -51,6 +51,9 @@ The figures of issue #6's closing note (build dir B, from the repository root):
   python3 tests/bench/real_tiles.py B/csgtile /tmp/real_tiles
   python3 tests/bench/real_tiles.py B/csgtile /tmp/real_tiles_air \\
       --config tests/bench/fit_airborne.yaml
+With --use-footprints, csgtile fit gets the tile's footprints (--footprints; the Amsterdam CSV
+written out as GeoJSON first): the figures inside the footprints are then those of issue #18's
+runs with footprints (footprint IoU then says how exactly buildings stand on them).
 (--config with any csgtile config for a sweep; --sigma 0.1 for a looser σ.)
 Standard library only (struct + zlib for the PNG); GDAL's ogr2ogr for the SQLite footprints.
 """
@@ -446,6 +449,27 @@ def run_fit(name, spec, args, out_dir):
     cmd = [args.csgtile, "fit", las_path, "--out", fit_path, "--json"]
     if args.config:
         cmd += ["--config", args.config]
+    if args.use_footprints and spec["footprints"]:
+        kind, rel, layer = spec["footprints"]
+        path = os.path.join(args.data, rel)
+        if kind == "csv":
+            # Not a layout GDAL reads: written out as GeoJSON in the tile's CRS (the 2008
+            # GeoJSON "crs" member, which GDAL honours).
+            path = os.path.join(out_dir, name + "_footprints.geojson")
+            feats = [{"type": "Feature", "properties": {"id": "b%d" % i},
+                      "geometry": {"type": "MultiPolygon",
+                                   "coordinates": [[[list(q) for q in ring] for ring in poly]
+                                                   for poly in b]}}
+                     for i, b in enumerate(read_footprints(kind, os.path.join(args.data, rel),
+                                                           layer))]
+            with open(path, "w") as f:
+                json.dump({"type": "FeatureCollection",
+                           "crs": {"type": "name",
+                                   "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}},
+                           "features": feats}, f)
+        cmd += ["--footprints", path]
+        if layer:
+            cmd += ["--footprints-layer", layer]
     if spec["crs"]:
         cmd += ["--crs", spec["crs"]]
     res = {"las": las_path, "command": " ".join(cmd)}
@@ -962,6 +986,9 @@ def main():
     ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--tiles", default=",".join(TILES))
     ap.add_argument("--config", help="csgtile config (YAML, fit: section) given to csgtile fit --config")
+    ap.add_argument("--use-footprints", action="store_true",
+                    help="give csgtile fit the tile's published footprints (--footprints): one "
+                         "building per footprint")
     ap.add_argument("--sigma", type=float, default=0.05,
                     help="σ in metres (default 0.05: AHN3's nominal stochastic error)")
     ap.add_argument("--cell", type=float, default=0.25)

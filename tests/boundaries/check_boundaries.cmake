@@ -7,11 +7,11 @@ if(NOT ROOT)
 endif()
 
 # Forbidden include prefixes per module directory (regular expressions on the include path).
-set(third_party_worker "pcl/|GeographicLib/|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/")
+set(third_party_worker "pcl/|GeographicLib/|gdal|ogr_|ogrsf_|cpl_|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/")
 set(rules
   "kernel|${third_party_worker}|openvdb/|tbb/|nlohmann/|csgtile/(geo|fit|config|worker)/"
   "geo|curl/|yaml-cpp/|sqlite3|libpq|postgresql/|CLI/|valijson/|csgtile/(config|worker)/"
-  "config|pcl/|GeographicLib/|curl/|sqlite3|libpq|openvdb/|csgtile/(kernel|geo|fit|worker)/")
+  "config|pcl/|GeographicLib/|gdal|ogr_|ogrsf_|cpl_|curl/|sqlite3|libpq|openvdb/|csgtile/(kernel|geo|fit|worker)/")
 set(violations "")
 
 function(scan_module module pattern)

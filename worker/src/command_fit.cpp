@@ -40,6 +40,7 @@ struct FitCommand {
   std::string crs;
   std::string dump_shapes;
   std::string segments;
+  std::string footprints, footprints_layer, footprints_id;
   std::uint64_t seed = 1;
   bool seed_given = false;
   bool json = false;
@@ -179,7 +180,13 @@ int run_fit(const FitCommand& c) {
   }
   const std::string stem =
       std::filesystem::path(c.input.substr(0, c.input.find_first_of("?#"))).stem().string();
-  if (Failure f = city::fit_tile(std::move(source), stem, options, crs, tile); !f.ok()) {
+  // Footprints: the flags, else the config's city.footprints*.
+  const geo::FootprintSource footprints{
+      c.footprints.empty() ? config.city.footprints : c.footprints,
+      c.footprints.empty() ? config.city.footprints_layer : c.footprints_layer,
+      c.footprints.empty() ? config.city.footprints_id : c.footprints_id};
+  if (Failure f = city::fit_tile(std::move(source), stem, options, crs, tile, footprints);
+      !f.ok()) {
     return fail(f.code, f.message);
   }
   const fit::FitOutput& f = tile.output;
@@ -220,6 +227,15 @@ int run_fit(const FitCommand& c) {
   out["assigned_points"] = f.assigned_points;
   out["unassigned_points"] = f.unassigned_points;
   out["regions"] = f.regions;
+  if (!footprints.source.empty()) {
+    Json without = Json::array();
+    for (const auto& r : f.rejected) {
+      if (r.what.rfind("footprint ", 0) == 0) without.push_back(r.what.substr(10));
+    }
+    out["footprints"] = {{"source", footprints.source},      {"read", tile.footprints_read},
+                         {"buildings", f.footprint_regions}, {"points", f.footprint_points},
+                         {"without_building", without},      {"skipped", tile.footprints_skipped}};
+  }
   out["cluster_tolerance"] = f.cluster_tolerance;
   Json regions = Json::array();
   for (const auto& r : f.region_stats) {
@@ -230,7 +246,8 @@ int run_fit(const FitCommand& c) {
                            {"min_points", r.min_points},
                            {"shapes", r.shapes},
                            {"primitives", r.primitives},
-                           {"candidates", r.candidates}});
+                           {"candidates", r.candidates},
+                           {"building", r.building}});
   }
   out["region_stats"] = regions;
   out["candidates"] = f.candidates;
@@ -288,6 +305,13 @@ void register_fit(CLI::App& app, Action& action) {
                   "CRS to assume when the file has none (EPSG:code[+vertical]; replaces the "
                   "config's run.crs)");
   cmd->add_flag("--json", c->json, "Print one JSON object");
+  cmd->add_option("--footprints", c->footprints,
+                  "Building footprints: any vector source GDAL reads (path, URL, PG:...); one "
+                  "building per footprint (replaces the config's city.footprints)");
+  cmd->add_option("--footprints-layer", c->footprints_layer, "Its layer (default: the only one)");
+  cmd->add_option("--footprints-id", c->footprints_id,
+                  "Its attribute carried to the outputs as the building's id (default: the "
+                  "feature id)");
   cmd->add_option("--dump-shapes", c->dump_shapes,
                   "Diagnostics: write every region's points, normals and RANSAC shapes to this "
                   "text file (tests/bench/beam_causes.py reads it)");

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "fit_internal.h"
+#include "footprint_clip.h"
 #include "plane2d.h"
 
 namespace csgtile::fit::detail {
@@ -106,6 +107,54 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
     p.area = polygon_area(outline->profile, outline->holes) +
              polygon_perimeter(outline->profile, outline->holes) * p.spec.height;
     p.what = what + " (LoD1.2 of points no surface explains)";
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
+                                              std::vector<Rejection>& rejected) {
+  std::vector<Proposal> out;
+  const PrimitiveOptions& o = *in.options;
+  if (o.ground == nullptr || o.footprint == nullptr || o.footprint->empty()) return out;
+  std::vector<std::uint32_t> pts;
+  std::vector<double> heights;
+  for (std::uint32_t i = 0; i < in.points.size(); ++i) {
+    if ((*in.used)[i] || !in.points[i].allFinite()) continue;
+    pts.push_back(i);
+    heights.push_back(in.points[i].z());
+  }
+  const std::string what = "footprint block (LoD1.2)";
+  if (heights.empty()) return out;
+  std::sort(heights.begin(), heights.end());
+  const double roof =
+      heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
+  for (std::size_t k = 0; k < o.footprint->size(); ++k) {
+    const geo::FootprintPolygon& fp = (*o.footprint)[k];
+    RoofOutline outline;  // in the world frame: (a, b) = (x, y)
+    outline.cell = 1.5 * in.shapes->spacing;
+    // Counter-clockwise outer ring, clockwise holes, as extrusion profiles are: the outer
+    // ring clipped to the polygon itself.
+    const FootprintClip self({fp}, Vec2(1.0, 0.0), Vec2(0.0, 1.0));
+    const auto pieces = self.clip(FramePolygon{fp.outer, {}}, 0.0);
+    if (pieces.empty()) continue;
+    outline.profile = pieces.front().outer;
+    outline.holes = pieces.front().holes;
+    const OutlineGround under = outline_ground(outline, *o.ground);
+    const double g = under.ground;
+    if (!std::isfinite(g) || roof - g < 0.5 * o.min_building_height) {
+      rejected.push_back(
+          {what, "not a building's height above the terrain", static_cast<long long>(pts.size())});
+      continue;
+    }
+    auto spec = outline_extrusion(outline, under, roof - g);
+    if (!spec) continue;
+    Proposal p;
+    p.spec = std::move(*spec);
+    if (k == 0) p.members = pts;
+    p.area = polygon_area(outline.profile, outline.holes) +
+             polygon_perimeter(outline.profile, outline.holes) * p.spec.height;
+    p.what = what;
     out.push_back(std::move(p));
   }
   return out;

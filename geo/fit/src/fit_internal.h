@@ -254,6 +254,18 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
                                      const std::function<bool(const Vec3&)>& explained,
                                      std::vector<Rejection>& rejected);
 
+/// The LoD1.2 block of a building's footprint (PrimitiveOptions::footprint) when its roof
+/// partition made nothing: each polygon extruded from the terrain around it to the 70th
+/// percentile of the region's points' heights.
+std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
+                                              std::vector<Rejection>& rejected);
+
+/// Per point: the index of the footprint it lies in (the first, where footprints overlap),
+/// else of the footprint whose boundary is nearest within `buffer` (eaves reach past the
+/// walls a footprint draws), else -1.
+std::vector<int> footprint_of_points(std::span<const Vec3> points,
+                                     std::span<const geo::Footprint> footprints, double buffer);
+
 /// Rule 4 of issue #18 (support.cpp): empty when a primitive whose solid has bounding box
 /// `box` and whose inliers cover `coverage` of its surface is supported by the points of its
 /// region (bounding box `region`, connectivity `cell`), else the reason: a curved primitive

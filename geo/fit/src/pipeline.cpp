@@ -109,7 +109,8 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
 
 kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                           std::span<const std::uint8_t> classes,
-                                          const FitPipelineOptions& options) {
+                                          const FitPipelineOptions& options,
+                                          std::span<const geo::Footprint> footprints) {
   using kernel::ErrorCode;
   auto bad = [](const std::string& what) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option " + what};
@@ -239,13 +240,49 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   out.seconds.emplace_back("normals", seconds_since(start));
 
   start = std::chrono::steady_clock::now();
-  auto clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+  // Footprints first: each one's points are a region; the points of none are clustered.
+  std::vector<std::vector<std::uint32_t>> clusters;
+  std::vector<int> region_footprint;  // per region: its footprint, -1 for a cluster
+  std::vector<std::uint32_t> loose;   // cloud indices of the points in no footprint
+  if (footprints.empty()) {
+    clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+  } else {
+    const std::vector<int> of = detail::footprint_of_points(cloud, footprints, kFootprintBuffer);
+    std::vector<std::vector<std::uint32_t>> members(footprints.size());
+    std::vector<Vec3> rest;
+    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+      if (of[i] >= 0) {
+        members[static_cast<std::size_t>(of[i])].push_back(i);
+      } else {
+        loose.push_back(i);
+        rest.push_back(cloud[i]);
+      }
+    }
+    for (std::size_t f = 0; f < footprints.size(); ++f) {
+      if (members[f].size() < 8) {
+        out.rejected.push_back({"footprint " + footprints[f].id,
+                                "only " + std::to_string(members[f].size()) +
+                                    " points of buildings in it: no building made",
+                                static_cast<long long>(members[f].size())});
+        continue;
+      }
+      out.footprint_points += static_cast<long long>(members[f].size());
+      clusters.push_back(std::move(members[f]));
+      region_footprint.push_back(static_cast<int>(f));
+    }
+    out.footprint_regions = static_cast<int>(clusters.size());
+    for (auto& c : euclidean_clusters(rest, options.clusters, &out.cluster_tolerance)) {
+      for (auto& i : c) i = loose[i];
+      clusters.push_back(std::move(c));
+      region_footprint.push_back(-1);
+    }
+  }
   long long clustered = 0;
   for (const auto& c : clusters) clustered += static_cast<long long>(c.size());
   out.small_cluster_points = out.fitted_points - clustered;
   out.seconds.emplace_back("clusters", seconds_since(start));
 
-  if (options.regions.enabled) {
+  if (options.regions.enabled && footprints.empty()) {
     // Each cluster becomes its grown regions (in region_growing's order) followed by its
     // points in none of them as one leftover region, so that no point is lost to the RANSAC.
     // Regions are numbered in cluster order, then in that order within a cluster.
@@ -300,6 +337,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
     RansacOptions ransac = options.ransac;
     ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
+    const int footprint = r < region_footprint.size() ? region_footprint[r] : -1;
+    PrimitiveOptions region_options = primitive_options;
+    if (footprint >= 0) {
+      region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
+    }
     auto detected = detect_shapes(p, n, ransac);
     if (!detected.ok()) return detected.error();
     // Options the region derived from its points (0 in the options) are the primitives' too.
@@ -327,16 +369,22 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     stats.min_points = ransac.min_points;
     stats.shapes = static_cast<int>(detected.value().shapes.size());
     stats.candidates = detected.value().candidates;
+    if (footprint >= 0) stats.building = footprints[static_cast<std::size_t>(footprint)].id;
     out.region_stats.push_back(stats);
     if (detected.value().shapes.empty()) {
       out.rejected.push_back({"region " + std::to_string(r), detected.value().reason,
                               static_cast<long long>(p.size())});
       // A building region without a surface is still a building: its block (LoD1.2).
-      if (!primitive_options.blocks || primitive_options.ground == nullptr) continue;
+      if ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr)
+        continue;
     }
     const auto t = std::chrono::steady_clock::now();
-    auto fitted = primitives_from_shapes(p, n, detected.value(), primitive_options, ransac,
-                                         static_cast<int>(r));
+    auto fitted =
+        primitives_from_shapes(p, n, detected.value(), region_options, ransac, static_cast<int>(r));
+    if (footprint >= 0) {
+      for (auto& prim : fitted.primitives)
+        prim.building = footprints[static_cast<std::size_t>(footprint)].id;
+    }
     primitives_seconds += seconds_since(t);
     out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
     for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));

@@ -218,6 +218,14 @@ class Builder {
     for (const Vec3& p : points) {
       if (p.allFinite()) region_box_.add(p);
     }
+    // A footprint is evidence too: a building reaches over all of it, points or not.
+    if (o.footprint != nullptr && !region_box_.empty()) {
+      for (const auto& polygon : *o.footprint) {
+        for (const kernel::Vec2& q : polygon.outer) {
+          region_box_.add(Vec3(q.x(), q.y(), region_box_.min.z()));
+        }
+      }
+    }
   }
 
   FittedPrimitives run();
@@ -914,6 +922,16 @@ bool Builder::take(const detail::Proposal& proposal) {
 FittedPrimitives Builder::run() {
   absorbed_.assign(shapes_.shapes.size(), 0);
   const detail::ProposalInput in = proposal_input();
+  if (o_.footprint != nullptr && !o_.footprint->empty()) {
+    // A building in its footprint: its roof partition, else the footprint's block; nothing
+    // else (one building per footprint, standing exactly on it).
+    bool any = false;
+    for (const auto& p : detail::propose_roof_partition(in, out_.rejected)) any = take(p) || any;
+    if (!any) {
+      for (const auto& p : detail::propose_footprint_block(in, out_.rejected)) take(p);
+    }
+    return std::move(out_);
+  }
   if (o_.revolutions) {
     for (const auto& p : detail::propose_revolutions(in, out_.rejected)) take(p);
   }

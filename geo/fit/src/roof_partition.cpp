@@ -15,6 +15,7 @@
 #include <numbers>
 
 #include "fit_internal.h"
+#include "footprint_clip.h"
 #include "partition.h"
 #include "plane2d.h"
 
@@ -63,12 +64,28 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   if (static_cast<long long>(pts.size()) < std::max<long long>(in.ransac->min_points, 8)) {
     return out;
   }
-  // The grid, in the principal frame of the points (walls along its axes stay straight).
-  const auto frame = principal_frame(flat);
+  // The grid, in the principal frame of the points (walls along its axes stay straight), or
+  // of the footprint, over it and the points.
+  const bool footprinted = o.footprint != nullptr && !o.footprint->empty();
+  const auto frame = footprinted ? footprint_frame(*o.footprint) : principal_frame(flat);
   if (!frame) return out;
   const Vec2 u = frame->u, v = frame->v;
-  const double a0 = frame->a0, a1 = frame->a1, b0 = frame->b0, b1 = frame->b1;
-  if (std::min(a1 - a0, b1 - b0) < o.min_building_width) return out;
+  double a0 = frame->a0, a1 = frame->a1, b0 = frame->b0, b1 = frame->b1;
+  std::optional<FootprintClip> clip;
+  if (footprinted) {
+    clip.emplace(*o.footprint, u, v);
+    if (!clip->extent(a0, a1, b0, b1)) {
+      rejected.push_back(
+          {"roof partition", "its footprint has no area", static_cast<long long>(pts.size())});
+      return out;
+    }
+    for (const Vec2& q : flat) {
+      a0 = std::min(a0, q.dot(u)), a1 = std::max(a1, q.dot(u));
+      b0 = std::min(b0, q.dot(v)), b1 = std::max(b1, q.dot(v));
+    }
+  } else if (std::min(a1 - a0, b1 - b0) < o.min_building_width) {
+    return out;
+  }
   const double cell = 1.5 * spacing;
   if (((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0) > 4e6) {
     rejected.push_back({"roof partition", "too large an outline for its grid",
@@ -104,12 +121,24 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   };
   // A free cell's cost and the height band of a point at the top of its cell.
   const double tau = std::max(0.25, 2.5 * in.ransac->epsilon);
-  // The outline: cells holding points, closed over the gaps between scan lines (3 × 3), with
-  // holes under 4 m² filled (larger ones are courtyards).
+  // The outline: with a footprint, the cells meeting it; else cells holding points, closed
+  // over the gaps between scan lines (3 × 3), with holes under 4 m² filled (larger ones are
+  // courtyards).
   std::vector<char> mask(ncell, 0);
-  for (std::size_t c = 0; c < ncell; ++c) mask[c] = in_cell[c].empty() ? 0 : 1;
-  close_cells(mask, nx, ny);
-  {
+  std::vector<double> area_in;  // with a footprint: each cell's area inside it
+  if (footprinted) {
+    area_in.assign(ncell, 0.0);
+    for (std::size_t c = 0; c < ncell; ++c) {
+      const double ca = ga + static_cast<double>(c % static_cast<std::size_t>(nx)) * cell;
+      const double cb = gb + static_cast<double>(c / static_cast<std::size_t>(nx)) * cell;
+      area_in[c] = clip->area_in(ca, cb, ca + cell, cb + cell);
+      mask[c] = area_in[c] > 1e-6 * cell * cell ? 1 : 0;
+    }
+  } else {
+    for (std::size_t c = 0; c < ncell; ++c) mask[c] = in_cell[c].empty() ? 0 : 1;
+    close_cells(mask, nx, ny);
+  }
+  if (!footprinted) {
     LabelGrid empty{nx, ny, std::vector<int>(ncell, -1)};
     for (std::size_t c = 0; c < ncell; ++c) empty.label[c] = mask[c] ? -1 : 0;
     const Components holes = label_components(empty);
@@ -135,8 +164,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   // A structure seen from the side or from below (a gate, a frame of beams scanned from the
   // ground) is no building seen from the air: the air sees no ground under a roof. Over the
   // outline's interior (cells farther than a terrain cell from its edge), the terrain grid
-  // must be mostly empty; a region with no such interior is left to the other steps.
-  {
+  // must be mostly empty; a region with no such interior is left to the other steps. (A
+  // footprint says it is a building.)
+  if (!footprinted) {
     const GroundGrid& t = *o.ground;
     const int margin = static_cast<int>(std::ceil(t.cell / cell)) + 1;
     std::vector<char> inner = mask;
@@ -360,6 +390,25 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
     if (!changed) break;
   }
+  // With a footprint, cells mostly outside it (eaves, points of walls) take the label of
+  // their neighbour most inside it: label boundaries then meet the footprint's edge where
+  // roofs meet, instead of running along it (slivers between a part and the edge).
+  if (footprinted) {
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<int> next = label;
+      for (std::size_t c = 0; c < ncell; ++c) {
+        if (!mask[c] || area_in[c] >= 0.5 * cell * cell) continue;
+        double most = area_in[c];
+        for_each_neighbour(c, [&](std::size_t k) {
+          if (mask[k] && label[k] != -1 && area_in[k] > most) {
+            most = area_in[k];
+            next[c] = label[k];
+          }
+        });
+      }
+      label = std::move(next);
+    }
+  }
   // Free cells become flat pieces: connected cells whose highest roof points differ by less
   // than a step, each at the 70th percentile of its points' heights.
   {
@@ -510,6 +559,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       std::fill(bases.begin(), bases.end(), std::max(*lo, *hi - 0.5));
     }
   }
+  std::optional<VertexSnap> snap;
+  if (clip) snap.emplace(std::min(0.05, 0.1 * cell));
   for (std::size_t k = 0; k < parts.size(); ++k) {
     const PartPolygon& part = parts[k];
     if (part.outer.size() < 3 || part.label < 0) continue;
@@ -517,46 +568,34 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     const std::string what = "roof partition part " + std::to_string(k) +
                              (plane.shape >= 0 ? " of plane " + std::to_string(plane.shape)
                                                : std::string(" (flat, LoD1.2)"));
-    Proposal p;
+    std::vector<std::uint32_t> members;
     for (auto c : part.cells) {
-      p.members.insert(p.members.end(), in_cell[static_cast<std::size_t>(c)].begin(),
-                       in_cell[static_cast<std::size_t>(c)].end());
+      members.insert(members.end(), in_cell[static_cast<std::size_t>(c)].begin(),
+                     in_cell[static_cast<std::size_t>(c)].end());
     }
-    std::sort(p.members.begin(), p.members.end());
-    RoofOutline outline;
-    outline.u = u;
-    outline.v = v;
-    outline.cell = cell;
-    outline.seen_cells = part.cells.size();
-    for (const auto& q : part.outer)
-      outline.profile.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+    std::sort(members.begin(), members.end());
+    FramePolygon whole;
+    for (const auto& q : part.outer) whole.outer.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+    const double base = bases[k];
+    // Whether the plane stands high enough over the part to be its roof, and the lowest and
+    // highest the plane reaches over a polygon's corners.
+    auto reach = [&](const std::vector<Vec2>& ring, double& low, double& high) {
+      low = INFINITY, high = -INFINITY;
+      for (const auto& q : ring) {
+        const Vec2 w = world(q.x(), q.y());
+        low = std::min(low, plane.z(w.x(), w.y()));
+        high = std::max(high, plane.z(w.x(), w.y()));
+      }
+      return plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
+    };
+    double low = 0.0, high = 0.0;
+    const bool tilted_whole = reach(whole.outer, low, high);
     for (const auto& h : part.holes) {
-      std::vector<Vec2> hole;
-      for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
-      outline.holes.push_back(std::move(hole));
-    }
-    OutlineGround under;
-    for (const auto& q : outline.profile) {
-      under.footprint.push_back(world(q.x(), q.y()));
-      under.centre += q / static_cast<double>(outline.profile.size());
-    }
-    under.world_centre = world(under.centre.x(), under.centre.y());
-    under.ground = bases[k];
-    const double base = under.ground;
-    double low = INFINITY, high = -INFINITY;
-    for (const auto& q : under.footprint) {
-      const double z = plane.z(q.x(), q.y());
-      low = std::min(low, z);
-      high = std::max(high, z);
-    }
-    const bool tilted = plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
-    if (tilted && !part.holes.empty()) {
-      // A tilted roof around an inner part that stands higher (a chimney, a dormer, a tower)
-      // is not cut around it: the two overlap and the fuse joins them. Its face then has no
-      // inner ring lying on the lines of its outer one (grid lines), which the mesher's hole
-      // bridging cannot always tell apart in the roof's tilted parameter plane.
-      outline.holes.clear();
-      for (const auto& h : part.holes) {
+      if (tilted_whole) {
+        // A tilted roof around an inner part that stands higher (a chimney, a dormer, a
+        // tower) is not cut around it: the two overlap and the fuse joins them. Its face then
+        // has no inner ring lying on the lines of its outer one (grid lines), which the
+        // mesher's hole bridging cannot always tell apart in the roof's tilted parameter plane.
         const Eigen::Vector2d d = h[1] - h[0];
         const Eigen::Vector2d inside =
             0.5 * (h[0] + h[1]) + 1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized();
@@ -571,43 +610,90 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
           filled_higher = !std::isnan(other.d) && other.z(w.x(), w.y()) >= plane.z(w.x(), w.y());
         }
         if (filled_higher) continue;
-        std::vector<Vec2> hole;
-        for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
-        outline.holes.push_back(std::move(hole));
       }
+      std::vector<Vec2> hole;
+      for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+      whole.holes.push_back(std::move(hole));
     }
-    double roof = high;
-    if (!tilted) {
-      // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th percentile.
-      std::vector<double> z;
-      for (auto i : p.members) {
-        if (!wall[i]) z.push_back(in.points[i].z());
+    // With a footprint, the part's pieces inside it (slivers under a hundredth of a cell
+    // left out), their vertices snapped across the parts; each point goes with the piece it
+    // lies in, else with the largest.
+    std::vector<FramePolygon> pieces;
+    if (clip) {
+      for (const FramePolygon& piece : clip->clip(whole, 0.01 * cell * cell)) {
+        if (auto snapped = snap->snap(piece)) pieces.push_back(std::move(*snapped));
       }
-      if (z.empty()) continue;
-      std::sort(z.begin(), z.end());
-      roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
+    } else {
+      pieces.push_back(whole);
     }
-    if (roof - base < 0.5 * o.min_building_height) {
-      rejected.push_back({what, "not a building's height above the terrain",
-                          static_cast<long long>(p.members.size())});
-      continue;
+    std::vector<std::vector<std::uint32_t>> piece_members(pieces.size());
+    for (auto i : members) {
+      const Vec2 ab(in.points[i].x() * u.x() + in.points[i].y() * u.y(),
+                    in.points[i].x() * v.x() + in.points[i].y() * v.y());
+      std::size_t at = 0;
+      for (std::size_t m = 0; m < pieces.size(); ++m) {
+        if (inside_ring(ab, pieces[m].outer)) {
+          at = m;
+          break;
+        }
+      }
+      if (!pieces.empty()) piece_members[at].push_back(i);
     }
-    auto spec = outline_extrusion(outline, under, tilted ? high - base + 1.0 : roof - base);
-    if (!spec) continue;
-    p.spec = std::move(*spec);
-    if (tilted) {
-      const kernel::Location loc = p.spec.placement;
-      const Vec3 nl = loc.rotation().transpose() * plane.n;
-      p.spec.clips.push_back(
-          Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
-      p.shapes = plane.merged;
-      std::sort(p.shapes.begin(), p.shapes.end());
+    for (std::size_t m = 0; m < pieces.size(); ++m) {
+      const FramePolygon& piece = pieces[m];
+      const std::string piece_what =
+          pieces.size() > 1 ? what + " piece " + std::to_string(m) : what;
+      Proposal p;
+      p.members = std::move(piece_members[m]);
+      RoofOutline outline;
+      outline.u = u;
+      outline.v = v;
+      outline.cell = cell;
+      outline.seen_cells = part.cells.size();
+      outline.profile = piece.outer;
+      outline.holes = piece.holes;
+      OutlineGround under;
+      for (const auto& q : outline.profile) {
+        under.footprint.push_back(world(q.x(), q.y()));
+        under.centre += q / static_cast<double>(outline.profile.size());
+      }
+      under.world_centre = world(under.centre.x(), under.centre.y());
+      under.ground = base;
+      const bool tilted = reach(outline.profile, low, high);
+      double roof = high;
+      if (!tilted) {
+        // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th
+        // percentile of the part's points.
+        std::vector<double> z;
+        for (auto i : members) {
+          if (!wall[i]) z.push_back(in.points[i].z());
+        }
+        if (z.empty()) continue;
+        std::sort(z.begin(), z.end());
+        roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
+      }
+      if (roof - base < 0.5 * o.min_building_height) {
+        rejected.push_back({piece_what, "not a building's height above the terrain",
+                            static_cast<long long>(p.members.size())});
+        continue;
+      }
+      auto spec = outline_extrusion(outline, under, tilted ? high - base + 1.0 : roof - base);
+      if (!spec) continue;
+      p.spec = std::move(*spec);
+      if (tilted) {
+        const kernel::Location loc = p.spec.placement;
+        const Vec3 nl = loc.rotation().transpose() * plane.n;
+        p.spec.clips.push_back(
+            Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
+        p.shapes = plane.merged;
+        std::sort(p.shapes.begin(), p.shapes.end());
+      }
+      const double area = polygon_area(outline.profile, outline.holes);
+      p.area = area / (tilted ? plane.n.z() : 1.0) +
+               polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
+      p.what = piece_what;
+      out.push_back(std::move(p));
     }
-    const double area = polygon_area(outline.profile, outline.holes);
-    p.area = area / (tilted ? plane.n.z() : 1.0) +
-             polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
-    p.what = what;
-    out.push_back(std::move(p));
   }
   return out;
 }

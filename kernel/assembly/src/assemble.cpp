@@ -218,8 +218,11 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     const auto [a, b] = survivors[k];
     if (!verdict[k]) {
       // The exact test could not decide: keep the pair together (the fuse decides or fails
-      // with a reason) rather than publish two objects that may overlap.
-      comps.join(a, b);
+      // with a reason) rather than publish two objects that may overlap; two groups stay two.
+      if (primitives[static_cast<std::size_t>(a)].group ==
+          primitives[static_cast<std::size_t>(b)].group) {
+        comps.join(a, b);
+      }
       contacts.push_back({a, b, kernel::Interference::BoundariesMeet});
       out.problems.push_back("pair " + primitives[static_cast<std::size_t>(a)].label + " / " +
                              primitives[static_cast<std::size_t>(b)].label +
@@ -227,8 +230,11 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       continue;
     }
     if (*verdict[k] == kernel::Interference::Disjoint) continue;
-    comps.join(a, b);
     contacts.push_back({a, b, *verdict[k]});
+    if (primitives[static_cast<std::size_t>(a)].group !=
+        primitives[static_cast<std::size_t>(b)].group)
+      continue;  // two groups' contact: a relation between objects, not one object
+    comps.join(a, b);
   }
   st.interacting_pairs = static_cast<long long>(contacts.size());
   std::map<int, std::vector<int>> members;
@@ -257,6 +263,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
     AssembledObject& o = out.objects[g];
     o.primitives = groups[g];
+    o.group = primitives[static_cast<std::size_t>(groups[g].front())].group;
     o.id = "obj-" + primitives[static_cast<std::size_t>(groups[g].front())].label;
     o.reaches_past_halo = past_halo[g] != 0;
     if (groups[g].size() == 1) {

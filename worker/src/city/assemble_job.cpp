@@ -77,6 +77,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
       cp.primitive.spec.placement =
           kernel::Location::translation(tile_origin - cell_origin3) * p.spec.placement;
       cp.primitive.label = tile + "-" + (p.id.empty() ? "p" + std::to_string(i) : p.id);
+      cp.primitive.group = p.building;
       cp.quality = p.quality;
       cp.crs_box = box;
       prims.push_back(std::move(cp));
@@ -140,6 +141,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
     io.escalation = object->escalation;
+    io.footprint_id = object->group;
     const ordered_json escalation = escalation_json(io.escalation);
     ordered_json prim_records = ordered_json::array();
     std::map<std::string, const CellPrimitive*> by_label;
@@ -168,6 +170,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
          {"fused", object->fused},
          {"error", object->fused ? ordered_json() : ordered_json(object->error)},
          {"escalation", escalation},
+         {"footprint_id", object->group.empty() ? ordered_json() : ordered_json(object->group)},
          {"volume", object->volume},
          {"primitives", prim_records}});
     objects.objects.push_back(std::move(io));

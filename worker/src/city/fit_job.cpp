@@ -74,7 +74,10 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   std::string name =
       std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
   if (only_cell) name += "_" + only_cell->name();
-  if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile); !f.ok()) {
+  const geo::FootprintSource footprints{config.city.footprints, config.city.footprints_layer,
+                                        config.city.footprints_id};
+  if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile, footprints);
+      !f.ok()) {
     // A range read that failed in transit keeps its own code (Network: the job is retried).
     if (range_stats && !range_stats->last_failure.ok()) return range_stats->last_failure;
     // Name the input once: readers already name the file they read (for a URL, its local
@@ -178,6 +181,20 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["assigned_points"] = fit.assigned_points;
   record["unassigned_points"] = fit.unassigned_points;
   record["regions"] = fit.regions;
+  if (!footprints.source.empty()) {
+    // Footprints that gave no building are named (rejections "footprint <id>") and so are
+    // features that gave no footprint.
+    record["footprints"] = {{"source", footprints.source},
+                            {"read", tile.footprints_read},
+                            {"buildings", fit.footprint_regions},
+                            {"points", fit.footprint_points},
+                            {"skipped", tile.footprints_skipped}};
+    ordered_json empty = ordered_json::array();
+    for (const auto& r : fit.rejected) {
+      if (r.what.rfind("footprint ", 0) == 0) empty.push_back(r.what.substr(10));
+    }
+    record["footprints"]["without_building"] = std::move(empty);
+  }
   record["primitives"] = tile.scene.primitives.size();
   ordered_json per_type = ordered_json::object();
   for (const geo::ScenePrimitive& p : tile.scene.primitives) {

@@ -14,7 +14,8 @@
 namespace csgtile::worker::city {
 
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
-                 const std::string& crs_override, FittedTile& out) {
+                 const std::string& crs_override, FittedTile& out,
+                 const geo::FootprintSource& footprints) {
   const auto start = std::chrono::steady_clock::now();
   out = FittedTile{};
   // Every point is read (the pipeline needs the whole tile), in the local frame. Only
@@ -96,7 +97,42 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   out.read_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  auto fitted = fit::fit_point_cloud(raw, classes, options);
+  // Footprints meeting the points' extent (and the eaves' reach), in the tile's frame.
+  std::vector<geo::Footprint> buildings;
+  if (!footprints.source.empty()) {
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (const auto& p : raw) {
+      if (!p.allFinite()) continue;
+      x0 = std::min(x0, p.x()), y0 = std::min(y0, p.y());
+      x1 = std::max(x1, p.x()), y1 = std::max(y1, p.y());
+    }
+    if (x0 <= x1) {
+      const double m = fit::kFootprintBuffer;
+      geo::FootprintQuery query;
+      query.target_crs = crs_text;
+      query.bbox =
+          std::array<double, 4>{x0 - m + o.x(), y0 - m + o.y(), x1 + m + o.x(), y1 + m + o.y()};
+      auto read = geo::read_footprints(footprints, query);
+      if (!read.ok()) {
+        return {read.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io
+                                                                : ErrorCode::InputInvalid,
+                read.error().message};
+      }
+      buildings = std::move(read.value().footprints);
+      out.footprints_skipped = std::move(read.value().skipped);
+      for (auto& b : buildings) {
+        for (auto& polygon : b.polygons) {
+          for (auto& q : polygon.outer) q -= kernel::Vec2(o.x(), o.y());
+          for (auto& h : polygon.holes) {
+            for (auto& q : h) q -= kernel::Vec2(o.x(), o.y());
+          }
+        }
+      }
+    }
+    out.footprints_read = static_cast<long long>(buildings.size());
+  }
+
+  auto fitted = fit::fit_point_cloud(raw, classes, options, buildings);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
   out.origin = origin;

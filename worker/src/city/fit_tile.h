@@ -14,6 +14,7 @@
 #include "csgtile/config/config.h"
 #include "csgtile/fit/segment.h"
 #include "csgtile/geo/byte_source.h"
+#include "csgtile/geo/footprints.h"
 #include "csgtile/geo/point.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/worker/errors.h"
@@ -32,6 +33,10 @@ struct FittedTile {
   fit::FitOutput output;           ///< counts, rejections, stage seconds
   std::array<double, 3> origin{};  ///< of the tile-local frame, whether the scene has one or not
   double read_seconds = 0.0;
+  /// With footprints: those read for the tile (meeting its points' extent), and the features
+  /// that gave none, with their reasons.
+  long long footprints_read = 0;
+  std::vector<std::string> footprints_skipped;
 };
 
 /// Where a tile's points come from: a local file, or a random-access source (a URL read by
@@ -44,10 +49,14 @@ struct TileSource {
 };
 
 /// Reads every point of a LAS/PLY/PCD/XYZ file (or of its region) and fits primitives to
-/// them. `crs_override` is used when the file names no CRS ("" = none). Errors: as the
-/// readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override).
+/// them. `crs_override` is used when the file names no CRS ("" = none). With `footprints`
+/// (source non-empty), the footprints meeting the tile's points, reprojected to its CRS (as
+/// stored when the tile has none), make one building each (fit_point_cloud). Errors: as the
+/// readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override),
+/// InputInvalid / Io (footprints that cannot be read, naming them).
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
-                 const std::string& crs_override, FittedTile& out);
+                 const std::string& crs_override, FittedTile& out,
+                 const geo::FootprintSource& footprints = {});
 inline Failure fit_tile(const std::filesystem::path& path, const std::string& name,
                         const fit::FitPipelineOptions& options, const std::string& crs_override,
                         FittedTile& out) {

@@ -78,6 +78,7 @@ std::optional<ReportBuilding> report_building(const IndexObject& object, double 
     b.h_roof_70p = h->roof_70p + origin_z;
     b.roof_surfaces = static_cast<long long>(h->roof_faces);
   }
+  b.footprint_id = object.footprint_id;
   b.problem = building_problem(object);
   return b;
 }
@@ -176,6 +177,9 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       io.model = std::move(model).value();
       if (entry.contains("error") && entry.at("error").is_string()) {
         io.fuse_error = entry.at("error").get<std::string>();
+      }
+      if (entry.contains("footprint_id") && entry.at("footprint_id").is_string()) {
+        io.footprint_id = entry.at("footprint_id").get<std::string>();
       }
       if (entry.contains("escalation") && entry.at("escalation").is_object()) {
         const ordered_json& e = entry.at("escalation");

@@ -643,6 +643,9 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
     city_object["type"] = g && !one_solid && !block ? "GenericCityObject" : "Building";
     Json attributes = attributes_json(object, g, options);
     if (building) {
+      // Its outline: the footprint it was fitted in (its id), or derived from the points.
+      if (!object.footprint_id.empty()) attributes["footprint_id"] = object.footprint_id;
+      attributes["outline"] = object.footprint_id.empty() ? "derived" : "footprint";
       attributes["lod_reached"] = one_solid ? Json("2.2") : block ? Json("1.2") : Json();
       if (g && !one_solid) {
         attributes["lod22_failure"] = lod22_failure(object);

@@ -33,6 +33,7 @@ struct ObjectRecord {
   /// Buildings (IndexObject::heights, lod12): the LoD reached ("2.2", "1.2"), heights in the
   /// SRS, why the model or the block is missing, and the block's boundary (lod12 layer).
   std::optional<std::string> lod, fuse_error, lod12_error;
+  std::optional<std::string> footprint_id, outline;  ///< buildings: "footprint" or "derived"
   std::optional<double> h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max;
   std::optional<std::int64_t> roof_surfaces;
   bool has_lod12 = false;

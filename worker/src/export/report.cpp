@@ -437,7 +437,8 @@ std::string buildings_table(const ReportInput& in) {
                      " reached LoD2.2; every building with a block has LoD1.2 too.</p>\n";
   html +=
       "<table class=\"buildings\">\n<tr><th>object</th><th>cell</th><th>LoD</th><th>fit RMS "
-      "(m)</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof surfaces</th><th>problem</th>"
+      "(m)</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof surfaces</th><th>footprint</th>"
+      "<th>problem</th>"
       "</tr>\n";
   auto metres = [](const std::optional<double>& v) {
     return v && std::isfinite(*v) ? fixed(*v, 2) : std::string("n/a");
@@ -449,7 +450,9 @@ std::string buildings_table(const ReportInput& in) {
             "</td><td>" + escape_html(b.lod.empty() ? "none" : b.lod) + "</td><td class=\"num\">" +
             metres(b.fit_rms) + "</td><td class=\"num\">" + metres(b.h_ground) +
             "</td><td class=\"num\">" + metres(b.h_roof_70p) + "</td><td class=\"num\">" +
-            std::to_string(b.roof_surfaces) + "</td><td>" + escape_html(b.problem) + "</td></tr>\n";
+            std::to_string(b.roof_surfaces) + "</td><td>" +
+            escape_html(b.footprint_id.empty() ? "derived" : b.footprint_id) + "</td><td>" +
+            escape_html(b.problem) + "</td></tr>\n";
   }
   html += "</table>\n";
   if (rows.size() > kRows) {

@@ -47,7 +47,8 @@ struct ReportBuilding {
   std::optional<double> fit_rms;  ///< metres, inlier-weighted over its fitted primitives
   std::optional<double> h_ground, h_roof_70p;  ///< heights in the CRS (metres)
   long long roof_surfaces = 0;
-  std::string problem;  ///< why LoD2.2 or LoD1.2 is missing; empty when neither is
+  std::string problem;         ///< why LoD2.2 or LoD1.2 is missing; empty when neither is
+  std::string footprint_id{};  ///< the footprint it stands on; empty: outline derived
 };
 
 struct ReportObject {

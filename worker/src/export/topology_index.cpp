@@ -273,6 +273,8 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
     o.roof_surfaces = static_cast<std::int64_t>(h->roof_faces);
   }
   if (!building) return;
+  if (!object.footprint_id.empty()) o.footprint_id = object.footprint_id;
+  o.outline = object.footprint_id.empty() ? "derived" : "footprint";
   if (object.lod12) {
     const Shape& block = object.lod12->shape;
     auto boundary = boundary_polygons(block, kernel::map_child_shapes(block, ShapeKind::Face),

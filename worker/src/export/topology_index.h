@@ -59,6 +59,9 @@ struct IndexObject {
   std::optional<assembly::AssembledObject::Escalation> escalation;
   std::optional<kernel::CsgModel> lod12;
   std::string lod12_error;
+  /// The footprint it was fitted in (city.footprints_id's value, or the feature id); empty
+  /// when its outline was derived from the points.
+  std::string footprint_id;
 };
 
 /// Fills heights, lod12 and lod12_error of every object (block_model.h) at the exporters'

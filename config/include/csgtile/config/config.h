@@ -108,6 +108,14 @@ struct CityConfig {
   /// Escalation (AssemblyOptions::escalate_to): objects whose fuse fails snapped again at
   /// growing distances up to this bound (m); 0: off. [0, 1]
   double snap_escalate_to = 0.02;
+  /// Building footprints (optional): a path, an http(s) URL or a GDAL connection string of
+  /// any vector source GDAL/OGR reads, reprojected to the run's CRS. With them, one building
+  /// per footprint, standing exactly on it; building points outside every footprint still
+  /// make buildings, with outlines derived from the points. "": none.
+  std::string footprints{};
+  std::string footprints_layer{};  ///< its layer; "": the source's only layer
+  /// The attribute carried to every output as the building's id; "": the feature id.
+  std::string footprints_id{};
   bool operator==(const CityConfig&) const = default;
 };
 

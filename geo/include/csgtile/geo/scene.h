@@ -30,6 +30,10 @@ struct ScenePrimitive {
   kernel::PrimitiveSpec spec;
   std::string id;  ///< may be empty
   std::optional<FitQuality> quality;
+  /// The building it was fitted for (key "building", an extension): the id of its footprint
+  /// (geo/footprints.h). Primitives of different buildings are never fused into one object;
+  /// "" (the key absent): no footprint.
+  std::string building{};
 };
 
 /// Counts of distinct sub-shapes; -1 where the scene does not give one.
@@ -66,7 +70,7 @@ kernel::Result<Scene> parse_scene(std::string_view json);
 
 /// Scene JSON that parse_scene reads back to an equal scene: numbers in their shortest
 /// round-trip form, keys in a fixed order (name, op, crs, origin, seed, primitives, expected;
-/// per primitive: type, id, parameters, placement, quality), one primitive per line. Same
+/// per primitive: type, id, parameters, placement, quality, building), one primitive per line. Same
 /// scene, same bytes. Placements are written as 3×4 matrices [s·R | t]; parse_scene
 /// re-orthonormalises R, so a general rotation may move in its last bits when read back.
 std::string scene_to_json(const Scene& scene);

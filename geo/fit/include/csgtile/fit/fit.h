@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "csgtile/geo/footprints.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/location.h"
 
@@ -161,6 +162,11 @@ struct PrimitiveOptions {
   /// sharing their walls exactly. Runs after the revolutions and before every other
   /// building step, which then see only the points it left (needs `ground`).
   bool roof_partition = true;
+  /// A building's footprint (its polygons, in the points' frame; set per region by the fit
+  /// pipeline): the roof partition covers exactly it — the grid's cells meeting it, its parts
+  /// clipped to it, no outline derived from the points — and the region makes nothing else
+  /// (one building per footprint). Points are not needed for its walls.
+  const std::vector<geo::FootprintPolygon>* footprint = nullptr;
   /// Points of a region no primitive explains become LoD1.2 blocks (their outline extruded
   /// from the terrain to the 70th percentile of their heights; needs `ground`). The fit
   /// pipeline makes blocks only of classified building points (ClassOptions::keep found).

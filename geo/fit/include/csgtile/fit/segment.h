@@ -151,6 +151,7 @@ struct FitRegion {
   int shapes = 0;                ///< surfaces detected
   int primitives = 0;            ///< primitives kept
   std::uint64_t candidates = 0;
+  std::string building;  ///< its footprint's id, "" for a cluster of points
 };
 
 /// One region as the RANSAC saw it: its points and normals (region order) and the shapes it
@@ -184,6 +185,8 @@ struct FitOutput {
   long long unassigned_points = 0;     ///< fitted_points - assigned_points
   long long small_cluster_points = 0;  ///< in clusters below min_points
   int regions = 0;
+  int footprint_regions = 0;            ///< the first regions: one per footprint with points
+  long long footprint_points = 0;       ///< fitted points in those regions
   std::vector<FitRegion> region_stats;  ///< per region, in region order
   double cluster_tolerance = 0.0;       ///< Euclidean clustering distance used
   std::uint64_t candidates = 0;
@@ -199,9 +202,18 @@ struct FitOutput {
 
 /// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
 /// primitives.
-/// `classes` may be empty. Errors: InvalidArgument for bad options (naming the option).
+/// `classes` may be empty. With `footprints` (in the points' frame), each footprint's points
+/// (inside it, or within kFootprintBuffer of its boundary: eaves) are one region, fitted as
+/// one building standing exactly on it (PrimitiveOptions::footprint), its primitives carrying
+/// its id (ScenePrimitive::building); only the other points are clustered. A footprint with
+/// too few points is a rejection naming it. Errors: InvalidArgument for bad options (naming
+/// the option).
 kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
-                                          const FitPipelineOptions& options);
+                                          const FitPipelineOptions& options,
+                                          std::span<const geo::Footprint> footprints = {});
+
+/// How far past a footprint's boundary its building's points reach (eaves), metres.
+inline constexpr double kFootprintBuffer = 1.0;
 
 }  // namespace csgtile::fit

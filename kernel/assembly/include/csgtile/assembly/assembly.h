@@ -25,6 +25,9 @@ namespace csgtile::assembly {
 struct AssemblyPrimitive {
   kernel::PrimitiveSpec spec;
   std::string label;
+  /// Primitives of different groups are never one object, even where they touch (buildings
+  /// of different footprints: their contact is a relation, a party wall, not a fuse).
+  std::string group{};
 };
 
 /// A square cell (i, j) of a grid in the XY plane: [ox + i·size, ox + (i+1)·size) × the
@@ -88,6 +91,7 @@ struct Contact {
 struct AssembledObject {
   std::string id;               ///< "obj-" + the label of its first primitive (stable)
   std::vector<int> primitives;  ///< input indices, ascending
+  std::string group;            ///< its primitives' group
   /// The fused solid(s) with the CSG tree (one n-ary fuse over the primitives, or the
   /// primitive alone) and face sources. When the fuse failed: the compound of the unfused
   /// primitive solids under the same tree, and `error` says why.

@@ -1,0 +1,62 @@
+#pragma once
+/// \file
+/// Building footprints from any vector source GDAL/OGR reads (GeoPackage, Shapefile,
+/// FlatGeobuf, GeoJSON, SQLite, PostGIS "PG:..." connections, http(s) URLs), reprojected to
+/// the run's CRS (issue #18 item 2). GDAL stays private to geo: nothing of it shows here.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "csgtile/kernel/location.h"
+#include "csgtile/kernel/result.h"
+
+namespace csgtile::geo {
+
+/// One polygon: its outer ring, then its holes; rings open (the first point not repeated),
+/// in the target CRS's x/y (easting, northing; longitude, latitude for geographic CRSs).
+struct FootprintPolygon {
+  std::vector<kernel::Vec2> outer;
+  std::vector<std::vector<kernel::Vec2>> holes;
+};
+
+/// One building's footprint: the polygons of one feature (several for a multipolygon).
+struct Footprint {
+  std::string id;  ///< the id attribute's value, or the feature id when none was named
+  std::vector<FootprintPolygon> polygons;
+};
+
+/// Where footprints come from.
+struct FootprintSource {
+  std::string source;        ///< a path, an http(s) URL, or a GDAL connection string
+  std::string layer;         ///< "": the source's only layer (an error when it has several)
+  std::string id_attribute;  ///< "": the feature id
+};
+
+/// What is read.
+struct FootprintQuery {
+  /// The CRS to reproject to, as crs_from_config reads it ("EPSG:28992", "EPSG:28992+5709",
+  /// WKT); its horizontal part is used. "": the coordinates as stored.
+  std::string target_crs;
+  /// Only features whose reprojected envelope meets [xmin, ymin, xmax, ymax] (target CRS).
+  std::optional<std::array<double, 4>> bbox;
+};
+
+struct FootprintSet {
+  std::vector<Footprint> footprints;  ///< in the layer's feature order
+  /// Features that give no footprint, each with its reason ("feature 12: no geometry",
+  /// "feature 40 (id 0363...): a LINESTRING is no polygon"): none is dropped silently.
+  std::vector<std::string> skipped;
+  std::string layer;       ///< the layer read
+  std::string source_crs;  ///< the layer's CRS as WKT, "" when it has none
+};
+
+/// Reads the footprints. A source without a CRS is taken to be in the target CRS. Errors
+/// (IoError for sources that cannot be opened, InvalidArgument otherwise) name the source and
+/// what is wrong: no such layer (listing the layers), no such attribute (listing the
+/// fields), a target CRS GDAL cannot read, no transformation between the CRSs.
+kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
+                                             const FootprintQuery& query);
+
+}  // namespace csgtile::geo
