@@ -260,6 +260,12 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
 std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
                                               std::vector<Rejection>& rejected);
 
+/// The ring without the vertices lying within `deviation` of the chord of their neighbours
+/// (walls digitised with several nearly collinear vertices: their near-parallel faces are
+/// sections the Booleans cannot compute reliably). Keeps at least 3 vertices.
+std::vector<kernel::Vec2> straightened_ring(const std::vector<kernel::Vec2>& ring,
+                                            double deviation);
+
 /// Per point: the index of the footprint it lies in (the first, where footprints overlap),
 /// else of the footprint whose boundary is nearest within `buffer` (eaves reach past the
 /// walls a footprint draws), else -1.

@@ -10,6 +10,35 @@
 
 namespace csgtile::fit::detail {
 
+std::vector<Vec2> straightened_ring(const std::vector<Vec2>& ring, double deviation) {
+  std::vector<Vec2> out = ring;
+  // Repeatedly the vertex nearest to the chord of its neighbours, while within `deviation`
+  // (ties: the first), so that the result does not depend on where the ring starts more
+  // than ties do.
+  while (out.size() > 3) {
+    std::size_t best = out.size();
+    double least = deviation;
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      const Vec2& a = out[(k + out.size() - 1) % out.size()];
+      const Vec2& b = out[(k + 1) % out.size()];
+      const Vec2 d = b - a;
+      const double len = d.norm();
+      const Vec2 w = out[k] - a;
+      const double dist = len > 0.0 ? std::abs(d.x() * w.y() - d.y() * w.x()) / len : w.norm();
+      // Only where the ring goes on (not a spike back along itself).
+      if (dist <= least && (len == 0.0 || w.dot(d) > 0.0) &&
+          (len == 0.0 || (out[k] - b).dot(d) < 0.0)) {
+        least = dist;
+        best = k;
+        if (dist == 0.0) break;
+      }
+    }
+    if (best == out.size()) break;
+    out.erase(out.begin() + static_cast<std::ptrdiff_t>(best));
+  }
+  return out;
+}
+
 std::vector<int> footprint_of_points(std::span<const Vec3> points,
                                      std::span<const geo::Footprint> footprints, double buffer) {
   std::vector<int> out(points.size(), -1);

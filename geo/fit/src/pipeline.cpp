@@ -242,11 +242,22 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   // Footprints first: each one's points are a region; the points of none are clustered.
   std::vector<std::vector<std::uint32_t>> clusters;
-  std::vector<int> region_footprint;  // per region: its footprint, -1 for a cluster
-  std::vector<std::uint32_t> loose;   // cloud indices of the points in no footprint
+  std::vector<int> region_footprint;                // per region: its footprint, -1 for a cluster
+  std::vector<std::uint32_t> loose;                 // cloud indices of the points in no footprint
+  std::vector<geo::Footprint> straight_footprints;  // the footprints used (outlives the fit)
   if (footprints.empty()) {
     clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
   } else {
+    // Walls digitised with nearly collinear vertices are made straight (within 1 cm).
+    std::vector<geo::Footprint> straight(footprints.begin(), footprints.end());
+    for (geo::Footprint& f : straight) {
+      for (geo::FootprintPolygon& p : f.polygons) {
+        p.outer = detail::straightened_ring(p.outer, 0.01);
+        for (auto& h : p.holes) h = detail::straightened_ring(h, 0.01);
+      }
+    }
+    straight_footprints = std::move(straight);
+    footprints = straight_footprints;
     const std::vector<int> of = detail::footprint_of_points(cloud, footprints, kFootprintBuffer);
     std::vector<std::vector<std::uint32_t>> members(footprints.size());
     std::vector<Vec3> rest;

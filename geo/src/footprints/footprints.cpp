@@ -201,6 +201,26 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
       const auto& b = *query.bbox;
       if (e.MaxX < b[0] || e.MinX > b[2] || e.MaxY < b[1] || e.MinY > b[3]) continue;
     }
+    std::unique_ptr<OGRGeometry> clipped;
+    if (query.bbox && query.clip_to_bbox) {
+      const auto& b = *query.bbox;
+      OGRPolygon rect;
+      OGRLinearRing ring;
+      ring.addPoint(b[0], b[1]);
+      ring.addPoint(b[2], b[1]);
+      ring.addPoint(b[2], b[3]);
+      ring.addPoint(b[0], b[3]);
+      ring.addPoint(b[0], b[1]);
+      rect.addRing(&ring);
+      CPLErrorReset();
+      clipped.reset(geometry->Intersection(&rect));
+      if (!clipped) {
+        out.skipped.push_back(name + ": cannot be cut to the bounds: " + last_gdal_error());
+        continue;
+      }
+      if (clipped->IsEmpty()) continue;
+      geometry = clipped.get();
+    }
     if (auto why = polygons_of(*geometry, fp.polygons); !why.empty()) {
       out.skipped.push_back(name + ": " + why);
       continue;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -87,6 +88,18 @@ TEST(Footprints, ReprojectsToTheRunCrsAndFiltersByItsBounds) {
   ASSERT_TRUE(near.ok()) << near.error().message;
   ASSERT_EQ(near.value().footprints.size(), 1u);
   EXPECT_EQ(near.value().footprints[0].id, "A1");
+  // ... and cut to them: A1 ends at x = 155005 (its hole, west of it, stays).
+  FootprintQuery cut{"EPSG:28992", std::array<double, 4>{154900, 462900, 155005, 463100}, true};
+  auto clipped = read_footprints({(dir / "b.geojson").string(), "", "bag_id"}, cut);
+  ASSERT_TRUE(clipped.ok()) << clipped.error().message;
+  ASSERT_EQ(clipped.value().footprints.size(), 1u);
+  const FootprintPolygon& p = clipped.value().footprints[0].polygons.at(0);
+  double x_max = -INFINITY, x_min = INFINITY;
+  for (const kernel::Vec2& q : p.outer)
+    x_max = std::max(x_max, q.x()), x_min = std::min(x_min, q.x());
+  EXPECT_DOUBLE_EQ(x_max, 155005.0);
+  EXPECT_NEAR(x_min, 155000.0 - 14.2, 3.0);
+  EXPECT_EQ(p.holes.size(), 1u);
 }
 
 TEST(Footprints, ErrorsNameWhatIsWrong) {

@@ -97,7 +97,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   out.read_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // Footprints meeting the points' extent (and the eaves' reach), in the tile's frame.
+  // Footprints meeting the points' extent, cut to it, in the tile's frame.
   std::vector<geo::Footprint> buildings;
   if (!footprints.source.empty()) {
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
@@ -107,11 +107,11 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       x1 = std::max(x1, p.x()), y1 = std::max(y1, p.y());
     }
     if (x0 <= x1) {
-      const double m = fit::kFootprintBuffer;
+      // Cut to the points' extent: a building ends where the tile's data ends.
       geo::FootprintQuery query;
       query.target_crs = crs_text;
-      query.bbox =
-          std::array<double, 4>{x0 - m + o.x(), y0 - m + o.y(), x1 + m + o.x(), y1 + m + o.y()};
+      query.bbox = std::array<double, 4>{x0 + o.x(), y0 + o.y(), x1 + o.x(), y1 + o.y()};
+      query.clip_to_bbox = true;
       auto read = geo::read_footprints(footprints, query);
       if (!read.ok()) {
         return {read.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io

@@ -50,9 +50,9 @@ struct TileSource {
 
 /// Reads every point of a LAS/PLY/PCD/XYZ file (or of its region) and fits primitives to
 /// them. `crs_override` is used when the file names no CRS ("" = none). With `footprints`
-/// (source non-empty), the footprints meeting the tile's points, reprojected to its CRS (as
-/// stored when the tile has none), make one building each (fit_point_cloud). Errors: as the
-/// readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override),
+/// (source non-empty), the footprints meeting the tile's points (cut to their extent), reprojected
+/// to its CRS (as stored when the tile has none), make one building each (fit_point_cloud). Errors:
+/// as the readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override),
 /// InputInvalid / Io (footprints that cannot be read, naming them).
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
                  const std::string& crs_override, FittedTile& out,

@@ -41,6 +41,8 @@ struct FootprintQuery {
   std::string target_crs;
   /// Only features whose reprojected envelope meets [xmin, ymin, xmax, ymax] (target CRS).
   std::optional<std::array<double, 4>> bbox;
+  /// ... and their polygons cut to it (a tile's buildings end where its data ends).
+  bool clip_to_bbox = false;
 };
 
 struct FootprintSet {
