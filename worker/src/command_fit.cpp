@@ -1,7 +1,7 @@
 // `csgtile fit INPUT [--config C.yaml] --out primitives.json [--json] [--seed N] [--crs EPSG:N]`:
 // reads a LAS/LAZ/PLY/PCD/XYZ point cloud, segments it, fits primitives (csgtile/fit/*.h)
-// and writes them in the scene format, in the tile-local frame (origin = the LAS offset, or
-// the floor of the smallest x and y for other formats) with the CRS and the seed. The file
+// and writes them in the scene format, in the tile-local frame (origin = the LAS offset near
+// the points, else the floor of the smallest x and y) with the CRS and the seed. The file
 // holds no timings: the same input, config and seed give the same bytes. Counts per type,
 // unassigned points, rejections with reasons and per-stage timings go to stdout.
 

@@ -83,14 +83,20 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       if (has_classes) classes.push_back(p.classification);
     }
   }
-  if (las == nullptr && !raw.empty()) {
-    double x = INFINITY, y = INFINITY;
+  // The tile-local frame: the LAS offset when the points lie within 10 km of it, else (other
+  // formats, or an offset of 0 under national coordinates of 1e5 m, as AHN3's) the floor of
+  // the smallest x and y: the fit computes in coordinates of the tile's size, not the CRS's.
+  if (!raw.empty()) {
+    double x0 = INFINITY, y0 = INFINITY, far = 0.0;
     for (const auto& p : raw) {
       if (!p.allFinite()) continue;
-      x = std::min(x, p.x());
-      y = std::min(y, p.y());
+      x0 = std::min(x0, p.x());
+      y0 = std::min(y0, p.y());
+      far = std::max({far, std::abs(p.x() - origin[0]), std::abs(p.y() - origin[1])});
     }
-    if (std::isfinite(x)) origin = {std::floor(x), std::floor(y), 0.0};
+    if (std::isfinite(x0) && (las == nullptr || far > 1e4)) {
+      origin = {std::floor(x0), std::floor(y0), las == nullptr ? 0.0 : origin[2]};
+    }
   }
   const kernel::Vec3 o(origin[0], origin[1], origin[2]);
   for (auto& p : raw) p -= o;

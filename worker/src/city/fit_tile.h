@@ -27,8 +27,9 @@ namespace csgtile::worker::city {
 fit::FitPipelineOptions fit_options(const config::Config& config);
 
 struct FittedTile {
-  /// The primitives in the tile-local frame: origin = the LAS offset (the floor of the
-  /// smallest x and y for other formats), CRS from the file or the override; the seed.
+  /// The primitives in the tile-local frame: origin = the LAS offset when the points lie
+  /// within 10 km of it, else (and for other formats) the floor of the smallest x and y; CRS
+  /// from the file or the override; the seed.
   geo::Scene scene;
   fit::FitOutput output;           ///< counts, rejections, stage seconds
   std::array<double, 3> origin{};  ///< of the tile-local frame, whether the scene has one or not
