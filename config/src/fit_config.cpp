@@ -35,6 +35,10 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "ground", "cell", fit.ground.cell);
   take(f, "ground", "window", fit.ground.window);
   take(f, "ground", "height", fit.ground.height);
+  take(f, "vegetation", "enabled", fit.vegetation.enabled);
+  take(f, "vegetation", "curvature", fit.vegetation.curvature);
+  take(f, "vegetation", "radius", fit.vegetation.radius);
+  take(f, "vegetation", "share", fit.vegetation.share);
   take(f, "clusters", "tolerance", fit.clusters.tolerance);
   take(f, "clusters", "min_points", fit.clusters.min_points);
   take(f, "regions", "enabled", fit.regions.enabled);
@@ -83,6 +87,10 @@ json fit_to_json(const FitConfig& fit) {
                    {"cell", fit.ground.cell},
                    {"window", fit.ground.window},
                    {"height", fit.ground.height}};
+  out["vegetation"] = {{"enabled", fit.vegetation.enabled},
+                       {"curvature", fit.vegetation.curvature},
+                       {"radius", fit.vegetation.radius},
+                       {"share", fit.vegetation.share}};
   out["clusters"] = {{"tolerance", fit.clusters.tolerance},
                      {"min_points", fit.clusters.min_points}};
   out["regions"] = {{"enabled", fit.regions.enabled},

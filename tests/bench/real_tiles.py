@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """`csgtile fit` on real LIDAR tiles, measured (issue #6, "Real data").
 
-Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c] [--use-footprints]
+Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c] [--use-footprints] [--unclassified]
                      [--config C] [--sigma S] [--cell 0.25] [--pixel 2]
                      [--min-share TILE=V ...] [--min-iou TILE=V ...]
                      [--min-top-within TILE=V ...] [--min-top-coverage TILE=V ...]
@@ -442,11 +442,35 @@ def median(v):
     return v[n // 2] if n % 2 else (v[n // 2 - 1] + v[n // 2]) / 2
 
 
+def write_unclassified(src, dst):
+    """A copy of a LAS file with every point's class set to 1 (never classified, as unclassified
+    tiles are): the fit then sees no classification; the measure still uses the original's."""
+    b = bytearray(open(src, "rb").read())
+    offset = struct.unpack_from("<I", b, 96)[0]
+    fmt = b[104] & 0x3F
+    length = struct.unpack_from("<H", b, 105)[0]
+    count = struct.unpack_from("<I", b, 107)[0]
+    if count == 0 and b[25] >= 4:
+        count = struct.unpack_from("<Q", b, 247)[0]
+    for i in range(count):
+        p = offset + i * length
+        if fmt < 6:
+            b[p + 15] = (b[p + 15] & 0xE0) | 1
+        else:
+            b[p + 16] = 1
+    with open(dst, "wb") as f:
+        f.write(b)
+
+
 def run_fit(name, spec, args, out_dir):
     """Runs `csgtile fit` on the tile: (figures, scene) or (figures with "error", None)."""
     las_path = os.path.join(args.data, spec["las"])
     fit_path = os.path.join(out_dir, name + "_fit.json")
-    cmd = [args.csgtile, "fit", las_path, "--out", fit_path, "--json"]
+    fit_input = las_path
+    if args.unclassified:
+        fit_input = os.path.join(out_dir, name + "_unclassified.las")
+        write_unclassified(las_path, fit_input)
+    cmd = [args.csgtile, "fit", fit_input, "--out", fit_path, "--json"]
     if args.config:
         cmd += ["--config", args.config]
     if args.use_footprints and spec["footprints"]:
@@ -986,6 +1010,10 @@ def main():
     ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--tiles", default=",".join(TILES))
     ap.add_argument("--config", help="csgtile config (YAML, fit: section) given to csgtile fit --config")
+    ap.add_argument("--unclassified", action="store_true",
+                    help="fit a copy of each tile with its classes cleared (an unclassified "
+                         "tile: ground, vegetation and buildings from the geometry alone); the "
+                         "measure keeps the original classes")
     ap.add_argument("--use-footprints", action="store_true",
                     help="give csgtile fit the tile's published footprints (--footprints): one "
                          "building per footprint")

@@ -222,6 +222,7 @@ int run_fit(const FitCommand& c) {
   out["ground_points"] = f.ground_points;
   out["other_class_points"] = f.other_class_points;
   out["outlier_points"] = f.outlier_points;
+  out["vegetation_points"] = f.vegetation_points;
   out["fitted_points"] = f.fitted_points;
   out["small_cluster_points"] = f.small_cluster_points;
   out["assigned_points"] = f.assigned_points;

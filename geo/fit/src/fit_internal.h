@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "csgtile/fit/fit.h"
+#include "csgtile/fit/segment.h"
 
 namespace csgtile::fit::detail {
 
@@ -259,6 +260,11 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
 /// percentile of the region's points' heights.
 std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
                                               std::vector<Rejection>& rejected);
+
+/// Per point of the cloud: 1 when it is vegetation (VegetationOptions), from each point's
+/// surface variation and whether its pulse returned several times (`several`, per point).
+std::vector<char> vegetation_mask(std::span<const Vec3> points, std::span<const double> curvature,
+                                  std::span<const char> several, const VegetationOptions& options);
 
 /// The ring without the vertices lying within `deviation` of the chord of their neighbours
 /// (walls digitised with several nearly collinear vertices: their near-parallel faces are

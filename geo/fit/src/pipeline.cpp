@@ -110,13 +110,16 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
 kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options,
-                                          std::span<const geo::Footprint> footprints) {
+                                          std::span<const geo::Footprint> footprints,
+                                          std::span<const std::uint8_t> returns) {
   using kernel::ErrorCode;
   auto bad = [](const std::string& what) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option " + what};
   };
   if (!classes.empty() && classes.size() != points.size())
     return bad("classes: size differs from points");
+  if (!returns.empty() && returns.size() != points.size())
+    return bad("returns: size differs from points");
   if (options.outliers.neighbours < 2) return bad("outliers.neighbours must be >= 2");
   if (!(options.outliers.std_ratio > 0.0)) return bad("outliers.std_ratio must be > 0");
   if (!(options.voxel.size >= 0.0) || !std::isfinite(options.voxel.size))
@@ -239,14 +242,46 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                 options.normals.sharp);
   out.seconds.emplace_back("normals", seconds_since(start));
 
+  // Vegetation (unclassified inputs only): excluded from the regions.
+  std::vector<char> excluded(cloud.size(), 0);
+  if (options.vegetation.enabled && !classified && !cloud.empty()) {
+    start = std::chrono::steady_clock::now();
+    // Each fitted point's pulse: its own (no downsampling), else the nearest cleaned point's.
+    std::vector<char> several(cloud.size(), 0);
+    if (!returns.empty()) {
+      const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
+      const std::vector<std::int32_t> nearest =
+          same ? std::vector<std::int32_t>{} : detail::nearest_of(cloud, clean);
+      for (std::size_t k = 0; k < cloud.size(); ++k) {
+        const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
+        if (c >= 0) several[k] = returns[clean_index[static_cast<std::size_t>(c)]] > 1 ? 1 : 0;
+      }
+    }
+    excluded = detail::vegetation_mask(cloud, curvature, several, options.vegetation);
+    for (char e : excluded) out.vegetation_points += e ? 1 : 0;
+    out.seconds.emplace_back("vegetation", seconds_since(start));
+  }
+
   start = std::chrono::steady_clock::now();
   // Footprints first: each one's points are a region; the points of none are clustered.
   std::vector<std::vector<std::uint32_t>> clusters;
   std::vector<int> region_footprint;                // per region: its footprint, -1 for a cluster
   std::vector<std::uint32_t> loose;                 // cloud indices of the points in no footprint
   std::vector<geo::Footprint> straight_footprints;  // the footprints used (outlives the fit)
-  if (footprints.empty()) {
+  if (footprints.empty() && out.vegetation_points == 0) {
     clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+  } else if (footprints.empty()) {
+    std::vector<Vec3> rest;
+    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+      if (excluded[i]) continue;
+      loose.push_back(i);
+      rest.push_back(cloud[i]);
+    }
+    for (auto& c : euclidean_clusters(rest, options.clusters, &out.cluster_tolerance)) {
+      for (auto& i : c) i = loose[i];
+      clusters.push_back(std::move(c));
+      region_footprint.push_back(-1);
+    }
   } else {
     // Walls digitised with nearly collinear vertices are made straight (within 1 cm).
     std::vector<geo::Footprint> straight(footprints.begin(), footprints.end());
@@ -262,6 +297,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     std::vector<std::vector<std::uint32_t>> members(footprints.size());
     std::vector<Vec3> rest;
     for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+      if (excluded[i]) continue;
       if (of[i] >= 0) {
         members[static_cast<std::size_t>(of[i])].push_back(i);
       } else {
@@ -290,7 +326,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   }
   long long clustered = 0;
   for (const auto& c : clusters) clustered += static_cast<long long>(c.size());
-  out.small_cluster_points = out.fitted_points - clustered;
+  out.small_cluster_points = out.fitted_points - out.vegetation_points - clustered;
   out.seconds.emplace_back("clusters", seconds_since(start));
 
   if (options.regions.enabled && footprints.empty()) {

@@ -177,6 +177,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["ground_points"] = fit.ground_points;
   record["other_class_points"] = fit.other_class_points;
   record["outlier_points"] = fit.outlier_points;
+  record["vegetation_points"] = fit.vegetation_points;
   record["fitted_points"] = fit.fitted_points;
   record["assigned_points"] = fit.assigned_points;
   record["unassigned_points"] = fit.unassigned_points;

@@ -22,6 +22,10 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.ground.cell = c.ground.cell;
   o.ground.window = c.ground.window;
   o.ground.height = c.ground.height;
+  o.vegetation.enabled = c.vegetation.enabled;
+  o.vegetation.curvature = c.vegetation.curvature;
+  o.vegetation.radius = c.vegetation.radius;
+  o.vegetation.share = c.vegetation.share;
   o.clusters.tolerance = c.clusters.tolerance;
   o.clusters.min_points = c.clusters.min_points;
   o.regions.enabled = c.regions.enabled;

@@ -71,7 +71,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     }
   }
   std::vector<kernel::Vec3> raw;
-  std::vector<std::uint8_t> classes;
+  std::vector<std::uint8_t> classes, returns;
   const bool has_classes = reader.info().fields.classification;
   geo::PointBatch batch;
   for (;;) {
@@ -81,6 +81,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     for (const auto& p : batch.points) {
       raw.emplace_back(p.x, p.y, p.z);
       if (has_classes) classes.push_back(p.classification);
+      returns.push_back(p.number_of_returns);
     }
   }
   // The tile-local frame: the LAS offset when the points lie within 10 km of it, else (other
@@ -138,7 +139,9 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     out.footprints_read = static_cast<long long>(buildings.size());
   }
 
-  auto fitted = fit::fit_point_cloud(raw, classes, options, buildings);
+  // Returns per pulse: only formats that record them (every LAS and LAZ).
+  if (las == nullptr) returns.clear();
+  auto fitted = fit::fit_point_cloud(raw, classes, options, buildings, returns);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
   out.origin = origin;

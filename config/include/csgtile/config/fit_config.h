@@ -44,6 +44,15 @@ struct FitGroundConfig {
   bool operator==(const FitGroundConfig&) const = default;
 };
 
+/// Vegetation on unclassified tiles (fit::VegetationOptions).
+struct FitVegetationConfig {
+  bool enabled = true;
+  double curvature = 0.05;
+  double radius = 0.0;  ///< 0: four times the point spacing
+  double share = 0.65;
+  bool operator==(const FitVegetationConfig&) const = default;
+};
+
 struct FitClustersConfig {
   double tolerance = 0.0;  ///< 0: from the spacing
   long long min_points = 40;
@@ -102,6 +111,7 @@ struct FitConfig {
   FitVoxelConfig voxel;
   FitNormalsConfig normals;
   FitGroundConfig ground;
+  FitVegetationConfig vegetation;
   FitClustersConfig clusters;
   FitRegionsConfig regions;
   FitRansacConfig ransac;

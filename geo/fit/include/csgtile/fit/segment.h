@@ -66,6 +66,23 @@ struct GroundOptions {
   double height = 0.3;
   bool operator==(const GroundOptions&) const = default;
 };
+/// Vegetation on unclassified inputs (issue #18 item 1): a laser pulse goes through a tree's
+/// crown and returns several times, and a tree's points scatter their normals, where a roof
+/// returns once and its points lie on planes. A point is vegetation when more than `share` of
+/// the points within `radius` (0: four times the cloud's point spacing, so that the rule does
+/// not depend on the unit; itself included) are of a pulse with several returns (when the
+/// input says) or rough — their surface variation (the smallest eigenvalue of the
+/// neighbourhood's covariance over the sum, from the `normals` neighbourhoods) above
+/// `curvature` — so a roof's edges, lines of such points between smooth single returns, stay.
+/// Vegetation is never fitted. Inputs with a classification use it instead (ClassOptions).
+struct VegetationOptions {
+  bool enabled = true;
+  double curvature = 0.05;
+  double radius = 0.0;
+  double share = 0.65;
+  bool operator==(const VegetationOptions&) const = default;
+};
+
 /// Per point: 1 ground, 0 not. `classes` may be empty (no classification).
 std::vector<char> ground_mask(std::span<const kernel::Vec3> points,
                               std::span<const std::uint8_t> classes, const GroundOptions& options);
@@ -128,6 +145,7 @@ struct FitPipelineOptions {
   VoxelOptions voxel;
   NormalOptions normals;
   GroundOptions ground;
+  VegetationOptions vegetation;
   ClusterOptions clusters;
   /// When enabled, each Euclidean cluster is split into grown regions; its points in no
   /// grown region stay together as one more region of that cluster (after its grown ones),
@@ -180,6 +198,7 @@ struct FitOutput {
   long long ground_points = 0;
   long long other_class_points = 0;  ///< non-ground points of classes not kept
   long long outlier_points = 0;
+  long long vegetation_points = 0;     ///< fitted-cloud points taken for vegetation (unclassified)
   long long fitted_points = 0;         ///< points given to the RANSAC (after downsampling)
   long long assigned_points = 0;       ///< of those, explained by an output primitive
   long long unassigned_points = 0;     ///< fitted_points - assigned_points
@@ -202,7 +221,8 @@ struct FitOutput {
 
 /// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
 /// primitives.
-/// `classes` may be empty. With `footprints` (in the points' frame), each footprint's points
+/// `classes` may be empty; `returns` (each point's pulse's number of returns, 0 unknown) may
+/// be empty. With `footprints` (in the points' frame), each footprint's points
 /// (inside it, or within kFootprintBuffer of its boundary: eaves) are one region, fitted as
 /// one building standing exactly on it (PrimitiveOptions::footprint), its primitives carrying
 /// its id (ScenePrimitive::building); only the other points are clustered. A footprint with
@@ -211,7 +231,8 @@ struct FitOutput {
 kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options,
-                                          std::span<const geo::Footprint> footprints = {});
+                                          std::span<const geo::Footprint> footprints = {},
+                                          std::span<const std::uint8_t> returns = {});
 
 /// How far past a footprint's boundary its building's points reach (eaves), metres.
 inline constexpr double kFootprintBuffer = 1.0;
