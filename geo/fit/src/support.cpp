@@ -17,7 +17,11 @@ using kernel::Vec3;
 //    than min_curved_coverage of its surface (the 20 m sphere over 49 points of a roof);
 //  - any primitive reaching beyond the points of its region by more than max_overreach of
 //    the region's extent (at least three connectivity cells) — above, beside, or below both
-//    the region and the terrain under and around it.
+//    the region and the terrain under and around it;
+//  - with a terrain grid, a flat slab (a box or an unclipped extrusion less than half a metre
+//    high and at least min_building_width wide) whose top stays below min_building_height
+//    over the terrain under it: raised ground the ground filter left (a quay, a street above
+//    a canal), no building (a beam lying low is narrower).
 std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& box, double coverage,
                         const kernel::BoundingBox& region, double cell, const PrimitiveOptions& o) {
   const bool curved = spec.type != PrimitiveType::Box && spec.type != PrimitiveType::Extrusion;
@@ -29,6 +33,19 @@ std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& bo
     return text;
   }
   if (region.empty() || box.empty()) return {};
+  if (o.ground != nullptr && !curved && spec.clips.empty() && box.size().z() < 0.5 &&
+      std::min(box.size().x(), box.size().y()) >= o.min_building_width) {
+    const Vec3 c = 0.5 * (box.min + box.max);
+    const double reach = 0.5 * Vec3(box.size().x(), box.size().y(), 0.0).norm();
+    const double terrain = o.ground->lowest_near(c.x(), c.y(), reach);
+    if (std::isfinite(terrain) && box.max.z() - terrain < o.min_building_height) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "a slab %.2g thick %.2g over the terrain: raised ground, no building",
+                    box.size().z(), box.max.z() - terrain);
+      return text;
+    }
+  }
   const Vec3 extent = region.size();
   const double margin = std::max(3.0 * cell, o.max_overreach * extent.maxCoeff());
   double floor = region.min.z();

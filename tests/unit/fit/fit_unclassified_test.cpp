@@ -1,5 +1,5 @@
-// Vegetation on unclassified tiles (issue #18 item 1): a tree beside a house, both without
-// classes. The tree's crown returns several times per pulse (or, without returns, scatters its
+// Unclassified tiles (issue #18 item 1): a tree beside a house, both without classes, and a
+// raised street beside a house. The tree's crown returns several times per pulse (or, without returns, scatters its
 // normals), the house's roof once on its planes: the fit makes the house and nothing over the
 // tree; with vegetation off, the tree's points are fitted too.
 
@@ -83,6 +83,38 @@ TEST(FitVegetation, ATreeBesideAHouseIsNotFitted) {
   ASSERT_TRUE(all.ok());
   EXPECT_EQ(all->vegetation_points, 0);
   EXPECT_GT(all->regions, out->regions);
+}
+
+// A street raised 1.2 m over the terrain beside it (a quay along a canal: wider than the
+// ground filter's window sees as terrain, narrower than the window it is opened with) is no
+// building: no slab over it; the house beside it is modelled.
+TEST(FitUnclassified, RaisedGroundIsNoBuilding) {
+  std::vector<Vec3> points;
+  auto add = [&](const Cloud& c) { points.insert(points.end(), c.points.begin(), c.points.end()); };
+  add(testing::rectangle_cloud(Vec3(-15, -15, 0), Vec3(60, 0, 0), Vec3(0, 40, 0), 0.5, 0.02, 3));
+  add(testing::rectangle_cloud(Vec3(0, 0, 6), Vec3(10, 0, 0), Vec3(0, 8, 0), 0.3, 0.02, 4));
+  // The quay: 20 × 6 m at 1.2 m (its wall, facing the water, is barely seen from the air).
+  add(testing::rectangle_cloud(Vec3(18, 0, 1.2), Vec3(20, 0, 0), Vec3(0, 6, 0), 0.3, 0.02, 8));
+  FitPipelineOptions o;
+  o.outliers.enabled = false;
+  o.ground.use_classification = false;
+  const auto out = fit_point_cloud(points, {}, o);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_GE(primitives_over(*out, -0.5, 10.5), 1);  // the house
+  std::string found;
+  for (const auto& p : out->primitives) {
+    const auto solid = kernel::build_primitive(p.spec);
+    if (!solid.ok()) continue;
+    const kernel::BoundingBox b = kernel::bounding_box(solid.value());
+    found += std::string(kernel::primitive_type_name(p.spec.type)) + " [" +
+             std::to_string(b.min.x()) + ", " + std::to_string(b.max.x()) + "] z [" +
+             std::to_string(b.min.z()) + ", " + std::to_string(b.max.z()) + "]; ";
+  }
+  for (const auto& r : out->rejected) found += "| " + r.what + ": " + r.reason + " ";
+  EXPECT_EQ(primitives_over(*out, 17.0, 39.0), 0) << found;  // nothing over the quay
+  bool named = false;
+  for (const auto& r : out->rejected) named = named || r.reason.find("raised ground") != std::string::npos;
+  EXPECT_TRUE(named);
 }
 
 }  // namespace
