@@ -1,7 +1,7 @@
 // Unclassified tiles (issue #18 item 1): a tree beside a house, both without classes, and a
-// raised street beside a house. The tree's crown returns several times per pulse (or, without returns, scatters its
-// normals), the house's roof once on its planes: the fit makes the house and nothing over the
-// tree; with vegetation off, the tree's points are fitted too.
+// raised street beside a house. The tree's crown returns several times per pulse (or, without
+// returns, scatters its normals), the house's roof once on its planes: the fit makes the house and
+// nothing over the tree; with vegetation off, the tree's points are fitted too.
 
 #include <gtest/gtest.h>
 
@@ -113,7 +113,8 @@ TEST(FitUnclassified, RaisedGroundIsNoBuilding) {
   for (const auto& r : out->rejected) found += "| " + r.what + ": " + r.reason + " ";
   EXPECT_EQ(primitives_over(*out, 17.0, 39.0), 0) << found;  // nothing over the quay
   bool named = false;
-  for (const auto& r : out->rejected) named = named || r.reason.find("raised ground") != std::string::npos;
+  for (const auto& r : out->rejected)
+    named = named || r.reason.find("raised ground") != std::string::npos;
   EXPECT_TRUE(named);
 }
 
