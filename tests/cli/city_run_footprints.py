@@ -15,7 +15,8 @@ coordinate lists) — and for each run:
     shared area (their party wall: Delft's row houses);
   * every footprint building is one fused solid (LoD2.2; measured: Delft 27 of 27, Amsterdam
     8 of 8).
-Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity and
+A run whose footprints name a layer the source lacks stops before any job (exit 78, naming
+city.footprints and the layers there are). Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity and
 GDAL are required when the data is present.
 Usage: city_run_footprints.py CSGTILE SOURCE_DIR WORK_DIR
 """
@@ -54,6 +55,17 @@ def source_ids(path, layer, id_field):
         return {str(r[0]) for r in db.execute(f"SELECT {id_field} FROM {layer}")}
     return {f["properties"][id_field] for f in json.load(open(path))["features"]}
 
+
+# A run whose footprints name a layer the source does not have stops before any job, naming
+# the key, the line and the layers there are (exit 78, config invalid).
+with open(f"{work}/bad.yaml", "w") as f:
+    f.write(f"run:\n  name: bad\n  inputs:\n    - {runs['delft'][0]}\n  output: {work}/bad\n"
+            f"  crs: EPSG:28992+5709\ncity:\n  footprints: {runs['delft'][1]}\n"
+            "  footprints_layer: panden\n")
+p = subprocess.run([binary, "run", f"{work}/bad.yaml"], capture_output=True, text=True)
+assert p.returncode == 78, (p.returncode, p.stdout, p.stderr)
+assert "city.footprints" in p.stderr and "no layer 'panden'" in p.stderr and "buildingpart" in p.stderr, p.stderr
+assert not os.path.exists(f"{work}/bad/runs"), "a run started"
 
 summary = {}
 for name, (tile, footprints, layer, id_field) in runs.items():

@@ -164,6 +164,7 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
       }
     }
   }
+  if (query.check_only) return out;
   if (query.bbox) {
     double x0 = (*query.bbox)[0], y0 = (*query.bbox)[1], x1 = (*query.bbox)[2],
            y1 = (*query.bbox)[3];

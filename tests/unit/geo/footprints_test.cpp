@@ -123,6 +123,14 @@ TEST(Footprints, ErrorsNameWhatIsWrong) {
   write(dir / "bad.geojson", "{\"type\": \"FeatureCollection\", \"features\": [");
   auto broken = read_footprints({(dir / "bad.geojson").string(), "", ""}, {});
   EXPECT_FALSE(broken.ok());
+  // A check reads no feature but finds what a read would.
+  FootprintQuery check;
+  check.target_crs = "EPSG:28992";
+  check.check_only = true;
+  auto checked = read_footprints({path, "", "bag_id"}, check);
+  ASSERT_TRUE(checked.ok()) << checked.error().message;
+  EXPECT_TRUE(checked.value().footprints.empty());
+  EXPECT_FALSE(read_footprints({path, "", "identificatie"}, check).ok());
   // Without an id attribute, the feature ids.
   auto fids = read_footprints({path, "", ""}, {});
   ASSERT_TRUE(fids.ok());

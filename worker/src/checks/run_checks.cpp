@@ -5,6 +5,7 @@
 
 #include "city/city_jobs.h"
 #include "csgtile/geo/crs.h"
+#include "csgtile/geo/footprints.h"
 #include "fetch/fetch.h"
 
 namespace csgtile::worker::detail {
@@ -20,6 +21,18 @@ std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, 
     }
   }
   if (what == RunChecks::CrsOnly) return problems;
+  // Footprints: the source opens, has the layer and the attribute, and reprojects to run.crs.
+  if (!config.city.footprints.empty()) {
+    geo::FootprintQuery query;
+    query.target_crs = config.run.crs;
+    query.check_only = true;
+    auto checked = geo::read_footprints(
+        {config.city.footprints, config.city.footprints_layer, config.city.footprints_id}, query);
+    if (!checked.ok()) {
+      problems.push_back(
+          {"city.footprints", loaded.line_of("city.footprints"), checked.error().message});
+    }
+  }
   for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
     const std::string& input = config.run.inputs[i];
     const std::string key = "run.inputs[" + std::to_string(i) + "]";

@@ -16,7 +16,9 @@ enum class RunChecks { CrsOnly, CrsAndInputs };
 
 /// Problems of `loaded` (which must have loaded): run.crs that is not a CRS; a local input
 /// path that does not exist; a local directory (a city of tiles) that holds no LIDAR tile
-/// (.las .laz .ply .pcd .xyz .txt). URLs, file:// too, are checked when a job fetches them.
+/// (.las .laz .ply .pcd .xyz .txt); city.footprints that GDAL cannot open, without the named
+/// layer or attribute, or that do not reproject to run.crs. URLs, file:// too, are checked
+/// when a job fetches them.
 std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, RunChecks what);
 
 }  // namespace csgtile::worker::detail

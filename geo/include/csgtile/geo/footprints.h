@@ -43,6 +43,9 @@ struct FootprintQuery {
   std::optional<std::array<double, 4>> bbox;
   /// ... and their polygons cut to it (a tile's buildings end where its data ends).
   bool clip_to_bbox = false;
+  /// Only check: open the source, find the layer and the attribute, make the transformation;
+  /// read no feature (a run's configuration checked before its jobs start).
+  bool check_only = false;
 };
 
 struct FootprintSet {
