@@ -228,15 +228,7 @@ int run_fit(const FitCommand& c) {
   out["assigned_points"] = f.assigned_points;
   out["unassigned_points"] = f.unassigned_points;
   out["regions"] = f.regions;
-  if (!footprints.source.empty()) {
-    Json without = Json::array();
-    for (const auto& r : f.rejected) {
-      if (r.what.rfind("footprint ", 0) == 0) without.push_back(r.what.substr(10));
-    }
-    out["footprints"] = {{"source", footprints.source},      {"read", tile.footprints_read},
-                         {"buildings", f.footprint_regions}, {"points", f.footprint_points},
-                         {"without_building", without},      {"skipped", tile.footprints_skipped}};
-  }
+  if (!footprints.source.empty()) out["footprints"] = city::footprints_record(footprints, tile);
   out["cluster_tolerance"] = f.cluster_tolerance;
   Json regions = Json::array();
   for (const auto& r : f.region_stats) {

@@ -133,13 +133,9 @@ std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
     const geo::FootprintPolygon& fp = (*o.footprint)[k];
     RoofOutline outline;  // in the world frame: (a, b) = (x, y)
     outline.cell = 1.5 * in.shapes->spacing;
-    // Counter-clockwise outer ring, clockwise holes, as extrusion profiles are: the outer
-    // ring clipped to the polygon itself.
-    const FootprintClip self({fp}, Vec2(1.0, 0.0), Vec2(0.0, 1.0));
-    const auto pieces = self.clip(FramePolygon{fp.outer, {}}, 0.0);
-    if (pieces.empty()) continue;
-    outline.profile = pieces.front().outer;
-    outline.holes = pieces.front().holes;
+    const FramePolygon ring = oriented(FramePolygon{fp.outer, fp.holes});
+    outline.profile = ring.outer;
+    outline.holes = ring.holes;
     const OutlineGround under = outline_ground(outline, *o.ground);
     const double g = under.ground;
     if (!std::isfinite(g) || roof - g < 0.5 * o.min_building_height) {

@@ -113,6 +113,14 @@ std::vector<FramePolygon> FootprintClip::clip(const FramePolygon& polygon, doubl
   return out;
 }
 
+FramePolygon oriented(const FramePolygon& polygon) {
+  const BPolygon b = to_boost(polygon);
+  FramePolygon out;
+  out.outer = from_ring(b.outer());
+  for (const auto& h : b.inners()) out.holes.push_back(from_ring(h));
+  return out;
+}
+
 std::vector<Vec2> VertexSnap::ring(const std::vector<Vec2>& ring) {
   auto key = [&](const Vec2& q) {
     return std::pair<long long, long long>(static_cast<long long>(std::floor(q.x() / distance_)),

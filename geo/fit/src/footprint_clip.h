@@ -41,6 +41,10 @@ class FootprintClip {
   Impl* impl_;
 };
 
+/// The polygon with its outer ring counter-clockwise and its holes clockwise (as extrusion
+/// profiles are).
+FramePolygon oriented(const FramePolygon& polygon);
+
 /// Vertices of a building's polygons made one where they lie closer than a distance: each
 /// vertex becomes the first vertex seen within it (in the order polygons are given), so that
 /// polygons sharing a boundary keep sharing it; then repeated vertices and spikes go. Clipping

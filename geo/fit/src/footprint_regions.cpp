@@ -1,9 +1,8 @@
 // Which footprint each point of a tile belongs to (see fit_internal.h): a grid over the
-// footprints' boxes, then point in polygon, else the nearest boundary within the buffer. And
-// which points are vegetation, from their neighbours' roughness.
+// footprints' boxes, then point in polygon, else the nearest boundary within the buffer; the
+// footprints' rings straightened.
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 
@@ -11,51 +10,6 @@
 #include "plane2d.h"
 
 namespace csgtile::fit::detail {
-
-std::vector<char> vegetation_mask(std::span<const Vec3> points, std::span<const double> curvature,
-                                  std::span<const char> several, const VegetationOptions& options) {
-  std::vector<char> out(points.size(), 0);
-  if (curvature.size() != points.size() || several.size() != points.size() || points.empty()) {
-    return out;
-  }
-  double r = options.radius;
-  if (!(r > 0.0)) {
-    std::vector<std::uint32_t> all(points.size());
-    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-    r = 4.0 * estimate_spacing(points, all);
-  }
-  if (!(r > 0.0) || !std::isfinite(r)) return out;
-  auto key = [&](const Vec3& p) {
-    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / r)),
-                                    static_cast<long long>(std::floor(p.y() / r)),
-                                    static_cast<long long>(std::floor(p.z() / r))};
-  };
-  std::map<std::array<long long, 3>, std::vector<std::uint32_t>> grid;
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    if (points[i].allFinite()) grid[key(points[i])].push_back(i);
-  }
-  const double r2 = r * r;
-  for (std::uint32_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite()) continue;
-    const auto k = key(points[i]);
-    long long near = 0, rough = 0;
-    for (long long dz = -1; dz <= 1; ++dz) {
-      for (long long dy = -1; dy <= 1; ++dy) {
-        for (long long dx = -1; dx <= 1; ++dx) {
-          const auto it = grid.find({k[0] + dx, k[1] + dy, k[2] + dz});
-          if (it == grid.end()) continue;
-          for (auto j : it->second) {
-            if ((points[j] - points[i]).squaredNorm() > r2) continue;
-            ++near;
-            rough += (several[j] || curvature[j] > options.curvature) ? 1 : 0;
-          }
-        }
-      }
-    }
-    out[i] = static_cast<double>(rough) > options.share * static_cast<double>(near) ? 1 : 0;
-  }
-  return out;
-}
 
 std::vector<Vec2> straightened_ring(const std::vector<Vec2>& ring, double deviation) {
   std::vector<Vec2> out = ring;

@@ -266,35 +266,25 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // Footprints first: each one's points are a region; the points of none are clustered.
   std::vector<std::vector<std::uint32_t>> clusters;
   std::vector<int> region_footprint;                // per region: its footprint, -1 for a cluster
-  std::vector<std::uint32_t> loose;                 // cloud indices of the points in no footprint
   std::vector<geo::Footprint> straight_footprints;  // the footprints used (outlives the fit)
-  if (footprints.empty() && out.vegetation_points == 0) {
-    clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
-  } else if (footprints.empty()) {
-    std::vector<Vec3> rest;
-    for (std::uint32_t i = 0; i < cloud.size(); ++i) {
-      if (excluded[i]) continue;
-      loose.push_back(i);
-      rest.push_back(cloud[i]);
-    }
-    for (auto& c : euclidean_clusters(rest, options.clusters, &out.cluster_tolerance)) {
-      for (auto& i : c) i = loose[i];
-      clusters.push_back(std::move(c));
-      region_footprint.push_back(-1);
-    }
-  } else {
+  if (!footprints.empty()) {
     // Walls digitised with nearly collinear vertices are made straight (within 1 cm).
-    std::vector<geo::Footprint> straight(footprints.begin(), footprints.end());
-    for (geo::Footprint& f : straight) {
+    straight_footprints.assign(footprints.begin(), footprints.end());
+    for (geo::Footprint& f : straight_footprints) {
       for (geo::FootprintPolygon& p : f.polygons) {
         p.outer = detail::straightened_ring(p.outer, 0.01);
         for (auto& h : p.holes) h = detail::straightened_ring(h, 0.01);
       }
     }
-    straight_footprints = std::move(straight);
     footprints = straight_footprints;
+  }
+  if (footprints.empty() && out.vegetation_points == 0) {
+    clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
+    region_footprint.assign(clusters.size(), -1);
+  } else {
     const std::vector<int> of = detail::footprint_of_points(cloud, footprints, kFootprintBuffer);
     std::vector<std::vector<std::uint32_t>> members(footprints.size());
+    std::vector<std::uint32_t> loose;  // cloud indices of the points in no footprint
     std::vector<Vec3> rest;
     for (std::uint32_t i = 0; i < cloud.size(); ++i) {
       if (excluded[i]) continue;
@@ -311,6 +301,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                 "only " + std::to_string(members[f].size()) +
                                     " points of buildings in it: no building made",
                                 static_cast<long long>(members[f].size())});
+        out.footprints_without_building.push_back(footprints[f].id);
         continue;
       }
       out.footprint_points += static_cast<long long>(members[f].size());
@@ -364,6 +355,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       if (!rest.empty()) split.push_back(std::move(rest));
     }
     clusters = std::move(split);
+    region_footprint.assign(clusters.size(), -1);  // grown regions: never with footprints
     out.seconds.emplace_back("regions", seconds_since(start));
   }
   out.regions = static_cast<int>(clusters.size());
@@ -384,7 +376,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
     RansacOptions ransac = options.ransac;
     ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
-    const int footprint = r < region_footprint.size() ? region_footprint[r] : -1;
+    const int footprint = region_footprint[r];
     PrimitiveOptions region_options = primitive_options;
     if (footprint >= 0) {
       region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;

@@ -216,25 +216,20 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   std::vector<Contact> contacts;
   for (std::size_t k = 0; k < survivors.size(); ++k) {
     const auto [a, b] = survivors[k];
+    if (verdict[k] && *verdict[k] == kernel::Interference::Disjoint) continue;
+    // A pair the exact test could not decide is kept together (the fuse decides or fails with
+    // a reason) rather than published as two objects that may overlap.
+    contacts.push_back({a, b, verdict[k].value_or(kernel::Interference::BoundariesMeet)});
     if (!verdict[k]) {
-      // The exact test could not decide: keep the pair together (the fuse decides or fails
-      // with a reason) rather than publish two objects that may overlap; two groups stay two.
-      if (primitives[static_cast<std::size_t>(a)].group ==
-          primitives[static_cast<std::size_t>(b)].group) {
-        comps.join(a, b);
-      }
-      contacts.push_back({a, b, kernel::Interference::BoundariesMeet});
       out.problems.push_back("pair " + primitives[static_cast<std::size_t>(a)].label + " / " +
                              primitives[static_cast<std::size_t>(b)].label +
                              ": exact test failed, assumed in contact: " + verdict_error[k]);
-      continue;
     }
-    if (*verdict[k] == kernel::Interference::Disjoint) continue;
-    contacts.push_back({a, b, *verdict[k]});
-    if (primitives[static_cast<std::size_t>(a)].group !=
-        primitives[static_cast<std::size_t>(b)].group)
-      continue;  // two groups' contact: a relation between objects, not one object
-    comps.join(a, b);
+    // Two groups' contact is a relation between objects, never one object.
+    if (primitives[static_cast<std::size_t>(a)].group ==
+        primitives[static_cast<std::size_t>(b)].group) {
+      comps.join(a, b);
+    }
   }
   st.interacting_pairs = static_cast<long long>(contacts.size());
   std::map<int, std::vector<int>> members;

@@ -182,20 +182,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["assigned_points"] = fit.assigned_points;
   record["unassigned_points"] = fit.unassigned_points;
   record["regions"] = fit.regions;
-  if (!footprints.source.empty()) {
-    // Footprints that gave no building are named (rejections "footprint <id>") and so are
-    // features that gave no footprint.
-    record["footprints"] = {{"source", footprints.source},
-                            {"read", tile.footprints_read},
-                            {"buildings", fit.footprint_regions},
-                            {"points", fit.footprint_points},
-                            {"skipped", tile.footprints_skipped}};
-    ordered_json empty = ordered_json::array();
-    for (const auto& r : fit.rejected) {
-      if (r.what.rfind("footprint ", 0) == 0) empty.push_back(r.what.substr(10));
-    }
-    record["footprints"]["without_building"] = std::move(empty);
-  }
+  if (!footprints.source.empty()) record["footprints"] = footprints_record(footprints, tile);
   record["primitives"] = tile.scene.primitives.size();
   ordered_json per_type = ordered_json::object();
   for (const geo::ScenePrimitive& p : tile.scene.primitives) {

@@ -13,6 +13,16 @@
 
 namespace csgtile::worker::city {
 
+nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
+                                         const FittedTile& tile) {
+  return {{"source", source.source},
+          {"read", tile.footprints_read},
+          {"buildings", tile.output.footprint_regions},
+          {"points", tile.output.footprint_points},
+          {"skipped", tile.footprints_skipped},
+          {"without_building", tile.output.footprints_without_building}};
+}
+
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
                  const std::string& crs_override, FittedTile& out,
                  const geo::FootprintSource& footprints) {

@@ -11,6 +11,8 @@
 #include <string>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
 #include "csgtile/config/config.h"
 #include "csgtile/fit/segment.h"
 #include "csgtile/geo/byte_source.h"
@@ -39,6 +41,12 @@ struct FittedTile {
   long long footprints_read = 0;
   std::vector<std::string> footprints_skipped;
 };
+
+/// The footprints' part of a fit's record (fit jobs, `csgtile fit --json`): the source, the
+/// footprints read, the buildings made and their points, the ids without a building and the
+/// features skipped with their reasons.
+nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
+                                         const FittedTile& tile);
 
 /// Where a tile's points come from: a local file, or a random-access source (a URL read by
 /// range requests); with a region, only the points inside it (a COPC file reads only the

@@ -204,8 +204,10 @@ struct FitOutput {
   long long unassigned_points = 0;     ///< fitted_points - assigned_points
   long long small_cluster_points = 0;  ///< in clusters below min_points
   int regions = 0;
-  int footprint_regions = 0;            ///< the first regions: one per footprint with points
-  long long footprint_points = 0;       ///< fitted points in those regions
+  int footprint_regions = 0;       ///< the first regions: one per footprint with points
+  long long footprint_points = 0;  ///< fitted points in those regions
+  /// Ids of the footprints with too few points for a building (each also a rejection).
+  std::vector<std::string> footprints_without_building;
   std::vector<FitRegion> region_stats;  ///< per region, in region order
   double cluster_tolerance = 0.0;       ///< Euclidean clustering distance used
   std::uint64_t candidates = 0;
