@@ -87,6 +87,7 @@ Config from_document(const json& document) {
   read(document, "city", "snap_distance", config.city.snap_distance);
   read(document, "city", "snap_angle_degrees", config.city.snap_angle_degrees);
   read(document, "city", "snap_escalate_to", config.city.snap_escalate_to);
+  read(document, "city", "building_timeout_seconds", config.city.building_timeout_seconds);
   read(document, "city", "footprints", config.city.footprints);
   read(document, "city", "footprints_layer", config.city.footprints_layer);
   read(document, "city", "footprints_id", config.city.footprints_id);
@@ -222,6 +223,7 @@ std::string to_json(const Config& config) {
                  {"snap_distance", config.city.snap_distance},
                  {"snap_angle_degrees", config.city.snap_angle_degrees},
                  {"snap_escalate_to", config.city.snap_escalate_to},
+                 {"building_timeout_seconds", config.city.building_timeout_seconds},
                  {"footprints", config.city.footprints},
                  {"footprints_layer", config.city.footprints_layer},
                  {"footprints_id", config.city.footprints_id}};

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Grace period on SIGTERM (issue #8): `csgtile worker` with queue.grace_seconds gets SIGTERM
 while it runs a job longer than the grace period (a large Boolean scene, several seconds).
-  * It releases the job and exits 0 within the grace period, logging "released at shutdown"
-    and (--json) printing one JSON line naming the released job;
+  * It asks the job to stop at the end of the grace period (its Booleans return Cancelled),
+    releases it and returns through main, exit 0 within the grace period, logging "released
+    at shutdown" and "stopped by signal" (job: cancelled) and (--json) printing one JSON line
+    naming the released job;
   * the job is queued again with its attempt count unchanged (0: the released attempt does
     not count), nothing is left running;
   * another worker then completes it (attempts 1).
@@ -108,7 +110,12 @@ try:
     assert exit_seconds < GRACE, f"exit took {exit_seconds:.2f} s, the grace period is {GRACE} s"
     messages = [e.get("message") for e in log_events(w)]
     assert "released at shutdown" in messages, messages
-    # --json says so on stdout too, though the process ends without unwinding.
+    # The job's Booleans were cancelled when asked (issue #23: a stop token through the
+    # Boolean engine): its thread returned and the worker returned through main, instead of
+    # ending the process under a running job.
+    stopped = [e for e in log_events(w) if e.get("message") == "stopped by signal"]
+    assert stopped and stopped[-1].get("job") == "cancelled", stopped
+    # --json says so on stdout too.
     w.out.seek(0)
     said = [json.loads(line) for line in w.out if line.startswith("{")]
     assert len(said) == 1 and said[0]["stopped"] is True and said[0]["released"] is True, said

@@ -58,6 +58,7 @@ ordered_json stats_json(const assembly::AssemblyStats& s) {
   j["objects"] = s.objects;
   j["objects_failed"] = s.objects_failed;
   j["objects_escalated"] = s.objects_escalated;
+  j["objects_timed_out"] = s.objects_timed_out;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
   j["snap"] = snap_report_json(s.snap);

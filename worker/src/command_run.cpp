@@ -84,16 +84,23 @@ void register_run(CLI::App& app, Action& action) {
       }
       if (summary.stopped) {
         if (*json) {
-          std::cout << nlohmann::ordered_json{{"run", cfg.run.name},
-                                              {"stopped", true},
-                                              {"done", summary.counts.done},
-                                              {"unfinished", summary.counts.unfinished()}}
-                           .dump()
-                    << "\n";
+          nlohmann::ordered_json out{{"run", cfg.run.name},
+                                     {"stopped", true},
+                                     {"done", summary.counts.done},
+                                     {"unfinished", summary.counts.unfinished()}};
+          if (!summary.released_job.empty()) {
+            out["job"] = summary.released_job;
+            out["released"] = summary.released;
+          }
+          std::cout << out.dump() << "\n";
         } else {
           std::cout << "run " << cfg.run.name << " stopped: " << summary.counts.done
-                    << " job(s) done, " << summary.counts.unfinished()
-                    << " left in the queue; run again to resume\n";
+                    << " job(s) done, " << summary.counts.unfinished() << " left in the queue";
+          if (!summary.released_job.empty()) {
+            std::cout << " (job " << summary.released_job
+                      << (summary.released ? " cancelled and released" : " cancelled") << ")";
+          }
+          std::cout << "; run again to resume\n";
         }
         return 0;
       }

@@ -135,13 +135,22 @@ void register_worker(CLI::App& app, Action& action) {
                                    {"published", published}, {"done", c.done},
                                    {"dead", c.dead},         {"unfinished", c.unfinished()}};
         if (published) out["manifest"] = summary.manifest.string();
+        if (!work.released_job.empty()) {
+          out["job"] = work.released_job;
+          out["released"] = work.released;
+        }
         std::cout << out.dump() << "\n";
       } else {
         std::cout << "worker " << (work.stopped ? "stopped" : "finished") << ": run "
                   << cfg.run.name << " " << c.done << " done, " << c.dead << " dead, "
                   << c.unfinished() << " unfinished"
-                  << (published ? "; published " + summary.manifest.string() : std::string())
-                  << "\n";
+                  << (published ? "; published " + summary.manifest.string() : std::string());
+        if (!work.released_job.empty()) {
+          std::cout << "; job " << work.released_job
+                    << (work.released ? " cancelled and released to the queue"
+                                      : " cancelled, not released (its lease will expire)");
+        }
+        std::cout << "\n";
       }
       return 0;
     };

@@ -7,7 +7,7 @@ namespace csgtile::worker {
 namespace {
 // Exit codes follow sysexits(3) where one fits; 1 and 3 report a command that ran but whose
 // result is not clean (an invalid solid, dead jobs) — see README "Exit codes".
-constexpr std::array<ErrorInfo, 12> kTable{{
+constexpr std::array<ErrorInfo, 13> kTable{{
     {ErrorCode::Ok, "ok", "success", false, 0},
     {ErrorCode::Usage, "usage", "bad command line", false, 64},
     {ErrorCode::ConfigInvalid, "config_invalid", "the configuration is invalid", false, 78},
@@ -22,6 +22,7 @@ constexpr std::array<ErrorInfo, 12> kTable{{
     {ErrorCode::Network, "network", "a transfer failed (timeout, reset, server error)", true, 75},
     {ErrorCode::FetchRefused, "fetch_refused", "a fetch was refused (policy, size, HTTP 4xx)",
      false, 77},
+    {ErrorCode::Cancelled, "cancelled", "stopped before it finished (a stop request)", true, 80},
 }};
 }  // namespace
 
@@ -46,6 +47,8 @@ ErrorCode from_kernel(kernel::ErrorCode code) {
       return ErrorCode::Io;
     case kernel::ErrorCode::Unsupported:
       return ErrorCode::Unsupported;
+    case kernel::ErrorCode::Cancelled:
+      return ErrorCode::Cancelled;
   }
   return ErrorCode::Internal;
 }

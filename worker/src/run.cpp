@@ -7,6 +7,8 @@
 #include <fstream>
 #include <future>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <stop_token>
 #include <thread>
 
 #include "city/city_jobs.h"
@@ -47,7 +49,8 @@ ordered_json topology_json(const kernel::Shape& s) {
 }  // namespace
 
 Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
-                      const config::Config& config, std::string& result, StageTimings* timings) {
+                      const config::Config& config, std::string& result, StageTimings* timings,
+                      std::stop_token stop) {
   ops::StageClock clock(timings);
   clock.enter("fetch");
   std::string input;
@@ -102,6 +105,7 @@ Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
   // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
   kernel::BooleanOptions boolean_options;
   boolean_options.tolerance = config.kernel.linear_tolerance;
+  boolean_options.interrupt.stop = stop;
   // Boolean results keep their CSG tree and face history (native CSG section).
   kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
   if (scene->op == geo::BooleanOp::None) {
@@ -202,37 +206,42 @@ struct RunOutcome {
   StageTimings timings;
 };
 
-/// Runs `job` on a thread of its own, so that the work loop can wait for it with a deadline.
+/// Runs `job` on a thread of its own, so that the work loop can wait for it with a deadline
+/// and ask it to stop through `stop` (its Booleans, assembly and fit return Cancelled).
 /// The returned thread must be joined once the future is ready, or left to the process's end.
 std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, JobQueue& queue, const Logger& log,
-                      std::future<RunOutcome>& outcome) {
+                      std::stop_token stop, std::future<RunOutcome>& outcome) {
   // packaged_task carries an exception of the job to the loop's future.get(), where it
   // surfaces as it did when jobs ran on the loop's thread.
-  std::packaged_task<RunOutcome()> task([job, run_dir, &config, &queue, &log] {
+  std::packaged_task<RunOutcome()> task([job, run_dir, &config, &queue, &log, stop] {
     hold_stop_signals();  // delivered to the loop's threads, never interrupting the job's I/O
     const LogJobScope log_scope(config.run.name, job.key, job.attempts);  // thread-local
     RunOutcome out;
     out.failure =
         job.kind == "build"
-            ? run_build_job(job, run_dir, config, out.result, &out.timings)
-            : city::run_city_job(job, run_dir, config, queue, log, out.result, &out.timings);
+            ? run_build_job(job, run_dir, config, out.result, &out.timings, stop)
+            : city::run_city_job(job, run_dir, config, queue, log, out.result, &out.timings, stop);
     return out;
   });
   outcome = task.get_future();
   return std::thread(std::move(task));
 }
 
+/// Room, at the end of a grace period, to stop the job, release it and exit: a second, or a
+/// quarter of a short grace period.
+std::chrono::milliseconds grace_margin(std::chrono::seconds grace) {
+  using namespace std::chrono_literals;
+  return std::min<std::chrono::milliseconds>(1s, std::chrono::milliseconds(grace) / 4);
+}
+
 /// Waits until `outcome` is ready, or — once a stop signal came — until the grace period
-/// measured from the signal, less a margin to release the job and exit, has passed. Returns
-/// whether the job ended.
+/// measured from the signal, less its margin, has passed. Returns whether the job ended.
 bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seconds grace) {
   using namespace std::chrono_literals;
   // A signal handler cannot wake a waiting thread, so the flag is looked at this often.
   constexpr auto kPoll = 50ms;
-  // Room to release the job and exit: a second, or a quarter of a short grace period.
-  const std::chrono::milliseconds margin =
-      std::min<std::chrono::milliseconds>(1s, std::chrono::milliseconds(grace) / 4);
+  const std::chrono::milliseconds margin = grace_margin(grace);
   while (true) {
     auto until = std::chrono::steady_clock::now() + kPoll;
     if (const auto signalled = stop_requested_at()) {
@@ -297,11 +306,32 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     LeaseHeartbeat heartbeat(queue, *job,
                              std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
     std::future<RunOutcome> outcome;
-    std::thread runner = start_job(*job, run_dir, config, queue, log, outcome);
-    if (!wait_within_grace(outcome, std::chrono::seconds(config.queue.grace_seconds))) {
-      // Stopped, and the job does not fit the grace period: it goes back to the queue without
-      // using an attempt, and the process ends now, its job's thread with it. The outputs
-      // it may have begun are temporary files renamed only when complete, so none is partial.
+    std::stop_source job_stop;
+    std::thread runner =
+        start_job(*job, run_dir, config, queue, log, job_stop.get_token(), outcome);
+    const std::chrono::seconds grace(config.queue.grace_seconds);
+    std::optional<RunOutcome> ran;  // once the job's thread has returned
+    bool asked_to_stop = false;
+    if (wait_within_grace(outcome, grace)) {
+      runner.join();
+      ran = outcome.get();
+    } else {
+      // Stopped, and the job does not fit the grace period: it is asked to stop (its
+      // Booleans, assembly and fit return Cancelled at their next step) and given half the
+      // margin to return.
+      job_stop.request_stop();
+      asked_to_stop = true;
+      if (outcome.wait_for(grace_margin(grace) / 2) == std::future_status::ready) {
+        runner.join();
+        ran = outcome.get();
+      }
+    }
+    // A job asked to stop that did not finish (Cancelled, or still running) goes back to the
+    // queue without using an attempt. Returned, its thread is gone and the worker returns
+    // through main; still running, the process ends now, its job's thread with it. The
+    // outputs a job may have begun are temporary files renamed only when complete, so none
+    // is partial.
+    if (asked_to_stop && !(ran && ran->failure.ok())) {
       heartbeat.stop();
       Failure released_failure;
       const bool released = queue.release(*job, released_failure);
@@ -316,14 +346,19 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
                   {{"job", job->key},
                    {"reason", released_failure.ok() ? "lease lost" : released_failure.message}});
       }
-      log.info("worker", "stopped by signal", {{"jobs", std::to_string(work.jobs)}});
+      log.info("worker", "stopped by signal",
+               {{"jobs", std::to_string(work.jobs)}, {"job", ran ? "cancelled" : "abandoned"}});
+      if (ran) {
+        work.stopped = true;
+        work.released_job = job->key;
+        work.released = released;
+        return failure;
+      }
       if (options.on_forced_exit) options.on_forced_exit(job->key, released);
       exit_leaving_threads(0);
     }
-    runner.join();
     heartbeat.stop();
-    const RunOutcome ran = outcome.get();
-    const Failure& job_failure = ran.failure;
+    const Failure& job_failure = ran->failure;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
@@ -336,7 +371,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     }
     if (job_failure.ok()) {
       const std::string record =
-          with_timings(ran.result, ran.timings, seconds, worker_id, job->attempts);
+          with_timings(ran->result, ran->timings, seconds, worker_id, job->attempts);
       const bool completed = queue.complete(*job, record, failure);
       if (failure.ok()) {
         ops::metrics().job_finished(completed ? ops::JobOutcome::Done : ops::JobOutcome::LeaseLost,
@@ -393,6 +428,8 @@ Failure run_embedded(const config::Config& config, const Logger& log, RunSummary
   if (work.stopped) {
     summary.counts = queue->counts(failure);
     summary.stopped = true;
+    summary.released_job = work.released_job;
+    summary.released = work.released;
     return failure;
   }
   return publish_run(config, *queue, log, summary);

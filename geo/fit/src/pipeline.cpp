@@ -216,6 +216,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   if (primitive_options.ground == nullptr && terrain.nx > 0) primitive_options.ground = &terrain;
   out.seconds.emplace_back("ground", seconds_since(start));
 
+  if (options.interrupt.fired()) return options.interrupt.error("before the fit's outliers stage");
   start = std::chrono::steady_clock::now();
   std::vector<Vec3> clean;
   std::vector<std::uint32_t> clean_index;  // input index of each point of `clean`
@@ -235,6 +236,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   out.fitted_points = static_cast<long long>(cloud.size());
   out.seconds.emplace_back("voxels", seconds_since(start));
 
+  if (options.interrupt.fired()) return options.interrupt.error("before the fit's normals stage");
   start = std::chrono::steady_clock::now();
   std::vector<Vec3> normals;
   std::vector<double> curvature;
@@ -262,6 +264,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     out.seconds.emplace_back("vegetation", seconds_since(start));
   }
 
+  if (options.interrupt.fired()) return options.interrupt.error("before the fit's clusters stage");
   start = std::chrono::steady_clock::now();
   // Footprints first: each one's points are a region; the points of none are clustered.
   std::vector<std::vector<std::uint32_t>> clusters;
@@ -367,6 +370,10 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   double primitives_seconds = 0.0;
   for (std::size_t r = 0; r < clusters.size(); ++r) {
+    if (options.interrupt.fired()) {
+      return options.interrupt.error("while fitting region " + std::to_string(r) + " of " +
+                                     std::to_string(clusters.size()));
+    }
     std::vector<Vec3> p, n;
     p.reserve(clusters[r].size());
     n.reserve(clusters[r].size());

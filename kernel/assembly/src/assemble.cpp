@@ -96,6 +96,10 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   st.primitives = static_cast<long long>(primitives.size());
   kernel::BooleanOptions bopt;
   bopt.tolerance = options.tolerance;
+  bopt.interrupt = options.interrupt;
+  const auto stopped = [&](const char* stage) {
+    return options.interrupt.check(std::string("while ") + stage + " (assembly)");
+  };
   // 0. The fuzzy mode: near-coincidences snapped, the snapped primitives assembled.
   std::vector<AssemblyPrimitive> snapped_input;
   if (options.snap.distance > 0.0 || options.snap.angle > 0.0) {
@@ -152,6 +156,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     st.primitives_read += read[i];
   }
   st.seconds_build = seconds_since(t0);
+  if (auto s = stopped("building the primitives"); !s.ok()) return s.error();
 
   // 2. Broad phase: candidate pairs.
   t0 = Clock::now();
@@ -194,6 +199,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   } else {
     survivors = candidates;
   }
+  if (auto s = stopped("culling pairs"); !s.ok()) return s.error();
   st.culled_pairs = st.candidate_pairs - static_cast<long long>(survivors.size());
   st.seconds_voxel = seconds_since(t0);
 
@@ -212,6 +218,8 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       verdict_error[k] = r.error().message;
     }
   });
+  // A test the interrupt cut short decided nothing: the assembly stops as a whole.
+  if (auto s = stopped("testing pairs"); !s.ok()) return s.error();
   Components comps(n);
   std::vector<Contact> contacts;
   for (std::size_t k = 0; k < survivors.size(); ++k) {
@@ -270,12 +278,17 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     } else {
       std::vector<kernel::CsgModel> parts;
       for (int i : groups[g]) parts.push_back(leaves[static_cast<std::size_t>(i)]);
-      auto fused = kernel::csg_combine(parts, kernel::BooleanOp::Fuse, bopt);
+      // The object's own time limit, from when its fuse starts.
+      kernel::BooleanOptions object_options = bopt;
+      object_options.interrupt = options.interrupt.within(options.object_time_limit);
+      auto fused = kernel::csg_combine(parts, kernel::BooleanOp::Fuse, object_options);
+      const bool cancelled = !fused.ok() && fused.error().code == ErrorCode::Cancelled;
       std::optional<detail::Escalated> escalated;
-      if (!fused.ok() && options.escalate_to > 0.0) {
+      const bool escalate = !fused.ok() && !cancelled && options.escalate_to > 0.0;
+      if (escalate) {
         std::vector<AssemblyPrimitive> group;
         for (int i : groups[g]) group.push_back(primitives[static_cast<std::size_t>(i)]);
-        escalated = detail::escalate_fuse(group, options);
+        escalated = detail::escalate_fuse(group, options, object_options.interrupt);
       }
       if (fused.ok()) {
         o.model = std::move(fused).value();
@@ -285,6 +298,12 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       } else {
         o.fused = false;
         o.error = fused.error().message;
+        // Escalation stops where the limit is reached too: its last fuse's error is the same.
+        o.timed_out = cancelled || (escalate && object_options.interrupt.fired());
+        if (o.timed_out && !cancelled) {
+          o.error = object_options.interrupt.error("while escalating").message +
+                    " (first: " + o.error + ")";
+        }
         std::vector<const kernel::CsgModel*> ptrs;
         for (const auto& p : parts) ptrs.push_back(&p);
         auto stacked = detail::stacked_model(ptrs);
@@ -294,10 +313,13 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     o.box = kernel::bounding_box(o.model.shape);
     o.volume = kernel::mass_properties(o.model.shape).volume;
   });
+  // Objects cut short by the assembly's own interrupt (not their time limit) are not results.
+  if (auto s = stopped("fusing objects"); !s.ok()) return s.error();
   std::vector<char> published(n, 0);
   for (const AssembledObject& o : out.objects) {
     for (int i : o.primitives) published[static_cast<std::size_t>(i)] = 1;
     if (o.escalation) ++st.objects_escalated;
+    if (o.timed_out) ++st.objects_timed_out;
     if (!o.fused) {
       ++st.objects_failed;
       out.problems.push_back("object " + o.id + " not fused: " + o.error);

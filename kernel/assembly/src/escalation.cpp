@@ -44,7 +44,8 @@ double thinnest_extent(const kernel::PrimitiveSpec& s) {
 }
 
 std::optional<Escalated> escalate_fuse(const std::vector<AssemblyPrimitive>& group,
-                                       const AssemblyOptions& options) {
+                                       const AssemblyOptions& options,
+                                       const kernel::Interrupt& interrupt) {
   if (!(options.escalate_to > 0.0) || group.size() < 2) return std::nullopt;
   double bound = options.escalate_to;
   std::vector<kernel::PrimitiveSpec> specs;
@@ -56,7 +57,9 @@ std::optional<Escalated> escalate_fuse(const std::vector<AssemblyPrimitive>& gro
   constexpr double kDegree = std::numbers::pi / 180.0;
   kernel::BooleanOptions bopt;
   bopt.tolerance = options.tolerance;
+  bopt.interrupt = interrupt;
   for (const double d : kSteps) {
+    if (interrupt.fired()) break;
     if (d <= options.snap.distance) continue;
     if (d > bound) break;
     kernel::SnapOptions snap;

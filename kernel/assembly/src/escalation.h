@@ -21,8 +21,9 @@ struct Escalated {
 
 /// Fuses `group` (the object's primitives as given to the assembly) snapped at each step of
 /// AssemblyOptions::escalate_to in turn; the first fuse that holds, or nullopt when none does
-/// within the bound. Deterministic.
+/// within the bound or before `interrupt` fires. Deterministic (when it does not fire).
 std::optional<Escalated> escalate_fuse(const std::vector<AssemblyPrimitive>& group,
-                                       const AssemblyOptions& options);
+                                       const AssemblyOptions& options,
+                                       const kernel::Interrupt& interrupt);
 
 }  // namespace csgtile::assembly::detail

@@ -104,6 +104,7 @@ class BooleanEngine {
     std::vector<Piece> pieces;
     if (auto s = split_faces(pieces); !s.ok()) return s.error();
     if (auto s = classify(pieces); !s.ok()) return s.error();
+    if (auto s = interrupted("assembling the result"); !s.ok()) return s.error();
     return build(pieces);
   }
 
@@ -141,6 +142,13 @@ class BooleanEngine {
   }
 
  private:
+  // Cancelled once options_.interrupt has fired (interrupt.h), naming the operation's stage.
+  Status interrupted(const char* stage) const {
+    if (!options_.interrupt.fired()) return {};
+    return options_.interrupt.error(std::string("while ") + stage + " (boolean " +
+                                    boolean_op_name(op_) + ")");
+  }
+
   // Edges of the two operands that coincide (touching solids) become one edge, so the
   // result shares them.
   void unify_shared_edges() {
@@ -959,6 +967,7 @@ class BooleanEngine {
     const double tol = options_.tolerance;
     boundary_boxes_.clear();
     for (std::size_t fa = 0; fa < first_b_face_; ++fa) {
+      if (auto s = interrupted("intersecting faces"); !s.ok()) return s;
       for (std::size_t fb = first_b_face_; fb < model_.faces.size(); ++fb) {
         BoundingBox ba = model_.faces[fa].box, bb = model_.faces[fb].box;
         ba.enlarge(tol);
@@ -1114,6 +1123,7 @@ class BooleanEngine {
 
   Status split_faces(std::vector<Piece>& pieces) {
     for (std::size_t f = 0; f < model_.faces.size(); ++f) {
+      if (auto s = interrupted("splitting faces"); !s.ok()) return s;
       auto regions = split_face(model_, model_.faces[f]);
       if (!regions.ok()) {
         // Name the face: which argument, which of its faces, on what surface.
@@ -1194,6 +1204,7 @@ class BooleanEngine {
     if (!ca.ok()) return ca.error();
     if (!cb.ok()) return cb.error();
     for (Piece& piece : pieces) {
+      if (auto s = interrupted("classifying face pieces"); !s.ok()) return s;
       const bool from_a = static_cast<std::size_t>(piece.face) < first_b_face_;
       const SolidClassifier& other = from_a ? cb.value() : ca.value();
       const std::vector<Vec3> candidates = interior_points(piece, 3);

@@ -3,8 +3,8 @@
 // so that every argument takes part in about log2(n) operations instead of a growing
 // accumulator taking part in n − 1. Where the fuse of two partial results fails, the right
 // one is taken apart along its own tree and its halves are fused into the left one in turn,
-// down to single arguments; an error there is returned. Used for shapes (boolean_fuse_all)
-// and for shapes with their face history (csg_combine).
+// down to single arguments; an error there is returned (Cancelled at once). Used for shapes
+// (boolean_fuse_all) and for shapes with their face history (csg_combine).
 
 #include <utility>
 #include <vector>
@@ -26,7 +26,8 @@ Result<T> fuse_tree(const std::vector<T>& items, const Fuse& fuse) {
   auto fuse_into = [&](const auto& self, const T& acc, int part) -> Result<T> {
     const Node node = nodes[static_cast<std::size_t>(part)];
     auto fused = fuse(acc, node.value);
-    if (fused.ok() || node.left < 0) return fused;
+    // A cancelled fuse is not retried piece by piece: the interrupt stays fired.
+    if (fused.ok() || node.left < 0 || fused.error().code == ErrorCode::Cancelled) return fused;
     auto first = self(self, acc, node.left);
     if (!first.ok()) return first;
     return self(self, first.value(), node.right);

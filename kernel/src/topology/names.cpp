@@ -21,6 +21,8 @@ const char* error_code_name(ErrorCode code) {
       return "io_error";
     case ErrorCode::Unsupported:
       return "unsupported";
+    case ErrorCode::Cancelled:
+      return "cancelled";
   }
   return "unknown";
 }

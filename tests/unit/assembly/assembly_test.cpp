@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <stop_token>
 
 #include "broad_phase.h"
 #include "csgtile/assembly/assembly.h"
@@ -463,6 +464,51 @@ TEST(Assembly, EscalationLeavesObjectsThatFuseAlone) {
   EXPECT_TRUE(a->objects[0].fused);
   EXPECT_FALSE(a->objects[0].escalation.has_value());
   EXPECT_EQ(a->stats.objects_escalated, 0);
+}
+
+// A time limit per object (city.building_timeout_seconds): an object whose fuse reaches it
+// is kept unfused, named and counted like a failed fuse, and escalation does not start after
+// it; single primitives have no fuse to limit.
+TEST(Assembly, AnObjectPastItsTimeLimitIsKeptUnfusedWithTheReason) {
+  auto input = labelled({test::box_at({0, 0, 0}, {1, 1, 1}), test::box_at({0.5, 0, 0}, {1, 1, 1}),
+                         test::box_at({5, 0, 0}, {1, 1, 1})});
+  AssemblyOptions options;
+  options.escalate_to = 0.02;
+  options.object_time_limit = 1e-9;  // passed before the fuse's first step
+  auto a = assemble(input, options);
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  ASSERT_EQ(a->objects.size(), 2u);
+  const AssembledObject& pair = a->objects[0];
+  EXPECT_FALSE(pair.fused);
+  EXPECT_TRUE(pair.timed_out);
+  EXPECT_FALSE(pair.escalation.has_value());
+  EXPECT_NE(pair.error.find("time limit of 1e-09 s reached"), std::string::npos) << pair.error;
+  // Its parts are published as they are (a compound of the two boxes under the same tree).
+  EXPECT_EQ(kernel::map_child_shapes(pair.model.shape, kernel::ShapeKind::Solid).size(), 2u);
+  EXPECT_TRUE(a->objects[1].fused);
+  EXPECT_FALSE(a->objects[1].timed_out);
+  EXPECT_EQ(a->stats.objects_timed_out, 1);
+  EXPECT_EQ(a->stats.objects_failed, 1);
+  // A limit the fuse stays within: the same objects as without one.
+  options.object_time_limit = 3600;
+  auto in_time = assemble(input, options);
+  ASSERT_TRUE(in_time.ok());
+  EXPECT_TRUE(in_time->objects[0].fused);
+  EXPECT_EQ(in_time->stats.objects_timed_out, 0);
+}
+
+// A stop request (a worker shutting down) cancels the whole assembly: no partial result.
+TEST(Assembly, AStopRequestCancelsTheAssembly) {
+  std::stop_source source;
+  source.request_stop();
+  AssemblyOptions options;
+  options.interrupt.stop = source.get_token();
+  auto a =
+      assemble(labelled({test::box_at({0, 0, 0}, {1, 1, 1}), test::box_at({0.5, 0, 0}, {1, 1, 1})}),
+               options);
+  ASSERT_FALSE(a.ok());
+  EXPECT_EQ(a.error().code, kernel::ErrorCode::Cancelled);
+  EXPECT_NE(a.error().message.find("(assembly)"), std::string::npos) << a.error().message;
 }
 
 TEST(Assembly, BadOptionsAreNamed) {

@@ -540,7 +540,7 @@ TEST(ConfigJson, SameConfigGivesSameBytesAndLoadsBack) {
 TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(
       to_json(Config{}),
-      R"({"city":{"cell_size":250.0,"footprints":"","footprints_id":"","footprints_layer":"","halo":50.0,"snap_angle_degrees":0.5,"snap_distance":0.005,)"
+      R"({"city":{"building_timeout_seconds":60.0,"cell_size":250.0,"footprints":"","footprints_id":"","footprints_layer":"","halo":50.0,"snap_angle_degrees":0.5,"snap_distance":0.005,)"
       R"("snap_escalate_to":0.02,)"
       R"("voxel_size":0.5},)"
       R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"

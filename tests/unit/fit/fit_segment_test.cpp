@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stop_token>
 
 #include "csgtile/fit/segment.h"
 #include "csgtile/geo/scene.h"
@@ -179,6 +180,35 @@ TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
   EXPECT_GT(out->ground_points, 9000);
   EXPECT_EQ(out->unassigned_points, out->fitted_points - out->assigned_points);
   EXPECT_LT(out->unassigned_points, out->fitted_points / 10);
+}
+
+// A fit asked to stop (a worker shutting down) returns Cancelled, naming the stage; a time
+// limit the fit stays within changes nothing.
+TEST(FitSegment, AStopRequestCancelsTheFit) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  std::stop_source source;
+  source.request_stop();
+  o.interrupt.stop = source.get_token();
+  const auto stopped = fit_point_cloud(c.points, {}, o);
+  ASSERT_FALSE(stopped.ok());
+  EXPECT_EQ(stopped.error().code, kernel::ErrorCode::Cancelled);
+  EXPECT_NE(stopped.error().message.find("stopped on request before the fit's outliers stage"),
+            std::string::npos)
+      << stopped.error().message;
+  o.interrupt = kernel::Interrupt{}.within(3600);
+  const auto limited = fit_point_cloud(c.points, {}, o);
+  o.interrupt = {};
+  const auto free = fit_point_cloud(c.points, {}, o);
+  ASSERT_TRUE(limited.ok() && free.ok());
+  Scene a, b;
+  a.primitives = limited->primitives;
+  b.primitives = free->primitives;
+  EXPECT_FALSE(a.primitives.empty());
+  EXPECT_EQ(scene_to_json(a), scene_to_json(b));
 }
 
 // With classes.keep, only the kept classes are fitted: the sphere labelled vegetation (5)

@@ -38,7 +38,8 @@ ordered_json quality_json(const std::optional<geo::FitQuality>& q) {
 }  // namespace
 
 Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
-                         const config::Config& config, std::string& result, StageTimings* timings) {
+                         const config::Config& config, std::string& result, StageTimings* timings,
+                         std::stop_token stop) {
   ops::StageClock clock(timings);
   clock.enter("read");
   const auto payload = ordered_json::parse(job.payload, nullptr, false);
@@ -94,6 +95,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.threads = config.run.threads;
   options.snap = snap_options(config.city.snap_distance, config.city.snap_angle_degrees);
   options.escalate_to = config.city.snap_escalate_to;
+  options.interrupt.stop = stop;
+  options.object_time_limit = config.city.building_timeout_seconds;
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
     return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
@@ -126,7 +129,10 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                          " (city.halo " + ordered_json(halo).dump() +
                          "): it may be cut; raise city.halo");
     }
-    if (!object.fused) problems.push_back("object " + object.id + " not fused: " + object.error);
+    if (!object.fused) {
+      problems.push_back("object " + object.id + " not fused: " + object.error +
+                         (object.timed_out ? " (city.building_timeout_seconds)" : ""));
+    }
     kept.push_back(&object);
   }
 
@@ -224,13 +230,18 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     files.push_back(std::move(entry));
   }
   const assembly::AssemblyStats& s = a.stats;
-  ordered_json stats = {
-      {"primitives_read", s.primitives_read}, {"primitives_failed", s.primitives_failed},
-      {"candidate_pairs", s.candidate_pairs}, {"culled_pairs", s.culled_pairs},
-      {"exact_tests", s.exact_tests},         {"interacting_pairs", s.interacting_pairs},
-      {"objects_in_halo", s.objects},         {"objects", kept.size()},
-      {"objects_unfused", invalid},           {"objects_escalated", s.objects_escalated},
-      {"snap", snap_report_json(s.snap)}};
+  ordered_json stats = {{"primitives_read", s.primitives_read},
+                        {"primitives_failed", s.primitives_failed},
+                        {"candidate_pairs", s.candidate_pairs},
+                        {"culled_pairs", s.culled_pairs},
+                        {"exact_tests", s.exact_tests},
+                        {"interacting_pairs", s.interacting_pairs},
+                        {"objects_in_halo", s.objects},
+                        {"objects", kept.size()},
+                        {"objects_unfused", invalid},
+                        {"objects_escalated", s.objects_escalated},
+                        {"objects_timed_out", s.objects_timed_out},
+                        {"snap", snap_report_json(s.snap)}};
   ordered_json manifest;
   manifest["run"] = config.run.name;
   manifest["cell"] = name;

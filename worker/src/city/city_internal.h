@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <stop_token>
 #include <string>
 
 #include "csgtile/config/config.h"
@@ -59,10 +60,13 @@ std::vector<std::pair<std::string, ordered_json>> done_records(
     const std::vector<std::pair<std::string, std::string>>& results, const std::string& kind,
     const std::string& run);
 
+// `stop`: the job's stop token (run_city_job): its fit and assembly return Cancelled once asked.
 Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
-                    const config::Config& config, std::string& result, StageTimings* timings);
+                    const config::Config& config, std::string& result, StageTimings* timings,
+                    std::stop_token stop);
 Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
-                         const config::Config& config, std::string& result, StageTimings* timings);
+                         const config::Config& config, std::string& result, StageTimings* timings,
+                         std::stop_token stop);
 Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, JobQueue& queue, const Logger& log,
                       std::string& result, StageTimings* timings);

@@ -426,10 +426,11 @@ Failure city_progress(const config::Config& config, JobQueue& queue, CityProgres
 
 namespace {
 Failure run_job(const Job& job, const std::filesystem::path& run_dir, const config::Config& config,
-                JobQueue& queue, const Logger& log, std::string& result, StageTimings* timings) {
-  if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings);
+                JobQueue& queue, const Logger& log, std::string& result, StageTimings* timings,
+                std::stop_token stop) {
+  if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings, stop);
   if (job.kind == "assemble")
-    return detail::run_assemble_job(job, run_dir, config, result, timings);
+    return detail::run_assemble_job(job, run_dir, config, result, timings, stop);
   if (job.kind == "index") {
     return detail::run_index_job(job, run_dir, config, queue, log, result, timings);
   }
@@ -440,9 +441,9 @@ Failure run_job(const Job& job, const std::filesystem::path& run_dir, const conf
 
 Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
                      const config::Config& config, JobQueue& queue, const Logger& log,
-                     std::string& result, StageTimings* timings) {
+                     std::string& result, StageTimings* timings, std::stop_token stop) {
   try {
-    return run_job(job, run_dir, config, queue, log, result, timings);
+    return run_job(job, run_dir, config, queue, log, result, timings, stop);
   } catch (const nlohmann::json::exception& e) {
     return {ErrorCode::Internal,
             "job " + job.key + ": a payload or record is malformed: " + e.what()};

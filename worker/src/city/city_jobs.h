@@ -30,6 +30,7 @@
 ///   index.gpkg, tiles/tileset.json (root, cells as external tilesets), manifest.json (last)
 
 #include <filesystem>
+#include <stop_token>
 #include <string>
 
 #include "csgtile/config/config.h"
@@ -70,8 +71,10 @@ Failure city_progress(const config::Config& config, JobQueue& queue, CityProgres
 
 /// Runs one job of the graph (kind "fit", "assemble" or "index"). On success `result` is its
 /// deterministic JSON record. The index job reads the run's other records from `queue`.
+/// Once `stop` is asked (a worker shutting down), a fit or an assembly under way returns
+/// Cancelled at its next step.
 Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
                      const config::Config& config, JobQueue& queue, const Logger& log,
-                     std::string& result, StageTimings* timings);
+                     std::string& result, StageTimings* timings, std::stop_token stop = {});
 
 }  // namespace csgtile::worker::city

@@ -22,7 +22,8 @@
 namespace csgtile::worker::city::detail {
 
 Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
-                    const config::Config& config, std::string& result, StageTimings* timings) {
+                    const config::Config& config, std::string& result, StageTimings* timings,
+                    std::stop_token stop) {
   ops::StageClock clock(timings);
   std::shared_ptr<fetch::RangeStats> range_stats;  // a COPC cell read by range requests
   clock.enter("fetch");
@@ -69,7 +70,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   }
 
   clock.enter("fit");
-  const fit::FitPipelineOptions options = fit_options(config);
+  fit::FitPipelineOptions options = fit_options(config);
+  options.interrupt.stop = stop;
   FittedTile tile;
   std::string name =
       std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();

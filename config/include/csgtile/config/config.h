@@ -108,6 +108,10 @@ struct CityConfig {
   /// Escalation (AssemblyOptions::escalate_to): objects whose fuse fails snapped again at
   /// growing distances up to this bound (m); 0: off. [0, 1]
   double snap_escalate_to = 0.02;
+  /// Time limit of one building's (object's) fuse, escalation included, seconds: a building
+  /// that reaches it keeps its LoD1.2 block, the limit named as the reason (the outputs of a
+  /// run where one is reached depend on the machine's speed); 0: none. [0, 86400]
+  double building_timeout_seconds = 60.0;
   /// Building footprints (optional): a path, an http(s) URL or a GDAL connection string of
   /// any vector source GDAL/OGR reads, reprojected to the run's CRS. With them, one building
   /// per footprint, standing exactly on it; building points outside every footprint still

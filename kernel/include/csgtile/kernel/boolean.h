@@ -15,6 +15,7 @@
 #include <compare>
 #include <vector>
 
+#include "csgtile/kernel/interrupt.h"
 #include "csgtile/kernel/shape.h"
 
 namespace csgtile::kernel {
@@ -25,13 +26,15 @@ const char* boolean_op_name(BooleanOp op);  ///< "fuse", "common", "cut"
 struct BooleanOptions {
   double tolerance = 1e-7;   ///< linear tolerance (world units) of every decision and new edge
   bool check_result = true;  ///< run the validity checker on the result (InvalidShape if bad)
+  /// Looked at between the operation's steps: once it fires, the call returns Cancelled.
+  Interrupt interrupt{};
 };
 
 /// a ∪ b, a ∩ b or a − b. Arguments: solids, or compounds/compsolids of solids (treated as
 /// the union of their solids' interiors). The result is a compound of solids (empty when the
 /// result has no volume). Errors: InvalidArgument (not solids), Unsupported (a surface pair
 /// whose intersection this version cannot compute exactly, named), InvalidShape (the result
-/// failed the checker — a bug to report).
+/// failed the checker — a bug to report), Cancelled (options.interrupt fired).
 Result<Shape> boolean_operation(const Shape& a, const Shape& b, BooleanOp op,
                                 const BooleanOptions& options = {});
 

@@ -20,6 +20,7 @@ enum class ErrorCode {
   UnsupportedVersion,  ///< a serialised model has a format version this build cannot read
   IoError,             ///< the operating system refused a read or write
   Unsupported,         ///< a valid request this kernel version does not handle
+  Cancelled,           ///< stopped before it finished: a stop request or a time limit (interrupt.h)
 };
 
 /// Short stable name of a code, e.g. "invalid_location".

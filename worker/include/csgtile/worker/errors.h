@@ -23,6 +23,7 @@ enum class ErrorCode {
   JobsFailed,       ///< a run finished with some jobs dead
   Network,          ///< a transfer failed in a way that may pass (timeout, reset, HTTP 5xx)
   FetchRefused,     ///< a fetch the policy or the server refuses (scheme, address, size, 4xx)
+  Cancelled,        ///< stopped before it finished: a stop request (shutdown) or a time limit
 };
 
 struct ErrorInfo {

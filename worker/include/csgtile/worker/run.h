@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <stop_token>
 #include <string>
 #include <utility>
 #include <vector>
@@ -29,11 +30,18 @@ struct RunSummary {
   /// A stop signal ended the run early (after its running job): no index or manifest yet;
   /// running the same config again resumes.
   bool stopped = false;
+  /// The job the stop cancelled and released to the queue ("" when none was cut short), and
+  /// whether the release succeeded (else its lease expires).
+  std::string released_job{};
+  bool released = false;
 };
 
 /// Called just before a stopped worker ends the process because its job outlasted the grace
-/// period (the job is released to the queue): the job's key and whether the release
-/// succeeded. The command prints its summary here; nothing after it runs.
+/// period and did not return when asked to stop (a step that does not look at the stop
+/// token: the job is released to the queue): the job's key and whether the release
+/// succeeded. The command prints its summary here; nothing after it runs. A job that returns
+/// Cancelled is released the same way and the worker returns through main instead
+/// (WorkSummary::released_job).
 using ForcedExitReport = std::function<void(const std::string& job, bool released)>;
 
 /// Runs `config` to completion on its SQLite queue. Jobs that fail are retried or end dead
@@ -58,6 +66,10 @@ struct WorkSummary {
   long long jobs = 0;     ///< jobs this worker ran (any outcome)
   bool finished = false;  ///< the queue had no unfinished job when last looked at
   bool stopped = false;   ///< a stop signal ended the loop
+  /// The job the stop cancelled at the end of the grace period and released ("" if none),
+  /// and whether the release succeeded.
+  std::string released_job{};
+  bool released = false;
 };
 
 /// Claims and runs jobs (lease heartbeat, fencing, retries) until a stop signal, or — with
@@ -84,9 +96,10 @@ struct StageTimings {
 
 /// Executes one "build" job: its payload names a scene input. On success `result` is the
 /// job's JSON record (deterministic: no timings, no absolute paths); `timings`, when given,
-/// receives the seconds of each stage that ran (also on failure).
+/// receives the seconds of each stage that ran (also on failure). Once `stop` is asked (a
+/// worker shutting down), its Booleans return Cancelled at their next step.
 Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, std::string& result,
-                      StageTimings* timings = nullptr);
+                      StageTimings* timings = nullptr, std::stop_token stop = {});
 
 }  // namespace csgtile::worker

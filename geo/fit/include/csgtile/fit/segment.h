@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "csgtile/fit/fit.h"
+#include "csgtile/kernel/interrupt.h"
 
 namespace csgtile::fit {
 
@@ -156,6 +157,9 @@ struct FitPipelineOptions {
   PrimitiveOptions primitives;
   bool keep_detections = false;  ///< diagnostics: fill FitOutput::detections
   bool keep_segments = false;    ///< fill FitOutput::segments and ::point_segment
+  /// Not a setting: looked at between stages and regions; once it fires, the fit returns
+  /// Cancelled (a worker shutting down, a job's time limit).
+  kernel::Interrupt interrupt{};
   bool operator==(const FitPipelineOptions&) const = default;
 };
 
@@ -229,7 +233,7 @@ struct FitOutput {
 /// one building standing exactly on it (PrimitiveOptions::footprint), its primitives carrying
 /// its id (ScenePrimitive::building); only the other points are clustered. A footprint with
 /// too few points is a rejection naming it. Errors: InvalidArgument for bad options (naming
-/// the option).
+/// the option), Cancelled (options.interrupt fired).
 kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options,

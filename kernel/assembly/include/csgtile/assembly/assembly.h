@@ -61,6 +61,13 @@ struct AssemblyOptions {
   /// and to a tenth of its thinnest primitive, until it fuses; AssembledObject::escalation
   /// records the snap that was used and why the first fuse failed. Zero (the default): none.
   double escalate_to = 0.0;
+  /// Looked at between the assembly's steps and inside its Booleans: once it fires, assemble
+  /// returns Cancelled (a worker shutting down).
+  kernel::Interrupt interrupt{};
+  /// Time limit of one object's fuse (escalation included), seconds; 0: none. An object that
+  /// reaches it is kept unfused like one whose fuse fails (`fused` false, `error` names the
+  /// limit, `timed_out` set). Objects that reach it depend on the machine's speed.
+  double object_time_limit = 0.0;
 };
 
 struct AssemblyStats {
@@ -74,6 +81,7 @@ struct AssemblyStats {
   long long objects = 0;            ///< published (anchored in the cell)
   long long objects_failed = 0;     ///< whose fuse failed (kept unfused, with the reason)
   long long objects_escalated = 0;  ///< fused only after escalation
+  long long objects_timed_out = 0;  ///< whose fuse reached AssemblyOptions::object_time_limit
   long long objects_past_halo = 0;  ///< reaching past the halo (reported, see problems)
   long long active_voxels = 0;      ///< in all masks
   kernel::SnapReport snap;          ///< what the fuzzy mode moved (zero without it)
@@ -98,6 +106,7 @@ struct AssembledObject {
   kernel::CsgModel model;
   bool fused = true;
   std::string error;
+  bool timed_out = false;  ///< the fuse reached AssemblyOptions::object_time_limit
   /// Set when the object fused only after escalation (AssemblyOptions::escalate_to): the snap
   /// its primitives got, and the first fuse's error.
   struct Escalation {
@@ -117,9 +126,10 @@ struct Assembly {
   AssemblyStats stats;
 };
 
-/// Assembles the primitives. Errors: InvalidArgument (bad options: voxel size or cell).
-/// Primitives that cannot be built and objects whose fuse fails do not fail the call: they
-/// are counted and named in `problems` / `error`.
+/// Assembles the primitives. Errors: InvalidArgument (bad options: voxel size or cell),
+/// Cancelled (options.interrupt fired). Primitives that cannot be built and objects whose
+/// fuse fails or runs out of time do not fail the call: they are counted and named in
+/// `problems` / `error`.
 kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitives,
                                   const AssemblyOptions& options = {});
 
