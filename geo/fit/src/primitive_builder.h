@@ -1,0 +1,124 @@
+// The primitive builder (internal): from one region's detected surfaces to scene primitives.
+// primitives.cpp holds the builder's run, curved primitives and the checks every primitive
+// passes; box_primitives.cpp builds boxes from planes.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fit_internal.h"
+
+namespace csgtile::fit::detail {
+
+using kernel::Location;
+using kernel::PrimitiveSpec;
+using kernel::PrimitiveType;
+using kernel::Vec2;
+using kernel::Vec3;
+
+// A plane's points in its own frame: n its normal, (u, v) the sides of the smallest
+// rectangle around its points.
+struct PlanePatch {
+  int shape = -1;
+  std::vector<std::uint32_t> members;  // a connected piece of the shape's inliers
+  Vec3 origin, n, u, v;
+  double umin = 0, umax = 0, vmin = 0, vmax = 0;
+  double coverage = 0.0;
+  double sagitta = 0.0;  // how far its points bow out of the plane across its width
+  bool used = false;
+};
+
+// A rotation with columns x, y, x × y, made exactly orthonormal.
+Eigen::Matrix3d frame(const Vec3& x, const Vec3& y);
+
+// The location with this rotation and origin, or nullopt when it is no rigid motion.
+std::optional<Location> placement(const Eigen::Matrix3d& rotation, const Vec3& origin);
+
+class Builder {
+ public:
+  Builder(std::span<const Vec3> points, std::span<const Vec3> normals, const RansacResult& shapes,
+          const PrimitiveOptions& o, const RansacOptions& ransac, int region)
+      : points_(points),
+        normals_(normals),
+        shapes_(shapes),
+        o_(o),
+        ransac_(ransac),
+        region_(region),
+        used_(points.size(), 0) {
+    cos_tol_ = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
+    cell_ = shapes.cluster_epsilon > 0.0 ? shapes.cluster_epsilon : 3.0 * ransac.epsilon;
+    for (const Vec3& p : points) {
+      if (p.allFinite()) region_box_.add(p);
+    }
+    // A footprint is evidence too: a building reaches over all of it, points or not.
+    if (o.footprint != nullptr && !region_box_.empty()) {
+      for (const auto& polygon : *o.footprint) {
+        for (const kernel::Vec2& q : polygon.outer) {
+          region_box_.add(Vec3(q.x(), q.y(), region_box_.min.z()));
+        }
+      }
+    }
+  }
+
+  FittedPrimitives run();
+
+ private:
+  // How far a box reaches behind (c0 < 0) or before (c1 > 0) its seed plane, and the extent
+  // across (v) of the opposite face when one was seen.
+  struct Depth {
+    double c0 = 0.0, c1 = 0.0;
+    double v0 = INFINITY, v1 = -INFINITY;
+  };
+  // Which axis of the seed's frame a point's normal follows.
+  enum class Facing : std::uint8_t { Normal, Across, Along, Other };
+  struct Framed {
+    double a = 0.0, b = 0.0, c = 0.0;  // along u, v, n of the seed
+    Facing facing = Facing::Other;
+  };
+  std::vector<Framed> framed_near(const PlanePatch& seed, double across, double cos_normal) const;
+  Depth box_depth(const PlanePatch& seed, double margin, double cos_normal) const;
+  std::pair<double, double> box_length(const PlanePatch& seed, double c0, double c1, double v0,
+                                       double v1, double tight, double cos_normal) const;
+  bool round_section(const std::vector<std::uint32_t>& members, const PlanePatch& seed,
+                     const std::array<double, 4>& section) const;
+  void boxes();
+  void curved(int index);
+  void blocks();
+  // What the proposal steps see of the region (points, shapes, what is used or absorbed).
+  detail::ProposalInput proposal_input() const {
+    detail::ProposalInput in;
+    in.points = points_;
+    in.normals = normals_;
+    in.shapes = &shapes_;
+    in.used = &used_;
+    in.absorbed = &absorbed_;
+    in.options = &o_;
+    in.ransac = &ransac_;
+    in.cell = cell_;
+    return in;
+  }
+  std::string coaxial_overlap(const PrimitiveSpec& spec) const;
+  bool take(const detail::Proposal& proposal);
+  void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
+            const std::string& what);
+
+  std::span<const Vec3> points_;
+  std::span<const Vec3> normals_;
+  const RansacResult& shapes_;
+  PrimitiveOptions o_;
+  RansacOptions ransac_;
+  int region_;
+  double cos_tol_ = 1.0;
+  double cell_ = 0.1;
+  std::vector<char> used_;
+  std::vector<char> absorbed_;  // per shape: part of a kept extrusion or revolution
+  std::vector<PlanePatch> patches_;
+  kernel::BoundingBox region_box_;  // of the region's finite points
+  FittedPrimitives out_;
+};
+
+}  // namespace csgtile::fit::detail
