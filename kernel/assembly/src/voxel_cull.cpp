@@ -145,6 +145,12 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
       tb.add(p1);
       tb.add(p2);
       tb.enlarge(d.margin);
+      // Voxel centres farther than the margin from the triangle's plane are farther from the
+      // triangle: skipped before the closest-point test (most of a sloped triangle's box).
+      kernel::Vec3 normal = (p1 - p0).cross(p2 - p0);
+      const double length = normal.norm();
+      const bool flat = length > 0.0 && std::isfinite(length);
+      if (flat) normal /= length;
       for (const kernel::BoundingBox& r : regions[i]) {
         if (!r.intersects(tb)) continue;
         const kernel::Vec3 lo = tb.min.cwiseMax(r.min), hi = tb.max.cwiseMin(r.max);
@@ -160,6 +166,7 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
               const openvdb::Coord c(x, y, z);
               if (access.isValueOn(c)) continue;
               const kernel::Vec3 q(x * h, y * h, z * h);
+              if (flat && std::abs(normal.dot(q - p0)) > d.margin) continue;
               if ((closest_on_triangle(q, p0, p1, p2) - q).squaredNorm() <= m2)
                 access.setValueOn(c);
             }

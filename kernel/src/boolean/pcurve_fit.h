@@ -12,7 +12,8 @@ namespace csgtile::kernel::detail {
 /// The pcurve of `curve` over [t0, t1] on `surface` (both in one frame), or null when no
 /// trig-linear pcurve matches within `tolerance` at every check point. On a plane the pcurve
 /// is the exact affine projection; elsewhere it is fitted to inverted samples (periodic
-/// parameters unwrapped) and verified at 97 points.
+/// parameters unwrapped) and verified at 97 points (a line on a plane: at its two ends, which
+/// bound its deviation).
 Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& surface,
                       double tolerance);
 

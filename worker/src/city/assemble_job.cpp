@@ -69,6 +69,16 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     const std::string tile = "t" + std::to_string(fit.at("tile").get<long long>());
     for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
       const geo::ScenePrimitive& p = scene->primitives[i];
+      // A clipped primitive lies inside its plain solid (no Boolean to build): one whose plain
+      // solid, grown by the tolerance, stays clear of the halo is skipped unbuilt.
+      if (!p.spec.clips.empty()) {
+        kernel::PrimitiveSpec plain = p.spec;
+        plain.clips.clear();
+        kernel::BoundingBox outer =
+            primitive_crs_box(plain, tile_origin, config.kernel.linear_tolerance);
+        outer.enlarge(config.kernel.linear_tolerance);
+        if (!outer.empty() && !meets_halo(outer, cell, size, halo)) continue;
+      }
       const kernel::BoundingBox box =
           primitive_crs_box(p.spec, tile_origin, config.kernel.linear_tolerance);
       if (box.empty()) continue;  // the fit job left out primitives that do not build
