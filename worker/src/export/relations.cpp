@@ -64,6 +64,14 @@ std::string boolean_error(const char* op, const kernel::Error& e) {
 // Classifies one candidate pair. Returns false when the pair has no relation.
 bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma,
               const Measured& mb, const kernel::BooleanOptions& options, ObjectRelation& out) {
+  // Boxes that meet hold solids that mostly do not (neighbours across a street or a gap): the
+  // Booleans' own contact test (the first half of an operation, stopped at the first
+  // contact) rules those out before the common and the union of two whole buildings.
+  // Disjoint solids share no volume and no area; a pair the test cannot decide goes on.
+  if (auto contact = kernel::solid_interference(a, b, options);
+      contact.ok() && contact.value() == kernel::Interference::Disjoint) {
+    return false;
+  }
   auto common = kernel::boolean_operation(a, b, kernel::BooleanOp::Common, options);
   if (!common.ok()) {
     out.kind = RelationKind::Unknown;
