@@ -324,6 +324,8 @@ class FaceIntegrator {
     if constexpr (std::is_same_v<M, VolumeMoment>) {
       if (evaluator_.plane()) return {plane_inner_volume(u, v)};
       if (evaluator_.cylinder()) return {cylinder_inner_volume(u, v, panels)};
+    } else {
+      if (evaluator_.plane()) return plane_inner_moments(u, v);
     }
     if (!evaluator_.cylinder()) {
       auto f = [&](double s) { return density(s, v); };
@@ -362,6 +364,32 @@ class FaceIntegrator {
     }
     return (u - u_ref_) * ((plane_o_ + v * plane_y_) + plane_x_ * 0.5 * (u + u_ref_));
   }
+  // All moments on a plane p = a + s·x (a = o + v·y), N = x × y, in closed form (each
+  // integrand is a polynomial of degree at most 2 in s): area |N|·d, volume by
+  // plane_inner_volume, first moments N_i/2 · d·(a_i² + a_i x_i (u + u_ref) + x_i² (u² + u·u_ref +
+  // u_ref²)/3), d = u − u_ref. Equal to the Gauss sums up to rounding.
+  Moments plane_inner_moments(double u, double v) const {
+    if (!plane_moments_ready_) {
+      const SurfacePoint origin = evaluator_.evaluate(0.0, 0.0);
+      plane_origin_ = origin.p;
+      plane_su_ = origin.su;
+      plane_sv_ = origin.sv;
+      plane_n_ = origin.su.cross(origin.sv);
+      plane_area_ = plane_n_.norm();
+      plane_moments_ready_ = true;
+    }
+    const double r = u_ref_, d = u - r, sum = u + r, squares = (u * u + u * r + r * r) / 3.0;
+    const Vec3 a = plane_origin_ + v * plane_sv_;
+    const Vec3& x = plane_su_;
+    Moments m;
+    m[0] = plane_area_ * d;
+    m[1] = plane_inner_volume(u, v);  // the very numbers solid_volume sums
+    for (int i = 0; i < 3; ++i) {
+      m[static_cast<std::size_t>(2 + i)] =
+          0.5 * plane_n_[i] * d * (a[i] * a[i] + a[i] * x[i] * sum + x[i] * x[i] * squares);
+    }
+    return m;
+  }
   // On a cylinder p = P(s) + v·z with N(s) = S_u(s) × z: p·N = P·N + v z·N (z·N vanishes up to
   // rounding), so the u-integral is A(u) + v·B(u), and both are kept for the last u (an edge of
   // constant u, a seam or a vertical section line, asks for one u at every outer node).
@@ -385,6 +413,10 @@ class FaceIntegrator {
   mutable std::vector<std::pair<double, double>> trig_;
   mutable bool plane_ready_ = false, cylinder_ready_ = false;  // volume-only caches
   mutable double plane_o_ = 0, plane_x_ = 0, plane_y_ = 0;
+  mutable bool plane_moments_ready_ = false;  // plane_inner_moments' cache
+  mutable Vec3 plane_origin_ = Vec3::Zero(), plane_su_ = Vec3::Zero(), plane_sv_ = Vec3::Zero(),
+               plane_n_ = Vec3::Zero();
+  mutable double plane_area_ = 0;
   mutable double cylinder_u_ = 0;
   mutable std::array<double, 2> cylinder_ab_{};
   bool angular_u_ = false, angular_v_ = false;

@@ -18,8 +18,9 @@ struct MassProperties {
 /// volume by the divergence theorem V = ⅓∮ p·n dA, area ∮ dA, first moments ½∮ p_i² n_i dA.
 /// Each face integral is reduced by Green's theorem to its boundary in the (u, v) plane
 /// (through the faces' pcurves) and evaluated with composite 16-point Gauss–Legendre
-/// panels no wider than π/4 in angular parameters, so results are exact to rounding for the
-/// primitives (closed forms matched to 1e-12 relative in tests).
+/// panels no wider than π/4 in angular parameters (on planes, the inner integral in closed
+/// form), so results are exact to rounding for the primitives (closed forms matched to 1e-12
+/// relative in tests).
 /// Shapes without faces give zeros. O(edges).
 MassProperties mass_properties(const Shape& shape);
 
