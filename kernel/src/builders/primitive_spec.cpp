@@ -1,6 +1,13 @@
 #include "csgtile/kernel/primitives.h"
 
 #include <cmath>
+#include <cstring>
+#include <list>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <utility>
 
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/explorer.h"
@@ -68,6 +75,71 @@ Result<Shape> apply_clips(Shape solid, const std::vector<Eigen::Vector4d>& clips
   return solid;
 }
 
+// The clipped solids built last, by their local spec (everything but the placement) and
+// tolerance. A city run builds each roof part several times — its fit's check, the box that
+// puts it in cells, every cell's assembly and CSG check — and each build is an exact
+// Boolean; the build is a pure function of the key, so a remembered solid (its bodies shared,
+// as a shape's are) is the very one a new build would give. Bounded, least recently used
+// first out; errors are remembered too.
+class ClipMemo {
+ public:
+  static ClipMemo& instance() {
+    static ClipMemo memo;
+    return memo;
+  }
+
+  static std::string key(const PrimitiveSpec& spec, double tolerance) {
+    std::string k;
+    auto put = [&k](const void* data, std::size_t bytes) {
+      k.append(static_cast<const char*>(data), bytes);
+    };
+    auto put_ring = [&](const std::vector<Vec2>& ring) {
+      const std::size_t n = ring.size();
+      put(&n, sizeof n);
+      for (const Vec2& q : ring) put(q.data(), 2 * sizeof(double));
+    };
+    put(&spec.type, sizeof spec.type);
+    put(spec.size.data(), 3 * sizeof(double));
+    put(&spec.radius, sizeof(double));
+    put(&spec.radius2, sizeof(double));
+    put(&spec.height, sizeof(double));
+    put(&spec.angle, sizeof(double));
+    put(&tolerance, sizeof(double));
+    put_ring(spec.profile);
+    const std::size_t holes = spec.holes.size();
+    put(&holes, sizeof holes);
+    for (const auto& hole : spec.holes) put_ring(hole);
+    for (const Eigen::Vector4d& c : spec.clips) put(c.data(), 4 * sizeof(double));
+    return k;
+  }
+
+  std::optional<Result<Shape>> find(const std::string& k) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    auto it = entries_.find(k);
+    if (it == entries_.end()) return std::nullopt;
+    order_.splice(order_.begin(), order_, it->second.second);
+    return it->second.first;
+  }
+
+  void insert(const std::string& k, const Result<Shape>& built) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (entries_.count(k) != 0) return;
+    order_.push_front(k);
+    entries_.emplace(k, std::make_pair(built, order_.begin()));
+    if (entries_.size() > kCapacity) {
+      entries_.erase(order_.back());
+      order_.pop_back();
+    }
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = 2048;  // a few MB of roof parts
+  std::mutex mutex_;
+  std::list<std::string> order_;  // most recently used first
+  std::unordered_map<std::string, std::pair<Result<Shape>, std::list<std::string>::iterator>>
+      entries_;
+};
+
 }  // namespace
 
 const char* primitive_type_name(PrimitiveType type) {
@@ -91,7 +163,13 @@ const char* primitive_type_name(PrimitiveType type) {
 }
 
 Result<Shape> build_primitive(const PrimitiveSpec& spec, double tolerance) {
-  Result<Shape> local = [&]() -> Result<Shape> {
+  std::string memo_key;
+  std::optional<Result<Shape>> remembered;
+  if (!spec.clips.empty()) {
+    memo_key = ClipMemo::key(spec, tolerance);
+    remembered = ClipMemo::instance().find(memo_key);
+  }
+  Result<Shape> local = remembered ? *remembered : [&]() -> Result<Shape> {
     switch (spec.type) {
       case PrimitiveType::Box:
         return make_box(spec.size.x(), spec.size.y(), spec.size.z(), tolerance);
@@ -110,11 +188,11 @@ Result<Shape> build_primitive(const PrimitiveSpec& spec, double tolerance) {
     }
     return Error{ErrorCode::InvalidArgument, "unknown primitive type"};
   }();
-  if (!local.ok()) return local;
-  if (!spec.clips.empty()) {
+  if (!remembered && local.ok() && !spec.clips.empty()) {
     local = apply_clips(local.value(), spec.clips, tolerance);
-    if (!local.ok()) return local;
   }
+  if (!remembered && !spec.clips.empty()) ClipMemo::instance().insert(memo_key, local);
+  if (!local.ok()) return local;
   if (spec.placement.is_identity()) return local;
   return local.value().moved(spec.placement);
 }

@@ -468,51 +468,80 @@ M face_moments(const Shape& face) {
 
 }  // namespace
 
+namespace {
+
+void add_edge_bounds(BoundingBox& box, const Shape& e) {
+  const EdgeData& d = *e.body().edge();
+  if (d.degenerate()) return;
+  box.add(d.curve->transformed(e.location())->bounds(d.first, d.last));
+}
+
+// A plane's extremes lie on its boundary; a curved face can bulge between its edges, so the
+// patch over the (u, v) box of its boundary is added.
+void add_face_patch(BoundingBox& box, const Shape& f) {
+  const FaceData& d = *f.body().face();
+  if (d.surface->kind() == SurfaceKind::Plane) return;
+  ParamBox pb{INFINITY, -INFINITY, INFINITY, -INFINITY};
+  const Shape body_face = f.oriented(Orientation::Forward);
+  for (std::size_t w = 0; w < body_face.child_count(); ++w) {
+    const Shape wire = body_face.child(w);
+    for (std::size_t e = 0; e < wire.child_count(); ++e) {
+      const EdgeData& ed = *wire.child(e).body().edge();
+      const Curve2d& pc = *d.pcurves[w][e];
+      const int samples = pc.kind() == Curve2dKind::Line ? 1 : 64;
+      for (int k = 0; k <= samples; ++k) {
+        const Vec2 p = pc.point(ed.first + (ed.last - ed.first) * k / samples);
+        pb.u0 = std::min(pb.u0, p.x());
+        pb.u1 = std::max(pb.u1, p.x());
+        pb.v0 = std::min(pb.v0, p.y());
+        pb.v1 = std::max(pb.v1, p.y());
+      }
+    }
+  }
+  if (pb.u0 <= pb.u1) {
+    // The moved surface measures its length parameters in world units (scaled by the
+    // location); angles are unchanged.
+    const double s = f.location().scale();
+    const SurfaceKind k = d.surface->kind();
+    if (k == SurfaceKind::Cylinder || k == SurfaceKind::Cone || k == SurfaceKind::Extrusion) {
+      pb.v0 *= s;
+      pb.v1 *= s;
+    }
+    box.add(d.surface->transformed(f.location())->bounds(pb));
+  }
+}
+
+// Every vertex and edge under `shape` (wires, edges, vertices, in any orientation), walked
+// without the index of distinct sub-shapes.
+void add_descendants(BoundingBox& box, const Shape& shape) {
+  for (std::size_t i = 0; i < shape.child_count(); ++i) {
+    const Shape child = shape.child(i);
+    if (child.kind() == ShapeKind::Vertex) {
+      box.add(vertex_point(child));
+      continue;
+    }
+    if (child.kind() == ShapeKind::Edge) add_edge_bounds(box, child);
+    add_descendants(box, child);
+  }
+}
+
+}  // namespace
+
 BoundingBox bounding_box(const Shape& shape) {
   BoundingBox box;
   if (shape.is_null()) return box;
+  if (shape.kind() == ShapeKind::Face) {
+    // One face (the Booleans take every face's box): walked directly, without the index of
+    // distinct edges (a box is a union: an edge seen twice, a seam, adds nothing).
+    add_descendants(box, shape);
+    add_face_patch(box, shape);
+    return box;
+  }
   for (const Shape& v : Explorer(shape, ShapeKind::Vertex)) box.add(vertex_point(v));
   const ShapeIndex edges = map_child_shapes(shape, ShapeKind::Edge);
-  for (const Shape& e : edges.shapes()) {
-    const EdgeData& d = *e.body().edge();
-    if (d.degenerate()) continue;
-    box.add(d.curve->transformed(e.location())->bounds(d.first, d.last));
-  }
-  // A plane's extremes lie on its boundary; curved faces can bulge between their edges, so
-  // add the patch over the (u, v) box of their boundary.
+  for (const Shape& e : edges.shapes()) add_edge_bounds(box, e);
   const ShapeIndex faces = map_child_shapes(shape, ShapeKind::Face);
-  for (const Shape& f : faces.shapes()) {
-    const FaceData& d = *f.body().face();
-    if (d.surface->kind() == SurfaceKind::Plane) continue;
-    ParamBox pb{INFINITY, -INFINITY, INFINITY, -INFINITY};
-    const Shape body_face = f.oriented(Orientation::Forward);
-    for (std::size_t w = 0; w < body_face.child_count(); ++w) {
-      const Shape wire = body_face.child(w);
-      for (std::size_t e = 0; e < wire.child_count(); ++e) {
-        const EdgeData& ed = *wire.child(e).body().edge();
-        const Curve2d& pc = *d.pcurves[w][e];
-        const int samples = pc.kind() == Curve2dKind::Line ? 1 : 64;
-        for (int k = 0; k <= samples; ++k) {
-          const Vec2 p = pc.point(ed.first + (ed.last - ed.first) * k / samples);
-          pb.u0 = std::min(pb.u0, p.x());
-          pb.u1 = std::max(pb.u1, p.x());
-          pb.v0 = std::min(pb.v0, p.y());
-          pb.v1 = std::max(pb.v1, p.y());
-        }
-      }
-    }
-    if (pb.u0 <= pb.u1) {
-      // The moved surface measures its length parameters in world units (scaled by the
-      // location); angles are unchanged.
-      const double s = f.location().scale();
-      const SurfaceKind k = d.surface->kind();
-      if (k == SurfaceKind::Cylinder || k == SurfaceKind::Cone || k == SurfaceKind::Extrusion) {
-        pb.v0 *= s;
-        pb.v1 *= s;
-      }
-      box.add(d.surface->transformed(f.location())->bounds(pb));
-    }
-  }
+  for (const Shape& f : faces.shapes()) add_face_patch(box, f);
   return box;
 }
 
