@@ -237,5 +237,46 @@ TEST(Primitive, ClipsCutTheSolidByTheirHalfSpaces) {
   EXPECT_EQ(build_primitive(bad).error().code, ErrorCode::DegenerateGeometry);
 }
 
+// A clipped solid is remembered by its local spec: a second build at another placement is the
+// first one's solid moved (the same body, the same faces and volume), and a spec that differs
+// in one clip is built anew; a remembered error is the same error.
+TEST(Primitive, ClippedSolidsAreRememberedByTheirLocalSpec) {
+  PrimitiveSpec spec;
+  spec.type = PrimitiveType::Extrusion;
+  spec.profile = {{0, 0}, {6, 0}, {6, 5}, {0, 5}};
+  spec.height = 12.0;
+  const Vec3 n = Vec3(0.0, -0.4, 1.0).normalized();
+  spec.clips.push_back(Eigen::Vector4d(n.x(), n.y(), n.z(), 7.0 * n.z()));
+  spec.placement = Location::translation(Vec3(10.0, 0.0, 0.0));
+  const auto first = build_primitive(spec);
+  ASSERT_TRUE(first.ok()) << first.error().message;
+  PrimitiveSpec moved = spec;
+  moved.placement = Location::translation(Vec3(-3.0, 40.0, 2.0));
+  const auto second = build_primitive(moved);
+  ASSERT_TRUE(second.ok()) << second.error().message;
+  EXPECT_TRUE(first.value().shares_body(second.value()));  // one body, two locations
+  EXPECT_FALSE(first.value().is_same(second.value()));
+  EXPECT_NEAR(mass_properties(second.value()).volume, mass_properties(first.value()).volume, 1e-9);
+  EXPECT_TRUE(check_shape(second.value()).valid());
+  // [0,6]×[0,5] under z = 7 + 0.4·y: mean height 7 + 0.4·2.5 = 8.
+  EXPECT_NEAR(mass_properties(second.value()).volume, 30.0 * 8.0, 1e-6);
+
+  PrimitiveSpec other = spec;
+  other.clips[0].w() += 1.0 * n.z();  // one metre higher: another solid
+  const auto third = build_primitive(other);
+  ASSERT_TRUE(third.ok()) << third.error().message;
+  EXPECT_FALSE(third.value().shares_body(first.value()));
+  EXPECT_NEAR(mass_properties(third.value()).volume, 30.0 * 9.0, 1e-6);
+
+  PrimitiveSpec below = spec;
+  below.clips = {Eigen::Vector4d(0, 0, 1, -1.0)};
+  const auto error = build_primitive(below);
+  const auto again = build_primitive(below);
+  ASSERT_FALSE(error.ok());
+  ASSERT_FALSE(again.ok());
+  EXPECT_EQ(again.error().code, error.error().code);
+  EXPECT_EQ(again.error().message, error.error().message);
+}
+
 }  // namespace
 }  // namespace csgtile::kernel
