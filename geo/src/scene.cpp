@@ -203,6 +203,9 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
     if (q.contains("rms") && q["rms"].is_number()) fq.rms = q["rms"].get<double>();
     if (q.contains("coverage") && q["coverage"].is_number())
       fq.coverage = q["coverage"].get<double>();
+    if (q.contains("sigma") && q["sigma"].is_number()) fq.sigma = q["sigma"].get<double>();
+    if (q.contains("within_2sigma") && q["within_2sigma"].is_number())
+      fq.within_2sigma = q["within_2sigma"].get<double>();
     out.quality = fq;
   }
   if (j.contains("building")) {
@@ -361,6 +364,8 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
     j["quality"] = {{"inliers", p.quality->inliers},
                     {"rms", p.quality->rms},
                     {"coverage", p.quality->coverage}};
+    if (p.quality->sigma) j["quality"]["sigma"] = *p.quality->sigma;
+    if (p.quality->within_2sigma) j["quality"]["within_2sigma"] = *p.quality->within_2sigma;
   }
   if (!p.building.empty()) j["building"] = p.building;
   return j;

@@ -288,13 +288,20 @@ std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::Boundin
                         double coverage, const kernel::BoundingBox& region, double cell,
                         const PrimitiveOptions& o);
 
-/// RMS distance of the points `members` (indices into `points`) to the boundary of `solid`,
-/// a primitive's built solid (model_distance.cpp): "the RMSE of its points to the model".
-/// Measured on its tessellation at `chordal_tolerance` (exact for planar faces, within the
-/// tolerance for curved ones). nullopt when there is no member or the solid cannot be meshed.
-std::optional<double> boundary_rms(const kernel::Shape& solid, std::span<const Vec3> points,
-                                   std::span<const std::uint32_t> members,
-                                   double chordal_tolerance);
+/// How far a primitive's points lie from its solid: their RMS distance ("the RMSE of its
+/// points to the model") and the share of them within `near` of it.
+struct BoundaryFit {
+  double rms = 0.0;
+  double share_near = 0.0;
+};
+
+/// The distances of the points `members` (indices into `points`) to the boundary of `solid`,
+/// a primitive's built solid (model_distance.cpp), measured on its tessellation at
+/// `chordal_tolerance` (exact for planar faces, within the tolerance for curved ones).
+/// nullopt when there is no finite member or the solid cannot be meshed.
+std::optional<BoundaryFit> boundary_fit(const kernel::Shape& solid, std::span<const Vec3> points,
+                                        std::span<const std::uint32_t> members,
+                                        double chordal_tolerance, double near);
 
 /// One ground per building (bases.cpp): vertical extrusions whose footprint boxes touch and
 /// whose bases lie within `tolerance` above the lowest of them are lowered onto it (height

@@ -41,9 +41,9 @@ double triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec
 
 }  // namespace
 
-std::optional<double> boundary_rms(const kernel::Shape& solid, std::span<const Vec3> points,
-                                   std::span<const std::uint32_t> members,
-                                   double chordal_tolerance) {
+std::optional<BoundaryFit> boundary_fit(const kernel::Shape& solid, std::span<const Vec3> points,
+                                        std::span<const std::uint32_t> members,
+                                        double chordal_tolerance, double near) {
   if (members.empty()) return std::nullopt;
   kernel::TessellationOptions t;
   t.chordal_tolerance = chordal_tolerance;
@@ -62,7 +62,7 @@ std::optional<double> boundary_rms(const kernel::Shape& solid, std::span<const V
     triangles.push_back(tri);
   }
   double sum = 0.0;
-  std::size_t counted = 0;
+  std::size_t counted = 0, within = 0;
   for (const std::uint32_t i : members) {
     const Vec3& p = points[i];
     if (!p.allFinite()) continue;
@@ -75,9 +75,11 @@ std::optional<double> boundary_rms(const kernel::Shape& solid, std::span<const V
     }
     sum += best;
     ++counted;
+    if (best <= near * near) ++within;
   }
   if (counted == 0) return std::nullopt;
-  return std::sqrt(sum / static_cast<double>(counted));
+  const auto n = static_cast<double>(counted);
+  return BoundaryFit{std::sqrt(sum / n), static_cast<double>(within) / n};
 }
 
 }  // namespace csgtile::fit::detail

@@ -102,6 +102,9 @@ class Builder {
     return in;
   }
   std::string coaxial_overlap(const PrimitiveSpec& spec) const;
+  // σ of the region's scan (estimate_noise where it is flattest), found once; 0 when the
+  // region has too few points to tell.
+  double region_sigma();
   bool take(const detail::Proposal& proposal);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what);
@@ -119,6 +122,7 @@ class Builder {
   std::vector<PlanePatch> patches_;
   kernel::BoundingBox region_box_;  // of the region's finite points
   FittedPrimitives out_;
+  std::optional<double> sigma_;  // region_sigma()
 };
 
 }  // namespace csgtile::fit::detail

@@ -86,13 +86,17 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   geo::FitQuality q;
   q.inliers = static_cast<long long>(members.size());
   // The RMS distance of its points to its solid (the model), on a mesh finer than the fit's
-  // tolerance; when that cannot be measured, to the surfaces their RANSAC shapes found.
+  // tolerance, and the share within 2σ of it; when that cannot be measured, to the surfaces
+  // their RANSAC shapes found.
   const double chordal = std::clamp(0.25 * ransac_.epsilon, 0.001, 0.05);
-  if (const auto rms = detail::boundary_rms(solid.value(), points_, members, chordal)) {
-    q.rms = *rms;
+  const double sigma = region_sigma();
+  double within = 0.0;
+  if (const auto fit = detail::boundary_fit(solid.value(), points_, members, chordal, 2 * sigma)) {
+    q.rms = fit->rms;
+    within = fit->share_near;
   } else {
     double sum = 0.0;
-    std::size_t counted = 0;
+    std::size_t counted = 0, near = 0;
     for (auto i : members) {
       const int s = shapes_.assignment[i];
       if (s < 0) continue;
@@ -100,8 +104,14 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
           surface_distance(shapes_.shapes[static_cast<std::size_t>(s)].surface, points_[i]);
       sum += d * d;
       ++counted;
+      if (std::abs(d) <= 2 * sigma) ++near;
     }
     q.rms = counted > 0 ? std::sqrt(sum / static_cast<double>(counted)) : 0.0;
+    within = counted > 0 ? static_cast<double>(near) / static_cast<double>(counted) : 0.0;
+  }
+  if (sigma > 0.0) {
+    q.sigma = sigma;
+    q.within_2sigma = within;
   }
   q.coverage = coverage;
   p.quality = q;
@@ -253,6 +263,21 @@ bool Builder::take(const detail::Proposal& proposal) {
   if (out_.primitives.size() == before) return false;
   for (int s : proposal.shapes) absorbed_[static_cast<std::size_t>(s)] = 1;
   return true;
+}
+
+double Builder::region_sigma() {
+  if (!sigma_) {
+    // The RANSAC's own estimate when it derived its epsilon, else the same estimate (the 5 %
+    // quantile of the neighbourhoods' RMS distance to their plane) over the region's points.
+    double sigma = shapes_.noise;
+    if (!(sigma > 0.0)) {
+      std::vector<std::uint32_t> all(points_.size());
+      for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
+      sigma = detail::estimate_noise(points_, all, 0.05);
+    }
+    sigma_ = std::isfinite(sigma) && sigma > 0.0 ? sigma : 0.0;
+  }
+  return *sigma_;
 }
 
 FittedPrimitives Builder::run() {

@@ -19,11 +19,18 @@ kernel::Shape built(const kernel::PrimitiveSpec& spec) {
   return s.value();
 }
 
-std::optional<double> rms(const kernel::Shape& solid, const std::vector<Vec3>& points,
-                          double chordal = 0.001) {
+std::optional<BoundaryFit> measured(const kernel::Shape& solid, const std::vector<Vec3>& points,
+                                    double near, double chordal = 0.001) {
   std::vector<std::uint32_t> members(points.size());
   for (std::uint32_t i = 0; i < members.size(); ++i) members[i] = i;
-  return boundary_rms(solid, points, members, chordal);
+  return boundary_fit(solid, points, members, chordal, near);
+}
+
+std::optional<double> rms(const kernel::Shape& solid, const std::vector<Vec3>& points,
+                          double chordal = 0.001) {
+  const auto fit = measured(solid, points, 0.0, chordal);
+  if (!fit) return std::nullopt;
+  return fit->rms;
 }
 
 TEST(FitModelDistance, PointsInsideOnAndOutsideABox) {
@@ -47,6 +54,18 @@ TEST(FitModelDistance, ARoofPartMeasuresItsPointsToItsClippedSolid) {
   const kernel::Shape house = built(test::gable_house());
   EXPECT_NEAR(*rms(house, {{5, 1, 6}, {5, 3, 8}, {2, 5, 6}}), 0.0, 1e-9);
   EXPECT_NEAR(*rms(house, {{5, 3, 8.5}}), 0.5, 1e-9);
+}
+
+// The share near the model: of four points 0, 0.05, 0.1 and 1 m from a box's face, those
+// within 2σ = 0.1 m (the bound included) are three.
+TEST(FitModelDistance, ShareOfPointsWithinADistance) {
+  const kernel::Shape box = built(test::box_at({0, 0, 0}, {10, 10, 10}));
+  const std::vector<Vec3> points{{5, 5, 10}, {5, 5, 10.05}, {5, 5, 9.9}, {5, 5, 11}};
+  const auto fit = measured(box, points, 2 * 0.05);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_DOUBLE_EQ(fit->share_near, 0.75);
+  EXPECT_NEAR(fit->rms, std::sqrt((0.0025 + 0.01 + 1.0) / 4.0), 1e-12);
+  EXPECT_DOUBLE_EQ(measured(box, points, 0.0)->share_near, 0.25);  // the point on the face
 }
 
 TEST(FitModelDistance, NothingToMeasure) {

@@ -467,7 +467,7 @@ TEST(SceneJson, RoundTripsThroughTheParser) {
     ASSERT_TRUE(made.ok());
     Scene scene = made->scene;
     scene.frame = SceneFrame{"EPSG:28992+5709", {121500.0, 487000.25, -1.5}};
-    scene.primitives[0].quality = FitQuality{120, 0.004, 0.75};
+    scene.primitives[0].quality = FitQuality{120, 0.004, 0.75, 0.01, 0.875};
     const std::string text = scene_to_json(scene);
     auto back = parse_scene(text);
     ASSERT_TRUE(back.ok()) << back.error().message;
@@ -479,6 +479,8 @@ TEST(SceneJson, RoundTripsThroughTheParser) {
     ASSERT_EQ(back->primitives.size(), scene.primitives.size());
     ASSERT_TRUE(back->primitives[0].quality);
     EXPECT_EQ(back->primitives[0].quality->inliers, 120);
+    EXPECT_EQ(back->primitives[0].quality->sigma, 0.01);
+    EXPECT_EQ(back->primitives[0].quality->within_2sigma, 0.875);
     for (std::size_t i = 0; i < scene.primitives.size(); ++i) {
       const PrimitiveSpec& a = scene.primitives[i].spec;
       const PrimitiveSpec& b = back->primitives[i].spec;

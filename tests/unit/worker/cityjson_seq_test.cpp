@@ -61,6 +61,7 @@ std::vector<IndexObject> build_objects() {
   out[0].primitives[0].inliers = 100;
   out[0].primitives[0].rms = 0.01;
   out[0].primitives[0].coverage = 0.9;
+  out[0].primitives[0].within_2sigma = 0.95;
   out.push_back(object("block", leaf(box({10, 0, 0}, {2, 3, 4}), "block")));
   out.push_back(object("drilled", combine({leaf(box({20, 0, 0}, {3, 2, 2}), "slab"),
                                            leaf(cylinder({21.5, 1, -1}, 0.5, 4), "bore")},
@@ -293,6 +294,7 @@ TEST_F(CityJsonSeqTest, OneFeaturePerObjectWithItsIdAttributesAndIntegerVertices
   EXPECT_EQ(fused["primitive_types"], Json::array({"box", "cylinder"}));
   EXPECT_DOUBLE_EQ(fused["fit_rms"].get<double>(), 0.01);
   EXPECT_DOUBLE_EQ(fused["fit_coverage"].get<double>(), 0.9);
+  EXPECT_DOUBLE_EQ(fused["fit_within_2sigma"].get<double>(), 0.95);
   EXPECT_FALSE(city_object(feature("block"))["attributes"].contains("fit_rms"));
 }
 

@@ -171,6 +171,7 @@ TEST(RunReport, BuildingsAreListedWorstFirst) {
   ReportBuilding good{"2.2", 0.04, 1.5, 9.25, 2, ""};
   ReportBuilding rough{"2.2", 0.31, 0.5, 12.0, 6, ""};
   ReportBuilding failed{"1.2", 0.02, 0.0, 7.0, 3, "LoD2.2: unsupported: <no pcurve>"};
+  good.fit_within_2sigma = 0.934;
   in.cells[0].objects[0].building = good;
   in.cells[0].objects[1].building = rough;
   ReportObject block{"block", {"extrusion"}, 300.0, false, {}, failed};
@@ -193,6 +194,7 @@ TEST(RunReport, BuildingsAreListedWorstFirst) {
   EXPECT_NE(table.find("LoD2.2: unsupported: &lt;no pcurve&gt;"), std::string::npos) << table;
   EXPECT_NE(table.find("<td class=\"num\">0.31</td>"), std::string::npos) << table;
   EXPECT_NE(table.find("<td class=\"num\">9.25</td>"), std::string::npos) << table;
+  EXPECT_NE(table.find("<td class=\"num\">93 %</td>"), std::string::npos) << table;
 }
 
 TEST(RunReport, SameInputGivesSameBytesWhateverTheTimings) {

@@ -78,6 +78,7 @@ const std::vector<IndexObject>& sample_objects() {
     out[0].primitives[1].inliers = 300;
     out[0].primitives[1].rms = 0.02;
     out[0].primitives[1].coverage = 0.5;
+    out[0].primitives[0].within_2sigma = 0.9;  // the other has none: the share is its own
     out.push_back(object(
         "drilled", combine(leaf(box({5, 0, 0}, {3, 2, 2}), "block"),
                            leaf(cylinder({6.5, 1, -1}, 0.5, 4), "hole"), kernel::BooleanOp::Cut)));
@@ -411,7 +412,7 @@ TEST_F(TopologyIndexTest, ObjectsLayerAttributes) {
   const auto index = reader();
   const auto rows = index->sql(
       "SELECT object_id, cell, primitive_count, primitive_types, volume, valid, fit_rms, "
-      "fit_coverage, min_x, max_z FROM objects ORDER BY fid");
+      "fit_coverage, min_x, max_z, fit_within_2sigma FROM objects ORDER BY fid");
   ASSERT_TRUE(rows.ok());
   ASSERT_EQ(rows->size(), 6u);
   const auto& fused = rows.value()[0];
@@ -425,6 +426,8 @@ TEST_F(TopologyIndexTest, ObjectsLayerAttributes) {
   EXPECT_NEAR(std::stod(fused[7]), (100 * 0.9 + 300 * 0.5) / 400, 1e-15);
   EXPECT_DOUBLE_EQ(std::stod(fused[8]), 155000.0);
   EXPECT_DOUBLE_EQ(std::stod(fused[9]), 1.5);
+  EXPECT_DOUBLE_EQ(std::stod(fused[10]), 0.9);
+  EXPECT_EQ(rows.value()[2][10], "NULL");  // not fitted
   EXPECT_EQ(rows.value()[1][3], "box,cylinder");
   EXPECT_EQ(rows.value()[2][6], "NULL");  // not fitted
   // CSG nodes, face sources and primitives of the drilled block.

@@ -72,7 +72,9 @@ std::optional<ReportBuilding> report_building(const IndexObject& object, double 
   if (!is_building(object)) return std::nullopt;
   ReportBuilding b;
   b.lod = lod_reached(object);
-  b.fit_rms = fit_summary(object.primitives).rms;
+  const FitSummary fit = fit_summary(object.primitives);
+  b.fit_rms = fit.rms;
+  b.fit_within_2sigma = fit.within_2sigma;
   if (const auto& h = object.heights) {
     b.h_ground = h->ground + origin_z;
     b.h_roof_70p = h->roof_70p + origin_z;
@@ -194,9 +196,13 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");
         if (!q.is_object()) continue;
-        quality[p.at("label").get<std::string>()] = {q.at("inliers").get<long long>(),
-                                                     q.at("rms").get<double>(),
-                                                     q.at("coverage").get<double>()};
+        geo::FitQuality fq;
+        fq.inliers = q.at("inliers").get<long long>();
+        fq.rms = q.at("rms").get<double>();
+        fq.coverage = q.at("coverage").get<double>();
+        if (q.contains("sigma")) fq.sigma = q.at("sigma").get<double>();
+        if (q.contains("within_2sigma")) fq.within_2sigma = q.at("within_2sigma").get<double>();
+        quality[p.at("label").get<std::string>()] = fq;
       }
       io.primitives = model_primitives(
           io.model, [&quality](const std::string& label) -> std::optional<geo::FitQuality> {

@@ -513,6 +513,7 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   const FitSummary fit = fit_summary(object.primitives);
   if (fit.rms) a["fit_rms"] = *fit.rms;
   if (fit.coverage) a["fit_coverage"] = *fit.coverage;
+  if (fit.within_2sigma) a["fit_within_2sigma"] = *fit.within_2sigma;
   if (geometry) {
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;

@@ -28,8 +28,9 @@ struct ObjectRecord {
   kernel::BoundingBox bounds;  ///< in the SRS
   bool valid = false;
   std::optional<double> fit_rms, fit_coverage;
-  bool has_geometry = false;       ///< false: NULL geometry (tessellation failed)
-  std::vector<Polygon3> boundary;  ///< in the SRS
+  std::optional<double> fit_within_2sigma;  ///< share of its fitted points within 2σ
+  bool has_geometry = false;                ///< false: NULL geometry (tessellation failed)
+  std::vector<Polygon3> boundary;           ///< in the SRS
   /// Buildings (IndexObject::heights, lod12): the LoD reached ("2.2", "1.2"), heights in the
   /// SRS, why the model or the block is missing, and the block's boundary (lod12 layer).
   std::optional<std::string> lod, fuse_error, lod12_error;

@@ -437,22 +437,26 @@ std::string buildings_table(const ReportInput& in) {
                      " reached LoD2.2; every building with a block has LoD1.2 too.</p>\n";
   html +=
       "<table class=\"buildings\">\n<tr><th>object</th><th>cell</th><th>LoD</th><th>fit RMS "
-      "(m)</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof surfaces</th><th>footprint</th>"
+      "(m)</th><th>within 2σ</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof "
+      "surfaces</th><th>footprint</th>"
       "<th>problem</th>"
       "</tr>\n";
   auto metres = [](const std::optional<double>& v) {
     return v && std::isfinite(*v) ? fixed(*v, 2) : std::string("n/a");
+  };
+  auto share = [](const std::optional<double>& v) {
+    return v && std::isfinite(*v) ? fixed(100.0 * *v, 0) + " %" : std::string("n/a");
   };
   for (std::size_t k = 0; k < rows.size() && k < kRows; ++k) {
     const ReportBuilding& b = *rows[k].object->building;
     html += std::string("<tr") + (b.lod == "2.2" ? "" : " class=\"bad\"") + "><td>" +
             escape_html(rows[k].object->id) + "</td><td>" + escape_html(*rows[k].cell) +
             "</td><td>" + escape_html(b.lod.empty() ? "none" : b.lod) + "</td><td class=\"num\">" +
-            metres(b.fit_rms) + "</td><td class=\"num\">" + metres(b.h_ground) +
-            "</td><td class=\"num\">" + metres(b.h_roof_70p) + "</td><td class=\"num\">" +
-            std::to_string(b.roof_surfaces) + "</td><td>" +
-            escape_html(b.footprint_id.empty() ? "derived" : b.footprint_id) + "</td><td>" +
-            escape_html(b.problem) + "</td></tr>\n";
+            metres(b.fit_rms) + "</td><td class=\"num\">" + share(b.fit_within_2sigma) +
+            "</td><td class=\"num\">" + metres(b.h_ground) + "</td><td class=\"num\">" +
+            metres(b.h_roof_70p) + "</td><td class=\"num\">" + std::to_string(b.roof_surfaces) +
+            "</td><td>" + escape_html(b.footprint_id.empty() ? "derived" : b.footprint_id) +
+            "</td><td>" + escape_html(b.problem) + "</td></tr>\n";
   }
   html += "</table>\n";
   if (rows.size() > kRows) {

@@ -49,6 +49,7 @@ struct ReportBuilding {
   long long roof_surfaces = 0;
   std::string problem;         ///< why LoD2.2 or LoD1.2 is missing; empty when neither is
   std::string footprint_id{};  ///< the footprint it stands on; empty: outline derived
+  std::optional<double> fit_within_2sigma{};  ///< share of its fitted points within 2σ
 };
 
 struct ReportObject {

@@ -52,6 +52,7 @@ PrimitiveInfo primitive_info(int node, const kernel::CsgNode& leaf,
     info.inliers = quality->inliers;
     info.rms = quality->rms;
     info.coverage = quality->coverage;
+    info.within_2sigma = quality->within_2sigma;
   }
   return info;
 }

@@ -424,6 +424,7 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
     const FitSummary fit = fit_summary(object.primitives);
     o.fit_rms = fit.rms;
     o.fit_coverage = fit.coverage;
+    o.fit_within_2sigma = fit.within_2sigma;
     auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
                                       maps[static_cast<int>(ShapeKind::Edge)], options);
     if (boundary.ok()) {
@@ -466,7 +467,7 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
 
 // Weights: inlier counts when any fitted primitive has them, else equal.
 FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {
-  double weight = 0.0, squares = 0.0, coverage = 0.0;
+  double weight = 0.0, squares = 0.0, coverage = 0.0, near_weight = 0.0, near = 0.0;
   bool any = false;
   bool counted = std::any_of(primitives.begin(), primitives.end(), [](const PrimitiveInfo& p) {
     return p.rms && p.inliers && *p.inliers > 0;
@@ -478,11 +479,16 @@ FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {
     weight += w;
     squares += w * *p.rms * *p.rms;
     coverage += w * p.coverage.value_or(0.0);
+    if (p.within_2sigma) {
+      near_weight += w;
+      near += w * *p.within_2sigma;
+    }
   }
   FitSummary out;
   if (!any || weight <= 0.0) return out;
   out.rms = std::sqrt(squares / weight);
   out.coverage = coverage / weight;
+  if (near_weight > 0.0) out.within_2sigma = near / near_weight;
   return out;
 }
 

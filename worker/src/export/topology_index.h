@@ -39,8 +39,9 @@ struct PrimitiveInfo {
   std::string id;    ///< scene or fit id (may be empty)
   std::string type;  ///< kernel::primitive_type_name, e.g. "cylinder"
   std::optional<long long> inliers;
-  std::optional<double> rms;       ///< fit RMS error (model units)
-  std::optional<double> coverage;  ///< fit coverage in [0, 1]
+  std::optional<double> rms;            ///< fit RMS error (model units)
+  std::optional<double> coverage;       ///< fit coverage in [0, 1]
+  std::optional<double> within_2sigma;  ///< share of its points within 2σ of its solid
 };
 
 /// One object of the index: a solid (or a compound of solids) with its CSG history.
@@ -82,8 +83,9 @@ std::string building_problem(const IndexObject& object);
 
 /// Fit quality of an object: RMS and coverage of its fitted primitives, weighted by their
 /// inlier counts (equal weights when no counts are known); both unset when none was fitted.
+/// The share of its points within 2σ, likewise over the primitives that have one.
 struct FitSummary {
-  std::optional<double> rms, coverage;
+  std::optional<double> rms, coverage, within_2sigma;
 };
 FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives);
 

@@ -24,6 +24,10 @@ struct FitQuality {
   long long inliers = 0;
   double rms = 0.0;
   double coverage = 0.0;
+  /// σ (m): the noise of the region's scan where it is flattest (fit's estimate_noise); absent
+  /// when the region has too few points to tell.
+  std::optional<double> sigma;
+  std::optional<double> within_2sigma;  ///< share of its points within 2σ of its solid
 };
 
 struct ScenePrimitive {
