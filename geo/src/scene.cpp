@@ -31,6 +31,20 @@ const char* boolean_op_name(BooleanOp op) {
 
 namespace {
 
+// A primitive's "quality" object; keys absent or of another type stay at their defaults.
+FitQuality quality_from(const json& q) {
+  FitQuality fq;
+  if (q.contains("inliers") && q["inliers"].is_number_integer())
+    fq.inliers = q["inliers"].get<long long>();
+  if (q.contains("rms") && q["rms"].is_number()) fq.rms = q["rms"].get<double>();
+  if (q.contains("coverage") && q["coverage"].is_number())
+    fq.coverage = q["coverage"].get<double>();
+  if (q.contains("sigma") && q["sigma"].is_number()) fq.sigma = q["sigma"].get<double>();
+  if (q.contains("within_2sigma") && q["within_2sigma"].is_number())
+    fq.within_2sigma = q["within_2sigma"].get<double>();
+  return fq;
+}
+
 // Reads the fields of one primitive; every failure names the primitive and the key.
 class PrimitiveReader {
  public:
@@ -195,19 +209,7 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
     if (!j["id"].is_string()) return r.fail("id", "must be a string");
     out.id = j["id"].get<std::string>();
   }
-  if (j.contains("quality") && j["quality"].is_object()) {
-    const json& q = j["quality"];
-    FitQuality fq;
-    if (q.contains("inliers") && q["inliers"].is_number_integer())
-      fq.inliers = q["inliers"].get<long long>();
-    if (q.contains("rms") && q["rms"].is_number()) fq.rms = q["rms"].get<double>();
-    if (q.contains("coverage") && q["coverage"].is_number())
-      fq.coverage = q["coverage"].get<double>();
-    if (q.contains("sigma") && q["sigma"].is_number()) fq.sigma = q["sigma"].get<double>();
-    if (q.contains("within_2sigma") && q["within_2sigma"].is_number())
-      fq.within_2sigma = q["within_2sigma"].get<double>();
-    out.quality = fq;
-  }
+  if (j.contains("quality") && j["quality"].is_object()) out.quality = quality_from(j["quality"]);
   if (j.contains("building")) {
     if (!j["building"].is_string()) return r.fail("building", "must be a string");
     out.building = j["building"].get<std::string>();
@@ -299,6 +301,14 @@ namespace {
 
 using OrderedJson = nlohmann::ordered_json;
 
+// A primitive's "quality" object, keys in a fixed order.
+OrderedJson quality_json(const FitQuality& q) {
+  OrderedJson j = {{"inliers", q.inliers}, {"rms", q.rms}, {"coverage", q.coverage}};
+  if (q.sigma) j["sigma"] = *q.sigma;
+  if (q.within_2sigma) j["within_2sigma"] = *q.within_2sigma;
+  return j;
+}
+
 // + 0.0 turns -0 into 0: the same scene prints the same bytes whichever sign a zero got.
 double clean(double v) { return v + 0.0; }
 
@@ -360,13 +370,7 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
     rows.push_back({clean(m(r, 0)), clean(m(r, 1)), clean(m(r, 2)), clean(m(r, 3))});
   }
   j["placement"] = std::move(rows);
-  if (p.quality) {
-    j["quality"] = {{"inliers", p.quality->inliers},
-                    {"rms", p.quality->rms},
-                    {"coverage", p.quality->coverage}};
-    if (p.quality->sigma) j["quality"]["sigma"] = *p.quality->sigma;
-    if (p.quality->within_2sigma) j["quality"]["within_2sigma"] = *p.quality->within_2sigma;
-  }
+  if (p.quality) j["quality"] = quality_json(*p.quality);
   if (!p.building.empty()) j["building"] = p.building;
   return j;
 }
@@ -421,6 +425,16 @@ Result<Scene> read_scene(const std::filesystem::path& path) {
   auto scene = parse_scene(buf.str());
   if (!scene.ok()) return Error{scene.error().code, path.string() + ": " + scene.error().message};
   return scene;
+}
+
+std::string fit_quality_to_json(const FitQuality& quality) { return quality_json(quality).dump(); }
+
+kernel::Result<FitQuality> parse_fit_quality(std::string_view text) {
+  const json q = json::parse(text, nullptr, false);
+  if (q.is_discarded() || !q.is_object()) {
+    return kernel::Error{kernel::ErrorCode::InvalidArgument, "fit quality: not a JSON object"};
+  }
+  return quality_from(q);
 }
 
 }  // namespace csgtile::geo

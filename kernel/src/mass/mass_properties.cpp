@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <optional>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -350,43 +351,49 @@ class FaceIntegrator {
     return integrate_panels_indexed<M>(f, u_ref_, u, panels);
   }
 
-  // The volume integrand alone (solid_volume) on a plane p = o + s·x + v·y, N = x × y: linear
-  // in s, integrated in closed form, (u − u_ref)·((o + v·y)·N + x·N (u + u_ref)/2) / 3.
-  // Equal to the Gauss sum of the other path up to rounding.
-  double plane_inner_volume(double u, double v) const {
-    if (!plane_ready_) {
+  // A plane p = o + s·x + v·y in world coordinates, N = x × y, and the volume integrand's
+  // coefficients, found once per face.
+  struct PlaneTerms {
+    Vec3 o, x, y, n;
+    double area = 0.0;                    // |N|
+    double o3 = 0.0, x3 = 0.0, y3 = 0.0;  // o·N/3, x·N/3, y·N/3
+  };
+  const PlaneTerms& plane_terms() const {
+    if (!plane_) {
       const SurfacePoint origin = evaluator_.evaluate(0.0, 0.0);
       const Vec3 n = origin.su.cross(origin.sv);
-      plane_o_ = origin.p.dot(n) / 3.0;
-      plane_x_ = origin.su.dot(n) / 3.0;
-      plane_y_ = origin.sv.dot(n) / 3.0;
-      plane_ready_ = true;
+      plane_ = PlaneTerms{origin.p,
+                          origin.su,
+                          origin.sv,
+                          n,
+                          n.norm(),
+                          origin.p.dot(n) / 3.0,
+                          origin.su.dot(n) / 3.0,
+                          origin.sv.dot(n) / 3.0};
     }
-    return (u - u_ref_) * ((plane_o_ + v * plane_y_) + plane_x_ * 0.5 * (u + u_ref_));
+    return *plane_;
   }
-  // All moments on a plane p = a + s·x (a = o + v·y), N = x × y, in closed form (each
-  // integrand is a polynomial of degree at most 2 in s): area |N|·d, volume by
-  // plane_inner_volume, first moments N_i/2 · d·(a_i² + a_i x_i (u + u_ref) + x_i² (u² + u·u_ref +
-  // u_ref²)/3), d = u − u_ref. Equal to the Gauss sums up to rounding.
+  // The volume integrand alone (solid_volume) on a plane: linear in s, integrated in closed
+  // form, (u − u_ref)·((o + v·y)·N + x·N (u + u_ref)/2) / 3. Equal to the Gauss sum of the
+  // other path up to rounding.
+  double plane_inner_volume(double u, double v) const {
+    const PlaneTerms& p = plane_terms();
+    return (u - u_ref_) * ((p.o3 + v * p.y3) + p.x3 * 0.5 * (u + u_ref_));
+  }
+  // All moments on a plane p = a + s·x (a = o + v·y) in closed form (each integrand is a
+  // polynomial of degree at most 2 in s): area |N|·d, volume by plane_inner_volume, first
+  // moments N_i/2 · d·(a_i² + a_i x_i (u + u_ref) + x_i² (u² + u·u_ref + u_ref²)/3),
+  // d = u − u_ref. Equal to the Gauss sums up to rounding.
   Moments plane_inner_moments(double u, double v) const {
-    if (!plane_moments_ready_) {
-      const SurfacePoint origin = evaluator_.evaluate(0.0, 0.0);
-      plane_origin_ = origin.p;
-      plane_su_ = origin.su;
-      plane_sv_ = origin.sv;
-      plane_n_ = origin.su.cross(origin.sv);
-      plane_area_ = plane_n_.norm();
-      plane_moments_ready_ = true;
-    }
+    const PlaneTerms& p = plane_terms();
     const double r = u_ref_, d = u - r, sum = u + r, squares = (u * u + u * r + r * r) / 3.0;
-    const Vec3 a = plane_origin_ + v * plane_sv_;
-    const Vec3& x = plane_su_;
+    const Vec3 a = p.o + v * p.y;
     Moments m;
-    m[0] = plane_area_ * d;
+    m[0] = p.area * d;
     m[1] = plane_inner_volume(u, v);  // the very numbers solid_volume sums
     for (int i = 0; i < 3; ++i) {
       m[static_cast<std::size_t>(2 + i)] =
-          0.5 * plane_n_[i] * d * (a[i] * a[i] + a[i] * x[i] * sum + x[i] * x[i] * squares);
+          0.5 * p.n[i] * d * (a[i] * a[i] + a[i] * p.x[i] * sum + p.x[i] * p.x[i] * squares);
     }
     return m;
   }
@@ -411,12 +418,8 @@ class FaceIntegrator {
   double u_ref_;
   mutable double trig_u_ = 0;  // inner()'s cache: the u of trig_
   mutable std::vector<std::pair<double, double>> trig_;
-  mutable bool plane_ready_ = false, cylinder_ready_ = false;  // volume-only caches
-  mutable double plane_o_ = 0, plane_x_ = 0, plane_y_ = 0;
-  mutable bool plane_moments_ready_ = false;  // plane_inner_moments' cache
-  mutable Vec3 plane_origin_ = Vec3::Zero(), plane_su_ = Vec3::Zero(), plane_sv_ = Vec3::Zero(),
-               plane_n_ = Vec3::Zero();
-  mutable double plane_area_ = 0;
+  mutable std::optional<PlaneTerms> plane_;  // plane_terms()
+  mutable bool cylinder_ready_ = false;      // cylinder_inner_volume's cache
   mutable double cylinder_u_ = 0;
   mutable std::array<double, 2> cylinder_ab_{};
   bool angular_u_ = false, angular_v_ = false;

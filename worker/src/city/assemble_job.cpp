@@ -32,10 +32,7 @@ struct CellPrimitive {
 
 ordered_json quality_json(const std::optional<geo::FitQuality>& q) {
   if (!q) return nullptr;
-  ordered_json j{{"inliers", q->inliers}, {"rms", q->rms}, {"coverage", q->coverage}};
-  if (q->sigma) j["sigma"] = *q->sigma;
-  if (q->within_2sigma) j["within_2sigma"] = *q->within_2sigma;
-  return j;
+  return ordered_json::parse(geo::fit_quality_to_json(*q));
 }
 
 }  // namespace

@@ -196,13 +196,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");
         if (!q.is_object()) continue;
-        geo::FitQuality fq;
-        fq.inliers = q.at("inliers").get<long long>();
-        fq.rms = q.at("rms").get<double>();
-        fq.coverage = q.at("coverage").get<double>();
-        if (q.contains("sigma")) fq.sigma = q.at("sigma").get<double>();
-        if (q.contains("within_2sigma")) fq.within_2sigma = q.at("within_2sigma").get<double>();
-        quality[p.at("label").get<std::string>()] = fq;
+        auto fq = geo::parse_fit_quality(q.dump());
+        if (fq.ok()) quality[p.at("label").get<std::string>()] = fq.value();
       }
       io.primitives = model_primitives(
           io.model, [&quality](const std::string& label) -> std::optional<geo::FitQuality> {

@@ -79,6 +79,12 @@ kernel::Result<Scene> parse_scene(std::string_view json);
 /// re-orthonormalises R, so a general rotation may move in its last bits when read back.
 std::string scene_to_json(const Scene& scene);
 
+/// A primitive's fit quality as the scene format writes it (its "quality" object, compact),
+/// for other records that carry it (a cell's assembly.json); parse_fit_quality reads it back
+/// (absent keys stay at their defaults). Error: InvalidArgument when `json` is no object.
+std::string fit_quality_to_json(const FitQuality& quality);
+kernel::Result<FitQuality> parse_fit_quality(std::string_view json);
+
 /// Reads and parses a scene file. Errors: IoError (cannot read), then as parse_scene.
 kernel::Result<Scene> read_scene(const std::filesystem::path& path);
 

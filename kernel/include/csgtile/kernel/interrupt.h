@@ -40,7 +40,7 @@ struct Interrupt {
   /// Status::ok() while it has not fired, else error(where).
   Status check(const std::string& where) const { return fired() ? Status(error(where)) : Status(); }
 
-  /// Same token (stop state), deadline and limit.
+  /// Same token (stop state), deadline and limit (options holding one compare with it).
   bool operator==(const Interrupt&) const = default;
 };
 
