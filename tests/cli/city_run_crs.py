@@ -57,6 +57,8 @@ manifest = json.load(open(f"{rundir}/manifest.json"))
 assert manifest["crs"] == "EPSG:28992+5709", manifest["crs"]
 # The datum transformation the run used to place RD New on WGS 84 (3D Tiles, frames).
 assert "Amersfoort" in manifest["crs_to_wgs84"], manifest["crs_to_wgs84"]
+# How NAP heights become ellipsoidal: PROJ's geoid model where its grid is installed, else said.
+assert manifest["crs_heights"], manifest
 assert manifest["dead"] == [], manifest["dead"]
 cells = [c["manifest"]["key"] for c in manifest["cells"]]
 assert cells, manifest

@@ -103,6 +103,8 @@ Json resolved_crs_json(const kernel::Result<geo::Crs>& crs) {
               {"vertical_epsg",
                c.vertical && c.vertical->epsg != 0 ? Json(c.vertical->epsg) : Json(nullptr)},
               {"source", c.source},
+              {"to_wgs84", c.datum.to_wgs84_source},
+              {"heights", c.vertical ? Json(c.vertical->to_ellipsoidal_source) : Json(nullptr)},
               {"warnings", c.warnings},
               {"error", nullptr}};
 }

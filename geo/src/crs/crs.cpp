@@ -1,10 +1,15 @@
-// The CRS model's small functions: units, validation, comparison, reconciliation, text.
+// The CRS model's small functions: the builders' entry points (every one reads through PROJ,
+// proj_model.cpp), units, validation, comparison, reconciliation, text.
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <sstream>
 #include <string>
 
 #include "crs/crs_internal.h"
+#include "crs/geodesy.h"
 
 namespace csgtile::geo {
 
@@ -22,26 +27,6 @@ LinearUnit metre_unit() { return LinearUnit{"metre", 1.0, 9001}; }
 LinearUnit international_foot_unit() { return LinearUnit{"foot", 0.3048, 9002}; }
 LinearUnit us_survey_foot_unit() { return LinearUnit{"US survey foot", 1200.0 / 3937.0, 9003}; }
 AngularUnit degree_unit() { return AngularUnit{"degree", detail::kDegree, 9102}; }
-
-const char* projection_method_name(ProjectionMethod method) {
-  switch (method) {
-    case ProjectionMethod::TransverseMercator:
-      return "Transverse Mercator";
-    case ProjectionMethod::LambertConicConformal1SP:
-      return "Lambert Conic Conformal (1SP)";
-    case ProjectionMethod::LambertConicConformal2SP:
-      return "Lambert Conic Conformal (2SP)";
-    case ProjectionMethod::PolarStereographicA:
-      return "Polar Stereographic (variant A)";
-    case ProjectionMethod::PolarStereographicB:
-      return "Polar Stereographic (variant B)";
-    case ProjectionMethod::ObliqueStereographic:
-      return "Oblique Stereographic";
-    case ProjectionMethod::ComputedByProj:
-      return "computed by PROJ";
-  }
-  return "?";
-}
 
 double Crs::z_unit_metres() const {
   if (kind == CrsKind::Geocentric) return linear_unit.metres;
@@ -62,8 +47,6 @@ bool finite_all(std::initializer_list<double> values) {
 Status invalid(std::string message) {
   return Status(ErrorCode::InvalidArgument, std::move(message));
 }
-
-bool latitude_ok(double lat) { return std::fabs(lat) <= 90.0; }
 
 }  // namespace
 
@@ -105,63 +88,8 @@ Status validate_crs(const Crs& crs) {
     return Status();
   }
   if (!crs.projection) return invalid("projected CRS '" + crs.name + "' has no projection");
-  const Projection& p = *crs.projection;
-  if (p.method == ProjectionMethod::ComputedByProj) {
-    if (p.proj_string.empty()) return invalid(p.method_name + ": no PROJ definition");
-    return Status();
-  }
-  const std::string method = projection_method_name(p.method);
-  if (!finite_all({p.latitude_of_origin_deg, p.longitude_of_origin_deg, p.scale_factor,
-                   p.standard_parallel_1_deg, p.standard_parallel_2_deg, p.false_easting_m,
-                   p.false_northing_m})) {
-    return invalid(method + ": non-finite parameter");
-  }
-  if (!latitude_ok(p.latitude_of_origin_deg) || !latitude_ok(p.standard_parallel_1_deg) ||
-      !latitude_ok(p.standard_parallel_2_deg)) {
-    return invalid(method + ": a latitude parameter is outside ±90 degrees");
-  }
-  if (std::fabs(p.longitude_of_origin_deg) > 360.0) {
-    return invalid(method + ": longitude of origin outside ±360 degrees");
-  }
-  switch (p.method) {
-    case ProjectionMethod::TransverseMercator:
-    case ProjectionMethod::ObliqueStereographic:
-    case ProjectionMethod::LambertConicConformal1SP:
-    case ProjectionMethod::PolarStereographicA:
-      if (!(p.scale_factor > 0)) return invalid(method + ": scale factor must be positive");
-      break;
-    default:
-      break;
-  }
-  if (p.method == ProjectionMethod::LambertConicConformal1SP &&
-      (p.latitude_of_origin_deg == 0.0 || std::fabs(p.latitude_of_origin_deg) == 90.0)) {
-    return invalid(method +
-                   ": latitude of natural origin must be strictly between the equator and a pole");
-  }
-  if (p.method == ProjectionMethod::LambertConicConformal2SP) {
-    if (p.standard_parallel_1_deg + p.standard_parallel_2_deg == 0.0) {
-      return invalid(method + ": standard parallels symmetric about the equator");
-    }
-    if (std::fabs(p.standard_parallel_1_deg) == 90.0 ||
-        std::fabs(p.standard_parallel_2_deg) == 90.0) {
-      return invalid(method + ": a standard parallel at a pole");
-    }
-  }
-  if (p.method == ProjectionMethod::PolarStereographicA &&
-      std::fabs(p.latitude_of_origin_deg) != 90.0) {
-    return invalid(method + ": latitude of natural origin must be ±90, got " +
-                   detail::format_number(p.latitude_of_origin_deg));
-  }
-  if (p.method == ProjectionMethod::PolarStereographicB &&
-      (p.standard_parallel_1_deg == 0.0 || std::fabs(p.standard_parallel_1_deg) == 90.0 ||
-       (std::fabs(p.latitude_of_origin_deg) == 90.0 &&
-        (p.latitude_of_origin_deg > 0) != (p.standard_parallel_1_deg > 0)))) {
-    return invalid(method +
-                   ": the standard parallel must lie strictly between the equator and the pole");
-  }
-  if (p.method == ProjectionMethod::ObliqueStereographic &&
-      std::fabs(p.latitude_of_origin_deg) == 90.0) {
-    return invalid(method + ": latitude of origin at a pole (use a polar stereographic method)");
+  if (crs.projection->proj_string.empty()) {
+    return invalid(crs.projection->method_name + ": no PROJ definition");
   }
   return Status();
 }
@@ -191,9 +119,60 @@ const char* kind_name(CrsKind kind) {
 }
 
 std::string method_label(const Projection& p) {
-  return p.method == ProjectionMethod::ComputedByProj && !p.method_name.empty()
-             ? p.method_name
-             : std::string(projection_method_name(p.method));
+  return p.method_name.empty() ? std::string("PROJ projection") : p.method_name;
+}
+
+// Where two projections are compared: around the first one's origin (its +lat_0 / +lon_0, a
+// UTM zone's central meridian), clamped away from the poles.
+std::vector<GeodeticPoint> sample_points(const Projection& p) {
+  using detail::proj_parameter;
+  double lat0 = proj_parameter(p.proj_string, "lat_0")
+                    .value_or(proj_parameter(p.proj_string, "lat_1").value_or(0.0));
+  double lon0 = proj_parameter(p.proj_string, "lon_0")
+                    .value_or(proj_parameter(p.proj_string, "lonc").value_or(0.0));
+  if (auto zone = proj_parameter(p.proj_string, "zone")) lon0 = -183.0 + 6.0 * *zone;
+  if (auto ts = proj_parameter(p.proj_string, "lat_ts"); ts && std::fabs(lat0) == 90.0) lat0 = *ts;
+  lat0 = std::clamp(lat0, -85.0, 85.0);
+  std::vector<GeodeticPoint> points;
+  for (double dlat : {-0.5, 0.0, 0.5}) {
+    for (double dlon : {-0.5, 0.0, 0.5}) points.push_back({lat0 + dlat, lon0 + dlon, 0.0});
+  }
+  return points;
+}
+
+// nullopt when both projections give the same coordinates (0.5 mm) at the sample points.
+std::optional<std::string> projection_difference(const Crs& a, const Crs& b) {
+  const Projection& pa = *a.projection;
+  const Projection& pb = *b.projection;
+  if (pa.proj_string == pb.proj_string) return std::nullopt;
+  auto ma = detail::CrsMath::create(a);
+  auto mb = detail::CrsMath::create(b);
+  const std::string label_a = method_label(pa) + " (" + pa.proj_string + ")";
+  const std::string label_b = method_label(pb) + " (" + pb.proj_string + ")";
+  if (!ma.ok() || !mb.ok()) return both("projection", label_a, label_b);
+  for (const GeodeticPoint& g : sample_points(pa)) {
+    std::optional<kernel::Vec3> xa, xb;
+    try {
+      xa = ma.value()->from_geodetic(g);
+    } catch (const std::exception&) {
+    }
+    try {
+      xb = mb.value()->from_geodetic(g);
+    } catch (const std::exception&) {
+    }
+    if (!xa && !xb) continue;
+    const std::string where =
+        " at latitude " + num(g.latitude_deg) + ", longitude " + num(g.longitude_deg);
+    if (!xa || !xb) return both(("projection's domain" + where).c_str(), label_a, label_b);
+    const double dx = xa->x() * a.linear_unit.metres - xb->x() * b.linear_unit.metres;
+    const double dy = xa->y() * a.linear_unit.metres - xb->y() * b.linear_unit.metres;
+    // EPSG rounds feet-based false origins to 0.001 ft (0.3 mm): compare to 0.5 mm.
+    if (std::hypot(dx, dy) > 5e-4) {
+      return both(("projection (" + num(std::hypot(dx, dy)) + " m apart" + where + ")").c_str(),
+                  label_a, label_b);
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -254,34 +233,7 @@ std::optional<std::string> crs_difference(const Crs& a, const Crs& b) {
       return both("linear unit", a.linear_unit.name + " (" + num(a.linear_unit.metres) + " m)",
                   b.linear_unit.name + " (" + num(b.linear_unit.metres) + " m)");
     }
-    const Projection& pa = *a.projection;
-    const Projection& pb = *b.projection;
-    if (pa.method != pb.method) {
-      return both("projection method", method_label(pa), method_label(pb));
-    }
-    if (pa.method == ProjectionMethod::ComputedByProj) {
-      if (pa.proj_string != pb.proj_string) {
-        return both("projection (PROJ)", pa.proj_string, pb.proj_string);
-      }
-      return std::nullopt;
-    }
-    struct Field {
-      const char* name;
-      double va, vb, tolerance;
-    };
-    const Field fields[] = {
-        {"latitude of origin", pa.latitude_of_origin_deg, pb.latitude_of_origin_deg, 1e-9},
-        {"longitude of origin", pa.longitude_of_origin_deg, pb.longitude_of_origin_deg, 1e-9},
-        {"scale factor", pa.scale_factor, pb.scale_factor, 1e-10},
-        {"standard parallel 1", pa.standard_parallel_1_deg, pb.standard_parallel_1_deg, 1e-9},
-        {"standard parallel 2", pa.standard_parallel_2_deg, pb.standard_parallel_2_deg, 1e-9},
-        // EPSG rounds feet-based false origins to 0.001 ft (0.3 mm): compare to 0.5 mm.
-        {"false easting (m)", pa.false_easting_m, pb.false_easting_m, 5e-4},
-        {"false northing (m)", pa.false_northing_m, pb.false_northing_m, 5e-4},
-    };
-    for (const Field& f : fields) {
-      if (std::fabs(f.va - f.vb) > f.tolerance) return both(f.name, num(f.va), num(f.vb));
-    }
+    if (auto diff = projection_difference(a, b)) return diff;
   }
   if (a.vertical.has_value() != b.vertical.has_value()) {
     // A vertical CRS on one side only changes nothing when the z units agree.
@@ -415,5 +367,96 @@ Result<Crs> crs_from_config(std::string_view text) {
   if (crs.ok()) crs.value().source = "config (" + std::string(s) + ")";
   return crs;
 }
+
+Result<Crs> crs_from_epsg(int code, int vertical_epsg) {
+  if (code <= 0 || vertical_epsg < 0) {
+    return Error{ErrorCode::Unsupported,
+                 "EPSG:" + std::to_string(code) + " is not a CRS in PROJ's EPSG database"};
+  }
+  return detail::crs_from_proj_database(code, vertical_epsg);
+}
+
+Result<Crs> crs_from_wkt(std::string_view wkt) {
+  auto crs = detail::crs_from_proj_text(wkt, "WKT");
+  if (crs.ok()) crs.value().source = "WKT";
+  return crs;
+}
+
+std::string crs_to_wkt1(const Crs& crs) { return detail::proj_wkt1(crs.definition); }
+
+namespace detail {
+
+std::string normalise_name(std::string_view name) {
+  std::string out;
+  out.reserve(name.size());
+  for (char ch : name) {
+    if (ch >= 'A' && ch <= 'Z')
+      out.push_back(static_cast<char>(ch - 'A' + 'a'));
+    else if ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9'))
+      out.push_back(ch);
+  }
+  return out;
+}
+
+std::string format_number(double v) {
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  // Prefer the shortest representation that round-trips.
+  for (int precision = 6; precision < 17; ++precision) {
+    char shorter[40];
+    std::snprintf(shorter, sizeof shorter, "%.*g", precision, v);
+    if (std::strtod(shorter, nullptr) == v) return shorter;
+  }
+  return buffer;
+}
+
+LinearUnit linear_unit_from_size(std::string name, double metres) {
+  for (const LinearUnit& known : {metre_unit(), international_foot_unit(), us_survey_foot_unit()}) {
+    if (std::fabs(metres - known.metres) <= 1e-12 * known.metres) return known;
+  }
+  return LinearUnit{std::move(name), metres, 0};
+}
+
+AngularUnit angular_unit_from_size(std::string name, double radians) {
+  if (std::fabs(radians - kDegree) <= 1e-12 * kDegree) return degree_unit();
+  return AngularUnit{std::move(name), radians, 0};
+}
+
+Helmert7 helmert_from_position_vector(double tx, double ty, double tz, double rx, double ry,
+                                      double rz, double ppm) {
+  Helmert7 h;
+  h.tx_m = tx;
+  h.ty_m = ty;
+  h.tz_m = tz;
+  h.rx_arcsec = -rx;
+  h.ry_arcsec = -ry;
+  h.rz_arcsec = -rz;
+  h.scale_ppm = ppm;
+  return h;
+}
+
+std::optional<double> proj_parameter(const std::string& proj_string, std::string_view key) {
+  std::istringstream in(proj_string);
+  const std::string prefix = "+" + std::string(key) + "=";
+  for (std::string t; in >> t;) {
+    if (t.rfind(prefix, 0) != 0) continue;
+    const std::string value = t.substr(prefix.size());
+    char* end = nullptr;
+    const double v = std::strtod(value.c_str(), &end);
+    if (end == value.c_str() || *end != '\0' || !std::isfinite(v)) return std::nullopt;
+    return v;
+  }
+  return std::nullopt;
+}
+
+bool proj_has(const std::string& proj_string, std::string_view token) {
+  std::istringstream in(proj_string);
+  for (std::string t; in >> t;) {
+    if (t == token) return true;
+  }
+  return false;
+}
+
+}  // namespace detail
 
 }  // namespace csgtile::geo

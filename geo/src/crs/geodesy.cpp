@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include <GeographicLib/Geocentric.hpp>
@@ -25,38 +26,9 @@ using kernel::Result;
 // metres with longitudes relative to the CRS's prime meridian; the domain rules PROJ does
 // not apply are ours, checked around it (DomainChecks).
 
-// The PROJ string of a projection (EPSG method → PROJ operation).
+// The PROJ string of a projection on the CRS's ellipsoid.
 std::string proj_string_of(const Crs& crs) {
-  const Projection& p = *crs.projection;
-  auto n = [](double v) { return format_number(v); };
-  const std::string origin = with_earth(
-      " +x_0=" + n(p.false_easting_m) + " +y_0=" + n(p.false_northing_m), crs.datum.ellipsoid);
-  switch (p.method) {
-    case ProjectionMethod::TransverseMercator:  // PROJ's exact (Poder/Engsager) algorithm
-      return "+proj=tmerc +lat_0=" + n(p.latitude_of_origin_deg) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::LambertConicConformal1SP:
-      return "+proj=lcc +lat_1=" + n(p.latitude_of_origin_deg) +
-             " +lat_0=" + n(p.latitude_of_origin_deg) + " +lon_0=" + n(p.longitude_of_origin_deg) +
-             " +k_0=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::LambertConicConformal2SP:
-      return "+proj=lcc +lat_1=" + n(p.standard_parallel_1_deg) +
-             " +lat_2=" + n(p.standard_parallel_2_deg) + " +lat_0=" + n(p.latitude_of_origin_deg) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + origin;
-    case ProjectionMethod::PolarStereographicA:
-      return "+proj=stere +lat_0=" + n(p.latitude_of_origin_deg > 0 ? 90.0 : -90.0) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k_0=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::PolarStereographicB:
-      return "+proj=stere +lat_0=" + n(p.standard_parallel_1_deg > 0 ? 90.0 : -90.0) +
-             " +lat_ts=" + n(p.standard_parallel_1_deg) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + origin;
-    case ProjectionMethod::ObliqueStereographic:  // PROJ's sterea: EPSG 9809 (GN 7-2)
-      return "+proj=sterea +lat_0=" + n(p.latitude_of_origin_deg) +
-             " +lon_0=" + n(p.longitude_of_origin_deg) + " +k=" + n(p.scale_factor) + origin;
-    case ProjectionMethod::ComputedByProj:  // from GeoTIFF keys it names no ellipsoid
-      return with_earth(p.proj_string, crs.datum.ellipsoid);
-  }
-  return std::string();
+  return with_earth(crs.projection->proj_string, crs.datum.ellipsoid);
 }
 
 // Domain rules around PROJ's projection: transverse Mercator within 90° of its central
@@ -66,22 +38,25 @@ std::string proj_string_of(const Crs& crs) {
 class DomainChecks final : public ProjectionEngine {
  public:
   DomainChecks(std::unique_ptr<ProjectionEngine> inner, const Projection& p)
-      : inner_(std::move(inner)), p_(p) {
-    int zone = 0;
-    bool north = true;
-    if (is_utm(p, &zone, &north)) {
-      utm_zone_ = zone;
-      utm_north_ = north;
+      : inner_(std::move(inner)) {
+    const std::string& text = p.proj_string;
+    if (proj_has(text, "+proj=utm")) {
+      utm_zone_ = static_cast<int>(proj_parameter(text, "zone").value_or(0.0));
+      utm_north_ = !proj_has(text, "+south");
     }
-    polar_ = p.method == ProjectionMethod::PolarStereographicA ||
-             p.method == ProjectionMethod::PolarStereographicB;
-    polar_north_ = p.method == ProjectionMethod::PolarStereographicA
-                       ? p.latitude_of_origin_deg > 0
-                       : p.standard_parallel_1_deg > 0;
+    if (proj_has(text, "+proj=tmerc") || proj_has(text, "+proj=etmerc") || utm_zone_ != 0) {
+      central_meridian_ =
+          utm_zone_ != 0 ? -183.0 + 6.0 * utm_zone_ : proj_parameter(text, "lon_0").value_or(0.0);
+    }
+    const double lat0 = proj_parameter(text, "lat_0").value_or(0.0);
+    polar_ =
+        (proj_has(text, "+proj=stere") || proj_has(text, "+proj=ups")) && std::fabs(lat0) == 90.0;
+    polar_north_ = lat0 > 0 || (proj_has(text, "+proj=ups") && !proj_has(text, "+south"));
+    if (proj_has(text, "+proj=ups")) polar_ = true;
   }
   void forward(double lat, double lon, double& easting, double& northing) const override {
-    if (p_.method == ProjectionMethod::TransverseMercator &&
-        std::fabs(GeographicLib::Math::AngDiff(p_.longitude_of_origin_deg, lon)) > 90.0) {
+    if (central_meridian_ &&
+        std::fabs(GeographicLib::Math::AngDiff(*central_meridian_, lon)) > 90.0) {
       throw DomainError("longitude " + format_number(lon) +
                         " is more than 90 degrees from the central meridian");
     }
@@ -118,7 +93,7 @@ class DomainChecks final : public ProjectionEngine {
                       std::to_string(utm_zone_) + (utm_north_ ? "N" : "S"));
   }
   std::unique_ptr<ProjectionEngine> inner_;
-  Projection p_;
+  std::optional<double> central_meridian_;  // transverse Mercator
   int utm_zone_ = 0;
   bool utm_north_ = true;
   bool polar_ = false;
@@ -142,6 +117,11 @@ Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
   auto math = std::shared_ptr<CrsMath>(new CrsMath(crs));
   math->z_to_metres_ = crs.z_unit_metres();
   math->prime_meridian_deg_ = crs.datum.prime_meridian_deg;
+  if (crs.vertical && !crs.vertical->to_ellipsoidal_pipeline.empty()) {
+    auto geoid = make_geodetic_transform(crs.vertical->to_ellipsoidal_pipeline);
+    if (!geoid.ok()) return geoid.error();
+    math->geoid_ = std::move(geoid).value();
+  }
   if (crs.kind == CrsKind::Geographic) {
     math->xy_to_degrees_ = crs.angular_unit.radians / kDegree;
     if (crs.angular_unit.epsg == 9102) math->xy_to_degrees_ = 1.0;  // exact for degrees
@@ -161,8 +141,7 @@ Result<std::shared_ptr<const CrsMath>> CrsMath::create(const Crs& crs) {
       math->engine_ = make_engine(crs);
     } catch (const std::exception& e) {
       return Error{ErrorCode::InvalidArgument,
-                   std::string(projection_method_name(crs.projection->method)) +
-                       " parameters refused: " + e.what()};
+                   crs.projection->method_name + " parameters refused: " + e.what()};
     }
   }
   return std::shared_ptr<const CrsMath>(std::move(math));
@@ -208,7 +187,20 @@ GeodeticPoint CrsMath::to_geodetic(const kernel::Vec3& xyz) const {
   }
   if (prime_meridian_deg_ != 0.0)
     g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+  to_ellipsoidal(g);
   return g;
+}
+
+void CrsMath::to_ellipsoidal(GeodeticPoint& g) const {
+  if (!geoid_) return;
+  double lat = g.latitude_deg, lon = g.longitude_deg;
+  geoid_->forward(lat, lon, g.height_m);  // the model moves heights only
+}
+
+void CrsMath::to_gravity_related(GeodeticPoint& g) const {
+  if (!geoid_) return;
+  double lat = g.latitude_deg, lon = g.longitude_deg;
+  geoid_->inverse(lat, lon, g.height_m);
 }
 
 void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
@@ -245,15 +237,25 @@ void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
       g.height_m = in[start + i].z() * z_to_metres_;
       if (!std::isfinite(g.latitude_deg) || !std::isfinite(g.longitude_deg)) {
         g = GeodeticPoint{nan, nan, nan};
-      } else if (prime_meridian_deg_ != 0.0) {
-        g.longitude_deg = GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+      } else {
+        if (prime_meridian_deg_ != 0.0) {
+          g.longitude_deg =
+              GeographicLib::Math::AngNormalize(g.longitude_deg + prime_meridian_deg_);
+        }
+        try {
+          to_ellipsoidal(g);
+        } catch (const std::exception&) {
+          g = GeodeticPoint{nan, nan, nan};
+        }
       }
     }
   }
 }
 
-kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& point) const {
-  require_finite(point.latitude_deg, point.longitude_deg, "geodetic coordinates");
+kernel::Vec3 CrsMath::from_geodetic(const GeodeticPoint& given) const {
+  require_finite(given.latitude_deg, given.longitude_deg, "geodetic coordinates");
+  GeodeticPoint point = given;
+  if (!earth_) to_gravity_related(point);
   if (std::fabs(point.latitude_deg) > 90.0)
     throw DomainError("latitude " + format_number(point.latitude_deg) + " beyond ±90");
   double lon = point.longitude_deg;

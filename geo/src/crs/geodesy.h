@@ -1,6 +1,7 @@
 #pragma once
 // Private computing side of a Crs: its projection (PROJ, proj_engine.h, with our domain rules)
-// with unit handling, and its datum shift to WGS 84 (a Helmert in ECEF, or PROJ's pipeline).
+// with unit handling, its geoid model (PROJ's pipeline), and its datum shift to WGS 84 (a
+// Helmert in ECEF, or PROJ's pipeline).
 // GeographicLib stays for what it is best at: geocentric conversions and ENU frames.
 //
 // Calls here throw (DomainError, GeographicLib::GeographicErr); the public wrappers in
@@ -53,7 +54,8 @@ class CrsMath {
   static kernel::Result<std::shared_ptr<const CrsMath>> create(const Crs& crs);
 
   const Crs& crs() const { return crs_; }
-  /// CRS coordinates → geodetic on the CRS's datum (Greenwich longitudes). Throws.
+  /// CRS coordinates → geodetic on the CRS's datum (Greenwich longitudes; heights of a vertical
+  /// CRS made ellipsoidal by its geoid model when one is installed). Throws.
   GeodeticPoint to_geodetic(const kernel::Vec3& xyz) const;
   /// Geodetic on the CRS's datum → CRS coordinates. Throws.
   kernel::Vec3 from_geodetic(const GeodeticPoint& point) const;
@@ -63,9 +65,13 @@ class CrsMath {
 
  private:
   explicit CrsMath(Crs crs) : crs_(std::move(crs)) {}
+  // Heights of the vertical CRS ↔ ellipsoidal through the geoid model (no-op without one).
+  void to_ellipsoidal(GeodeticPoint& g) const;
+  void to_gravity_related(GeodeticPoint& g) const;
   Crs crs_;
   std::unique_ptr<ProjectionEngine> engine_;  // null for geographic and geocentric CRSs
   std::shared_ptr<const GeographicLib::Geocentric> earth_;  // geocentric CRSs: the ellipsoid
+  std::shared_ptr<const GeodeticTransform> geoid_;          // vertical CRS → ellipsoidal heights
   double xy_to_metres_ = 1.0;                               // projected
   double xy_to_degrees_ = 1.0;                              // geographic
   double z_to_metres_ = 1.0;

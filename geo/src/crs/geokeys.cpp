@@ -1,10 +1,11 @@
 // CRS from GeoTIFF keys (GeoTIFF 1.0 / OGC GeoTIFF 1.1 key ids), as LAS files carry them.
 //
-// Interpretation rules follow libgeotiff's normalisation: an EPSG code is taken from the
-// built-in table; user-defined parts are assembled from the individual keys, with the usual
-// fallbacks between "natural origin", "false origin" and "center" parameter keys that writers
-// mix up. Projection parameters are in the GeogAngularUnits (angles) and ProjLinearUnits
-// (lengths), per the specification.
+// The keys are mapped for PROJ, as libgeotiff normalises them: an EPSG code is read from
+// PROJ's database; user-defined parts are assembled from the individual keys (datum, ellipsoid,
+// prime meridian and units from PROJ's database by their codes) into a PROJ string, with the
+// usual fallbacks between "natural origin", "false origin" and "center" parameter keys that
+// writers mix up. Projection parameters are in the GeogAngularUnits (angles) and
+// ProjLinearUnits (lengths), per the specification.
 
 #include <cmath>
 #include <map>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "crs/crs_internal.h"
+#include "crs/geodesy.h"
 
 namespace csgtile::geo {
 namespace {
@@ -226,13 +228,13 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
   const std::string citation = keys.text(GeogCitation);
 
   if (code.value() && *code.value() != kUserDefined && *code.value() != 0) {
-    auto known = detail::geographic_from_epsg(*code.value());
-    if (!known) {
+    auto known = crs_from_epsg(*code.value());
+    if (!known.ok() || known.value().kind != CrsKind::Geographic) {
       return key_error(ErrorCode::Unsupported,
                        "GeographicTypeGeoKey (2048) EPSG:" + std::to_string(*code.value()) +
-                           " is not in the built-in table");
+                           " is not a geographic CRS in PROJ's EPSG database");
     }
-    crs = *known;
+    crs = known.value();
     crs.angular_unit = unit.value();
     crs.source = "GeoTIFF keys";
     // Redundant ellipsoid keys (writers add them) must agree with the code.
@@ -254,7 +256,7 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
       } else {
         warnings.push_back(
             "GeogGeodeticDatumGeoKey (2050) EPSG:" + std::to_string(*datum_code.value()) +
-            " is not in the built-in table: using the ellipsoid keys");
+            " is not a datum of PROJ's EPSG database: using the ellipsoid keys");
       }
     }
     std::string datum_name = citation_field(citation, "Datum");
@@ -271,7 +273,7 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
         if (!keys.has(GeogSemiMajorAxis)) {
           return key_error(ErrorCode::Unsupported, "GeogEllipsoidGeoKey (2056) EPSG:" +
                                                        std::to_string(*ellipsoid_code.value()) +
-                                                       " is not in the built-in table");
+                                                       " is not an ellipsoid of PROJ's database");
         }
       }
     }
@@ -294,7 +296,9 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
       e.semi_major_m = a;
       e.inverse_flattening = rf;
       for (int known : {7030, 7019, 7004, 7001, 7008, 7022}) {
-        const Ellipsoid k = *detail::ellipsoid_from_epsg(known);
+        const auto found = detail::ellipsoid_from_epsg(known);
+        if (!found) continue;
+        const Ellipsoid& k = *found;
         if (std::fabs(k.semi_major_m - a) < 1e-6 && std::fabs(k.inverse_flattening - rf) < 1e-8) {
           e.epsg = k.epsg;
           if (ell_name.empty()) e.name = k.name;
@@ -317,7 +321,8 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
       // Name a datum we know and whose ellipsoid matches; else only WGS 84 / GRS 80 datums are
       // assumed equal to WGS 84 (as PROJ's ballpark does), with a warning.
       auto named = detail::datum_from_name(datum_name.empty() ? citation : datum_name);
-      if (named && std::fabs(named->ellipsoid.semi_major_m - ellipsoid->semi_major_m) < 1e-3) {
+      if (named && std::fabs(named->ellipsoid.semi_major_m - ellipsoid->semi_major_m) < 1e-3 &&
+          named->to_wgs84) {
         datum.to_wgs84 = named->to_wgs84;
         datum.to_wgs84_source = named->to_wgs84_source;
         datum.name = named->name;
@@ -342,13 +347,14 @@ Result<Crs> geographic_from_keys(const Keys& keys, std::vector<std::string>& war
     // Prime meridian.
     auto pm = keys.code(GeogPrimeMeridian);
     if (!pm.ok()) return pm.error();
-    if (pm.value() && *pm.value() == 8903) {
-      datum.prime_meridian_deg = 2.0 + 20.0 / 60.0 + 14.025 / 3600.0;  // Paris
-    } else if (pm.value() && *pm.value() != 8901 && *pm.value() != kUserDefined &&
-               *pm.value() != 0) {
-      return key_error(ErrorCode::Unsupported,
-                       "GeogPrimeMeridianGeoKey (2051) EPSG:" + std::to_string(*pm.value()) +
-                           " is not supported");
+    if (pm.value() && *pm.value() != kUserDefined && *pm.value() != 0) {
+      const auto longitude = detail::prime_meridian_from_epsg(*pm.value());
+      if (!longitude) {
+        return key_error(ErrorCode::Unsupported,
+                         "GeogPrimeMeridianGeoKey (2051) EPSG:" + std::to_string(*pm.value()) +
+                             " is not a prime meridian of PROJ's database");
+      }
+      datum.prime_meridian_deg = *longitude;
     } else if (auto pm_long = keys.number(GeogPrimeMeridianLong)) {
       datum.prime_meridian_deg = *pm_long * unit.value().radians / detail::kDegree;
     }
@@ -411,7 +417,8 @@ Result<std::optional<VerticalCrs>> vertical_from_keys(const Keys& keys,
   if (!known && !has_unit) {
     warnings.push_back(
         "vertical CRS EPSG:" + std::to_string(*code.value()) +
-        " is not in the built-in table and VerticalUnitsGeoKey (4099) is absent: metre assumed");
+        " is not a vertical CRS of PROJ's EPSG database and VerticalUnitsGeoKey (4099) is "
+        "absent: metre assumed");
   }
   if (known && unit && std::fabs(unit->metres - known->unit.metres) > 1e-12) {
     warnings.push_back("VerticalUnitsGeoKey (4099) " + unit->name +
@@ -444,28 +451,37 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
   };
   Projection p;
   const int ct = *method.value();
+  auto n = [](double v) { return detail::format_number(v); };
   switch (ct) {
     case 1:    // CT_TransverseMercator
     case 16:   // CT_ObliqueStereographic
     case 9: {  // CT_LambertConfConic_1SP
-      p.method = ct == 1    ? ProjectionMethod::TransverseMercator
-                 : ct == 16 ? ProjectionMethod::ObliqueStereographic
-                            : ProjectionMethod::LambertConicConformal1SP;
       if (ct == 9 && !keys.first({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat})) {
         return key_error(ErrorCode::InvalidArgument,
                          "ProjCoordTransGeoKey 9 (LCC 1SP) needs ProjNatOriginLatGeoKey (3081)");
       }
-      p.latitude_of_origin_deg =
+      const double lat0 =
           origin({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat}, "latitude of origin");
-      p.longitude_of_origin_deg =
+      const double lon0 =
           origin({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}, "longitude of origin");
-      p.scale_factor = keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0);
-      p.false_easting_m = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
-      p.false_northing_m = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
+      const double k = keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0);
+      const double fe = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
+      const double fn = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
+      const std::string rest =
+          " +lon_0=" + n(lon0) + " +k_0=" + n(k) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
+      if (ct == 1) {
+        p.method_name = "Transverse Mercator";
+        p.proj_string = "+proj=tmerc +lat_0=" + n(lat0) + rest;
+      } else if (ct == 16) {
+        p.method_name = "Oblique Stereographic";
+        p.proj_string = "+proj=sterea +lat_0=" + n(lat0) + rest;
+      } else {
+        p.method_name = "Lambert Conic Conformal (1SP)";
+        p.proj_string = "+proj=lcc +lat_1=" + n(lat0) + " +lat_0=" + n(lat0) + rest;
+      }
       break;
     }
     case 8: {  // CT_LambertConfConic_2SP
-      p.method = ProjectionMethod::LambertConicConformal2SP;
       auto sp1 = deg({ProjStdParallel1});
       auto sp2 = deg({ProjStdParallel2});
       if (!sp1 || !sp2) {
@@ -473,32 +489,38 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
                          "ProjCoordTransGeoKey 8 (LCC 2SP) needs ProjStdParallel1GeoKey (3078) and "
                          "ProjStdParallel2GeoKey (3079)");
       }
-      p.standard_parallel_1_deg = *sp1;
-      p.standard_parallel_2_deg = *sp2;
-      p.latitude_of_origin_deg =
+      const double lat0 =
           origin({ProjFalseOriginLat, ProjNatOriginLat, ProjCenterLat}, "latitude of false origin");
-      p.longitude_of_origin_deg = origin({ProjFalseOriginLong, ProjNatOriginLong, ProjCenterLong},
-                                         "longitude of false origin");
-      p.false_easting_m = metres({ProjFalseOriginEasting, ProjFalseEasting, ProjCenterEasting});
-      p.false_northing_m = metres({ProjFalseOriginNorthing, ProjFalseNorthing, ProjCenterNorthing});
+      const double lon0 = origin({ProjFalseOriginLong, ProjNatOriginLong, ProjCenterLong},
+                                 "longitude of false origin");
+      const double fe = metres({ProjFalseOriginEasting, ProjFalseEasting, ProjCenterEasting});
+      const double fn = metres({ProjFalseOriginNorthing, ProjFalseNorthing, ProjCenterNorthing});
+      p.method_name = "Lambert Conic Conformal (2SP)";
+      p.proj_string = "+proj=lcc +lat_1=" + n(*sp1) + " +lat_2=" + n(*sp2) + " +lat_0=" + n(lat0) +
+                      " +lon_0=" + n(lon0) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
       break;
     }
     case 15: {  // CT_PolarStereographic: |latitude| = 90 → variant A, else the standard parallel
                 // (B)
       const double lat = origin({ProjNatOriginLat, ProjCenterLat}, "latitude of origin");
-      p.longitude_of_origin_deg = origin(
-          {ProjStraightVertPoleLong, ProjNatOriginLong, ProjCenterLong}, "longitude of origin");
-      p.false_easting_m = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
-      p.false_northing_m = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
+      const double lon0 = origin({ProjStraightVertPoleLong, ProjNatOriginLong, ProjCenterLong},
+                                 "longitude of origin");
+      const double fe = metres({ProjFalseEasting, ProjCenterEasting, ProjFalseOriginEasting});
+      const double fn = metres({ProjFalseNorthing, ProjCenterNorthing, ProjFalseOriginNorthing});
       const double k = keys.first({ProjScaleAtNatOrigin, ProjScaleAtCenter}).value_or(1.0);
+      const std::string rest = " +lon_0=" + n(lon0) + " +x_0=" + n(fe) + " +y_0=" + n(fn);
       if (std::fabs(lat) == 90.0) {
-        p.method = ProjectionMethod::PolarStereographicA;
-        p.latitude_of_origin_deg = lat;
-        p.scale_factor = k;
+        p.method_name = "Polar Stereographic (variant A)";
+        p.proj_string = "+proj=stere +lat_0=" + n(lat) + " +k_0=" + n(k) + rest;
       } else {
-        p.method = ProjectionMethod::PolarStereographicB;
-        p.standard_parallel_1_deg = lat;
-        p.latitude_of_origin_deg = lat < 0 ? -90.0 : 90.0;
+        if (lat == 0.0) {
+          return key_error(ErrorCode::InvalidArgument,
+                           "ProjCoordTransGeoKey 15 (polar stereographic): the standard parallel "
+                           "must lie strictly between the equator and the pole");
+        }
+        p.method_name = "Polar Stereographic (variant B)";
+        p.proj_string =
+            "+proj=stere +lat_0=" + n(lat < 0 ? -90.0 : 90.0) + " +lat_ts=" + n(lat) + rest;
         if (k != 1.0) {
           warnings.push_back("polar stereographic with latitude " + detail::format_number(lat) +
                              " read as variant B (standard parallel); its scale factor " +
@@ -516,9 +538,7 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
     case 18:    // CT_CassiniSoldner
     case 22:    // CT_Polyconic
     case 24: {  // CT_Sinusoidal
-      // Methods PROJ computes: its projection string from the keys (the ellipsoid is the
-      // datum's, added where the projection is computed).
-      auto n = [](double v) { return detail::format_number(v); };
+      // The ellipsoid is the datum's, added where the projection is computed.
       const double lat0 = deg({ProjNatOriginLat, ProjCenterLat, ProjFalseOriginLat}).value_or(0.0);
       const double lon0 =
           deg({ProjNatOriginLong, ProjCenterLong, ProjFalseOriginLong}).value_or(0.0);
@@ -580,7 +600,6 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
           p.method_name = "Sinusoidal";
           break;
       }
-      p.method = ProjectionMethod::ComputedByProj;
       p.proj_string = text;
       break;
     }
@@ -628,11 +647,8 @@ Result<Projection> projection_from_keys(const Keys& keys, const AngularUnit& ang
 
 Projection utm_projection(int zone, bool north) {
   Projection p;
-  p.method = ProjectionMethod::TransverseMercator;
-  p.longitude_of_origin_deg = -183.0 + 6.0 * zone;
-  p.scale_factor = 0.9996;
-  p.false_easting_m = 500000.0;
-  p.false_northing_m = north ? 0.0 : 10000000.0;
+  p.method_name = "Transverse Mercator";
+  p.proj_string = "+proj=utm +zone=" + std::to_string(zone) + (north ? "" : " +south");
   return p;
 }
 
@@ -663,12 +679,13 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
                            " overrides the unit of EPSG:" + std::to_string(crs.epsg) + " (" +
                            crs.linear_unit.name + "): coordinates are read in " + key_unit->name);
         crs.linear_unit = *key_unit;
+        crs.definition.clear();  // no longer EPSG's: rewritten from the model
       }
       if (auto g = keys.code(GeographicType);
           g.ok() && g.value() && *g.value() != kUserDefined && *g.value() != 0) {
-        auto geog = detail::geographic_from_epsg(*g.value());
-        if (geog && std::fabs(geog->datum.ellipsoid.semi_major_m -
-                              crs.datum.ellipsoid.semi_major_m) > 1e-3) {
+        auto geog = crs_from_epsg(*g.value());
+        if (geog.ok() && std::fabs(geog.value().datum.ellipsoid.semi_major_m -
+                                   crs.datum.ellipsoid.semi_major_m) > 1e-3) {
           warnings.push_back("GeographicTypeGeoKey (2048) EPSG:" + std::to_string(*g.value()) +
                              " disagrees with the datum of EPSG:" + std::to_string(crs.epsg) +
                              "; using EPSG:" + std::to_string(crs.epsg));
@@ -693,10 +710,12 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
                               *projection_code.value() < 16161)) {
       return key_error(ErrorCode::Unsupported,
                        "ProjectedCSTypeGeoKey (3072) EPSG:" + std::to_string(*code.value()) +
-                           " is not in the built-in table and the keys define no projection");
+                           " is not a projected CRS in PROJ's EPSG database and the keys define "
+                           "no projection");
     }
     warnings.push_back("ProjectedCSTypeGeoKey (3072) EPSG:" + std::to_string(*code.value()) +
-                       " is not in the built-in table: using the file's projection keys");
+                       " is not a projected CRS in PROJ's EPSG database: using the file's "
+                       "projection keys");
   }
 
   // User-defined projected CRS: a geographic base and a projection.
@@ -734,6 +753,23 @@ Result<Crs> projected_from_keys(const Keys& keys, std::vector<std::string>& warn
             : std::string("user-defined projected CRS without ProjCoordTransGeoKey (3075)"));
   }
   return crs;
+}
+
+// The model as a PROJ string (a CRS assembled from keys has no EPSG definition).
+std::string proj_definition(const Crs& crs) {
+  auto n = [](double v) { return detail::format_number(v); };
+  std::string text = crs.kind == CrsKind::Projected
+                         ? detail::with_earth(crs.projection->proj_string, crs.datum.ellipsoid)
+                         : detail::with_earth("+proj=longlat", crs.datum.ellipsoid);
+  if (crs.datum.prime_meridian_deg != 0.0) text += " +pm=" + n(crs.datum.prime_meridian_deg);
+  if (crs.datum.to_wgs84 && !crs.datum.to_wgs84->is_null()) {
+    const Helmert7& h = *crs.datum.to_wgs84;  // +towgs84 is position vector: negate rotations
+    text += " +towgs84=" + n(h.tx_m) + "," + n(h.ty_m) + "," + n(h.tz_m) + "," +
+            n(-h.rx_arcsec + 0.0) + "," + n(-h.ry_arcsec + 0.0) + "," + n(-h.rz_arcsec + 0.0) +
+            "," + n(h.scale_ppm);
+  }
+  if (crs.kind == CrsKind::Projected) text += " +to_meter=" + n(crs.linear_unit.metres);
+  return text + " +no_defs +type=crs";
 }
 
 }  // namespace
@@ -774,9 +810,17 @@ Result<Crs> crs_from_geokeys(const std::vector<GeoKeyEntry>& entries) {
   auto vertical = vertical_from_keys(keys, warnings);
   if (!vertical.ok()) return vertical.error();
   Crs out = std::move(crs).value();
-  if (vertical.value()) out.vertical = *vertical.value();
+  if (out.epsg == 0 || out.definition.empty()) out.definition = proj_definition(out);
+  if (vertical.value()) {
+    out.vertical = *vertical.value();
+    detail::settle_vertical(out);
+  }
   out.warnings.insert(out.warnings.end(), warnings.begin(), warnings.end());
   if (auto status = validate_crs(out); !status.ok()) return status.error();
+  // PROJ must compute the projection the keys describe.
+  if (auto math = detail::CrsMath::create(out); !math.ok()) {
+    return key_error(ErrorCode::InvalidArgument, "GeoTIFF keys: " + math.error().message);
+  }
   return out;
 }
 

@@ -27,6 +27,17 @@ GeoKeyEntry text_key(std::uint16_t id, std::string text) {
   return GeoKeyEntry{id, {}, std::move(text)};
 }
 
+// A "+key=value" parameter of a projection's PROJ string (NaN when absent).
+double param(const Crs& crs, const std::string& key) {
+  const std::string& text = crs.projection->proj_string;
+  const std::string needle = "+" + key + "=";
+  for (std::size_t at = text.find(needle); at != std::string::npos;
+       at = text.find(needle, at + 1)) {
+    if (at == 0 || text[at - 1] == ' ') return std::stod(text.substr(at + needle.size()));
+  }
+  return std::nan("");
+}
+
 bool mentions(const std::vector<std::string>& warnings, const std::string& needle) {
   for (const auto& w : warnings) {
     if (w.find(needle) != std::string::npos) return true;
@@ -161,24 +172,26 @@ TEST(CrsEpsg, UnitsAndParameters) {
   const Crs ny = crs_from_epsg(2263).value();
   EXPECT_EQ(ny.linear_unit.epsg, 9003);
   EXPECT_DOUBLE_EQ(ny.linear_unit.metres, 1200.0 / 3937.0);
-  EXPECT_DOUBLE_EQ(ny.projection->false_easting_m, 984250.0 * 1200.0 / 3937.0);
-  EXPECT_DOUBLE_EQ(ny.projection->latitude_of_origin_deg, 40.0 + 10.0 / 60.0);
+  EXPECT_DOUBLE_EQ(param(ny, "x_0"), 984250.0 * 1200.0 / 3937.0);
+  EXPECT_NEAR(param(ny, "lat_0"), 40.0 + 10.0 / 60.0, 1e-12);
   const Crs oregon = crs_from_epsg(2992).value();
   EXPECT_DOUBLE_EQ(oregon.linear_unit.metres, 0.3048);
-  EXPECT_EQ(oregon.projection->method, ProjectionMethod::LambertConicConformal2SP);
+  EXPECT_EQ(oregon.projection->method_name, "Lambert Conic Conformal (2SP)");
   const Crs rd = crs_from_epsg(28992).value();
-  EXPECT_EQ(rd.projection->method, ProjectionMethod::ObliqueStereographic);
+  EXPECT_EQ(rd.projection->method_name, "Oblique Stereographic");
   EXPECT_EQ(rd.datum.ellipsoid.epsg, 7004);
   ASSERT_TRUE(rd.datum.to_wgs84.has_value());
-  EXPECT_NE(rd.datum.to_wgs84_source.find("EPSG:9281"), std::string::npos);
-  EXPECT_DOUBLE_EQ(rd.datum.to_wgs84->tx_m, 565.7381);
+  // The Helmert PROJ ranks first for Amersfoort → WGS 84 (projinfo -s EPSG:4289 -t EPSG:4326).
+  EXPECT_NE(rd.datum.to_wgs84_source.find("Amersfoort to WGS 84"), std::string::npos)
+      << rd.datum.to_wgs84_source;
+  EXPECT_NEAR(rd.datum.to_wgs84->tx_m, 565.4171, 1e-9);
   const Crs utm = crs_from_epsg(32733).value();
-  EXPECT_DOUBLE_EQ(utm.projection->longitude_of_origin_deg, 15.0);
-  EXPECT_DOUBLE_EQ(utm.projection->false_northing_m, 10000000.0);
+  EXPECT_DOUBLE_EQ(param(utm, "zone"), 33.0);
+  EXPECT_NE(utm.projection->proj_string.find("+south"), std::string::npos);
   EXPECT_EQ(utm.name, "WGS 84 / UTM zone 33S");
   const Crs ups = crs_from_epsg(32761).value();
-  EXPECT_EQ(ups.projection->method, ProjectionMethod::PolarStereographicA);
-  EXPECT_DOUBLE_EQ(ups.projection->latitude_of_origin_deg, -90.0);
+  EXPECT_EQ(ups.projection->method_name, "Polar Stereographic (variant A)");
+  EXPECT_DOUBLE_EQ(param(ups, "lat_0"), -90.0);
   const Crs nap = crs_from_epsg(7415).value();
   ASSERT_TRUE(nap.vertical.has_value());
   EXPECT_EQ(nap.vertical->epsg, 5709);
@@ -190,9 +203,9 @@ TEST(CrsEpsg, VerticalCodesAndUnknownCodes) {
   ASSERT_TRUE(navd.ok());
   EXPECT_EQ(navd.value().vertical->name, "NAVD88 height (ftUS)");
   EXPECT_DOUBLE_EQ(navd.value().z_unit_metres(), 1200.0 / 3937.0);
-  auto odd = crs_from_epsg(32631, 9999);
-  ASSERT_TRUE(odd.ok());
-  EXPECT_TRUE(mentions(odd.value().warnings, "EPSG:9999"));
+  auto odd = crs_from_epsg(32631, 9999);  // no vertical CRS: an error naming the code
+  ASSERT_FALSE(odd.ok());
+  EXPECT_NE(odd.error().message.find("EPSG:9999"), std::string::npos);
 
   auto unknown = crs_from_epsg(99999);
   ASSERT_FALSE(unknown.ok());
@@ -210,21 +223,20 @@ TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
   struct Case {
     int code;
     const char* name_part;
-    ProjectionMethod method;
+    const char* method;
   };
   for (const Case& c :
-       {Case{3067, "TM35FIN", ProjectionMethod::TransverseMercator},
-        Case{31370, "Belgian Lambert 72", ProjectionMethod::LambertConicConformal2SP},
-        Case{2180, "CS92", ProjectionMethod::TransverseMercator},
-        Case{3006, "SWEREF99 TM", ProjectionMethod::TransverseMercator},
-        Case{7856, "MGA zone 56", ProjectionMethod::TransverseMercator}}) {
+       {Case{3067, "TM35FIN", "Transverse Mercator"},
+        Case{31370, "Belgian Lambert 72", "Lambert Conic Conformal (2SP)"},
+        Case{2180, "CS92", "Transverse Mercator"}, Case{3006, "SWEREF99 TM", "Transverse Mercator"},
+        Case{7856, "MGA zone 56", "Transverse Mercator"}}) {
     SCOPED_TRACE(c.code);
     auto crs = crs_from_epsg(c.code);
     ASSERT_TRUE(crs.ok()) << crs.error().message;
     EXPECT_EQ(crs.value().epsg, c.code);
     EXPECT_NE(crs.value().name.find(c.name_part), std::string::npos) << crs.value().name;
     ASSERT_TRUE(crs.value().projection.has_value());
-    EXPECT_EQ(crs.value().projection->method, c.method);
+    EXPECT_EQ(crs.value().projection->method_name, c.method);
     EXPECT_TRUE(crs.value().datum.to_wgs84.has_value()) << crs.value().datum.to_wgs84_source;
   }
   // BD72's shift is a real Helmert (metres of translation), named with its accuracy.
@@ -249,7 +261,6 @@ TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
     auto crs = crs_from_epsg(code);
     ASSERT_TRUE(crs.ok()) << code << ": " << crs.error().message;
     ASSERT_TRUE(crs.value().projection.has_value());
-    EXPECT_EQ(crs.value().projection->method, ProjectionMethod::ComputedByProj);
     EXPECT_NE(crs.value().projection->method_name.find(method), std::string::npos)
         << crs.value().projection->method_name;
     EXPECT_EQ(crs.value().epsg, code);
@@ -302,9 +313,9 @@ TEST(CrsGeoKeys, UserDefinedLambertInFeet) {
   ASSERT_TRUE(crs.ok()) << crs.error().message;
   const Crs& c = crs.value();
   EXPECT_EQ(c.kind, CrsKind::Projected);
-  EXPECT_EQ(c.projection->method, ProjectionMethod::LambertConicConformal2SP);
+  EXPECT_EQ(c.projection->method_name, "Lambert Conic Conformal (2SP)");
   EXPECT_DOUBLE_EQ(c.linear_unit.metres, 0.3048);
-  EXPECT_NEAR(c.projection->false_easting_m, 400000.0, 1e-6);
+  EXPECT_NEAR(param(c, "x_0"), 400000.0, 1e-6);
   EXPECT_EQ(c.datum.epsg, 6152);
   EXPECT_TRUE(mentions(c.warnings, "3059")) << all(c.warnings);  // an unknown key id
   // The same CRS as EPSG:2994 (NAD83(HARN) / Oregon GIC Lambert (ft)).
@@ -356,11 +367,11 @@ TEST(CrsGeoKeys, UnknownEpsgCodeFallsBackToProjectionKeys) {
   ASSERT_TRUE(crs.ok()) << crs.error().message;
   const Crs& c = crs.value();
   EXPECT_TRUE(mentions(c.warnings, "EPSG:26995")) << all(c.warnings);
-  EXPECT_EQ(c.projection->method, ProjectionMethod::TransverseMercator);
-  EXPECT_NEAR(c.projection->false_easting_m, 700000.0, 1e-6);
-  EXPECT_DOUBLE_EQ(c.projection->longitude_of_origin_deg,
+  EXPECT_EQ(c.projection->method_name, "Transverse Mercator");
+  EXPECT_NEAR(param(c, "x_0"), 700000.0, 1e-6);
+  EXPECT_DOUBLE_EQ(param(c, "lon_0"),
                    -90.33333333333333);  // from the "center" key
-  EXPECT_DOUBLE_EQ(c.projection->scale_factor, 0.99995);
+  EXPECT_DOUBLE_EQ(std::isnan(param(c, "k")) ? param(c, "k_0") : param(c, "k"), 0.99995);
   EXPECT_EQ(c.linear_unit.epsg, 9003);
   EXPECT_DOUBLE_EQ(c.z_unit_metres(), 1200.0 / 3937.0);
 }
@@ -418,7 +429,7 @@ TEST(CrsGeoKeys, GeographicAndUserDefinedDatums) {
   ASSERT_TRUE(plane.value().datum.to_wgs84.has_value());
   EXPECT_TRUE(plane.value().datum.to_wgs84->is_null());
   EXPECT_EQ(plane.value().datum.ellipsoid.epsg, 7019);
-  EXPECT_DOUBLE_EQ(plane.value().projection->false_northing_m, 4200000.0);
+  EXPECT_DOUBLE_EQ(param(plane.value(), "y_0"), 4200000.0);
 
   // A user-defined Bessel datum without TOWGS84 reads, but cannot be placed on the globe.
   auto bessel =
@@ -441,7 +452,7 @@ TEST(CrsGeoKeys, PolarStereographicAndObliqueStereographicKeys) {
                               key(3076, 9001), key(3081, -71.0), key(3095, 0.0), key(3092, 1.0),
                               key(3082, 0), key(3083, 0)});
   ASSERT_TRUE(ps.ok()) << ps.error().message;
-  EXPECT_EQ(ps.value().projection->method, ProjectionMethod::PolarStereographicB);
+  EXPECT_EQ(ps.value().projection->method_name, "Polar Stereographic (variant B)");
   EXPECT_EQ(crs_difference(ps.value(), crs_from_epsg(3031).value()), std::nullopt);
 
   auto rd =
@@ -479,7 +490,7 @@ TEST(CrsGeoKeys, ErrorsNameTheKey) {
   // A projected code whose method PROJ computes for us (Swiss oblique Mercator).
   auto swiss = crs_from_geokeys({key(1024, 1), key(3072, 2056)});
   ASSERT_TRUE(swiss.ok()) << swiss.error().message;
-  EXPECT_EQ(swiss.value().projection->method, ProjectionMethod::ComputedByProj);
+  EXPECT_NE(swiss.value().projection->method_name.find("Oblique Mercator"), std::string::npos);
   auto unknown = crs_from_geokeys({key(1024, 1), key(3072, 65000)});
   ASSERT_FALSE(unknown.ok());
   EXPECT_NE(unknown.error().message.find("65000"), std::string::npos);
@@ -520,13 +531,13 @@ TEST(CrsSharedFiles, InterestingLasKeysDisagreeWithItsWkt) {
   c.geokeys = crs_from_geokeys(*file->geokeys);
   c.wkt = crs_from_wkt(*file->wkt);
   ASSERT_TRUE(c.geokeys->ok() && c.wkt->ok());
-  EXPECT_NEAR(c.geokeys->value().projection->false_easting_m, 121920.0, 1e-3);
-  EXPECT_NEAR(c.wkt->value().projection->false_easting_m, 400000.0, 1e-3);
+  EXPECT_NEAR(param(c.geokeys->value(), "x_0"), 121920.0, 1e-3);
+  EXPECT_NEAR(param(c.wkt->value(), "x_0"), 400000.0, 1e-3);
   auto crs = reconcile_crs(c);
   ASSERT_TRUE(crs.ok());
-  EXPECT_NEAR(crs.value().projection->false_easting_m, 400000.0, 1e-3);  // WKT wins
+  EXPECT_NEAR(param(crs.value(), "x_0"), 400000.0, 1e-3);  // WKT wins
   ASSERT_TRUE(mentions(crs.value().warnings, "GeoTIFF keys")) << all(crs.value().warnings);
-  EXPECT_TRUE(mentions(crs.value().warnings, "false easting")) << all(crs.value().warnings);
+  EXPECT_TRUE(mentions(crs.value().warnings, "projection")) << all(crs.value().warnings);
   EXPECT_TRUE(mentions(crs.value().warnings, "using WKT")) << all(crs.value().warnings);
 }
 
@@ -559,7 +570,7 @@ TEST(CrsSharedFiles, KeysOfTheFormatCaseFiles) {
   SHARED_FILE(mvk, "pdal/mvk-thin.las");
   auto mvk_crs = crs_from_geokeys(*mvk->geokeys);
   ASSERT_TRUE(mvk_crs.ok());
-  EXPECT_NEAR(mvk_crs.value().projection->false_easting_m, 700000.0, 1e-6);
+  EXPECT_NEAR(param(mvk_crs.value(), "x_0"), 700000.0, 1e-6);
   SHARED_FILE(empty, "pdal/1.2-empty-geotiff-vlrs.las");
   auto none = crs_from_geokeys(*empty->geokeys);
   ASSERT_FALSE(none.ok());
@@ -572,11 +583,9 @@ TEST(CrsSharedFiles, WktOfTheFormatCaseFiles) {
   ASSERT_TRUE(crs.ok()) << crs.error().message;
   EXPECT_EQ(crs.value().epsg, 2903);
   EXPECT_EQ(crs_difference(crs.value(), crs_from_epsg(2903).value()), std::nullopt);
-  // VERTCS nested in PROJCS with UNIT["US survey foot",1.0]: read by name, with a warning.
-  ASSERT_TRUE(crs.value().vertical.has_value());
-  EXPECT_EQ(crs.value().vertical->epsg, 5703);
-  EXPECT_DOUBLE_EQ(crs.value().vertical->unit.metres, 1200.0 / 3937.0);
-  EXPECT_TRUE(mentions(crs.value().warnings, "conversion factor 1")) << all(crs.value().warnings);
+  // Its VERTCS nested inside the PROJCS is no WKT PROJ reads (dropped): z keeps the
+  // horizontal unit, the US survey foot, as the LAS convention says.
+  EXPECT_DOUBLE_EQ(crs.value().z_unit_metres(), 1200.0 / 3937.0);
 
   SHARED_FILE(w3, "pdal/wontcompress3.las");
   auto utm = crs_from_wkt(*w3->wkt);
@@ -591,9 +600,9 @@ TEST(CrsSharedFiles, WktOfTheFormatCaseFiles) {
   EXPECT_EQ(crs_difference(geographic.value(), crs_from_epsg(4326).value()), std::nullopt);
 
   SHARED_FILE(warsaw, "pdal/warsaw_small.las");
-  auto empty = crs_from_wkt(*warsaw->wkt);
+  auto empty = crs_from_wkt(*warsaw->wkt);  // a 3-byte record, "''" and a NUL
   ASSERT_FALSE(empty.ok());
-  EXPECT_NE(empty.error().message.find("empty"), std::string::npos);
+  EXPECT_NE(empty.error().message.find("WKT"), std::string::npos) << empty.error().message;
 }
 
 // ---- WKT ---------------------------------------------------------------------------------
@@ -610,14 +619,14 @@ TEST(CrsWkt, Wkt2CompoundAndBoundCrs) {
   EXPECT_EQ(crs_difference(rd.value(), crs_from_epsg(7415).value()), std::nullopt);
   ASSERT_TRUE(rd.value().vertical.has_value());
   EXPECT_EQ(rd.value().vertical->name, "NAP height");
-  EXPECT_NE(rd.value().datum.to_wgs84_source.find("9281"), std::string::npos);
+  EXPECT_EQ(rd.value().datum.to_wgs84_source, crs_from_epsg(28992).value().datum.to_wgs84_source);
 
   auto ny = crs_from_wkt(kNyBoundWkt2);
   ASSERT_TRUE(ny.ok()) << ny.error().message;
   EXPECT_EQ(ny.value().epsg, 2263);
   EXPECT_EQ(ny.value().linear_unit.epsg, 9003);  // 0.304800609601219 snapped to 1200/3937
   EXPECT_EQ(crs_difference(ny.value(), crs_from_epsg(2263).value()), std::nullopt);
-  EXPECT_NE(ny.value().datum.to_wgs84_source.find("BOUNDCRS"), std::string::npos);
+  EXPECT_NE(ny.value().datum.to_wgs84_source.find("TOWGS84"), std::string::npos);
 }
 
 TEST(CrsWkt, EsriAndGdalDialects) {
@@ -656,7 +665,8 @@ TEST(CrsWkt, WriterRoundTripsEveryTableCode) {
     ASSERT_TRUE(back.ok()) << code << ": " << back.error().message << "\n" << wkt;
     EXPECT_EQ(crs_difference(crs, back.value()), std::nullopt) << code << "\n" << wkt;
     EXPECT_EQ(back.value().epsg, crs.epsg) << code;
-    EXPECT_TRUE(back.value().warnings.empty()) << code << ": " << all(back.value().warnings);
+    // Only what the CRS itself warrants (no geoid grid for NAP here) is said.
+    EXPECT_EQ(back.value().warnings, crs.warnings) << code << ": " << all(back.value().warnings);
   }
 }
 
@@ -664,12 +674,11 @@ TEST(CrsWkt, ErrorsAreNamed) {
   auto syntax = crs_from_wkt(R"wkt(PROJCS["x",GEOGCS["y")wkt");
   ASSERT_FALSE(syntax.ok());
   EXPECT_EQ(syntax.error().code, ErrorCode::InvalidArgument);
-  EXPECT_NE(syntax.error().message.find("offset"), std::string::npos);
+  EXPECT_NE(syntax.error().message.find("WKT"), std::string::npos);
 
   auto mercator = crs_from_wkt(
       R"wkt(PROJCS["WGS 84 / World Mercator",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Mercator_1SP"],PARAMETER["central_meridian",0],PARAMETER["scale_factor",1],PARAMETER["false_easting",0],PARAMETER["false_northing",0],UNIT["metre",1]])wkt");
   ASSERT_TRUE(mercator.ok()) << mercator.error().message;  // a method PROJ computes
-  EXPECT_EQ(mercator.value().projection->method, ProjectionMethod::ComputedByProj);
   EXPECT_NE(mercator.value().projection->proj_string.find("+proj=merc"), std::string::npos);
   auto nonsense = crs_from_wkt(
       R"wkt(PROJCS["x",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["No_Such_Projection"],UNIT["metre",1]])wkt");
@@ -678,9 +687,9 @@ TEST(CrsWkt, ErrorsAreNamed) {
   EXPECT_NE(nonsense.error().message.find("No_Such_Projection"), std::string::npos);
 
   auto geocentric = crs_from_wkt(
-      R"wkt(GEOCCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]]])wkt");
-  ASSERT_FALSE(geocentric.ok());
-  EXPECT_EQ(geocentric.error().code, ErrorCode::Unsupported);
+      R"wkt(GEOCCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],UNIT["metre",1]])wkt");
+  ASSERT_TRUE(geocentric.ok()) << geocentric.error().message;  // a CRS kind of its own
+  EXPECT_EQ(geocentric.value().kind, CrsKind::Geocentric);
 
   auto vertical_only =
       crs_from_wkt(R"wkt(VERT_CS["NAVD88",VERT_DATUM["NAVD88",2005],UNIT["metre",1]])wkt");
@@ -691,14 +700,9 @@ TEST(CrsWkt, ErrorsAreNamed) {
   for (int i = 0; i < 100000; ++i) deep += "A[";
   auto nested = crs_from_wkt(deep);
   ASSERT_FALSE(nested.ok());
-  EXPECT_NE(nested.error().message.find("nesting"), std::string::npos);
+  EXPECT_NE(nested.error().message.find("WKT"), std::string::npos);
   auto huge = crs_from_wkt(std::string(3 << 20, ' '));
   ASSERT_FALSE(huge.ok());
-
-  auto missing = crs_from_wkt(
-      R"wkt(PROJCS["x",GEOGCS["NAD83",DATUM["NAD83",SPHEROID["GRS 1980",6378137,298.257222101]],PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Lambert_Conformal_Conic_2SP"],PARAMETER["standard_parallel_1",43],UNIT["metre",1]])wkt");
-  ASSERT_FALSE(missing.ok());
-  EXPECT_NE(missing.error().message.find("standard parallel 2"), std::string::npos);
 }
 
 TEST(CrsWkt, TowgsConventionAndUnknownDatums) {
@@ -834,7 +838,7 @@ TEST(CrsValidate, RangesAreChecked) {
   Crs crs = crs_from_epsg(2992).value();
   EXPECT_TRUE(validate_crs(crs).ok());
   Crs bad = crs;
-  bad.projection->standard_parallel_2_deg = -43;
+  bad.projection->proj_string.clear();
   EXPECT_FALSE(validate_crs(bad).ok());
   bad = crs;
   bad.linear_unit.metres = 0;
@@ -843,7 +847,7 @@ TEST(CrsValidate, RangesAreChecked) {
   bad.datum.ellipsoid.semi_major_m = std::nan("");
   EXPECT_FALSE(validate_crs(bad).ok());
   bad = crs;
-  bad.projection->latitude_of_origin_deg = 91;
+  bad.datum.ellipsoid.inverse_flattening = 0.5;
   EXPECT_FALSE(validate_crs(bad).ok());
   bad = crs;
   bad.projection.reset();

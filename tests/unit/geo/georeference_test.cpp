@@ -223,7 +223,7 @@ TEST(GeoProjectionVsCs2cs, NationalGridsFromProjsDatabase) {
 }
 
 // Methods our own engines do not compute are computed by PROJ from its own definition
-// (ProjectionMethod::ComputedByProj, issue #19): Krovak, Swiss and Hotine oblique Mercator,
+// (issue #19): Krovak, Swiss and Hotine oblique Mercator,
 // Mercator (spherical and ellipsoidal), Lambert azimuthal equal area, Albers.
 TEST(GeoProjectionVsCs2cs, MethodsComputedByProj) {
   REQUIRE_PROJ();
@@ -238,7 +238,6 @@ TEST(GeoProjectionVsCs2cs, MethodsComputedByProj) {
   expect_family({"GDM2000 / Peninsula RSO", 3375, 4742, false, 1.3, 6.7, 99.7, 104.5});
   const Crs krovak = epsg(5514);
   ASSERT_TRUE(krovak.projection.has_value());
-  EXPECT_EQ(krovak.projection->method, ProjectionMethod::ComputedByProj);
   EXPECT_NE(krovak.projection->method_name.find("Krovak"), std::string::npos);
   EXPECT_NE(describe_crs(krovak).find("Krovak"), std::string::npos) << describe_crs(krovak);
 }
@@ -345,7 +344,6 @@ TEST(GeoProjectionVsCs2cs, GeoTiffUserDefinedMethodsComputedByProj) {
     keys.insert(keys.end(), c.projection.begin(), c.projection.end());
     auto crs = crs_from_geokeys(keys);
     ASSERT_TRUE(crs.ok()) << crs.error().message;
-    ASSERT_EQ(crs.value().projection->method, ProjectionMethod::ComputedByProj);
     std::vector<Triple> points;
     for (int i = 0; i < 50; ++i) points.push_back({c.lat + 0.02 * i, c.lon - 0.03 * i, 0.0});
     auto oracle = cs2cs("+proj=longlat +ellps=GRS80", "+to " + c.oracle, [&] {
@@ -398,7 +396,7 @@ TEST(GeoProjectionVsCs2cs, LambertConic1SpFromWktAgrees) {
       "PARAMETER[\"false_easting\",250000],PARAMETER[\"false_northing\",150000],UNIT[\"metre\",1]]";
   auto crs = crs_from_wkt(wkt);
   ASSERT_TRUE(crs.ok()) << crs.error().message;
-  ASSERT_EQ(crs.value().projection->method, ProjectionMethod::LambertConicConformal1SP);
+  ASSERT_EQ(crs.value().projection->method_name, "Lambert Conic Conformal (1SP)");
   const Family f{"LCC 1SP (WKT)", 0, 0, false, 14.0, 22.0, -82.0, -72.0};
   const auto points = random_geodetic(f, 2000, 77);
   auto oracle = cs2cs("EPSG:4269", "'" + wkt + "'", points);
@@ -550,14 +548,16 @@ TEST(ProjDatumShift, GridShiftsPROJChoosesAreApplied) {
   EXPECT_LT(geodetic_gap_m(again.value().y(), again.value().x(), 49.0, 9.0), 1e-6);
 }
 
-TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
+// RD New reaches WGS 84 by the Helmert PROJ ranks first (EPSG:4833 "Amersfoort to WGS 84 (4)",
+// 1 m: the RDNAPTRANS grid is not installed), which is what cs2cs EPSG:28992 → EPSG:4326 runs.
+TEST(RdNewDatumShift, HelmertPROJChoosesAgreesWithCs2cs) {
   REQUIRE_PROJ();
   const Crs rd = epsg(28992);
   std::mt19937_64 rng(28992);
   std::uniform_real_distribution<double> x(13000, 278000), y(306000, 619000);
   std::vector<Triple> points;
   for (int i = 0; i < 2500; ++i) points.push_back({x(rng), y(rng), 0.0});
-  auto oracle = cs2cs("EPSG:28992", "EPSG:4937", points);
+  auto oracle = cs2cs("EPSG:28992", "EPSG:4326", points);
   ASSERT_TRUE(oracle.has_value());
   double worst = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -568,16 +568,17 @@ TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
     worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg,
                                            (*oracle)[i][0], (*oracle)[i][1]));
   }
-  std::cout << "[agreement] RD New -> ETRS89 (EPSG:9281 Helmert) vs cs2cs EPSG:28992->4937 (2500 "
-               "points): max "
-            << worst * 1e3 << " mm\n";
+  EXPECT_NE(rd.datum.to_wgs84_source.find("Amersfoort to WGS 84"), std::string::npos)
+      << rd.datum.to_wgs84_source;
+  std::cout << "[agreement] RD New -> WGS 84 (" << rd.datum.to_wgs84_source
+            << ") vs cs2cs EPSG:28992->4326 (2500 points): max " << worst * 1e3 << " mm\n";
   EXPECT_LT(worst, 1e-3);
 
   // And back: cs2cs inverts the small-angle Helmert by transposition, we invert it exactly;
   // the two differ by second-order terms (|Ω|²·|X| ≈ 0.5 mm), so 2 mm here.
   std::vector<Triple> etrs;
   for (const Triple& t : *oracle) etrs.push_back({t[0], t[1], 0.0});
-  auto back_oracle = cs2cs("EPSG:4937", "EPSG:28992", etrs);
+  auto back_oracle = cs2cs("EPSG:4326", "EPSG:28992", etrs);
   ASSERT_TRUE(back_oracle.has_value());
   double worst_back = 0;
   for (std::size_t i = 0; i < etrs.size(); ++i) {
@@ -588,35 +589,70 @@ TEST(RdNewDatumShift, Epsg9281HelmertAgreesWithCs2csToEtrs89) {
     worst_back = std::max(worst_back, std::hypot(p.value().x() - (*back_oracle)[i][0],
                                                  p.value().y() - (*back_oracle)[i][1]));
   }
-  std::cout << "[agreement] ETRS89 -> RD New vs cs2cs EPSG:4937->28992: max " << worst_back * 1e3
+  std::cout << "[agreement] WGS 84 -> RD New vs cs2cs EPSG:4326->28992: max " << worst_back * 1e3
             << " mm\n";
   EXPECT_LT(worst_back, 2e-3);
 }
 
-// cs2cs EPSG:28992 → EPSG:4326 picks EPSG:4833 "Amersfoort to WGS 84 (4)" (another Helmert,
-// 1 m). We identify ETRS89 with WGS 84 after EPSG:9281, so the two differ by the difference
-// of the Helmert sets: measured and bounded here (the full RDNAPTRANS2018 grid, which neither
-// side applies, differs from either Helmert by up to ~0.25 m).
-TEST(RdNewDatumShift, DifferenceToCs2csWgs84IsTheHelmertSetDifference) {
+// ---- geoid models ------------------------------------------------------------------------
+
+// A vertical CRS's heights become ellipsoidal through the geoid model PROJ chooses where its
+// grid is installed: EGM96 height (EPSG:5773) by Debian proj-data's egm96_15.gtx, checked
+// against cs2cs EPSG:4326+5773 → EPSG:4979 (issue #19: grids where installed).
+TEST(GeoGeoid, Egm96HeightsBecomeEllipsoidalAsCs2csSays) {
   REQUIRE_PROJ();
-  const Crs rd = epsg(28992);
-  std::mt19937_64 rng(4833);
-  std::uniform_real_distribution<double> x(13000, 278000), y(306000, 619000);
-  std::vector<Triple> points;
-  for (int i = 0; i < 2500; ++i) points.push_back({x(rng), y(rng), 0.0});
-  auto oracle = cs2cs("EPSG:28992", "EPSG:4326", points);
-  ASSERT_TRUE(oracle.has_value());
-  double worst = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    auto g = projected_to_geodetic(rd, Vec3(points[i][0], points[i][1], 0.0));
-    auto w = datum_to_wgs84(rd.datum, g.value());
-    worst = std::max(worst, geodetic_gap_m(w.value().latitude_deg, w.value().longitude_deg,
-                                           (*oracle)[i][0], (*oracle)[i][1]));
+  auto crs = crs_from_config("EPSG:4326+5773");
+  ASSERT_TRUE(crs.ok()) << crs.error().message;
+  ASSERT_TRUE(crs.value().vertical.has_value());
+  if (crs.value().vertical->to_ellipsoidal_pipeline.empty()) {
+    GTEST_SKIP() << "no EGM96 grid installed for PROJ (proj-data): "
+                 << crs.value().vertical->to_ellipsoidal_source;
   }
-  std::cout
-      << "[agreement] RD New -> WGS 84 ours (EPSG:9281) vs cs2cs EPSG:28992->4326 (EPSG:4833): max "
-      << worst * 1e3 << " mm\n";
-  EXPECT_LT(worst, 1.0);  // EPSG:4833's stated accuracy
+  EXPECT_NE(crs.value().vertical->to_ellipsoidal_source.find("EGM96"), std::string::npos)
+      << crs.value().vertical->to_ellipsoidal_source;
+  std::mt19937_64 rng(5773);
+  std::uniform_real_distribution<double> lat(-70, 70), lon(-179, 179), h(-20, 300);
+  std::vector<Triple> points;  // cs2cs takes EPSG:4326's latitude, longitude order
+  for (int i = 0; i < 500; ++i) points.push_back({lat(rng), lon(rng), h(rng)});
+  auto oracle = cs2cs("EPSG:4326+5773", "EPSG:4979", points);
+  ASSERT_TRUE(oracle.has_value());
+  double worst = 0, largest_n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    auto g = projected_to_geodetic(crs.value(), Vec3(points[i][1], points[i][0], points[i][2]));
+    ASSERT_TRUE(g.ok()) << g.error().message;
+    worst = std::max(worst, std::fabs(g.value().height_m - (*oracle)[i][2]));
+    largest_n = std::max(largest_n, std::fabs(g.value().height_m - points[i][2]));
+    // And back: the geoid model's inverse.
+    auto back = geodetic_to_projected(crs.value(), g.value());
+    ASSERT_TRUE(back.ok());
+    EXPECT_NEAR(back.value().z(), points[i][2], 1e-6);
+  }
+  std::cout << "[agreement] EGM96 heights -> ellipsoidal vs cs2cs (500 points): max " << worst * 1e3
+            << " mm (undulations up to " << largest_n << " m)\n";
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_GT(largest_n, 10.0);  // the model was applied, not skipped
+  // The tile frame sees the same heights: a point at H = 0 lies N above the frame's origin.
+  auto georef = Georeferencer::create_at(crs.value(), Vec3(4.36, 52.0, 0.0));
+  ASSERT_TRUE(georef.ok()) << georef.error().message;
+  EXPECT_NEAR(georef.value().frame().origin.height_m, 43.5, 1.0);  // N at Delft (cs2cs: 43.477)
+}
+
+// Where no grid for the vertical CRS is installed, heights stay as they are and the CRS says so.
+TEST(GeoGeoid, WithoutAGridHeightsAreTakenAsEllipsoidalWithAWarning) {
+  auto crs = crs_from_config("EPSG:28992+5709");
+  ASSERT_TRUE(crs.ok()) << crs.error().message;
+  ASSERT_TRUE(crs.value().vertical.has_value());
+  if (!crs.value().vertical->to_ellipsoidal_pipeline.empty()) {
+    GTEST_SKIP() << "a NAP geoid grid is installed here: "
+                 << crs.value().vertical->to_ellipsoidal_source;
+  }
+  EXPECT_NE(crs.value().vertical->to_ellipsoidal_source.find("none installed"), std::string::npos);
+  bool warned = false;
+  for (const auto& w : crs.value().warnings) warned |= w.find("NAP height") != std::string::npos;
+  EXPECT_TRUE(warned);
+  auto g = projected_to_geodetic(crs.value(), Vec3(85000, 446000, 12.5));
+  ASSERT_TRUE(g.ok());
+  EXPECT_DOUBLE_EQ(g.value().height_m, 12.5);
 }
 
 // ---- the local frame ---------------------------------------------------------------------
@@ -662,13 +698,10 @@ TEST(GeoLocalFrame, UtmToLocalMatchesProjTopocentric) {
 
 TEST(RdNewLocalFrame, RdToLocalMatchesProjPipelineWithHelmert) {
   REQUIRE_PROJ();
-  const double arcsec = 648000.0 / kPi / 1e6;
-  char helmert[512];
-  std::snprintf(helmert, sizeof helmert,
-                "+step +proj=helmert +x=565.7381 +y=50.4018 +z=465.2904 +rx=%.15f +ry=%.15f "
-                "+rz=%.15f +s=4.07244 "
-                "+convention=coordinate_frame",
-                1.91514 * arcsec, -1.60363 * arcsec, 9.09546 * arcsec);
+  // EPSG:4833 "Amersfoort to WGS 84 (4)", as projinfo -s EPSG:4289 -t EPSG:4326 writes it.
+  const char* helmert =
+      "+step +proj=helmert +x=565.4171 +y=50.3319 +z=465.5524 +rx=0.398957388243134 "
+      "+ry=-0.343987817378283 +rz=1.87740163998045 +s=4.0725 +convention=coordinate_frame";
   expect_local_matches_cct(
       epsg(28992), Vec3(85000, 446000, 0),
       "+step +inv +proj=sterea +lat_0=52.156160555555555 +lon_0=5.387638888888889 "
@@ -843,14 +876,16 @@ TEST(GeoErrors, GeographicLibExceptionsBecomeTypedErrors) {
 }
 
 TEST(GeoErrors, DatumWithoutWgs84RelationCannotBeGeoreferenced) {
-  auto nad27 = crs_from_epsg(4267);
-  ASSERT_TRUE(nad27.ok());
-  auto georef = Georeferencer::create(nad27.value(), GeodeticPoint{40, -100, 0});
+  // A datum PROJ relates to nothing, on an ellipsoid other than WGS 84's.
+  auto odd = crs_from_wkt(
+      R"wkt(GEOGCS["odd",DATUM["D_Odd",SPHEROID["Clarke 1880",6378249.145,293.465]],PRIMEM["Greenwich",0],UNIT["Degree",0.0174532925199433]])wkt");
+  ASSERT_TRUE(odd.ok()) << odd.error().message;
+  auto georef = Georeferencer::create(odd.value(), GeodeticPoint{40, -100, 0});
   ASSERT_FALSE(georef.ok());
   EXPECT_EQ(georef.error().code, kernel::ErrorCode::Unsupported);
-  EXPECT_NE(georef.error().message.find("North American Datum 1927"), std::string::npos);
-  // ... but it still projects within its own datum.
-  auto p = projected_to_geodetic(nad27.value(), Vec3(-100, 40, 0));
+  EXPECT_NE(georef.error().message.find("Odd"), std::string::npos) << georef.error().message;
+  // ... but it still converts within its own datum.
+  auto p = projected_to_geodetic(odd.value(), Vec3(-100, 40, 0));
   EXPECT_TRUE(p.ok());
 }
 
@@ -859,10 +894,11 @@ TEST(GeoErrors, BadFrameOriginAndBadCrs) {
   ASSERT_FALSE(georef.ok());
   EXPECT_EQ(georef.error().code, kernel::ErrorCode::InvalidArgument);
   Crs broken = epsg(32631);
-  broken.projection->scale_factor = -1;
+  broken.projection->proj_string = "+proj=utm +zone=99";
   auto bad = Georeferencer::create(broken, GeodeticPoint{50, 3, 0});
   ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.error().message.find("scale factor"), std::string::npos);
+  EXPECT_NE(bad.error().message.find("+proj=utm +zone=99"), std::string::npos)
+      << bad.error().message;
 }
 
 TEST(GeoTransform, TransformPointThroughTheHub) {

@@ -396,10 +396,12 @@ TEST(SharedLas, CrsRecordsResolveToTheirCrs) {
       {"pdal/autzen-utm.las", 26910, "UTM zone 10N", 0},
       {"pdal/epsg_4326.las", 4326, "geographic", 0},
       {"pdal/autzen-dd.las", 4326, "geographic", 0},
-      {"pdal/interesting.las", 0, "Lambert Conic Conformal (2SP), foot", 0},
+      // ESRI's name for EPSG:2992; PROJ identifies it (same parameters, other names).
+      {"pdal/interesting.las", 2992, "Lambert Conic Conformal (2SP), foot", 0},
       {"laspy/plane.las", 0, "Lambert Conic Conformal (2SP), metre", 0},
       {"liblas/certainty3d-color-utm-feet-navd88.las", 2229, "US survey foot", 0},
-      {"pdal/test1_4.las", 2903, "New Mexico Central (ftUS)", 5703},
+      // Its VERTCS nested inside the PROJCS is no WKT PROJ reads: no vertical CRS.
+      {"pdal/test1_4.las", 2903, "New Mexico Central (ftUS)", 0},
       {"pdal/wontcompress3.las", 26919, "UTM zone 19N", 0},
       {"pdal/crop-on-edge_crop.las", 2154, "Lambert-93", 0},
       {"pnext/v4d0.las", 6676, "Japan Plane Rectangular CS VIII", 0},

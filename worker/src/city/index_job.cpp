@@ -146,10 +146,12 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   const auto payload = ordered_json::parse(job.payload, nullptr, false);
   const std::string crs_text = payload.is_object() ? payload.value("crs", "") : std::string();
   RunObjects objects;
-  std::string datum_transformation;  // how the run's CRS reaches WGS 84 (3D Tiles, ENU frames)
+  std::string datum_transformation;   // how the run's CRS reaches WGS 84 (3D Tiles, ENU frames)
+  std::string height_transformation;  // how its heights become ellipsoidal (a geoid model)
   if (!crs_text.empty()) {
     auto crs = geo::crs_from_config(crs_text);
     if (crs.ok()) datum_transformation = crs->datum.to_wgs84_source;
+    if (crs.ok() && crs->vertical) height_transformation = crs->vertical->to_ellipsoidal_source;
     if (crs.ok() && crs->epsg > 0) objects.crs = std::move(crs).value();
   }
   objects.origin = objects.crs ? origin : kernel::Vec3::Zero();
@@ -238,6 +240,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   manifest["seed"] = config.run.seed;
   manifest["crs"] = crs_text;
   manifest["crs_to_wgs84"] = datum_transformation;
+  manifest["crs_heights"] = height_transformation;
   manifest["origin"] = {objects.origin.x(), objects.origin.y(), objects.origin.z()};
   manifest["cell_size"] = config.city.cell_size;
   manifest["halo"] = config.city.halo;

@@ -2,23 +2,25 @@
 /// \file
 /// Coordinate reference systems as plain descriptions: what a LIDAR tile's coordinates mean.
 ///
-/// A Crs is built from an EPSG code (a built-in table of the codes a city service meets), from
-/// GeoTIFF keys (LAS GeoKeyDirectory VLRs), from OGC WKT 1 or WKT 2 text, or from a config
-/// string. It carries everything georeference.h needs to compute with it; nothing here
-/// computes coordinates.
+/// Every CRS is read by PROJ (Debian libproj, its EPSG database in proj-data): EPSG codes,
+/// OGC WKT 1 (GDAL and ESRI dialects) and WKT 2, PROJJSON, PROJ strings, and GeoTIFF keys
+/// (LAS GeoKeyDirectory VLRs), which are mapped to EPSG codes or, when user-defined, to a
+/// PROJ string. The Crs below is what PROJ says about the CRS, in the terms georeference.h
+/// computes with; nothing here computes coordinates.
 ///
 /// Conventions (all builders normalise to them):
 ///  - x is easting / longitude, y is northing / latitude, whatever the authority's axis order
 ///    (LAS and most GIS files store easting first; so does this model).
-///  - Projection parameters are stored in degrees (angles) and metres (false easting and
-///    northing); `linear_unit` / `angular_unit` say what the coordinates themselves are in.
-///  - Datum shifts are described towards WGS 84 as a 7-parameter Helmert transformation in the
-///    coordinate-frame rotation convention (EPSG method 1032/9607).
+///  - `linear_unit` / `angular_unit` say what the coordinates themselves are in; the
+///    projection is a PROJ string in metres.
+///  - The datum's relation to WGS 84 is the transformation PROJ ranks first among those whose
+///    grids are installed (or the definition's own TOWGS84): a 7-parameter Helmert kept in the
+///    coordinate-frame rotation convention (EPSG method 1032/9607), or PROJ's pipeline.
 ///
 /// Errors (kernel::Result): InvalidArgument for malformed, incomplete or out-of-range
 /// definitions (WKT syntax, a missing projection parameter, a GeoTIFF directory without a CRS);
-/// Unsupported for valid definitions this build does not handle (a projection method, an EPSG
-/// code outside the table, a geocentric model). Messages name the key, WKT node or code.
+/// Unsupported for definitions PROJ cannot read or that are no usable CRS (an unknown EPSG
+/// code, an engineering CRS). Messages name the key, the code or PROJ's reason.
 
 #include <cstdint>
 #include <optional>
@@ -91,54 +93,31 @@ LinearUnit international_foot_unit();  ///< EPSG:9002, 0.3048 m
 LinearUnit us_survey_foot_unit();      ///< EPSG:9003, 1200/3937 m
 AngularUnit degree_unit();
 
-/// Projection methods this build computes (EPSG method codes in brackets).
-enum class ProjectionMethod {
-  TransverseMercator,        ///< [9807] includes UTM and most US state planes
-  LambertConicConformal1SP,  ///< [9801]
-  LambertConicConformal2SP,  ///< [9802]
-  PolarStereographicA,       ///< [9810] natural origin at a pole with a scale factor (UPS)
-  PolarStereographicB,       ///< [9829] scale 1 on a standard parallel
-  ObliqueStereographic,      ///< [9809] double stereographic, e.g. RD New (EPSG:28992)
-  /// Any other method PROJ computes (Krovak, Hotine / Swiss oblique Mercator, Mercator,
-  /// Lambert azimuthal equal area, Albers, ...): Projection::proj_string defines it.
-  ComputedByProj,
-};
-
-/// EPSG name of a method, e.g. "Lambert Conic Conformal (2SP)".
-const char* projection_method_name(ProjectionMethod method);
-
-/// Parameters of a projection, in degrees and metres. Which fields a method reads:
-///  - TransverseMercator, LambertConicConformal1SP, ObliqueStereographic, PolarStereographicA:
-///    latitude/longitude of natural origin, scale_factor, false easting/northing (PS-A: the
-///    latitude of origin is ±90 and picks the pole).
-///  - LambertConicConformal2SP: latitude/longitude of the false origin, both standard
-///    parallels, easting/northing at the false origin.
-///  - PolarStereographicB: standard_parallel_1 (its sign picks the pole), longitude of
-///    origin, false easting/northing.
+/// The projection of a projected CRS, computed by PROJ: every method PROJ knows (transverse
+/// Mercator and UTM, Lambert conic, oblique and polar stereographic, Krovak, Hotine / Swiss
+/// oblique Mercator, Mercator, Lambert azimuthal equal area, Albers, ...).
 struct Projection {
-  ProjectionMethod method = ProjectionMethod::TransverseMercator;
-  double latitude_of_origin_deg = 0.0;
-  double longitude_of_origin_deg = 0.0;
-  double scale_factor = 1.0;
-  double standard_parallel_1_deg = 0.0;
-  double standard_parallel_2_deg = 0.0;
-  double false_easting_m = 0.0;
-  double false_northing_m = 0.0;
-  /// ComputedByProj only (empty otherwise):
-  std::string method_name;  ///< EPSG name of the method, e.g. "Krovak (North Orientated)"
+  std::string method_name;  ///< EPSG name of the method, e.g. "Oblique Stereographic"
   /// The projection as a PROJ string on the CRS's ellipsoid, in metres, longitudes relative
-  /// to the CRS's prime meridian (e.g. "+proj=krovak +lat_0=49.5 ... +ellps=bessel"). The
-  /// numeric fields above are not used.
+  /// to the CRS's prime meridian (e.g. "+proj=sterea +lat_0=52.15616055555555 ... +a=… +rf=…").
   std::string proj_string;
-  std::string wkt1;  ///< the projected CRS as PROJ writes it in WKT 1 (for crs_to_wkt1)
 };
 
-/// A vertical CRS: informative (no geoid model is applied, see georeference.h) except for its
-/// unit, which scales z.
+/// A vertical CRS (gravity-related heights such as NAP or NAVD88). Its unit scales z; its
+/// relation to ellipsoidal heights is the transformation PROJ ranks first among those whose
+/// grids are installed (a geoid model), applied by georeference.h. Without one, heights are
+/// taken as ellipsoidal and the CRS carries a warning saying so.
 struct VerticalCrs {
   int epsg = 0;
   std::string name;
   LinearUnit unit;
+  /// PROJ pipeline from (longitude, latitude in degrees, height in metres on this vertical
+  /// CRS) on the horizontal CRS's datum to its ellipsoidal height; empty when none is
+  /// installed.
+  std::string to_ellipsoidal_pipeline = {};
+  /// What that relation is (PROJ's operation, its grid and accuracy) or why there is none:
+  /// written into every run's manifest.
+  std::string to_ellipsoidal_source = {};
 };
 
 /// Geographic: x longitude, y latitude. Projected: x easting, y northing. Geocentric: x, y, z
@@ -158,6 +137,9 @@ struct Crs {
   /// What a builder had to assume or ignore (e.g. "user-defined datum assumed to be WGS 84").
   std::vector<std::string> warnings;
   std::string source;  ///< "EPSG:2992", "GeoTIFF keys", "WKT", "config"
+  /// The whole CRS as PROJ reads it (OGC WKT 2:2019 as PROJ writes it, or a PROJ string for
+  /// CRSs assembled from GeoTIFF keys): what crs_to_wkt1 and the outputs write.
+  std::string definition = {};
 
   bool is_projected() const { return kind == CrsKind::Projected; }
   /// Metres per unit of z: the vertical CRS's unit, else the horizontal linear unit of a
@@ -173,46 +155,42 @@ struct GeoKeyEntry {
   std::string text;
 };
 
-/// A CRS from the built-in EPSG table: geographic 4326, 4979, 4258, 4937, 4269, 4152, 6318,
-/// 4289, 4167, 4171, 4173, 4277, 4267; UTM 32601–32660 / 32701–32760 (WGS 84), 25828–25838
-/// (ETRS89), 26901–26923 (NAD83), 6330–6348 (NAD83(2011)); UPS 32661/32761 and 5041/5042;
-/// RD New 28992 (and compound 7415 = 28992 + NAP 5709); polar stereographic 3031, 3413,
-/// 3976, 3995; TM 2193, 2157, 27700, 2236 (ftUS), 2903 (ftUS); LCC 2154, 2991, 2992, 2994,
-/// 2269, 2270, 2913 (ft), 2227, 2229, 2263 (ftUS). `vertical_epsg` (optional) adds a vertical
-/// CRS: 5703, 6360, 8228, 5709, 5941, 5773, 3855, 7837, 5701, 5714; other codes are kept by
-/// number with a warning. Errors: Unsupported naming the code.
+/// A CRS from PROJ's EPSG database: any geographic, projected, geocentric or compound code.
+/// `vertical_epsg` (optional) adds a vertical CRS (as "EPSG:h+v"). Looked up once per
+/// process. Errors: Unsupported naming the code (not in the database, or not usable).
 kernel::Result<Crs> crs_from_epsg(int code, int vertical_epsg = 0);
 
-/// A CRS from GeoTIFF keys (GeoTIFF 1.0/1.1 ids): model type 1024; EPSG codes 2048
-/// (geographic), 3072 (projected), 3074 (UTM projection codes 16001–16160), 4096 (vertical);
-/// user-defined geographic CRSs (2050 datum, 2051/2061 prime meridian, 2054/2055 angular
-/// unit, 2056–2059 ellipsoid, 2062 TOWGS84) and projections (3075 method: 1 TM, 8 LCC 2SP,
-/// 9 LCC 1SP, 15 polar stereographic, 16 oblique stereographic; 3078–3095 parameters in the
-/// angular unit and in the linear unit 3076/3077); vertical unit 4099. A linear-unit key that
+/// A CRS from GeoTIFF keys (GeoTIFF 1.0/1.1 ids) mapped for PROJ: model type 1024; EPSG codes
+/// 2048 (geographic), 3072 (projected), 3074 (UTM projection codes 16001–16160), 4096
+/// (vertical); user-defined geographic CRSs (2050 datum, 2051/2061 prime meridian, 2054/2055
+/// angular unit, 2056–2059 ellipsoid, 2062 TOWGS84) and projections (3075 method: 1 TM, 7
+/// Mercator, 8 LCC 2SP, 9 LCC 1SP, 10 LAEA, 11 Albers, 12 azimuthal equidistant, 14
+/// stereographic, 15 polar stereographic, 16 oblique stereographic, 17 equirectangular, 18
+/// Cassini, 22 polyconic, 24 sinusoidal; 3078–3095 parameters in the angular unit and in the
+/// linear unit 3076/3077) become a PROJ string; vertical unit 4099. A linear-unit key that
 /// differs from an EPSG code's unit overrides it (coordinates are in the key's unit) with a
 /// warning. Unknown and zero key ids are ignored with a warning.
 /// Errors: InvalidArgument (no CRS, missing parameters), Unsupported (method, code, model).
 kernel::Result<Crs> crs_from_geokeys(const std::vector<GeoKeyEntry>& keys);
 
-/// A CRS from OGC WKT 1 (incl. ESRI and GDAL dialects) or WKT 2 (2015/2019) text: PROJCS /
-/// PROJCRS, GEOGCS / GEOGCRS / GEODCRS, COMPD_CS / COMPOUNDCRS, VERT_CS / VERTCRS, BOUNDCRS
-/// with an abridged Helmert to WGS 84. The parser is tolerant: keywords in any case, '(' or
-/// '[' brackets, unknown nodes skipped; depth and length are bounded (hostile input is refused
-/// cleanly). Errors: InvalidArgument (syntax, missing nodes), Unsupported (method, geocentric).
+/// A CRS from OGC WKT 1 (incl. ESRI and GDAL dialects) or WKT 2 (2015/2019) text, read by PROJ
+/// (not strictly: what GDAL writes is accepted). Length is bounded (64 KiB) and NUL bytes are
+/// refused. Errors: Unsupported naming PROJ's reason.
 kernel::Result<Crs> crs_from_wkt(std::string_view wkt);
 
-/// A CRS from configuration text: "EPSG:28992", "EPSG:28992+5709", "28992", or WKT.
+/// A CRS from configuration text: "EPSG:28992", "EPSG:28992+5709", "28992", WKT, PROJJSON or a
+/// PROJ string with +type=crs.
 kernel::Result<Crs> crs_from_config(std::string_view text);
 
-/// Checks ranges: a > 0, 0 <= f < 1, units > 0, |latitudes| <= 90, scale > 0, standard
-/// parallels not symmetric about the equator (LCC 2SP), a polar method at a pole, finiteness.
+/// Checks what georeference.h relies on: a > 0, 0 <= f < 1, units > 0, a projected CRS has its
+/// PROJ string, finiteness.
 kernel::Status validate_crs(const Crs& crs);
 
-/// nullopt when the two CRSs compute the same coordinates (ellipsoid, datum shift, prime
-/// meridian, method, parameters and units within 1e-9 relative, 1e-9 degrees, 1e-6 of a
-/// Helmert parameter, 0.5 mm of false easting/northing: EPSG rounds feet-based false
-/// origins to 0.001 ft); otherwise a
-/// message naming the first difference and both values. Names and EPSG codes are not compared.
+/// nullopt when the two CRSs compute the same coordinates: ellipsoid, datum shift, prime
+/// meridian and units within 1e-9 relative (1e-6 of a Helmert parameter), and projections that
+/// give the same coordinates within 0.5 mm at points around the projection's origin (EPSG
+/// rounds feet-based false origins to 0.001 ft); otherwise a message naming the first
+/// difference and both values. Names and EPSG codes are not compared.
 std::optional<std::string> crs_difference(const Crs& a, const Crs& b);
 
 /// The readings of one file (and the config) to reconcile. Each is either absent, a CRS, or
@@ -236,8 +214,9 @@ kernel::Result<Crs> reconcile_crs(const CrsCandidates& candidates);
 /// "EPSG:2992 NAD83 / Oregon GIC Lambert (ft): Lambert Conic Conformal (2SP), foot".
 std::string describe_crs(const Crs& crs);
 
-/// OGC WKT 1 (GDAL dialect, with TOWGS84 and AUTHORITY where known; COMPD_CS when a vertical
-/// CRS is set), e.g. for writing LAS 1.4 files. crs_from_wkt(crs_to_wkt1(c)) is equivalent to c.
+/// OGC WKT 1 (GDAL dialect, as PROJ writes it from the definition: TOWGS84 and AUTHORITY where
+/// known, COMPD_CS when a vertical CRS is set), e.g. for writing LAS 1.4 files.
+/// crs_from_wkt(crs_to_wkt1(c)) is equivalent to c.
 std::string crs_to_wkt1(const Crs& crs);
 
 }  // namespace csgtile::geo

@@ -13,30 +13,21 @@
 /// a translation from ENU to WGS 84 ECEF. Models keep small local coordinates plus that
 /// Location and the geodetic origin.
 ///
-/// Datums. "WGS 84" here means the hub every datum is related to: ETRS89, NAD83 and their
-/// realisations are identified with it (EPSG's null transformations: geodetic coordinates
-/// carried over unchanged; metre-level), and datums with a Helmert (Amersfoort for RD New,
-/// OSGB36) go through it in ECEF. The Helmert's output ECEF is taken as WGS 84 ECEF even
-/// where its target is ETRS89 on GRS 80 (EPSG:9281): converting through ETRS89 geodetic
-/// coordinates instead would move points by at most ~0.1 mm (measured against cs2cs).
+/// Datums. "WGS 84" here means the hub every datum is related to, by the transformation PROJ
+/// ranks first among those whose grids are installed (crs.h): a Helmert applied in ECEF, the
+/// identity for PROJ's null transformations (ETRS89, NAD83: geodetic coordinates carried over
+/// unchanged; metre-level), or PROJ's own pipeline (a grid shift such as BETA2007 for DHDN).
 ///
-/// Heights. z is scaled by the CRS's z unit and used as an ellipsoidal height. No geoid model
-/// is applied: heights of a vertical CRS (NAP, NAVD88, ...) enter as if ellipsoidal, unless a
-/// constant undulation is supplied in GeoreferenceOptions. Ignoring an undulation N shifts
-/// the frame by N vertically and scales horizontal distances by N / R (7 ppm for N = 43 m).
+/// Heights. z is scaled by the CRS's z unit; heights of a vertical CRS are made ellipsoidal by
+/// the geoid model PROJ ranks first whose grid is installed (VerticalCrs::
+/// to_ellipsoidal_pipeline, e.g. EGM96 by egm96_15.gtx). Without one they enter as if
+/// ellipsoidal, unless a constant undulation is supplied in GeoreferenceOptions. Ignoring an
+/// undulation N shifts the frame by N vertically and scales horizontal distances by N / R
+/// (7 ppm for N = 43 m).
 ///
 /// Projections are PROJ's (every method it computes, in batches for bulk work), with our own
 /// domain rules around them (UTM legal windows, transverse Mercator within 90° of its central
 /// meridian, no opposite pole); GeographicLib gives the geocentric conversions and ENU frames.
-/// A datum outside the built-in table takes PROJ's best transformation to WGS 84 whose grids
-/// are installed: a Helmert, or PROJ's own pipeline (a grid shift such as BETA2007 for DHDN).
-///
-/// RD New (EPSG:28992). The oblique stereographic projection is PROJ's sterea (EPSG method
-/// 9809, the formulas of Guidance Note 7-2) on Bessel 1841, and the datum shift is the EPSG:9281
-/// Helmert "Amersfoort to ETRS89 (8)", the 7-parameter part of RDNAPTRANS(TM)2018 published by
-/// Kadaster/NSGI (stated accuracy 0.25 m). The RDNAPTRANS correction grid is not applied
-/// (its grid file is not available here): positions on ETRS89 differ from the full
-/// RDNAPTRANS result by up to about 0.25 m.
 ///
 /// Errors: kernel::ErrorCode::InvalidArgument for points outside a projection's domain
 /// (PROJ's reason, or ours, kept in the message) and bad options; Unsupported for a datum with no
