@@ -14,7 +14,7 @@ halo) and indexes the run. One extra input is a truncated tile. Checked:
   * `csgtile query` answers from the run index;
   * the 1-thread run also publishes to S3 (@20minutes/s3rver): the pointer names a manifest
     whose every file is stored with its hash;
-  * byte-identical outputs for 1 and 2 threads, and — when PostgreSQL 15 is installed — for
+  * byte-identical outputs for 1, 2 and 8 threads, and — when PostgreSQL 15 is installed — for
     the same run on PostgreSQL worked by three `csgtile worker` processes at once, one of them
     killed (SIGKILL) and restarted every second or so, six times.
 Validators and PostgreSQL are skipped with a message when missing, unless CSGTILE_REQUIRE_GDAL,
@@ -265,7 +265,12 @@ finally:
         s3.wait()
 other = outputs(f"{work}/b")
 assert other == reference, sorted(set(other.items()) ^ set(reference.items()))[:6]
-figures["identical"] = ["threads 1 vs 2"]
+# And with more threads than cores (every stage's thread count: fit regions, fuse groups, the
+# objects of a cell's exports, relations): the same bytes.
+run("run", write_config("t8", f"{work}/t8", 8), ok=(3,))
+eight = outputs(f"{work}/t8")
+assert eight == reference, sorted(set(eight.items()) ^ set(reference.items()))[:6]
+figures["identical"] = ["threads 1 vs 2", "threads 8 vs 2"]
 if s3:
     stored = f"{work}/s3/runs/city-test"
 

@@ -11,6 +11,7 @@
     building valid, both LoDs;
   * each cell's GeoPackage has a lod12 layer with one feature per building, whose top is the
     building's h_roof_70p, and the objects layer carries the LoD and the heights;
+  * Delft again with run.threads 1 and 8: every output file byte-identical (timings aside);
   * every building carries its points' RMSE to its model (fit_rms) and its heights (h_ground <= h_roof_min <= h_roof_50p <= h_roof_70p
     <= h_roof_max, within the tile's NAP range) and at least one roof surface.
 Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity is
@@ -18,6 +19,7 @@ required when the data is present.
 Usage: city_run_buildings.py CSGTILE SOURCE_DIR WORK_DIR
 """
 import glob
+import hashlib
 import json
 import os
 import shutil
@@ -39,13 +41,37 @@ if not os.path.exists(val3dity):
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 summary = {}
-for name, tile in tiles.items():
-    config = f"{work}/{name}.yaml"
+
+
+def run_tile(name, tile, output, threads=None):
+    config = f"{work}/{os.path.basename(output)}.yaml"
     with open(config, "w") as f:
-        f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {work}/{name}\n"
-                "  crs: EPSG:28992+5709\nlog:\n  level: warn\n")
+        f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {output}\n"
+                "  crs: EPSG:28992+5709\n" + (f"  threads: {threads}\n" if threads else "") +
+                "log:\n  level: warn\n")
     p = subprocess.run([binary, "run", config, "--json"], capture_output=True, text=True)
     assert p.returncode == 0, f"{name}: exit {p.returncode}\n{p.stdout}\n{p.stderr}"
+
+
+def hashes(rundir):
+    out = {}
+    for path in glob.glob(f"{rundir}/**", recursive=True):
+        rel = os.path.relpath(path, rundir)
+        if os.path.isfile(path) and rel not in ("timings.json", "report/timings.js"):
+            with open(path, "rb") as f:
+                out[rel] = hashlib.sha256(f.read()).hexdigest()
+    return out
+
+
+for name, tile in tiles.items():
+    run_tile(name, tile, f"{work}/{name}")
+    if name == "delft":  # the same bytes whatever the thread count (issue #22 item 2)
+        reference = hashes(f"{work}/{name}/runs/{name}")
+        for threads in (1, 8):
+            run_tile(name, tile, f"{work}/{name}_t{threads}", threads)
+            other = hashes(f"{work}/{name}_t{threads}/runs/{name}")
+            assert other == reference, (threads, sorted(set(other.items()) ^ set(reference.items()))[:6])
+        summary["delft_identical_threads"] = [1, 8, len(reference)]
     rundir = f"{work}/{name}/runs/{name}"
     manifest = json.load(open(f"{rundir}/manifest.json"))
     assert manifest["dead"] == [], (name, manifest["dead"])
