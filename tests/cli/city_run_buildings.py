@@ -6,11 +6,12 @@
     without it); every one of them is a Building with one Solid — a building whose parts the
     exact Booleans did not fuse would be a GenericCityObject MultiSolid of its parts, named in
     its cell's problems (measured: Delft 10 of 10, Amsterdam 3 of 3);
-  * every building has its model as LoD2.2 and its block as LoD1.2 (issue #18 item 5;
-    "lod_reached": "2.2"), and val3dity (../shared/tools/val3dity) finds every solid of every
+  * every building has its model as LoD2.2, its multi-height block as LoD1.3 and its block as
+    LoD1.2 (issue #18 item 5; "lod_reached": "2.2"), and val3dity (../shared/tools/val3dity) finds every solid of every
     building valid, both LoDs;
   * each cell's GeoPackage has a lod12 layer with one feature per building, whose top is the
-    building's h_roof_70p, and the objects layer carries the LoD and the heights;
+    building's h_roof_70p, a lod13 layer with one feature per building whose top lies within
+    its roof's heights, and the objects layer carries the LoD and the heights;
   * Delft again with run.threads 1 and 8: every output file byte-identical (timings aside);
   * every building carries its points' RMSE to its model (fit_rms) and its heights (h_ground <= h_roof_min <= h_roof_50p <= h_roof_70p
     <= h_roof_max, within the tile's NAP range) and at least one roof surface.
@@ -87,7 +88,8 @@ for name, tile in tiles.items():
             feature = json.loads(line)
             for oid, o in feature["CityObjects"].items():
                 kinds = [(g["lod"], g["type"]) for g in o.get("geometry", [])]
-                assert kinds == [("2.2", "Solid"), ("1.2", "Solid")], (name, oid, kinds)
+                assert kinds == [("2.2", "Solid"), ("1.3", "Solid"), ("1.2", "Solid")], \
+                    (name, oid, kinds, o["attributes"].get("lod13_failure"))
                 a = o["attributes"]
                 fused += 1 if o["type"] == "Building" and a["lod_reached"] == "2.2" else 0
                 heights = [a[k] for k in ("h_ground", "h_roof_min", "h_roof_50p", "h_roof_70p",
@@ -112,7 +114,12 @@ for name, tile in tiles.items():
                                    "JOIN lod12 l ON l.object_id = o.object_id "
                                    "WHERE o.lod = '2.2'").fetchall())
             objects = db.execute("SELECT count(*) FROM objects").fetchone()[0]
+            # LoD1.3: one feature per building, its highest level within its roof's range.
+            levels = db.execute("SELECT l.h_top, o.h_roof_min, o.h_roof_max FROM objects o "
+                                "JOIN lod13 l ON l.object_id = o.object_id").fetchall()
         assert len(rows) == objects and all(abs(d) < 1e-9 for d in rows.values()), (gpkg, rows)
+        assert len(levels) == objects, (gpkg, len(levels), objects)
+        assert all(low - 1e-6 <= top <= high + 1e-6 for top, low, high in levels), (gpkg, levels)
         blocks += len(rows)
     assert buildings > 0, f"{name}: no building published"
     assert valid == buildings, f"{name}: val3dity: {valid} of {buildings} valid"

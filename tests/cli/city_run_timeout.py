@@ -3,7 +3,7 @@
 over ../shared/data/ams/ahn_2386_9702.las with a limit no fuse can meet (1 µs), then with the
 default (60 s):
   * with the tiny limit the run ends without a dead job; every building of several parts is
-    published as a Building of its LoD1.2 block alone ("lod_reached": "1.2"), its
+    published as a Building of its LoD1.3 and LoD1.2 blocks alone ("lod_reached": "1.3"), its
     "lod22_failure" naming the limit; its cell's manifest counts it (objects_timed_out) and
     names it in its problems with the config key; a building of one part has no fuse to
     limit and keeps its LoD2.2; val3dity finds every published solid valid;
@@ -61,11 +61,13 @@ def run(name, limit):
                 kinds = [(g["lod"], g["type"]) for g in o.get("geometry", [])]
                 out["buildings"] += 1
                 if a["lod_reached"] == "2.2":
-                    assert kinds == [("2.2", "Solid"), ("1.2", "Solid")], (name, oid, kinds)
+                    assert kinds == [("2.2", "Solid"), ("1.3", "Solid"), ("1.2", "Solid")], \
+                        (name, oid, kinds)
                     out["lod22"] += 1
                 else:
-                    assert kinds == [("1.2", "Solid")], (name, oid, kinds)
-                    assert a["lod_reached"] == "1.2", (name, oid, a["lod_reached"])
+                    # Its blocks (LoD1.3 by part, LoD1.2), fused on their own without a limit.
+                    assert kinds == [("1.3", "Solid"), ("1.2", "Solid")], (name, oid, kinds)
+                    assert a["lod_reached"] == "1.3", (name, oid, a["lod_reached"])
                     assert "time limit of" in a.get("lod22_failure", ""), (name, oid, a)
                     out["blocks_only"] += 1
         report = f"{seq}.val3dity.json"

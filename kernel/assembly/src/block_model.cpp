@@ -70,6 +70,8 @@ double roof_percentile(const std::vector<Triangle>& roof, double total, double l
 struct Measured {
   kernel::Mesh mesh;
   BuildingHeights heights;
+  std::vector<Triangle> roof;             // the roof's triangles (nz > kRoofNz)
+  std::vector<std::uint32_t> roof_faces;  // the face (Mesh::triangle_face) of each
 };
 
 kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tolerance) {
@@ -100,6 +102,7 @@ kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tole
     if (nz < kDownNz) ground = std::min(ground, low);
     if (nz <= kRoofNz) continue;
     roof.push_back(t);
+    out.roof_faces.push_back(m.triangle_face[i]);
     h.roof_area += 0.5 * n.z();
     h.roof_min = std::min(h.roof_min, low);
     h.roof_max = std::max(h.roof_max, high);
@@ -114,6 +117,7 @@ kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tole
   h.roof_faces = static_cast<std::size_t>(std::count(roof_face.begin(), roof_face.end(), true));
   h.roof_50p = roof_percentile(roof, h.roof_area, h.roof_min, h.roof_max, 0.5);
   h.roof_70p = roof_percentile(roof, h.roof_area, h.roof_min, h.roof_max, 0.7);
+  out.roof = std::move(roof);
   return out;
 }
 
@@ -132,37 +136,37 @@ kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
   return measured.value().heights;
 }
 
-kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
-                                       const BlockModelOptions& options) {
+namespace {
+
+// Every CSG leaf of a building is an extrusion or a box. Errors: InvalidArgument naming the
+// first that is not (a curved primitive: not a building).
+kernel::Status check_building_leaves(const kernel::CsgModel& model) {
   if (model.shape.is_null() || model.nodes.empty()) {
-    return kernel::Error{ErrorCode::InvalidArgument,
-                         "the model has no CSG history: its leaves cannot tell a building"};
+    return kernel::Status(ErrorCode::InvalidArgument,
+                          "the model has no CSG history: its leaves cannot tell a building");
   }
   for (std::size_t k = 0; k < model.nodes.size(); ++k) {
     const kernel::CsgNode& node = model.nodes[k];
     if (node.kind != kernel::CsgNodeKind::Primitive) continue;
     const kernel::PrimitiveSpec& s = node.primitive;
     if (s.type != kernel::PrimitiveType::Extrusion && s.type != kernel::PrimitiveType::Box) {
-      return kernel::Error{ErrorCode::InvalidArgument, "leaf " + std::to_string(k) + " is a " +
-                                                           kernel::primitive_type_name(s.type) +
-                                                           ", not an extrusion or a box"};
+      return kernel::Status(ErrorCode::InvalidArgument, "leaf " + std::to_string(k) + " is a " +
+                                                            kernel::primitive_type_name(s.type) +
+                                                            ", not an extrusion or a box");
     }
   }
-  auto measured = measure(model.shape, options.chordal_tolerance);
-  if (!measured.ok()) return measured.error();
-  const kernel::Mesh& mesh = measured.value().mesh;
-  BlockModel out;
-  out.heights = measured.value().heights;
-  const double ground = out.heights.ground, top = out.heights.roof_70p;
-  if (!(top - ground > 100.0 * options.tolerance)) {
-    return kernel::Error{ErrorCode::DegenerateGeometry,
-                         "the roof's 70th percentile is not above the ground"};
-  }
+  return kernel::Status();
+}
 
-  // The footprint: every face seen from below, as an extrusion from the ground to the top.
-  const kernel::EdgePoints edge_points = kernel::mesh_edge_points(model.shape, mesh);
-  const kernel::ShapeIndex faces = kernel::map_child_shapes(model.shape, kernel::ShapeKind::Face);
-  std::vector<kernel::CsgModel> pieces;
+// The footprint of `shape` (meshed as `mesh`): every face seen from below, each as an
+// extrusion from `ground` to `top`, appended to `pieces`.
+kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
+                                    double ground, double top, double tolerance,
+                                    const std::string& label,
+                                    std::vector<kernel::CsgModel>& pieces) {
+  const kernel::EdgePoints edge_points = kernel::mesh_edge_points(shape, mesh);
+  const kernel::ShapeIndex faces = kernel::map_child_shapes(shape, kernel::ShapeKind::Face);
+  const std::size_t before = pieces.size();
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const kernel::Shape& face = faces[f];
     if (face.orientation() != kernel::Orientation::Forward &&
@@ -187,36 +191,160 @@ kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
         spec.holes.push_back(std::move(ring));
       }
     }
-    auto piece =
-        kernel::csg_primitive(spec, "footprint face " + std::to_string(f), options.tolerance);
+    const std::string name = label + "footprint face " + std::to_string(f);
+    auto piece = kernel::csg_primitive(spec, name, tolerance);
     if (!piece.ok()) {
-      return kernel::Error{piece.error().code,
-                           "footprint face " + std::to_string(f) + ": " + piece.error().message};
+      return kernel::Status(piece.error().code, name + ": " + piece.error().message);
     }
     pieces.push_back(std::move(piece).value());
   }
-  if (pieces.empty()) {
-    return kernel::Error{ErrorCode::DegenerateGeometry, "the solid has no face seen from below"};
+  if (pieces.size() == before) {
+    return kernel::Status(
+        ErrorCode::DegenerateGeometry,
+        label + (label.empty() ? "the solid" : "") + " has no face seen from below");
   }
+  return kernel::Status();
+}
+
+// The pieces fused into one valid solid: `block`'s model.
+kernel::Result<BlockModel> fuse_block(std::vector<kernel::CsgModel> pieces, double tolerance,
+                                      BlockModel block) {
+  kernel::CsgModel& out = block.model;
   if (pieces.size() == 1) {
-    out.model = std::move(pieces.front());
+    out = std::move(pieces.front());
   } else {
     kernel::BooleanOptions b;
-    b.tolerance = options.tolerance;
+    b.tolerance = tolerance;
     auto fused = kernel::csg_combine(pieces, kernel::BooleanOp::Fuse, b);
     if (!fused.ok()) return fused.error();
-    out.model = std::move(fused).value();
+    out = std::move(fused).value();
   }
-  const std::size_t solids =
-      kernel::map_child_shapes(out.model.shape, kernel::ShapeKind::Solid).size();
+  const std::size_t solids = kernel::map_child_shapes(out.shape, kernel::ShapeKind::Solid).size();
   if (solids != 1) {
     return kernel::Error{ErrorCode::DegenerateGeometry,
                          "the footprint is in " + std::to_string(solids) + " pieces"};
   }
-  if (!kernel::check_shape(out.model.shape).valid()) {
+  if (!kernel::check_shape(out.shape).valid()) {
     return kernel::Error{ErrorCode::InvalidShape, "the block fails the validity checker"};
   }
-  return out;
+  return block;
+}
+
+}  // namespace
+
+kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
+                                       const BlockModelOptions& options) {
+  if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
+  auto measured = measure(model.shape, options.chordal_tolerance);
+  if (!measured.ok()) return measured.error();
+  BlockModel out;
+  out.heights = measured.value().heights;
+  const double ground = out.heights.ground, top = out.heights.roof_70p;
+  if (!(top - ground > 100.0 * options.tolerance)) {
+    return kernel::Error{ErrorCode::DegenerateGeometry,
+                         "the roof's 70th percentile is not above the ground"};
+  }
+  std::vector<kernel::CsgModel> pieces;
+  if (kernel::Status st = add_footprint_pieces(model.shape, measured.value().mesh, ground, top,
+                                               options.tolerance, "", pieces);
+      !st.ok()) {
+    return st.error();
+  }
+  return fuse_block(std::move(pieces), options.tolerance, std::move(out));
+}
+
+kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& model,
+                                                    const BlockModelOptions& options) {
+  if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
+  auto whole = measure(model.shape, options.chordal_tolerance);
+  if (!whole.ok()) return whole.error();
+  const Measured& measured = whole.value();
+  BlockModel out;
+  out.heights = measured.heights;
+  const double ground = out.heights.ground;
+  // The roof parts: the leaves. Each roof triangle of the model belongs to the leaf its face
+  // came from (the CSG history), so a part's roof is what is left of it in the model.
+  struct Part {
+    std::size_t node = 0;
+    std::vector<Triangle> roof;
+    double area = 0.0, low = std::numeric_limits<double>::infinity(), high = -low;
+    double top = 0.0, level = 0.0;
+  };
+  std::vector<Part> parts;
+  std::vector<int> part_of(model.nodes.size(), -1);
+  for (std::size_t k = 0; k < model.nodes.size(); ++k) {
+    if (model.nodes[k].kind != kernel::CsgNodeKind::Primitive) continue;
+    part_of[k] = static_cast<int>(parts.size());
+    parts.push_back(Part{k, {}, 0.0});
+  }
+  for (std::size_t i = 0; i < measured.roof.size(); ++i) {
+    const std::size_t f = measured.roof_faces[i];
+    if (f >= model.face_sources.size() || model.face_sources[f].empty()) continue;
+    const int node = model.face_sources[f].front().node;
+    if (node < 0 || static_cast<std::size_t>(node) >= part_of.size() || part_of[node] < 0) continue;
+    Part& p = parts[static_cast<std::size_t>(part_of[node])];
+    const Triangle& t = measured.roof[i];
+    p.roof.push_back(t);
+    p.area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).z();
+    p.low = std::min({p.low, t[0].z(), t[1].z(), t[2].z()});
+    p.high = std::max({p.high, t[0].z(), t[1].z(), t[2].z()});
+  }
+  // Levels: the parts with a roof sorted by their own 70th percentile, a new level where the
+  // next is a step or more higher; a level's height is its roofs' 70th percentile together.
+  // A part whose roof is all hidden under others' takes the building's.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    Part& p = parts[i];
+    p.level = out.heights.roof_70p;
+    if (!(p.area > 0.0)) continue;
+    p.top = roof_percentile(p.roof, p.area, p.low, p.high, 0.7);
+    order.push_back(i);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return parts[a].top < parts[b].top; });
+  for (std::size_t first = 0; first < order.size();) {
+    std::size_t last = first + 1;
+    while (last < order.size() &&
+           parts[order[last]].top - parts[order[last - 1]].top < options.level_step) {
+      ++last;
+    }
+    std::vector<Triangle> roof;
+    double area = 0.0, low = std::numeric_limits<double>::infinity(), high = -low;
+    for (std::size_t i = first; i < last; ++i) {
+      const Part& p = parts[order[i]];
+      roof.insert(roof.end(), p.roof.begin(), p.roof.end());
+      area += p.area;
+      low = std::min(low, p.low);
+      high = std::max(high, p.high);
+    }
+    const double level = roof_percentile(roof, area, low, high, 0.7);
+    for (std::size_t i = first; i < last; ++i) parts[order[i]].level = level;
+    first = last;
+  }
+  // Each part's footprint (its leaf without the roof planes that cut its top: those do not
+  // reach its bottom) from the building's ground to its level.
+  std::vector<kernel::CsgModel> pieces;
+  kernel::TessellationOptions tessellation;
+  tessellation.chordal_tolerance = options.chordal_tolerance;
+  for (const Part& p : parts) {
+    const std::string label = "roof part " + std::to_string(p.node) + " ";
+    if (!(p.level - ground > 100.0 * options.tolerance)) {
+      return kernel::Error{ErrorCode::DegenerateGeometry,
+                           label + "has its level's roof not above the ground"};
+    }
+    kernel::PrimitiveSpec plain = model.nodes[p.node].primitive;
+    plain.clips.clear();
+    auto solid = kernel::csg_primitive(plain, label, options.tolerance);
+    if (!solid.ok()) return kernel::Error{solid.error().code, label + solid.error().message};
+    auto mesh = kernel::tessellate(solid.value().shape, tessellation);
+    if (!mesh.ok()) return kernel::Error{mesh.error().code, label + mesh.error().message};
+    if (kernel::Status st = add_footprint_pieces(solid.value().shape, mesh.value(), ground, p.level,
+                                                 options.tolerance, label, pieces);
+        !st.ok()) {
+      return st.error();
+    }
+  }
+  return fuse_block(std::move(pieces), options.tolerance, std::move(out));
 }
 
 }  // namespace csgtile::assembly

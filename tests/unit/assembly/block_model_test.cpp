@@ -1,4 +1,5 @@
-// LoD1.2 block models and building heights (block_model.h) on buildings with known answers.
+// LoD1.2 and LoD1.3 block models and building heights (block_model.h) on buildings with known
+// answers.
 
 #include "csgtile/assembly/block_model.h"
 
@@ -62,6 +63,54 @@ TEST(BlockModel, PartsOnTwoGroundLevelsMakeOneBlockOverTheWholeFootprint) {
   EXPECT_TRUE(kernel::check_shape(block->model.shape).valid());
   EXPECT_EQ(kernel::map_child_shapes(block->model.shape, kernel::ShapeKind::Solid).size(), 1u);
   EXPECT_NEAR(kernel::mass_properties(block->model.shape).volume, 120.0 * 9.0, 1e-6);
+}
+
+// LoD1.3 (multi_height_block_model): the same L, each part on the building's ground up to its
+// own roof's 70th percentile: 60 m² × 5 m + 60 m² × 9 m.
+TEST(BlockModel, MultiHeightBlockKeepsEachRoofPartsHeight) {
+  const kernel::CsgModel low = leaf(extrusion_at(rectangle(0, 0, 10, 6), 0.0, 5.0));
+  const kernel::CsgModel high = leaf(extrusion_at(rectangle(10, 0, 16, 10), 1.0, 8.0));
+  auto building = kernel::csg_combine({low, high}, kernel::BooleanOp::Fuse);
+  ASSERT_TRUE(building.ok()) << building.error().message;
+  auto levels = multi_height_block_model(building.value());
+  ASSERT_TRUE(levels.ok()) << levels.error().message;
+  EXPECT_NEAR(levels->heights.roof_70p, 9.0, 1e-9);  // the building's, as LoD1.2's
+  EXPECT_TRUE(kernel::check_shape(levels->model.shape).valid());
+  EXPECT_EQ(kernel::map_child_shapes(levels->model.shape, kernel::ShapeKind::Solid).size(), 1u);
+  EXPECT_NEAR(kernel::mass_properties(levels->model.shape).volume, 60.0 * 5.0 + 60.0 * 9.0, 1e-6);
+}
+
+// Parts less than a level step apart are one level, at the 70th percentile of their roofs
+// together (half the roof at 5 m, half at 5.3 m: 5.3 m); a larger step keeps them apart.
+TEST(BlockModel, MultiHeightBlockMergesPartsWithinALevelStep) {
+  const kernel::CsgModel a = leaf(extrusion_at(rectangle(0, 0, 10, 6), 0.0, 5.0));
+  const kernel::CsgModel b = leaf(extrusion_at(rectangle(10, 0, 20, 6), 0.0, 5.3));
+  auto building = kernel::csg_combine({a, b}, kernel::BooleanOp::Fuse);
+  ASSERT_TRUE(building.ok()) << building.error().message;
+  auto merged = multi_height_block_model(building.value());
+  ASSERT_TRUE(merged.ok()) << merged.error().message;
+  EXPECT_NEAR(kernel::mass_properties(merged->model.shape).volume, 120.0 * 5.3, 1e-6);
+  BlockModelOptions fine;
+  fine.level_step = 0.2;
+  auto apart = multi_height_block_model(building.value(), fine);
+  ASSERT_TRUE(apart.ok()) << apart.error().message;
+  EXPECT_NEAR(kernel::mass_properties(apart->model.shape).volume, 60.0 * 5.0 + 60.0 * 5.3, 1e-6);
+  EXPECT_TRUE(kernel::check_shape(apart->model.shape).valid());
+}
+
+// One roof part: LoD1.3 is LoD1.2's block.
+TEST(BlockModel, MultiHeightBlockOfOnePartIsTheBlock) {
+  const kernel::CsgModel house = leaf(test::gable_house());
+  auto levels = multi_height_block_model(house);
+  ASSERT_TRUE(levels.ok()) << levels.error().message;
+  EXPECT_NEAR(kernel::mass_properties(levels->model.shape).volume, 60.0 * 7.1, 1e-6);
+  PrimitiveSpec column;
+  column.type = kernel::PrimitiveType::Cylinder;
+  column.radius = 0.2;
+  column.height = 3.0;
+  auto curved = multi_height_block_model(leaf(column));
+  ASSERT_FALSE(curved.ok());
+  EXPECT_EQ(curved.error().code, kernel::ErrorCode::InvalidArgument);
 }
 
 // A courtyard building: the footprint keeps its hole.

@@ -66,7 +66,7 @@ std::pair<double, double> z_range(const Json& feature, const Json& geometry,
   return {low, high};
 }
 
-TEST(CityJsonLods, ABuildingHasItsModelAsLod22AndItsBlockAsLod12) {
+TEST(CityJsonLods, ABuildingHasItsModelAsLod22ItsLevelsAsLod13AndItsBlockAsLod12) {
   std::vector<IndexObject> objects = {test::index_object("house", gable_house())};
   add_building_lods(objects, 0.01, 1e-7);
   CityJsonOptions options;
@@ -76,11 +76,16 @@ TEST(CityJsonLods, ABuildingHasItsModelAsLod22AndItsBlockAsLod12) {
   ASSERT_EQ(features.size(), 1u);
   const Json& o = city_object(features[0]);
   EXPECT_EQ(o["type"], "Building");
-  ASSERT_EQ(o["geometry"].size(), 2u);
+  ASSERT_EQ(o["geometry"].size(), 3u);
   const Json& lod22 = o["geometry"][0];
-  const Json& lod12 = o["geometry"][1];
+  const Json& lod13 = o["geometry"][1];
+  const Json& lod12 = o["geometry"][2];
   EXPECT_EQ(lod22["lod"], "2.2");
   EXPECT_EQ(lod22["type"], "Solid");
+  // One roof part: its LoD1.3 is the block.
+  EXPECT_EQ(lod13["lod"], "1.3");
+  EXPECT_EQ(lod13["type"], "Solid");
+  EXPECT_EQ(lod13["boundaries"][0].size(), 6u);
   EXPECT_EQ(lod12["lod"], "1.2");
   EXPECT_EQ(lod12["type"], "Solid");
   // The block: a box of six surfaces from the ground to the roof's 70th percentile.
@@ -98,6 +103,7 @@ TEST(CityJsonLods, ABuildingHasItsModelAsLod22AndItsBlockAsLod12) {
   EXPECT_EQ(a["roof_surfaces"], 2);
   EXPECT_FALSE(a.contains("lod22_failure"));
   EXPECT_FALSE(a.contains("lod12_failure"));
+  EXPECT_FALSE(a.contains("lod13_failure"));
   // Semantics of the block: one roof, one ground, four walls.
   std::map<std::string, int> kinds;
   for (const Json& v : lod12["semantics"]["values"][0]) {
@@ -108,8 +114,8 @@ TEST(CityJsonLods, ABuildingHasItsModelAsLod22AndItsBlockAsLod12) {
   EXPECT_EQ(kinds["WallSurface"], 4);
 }
 
-// The parts of a building whose fuse failed: a Building of its block alone (CityJSON admits
-// no MultiSolid for a Building), the reason recorded; the block covers both parts.
+// The parts of a building whose fuse failed: a Building of its blocks alone (CityJSON admits
+// no MultiSolid for a Building), the reason recorded; the blocks cover both parts.
 TEST(CityJsonLods, ABuildingWhoseModelDidNotFuseKeepsItsBlockWithTheReason) {
   const kernel::CsgModel a = leaf(part(rectangle(0, 0, 10, 6), 0.0, 5.0), "a");
   const kernel::CsgModel b = leaf(part(rectangle(8, 0, 16, 10), 0.0, 9.0), "b");
@@ -131,10 +137,13 @@ TEST(CityJsonLods, ABuildingWhoseModelDidNotFuseKeepsItsBlockWithTheReason) {
   ASSERT_EQ(features.size(), 1u);
   const Json& o = city_object(features[0]);
   EXPECT_EQ(o["type"], "Building");
-  ASSERT_EQ(o["geometry"].size(), 1u);
-  EXPECT_EQ(o["geometry"][0]["lod"], "1.2");
+  // Its parts at their own heights (5 m and 9 m) as LoD1.3, the block as LoD1.2.
+  ASSERT_EQ(o["geometry"].size(), 2u);
+  EXPECT_EQ(o["geometry"][0]["lod"], "1.3");
   EXPECT_EQ(o["geometry"][0]["type"], "Solid");
-  EXPECT_EQ(o["attributes"]["lod_reached"], "1.2");
+  EXPECT_EQ(o["geometry"][1]["lod"], "1.2");
+  EXPECT_EQ(o["geometry"][1]["type"], "Solid");
+  EXPECT_EQ(o["attributes"]["lod_reached"], "1.3");
   EXPECT_EQ(o["attributes"]["lod22_failure"], "unsupported: the Booleans gave up");
 }
 

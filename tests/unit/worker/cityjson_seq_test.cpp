@@ -257,13 +257,14 @@ TEST_F(CityJsonSeqTest, OneFeaturePerObjectWithItsIdAttributesAndIntegerVertices
     ASSERT_EQ(f["CityObjects"].size(), 1u);
     const Json& co = city_object(f);
     EXPECT_EQ(co["type"], "Building");
-    // Objects of boxes and extrusions are buildings: their model as lod 2.2 and their LoD1.2
-    // block; the others (a cylinder among their primitives) one lod-2 solid.
-    ASSERT_EQ(co["geometry"].size(), o.lod12 ? 2u : 1u) << o.id;
+    // Objects of boxes and extrusions are buildings: their model as lod 2.2, their LoD1.3
+    // and their LoD1.2 block; the others (a cylinder among their primitives) one lod-2 solid.
+    ASSERT_EQ(co["geometry"].size(), o.lod12 ? (o.lod13 ? 3u : 2u) : 1u) << o.id;
     EXPECT_EQ(co["geometry"][0]["type"], "Solid") << o.id;
     EXPECT_EQ(co["geometry"][0]["lod"], o.lod12 ? "2.2" : "2") << o.id;
     if (o.lod12) {
-      EXPECT_EQ(co["geometry"][1]["lod"], "1.2") << o.id;
+      EXPECT_EQ(co["geometry"][1]["lod"], o.lod13 ? "1.3" : "1.2") << o.id;
+      EXPECT_EQ(co["geometry"].back()["lod"], "1.2") << o.id;
     }
     const Json& a = co["attributes"];
     EXPECT_EQ(a["primitive_count"], o.primitives.size());

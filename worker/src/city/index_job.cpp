@@ -192,8 +192,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                          e.at("snap_angle_degrees").get<double>()),
             e.at("reason").get<std::string>()};
       }
-      if (!offset.isZero(0.0))
-        io.model.shape = io.model.shape.moved(kernel::Location::translation(offset));
+      if (!offset.isZero(0.0)) move_model(io.model, kernel::Location::translation(offset));
       std::map<std::string, geo::FitQuality> quality;
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");

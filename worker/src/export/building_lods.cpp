@@ -1,4 +1,4 @@
-// Heights and LoD1.2 block models of the objects an export writes (topology_index.h).
+// Heights and LoD1.2 / LoD1.3 block models of the objects an export writes (topology_index.h).
 
 #include <tbb/parallel_for.h>
 
@@ -17,10 +17,19 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
     o.heights.reset();
     o.lod12.reset();
     o.lod12_error.clear();
+    o.lod13.reset();
+    o.lod13_error.clear();
     auto block = assembly::block_model(o.model, options);
     if (block.ok()) {
       o.heights = block.value().heights;
       o.lod12 = std::move(block).value().model;
+      auto levels = assembly::multi_height_block_model(o.model, options);
+      if (levels.ok()) {
+        o.lod13 = std::move(levels).value().model;
+      } else {
+        o.lod13_error = kernel::error_code_name(levels.error().code) + std::string(": ") +
+                        levels.error().message;
+      }
       return;
     }
     // Not a building (another primitive among its leaves): no block, its heights still.
@@ -33,6 +42,14 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
   });
 }
 
+void move_model(kernel::CsgModel& model, const kernel::Location& by) {
+  model.shape = model.shape.moved(by);
+  for (kernel::CsgNode& node : model.nodes) {
+    if (node.kind == kernel::CsgNodeKind::Primitive)
+      node.primitive.placement = by * node.primitive.placement;
+  }
+}
+
 bool is_building(const IndexObject& object) {
   return object.lod12.has_value() || !object.lod12_error.empty();
 }
@@ -43,7 +60,7 @@ std::string lod_reached(const IndexObject& object) {
       object.fuse_error.empty() &&
       kernel::map_child_shapes(object.model.shape, kernel::ShapeKind::Solid).size() == 1;
   if (one_solid) return "2.2";
-  return object.lod12 ? "1.2" : "";
+  return object.lod13 ? "1.3" : object.lod12 ? "1.2" : "";
 }
 
 std::string lod22_failure(const IndexObject& object) {
@@ -58,6 +75,9 @@ std::string building_problem(const IndexObject& object) {
   }
   if (!object.lod12_error.empty()) {
     out += (out.empty() ? "" : "; ") + std::string("LoD1.2: ") + object.lod12_error;
+  }
+  if (!object.lod13_error.empty()) {
+    out += (out.empty() ? "" : "; ") + std::string("LoD1.3: ") + object.lod13_error;
   }
   return out;
 }

@@ -618,22 +618,32 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
                             ": no geometry: " + kernel::error_code_name(geometry.error().code) +
                             ": " + geometry.error().message);
     }
-    // A building's LoD1.2 block beside its LoD2.2 model, as 3DBAG publishes both.
-    std::optional<ObjectGeometry> block;
-    std::string block_problem = object.lod12_error;
-    if (object.lod12) {
-      auto b = object_geometry(object.lod12->shape, options, true);
-      if (b.ok() && b.value().closed && b.value().solids.size() == 1) {
-        block = std::move(b).value();
-      } else {
-        block_problem = b.ok() ? "its shell is not closed after quantisation"
-                               : kernel::error_code_name(b.error().code) + std::string(": ") +
-                                     b.error().message;
+    // A building's LoD1.2 block and LoD1.3 levels beside its LoD2.2 model, as 3DBAG
+    // publishes them: each one closed solid after quantisation, or the reason it is missing.
+    auto block_geometry = [&](const std::optional<kernel::CsgModel>& model, std::string& problem,
+                              const char* lod) -> std::optional<ObjectGeometry> {
+      std::optional<ObjectGeometry> out;
+      if (model) {
+        auto b = object_geometry(model->shape, options, true);
+        if (b.ok() && b.value().closed && b.value().solids.size() == 1) {
+          out = std::move(b).value();
+        } else {
+          problem = b.ok() ? "its shell is not closed after quantisation"
+                           : kernel::error_code_name(b.error().code) + std::string(": ") +
+                                 b.error().message;
+        }
       }
-    }
-    if (!block_problem.empty()) {
-      st.warnings.push_back("CityJSON: object " + object.id + ": no LoD1.2: " + block_problem);
-    }
+      if (!problem.empty()) {
+        st.warnings.push_back("CityJSON: object " + object.id + ": no " + lod + ": " + problem);
+      }
+      return out;
+    };
+    std::string block_problem = object.lod12_error;
+    const std::optional<ObjectGeometry> block =
+        block_geometry(object.lod12, block_problem, "LoD1.2");
+    std::string levels_problem = block ? object.lod13_error : std::string();
+    const std::optional<ObjectGeometry> levels =
+        block ? block_geometry(object.lod13, levels_problem, "LoD1.3") : std::nullopt;
     const bool building = is_building(object);
     const bool one_solid = g && g->solids.size() == 1;
     FeatureVertices vertices;
@@ -647,17 +657,22 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
       // Its outline: the footprint it was fitted in (its id), or derived from the points.
       if (!object.footprint_id.empty()) attributes["footprint_id"] = object.footprint_id;
       attributes["outline"] = object.footprint_id.empty() ? "derived" : "footprint";
-      attributes["lod_reached"] = one_solid ? Json("2.2") : block ? Json("1.2") : Json();
+      attributes["lod_reached"] = one_solid ? Json("2.2")
+                                  : levels  ? Json("1.3")
+                                  : block   ? Json("1.2")
+                                            : Json();
       if (g && !one_solid) {
         attributes["lod22_failure"] = lod22_failure(object);
       }
       if (!block_problem.empty()) attributes["lod12_failure"] = block_problem;
+      if (!levels_problem.empty()) attributes["lod13_failure"] = levels_problem;
     }
     city_object["attributes"] = std::move(attributes);
     Json geometries = Json::array();
     if (g && (one_solid || !block)) {
       geometries.push_back(geometry_json(*g, building ? "2.2" : "2", vertices));
     }
+    if (levels) geometries.push_back(geometry_json(*levels, "1.3", vertices));
     if (block) geometries.push_back(geometry_json(*block, "1.2", vertices));
     if (!geometries.empty()) city_object["geometry"] = std::move(geometries);
     if (g) {

@@ -6,9 +6,10 @@
 ///
 /// Each object is a Building with one lod-2 Solid (a compound of several solids is a
 /// GenericCityObject with a MultiSolid, which Building does not admit). A building (an
-/// object with a LoD1.2 block, add_building_lods) has its model as lod 2.2 and its block as
-/// lod 1.2, with the heights and "lod_reached"; when its model is in several solids it is a
-/// Building of its block alone with "lod22_failure" saying why. Planar faces
+/// object with a LoD1.2 block, add_building_lods) has its model as lod 2.2, its multi-height
+/// block as lod 1.3 and its block as lod 1.2, with the heights and "lod_reached"; when its
+/// model is in several solids it is a Building of its blocks alone with "lod22_failure"
+/// saying why. Planar faces
 /// become one surface each (exterior ring and holes), curved faces the triangles of their
 /// tessellation. Every surface gets a semantic surface from its outward normal n and height:
 /// GroundSurface when n_z < -0.9 and it lies within the ground tolerance of the object's

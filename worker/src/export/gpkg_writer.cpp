@@ -90,9 +90,18 @@ CREATE TABLE objects (
   lod12_error TEXT,
   footprint_id TEXT,
   outline TEXT,
-  fit_within_2sigma REAL
+  fit_within_2sigma REAL,
+  lod13_error TEXT
 );
 CREATE TABLE lod12 (
+  fid INTEGER PRIMARY KEY AUTOINCREMENT,
+  geom MULTIPOLYGON,
+  object_id TEXT NOT NULL UNIQUE,
+  cell TEXT NOT NULL,
+  h_ground REAL NOT NULL,
+  h_top REAL NOT NULL
+);
+CREATE TABLE lod13 (
   fid INTEGER PRIMARY KEY AUTOINCREMENT,
   geom MULTIPOLYGON,
   object_id TEXT NOT NULL UNIQUE,
@@ -235,7 +244,7 @@ constexpr const char* kWgs84Wkt =
     "\"9122\"]],AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],AUTHORITY[\"EPSG\",\"4326\"]]";
 
 // Feature tables, their gpkg_contents descriptions and which extent they have (0: the
-// objects', 1: the blocks').
+// objects', 1: the LoD1.2 blocks', 2: the LoD1.3 blocks').
 struct FeatureTable {
   const char* table;
   const char* description;
@@ -247,6 +256,10 @@ constexpr FeatureTable kFeatureTables[] = {
      "csgtile: LoD1.2 of each building, its footprint extruded from the ground to the roof's "
      "70th percentile, as MULTIPOLYGON Z",
      1},
+    {"lod13",
+     "csgtile: LoD1.3 of each building, each roof part's footprint extruded from the ground to "
+     "its level's 70th percentile, fused, as MULTIPOLYGON Z (h_top: the highest level)",
+     2},
 };
 
 // The R-tree statements of objects.geom for another feature table.
@@ -385,19 +398,26 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
       "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
       "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
       "fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max, "
-      "roof_surfaces, fuse_error, lod12_error, footprint_id, outline, fit_within_2sigma) "
+      "roof_surfaces, fuse_error, lod12_error, footprint_id, outline, fit_within_2sigma, "
+      "lod13_error) "
       "VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,"
-      "?23,?24,?25,?26,?27,?28,?29,?30)");
+      "?23,?24,?25,?26,?27,?28,?29,?30,?31)");
   SqliteStatement rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)");
   SqliteStatement block(db,
                         "INSERT INTO lod12 (fid, geom, object_id, cell, h_ground, h_top) "
                         "VALUES (?1,?2,?3,?4,?5,?6)");
   SqliteStatement block_rtree(db, "INSERT INTO rtree_lod12_geom VALUES (?1,?2,?3,?4,?5)");
+  SqliteStatement levels(db,
+                         "INSERT INTO lod13 (fid, geom, object_id, cell, h_ground, h_top) "
+                         "VALUES (?1,?2,?3,?4,?5,?6)");
+  SqliteStatement levels_rtree(db, "INSERT INTO rtree_lod13_geom VALUES (?1,?2,?3,?4,?5)");
+  CSGTILE_TRY(levels.status());
+  CSGTILE_TRY(levels_rtree.status());
   CSGTILE_TRY(st.status());
   CSGTILE_TRY(rtree.status());
   CSGTILE_TRY(block.status());
   CSGTILE_TRY(block_rtree.status());
-  std::int64_t block_fid = 0;
+  std::int64_t block_fid = 0, levels_fid = 0;
   for (std::size_t i = 0; i < rows.objects.size(); ++i) {
     const ObjectRecord& o = rows.objects[i];
     const auto fid = static_cast<std::int64_t>(i + 1);
@@ -423,7 +443,7 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
     st.bind(19, o.lod).bind(20, o.h_ground).bind(21, o.h_roof_min).bind(22, o.h_roof_50p);
     st.bind(23, o.h_roof_70p).bind(24, o.h_roof_max).bind(25, o.roof_surfaces);
     st.bind(26, o.fuse_error).bind(27, o.lod12_error).bind(28, o.footprint_id).bind(29, o.outline);
-    st.bind(30, o.fit_within_2sigma);
+    st.bind(30, o.fit_within_2sigma).bind(31, o.lod13_error);
     CSGTILE_TRY(st.run());
     // SQLite's R-tree stores 32-bit floats, rounded outwards.
     auto index = [](SqliteStatement& tree, std::int64_t id, const kernel::BoundingBox& b) {
@@ -438,6 +458,14 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
       block.bind(3, o.object_id).bind(4, o.cell).bind(5, *o.h_ground).bind(6, *o.h_roof_70p);
       CSGTILE_TRY(block.run());
       CSGTILE_TRY(index(block_rtree, block_fid, boundary_box(o.lod12_boundary)));
+    }
+    if (o.has_lod13 && o.h_ground) {
+      ++levels_fid;
+      const kernel::BoundingBox box = boundary_box(o.lod13_boundary);
+      levels.bind(1, levels_fid).bind_blob(2, geopackage_multipolygon_z(o.lod13_boundary, srs_id));
+      levels.bind(3, o.object_id).bind(4, o.cell).bind(5, *o.h_ground).bind(6, box.max.z());
+      CSGTILE_TRY(levels.run());
+      CSGTILE_TRY(index(levels_rtree, levels_fid, box));
     }
   }
   return {};
@@ -550,10 +578,11 @@ kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptio
 }
 
 kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  kernel::BoundingBox all, blocks;
+  kernel::BoundingBox all, blocks, levels;
   for (const ObjectRecord& o : rows.objects) {
     if (o.has_geometry) all.add(boundary_box(o.boundary));
     if (o.has_lod12) blocks.add(boundary_box(o.lod12_boundary));
+    if (o.has_lod13) levels.add(boundary_box(o.lod13_boundary));
   }
   SqliteStatement st(
       db,
@@ -562,7 +591,7 @@ kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const Inde
       "?8,?9,?10)");
   CSGTILE_TRY(st.status());
   for (const auto& [table, description, box] : kFeatureTables) {
-    const kernel::BoundingBox& b = box == 0 ? all : blocks;
+    const kernel::BoundingBox& b = box == 0 ? all : box == 1 ? blocks : levels;
     st.bind(1, std::string_view(table)).bind(2, std::string_view("features"));
     st.bind(3, std::string_view(table)).bind(4, std::string_view(description));
     st.bind(5, options.last_change);

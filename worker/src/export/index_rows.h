@@ -31,14 +31,17 @@ struct ObjectRecord {
   std::optional<double> fit_within_2sigma;  ///< share of its fitted points within 2σ
   bool has_geometry = false;                ///< false: NULL geometry (tessellation failed)
   std::vector<Polygon3> boundary;           ///< in the SRS
-  /// Buildings (IndexObject::heights, lod12): the LoD reached ("2.2", "1.2"), heights in the
-  /// SRS, why the model or the block is missing, and the block's boundary (lod12 layer).
-  std::optional<std::string> lod, fuse_error, lod12_error;
+  /// Buildings (IndexObject::heights, lod12, lod13): the LoD reached ("2.2", "1.3", "1.2"),
+  /// heights in the SRS, why the model or a block is missing, and the blocks' boundaries
+  /// (lod12 and lod13 layers).
+  std::optional<std::string> lod, fuse_error, lod12_error, lod13_error;
   std::optional<std::string> footprint_id, outline;  ///< buildings: "footprint" or "derived"
   std::optional<double> h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max;
   std::optional<std::int64_t> roof_surfaces;
   bool has_lod12 = false;
   std::vector<Polygon3> lod12_boundary;  ///< in the SRS
+  bool has_lod13 = false;
+  std::vector<Polygon3> lod13_boundary;  ///< in the SRS
 };
 
 struct ShapeRecord {

@@ -188,7 +188,7 @@ Failure collect_run_objects(const config::Config& config,
       const kernel::Vec3 offset = kernel::Vec3(o[0], o[1], o[2]) - out.origin;
       if (!offset.isZero(0.0)) {
         for (IndexObject& object : mine) {
-          object.model.shape = object.model.shape.moved(kernel::Location::translation(offset));
+          move_model(object.model, kernel::Location::translation(offset));
         }
       }
     }

@@ -255,8 +255,8 @@ kernel::Status check_objects(const std::vector<IndexObject>& objects, const Inde
   return {};
 }
 
-// A building's columns and its LoD1.2 block's boundary: heights mapped to the SRS at the
-// centre of the object's bounds (a translation in z for the SRSs of city models).
+// A building's columns and its LoD1.2 and LoD1.3 blocks' boundaries: heights mapped to the SRS at
+// the centre of the object's bounds (a translation in z for the SRSs of city models).
 void add_building_columns(const IndexObject& object, const IndexOptions& options,
                           const kernel::BoundingBox& b, ObjectRecord& o, IndexStats& stats) {
   const bool building = is_building(object);
@@ -275,19 +275,24 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
   if (!building) return;
   if (!object.footprint_id.empty()) o.footprint_id = object.footprint_id;
   o.outline = object.footprint_id.empty() ? "derived" : "footprint";
-  if (object.lod12) {
-    const Shape& block = object.lod12->shape;
+  if (!object.lod13_error.empty()) o.lod13_error = object.lod13_error;
+  auto block_boundary = [&](const std::optional<kernel::CsgModel>& model, const char* lod,
+                            std::vector<Polygon3>& out) {
+    if (!model) return false;
+    const Shape& block = model->shape;
     auto boundary = boundary_polygons(block, kernel::map_child_shapes(block, ShapeKind::Face),
                                       kernel::map_child_shapes(block, ShapeKind::Edge), options);
-    if (boundary.ok()) {
-      o.lod12_boundary = std::move(boundary).value();
-      o.has_lod12 = !o.lod12_boundary.empty();
-    } else {
-      stats.warnings.push_back("object " + object.id + ": no LoD1.2 geometry: " +
-                               kernel::error_code_name(boundary.error().code) + ": " +
-                               boundary.error().message);
+    if (!boundary.ok()) {
+      stats.warnings.push_back("object " + object.id + ": no " + lod +
+                               " geometry: " + kernel::error_code_name(boundary.error().code) +
+                               ": " + boundary.error().message);
+      return false;
     }
-  }
+    out = std::move(boundary).value();
+    return !out.empty();
+  };
+  o.has_lod12 = block_boundary(object.lod12, "LoD1.2", o.lod12_boundary);
+  o.has_lod13 = block_boundary(object.lod13, "LoD1.3", o.lod13_boundary);
   if (std::string lod = lod_reached(object); !lod.empty()) o.lod = std::move(lod);
 }
 

@@ -63,11 +63,19 @@ struct IndexObject {
   /// The footprint it was fitted in (city.footprints_id's value, or the feature id); empty
   /// when its outline was derived from the points.
   std::string footprint_id;
+  /// A building's LoD1.3 (assembly::multi_height_block_model: each roof part extruded to its
+  /// level's height); `lod13_error` says why a building with a LoD1.2 block has none.
+  std::optional<kernel::CsgModel> lod13 = {};
+  std::string lod13_error = {};
 };
 
-/// Fills heights, lod12 and lod12_error of every object (block_model.h) at the exporters'
-/// chordal tolerance and the Booleans' linear tolerance. Each object on its own: the result
-/// does not depend on the order or the thread count.
+/// Moves an object's model by `by`: its shape and, so that its history stays in the shape's
+/// frame, every primitive leaf's placement.
+void move_model(kernel::CsgModel& model, const kernel::Location& by);
+
+/// Fills heights, lod12, lod12_error, lod13 and lod13_error of every object (block_model.h) at
+/// the exporters' chordal tolerance and the Booleans' linear tolerance. Each object on its own: the
+/// result does not depend on the order or the thread count.
 void add_building_lods(std::vector<IndexObject>& objects, double chordal_tolerance,
                        double linear_tolerance);
 

@@ -1,9 +1,10 @@
 #pragma once
 /// \file
-/// Buildings at LoD1.2 (the block model 3D city models publish beside LoD2.2, e.g. 3DBAG):
-/// the footprint of a building's solid extruded from its ground to a percentile of its roof's
-/// height, with the heights 3D city models publish. Both are derived from the LoD2.2 solid
-/// itself, so they agree with it whatever made it.
+/// Buildings at LoD1.2 and LoD1.3 (the block models 3D city models publish beside LoD2.2, e.g.
+/// 3DBAG): the footprint of a building's solid extruded from its ground to a percentile of its
+/// roof's height (LoD1.2), or each roof part to its own (LoD1.3), with the heights 3D city
+/// models publish. All are derived from the LoD2.2 model itself, so they agree with it
+/// whatever made it.
 
 #include <cstddef>
 
@@ -31,6 +32,8 @@ kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
 struct BlockModelOptions {
   double chordal_tolerance = 0.01;  ///< of the tessellation the heights and footprint use
   double tolerance = kernel::kDefaultTolerance;  ///< of the extrusions and their fuse
+  /// LoD1.3: roof parts whose heights differ by less than this (model units) are one level.
+  double level_step = 0.5;
 };
 
 /// A building's LoD1.2: its footprint (every face of its solid that looks down, seen from
@@ -50,5 +53,17 @@ struct BlockModel {
 /// InvalidShape when the fused block fails the checker.
 kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
                                        const BlockModelOptions& options = {});
+
+/// A building's LoD1.3, 3DBAG's multi-height block: each roof part — a leaf of its CSG tree,
+/// an extrusion or a box cut by its roof planes — has its footprint (the faces of the leaf
+/// without its roof planes that look down) extruded from the building's ground to the 70th
+/// percentile of its level's roof. A part's roof is what is left of it in the model (the
+/// faces whose history names the leaf; a part with none takes the building's height); a
+/// level is the parts whose own 70th percentiles lie within `level_step` of the next (single
+/// linkage), its roof the union of theirs. The extrusions are fused by the exact Booleans.
+/// One roof part (or one level) gives LoD1.2's block. `heights` are the building's.
+/// Errors: as block_model.
+kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& model,
+                                                    const BlockModelOptions& options = {});
 
 }  // namespace csgtile::assembly
