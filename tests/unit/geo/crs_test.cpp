@@ -1,6 +1,6 @@
-// CRS model: the EPSG table, GeoTIFF keys (inline and from the real LAS files in
-// ../shared/data through a tiny raw-bytes VLR reader), WKT 1 / WKT 2, reconciliation, the
-// WKT writer, config text and validation.
+// CRS model as PROJ reads it: EPSG codes, GeoTIFF keys (inline and from the real LAS files in
+// ../shared/data through a tiny raw-bytes VLR reader), WKT 1 / WKT 2, reconciliation, WKT 1
+// as PROJ writes it, config text and validation.
 
 #include <gtest/gtest.h>
 
@@ -154,9 +154,9 @@ std::optional<LasCrsRecords> shared_file(const char* relative) {
   auto var = shared_file(relative); \
   if (!var) GTEST_SKIP() << "../shared/data/" << relative << " not present: skipped"
 
-// ---- EPSG table --------------------------------------------------------------------------
+// ---- EPSG codes --------------------------------------------------------------------------
 
-TEST(CrsEpsg, TableCoversTheCityCodes) {
+TEST(CrsEpsg, TheCityCodesResolve) {
   for (int code : {4326,  4979,  4258,  4937,  4269,  4152, 6318, 4289,  32601, 32660, 32701,
                    32760, 25828, 25838, 26901, 26923, 6330, 6348, 32661, 32761, 5041,  5042,
                    28992, 7415,  3031,  3413,  3976,  3995, 2193, 2157,  27700, 2154,  2991,
@@ -216,9 +216,8 @@ TEST(CrsEpsg, VerticalCodesAndUnknownCodes) {
   EXPECT_NE(web.value().name.find("Pseudo-Mercator"), std::string::npos);
 }
 
-// Codes outside the built-in table come from PROJ's database (issue #19): the national grids
-// a city service meets, with the datum shift PROJ ranks first; methods this build does not
-// compute, and geocentric CRSs, are refused naming the code and what is missing.
+// Codes come from PROJ's database (issue #19): the national grids a city service meets, with
+// the datum shift PROJ ranks first; every method PROJ computes, and geocentric CRSs.
 TEST(CrsEpsg, NationalCodesFromProjsDatabase) {
   struct Case {
     int code;
@@ -655,7 +654,7 @@ TEST(CrsWkt, EsriAndGdalDialects) {
   }
 }
 
-TEST(CrsWkt, WriterRoundTripsEveryTableCode) {
+TEST(CrsWkt, Wkt1RoundTripsTheCityCodes) {
   for (int code :
        {4326, 4258, 4289, 4277, 32631, 32733, 25832, 26910, 6339, 32661, 32761, 28992, 7415,
         3031, 3413, 2193, 2157, 27700, 2154,  2991,  2992,  2263, 2227,  2236,  2903}) {

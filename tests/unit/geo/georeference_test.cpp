@@ -210,8 +210,7 @@ TEST(GeoProjectionVsCs2cs, LambertConicInFeet) {
   expect_family({"Texas Centric LCC", 6580, 6318, false, 25.8, 36.5, -106.6, -93.5});
 }
 
-// National grids outside the built-in table, resolved through PROJ's database (issue #19):
-// computed by our projections, checked against cs2cs.
+// National grids resolved through PROJ's database (issue #19), checked against cs2cs.
 TEST(GeoProjectionVsCs2cs, NationalGridsFromProjsDatabase) {
   REQUIRE_PROJ();
   expect_family({"ETRS89 / TM35FIN", 3067, 4258, false, 60.0, 69.5, 20.0, 31.0});
