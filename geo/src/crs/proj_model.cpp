@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "crs/crs_internal.h"
 #include "crs/proj_context.h"
@@ -572,30 +573,36 @@ std::string proj_wkt1(const std::string& definition) {
   return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
 }
 
-std::optional<LinearUnit> linear_unit_from_epsg(int code) {
+namespace {
+
+// A unit of measure of PROJ's database by EPSG code and category ("linear", "angular"): its
+// name and size in SI units; nullopt when the code is no unit of that category.
+std::optional<std::pair<std::string, double>> unit_of(int code, std::string_view wanted) {
   const char* name = nullptr;
   double factor = 0.0;
   const char* category = nullptr;
   if (proj_uom_get_info_from_database(context(), "EPSG", std::to_string(code).c_str(), &name,
                                       &factor, &category) == 0 ||
-      category == nullptr || std::string_view(category) != "linear" || !(factor > 0)) {
+      category == nullptr || std::string_view(category) != wanted || !(factor > 0)) {
     return std::nullopt;
   }
-  LinearUnit unit = linear_unit_from_size(text_of(name), factor);
+  return std::pair<std::string, double>(text_of(name), factor);
+}
+
+}  // namespace
+
+std::optional<LinearUnit> linear_unit_from_epsg(int code) {
+  const auto found = unit_of(code, "linear");
+  if (!found) return std::nullopt;
+  LinearUnit unit = linear_unit_from_size(found->first, found->second);
   unit.epsg = code;
   return unit;
 }
 
 std::optional<AngularUnit> angular_unit_from_epsg(int code) {
-  const char* name = nullptr;
-  double factor = 0.0;
-  const char* category = nullptr;
-  if (proj_uom_get_info_from_database(context(), "EPSG", std::to_string(code).c_str(), &name,
-                                      &factor, &category) == 0 ||
-      category == nullptr || std::string_view(category) != "angular" || !(factor > 0)) {
-    return std::nullopt;
-  }
-  AngularUnit unit = angular_unit_from_size(text_of(name), factor);
+  const auto found = unit_of(code, "angular");
+  if (!found) return std::nullopt;
+  AngularUnit unit = angular_unit_from_size(found->first, found->second);
   unit.epsg = code;
   return unit;
 }
