@@ -112,33 +112,53 @@ std::string pipeline_of(const PJ* op) {
   return text_of(text);
 }
 
+// The first of PROJ's operations `source` → `target` (best first, grids installed) that is no
+// ballpark and that `take` accepts; `take` records what it needs and its label (the operation's
+// name, code and accuracy) is set. False when none is taken.
+template <typename Take>
+bool take_best_operation(const PJ* source, const PJ* target, std::string& label, Take take) {
+  PJ_CONTEXT* ctx = context();
+  PJ_OBJ_LIST* ops = operations(source, target);
+  if (ops == nullptr) return false;
+  bool taken = false;
+  const int n = proj_list_get_count(ops);
+  for (int i = 0; i < n && !taken; ++i) {
+    Object op(proj_list_get(ctx, ops, i));
+    if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.p) != 0) continue;
+    taken = take(op.p);
+    if (taken) label = operation_label(ctx, op.p);
+  }
+  proj_list_destroy(ops);
+  return taken;
+}
+
+// A pipeline PROJ can run here (its grids found), or empty.
+std::string runnable_pipeline(const PJ* op) {
+  return proj_coordoperation_is_instantiable(context(), op) != 0 ? pipeline_of(op) : std::string();
+}
+
 // PROJ's best transformation `geodetic` → WGS 84 (EPSG:4326) among those whose grids are
 // installed, no ballpark: a Helmert (position-vector TOWGS84 values in `values`) or, when the
 // best is something else (a grid shift), its PROJ pipeline. False when PROJ knows none.
 bool best_shift_to_wgs84(const PJ* geodetic, double values[7], std::string& pipeline,
                          std::string& source) {
-  PJ_CONTEXT* ctx = context();
   Object wgs84 = from_database(4326, PJ_CATEGORY_CRS);
   if (!wgs84) return false;
-  PJ_OBJ_LIST* ops = operations(geodetic, wgs84.p);
-  if (ops == nullptr) return false;
-  bool found = false;
-  const int n = proj_list_get_count(ops);
-  for (int i = 0; i < n && !found; ++i) {
-    Object op(proj_list_get(ctx, ops, i));
-    if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.p) != 0) continue;
-    if (proj_coordoperation_get_towgs84_values(ctx, op.p, values, 7, 0) != 0) {
-      found = std::isfinite(values[0]) && std::isfinite(values[6]);
+  return take_best_operation(geodetic, wgs84.p, source, [&](const PJ* op) {
+    if (proj_coordoperation_get_towgs84_values(context(), op, values, 7, 0) != 0) {
       pipeline.clear();
-    } else {
-      if (proj_coordoperation_is_instantiable(ctx, op.p) == 0) continue;
-      pipeline = pipeline_of(op.p);
-      found = !pipeline.empty();
+      return std::isfinite(values[0]) && std::isfinite(values[6]);
     }
-    if (found) source = operation_label(ctx, op.p);
-  }
-  proj_list_destroy(ops);
-  return found;
+    pipeline = runnable_pipeline(op);
+    return !pipeline.empty();
+  });
+}
+
+// A bound CRS's source CRS (kept alive by `holder`); any other CRS itself.
+const PJ* unbound(const PJ* crs, Object& holder) {
+  if (crs == nullptr || proj_get_type(crs) != PJ_TYPE_BOUND_CRS) return crs;
+  holder = Object(proj_get_source_crs(context(), crs));
+  return holder ? holder.p : crs;
 }
 
 // The unit of a CRS's first axis: (name, size in SI units — metres or radians, EPSG code).
@@ -177,8 +197,10 @@ bool is_wgs84_datum(const PJ* datum) {
          name.rfind("worldgeodeticsystem1984ensemble", 0) == 0;
 }
 
-// The datum of a geodetic (geographic or geocentric) CRS, with its relation to WGS 84.
+// The datum of a geodetic (geographic or geocentric) CRS, with its relation to WGS 84: the
+// definition's own TOWGS84 (`given`, a bound CRS's) or PROJ's best.
 Result<GeodeticDatum> datum_of(const PJ* geodetic, const std::string& what,
+                               const std::optional<Helmert7>& given,
                                std::vector<std::string>& warnings) {
   PJ_CONTEXT* ctx = context();
   Object datum(proj_crs_get_datum_forced(ctx, geodetic));
@@ -201,11 +223,12 @@ Result<GeodeticDatum> datum_of(const PJ* geodetic, const std::string& what,
   if (pm && proj_prime_meridian_get_parameters(ctx, pm.p, &longitude, &angle_unit, nullptr) != 0) {
     out.prime_meridian_deg = longitude * angle_unit / kDegree;
   }
-  if (is_wgs84_datum(datum.p)) {
-    out.to_wgs84 = Helmert7{};
-    out.to_wgs84_source = "identity";
+  auto given_or = [&](Helmert7 h, const char* source) {
+    out.to_wgs84 = given ? *given : h;
+    out.to_wgs84_source = given ? "TOWGS84 of the definition" : source;
     return out;
-  }
+  };
+  if (is_wgs84_datum(datum.p)) return given_or(Helmert7{}, "identity");
   // The transformation is looked up from the database's own CRS of the datum where there is
   // one, so a CRS read from WKT (any axis order, no identifiers) gets the same one as its
   // EPSG code.
@@ -220,6 +243,7 @@ Result<GeodeticDatum> datum_of(const PJ* geodetic, const std::string& what,
     Object database_datum(proj_crs_get_datum_forced(ctx, database.p));
     if (database_datum && out.epsg == 0) out.epsg = epsg_of(database_datum.p);
   }
+  if (given) return given_or(*given, "");
   double v[7] = {0, 0, 0, 0, 0, 0, 0};
   std::string pipeline;
   std::string source;
@@ -301,20 +325,10 @@ void settle_geoid(const PJ* horizontal, const PJ* vertical, VerticalCrs& v,
   Object geodetic_3d(proj_crs_promote_to_3D(ctx, nullptr, geodetic.p));
   Object compound(proj_create_compound_crs(ctx, "heights", geodetic.p, const_cast<PJ*>(vertical)));
   if (geodetic_3d && compound) {
-    if (PJ_OBJ_LIST* ops = operations(compound.p, geodetic_3d.p)) {
-      const int n = proj_list_get_count(ops);
-      for (int i = 0; i < n && v.to_ellipsoidal_pipeline.empty(); ++i) {
-        Object op(proj_list_get(ctx, ops, i));
-        if (!op || proj_coordoperation_has_ballpark_transformation(ctx, op.p) != 0 ||
-            proj_coordoperation_is_instantiable(ctx, op.p) == 0) {
-          continue;
-        }
-        v.to_ellipsoidal_pipeline = pipeline_of(op.p);
-        if (!v.to_ellipsoidal_pipeline.empty())
-          v.to_ellipsoidal_source = operation_label(ctx, op.p);
-      }
-      proj_list_destroy(ops);
-    }
+    take_best_operation(compound.p, geodetic_3d.p, v.to_ellipsoidal_source, [&](const PJ* op) {
+      v.to_ellipsoidal_pipeline = runnable_pipeline(op);
+      return !v.to_ellipsoidal_pipeline.empty();
+    });
   }
   if (v.to_ellipsoidal_pipeline.empty()) {
     v.to_ellipsoidal_source = "none installed: heights taken as ellipsoidal";
@@ -347,8 +361,9 @@ std::string definition_of(const PJ* crs) {
 }
 
 // Any CRS PROJ made. A compound CRS is its horizontal part plus its vertical CRS; a bound CRS
-// its source with the definition's TOWGS84.
-Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
+// its source with the definition's TOWGS84 (`given` for its datum).
+Result<Crs> crs_from_pj(const PJ* crs, const std::string& what,
+                        const std::optional<Helmert7>& given = std::nullopt) {
   PJ_CONTEXT* ctx = context();
   const std::string name = text_of(proj_get_name(crs));
   const PJ_TYPE type = proj_get_type(crs);
@@ -356,21 +371,15 @@ Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
     Object source(proj_get_source_crs(ctx, crs));
     Object transformation(proj_crs_get_coordoperation(ctx, crs));
     if (!source) return Error{ErrorCode::Unsupported, what + ": empty BOUNDCRS"};
-    auto out = crs_from_pj(source.p, what);
-    if (!out.ok()) return out;
     double v[7] = {0, 0, 0, 0, 0, 0, 0};
+    std::optional<Helmert7> towgs84;
     if (transformation &&
         proj_coordoperation_get_towgs84_values(ctx, transformation.p, v, 7, 0) != 0 &&
         std::isfinite(v[0]) && std::isfinite(v[6])) {
-      GeodeticDatum& d = out.value().datum;
-      d.to_wgs84 = helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
-      d.to_wgs84_pipeline.clear();
-      d.to_wgs84_source = "TOWGS84 of the definition";
-      std::erase_if(out.value().warnings, [](const std::string& w) {
-        return w.find("WGS 84") != std::string::npos && w.find("datum '") == 0;
-      });
+      towgs84 = helmert_from_position_vector(v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
     }
-    out.value().definition = definition_of(crs);
+    auto out = crs_from_pj(source.p, what, towgs84);
+    if (out.ok()) out.value().definition = definition_of(crs);
     return out;
   }
   if (type == PJ_TYPE_COMPOUND_CRS) {
@@ -379,26 +388,16 @@ Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
     if (!horizontal) return Error{ErrorCode::Unsupported, what + ": empty compound CRS"};
     auto h = crs_from_pj(horizontal.p, what);
     if (!h.ok()) return h;
-    Crs out = std::move(h).value();
+    Crs out = std::move(h).value();  // its epsg: the horizontal CRS's
     if (out.kind == CrsKind::Geocentric) {
       return Error{ErrorCode::Unsupported, what + ": a geocentric CRS in a compound CRS"};
     }
-    PJ* vertical_crs = vertical.p;
-    Object vertical_source;
-    if (vertical && proj_get_type(vertical.p) == PJ_TYPE_BOUND_CRS) {
-      vertical_source = Object(proj_get_source_crs(ctx, vertical.p));
-      vertical_crs = vertical_source.p;
-    }
-    PJ* horizontal_crs = horizontal.p;
-    Object horizontal_source;
-    if (proj_get_type(horizontal.p) == PJ_TYPE_BOUND_CRS) {
-      horizontal_source = Object(proj_get_source_crs(ctx, horizontal.p));
-      horizontal_crs = horizontal_source.p;
-    }
-    out.vertical = vertical_of(vertical_crs, horizontal_crs, out.warnings);
+    Object vertical_source, horizontal_source;
+    const PJ* vertical_crs = unbound(vertical.p, vertical_source);
+    out.vertical =
+        vertical_of(vertical_crs, unbound(horizontal.p, horizontal_source), out.warnings);
     if (out.vertical && out.vertical->epsg == 0) out.vertical->epsg = identified_epsg(vertical_crs);
     out.name = name;
-    out.epsg = identified_epsg(horizontal_crs);
     out.definition = definition_of(crs);
     return out;
   }
@@ -414,7 +413,7 @@ Result<Crs> crs_from_pj(const PJ* crs, const std::string& what) {
   out.definition = definition_of(crs);
   Object geodetic(proj_crs_get_geodetic_crs(ctx, crs));
   if (!geodetic) return Error{ErrorCode::Unsupported, what + " (" + name + ") has no datum"};
-  auto datum = datum_of(geodetic.p, what + " (" + name + ")", out.warnings);
+  auto datum = datum_of(geodetic.p, what + " (" + name + ")", given, out.warnings);
   if (!datum.ok()) return datum.error();
   out.datum = std::move(datum).value();
   const auto unit = axis_unit(crs);
@@ -696,12 +695,7 @@ void settle_vertical(Crs& crs) {
   Object vertical = from_database(crs.vertical->epsg, PJ_CATEGORY_CRS);
   if (!horizontal || !vertical || proj_get_type(vertical.p) != PJ_TYPE_VERTICAL_CRS) return;
   Object source;
-  const PJ* base = horizontal.p;
-  if (proj_get_type(horizontal.p) == PJ_TYPE_BOUND_CRS) {
-    source = Object(proj_get_source_crs(ctx, horizontal.p));
-    if (source) base = source.p;
-  }
-  settle_geoid(base, vertical.p, *crs.vertical, crs.warnings);
+  settle_geoid(unbound(horizontal.p, source), vertical.p, *crs.vertical, crs.warnings);
   const std::string name = crs.name + " + " + crs.vertical->name;
   Object compound(proj_create_compound_crs(ctx, name.c_str(), horizontal.p, vertical.p));
   if (compound) crs.definition = definition_of(compound.p);

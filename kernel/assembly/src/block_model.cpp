@@ -206,10 +206,10 @@ kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Me
   return kernel::Status();
 }
 
-// The pieces fused into one valid solid: `block`'s model.
-kernel::Result<BlockModel> fuse_block(std::vector<kernel::CsgModel> pieces, double tolerance,
-                                      BlockModel block) {
-  kernel::CsgModel& out = block.model;
+// The pieces fused into one valid solid.
+kernel::Result<kernel::CsgModel> fuse_block(std::vector<kernel::CsgModel> pieces,
+                                            double tolerance) {
+  kernel::CsgModel out;
   if (pieces.size() == 1) {
     out = std::move(pieces.front());
   } else {
@@ -227,41 +227,31 @@ kernel::Result<BlockModel> fuse_block(std::vector<kernel::CsgModel> pieces, doub
   if (!kernel::check_shape(out.shape).valid()) {
     return kernel::Error{ErrorCode::InvalidShape, "the block fails the validity checker"};
   }
-  return block;
+  return out;
 }
 
-}  // namespace
-
-kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
-                                       const BlockModelOptions& options) {
-  if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
-  auto measured = measure(model.shape, options.chordal_tolerance);
-  if (!measured.ok()) return measured.error();
-  BlockModel out;
-  out.heights = measured.value().heights;
-  const double ground = out.heights.ground, top = out.heights.roof_70p;
+// LoD1.2 of a building measured as `measured`.
+kernel::Result<kernel::CsgModel> lod12_of(const kernel::CsgModel& model, const Measured& measured,
+                                          const BlockModelOptions& options) {
+  const double ground = measured.heights.ground, top = measured.heights.roof_70p;
   if (!(top - ground > 100.0 * options.tolerance)) {
     return kernel::Error{ErrorCode::DegenerateGeometry,
                          "the roof's 70th percentile is not above the ground"};
   }
   std::vector<kernel::CsgModel> pieces;
-  if (kernel::Status st = add_footprint_pieces(model.shape, measured.value().mesh, ground, top,
+  if (kernel::Status st = add_footprint_pieces(model.shape, measured.mesh, ground, top,
                                                options.tolerance, "", pieces);
       !st.ok()) {
     return st.error();
   }
-  return fuse_block(std::move(pieces), options.tolerance, std::move(out));
+  return fuse_block(std::move(pieces), options.tolerance);
 }
 
-kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& model,
-                                                    const BlockModelOptions& options) {
-  if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
-  auto whole = measure(model.shape, options.chordal_tolerance);
-  if (!whole.ok()) return whole.error();
-  const Measured& measured = whole.value();
-  BlockModel out;
-  out.heights = measured.heights;
-  const double ground = out.heights.ground;
+// LoD1.3 of a building measured as `measured`.
+kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const Measured& measured,
+                                          const BlockModelOptions& options) {
+  const BuildingHeights& heights = measured.heights;
+  const double ground = heights.ground;
   // The roof parts: the leaves. Each roof triangle of the model belongs to the leaf its face
   // came from (the CSG history), so a part's roof is what is left of it in the model.
   struct Part {
@@ -295,7 +285,7 @@ kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& mode
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     Part& p = parts[i];
-    p.level = out.heights.roof_70p;
+    p.level = heights.roof_70p;
     if (!(p.area > 0.0)) continue;
     p.top = roof_percentile(p.roof, p.area, p.low, p.high, 0.7);
     order.push_back(i);
@@ -344,7 +334,55 @@ kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& mode
       return st.error();
     }
   }
-  return fuse_block(std::move(pieces), options.tolerance, std::move(out));
+  return fuse_block(std::move(pieces), options.tolerance);
+}
+
+// A building's leaves checked and its model measured once.
+kernel::Result<Measured> measure_building(const kernel::CsgModel& model,
+                                          const BlockModelOptions& options) {
+  if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
+  return measure(model.shape, options.chordal_tolerance);
+}
+
+// One block of a building: its heights and `make`'s model.
+template <typename Make>
+kernel::Result<BlockModel> one_block(const kernel::CsgModel& model,
+                                     const BlockModelOptions& options, Make make) {
+  auto measured = measure_building(model, options);
+  if (!measured.ok()) return measured.error();
+  auto block = make(model, measured.value(), options);
+  if (!block.ok()) return block.error();
+  return BlockModel{measured.value().heights, std::move(block).value()};
+}
+
+}  // namespace
+
+kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
+                                       const BlockModelOptions& options) {
+  return one_block(model, options, lod12_of);
+}
+
+kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& model,
+                                                    const BlockModelOptions& options) {
+  return one_block(model, options, lod13_of);
+}
+
+kernel::Result<BuildingBlocks> building_blocks(const kernel::CsgModel& model,
+                                               const BlockModelOptions& options) {
+  auto measured = measure_building(model, options);
+  if (!measured.ok()) return measured.error();
+  auto lod12 = lod12_of(model, measured.value(), options);
+  if (!lod12.ok()) return lod12.error();
+  BuildingBlocks out;
+  out.heights = measured.value().heights;
+  out.lod12 = std::move(lod12).value();
+  auto lod13 = lod13_of(model, measured.value(), options);
+  if (lod13.ok()) {
+    out.lod13 = std::move(lod13).value();
+  } else {
+    out.lod13_error = lod13.error();
+  }
+  return out;
 }
 
 }  // namespace csgtile::assembly

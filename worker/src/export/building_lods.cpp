@@ -19,23 +19,22 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
     o.lod12_error.clear();
     o.lod13.reset();
     o.lod13_error.clear();
-    auto block = assembly::block_model(o.model, options);
-    if (block.ok()) {
-      o.heights = block.value().heights;
-      o.lod12 = std::move(block).value().model;
-      auto levels = assembly::multi_height_block_model(o.model, options);
-      if (levels.ok()) {
-        o.lod13 = std::move(levels).value().model;
-      } else {
-        o.lod13_error = kernel::error_code_name(levels.error().code) + std::string(": ") +
-                        levels.error().message;
+    auto blocks = assembly::building_blocks(o.model, options);
+    if (blocks.ok()) {
+      assembly::BuildingBlocks& b = blocks.value();
+      o.heights = b.heights;
+      o.lod12 = std::move(b.lod12);
+      o.lod13 = std::move(b.lod13);
+      if (b.lod13_error) {
+        o.lod13_error = kernel::error_code_name(b.lod13_error->code) + std::string(": ") +
+                        b.lod13_error->message;
       }
       return;
     }
     // Not a building (another primitive among its leaves): no block, its heights still.
-    if (block.error().code != kernel::ErrorCode::InvalidArgument) {
+    if (blocks.error().code != kernel::ErrorCode::InvalidArgument) {
       o.lod12_error =
-          kernel::error_code_name(block.error().code) + std::string(": ") + block.error().message;
+          kernel::error_code_name(blocks.error().code) + std::string(": ") + blocks.error().message;
     }
     auto heights = assembly::building_heights(o.model.shape, chordal_tolerance);
     if (heights.ok()) o.heights = heights.value();

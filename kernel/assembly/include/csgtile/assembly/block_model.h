@@ -7,6 +7,7 @@
 /// whatever made it.
 
 #include <cstddef>
+#include <optional>
 
 #include "csgtile/kernel/csg.h"
 
@@ -65,5 +66,17 @@ kernel::Result<BlockModel> block_model(const kernel::CsgModel& model,
 /// Errors: as block_model.
 kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& model,
                                                     const BlockModelOptions& options = {});
+
+/// Both blocks of a building from one measurement of its model, as exporters publish them:
+/// LoD1.2 as block_model (its errors are this function's), LoD1.3 as multi_height_block_model
+/// or the error that left it out.
+struct BuildingBlocks {
+  BuildingHeights heights;
+  kernel::CsgModel lod12;
+  std::optional<kernel::CsgModel> lod13;
+  std::optional<kernel::Error> lod13_error;
+};
+kernel::Result<BuildingBlocks> building_blocks(const kernel::CsgModel& model,
+                                               const BlockModelOptions& options = {});
 
 }  // namespace csgtile::assembly
