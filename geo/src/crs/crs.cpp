@@ -327,9 +327,10 @@ Result<Crs> crs_from_config(std::string_view text) {
   };
   std::string_view s = trim(text);
   if (s.empty()) return Error{ErrorCode::InvalidArgument, "empty CRS text in the config"};
-  if (s.front() == '{') {  // PROJJSON
-    auto crs = detail::crs_from_proj_text(s, "PROJJSON");
-    if (crs.ok()) crs.value().source = "config (PROJJSON)";
+  if (s.front() == '{' || s.front() == '+') {  // PROJJSON, or a PROJ string (+type=crs)
+    const char* kind = s.front() == '{' ? "PROJJSON" : "PROJ string";
+    auto crs = detail::crs_from_proj_text(s, kind);
+    if (crs.ok()) crs.value().source = "config (" + std::string(kind) + ")";
     return crs;
   }
   if (s.find('[') != std::string_view::npos || s.find('(') != std::string_view::npos) {
@@ -359,9 +360,9 @@ Result<Crs> crs_from_config(std::string_view text) {
                       : parse_int(trim(codes.substr(0, plus)), &horizontal) &&
                             parse_int(trim(codes.substr(plus + 1)), &vertical);
   if (!ok || horizontal == 0) {
-    return Error{
-        ErrorCode::InvalidArgument,
-        "config CRS '" + std::string(s) + "' is neither EPSG:<code>[+<vertical code>] nor WKT"};
+    return Error{ErrorCode::InvalidArgument,
+                 "config CRS '" + std::string(s) +
+                     "' is neither EPSG:<code>[+<vertical code>], WKT, PROJJSON nor a PROJ string"};
   }
   auto crs = crs_from_epsg(horizontal, vertical);
   if (crs.ok()) crs.value().source = "config (" + std::string(s) + ")";

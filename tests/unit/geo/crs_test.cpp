@@ -827,6 +827,12 @@ TEST(CrsConfig, CodesAndWkt) {
   EXPECT_EQ(crs_from_config(" epsg:7415 ").value().vertical->epsg, 5709);
   EXPECT_EQ(crs_from_config("28992+5709").value().vertical->epsg, 5709);
   EXPECT_EQ(crs_from_config(kRdNapWkt2).value().source, "config");
+  // A PROJ string with +type=crs, as the README's run.crs allows: UTM 31N on WGS 84.
+  auto utm = crs_from_config("+proj=utm +zone=31 +datum=WGS84 +units=m +type=crs");
+  ASSERT_TRUE(utm.ok()) << utm.error().message;
+  EXPECT_EQ(utm.value().source, "config (PROJ string)");
+  EXPECT_EQ(crs_difference(utm.value(), crs_from_epsg(32631).value()), std::nullopt);
+  EXPECT_FALSE(crs_from_config("+proj=nonsense +type=crs").ok());
   for (const char* bad : {"", "EPSG:", "EPSG:abc", "28992+", "hello"}) {
     auto crs = crs_from_config(bad);
     EXPECT_FALSE(crs.ok()) << bad;
