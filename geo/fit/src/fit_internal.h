@@ -196,6 +196,8 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in,
                                         const std::vector<kernel::Vec2>& flat,
                                         const std::function<bool(const kernel::Vec3&)>& above_roof,
                                         std::string& why);
+/// The outline as a polygon in world x, y (the points' frame), its rings as the outline's.
+geo::FootprintPolygon outline_polygon(const RoofOutline& outline);
 
 /// The outline's footprint in world x, y, its centre, and the terrain under it: the lowest
 /// level around it (lowest_ground_under), else the median level near it; NaN without ground.

@@ -292,6 +292,17 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
   return out;
 }
 
+geo::FootprintPolygon outline_polygon(const RoofOutline& outline) {
+  geo::FootprintPolygon out;
+  auto world = [&](const Vec2& q) { return Vec2(q.x() * outline.u + q.y() * outline.v); };
+  for (const auto& q : outline.profile) out.outer.push_back(world(q));
+  for (const auto& hole : outline.holes) {
+    auto& ring = out.holes.emplace_back();
+    for (const auto& q : hole) ring.push_back(world(q));
+  }
+  return out;
+}
+
 OutlineGround outline_ground(const RoofOutline& outline, const GroundGrid& ground) {
   OutlineGround out;
   for (const auto& q : outline.profile) {

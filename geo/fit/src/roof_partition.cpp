@@ -64,16 +64,30 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   if (static_cast<long long>(pts.size()) < std::max<long long>(in.ransac->min_points, 8)) {
     return out;
   }
-  // The grid, in the principal frame of the points (walls along its axes stay straight), or
-  // of the footprint, over it and the points.
+  // The building's bounds: its footprint, or else the outline derived from its points
+  // (roof.cpp: traced, simplified, its edges along the main directions and on the outermost
+  // points), so that walls stand where the points end rather than on the grid's lines. The
+  // partition is clipped to them; with neither (no outline could be derived), the grid's
+  // cells holding points are the outline.
   const bool footprinted = o.footprint != nullptr && !o.footprint->empty();
-  const auto frame = footprinted ? footprint_frame(*o.footprint) : principal_frame(flat);
+  std::vector<geo::FootprintPolygon> derived;
+  if (!footprinted) {
+    std::string why;
+    const auto outline = roof_outline(
+        in, flat, [](const Vec3&) { return false; }, why);
+    if (outline) derived.push_back(outline_polygon(*outline));
+  }
+  const std::vector<geo::FootprintPolygon>* bounds =
+      footprinted ? o.footprint : (derived.empty() ? nullptr : &derived);
+  // The grid, in the frame of the bounds (walls along its axes stay straight), or of the
+  // points, over them and the points.
+  const auto frame = bounds != nullptr ? footprint_frame(*bounds) : principal_frame(flat);
   if (!frame) return out;
   const Vec2 u = frame->u, v = frame->v;
   double a0 = frame->a0, a1 = frame->a1, b0 = frame->b0, b1 = frame->b1;
   std::optional<FootprintClip> clip;
-  if (footprinted) {
-    clip.emplace(*o.footprint, u, v);
+  if (bounds != nullptr) {
+    clip.emplace(*bounds, u, v);
     if (!clip->extent(a0, a1, b0, b1)) {
       rejected.push_back(
           {"roof partition", "its footprint has no area", static_cast<long long>(pts.size())});
@@ -83,9 +97,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       a0 = std::min(a0, q.dot(u)), a1 = std::max(a1, q.dot(u));
       b0 = std::min(b0, q.dot(v)), b1 = std::max(b1, q.dot(v));
     }
-  } else if (std::min(a1 - a0, b1 - b0) < o.min_building_width) {
-    return out;
   }
+  if (!footprinted && std::min(a1 - a0, b1 - b0) < o.min_building_width) return out;
   const double cell = 1.5 * spacing;
   if (((a1 - a0) / cell + 5.0) * ((b1 - b0) / cell + 5.0) > 4e6) {
     rejected.push_back({"roof partition", "too large an outline for its grid",
@@ -125,8 +138,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   // over the gaps between scan lines (3 × 3), with holes under 4 m² filled (larger ones are
   // courtyards).
   std::vector<char> mask(ncell, 0);
-  std::vector<double> area_in;  // with a footprint: each cell's area inside it
-  if (footprinted) {
+  std::vector<double> area_in;  // with bounds: each cell's area inside them
+  if (bounds != nullptr) {
     area_in.assign(ncell, 0.0);
     for (std::size_t c = 0; c < ncell; ++c) {
       const double ca = ga + static_cast<double>(c % static_cast<std::size_t>(nx)) * cell;
@@ -138,7 +151,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     for (std::size_t c = 0; c < ncell; ++c) mask[c] = in_cell[c].empty() ? 0 : 1;
     close_cells(mask, nx, ny);
   }
-  if (!footprinted) {
+  if (bounds == nullptr) {
     LabelGrid empty{nx, ny, std::vector<int>(ncell, -1)};
     for (std::size_t c = 0; c < ncell; ++c) empty.label[c] = mask[c] ? -1 : 0;
     const Components holes = label_components(empty);
@@ -390,10 +403,10 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
     if (!changed) break;
   }
-  // With a footprint, cells mostly outside it (eaves, points of walls) take the label of
-  // their neighbour most inside it: label boundaries then meet the footprint's edge where
-  // roofs meet, instead of running along it (slivers between a part and the edge).
-  if (footprinted) {
+  // With bounds, cells mostly outside them (eaves, points of walls) take the label of their
+  // neighbour most inside them: label boundaries then meet the bounds' edge where roofs
+  // meet, instead of running along it (slivers between a part and the edge).
+  if (bounds != nullptr) {
     for (int pass = 0; pass < 2; ++pass) {
       std::vector<int> next = label;
       for (std::size_t c = 0; c < ncell; ++c) {

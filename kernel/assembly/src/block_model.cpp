@@ -158,10 +158,33 @@ kernel::Status check_building_leaves(const kernel::CsgModel& model) {
   return kernel::Status();
 }
 
+// Twice the area over the perimeter of a face's projection (outer ring, holes): its width
+// where it is a strip.
+double projected_width(const kernel::PrimitiveSpec& spec) {
+  auto area = [](const std::vector<Vec2>& ring) {
+    double a2 = 0.0;
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const Vec2& p = ring[i];
+      const Vec2& q = ring[(i + 1) % ring.size()];
+      a2 += p.x() * q.y() - p.y() * q.x();
+    }
+    return 0.5 * std::abs(a2);
+  };
+  double a = area(spec.profile), perimeter = 0.0;
+  for (const auto& hole : spec.holes) a -= area(hole);
+  for (std::size_t i = 0; i < spec.profile.size(); ++i) {
+    perimeter += (spec.profile[(i + 1) % spec.profile.size()] - spec.profile[i]).norm();
+  }
+  return perimeter > 0.0 ? 2.0 * a / perimeter : 0.0;
+}
+
 // The footprint of `shape` (meshed as `mesh`): every face seen from below, each as an
-// extrusion from `ground` to `top`, appended to `pieces`.
+// extrusion from `ground` to `top`, appended to `pieces`. A face whose projection is a strip
+// narrower than `min_width` (a wall leaning out by a few millimetres) is left out: it adds
+// nothing a block model shows, and slivers that thin do not survive the coordinates'
+// quantisation in the published files (the shell then crosses itself).
 kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
-                                    double ground, double top, double tolerance,
+                                    double ground, double top, double tolerance, double min_width,
                                     const std::string& label,
                                     std::vector<kernel::CsgModel>& pieces) {
   const kernel::EdgePoints edge_points = kernel::mesh_edge_points(shape, mesh);
@@ -191,6 +214,7 @@ kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Me
         spec.holes.push_back(std::move(ring));
       }
     }
+    if (projected_width(spec) < min_width) continue;
     const std::string name = label + "footprint face " + std::to_string(f);
     auto piece = kernel::csg_primitive(spec, name, tolerance);
     if (!piece.ok()) {
@@ -239,8 +263,9 @@ kernel::Result<kernel::CsgModel> lod12_of(const kernel::CsgModel& model, const M
                          "the roof's 70th percentile is not above the ground"};
   }
   std::vector<kernel::CsgModel> pieces;
-  if (kernel::Status st = add_footprint_pieces(model.shape, measured.mesh, ground, top,
-                                               options.tolerance, "", pieces);
+  if (kernel::Status st =
+          add_footprint_pieces(model.shape, measured.mesh, ground, top, options.tolerance,
+                               options.chordal_tolerance, "", pieces);
       !st.ok()) {
     return st.error();
   }
@@ -328,8 +353,9 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
     if (!solid.ok()) return kernel::Error{solid.error().code, label + solid.error().message};
     auto mesh = kernel::tessellate(solid.value().shape, tessellation);
     if (!mesh.ok()) return kernel::Error{mesh.error().code, label + mesh.error().message};
-    if (kernel::Status st = add_footprint_pieces(solid.value().shape, mesh.value(), ground, p.level,
-                                                 options.tolerance, label, pieces);
+    if (kernel::Status st =
+            add_footprint_pieces(solid.value().shape, mesh.value(), ground, p.level,
+                                 options.tolerance, options.chordal_tolerance, label, pieces);
         !st.ok()) {
       return st.error();
     }

@@ -202,23 +202,33 @@ class EarClipper {
     node(p_next).prev = p_copy;
   }
 
-  // Strictly convex at b, and no other ring point inside or on the triangle except copies
-  // of its corners (bridge ends): a point on the new diagonal would become a T-junction.
+  // Strictly convex at b, and no other ring point inside, on or within rounding of the
+  // triangle except copies of its corners (bridge ends): a point on the new diagonal would
+  // become a T-junction. Points collinear in exact arithmetic (a wall's corners along one
+  // line, in a face's rotated parameter plane) lie a few ulps off the diagonal; taking them
+  // for outside would leave the last three points collinear, so points within a billionth
+  // of the triangle's size of its sides count as on them.
   bool is_ear(int a, int b, int c) const {
     const Vec2& pa = node(a).p;
     const Vec2& pb = node(b).p;
     const Vec2& pc = node(c).p;
+    const double ab = (pb - pa).norm(), bc = (pc - pb).norm(), ca = (pa - pc).norm();
     const double area2 = orient(pa, pb, pc);
-    if (!(area2 > 1e-12 * (pb - pa).norm() * (pc - pb).norm())) return false;
-    const double min_x = std::min({pa.x(), pb.x(), pc.x()});
-    const double max_x = std::max({pa.x(), pb.x(), pc.x()});
-    const double min_y = std::min({pa.y(), pb.y(), pc.y()});
-    const double max_y = std::max({pa.y(), pb.y(), pc.y()});
+    if (!(area2 > 1e-12 * ab * bc)) return false;
+    const double slack = 1e-9 * std::max({ab, bc, ca});
+    const double min_x = std::min({pa.x(), pb.x(), pc.x()}) - slack;
+    const double max_x = std::max({pa.x(), pb.x(), pc.x()}) + slack;
+    const double min_y = std::min({pa.y(), pb.y(), pc.y()}) - slack;
+    const double max_y = std::max({pa.y(), pb.y(), pc.y()}) + slack;
     for (int n = node(c).next; n != a; n = node(n).next) {
       const Vec2& p = node(n).p;
       if (p.x() < min_x || p.x() > max_x || p.y() < min_y || p.y() > max_y) continue;
       if (p == pa || p == pb || p == pc) continue;
-      if (orient(pa, pb, p) >= 0 && orient(pb, pc, p) >= 0 && orient(pc, pa, p) >= 0) return false;
+      // orient(u, v, p) / |v - u| is p's signed distance from the line u v.
+      if (orient(pa, pb, p) >= -slack * ab && orient(pb, pc, p) >= -slack * bc &&
+          orient(pc, pa, p) >= -slack * ca) {
+        return false;
+      }
     }
     return true;
   }

@@ -154,5 +154,21 @@ TEST(BlockModel, AnExtrusionLyingAlongItsRidgeHasABlockToo) {
   EXPECT_NEAR(kernel::mass_properties(block->model.shape).volume, 60.0 * 4.4, 1e-6);
 }
 
+// A shed fitted from a real Delft tile (regression): its walls lean out by 5 mm over 2 m, so
+// they look down a little. Their projections, 5 mm strips, are no footprint: the block stands
+// on the bottom alone (with them it had slivers that crossed themselves once quantised).
+TEST(BlockModel, WallsLeaningOutByMillimetresAddNoSliversToTheFootprint) {
+  PrimitiveSpec shed;
+  shed.type = kernel::PrimitiveType::Extrusion;
+  shed.profile = {{0, 0}, {3, 0}, {3.005, 2}, {-0.005, 2}};  // the section, walls leaning out
+  shed.height = 4.0;
+  shed.placement = kernel::Location::rotation(Vec3::Zero(), Vec3::UnitX(), 0.5 * M_PI);
+  auto block = block_model(leaf(shed));
+  ASSERT_TRUE(block.ok()) << block.error().message;
+  EXPECT_EQ(block->model.nodes.size(), 1u);  // one footprint piece, no fuse
+  EXPECT_NEAR(kernel::mass_properties(block->model.shape).volume, 12.0 * block->heights.roof_70p,
+              1e-6);
+}
+
 }  // namespace
 }  // namespace csgtile::assembly

@@ -494,6 +494,33 @@ TEST(TessellationGeneralMethod, PlanarFacesMatchTheirBoundaryExactly) {
   }
 }
 
+// A roof part of a real Delft building (regressions: its LoD1.3 block failed): three of its
+// corners lie on one line in the profile, which the footprint's rotated parameter plane puts
+// a few ulps apart. The ear clipper must still see the middle one on the diagonal.
+TEST(TessellationGeneralMethod, CollinearCornersInARotatedFaceStayOnTheirDiagonal) {
+  const std::vector<Vec2> profile{
+      {-2.0733454009053389, 2.5175826344429879},  {-0.15699992849843625, -1.3151083103708174},
+      {-2.1073227092042117, -3.9155386846451705}, {0.49310766507015558, -6.5159690589195378},
+      {0.49310766507015558, -7.8161842460567215}, {1.0038710461229527, -7.8161842460567215},
+      {1.0038710461229527, 1.2853220639035499},   {-0.15699992849843625, 1.2853220639035499},
+      {-0.15699992849843625, 3.2356448446093395}, {1.0038710461229527, 3.2356448446093395},
+      {1.0038710461229527, 6.4861828124522845},   {0.73475427618062383, 6.4861828124522845},
+      {-1.0847858952077871, 2.8471024696755052}};
+  const Shape part = built(make_extrusion(profile, {}, 15.567196758674289));
+  Matrix34 m = Matrix34::Zero();
+  m.block<2, 2>(0, 0) << 0.70802126353892014, -0.70619111462602746, 0.70619111462602746,
+      0.70802126353892014;
+  m(2, 2) = 1.0;
+  m.col(3) = Vec3(253.35012167920115, 46.876210053146423, -0.13185714285714278);
+  const auto loc = Location::from_matrix(m);
+  ASSERT_TRUE(loc.ok());
+  const Shape placed = part.moved(loc.value());
+  const Mesh mesh = mesh_of(placed, 1e-2);
+  EXPECT_TRUE(mesh_is_closed(mesh));
+  const double exact = mass_properties(placed).volume;
+  EXPECT_NEAR(mesh_volume(mesh), exact, 1e-9 * exact);
+}
+
 TEST(TessellationGeneralMethod, CurvedPrimitivesConvergeWithoutRows) {
   for (const PrimitiveCase& c : primitive_cases()) {
     if (c.name != "cylinder" && c.name != "sphere" && c.name != "torus" &&

@@ -486,6 +486,49 @@ TEST(CityJsonSeq, NoTwoVerticesWithinAUnitAndNoTriangleOnALine) {
   EXPECT_EQ(city_object(f)["geometry"][0]["type"], "Solid");
 }
 
+// val3dity triangulates each polygon and compares its triangles' normals (20°): a polygon
+// with a feature of a few units (a 3 mm edge, at 1 mm) has a triangle that thin, turned by
+// the rounding of its corners. Such faces are published as their triangles (a roof part of
+// a real Delft building had a hole with a 2.8 mm edge: NON_PLANAR_POLYGON_NORMALS_DEVIATION).
+TEST(CityJsonSeq, PolygonsWithFeaturesOfAFewUnitsArePublishedAsTriangles) {
+  kernel::PrimitiveSpec notch;
+  notch.type = kernel::PrimitiveType::Extrusion;
+  notch.profile = {{0, 0}, {4, 0}, {4, 3}, {2.003, 3.5}, {2.0, 3.5}, {0, 3}};
+  notch.height = 2.0;
+  const std::vector<IndexObject> objects = {object("notch", leaf(notch, "notch"))};
+  CityJsonOptions options;
+  options.scale = 0.001;
+  const auto text = cityjson_seq(objects, options, nullptr);
+  ASSERT_TRUE(text.ok()) << text.error().message;
+  const Sequence s = parse(text.value());
+  ASSERT_EQ(s.features.size(), 1u);
+  const Json& f = s.features[0];
+  const auto vertices = f["vertices"].get<std::vector<std::array<long long, 3>>>();
+  std::size_t triangles = 0, polygons = 0;
+  for (const FileShell& shell : shells_of(f)) {
+    EXPECT_TRUE(shell_closed(shell));
+    for (const Json& surface : shell.surfaces) {
+      const auto ring = surface[0].get<std::vector<std::size_t>>();
+      if (ring.size() == 3) {
+        ++triangles;
+        continue;
+      }
+      ++polygons;
+      for (std::size_t i = 0; i < ring.size(); ++i) {
+        const auto& a = vertices[ring[i]];
+        const auto& b = vertices[ring[(i + 1) % ring.size()]];
+        const double length =
+            std::hypot(static_cast<double>(a[0] - b[0]), static_cast<double>(a[1] - b[1]),
+                       static_cast<double>(a[2] - b[2]));
+        EXPECT_GE(length, 10.0) << "a polygon with an edge of " << length << " units";
+      }
+    }
+  }
+  EXPECT_GE(triangles, 8u);  // top and bottom, four triangles each at least
+  EXPECT_EQ(polygons, 5u);   // the walls but the 3 mm one (a thin rectangle: triangles)
+  EXPECT_EQ(city_object(f)["geometry"][0]["type"], "Solid");
+}
+
 // Where welding would open a shell (a thin pipe whose opposite sides are a unit apart), the
 // object is written unwelded, still a closed solid, and without triangles on a line.
 TEST(CityJsonSeq, WeldingNeverOpensAClosedShell) {

@@ -163,6 +163,40 @@ bool clean_polygon(const std::vector<Ring>& rings) {
   return !rings.empty() && !collinear(rings[0]);
 }
 
+// Features of a polygon this many units (quantisation steps) or smaller: a validator's
+// triangulation of it has a triangle that thin, whose normal the rounding of its corners
+// (up to half a unit each) turns by more than val3dity's 20° (its planarity test by the
+// normals of its triangulation). Ten units keep them within about 5°.
+constexpr double kFragileUnits = 10.0;
+
+// Whether a quantised polygon has an edge shorter than kFragileUnits or a point that close
+// to an edge it does not end (a neck, a spike, a hole touching its exterior): published as
+// its tessellation's triangles instead (a triangle is planar whatever its rounding).
+bool fragile_polygon(const std::vector<Ring>& rings) {
+  auto at = [](const Point& p) {
+    return Vec3(static_cast<double>(p[0]), static_cast<double>(p[1]), static_cast<double>(p[2]));
+  };
+  const double limit2 = kFragileUnits * kFragileUnits;
+  for (std::size_t r = 0; r < rings.size(); ++r) {
+    const Ring& ring = rings[r];
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const Vec3 a = at(ring[i]), b = at(ring[(i + 1) % ring.size()]);
+      const Vec3 e = b - a;
+      const double ee = e.squaredNorm();
+      if (ee < limit2) return true;
+      for (std::size_t r2 = 0; r2 < rings.size(); ++r2) {
+        for (std::size_t j = 0; j < rings[r2].size(); ++j) {
+          if (r2 == r && (j == i || j == (i + 1) % ring.size())) continue;
+          const Vec3 p = at(rings[r2][j]);
+          const double t = std::clamp((p - a).dot(e) / ee, 0.0, 1.0);
+          if ((a + t * e - p).squaredNorm() < limit2) return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
 std::int64_t dot(const std::array<std::int64_t, 3>& a, const std::array<std::int64_t, 3>& b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
@@ -304,7 +338,8 @@ Semantic classify(const Surface& s, std::int64_t object_min_z, double ground_uni
 
 // The surfaces of each solid of `root`, shell by shell, quantised. Planar faces are polygons
 // from their wires, curved faces (and planar ones whose polygon does not survive
-// quantisation) triangles of one tessellation, whose edge points the polygons share.
+// quantisation or is too fragile for it) triangles of one tessellation, whose edge points the
+// polygons share.
 kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options,
                                                bool weld_vertices) {
   kernel::TessellationOptions t;
@@ -348,7 +383,7 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
           for (const Vec3& p : ring) q.push_back(weld(*quantise(p, options.scale)));
           s.rings.push_back(without_repeats(std::move(q)));
         }
-        if (clean_polygon(s.rings)) {
+        if (clean_polygon(s.rings) && !fragile_polygon(s.rings)) {
           shell.push_back(std::move(s));
           return;
         }

@@ -31,7 +31,10 @@ kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
                                                  double chordal_tolerance);
 
 struct BlockModelOptions {
-  double chordal_tolerance = 0.01;  ///< of the tessellation the heights and footprint use
+  /// Of the tessellation the heights and footprint use; also the narrowest strip a face seen
+  /// from below must project to to be part of the footprint (a wall leaning out by less adds
+  /// a sliver no block model shows).
+  double chordal_tolerance = 0.01;
   double tolerance = kernel::kDefaultTolerance;  ///< of the extrusions and their fuse
   /// LoD1.3: roof parts whose heights differ by less than this (model units) are one level.
   double level_step = 0.5;

@@ -1,0 +1,171 @@
+#!/usr/bin/env python3
+"""Quality of the city models `csgtile run` publishes on the shared real tiles, measured as
+3DBAG measures its LoD2.2 (issue #18): each building point's 3D distance to the published
+model (model_distance.py).
+
+For each tile present — Delft (laz/ahn3_cropped_2.laz, points read from its LAS reference
+3dfier/ahn3_cropped_2.las; footprints 3dfier/bgt_pand.sqlite) and Amsterdam
+(ams/ahn_2386_9702.las, footprints ams/bgt_buildings_demo.csv) — it runs `csgtile run` with
+default settings (city_speed.py's configuration, one thread), without and with the footprints,
+reads what the cells published (model.city.jsonl: the highest LoD of each feature) and gives,
+for the class-6 points inside the BGT footprints and for all class-6 points of the tile:
+share within 0.1 / 0.3 / 1 m, RMSE, median, covered (a surface within 20 m) and the median of
+the published objects' RMSEs (points given to the object of their nearest surface). A top
+view OUT/<run>_distance.png (0.5 m pixels, north up): the farthest building point of each
+pixel white within 0.3 m, orange within 1 m, red farther, black with no surface near; other
+points grey; footprints outlined blue.
+
+Usage: city_quality.py CSGTILE WORK_DIR [--data DIR] [--tiles delft,ams] [--runs derived,footprints]
+                       [--min-within RUN=V ...] [--max-rmse RUN=V ...]
+Prints one JSON object. With --min-within / --max-rmse (RUN e.g. delft_footprints: the share
+within 0.3 m and the RMSE inside the footprints), exit 1 when a run misses its bound (a CLI
+test). Exit 77 when no tile is present. Standard library only.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+import city_speed  # beside this script
+import model_distance
+from real_tiles import Grid, read_footprints, read_las, write_png
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DEFAULT_DATA = os.path.normpath(os.path.join(HERE, "..", "..", "..", "shared", "data"))
+TILES = {
+    "delft": {"run_input": "laz/ahn3_cropped_2.laz", "las": "3dfier/ahn3_cropped_2.las",
+              "footprints": ("sqlite", "3dfier/bgt_pand.sqlite", "buildingpart")},
+    "ams": {"run_input": "ams/ahn_2386_9702.las", "las": "ams/ahn_2386_9702.las",
+            "footprints": ("csv", "ams/bgt_buildings_demo.csv", "")},
+}
+PIXEL = 0.5
+
+
+def footprint_mask(grid, buildings):
+    mask = bytearray(grid.nx * grid.ny)
+
+    def mark(k):
+        mask[k] = 1
+    for polys in buildings:
+        for poly in polys:
+            grid.fill(poly, mark)
+    return mask
+
+
+def measure(points, buildings, model_paths, picture):
+    surfaces, features, lods = model_distance.read_model(model_paths)
+    index = model_distance.Index(surfaces)
+    xs, ys, zs, cls = points["x"], points["y"], points["z"], points["cls"]
+    x0 = math.floor(min(xs) / PIXEL) * PIXEL
+    y0 = math.floor(min(ys) / PIXEL) * PIXEL
+    nx = int((max(xs) - x0) / PIXEL) + 1
+    ny = int((max(ys) - y0) / PIXEL) + 1
+    grid = Grid(x0, y0, PIXEL, nx, ny)
+    mask = footprint_mask(grid, buildings)
+    worst = [-1.0] * (nx * ny)   # farthest building point per pixel (inf: no surface)
+    other = bytearray(nx * ny)
+    all_d, all_o, in_d, in_o = [], [], [], []
+    for i in range(len(xs)):
+        k = min(ny - 1, int((ys[i] - y0) / PIXEL)) * nx + min(nx - 1, int((xs[i] - x0) / PIXEL))
+        if cls[i] != 6:
+            other[k] = 1
+            continue
+        d, s = index.nearest(xs[i], ys[i], zs[i])
+        o = surfaces[s].obj if s >= 0 else None
+        all_d.append(d)
+        all_o.append(o)
+        if mask[k]:
+            in_d.append(d)
+            in_o.append(o)
+        if d > worst[k]:
+            worst[k] = d
+    rgb = bytearray(nx * ny * 3)
+    for j in range(ny):
+        for i in range(nx):
+            k = j * nx + i
+            w = worst[k]
+            if w < 0:
+                c = (200, 200, 200) if other[k] else (110, 110, 110)
+            elif w == math.inf:
+                c = (0, 0, 0)
+            elif w <= 0.3:
+                c = (255, 255, 255)
+            elif w <= 1.0:
+                c = (255, 150, 0)
+            else:
+                c = (220, 0, 0)
+            p = ((ny - 1 - j) * nx + i) * 3
+            rgb[p:p + 3] = bytes(c)
+
+    def outline(k):
+        j, i = divmod(k, nx)
+        p = ((ny - 1 - j) * nx + i) * 3
+        rgb[p:p + 3] = bytes((40, 90, 255))
+    for polys in buildings:
+        for poly in polys:
+            for ring in poly:
+                for a in range(len(ring)):
+                    grid.line(ring[a], ring[(a + 1) % len(ring)], outline)
+    write_png(picture, nx, ny, rgb)
+    return {"features": features, "features_by_lod": lods, "surfaces": len(surfaces),
+            "inside_footprints": model_distance.summarise(in_d, in_o),
+            "whole_tile": model_distance.summarise(all_d, all_o), "picture": picture}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("csgtile")
+    ap.add_argument("work")
+    ap.add_argument("--data", default=DEFAULT_DATA)
+    ap.add_argument("--tiles", default="delft,ams")
+    ap.add_argument("--runs", default="derived,footprints")
+    ap.add_argument("--min-within", action="append", default=[])
+    ap.add_argument("--max-rmse", action="append", default=[])
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    report = {"measure": "3D distance of class-6 points to the published model", "runs": {}}
+    for tile in args.tiles.split(","):
+        spec = TILES[tile]
+        run_input = os.path.join(args.data, spec["run_input"])
+        las = os.path.join(args.data, spec["las"])
+        kind, fp, layer = spec["footprints"]
+        fp = os.path.join(args.data, fp)
+        if not (os.path.exists(run_input) and os.path.exists(las) and os.path.exists(fp)):
+            print(f"skip {tile}: shared data absent", file=sys.stderr)
+            continue
+        points = read_las(las)
+        buildings = read_footprints(kind, fp, layer)
+        for mode in args.runs.split(","):
+            name = f"{tile}_{mode}"
+            source = city_speed.footprints_source(fp, args.work) if mode == "footprints" else ""
+            timing = city_speed.one_run(args.csgtile, args.work, name, run_input, source, layer)
+            start = time.monotonic()
+            rundir = os.path.join(args.work, name, "runs", name)
+            res = measure(points, buildings, model_distance.run_model(rundir),
+                          os.path.join(args.work, name + "_distance.png"))
+            res["buildings"] = timing["buildings"]
+            res["run_wall_s"] = round(timing["wall_s"], 2)
+            res["measure_s"] = round(time.monotonic() - start, 1)
+            report["runs"][name] = res
+    if not report["runs"]:
+        print("skip: no tile present", file=sys.stderr)
+        sys.exit(77)
+    print(json.dumps(report, indent=1, sort_keys=True))
+    failures = []
+    for spec, key, worse in ((args.min_within, "within_0.3m", lambda v, b: v < b),
+                             (args.max_rmse, "rmse_m", lambda v, b: v > b)):
+        for item in spec:
+            name, bound = item.split("=")
+            if name not in report["runs"]:
+                continue
+            value = report["runs"][name]["inside_footprints"][key]
+            if worse(value, float(bound)):
+                failures.append(f"{name}: {key} {value:.3f} (bound {bound})")
+    if failures:
+        sys.exit("city_quality: FAIL: " + "; ".join(failures))
+
+
+if __name__ == "__main__":
+    main()
