@@ -192,10 +192,13 @@ struct RoofOutline {
 };
 /// nullopt when the points make no outline (too narrow, too large a grid; `why` says so
 /// when it is worth a rejection).
+/// With `heights` (each flat point's z), an edge under which the scan sees a wall (facade points
+/// well below the roof, at one offset) is moved onto that wall instead of the eaves' end.
 std::optional<RoofOutline> roof_outline(const ProposalInput& in,
                                         const std::vector<kernel::Vec2>& flat,
                                         const std::function<bool(const kernel::Vec3&)>& above_roof,
-                                        std::string& why);
+                                        std::string& why,
+                                        const std::vector<double>* heights = nullptr);
 /// The outline as a polygon in world x, y (the points' frame), its rings as the outline's.
 geo::FootprintPolygon outline_polygon(const RoofOutline& outline);
 

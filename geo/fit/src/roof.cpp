@@ -82,11 +82,62 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
   return loops;
 }
 
+// Where the scan sees the wall under an outline edge, the wall's offset from the edge line:
+// points of the facade lie well below the roof at the edge (more than kFacadeDrop under the
+// highest point within a metre along the edge) and, on one wall, at one offset. Their median
+// offset is the wall when there are enough of them (ten, and one per metre of the edge's
+// middle) and they agree (median absolute deviation within kFacadeSpread); nullopt otherwise
+// (the wall unseen, as airborne scans mostly leave it). Points are looked for from
+// kFacadeReach inside the edge (under eaves) to a cell outside it.
+constexpr double kFacadeDrop = 2.0;
+constexpr double kFacadeSpread = 0.15;
+constexpr double kFacadeReach = 1.5;
+
+std::optional<double> facade_offset(const std::vector<Vec2>& flat, const std::vector<double>& z,
+                                    const Vec2& u, const Vec2& v, const Vec2& start,
+                                    const Vec2& along, const Vec2& normal, double offset,
+                                    double length, double cell) {
+  const double reach = std::max(kFacadeReach, 2.0 * cell);
+  struct Near {
+    double off, z;
+    int bin;
+  };
+  std::vector<Near> band;
+  std::map<int, double> top;  // the highest point per metre along the edge
+  for (std::size_t i = 0; i < flat.size() && i < z.size(); ++i) {
+    const Vec2 q(flat[i].dot(u), flat[i].dot(v));
+    const double at = (q - start).dot(along);
+    if (at < 0.15 * length || at > 0.85 * length) continue;
+    const double off = q.dot(normal) - offset;
+    if (off < -reach || off > cell || !std::isfinite(z[i])) continue;
+    const int bin = static_cast<int>(std::floor(at));
+    band.push_back({off, z[i], bin});
+    auto [it, fresh] = top.emplace(bin, z[i]);
+    if (!fresh) it->second = std::max(it->second, z[i]);
+  }
+  std::vector<double> wall;
+  for (const Near& p : band) {
+    if (p.z < top[p.bin] - kFacadeDrop) wall.push_back(p.off);
+  }
+  const double middle = 0.7 * length;
+  if (wall.size() < 10 || static_cast<double>(wall.size()) < middle) return std::nullopt;
+  auto median = [](std::vector<double> x) {
+    const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+    std::nth_element(x.begin(), mid, x.end());
+    return *mid;
+  };
+  const double m = median(wall);
+  std::vector<double> deviation;
+  for (const double w : wall) deviation.push_back(std::abs(w - m));
+  if (median(deviation) > kFacadeSpread) return std::nullopt;
+  return m;
+}
+
 }  // namespace
 
 std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vector<Vec2>& flat,
                                         const std::function<bool(const Vec3&)>& above_roof,
-                                        std::string& why) {
+                                        std::string& why, const std::vector<double>* heights) {
   const PrimitiveOptions& o = *in.options;
   const double cos_tol = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
   const double spacing = in.shapes->spacing;
@@ -209,8 +260,12 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       }
       if (outward.size() >= 3) {
         std::sort(outward.begin(), outward.end());
-        offset[k] +=
+        const double roof_end =
             outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
+        const auto wall = heights != nullptr ? facade_offset(flat, *heights, u, v, simple[k], d,
+                                                             normal[k], offset[k], len, cell)
+                                             : std::nullopt;
+        offset[k] += wall && *wall <= roof_end + 0.5 * cell ? *wall : roof_end;
       }
     }
     // Consecutive edges along one line (a stair of the grid left by the simplification)

@@ -66,15 +66,18 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   }
   // The building's bounds: its footprint, or else the outline derived from its points
   // (roof.cpp: traced, simplified, its edges along the main directions and on the outermost
-  // points), so that walls stand where the points end rather than on the grid's lines. The
+  // points, or on the facade where the scan sees it under the eaves), so that walls stand
+  // where the points end rather than on the grid's lines. The
   // partition is clipped to them; with neither (no outline could be derived), the grid's
   // cells holding points are the outline.
   const bool footprinted = o.footprint != nullptr && !o.footprint->empty();
   std::vector<geo::FootprintPolygon> derived;
   if (!footprinted) {
     std::string why;
+    std::vector<double> heights;
+    for (const auto i : pts) heights.push_back(in.points[i].z());
     const auto outline = roof_outline(
-        in, flat, [](const Vec3&) { return false; }, why);
+        in, flat, [](const Vec3&) { return false; }, why, &heights);
     if (outline) derived.push_back(outline_polygon(*outline));
   }
   const std::vector<geo::FootprintPolygon>* bounds =

@@ -226,6 +226,40 @@ TEST(FitRoofPartition, GableHouseIsTwoPartsMeetingAtTheRidge) {
   }
 }
 
+// A flat roof (12 × 8 m at 6 m) whose eaves reach 0.6 m past its walls. Seen from the air
+// alone, the outline ends where the roof does; where the scan also sees the facades (points
+// down the walls, as AHN4's are), the walls stand on them.
+TEST(FitRoofPartition, WallsStandOnTheFacadesWhereTheScanSeesThemElseAtTheEaves) {
+  const GroundGrid ground = ground_around(0, 0, 12, 8);
+  const Cloud eaves = roof(Vec3(-0.6, -0.6, 6), Vec3(13.2, 0, 0), Vec3(0, 9.2, 0), 1);
+  auto extent = [](const Partitioned& p) {
+    kernel::BoundingBox all;
+    for (const auto& s : p.solids) all.add(kernel::bounding_box(s));
+    return all;
+  };
+  {
+    const auto p = partition(eaves, ground);
+    ASSERT_FALSE(p.parts.empty());
+    const auto box = extent(p);
+    EXPECT_NEAR(box.min.x(), -0.6, 0.3);
+    EXPECT_NEAR(box.max.x(), 12.6, 0.3);
+    EXPECT_NEAR(box.min.y(), -0.6, 0.3);
+    EXPECT_NEAR(box.max.y(), 8.6, 0.3);
+  }
+  Cloud seen = eaves;
+  seen.append(roof(Vec3(0, 0, 0.5), Vec3(12, 0, 0), Vec3(0, 0, 4.5), 2));
+  seen.append(roof(Vec3(12, 0, 0.5), Vec3(0, 8, 0), Vec3(0, 0, 4.5), 3));
+  seen.append(roof(Vec3(12, 8, 0.5), Vec3(-12, 0, 0), Vec3(0, 0, 4.5), 4));
+  seen.append(roof(Vec3(0, 8, 0.5), Vec3(0, -8, 0), Vec3(0, 0, 4.5), 5));
+  const auto p = partition(seen, ground);
+  ASSERT_FALSE(p.parts.empty());
+  const auto box = extent(p);
+  EXPECT_NEAR(box.min.x(), 0.0, 0.1);
+  EXPECT_NEAR(box.max.x(), 12.0, 0.1);
+  EXPECT_NEAR(box.min.y(), 0.0, 0.1);
+  EXPECT_NEAR(box.max.y(), 8.0, 0.1);
+}
+
 TEST(FitRoofPartition, NoPartitionWhereTheGroundIsSeenUnderTheRoof) {
   // The gable above, over terrain seen everywhere (a canopy scanned from the ground, a frame
   // of beams): no partition, and the reason is named.
