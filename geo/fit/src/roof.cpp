@@ -17,6 +17,8 @@
 #include <map>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
+
 #include "fit_internal.h"
 #include "partition.h"
 #include "plane2d.h"
@@ -82,24 +84,33 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
   return loops;
 }
 
-// Where the scan sees the wall under an outline edge, the wall's offset from the edge line:
-// points of the facade lie well below the roof at the edge (more than kFacadeDrop under the
-// highest point within a metre along the edge) and, on one wall, at one offset. Their median
-// offset is the wall when there are enough of them (ten, and one per metre of the edge's
-// middle) and they agree (median absolute deviation within kFacadeSpread); nullopt otherwise
-// (the wall unseen, as airborne scans mostly leave it). Points are looked for from
-// kFacadeReach inside the edge (under eaves) to a cell outside it.
+// Where the scan sees the wall under an outline edge, the wall's line: points of the facade
+// lie well below the roof at the edge (more than kFacadeDrop under the highest point within a
+// metre along the edge) and, on one wall, on one line. The line is fitted to them (principal
+// axis, refitted once without the points farther than twice its thickness: balconies, window
+// recesses) and taken when there are enough of them (ten, and one per metre of the edge's
+// middle), most lie on it, it is thin (within kFacadeSpread) and runs within kFacadeTurn of
+// the edge; nullopt otherwise (the wall unseen, as airborne scans mostly leave it). The
+// thickness allowed is a facade's relief (recessed windows, brick, ornament). Points are
+// looked for from kFacadeReach inside the edge (under eaves) to a cell outside it. The line
+// is its unit direction (along the edge's) and the centre of its points.
 constexpr double kFacadeDrop = 2.0;
-constexpr double kFacadeSpread = 0.15;
+constexpr double kFacadeSpread = 0.2;
 constexpr double kFacadeReach = 1.5;
+constexpr double kFacadeTurn = 20.0;  // degrees
 
-std::optional<double> facade_offset(const std::vector<Vec2>& flat, const std::vector<double>& z,
-                                    const Vec2& u, const Vec2& v, const Vec2& start,
-                                    const Vec2& along, const Vec2& normal, double offset,
-                                    double length, double cell) {
+struct FacadeLine {
+  Vec2 dir, centre;  // a point on the line: its points' centre
+};
+
+std::optional<FacadeLine> facade_line(const std::vector<Vec2>& flat, const std::vector<double>& z,
+                                      const Vec2& u, const Vec2& v, const Vec2& start,
+                                      const Vec2& along, const Vec2& normal, double offset,
+                                      double length, double cell) {
   const double reach = std::max(kFacadeReach, 2.0 * cell);
   struct Near {
-    double off, z;
+    Vec2 q;
+    double z;
     int bin;
   };
   std::vector<Near> band;
@@ -111,26 +122,43 @@ std::optional<double> facade_offset(const std::vector<Vec2>& flat, const std::ve
     const double off = q.dot(normal) - offset;
     if (off < -reach || off > cell || !std::isfinite(z[i])) continue;
     const int bin = static_cast<int>(std::floor(at));
-    band.push_back({off, z[i], bin});
+    band.push_back({q, z[i], bin});
     auto [it, fresh] = top.emplace(bin, z[i]);
     if (!fresh) it->second = std::max(it->second, z[i]);
   }
-  std::vector<double> wall;
+  std::vector<Vec2> wall;
   for (const Near& p : band) {
-    if (p.z < top[p.bin] - kFacadeDrop) wall.push_back(p.off);
+    if (p.z < top[p.bin] - kFacadeDrop) wall.push_back(p.q);
   }
-  const double middle = 0.7 * length;
-  if (wall.size() < 10 || static_cast<double>(wall.size()) < middle) return std::nullopt;
-  auto median = [](std::vector<double> x) {
-    const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
-    std::nth_element(x.begin(), mid, x.end());
-    return *mid;
+  if (wall.size() < 10 || static_cast<double>(wall.size()) < 0.7 * length) return std::nullopt;
+  // The principal axis of points (centre, direction, RMS distance across).
+  struct Axis {
+    Vec2 centre, dir;
+    double thickness = 0.0;
   };
-  const double m = median(wall);
-  std::vector<double> deviation;
-  for (const double w : wall) deviation.push_back(std::abs(w - m));
-  if (median(deviation) > kFacadeSpread) return std::nullopt;
-  return m;
+  auto axis = [](const std::vector<Vec2>& pts) {
+    Vec2 c = Vec2::Zero();
+    for (const Vec2& p : pts) c += p;
+    c /= static_cast<double>(pts.size());
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (const Vec2& p : pts) cov += (p - c) * (p - c).transpose();
+    cov /= static_cast<double>(pts.size());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+    return Axis{c, eig.eigenvectors().col(1), std::sqrt(std::max(eig.eigenvalues()(0), 0.0))};
+  };
+  Axis a = axis(wall);
+  std::vector<Vec2> kept;
+  const Vec2 across(-a.dir.y(), a.dir.x());
+  const double keep = std::max(2.0 * a.thickness, kFacadeSpread);
+  for (const Vec2& p : wall) {
+    if (std::abs((p - a.centre).dot(across)) <= keep) kept.push_back(p);
+  }
+  if (kept.size() < 10 || 2 * kept.size() < wall.size()) return std::nullopt;
+  a = axis(kept);
+  if (a.thickness > kFacadeSpread) return std::nullopt;
+  Vec2 dir = a.dir.dot(along) >= 0.0 ? a.dir : Vec2(-a.dir);
+  if (dir.dot(along) < std::cos(kFacadeTurn * std::numbers::pi / 180.0)) return std::nullopt;
+  return FacadeLine{dir, a.centre};
 }
 
 }  // namespace
@@ -262,10 +290,20 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
         std::sort(outward.begin(), outward.end());
         const double roof_end =
             outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
-        const auto wall = heights != nullptr ? facade_offset(flat, *heights, u, v, simple[k], d,
-                                                             normal[k], offset[k], len, cell)
+        const auto wall = heights != nullptr ? facade_line(flat, *heights, u, v, simple[k], d,
+                                                           normal[k], offset[k], len, cell)
                                              : std::nullopt;
-        offset[k] += wall && *wall <= roof_end + 0.5 * cell ? *wall : roof_end;
+        // The facade where it is seen (and the roof reaches over it), else the roof's end.
+        if (wall && (wall->centre - mid).dot(normal[k]) <= roof_end + 0.5 * cell) {
+          Vec2 w = wall->dir;  // snapped to the frame within the angle tolerance, as edges are
+          if (std::abs(w.x()) >= cos_tol) w = Vec2(w.x() > 0 ? 1.0 : -1.0, 0.0);
+          if (std::abs(w.y()) >= cos_tol) w = Vec2(0.0, w.y() > 0 ? 1.0 : -1.0);
+          dir[k] = w;
+          normal[k] = sign * Vec2(w.y(), -w.x());
+          offset[k] = wall->centre.dot(normal[k]);
+        } else {
+          offset[k] += roof_end;
+        }
       }
     }
     // Consecutive edges along one line (a stair of the grid left by the simplification)
