@@ -92,8 +92,9 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
 // middle), most lie on it, it is thin (within kFacadeSpread) and runs within kFacadeTurn of
 // the edge; nullopt otherwise (the wall unseen, as airborne scans mostly leave it). The
 // thickness allowed is a facade's relief (recessed windows, brick, ornament). Points are
-// looked for from kFacadeReach inside the edge (under eaves) to a cell outside it. The line
-// is its unit direction (along the edge's) and the centre of its points.
+// looked for from kFacadeReach inside the edge (under eaves) to a cell outside it, over the
+// edge's middle (`band`). The line is its unit direction (along the edge's) and the centre of
+// its points.
 constexpr double kFacadeDrop = 2.0;
 constexpr double kFacadeSpread = 0.2;
 constexpr double kFacadeReach = 1.5;
@@ -103,32 +104,22 @@ struct FacadeLine {
   Vec2 dir, centre;  // a point on the line: its points' centre
 };
 
-std::optional<FacadeLine> facade_line(const std::vector<Vec2>& flat, const std::vector<double>& z,
-                                      const Vec2& u, const Vec2& v, const Vec2& start,
-                                      const Vec2& along, const Vec2& normal, double offset,
-                                      double length, double cell) {
-  const double reach = std::max(kFacadeReach, 2.0 * cell);
-  struct Near {
-    Vec2 q;
-    double z;
-    int bin;
-  };
-  std::vector<Near> band;
+// A point near an edge, in the outline's frame: where it lies and how far along the edge.
+struct NearEdge {
+  Vec2 q;
+  double z = 0.0, at = 0.0;
+};
+
+std::optional<FacadeLine> facade_line(const std::vector<NearEdge>& band, const Vec2& along,
+                                      double length) {
   std::map<int, double> top;  // the highest point per metre along the edge
-  for (std::size_t i = 0; i < flat.size() && i < z.size(); ++i) {
-    const Vec2 q(flat[i].dot(u), flat[i].dot(v));
-    const double at = (q - start).dot(along);
-    if (at < 0.15 * length || at > 0.85 * length) continue;
-    const double off = q.dot(normal) - offset;
-    if (off < -reach || off > cell || !std::isfinite(z[i])) continue;
-    const int bin = static_cast<int>(std::floor(at));
-    band.push_back({q, z[i], bin});
-    auto [it, fresh] = top.emplace(bin, z[i]);
-    if (!fresh) it->second = std::max(it->second, z[i]);
+  for (const NearEdge& p : band) {
+    auto [it, fresh] = top.emplace(static_cast<int>(std::floor(p.at)), p.z);
+    if (!fresh) it->second = std::max(it->second, p.z);
   }
   std::vector<Vec2> wall;
-  for (const Near& p : band) {
-    if (p.z < top[p.bin] - kFacadeDrop) wall.push_back(p.q);
+  for (const NearEdge& p : band) {
+    if (p.z < top[static_cast<int>(std::floor(p.at))] - kFacadeDrop) wall.push_back(p.q);
   }
   if (wall.size() < 10 || static_cast<double>(wall.size()) < 0.7 * length) return std::nullopt;
   // The principal axis of points (centre, direction, RMS distance across).
@@ -277,22 +268,27 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       const double len = (simple[(k + 1) % n] - simple[k]).norm();
       // Roof points along the edge, within two cells inside it: the outermost (98th
       // percentile against noise) is where the roof ends.
+      // With heights, the points from kFacadeReach inside it too (facade_line).
       std::vector<double> outward;
-      for (const auto& p : flat) {
-        const Vec2 q(p.dot(u), p.dot(v));
+      std::vector<NearEdge> band;
+      const double reach = std::max(kFacadeReach, 2.0 * cell);
+      for (std::size_t i = 0; i < flat.size(); ++i) {
+        const Vec2 q(flat[i].dot(u), flat[i].dot(v));
         const double along = (q - simple[k]).dot(d);
         if (along < 0.15 * len || along > 0.85 * len) continue;
         const double off = q.dot(normal[k]) - offset[k];
-        if (off < -2.0 * cell || off > cell) continue;
-        outward.push_back(off);
+        if (off > cell) continue;
+        if (heights != nullptr && off >= -reach && i < heights->size() &&
+            std::isfinite((*heights)[i])) {
+          band.push_back({q, (*heights)[i], along});
+        }
+        if (off >= -2.0 * cell) outward.push_back(off);
       }
       if (outward.size() >= 3) {
         std::sort(outward.begin(), outward.end());
         const double roof_end =
             outward[static_cast<std::size_t>(0.98 * static_cast<double>(outward.size() - 1))];
-        const auto wall = heights != nullptr ? facade_line(flat, *heights, u, v, simple[k], d,
-                                                           normal[k], offset[k], len, cell)
-                                             : std::nullopt;
+        const auto wall = heights != nullptr ? facade_line(band, d, len) : std::nullopt;
         // The facade where it is seen (and the roof reaches over it), else the roof's end.
         if (wall && (wall->centre - mid).dot(normal[k]) <= roof_end + 0.5 * cell) {
           Vec2 w = wall->dir;  // snapped to the frame within the angle tolerance, as edges are
