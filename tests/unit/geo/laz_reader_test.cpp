@@ -315,6 +315,45 @@ TEST(LazReader, ABadLaszipVlrIsRefusedByName) {
   EXPECT_THAT(st.error().message, HasSubstr("POINT10 v2 (21 bytes)"));
 }
 
+// Found by the fuzzer (CI, laz_reader_fuzz_smoke): a layered chunk (formats 6-10) whose xy
+// layer is claimed empty while the chunk holds more points. The xy layer is always decoded, so
+// its decoder read through a null stream (SEGV). Now it reads its own empty stream past its end
+// and the chunk fails by name. All layer sizes zero, and each one alone zero, likewise end
+// without a crash.
+TEST(LazReader, ALayeredChunkWithAnEmptyXyLayerFailsByName) {
+  SKIP_WITHOUT_LAZ_DATA();
+  std::size_t layered = 0;
+  for (const auto& path : laz_files()) {
+    const auto bytes = file_bytes(path);
+    auto probe = LasReader::open_memory("probe", bytes);
+    ASSERT_TRUE(probe.ok()) << probe.error().message;
+    const auto& header = probe.value()->header();
+    if (header.point_format < 6 || header.point_count < 2) continue;
+    ++layered;
+    SCOPED_TRACE(path.filename().string());
+    // Chunked layout: the chunk table's offset (8 bytes), the first point raw, the chunk's
+    // point count (4 bytes), then the layer sizes, the xy layer's first.
+    const std::size_t sizes = header.offset_to_point_data + 8 + header.record_length + 4;
+    ASSERT_LT(sizes + 36, bytes.size());
+    auto bad = bytes;
+    std::memset(bad.data() + sizes, 0, 4);
+    auto st = open_and_read("empty-xy.laz", bad);
+    ASSERT_FALSE(st.ok());
+    EXPECT_EQ(st.error().code, kernel::ErrorCode::CorruptData);
+    EXPECT_THAT(st.error().message, HasSubstr("empty-xy.laz"));
+    EXPECT_THAT(st.error().message, HasSubstr("chunk 1"));
+    for (std::size_t layer = 0; layer < 9; ++layer) {
+      bad = bytes;
+      std::memset(bad.data() + sizes + 4 * layer, 0, 4);
+      (void)open_and_read("one-empty.laz", bad);  // ends, with points or an error
+    }
+    bad = bytes;
+    std::memset(bad.data() + sizes, 0, 36);
+    EXPECT_FALSE(open_and_read("all-empty.laz", bad).ok());
+  }
+  EXPECT_GT(layered, 0u) << "no layered LAZ among the test files";
+}
+
 // Layers are taken from a chunk read through a small window (a chunk too large to hold):
 // each layer keeps its bytes though the window is refilled under it.
 TEST(LazByteStream, LayersTakenAcrossRefilledWindowsKeepTheirBytes) {

@@ -23,6 +23,9 @@ using detail::load_le;
 using detail::store_le;
 
 // One layer: its bytes, its stream and its decoder. `active` when requested and non-empty.
+// The decoder always reads from the layer's own stream, even when the layer is inactive (an
+// empty stream then): a layer a file claims empty but must decode (the xy layer of a chunk of
+// several points) reads past its end and fails the chunk, never a null stream.
 struct Layer {
   std::uint32_t size = 0;
   ByteStream stream;
@@ -30,13 +33,14 @@ struct Layer {
   bool active = false;
 
   void take(ByteStream& chunk, bool requested) {
-    if (requested && size > 0) {
+    active = requested && size > 0;
+    if (active) {
       stream = chunk.take(size);
       dec.start(&stream);
-      active = true;
     } else {
       if (size > 0) (void)chunk.take(size);
-      active = false;
+      stream = ByteStream();
+      dec.start(&stream, /*read_start=*/false);
     }
   }
 };
