@@ -6,11 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "city/block_records.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
 #include "export/cityjson_seq.h"
 #include "export/topology_index.h"
 #include "index_object_builder.h"
@@ -218,6 +221,53 @@ TEST(GpkgLods, TheBlocksAreALayerAndTheObjectsCarryTheirLodAndHeights) {
   const auto valid = test::run_command(
       std::string("/usr/bin/python3 ") + kValidator + " --extra -k " + test::quoted(path), false);
   EXPECT_EQ(valid.exit_code, 0) << valid.out;
+}
+
+// The blocks a cell's assemble job computed travel in its object records to the index job
+// (city/block_records.h), which then does not compute them again: the heights, both blocks and
+// the reasons come back as they were, each block moved into the run's frame as the object's
+// model is; a record without blocks (written by an earlier version) says so.
+TEST(BlockRecords, TheBlocksOfACellComeBackInTheRunsFrame) {
+  const test::TempDir tmp("csgtile_block_records_");
+  const std::filesystem::path& dir = tmp.path();
+  std::filesystem::create_directories(dir / "objects");
+  std::vector<IndexObject> objects = {test::index_object("house", gable_house())};
+  add_building_lods(objects, 0.01, 1e-7);
+  const IndexObject& cell = objects[0];
+  ASSERT_TRUE(cell.lod12 && cell.lod13 && cell.heights);
+  city::detail::ordered_json record;
+  ASSERT_TRUE(city::detail::publish_blocks(dir, cell, record).ok());
+  city::detail::ordered_json entry = {{"blocks", record}};
+  entry = city::detail::ordered_json::parse(entry.dump());  // as the queue stores it
+  const Vec3 offset(250.0, -125.0, 0.0);
+  IndexObject run;
+  bool found = false;
+  ASSERT_TRUE(
+      city::detail::read_blocks(dir, entry, kernel::Location::translation(offset), run, found)
+          .ok());
+  ASSERT_TRUE(found);
+  ASSERT_TRUE(run.heights && run.lod12 && run.lod13);
+  EXPECT_EQ(run.heights->ground, cell.heights->ground);
+  EXPECT_EQ(run.heights->roof_50p, cell.heights->roof_50p);
+  EXPECT_EQ(run.heights->roof_70p, cell.heights->roof_70p);
+  EXPECT_EQ(run.heights->roof_faces, cell.heights->roof_faces);
+  EXPECT_EQ(run.lod12_error, cell.lod12_error);
+  EXPECT_EQ(run.lod13_error, cell.lod13_error);
+  const auto b0 = kernel::bounding_box(cell.lod12->shape);
+  const auto b1 = kernel::bounding_box(run.lod12->shape);
+  EXPECT_NEAR((b1.min - b0.min - offset).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((b1.max - b0.max - offset).norm(), 0.0, 1e-9);
+  EXPECT_EQ(run.lod13->nodes.size(), cell.lod13->nodes.size());
+  // Without blocks: nothing read, the object untouched.
+  IndexObject old;
+  ASSERT_TRUE(city::detail::read_blocks(dir, city::detail::ordered_json::object(),
+                                        kernel::Location(), old, found)
+                  .ok());
+  EXPECT_FALSE(found);
+  EXPECT_FALSE(old.lod12.has_value());
+  // A block file that is not there is an error naming it.
+  std::filesystem::remove_all(dir / "objects");
+  EXPECT_FALSE(city::detail::read_blocks(dir, entry, kernel::Location(), run, found).ok());
 }
 
 }  // namespace

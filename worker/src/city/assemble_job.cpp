@@ -4,6 +4,7 @@
 
 #include <map>
 
+#include "city/block_records.h"
 #include "city/city_internal.h"
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/geo/crs.h"
@@ -195,6 +196,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
 
   add_building_lods(objects.objects, config.kernel.chordal_tolerance,
                     config.kernel.linear_tolerance);
+  // The blocks go in the records: the index job reads them rather than computing them again.
+  for (std::size_t i = 0; i < objects.objects.size(); ++i) {
+    ordered_json blocks;
+    if (Failure f = publish_blocks(run_dir, objects.objects[i], blocks); !f.ok()) return f;
+    object_records[i]["blocks"] = std::move(blocks);
+  }
 
   // The cell's files, in the cell frame (origin: the cell's corner).
   const std::string crs_text = payload.value("crs", "");

@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "city/block_records.h"
 #include "city/city_internal.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/location.h"
@@ -163,6 +164,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     }
   }
   clock.enter("index");
+  bool all_blocks = true;
   for (const auto& [key, record] : cells) {
     const auto& o = record.at("origin");
     const kernel::Vec3 offset =
@@ -193,6 +195,13 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
             e.at("reason").get<std::string>()};
       }
       if (!offset.isZero(0.0)) move_model(io.model, kernel::Location::translation(offset));
+      bool has_blocks = false;
+      if (Failure f =
+              read_blocks(run_dir, entry, kernel::Location::translation(offset), io, has_blocks);
+          !f.ok()) {
+        return f;
+      }
+      all_blocks = all_blocks && has_blocks;
       std::map<std::string, geo::FitQuality> quality;
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");
@@ -209,8 +218,11 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       objects.objects.push_back(std::move(io));
     }
   }
-  add_building_lods(objects.objects, config.kernel.chordal_tolerance,
-                    config.kernel.linear_tolerance);
+  // Records written before blocks were kept: compute them all here, as the cells would have.
+  if (!all_blocks) {
+    add_building_lods(objects.objects, config.kernel.chordal_tolerance,
+                      config.kernel.linear_tolerance);
+  }
   RunIndexReport index;
   if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;
   log.info("index", "written",
@@ -379,8 +391,14 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     const std::string dir = std::filesystem::path(cell_manifest).parent_path().string();
     for (const auto& file : cm.at("files"))
       listed.insert(dir + "/" + file.at("key").get<std::string>());
-    for (const auto& object : record.at("objects"))
+    for (const auto& object : record.at("objects")) {
       listed.insert(object.at("key").get<std::string>());
+      if (!object.contains("blocks")) continue;
+      for (const char* lod : {"lod12", "lod13"}) {
+        const ordered_json& block = object.at("blocks").at(lod);
+        if (block.is_string()) listed.insert(block.get<std::string>());
+      }
+    }
   }
   if (Failure f = publish::publish_run_directory(config, run_dir, log, &listed); !f.ok()) return f;
 
