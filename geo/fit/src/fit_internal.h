@@ -77,6 +77,21 @@ double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32
 double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                       double quantile);
 
+/// The sample the three estimates above are quantiles of, taken once for a caller that needs
+/// several of them on the same members (each a grid search over up to 2 000 points): the same
+/// figures as the functions above. `with_noise`: also the neighbourhoods' plane residuals.
+class NeighbourSample {
+ public:
+  NeighbourSample(std::span<const Vec3> points, std::span<const std::uint32_t> members,
+                  bool with_noise);
+  double spacing(double quantile = 0.5) const;  ///< as estimate_spacing
+  double reach(double quantile) const;          ///< as neighbour_reach
+  double noise(double quantile) const;          ///< as estimate_noise (0 without with_noise)
+
+ private:
+  std::vector<double> distances_, residuals_;
+};
+
 /// For each query point, the index of the nearest of `targets` (PCL kd-tree; ties as PCL
 /// breaks them, deterministically); -1 for a non-finite query or when there is no target.
 std::vector<std::int32_t> nearest_of(std::span<const Vec3> queries, std::span<const Vec3> targets);

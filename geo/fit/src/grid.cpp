@@ -167,23 +167,34 @@ double quantile_of(std::vector<double> values, double quantile) {
 
 }  // namespace
 
+NeighbourSample::NeighbourSample(std::span<const Vec3> points,
+                                 std::span<const std::uint32_t> members, bool with_noise) {
+  distances_ = kth_neighbour_distances(points, members, with_noise ? &residuals_ : nullptr);
+}
+
+double NeighbourSample::spacing(double quantile) const {
+  // Density spacing 1/sqrt(points per unit area) = r_k·sqrt(π/k).
+  return quantile_of(distances_, quantile) *
+         std::sqrt(std::numbers::pi / static_cast<double>(kNeighbours));
+}
+
+double NeighbourSample::reach(double quantile) const { return quantile_of(distances_, quantile); }
+
+double NeighbourSample::noise(double quantile) const { return quantile_of(residuals_, quantile); }
+
 double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                         double quantile) {
-  // Density spacing 1/sqrt(points per unit area) = r_k·sqrt(π/k).
-  return quantile_of(kth_neighbour_distances(points, members), quantile) *
-         std::sqrt(std::numbers::pi / static_cast<double>(kNeighbours));
+  return NeighbourSample(points, members, false).spacing(quantile);
 }
 
 double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                        double quantile) {
-  return quantile_of(kth_neighbour_distances(points, members), quantile);
+  return NeighbourSample(points, members, false).reach(quantile);
 }
 
 double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                       double quantile) {
-  std::vector<double> residuals;
-  kth_neighbour_distances(points, members, &residuals);
-  return quantile_of(std::move(residuals), quantile);
+  return NeighbourSample(points, members, true).noise(quantile);
 }
 
 }  // namespace csgtile::fit::detail

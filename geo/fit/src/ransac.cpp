@@ -105,7 +105,8 @@ class Detector {
   void compact_remaining();
   void relabel();
   std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
-  void derive_scale(std::span<const std::uint32_t> members, RansacResult& result);
+  void derive_scale(std::span<const std::uint32_t> members, const detail::NeighbourSample& sample,
+                    RansacResult& result);
   void give_edges_to_smaller();
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
@@ -572,12 +573,13 @@ std::pair<Vec3, Vec3> Detector::bounds(std::span<const std::uint32_t> members) c
 
 // Options left to the cloud (0) from its own spacing (result.spacing), noise, size and
 // extent; the options used go to `result`.
-void Detector::derive_scale(std::span<const std::uint32_t> members, RansacResult& result) {
+void Detector::derive_scale(std::span<const std::uint32_t> members,
+                            const detail::NeighbourSample& sample, RansacResult& result) {
   const auto [lo, hi] = bounds(members);
   if (!(o_.epsilon > 0.0)) {
     // The noise where the region is flattest (a low quantile: curvature and edges raise the
     // others), and a tenth of the spacing for exact points.
-    result.noise = detail::estimate_noise(points_, members, 0.05);
+    result.noise = sample.noise(0.05);
     o_.epsilon = std::max(3.0 * result.noise, 0.1 * result.spacing);
     if (!(o_.epsilon > 0.0)) o_.epsilon = 1e-6 * std::max((hi - lo).maxCoeff(), 1e-9);
   }
@@ -615,20 +617,20 @@ RansacResult Detector::run() {
                                           std::to_string(seeds) + " with normals)";
     // Even a region too small to search reports the options it stands for, so that no 0
     // (derived) reaches the steps after the detection.
-    if (!members.empty() && o_.epsilon == 0.0) {
-      result.spacing = detail::estimate_spacing(points_, members);
-    }
-    derive_scale(members, result);
+    const detail::NeighbourSample sample(points_, members, !(o_.epsilon > 0.0));
+    if (!members.empty() && o_.epsilon == 0.0) result.spacing = sample.spacing();
+    derive_scale(members, sample, result);
     return result;
   }
-  result.spacing = detail::estimate_spacing(points_, members);
-  derive_scale(members, result);
+  // One neighbour search for the spacing, the noise and the reach.
+  const detail::NeighbourSample sample(points_, members, !(o_.epsilon > 0.0));
+  result.spacing = sample.spacing();
+  derive_scale(members, sample, result);
   const auto [lo, hi] = bounds(members);
   // Connectivity: three typical spacings, but enough for the sparser parts of the cloud too
   // (terrestrial scans mix dense near surfaces with sparse far ones).
   double beta = o_.cluster_epsilon > 0.0 ? o_.cluster_epsilon
-                                         : std::max(1.5 * result.spacing,
-                                                    detail::neighbour_reach(points_, members, 0.9));
+                                         : std::max(1.5 * result.spacing, sample.reach(0.9));
   beta = std::max(beta, o_.epsilon);
   result.cluster_epsilon = beta;
   grid_ = std::make_unique<PointGrid>(points_, members, beta, o_.seed);
