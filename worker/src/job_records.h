@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/job_support.h"
 #include "csgtile/worker/queue.h"
-#include "csgtile/worker/run.h"
 
 namespace csgtile::worker {
 

@@ -151,18 +151,6 @@ bool is_city_run(const config::Config& config) {
 }
 }  // namespace
 
-std::string output_config_sha256(const config::Config& config) {
-  config::Config hashed = config;
-  hashed.run.output.clear();
-  hashed.run.threads = 0;
-  hashed.queue = {};
-  hashed.log = {};
-  hashed.metrics = {};
-  hashed.fetch = {};
-  hashed.publish = {};
-  return sha256_hex(config::to_json(hashed));
-}
-
 Failure enqueue_run(const config::Config& config, JobQueue& queue, const Logger& log,
                     std::size_t& added) {
   Failure failure;

@@ -12,8 +12,9 @@
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/job_support.h"
+#include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
-#include "csgtile/worker/run.h"
 
 namespace csgtile::worker::city::detail {
 

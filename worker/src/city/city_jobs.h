@@ -34,9 +34,9 @@
 #include <string>
 
 #include "csgtile/config/config.h"
+#include "csgtile/worker/job_support.h"
 #include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
-#include "csgtile/worker/run.h"
 
 namespace csgtile::worker::city {
 

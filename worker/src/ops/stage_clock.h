@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "csgtile/worker/run.h"
+#include "csgtile/worker/job_support.h"
 
 namespace csgtile::worker::ops {
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "csgtile/config/config.h"
+#include "csgtile/worker/job_support.h"
 #include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
 
@@ -81,18 +82,6 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
 /// the manifest naming them. Deterministic, so publishing twice writes the same bytes.
 Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log,
                     RunSummary& summary);
-
-/// SHA-256 of the settings that shape a run's outputs, as manifests record it: the config
-/// without where outputs and the queue are (run.output, queue), how many threads work
-/// (outputs do not depend on it), logging, metrics, fetching and publishing.
-std::string output_config_sha256(const config::Config& config);
-
-/// Wall time of each stage of one job ("fetch", "read", "build", "check", "boolean",
-/// "publish"), in the order the stages first ran. Not deterministic: kept out of the run's
-/// manifest.json and published in timings.json beside it.
-struct StageTimings {
-  std::vector<std::pair<std::string, double>> seconds;
-};
 
 /// Executes one "build" job: its payload names a scene input. On success `result` is the
 /// job's JSON record (deterministic: no timings, no absolute paths); `timings`, when given,
