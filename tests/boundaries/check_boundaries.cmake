@@ -50,12 +50,13 @@ foreach(rule IN LISTS rules)
   endif()
 endforeach()
 
-# Inside the worker, includes run one way too (issue #23): the jobs and what they use (city,
-# export, ops, fetch, publish, queue rooms, the job records) never include the queue loop's
-# header (csgtile/worker/run.h); what every job shares is in csgtile/worker/job_support.h.
+# Inside the worker, includes run one way too (issue #23): the jobs and what they use (jobs,
+# city, export, ops, fetch, publish, queue rooms, the job records) never include the queue
+# loop's header (csgtile/worker/run.h); what every job shares is in csgtile/worker/job_support.h.
 file(GLOB_RECURSE worker_rooms
-     "${ROOT}/worker/src/city/*" "${ROOT}/worker/src/export/*" "${ROOT}/worker/src/ops/*"
-     "${ROOT}/worker/src/fetch/*" "${ROOT}/worker/src/publish/*" "${ROOT}/worker/src/queue/*"
+     "${ROOT}/worker/src/jobs/*" "${ROOT}/worker/src/city/*" "${ROOT}/worker/src/export/*"
+     "${ROOT}/worker/src/ops/*" "${ROOT}/worker/src/fetch/*" "${ROOT}/worker/src/publish/*"
+     "${ROOT}/worker/src/queue/*"
      "${ROOT}/worker/src/job_records.*")
 foreach(f IN LISTS worker_rooms)
   file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")

@@ -26,6 +26,7 @@
 #include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "job_records.h"
+#include "jobs/job_table.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
 #include "publish/publish_run.h"
@@ -36,113 +37,7 @@ namespace csgtile::worker {
 
 namespace {
 using nlohmann::ordered_json;
-
-ordered_json topology_json(const kernel::Shape& s) {
-  const auto c = kernel::count_shapes(s);
-  auto n = [&](kernel::ShapeKind k) { return c[static_cast<int>(k)]; };
-  return {{"solids", n(kernel::ShapeKind::Solid)},
-          {"shells", n(kernel::ShapeKind::Shell)},
-          {"faces", n(kernel::ShapeKind::Face)},
-          {"edges", n(kernel::ShapeKind::Edge)},
-          {"vertices", n(kernel::ShapeKind::Vertex)}};
-}
 }  // namespace
-
-Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
-                      const config::Config& config, std::string& result, StageTimings* timings,
-                      std::stop_token stop) {
-  ops::StageClock clock(timings);
-  clock.enter("fetch");
-  std::string input;
-  fetch::LocalInput local;
-  if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
-  clock.enter("read");
-  auto scene = geo::read_scene(local.path.string());
-  if (!scene.ok()) {
-    const std::string where =
-        local.fetched ? input + " (fetched to " + local.path.string() + "): " : "";
-    return {
-        scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
-        where + scene.error().message};
-  }
-  ordered_json record;
-  record["input"] = input;
-  record["input_sha256"] = local.sha256;
-  record["scene"] = scene->name;
-  record["op"] = geo::boolean_op_name(scene->op);
-  ordered_json objects = ordered_json::array();
-  std::vector<kernel::CsgModel> leaves;
-  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
-    const auto& p = scene->primitives[i];
-    const std::string id = p.id.empty() ? "p" + std::to_string(i) : p.id;
-    clock.enter("build");
-    auto leaf = kernel::csg_primitive(p.spec, id, config.kernel.linear_tolerance);
-    auto solid = leaf.ok() ? kernel::Result<kernel::Shape>(leaf.value().shape)
-                           : kernel::Result<kernel::Shape>(leaf.error());
-    const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
-                              kernel::primitive_type_name(p.spec.type) + ")";
-    if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
-    clock.enter("check");
-    const kernel::CheckReport check = kernel::check_shape(solid.value());
-    if (!check.valid()) {
-      return {ErrorCode::GeometryInvalid,
-              where + ": " + kernel::check_status_name(check.issues.front().status) + ": " +
-                  check.issues.front().message};
-    }
-    const kernel::MassProperties mp = kernel::mass_properties(solid.value());
-    ordered_json o;
-    o["id"] = id;
-    o["type"] = kernel::primitive_type_name(p.spec.type);
-    o["volume"] = mp.volume;
-    o["area"] = mp.area;
-    o["bounds"] = {mp.bounds.min.x(), mp.bounds.min.y(), mp.bounds.min.z(),
-                   mp.bounds.max.x(), mp.bounds.max.y(), mp.bounds.max.z()};
-    objects.push_back(std::move(o));
-    leaves.push_back(std::move(leaf).value());
-  }
-  ops::metrics().add_primitives_built(leaves.size());
-  clock.enter(scene->op == geo::BooleanOp::None ? "build" : "boolean");
-  // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
-  kernel::BooleanOptions boolean_options;
-  boolean_options.tolerance = config.kernel.linear_tolerance;
-  boolean_options.interrupt.stop = stop;
-  // Boolean results keep their CSG tree and face history (native CSG section).
-  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
-  if (scene->op == geo::BooleanOp::None) {
-    std::vector<kernel::Shape> solids;
-    for (const auto& leaf : leaves) solids.push_back(leaf.shape);
-    auto set = kernel::ShapeFactory::compound(std::move(solids));
-    if (!set.ok()) return {from_kernel(set.error().code), input + ": " + set.error().message};
-    model.value().shape = set.value();
-  } else {
-    model = kernel::csg_combine(leaves,
-                                scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
-                                : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
-                                                                      : kernel::BooleanOp::Cut,
-                                boolean_options);
-  }
-  if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
-  clock.enter("publish");
-  // Content-addressed: the same model always lands under the same key, so a job that runs
-  // twice (after a crash) rewrites identical bytes and publishes nothing new.
-  const std::string bytes = kernel::write_native_model(model.value());
-  const std::string sha = sha256_hex(bytes);
-  const std::string key = "objects/" + sha + ".csgt";
-  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
-  if (!std::filesystem::exists(run_dir / key)) {
-    if (Failure f = write_file_atomic(run_dir / key, bytes); !f.ok()) return f;
-  }
-  const kernel::MassProperties total = kernel::mass_properties(model.value().shape);
-  record["primitives"] = objects;
-  record["model"] = {{"key", key}, {"sha256", sha}, {"bytes", bytes.size()}};
-  record["volume"] = total.volume;
-  record["area"] = total.area;
-  record["topology"] = topology_json(model.value().shape);
-  record["csg_nodes"] = model.value().nodes.size();
-  record["valid"] = true;
-  result = record.dump();
-  return {};
-}
 
 namespace {
 /// A run of LIDAR tiles is a city run (city/city_jobs.h); a run of scenes builds each scene.
@@ -206,10 +101,8 @@ std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
     hold_stop_signals();  // delivered to the loop's threads, never interrupting the job's I/O
     const LogJobScope log_scope(config.run.name, job.key, job.attempts);  // thread-local
     RunOutcome out;
-    out.failure =
-        job.kind == "build"
-            ? run_build_job(job, run_dir, config, out.result, &out.timings, stop)
-            : city::run_city_job(job, run_dir, config, queue, log, out.result, &out.timings, stop);
+    const jobs::JobContext context{run_dir, config, queue, log, stop};
+    out.failure = jobs::run_job(job, context, out.result, &out.timings);
     return out;
   });
   outcome = task.get_future();
@@ -367,7 +260,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       }
       if (completed) {
         log.info("job", "done", {{"job", job->key}, {"seconds", std::to_string(seconds)}});
-        if (job->kind == "fit" || job->kind == "assemble") {
+        const jobs::JobKind* kind = jobs::find_job_kind(job->kind);
+        if (kind != nullptr && kind->advances_city_run) {
           std::size_t next = 0;
           if (Failure f = city::advance_city_run(config, queue, log, next); !f.ok()) {
             log.error("run", "cannot advance the city run", {{"reason", f.message}});

@@ -61,7 +61,8 @@ std::vector<std::pair<std::string, ordered_json>> done_records(
     const std::vector<std::pair<std::string, std::string>>& results, const std::string& kind,
     const std::string& run);
 
-// `stop`: the job's stop token (run_city_job): its fit and assembly return Cancelled once asked.
+// `stop`: the job's stop token (jobs::JobContext): its fit and assembly return Cancelled once
+// asked.
 Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
                     const config::Config& config, std::string& result, StageTimings* timings,
                     std::stop_token stop);

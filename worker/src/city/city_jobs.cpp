@@ -425,31 +425,38 @@ Failure city_progress(const config::Config& config, JobQueue& queue, CityProgres
 }
 
 namespace {
-Failure run_job(const Job& job, const std::filesystem::path& run_dir, const config::Config& config,
-                JobQueue& queue, const Logger& log, std::string& result, StageTimings* timings,
-                std::stop_token stop) {
-  if (job.kind == "fit") return detail::run_fit_job(job, run_dir, config, result, timings, stop);
-  if (job.kind == "assemble")
-    return detail::run_assemble_job(job, run_dir, config, result, timings, stop);
-  if (job.kind == "index") {
-    return detail::run_index_job(job, run_dir, config, queue, log, result, timings);
-  }
-  return {ErrorCode::Internal, "job " + job.key + " has an unknown kind " + job.kind};
-}
-
-}  // namespace
-
-Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
-                     const config::Config& config, JobQueue& queue, const Logger& log,
-                     std::string& result, StageTimings* timings, std::stop_token stop) {
+// A malformed payload or record, or a file system error, ends the job with its reason.
+template <typename Body>
+Failure guarded(const Job& job, Body body) {
   try {
-    return run_job(job, run_dir, config, queue, log, result, timings, stop);
+    return body();
   } catch (const nlohmann::json::exception& e) {
     return {ErrorCode::Internal,
             "job " + job.key + ": a payload or record is malformed: " + e.what()};
   } catch (const std::filesystem::filesystem_error& e) {
     return {ErrorCode::Io, "job " + job.key + ": " + e.what()};
   }
+}
+}  // namespace
+
+Failure run_fit(const Job& job, const jobs::JobContext& c, std::string& result,
+                StageTimings* timings) {
+  return guarded(
+      job, [&] { return detail::run_fit_job(job, c.run_dir, c.config, result, timings, c.stop); });
+}
+
+Failure run_assemble(const Job& job, const jobs::JobContext& c, std::string& result,
+                     StageTimings* timings) {
+  return guarded(job, [&] {
+    return detail::run_assemble_job(job, c.run_dir, c.config, result, timings, c.stop);
+  });
+}
+
+Failure run_index(const Job& job, const jobs::JobContext& c, std::string& result,
+                  StageTimings* timings) {
+  return guarded(job, [&] {
+    return detail::run_index_job(job, c.run_dir, c.config, c.queue, c.log, result, timings);
+  });
 }
 
 }  // namespace csgtile::worker::city

@@ -2,7 +2,7 @@
 /// \file
 /// A city run as a job graph (DESIGN.md §1): `fit` per LIDAR tile → `assemble` per output
 /// cell (after every fit has finished) → `index` per run (after every assemble). Internal to
-/// the worker; run.cpp dispatches to these.
+/// the worker; the job table (jobs/job_table.h) runs these.
 ///
 /// Cells are squares of `city.cell_size` aligned to multiples of it in the tiles' CRS
 /// (origin 0, 0), named "c<column>_r<row>". A primitive's anchor cell holds the minimum
@@ -37,6 +37,7 @@
 #include "csgtile/worker/job_support.h"
 #include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
+#include "jobs/job_table.h"
 
 namespace csgtile::worker::city {
 
@@ -69,12 +70,15 @@ struct CityProgress {
 };
 Failure city_progress(const config::Config& config, JobQueue& queue, CityProgress& progress);
 
-/// Runs one job of the graph (kind "fit", "assemble" or "index"). On success `result` is its
-/// deterministic JSON record. The index job reads the run's other records from `queue`.
-/// Once `stop` is asked (a worker shutting down), a fit or an assembly under way returns
-/// Cancelled at its next step.
-Failure run_city_job(const Job& job, const std::filesystem::path& run_dir,
-                     const config::Config& config, JobQueue& queue, const Logger& log,
-                     std::string& result, StageTimings* timings, std::stop_token stop = {});
+/// The runners of the graph's jobs (jobs/job_table.h: kinds "fit", "assemble", "index"). On
+/// success `result` is the job's deterministic JSON record. The index job reads the run's
+/// other records from the context's queue. Once the context's stop token is asked (a worker
+/// shutting down), a fit or an assembly under way returns Cancelled at its next step.
+Failure run_fit(const Job& job, const jobs::JobContext& context, std::string& result,
+                StageTimings* timings);
+Failure run_assemble(const Job& job, const jobs::JobContext& context, std::string& result,
+                     StageTimings* timings);
+Failure run_index(const Job& job, const jobs::JobContext& context, std::string& result,
+                  StageTimings* timings);
 
 }  // namespace csgtile::worker::city

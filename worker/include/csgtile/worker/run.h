@@ -83,12 +83,4 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
 Failure publish_run(const config::Config& config, JobQueue& queue, const Logger& log,
                     RunSummary& summary);
 
-/// Executes one "build" job: its payload names a scene input. On success `result` is the
-/// job's JSON record (deterministic: no timings, no absolute paths); `timings`, when given,
-/// receives the seconds of each stage that ran (also on failure). Once `stop` is asked (a
-/// worker shutting down), its Booleans return Cancelled at their next step.
-Failure run_build_job(const Job& job, const std::filesystem::path& run_dir,
-                      const config::Config& config, std::string& result,
-                      StageTimings* timings = nullptr, std::stop_token stop = {});
-
 }  // namespace csgtile::worker

@@ -1,0 +1,135 @@
+// The scene build job (build_job.h).
+
+#include "jobs/build_job.h"
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "csgtile/geo/scene.h"
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/publish.h"
+#include "fetch/fetch.h"
+#include "fetch/input.h"
+#include "ops/metrics.h"
+#include "ops/stage_clock.h"
+
+namespace csgtile::worker::jobs {
+
+namespace {
+using nlohmann::ordered_json;
+
+ordered_json topology_json(const kernel::Shape& s) {
+  const auto c = kernel::count_shapes(s);
+  auto n = [&](kernel::ShapeKind k) { return c[static_cast<int>(k)]; };
+  return {{"solids", n(kernel::ShapeKind::Solid)},
+          {"shells", n(kernel::ShapeKind::Shell)},
+          {"faces", n(kernel::ShapeKind::Face)},
+          {"edges", n(kernel::ShapeKind::Edge)},
+          {"vertices", n(kernel::ShapeKind::Vertex)}};
+}
+}  // namespace
+
+Failure run_build_job(const Job& job, const JobContext& context, std::string& result,
+                      StageTimings* timings) {
+  const std::filesystem::path& run_dir = context.run_dir;
+  const config::Config& config = context.config;
+  const std::stop_token stop = context.stop;
+  ops::StageClock clock(timings);
+  clock.enter("fetch");
+  std::string input;
+  fetch::LocalInput local;
+  if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
+  clock.enter("read");
+  auto scene = geo::read_scene(local.path.string());
+  if (!scene.ok()) {
+    const std::string where =
+        local.fetched ? input + " (fetched to " + local.path.string() + "): " : "";
+    return {
+        scene.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io : ErrorCode::InputInvalid,
+        where + scene.error().message};
+  }
+  ordered_json record;
+  record["input"] = input;
+  record["input_sha256"] = local.sha256;
+  record["scene"] = scene->name;
+  record["op"] = geo::boolean_op_name(scene->op);
+  ordered_json objects = ordered_json::array();
+  std::vector<kernel::CsgModel> leaves;
+  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+    const auto& p = scene->primitives[i];
+    const std::string id = p.id.empty() ? "p" + std::to_string(i) : p.id;
+    clock.enter("build");
+    auto leaf = kernel::csg_primitive(p.spec, id, config.kernel.linear_tolerance);
+    auto solid = leaf.ok() ? kernel::Result<kernel::Shape>(leaf.value().shape)
+                           : kernel::Result<kernel::Shape>(leaf.error());
+    const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
+                              kernel::primitive_type_name(p.spec.type) + ")";
+    if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
+    clock.enter("check");
+    const kernel::CheckReport check = kernel::check_shape(solid.value());
+    if (!check.valid()) {
+      return {ErrorCode::GeometryInvalid,
+              where + ": " + kernel::check_status_name(check.issues.front().status) + ": " +
+                  check.issues.front().message};
+    }
+    const kernel::MassProperties mp = kernel::mass_properties(solid.value());
+    ordered_json o;
+    o["id"] = id;
+    o["type"] = kernel::primitive_type_name(p.spec.type);
+    o["volume"] = mp.volume;
+    o["area"] = mp.area;
+    o["bounds"] = {mp.bounds.min.x(), mp.bounds.min.y(), mp.bounds.min.z(),
+                   mp.bounds.max.x(), mp.bounds.max.y(), mp.bounds.max.z()};
+    objects.push_back(std::move(o));
+    leaves.push_back(std::move(leaf).value());
+  }
+  ops::metrics().add_primitives_built(leaves.size());
+  clock.enter(scene->op == geo::BooleanOp::None ? "build" : "boolean");
+  // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
+  kernel::BooleanOptions boolean_options;
+  boolean_options.tolerance = config.kernel.linear_tolerance;
+  boolean_options.interrupt.stop = stop;
+  // Boolean results keep their CSG tree and face history (native CSG section).
+  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
+  if (scene->op == geo::BooleanOp::None) {
+    std::vector<kernel::Shape> solids;
+    for (const auto& leaf : leaves) solids.push_back(leaf.shape);
+    auto set = kernel::ShapeFactory::compound(std::move(solids));
+    if (!set.ok()) return {from_kernel(set.error().code), input + ": " + set.error().message};
+    model.value().shape = set.value();
+  } else {
+    model = kernel::csg_combine(leaves,
+                                scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
+                                : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
+                                                                      : kernel::BooleanOp::Cut,
+                                boolean_options);
+  }
+  if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
+  clock.enter("publish");
+  // Content-addressed: the same model always lands under the same key, so a job that runs
+  // twice (after a crash) rewrites identical bytes and publishes nothing new.
+  const std::string bytes = kernel::write_native_model(model.value());
+  const std::string sha = sha256_hex(bytes);
+  const std::string key = "objects/" + sha + ".csgt";
+  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
+  if (!std::filesystem::exists(run_dir / key)) {
+    if (Failure f = write_file_atomic(run_dir / key, bytes); !f.ok()) return f;
+  }
+  const kernel::MassProperties total = kernel::mass_properties(model.value().shape);
+  record["primitives"] = objects;
+  record["model"] = {{"key", key}, {"sha256", sha}, {"bytes", bytes.size()}};
+  record["volume"] = total.volume;
+  record["area"] = total.area;
+  record["topology"] = topology_json(model.value().shape);
+  record["csg_nodes"] = model.value().nodes.size();
+  record["valid"] = true;
+  result = record.dump();
+  return {};
+}
+
+}  // namespace csgtile::worker::jobs

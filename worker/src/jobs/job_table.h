@@ -1,0 +1,49 @@
+#pragma once
+// The job layer (issue #23): every kind of job a queue holds, with the one runner that executes
+// it, each handed the same context built once by the work loop. The work loop (run.cpp) looks a
+// job's kind up here and never names a kind itself; the jobs never include the loop's header.
+
+#include <filesystem>
+#include <stop_token>
+#include <string>
+#include <string_view>
+
+#include "csgtile/config/config.h"
+#include "csgtile/worker/job_support.h"
+#include "csgtile/worker/log.h"
+#include "csgtile/worker/queue.h"
+
+namespace csgtile::worker::jobs {
+
+/// What every runner is handed: where the run's outputs go, the run's config (tolerances,
+/// threads, seed), its queue (the index job reads the run's other records), the logger, and
+/// the stop token a worker shutting down asks (Booleans, assembly and fit then return
+/// Cancelled at their next step).
+struct JobContext {
+  const std::filesystem::path& run_dir;
+  const config::Config& config;
+  JobQueue& queue;
+  const Logger& log;
+  std::stop_token stop;
+};
+
+/// Executes one job. On success `result` is its deterministic JSON record; `timings`, when
+/// given, receives the seconds of each stage that ran (also on failure).
+using JobRunner = Failure (*)(const Job& job, const JobContext& context, std::string& result,
+                              StageTimings* timings);
+
+struct JobKind {
+  std::string_view name;  ///< the queue's kind column: "build", "fit", "assemble", "index"
+  JobRunner run = nullptr;
+  /// Whether a job of this kind, once done, may let the next stage of a city run start.
+  bool advances_city_run = false;
+};
+
+/// The kind named `name`; nullptr when no job has that kind.
+const JobKind* find_job_kind(std::string_view name);
+
+/// Runs `job` by its kind's runner; an unknown kind is an Internal failure naming it.
+Failure run_job(const Job& job, const JobContext& context, std::string& result,
+                StageTimings* timings);
+
+}  // namespace csgtile::worker::jobs
