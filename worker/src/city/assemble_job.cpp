@@ -174,16 +174,14 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
           const auto it = by_label.find(label);
           return it == by_label.end() ? std::nullopt : it->second->quality;
         });
-    const std::string bytes = kernel::write_native_model(object->model);
-    const std::string sha = sha256_hex(bytes);
-    const std::string key = "objects/" + sha + ".csgt";
-    if (Failure f = publish_object(run_dir, key, bytes); !f.ok()) return f;
+    PublishedModel published;
+    if (Failure f = publish_model(run_dir, object->model, published); !f.ok()) return f;
     if (!object->fused) ++invalid;
     object_records.push_back(
         {{"id", object->id},
-         {"key", key},
-         {"sha256", sha},
-         {"bytes", bytes.size()},
+         {"key", published.key},
+         {"sha256", published.sha256},
+         {"bytes", published.bytes},
          {"fused", object->fused},
          {"error", object->fused ? ordered_json() : ordered_json(object->error)},
          {"escalation", escalation},

@@ -11,15 +11,6 @@ namespace csgtile::worker::city::detail {
 
 namespace {
 
-Failure publish_model(const std::filesystem::path& run_dir, const kernel::CsgModel& model,
-                      ordered_json& key) {
-  const std::string bytes = kernel::write_native_model(model);
-  const std::string name = "objects/" + sha256_hex(bytes) + ".csgt";
-  if (Failure f = publish_object(run_dir, name, bytes); !f.ok()) return f;
-  key = name;
-  return {};
-}
-
 Failure read_model(const std::filesystem::path& run_dir, const ordered_json& key,
                    const kernel::Location& by, std::optional<kernel::CsgModel>& out) {
   out.reset();
@@ -50,17 +41,30 @@ Failure publish_blocks(const std::filesystem::path& run_dir, const IndexObject& 
   } else {
     record["heights"] = nullptr;
   }
-  record["lod12"] = nullptr;
-  if (object.lod12) {
-    if (Failure f = publish_model(run_dir, *object.lod12, record["lod12"]); !f.ok()) return f;
-  }
+  // Each block published as the objects are (content-addressed), named by its key.
+  auto block = [&](const std::optional<kernel::CsgModel>& model, ordered_json& key) -> Failure {
+    key = nullptr;
+    if (!model) return {};
+    PublishedModel published;
+    if (Failure f = publish_model(run_dir, *model, published); !f.ok()) return f;
+    key = published.key;
+    return {};
+  };
+  if (Failure f = block(object.lod12, record["lod12"]); !f.ok()) return f;
   record["lod12_error"] = object.lod12_error;
-  record["lod13"] = nullptr;
-  if (object.lod13) {
-    if (Failure f = publish_model(run_dir, *object.lod13, record["lod13"]); !f.ok()) return f;
-  }
+  if (Failure f = block(object.lod13, record["lod13"]); !f.ok()) return f;
   record["lod13_error"] = object.lod13_error;
   return {};
+}
+
+std::vector<std::string> block_keys(const ordered_json& entry) {
+  std::vector<std::string> keys;
+  if (!entry.contains("blocks")) return keys;
+  for (const char* lod : {"lod12", "lod13"}) {
+    const ordered_json& key = entry.at("blocks").at(lod);
+    if (key.is_string()) keys.push_back(key.get<std::string>());
+  }
+  return keys;
 }
 
 Failure read_blocks(const std::filesystem::path& run_dir, const ordered_json& entry,

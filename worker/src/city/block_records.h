@@ -5,6 +5,8 @@
 // model files under objects/, like the objects' own models.
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "city/city_internal.h"
 #include "csgtile/kernel/location.h"
@@ -16,6 +18,9 @@ namespace csgtile::worker::city::detail {
 /// "lod12": key | null, "lod12_error", "lod13": key | null, "lod13_error"}. Error: Io.
 Failure publish_blocks(const std::filesystem::path& run_dir, const IndexObject& object,
                        ordered_json& record);
+
+/// The keys of the block files an object record names (none when it has no blocks).
+std::vector<std::string> block_keys(const ordered_json& entry);
 
 /// Fills heights, lod12(_error) and lod13(_error) of `object` from an object record's
 /// "blocks", each block moved by `by` as the object's model is. `found` is false (and the

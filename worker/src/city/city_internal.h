@@ -10,6 +10,7 @@
 
 #include "csgtile/config/config.h"
 #include "csgtile/kernel/bounding_box.h"
+#include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/job_support.h"
@@ -53,6 +54,14 @@ Failure read_file(const std::filesystem::path& path, std::string& bytes);
 /// file holds these bytes). Error: Io.
 Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
                        const std::string& bytes);
+/// A native model published under objects/ by its content: its key, hash and size.
+struct PublishedModel {
+  std::string key, sha256;
+  std::size_t bytes = 0;
+};
+/// Writes `model` in the native format to objects/<sha256>.csgt unless it is there. Error: Io.
+Failure publish_model(const std::filesystem::path& run_dir, const kernel::CsgModel& model,
+                      PublishedModel& out);
 /// {"key", "sha256", "bytes"} of a file written under `dir` (read back and hashed).
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out);
 

@@ -14,6 +14,7 @@
 #include "city/city_internal.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
 #include "fetch/fetch.h"
 #include "fetch/input.h"
@@ -75,6 +76,15 @@ Failure publish_object(const std::filesystem::path& run_dir, const std::string& 
   std::error_code ec;
   if (std::filesystem::exists(run_dir / key, ec)) return {};
   return write_file_atomic(run_dir / key, bytes);
+}
+
+Failure publish_model(const std::filesystem::path& run_dir, const kernel::CsgModel& model,
+                      PublishedModel& out) {
+  const std::string bytes = kernel::write_native_model(model);
+  out.sha256 = sha256_hex(bytes);
+  out.key = "objects/" + out.sha256 + ".csgt";
+  out.bytes = bytes.size();
+  return publish_object(run_dir, out.key, bytes);
 }
 
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out) {

@@ -393,11 +393,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       listed.insert(dir + "/" + file.at("key").get<std::string>());
     for (const auto& object : record.at("objects")) {
       listed.insert(object.at("key").get<std::string>());
-      if (!object.contains("blocks")) continue;
-      for (const char* lod : {"lod12", "lod13"}) {
-        const ordered_json& block = object.at("blocks").at(lod);
-        if (block.is_string()) listed.insert(block.get<std::string>());
-      }
+      for (const std::string& block : block_keys(object)) listed.insert(block);
     }
   }
   if (Failure f = publish::publish_run_directory(config, run_dir, log, &listed); !f.ok()) return f;
