@@ -457,6 +457,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       if (c >= 0) out.point_segment[clean_index[k]] = cloud_segment[static_cast<std::size_t>(c)];
     }
   }
+  if (options.keep_structure_points) {
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+      if (!excluded[k]) out.structure_points.push_back(cloud[k]);
+    }
+  }
   out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);
   out.seconds.emplace_back("primitives", primitives_seconds);
   return out;

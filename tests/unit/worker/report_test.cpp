@@ -197,6 +197,33 @@ TEST(RunReport, BuildingsAreListedWorstFirst) {
   EXPECT_NE(table.find("<td class=\"num\">93 %</td>"), std::string::npos) << table;
 }
 
+// Among buildings that reached LoD2.2, the RMSE of all their points to the model ranks them
+// (not the fit's own inlier RMS), and both are shown.
+TEST(RunReport, BuildingsAreRankedByTheirPointsDistanceToTheModel) {
+  test::TempDir dir("csgtile_report_model_fit_");
+  const fs::path run = dir.path() / "run";
+  ReportInput in = small_input(run);
+  ReportBuilding tight_fit{"2.2", 0.02, 1.5, 9.25, 2, ""};  // inliers close, the rest far
+  ReportBuilding loose_fit{"2.2", 0.30, 0.5, 12.0, 6, ""};
+  tight_fit.model_rmse = 0.87;
+  tight_fit.model_within_2sigma = 0.42;
+  loose_fit.model_rmse = 0.21;
+  in.cells[0].objects[0].building = tight_fit;
+  in.cells[0].objects[1].building = loose_fit;
+  ReportFiles files;
+  ASSERT_TRUE(write_run_report(in, run, files).ok());
+  const std::string page = read_file(run / "report" / "index.html");
+  const auto section = page.find("<h2 id=\"buildings\">Buildings, worst first</h2>");
+  ASSERT_NE(section, std::string::npos);
+  const std::string table = page.substr(section, page.find("</table>", section) - section);
+  EXPECT_LT(table.find("<td>house</td>"), table.find("<td>shed</td>")) << table;
+  EXPECT_NE(table.find("<th>points to model: RMSE (m)</th>"), std::string::npos) << table;
+  EXPECT_NE(table.find("<td class=\"num\">0.87</td><td class=\"num\">42 %</td><td "
+                       "class=\"num\">0.02</td>"),
+            std::string::npos)
+      << table;
+}
+
 TEST(RunReport, SameInputGivesSameBytesWhateverTheTimings) {
   test::TempDir dir("csgtile_report_same_");
   ReportFiles first_files, second_files;

@@ -2,10 +2,12 @@
 // (kernel/assembly) anchored in the cell → the cell's native model, topology index,
 // CityJSONSeq, 3D Tiles and manifest (city_jobs.h).
 
+#include <algorithm>
 #include <map>
 
 #include "city/block_records.h"
 #include "city/city_internal.h"
+#include "city/model_fit.h"
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/scene.h"
@@ -31,6 +33,45 @@ struct CellPrimitive {
   kernel::BoundingBox crs_box;
 };
 
+// The structure points a fit job published (its record's "structure_points"; none for a
+// record without them), moved by `to_cell` into the cell frame, those in the cell's halo
+// appended to `out`. Errors: Io, InputInvalid (a file that does not match its hash or is no
+// points file), Internal (an unsafe key).
+Failure read_cell_points(const std::filesystem::path& run_dir, const ordered_json& fit,
+                         const kernel::Vec3& to_cell, double size, double halo,
+                         std::vector<kernel::Vec3>& out) {
+  if (!fit.contains("structure_points")) return {};
+  const ordered_json& entry = fit.at("structure_points");
+  const std::string key = entry.at("key").get<std::string>();
+  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe points key " + key};
+  std::string bytes;
+  if (Failure f = read_file(run_dir / key, bytes); !f.ok()) return f;
+  if (sha256_hex(bytes) != entry.at("sha256").get<std::string>()) {
+    return {ErrorCode::InputInvalid, (run_dir / key).string() + ": does not match its SHA-256"};
+  }
+  std::vector<kernel::Vec3> tile_points;
+  if (Failure f = decode_points(bytes, (run_dir / key).string(), tile_points); !f.ok()) return f;
+  // The halo in the cell frame: the cell's corner is its origin.
+  const double lo = -halo, hi = size + halo;
+  for (const kernel::Vec3& p : tile_points) {
+    const kernel::Vec3 q = p + to_cell;
+    if (q.x() >= lo && q.x() <= hi && q.y() >= lo && q.y() <= hi) out.push_back(q);
+  }
+  return {};
+}
+
+// The noise of an object's fit: the median σ of its primitives' fits (0 when none gave one).
+double median_sigma(const std::vector<CellPrimitive>& prims, const std::vector<int>& of) {
+  std::vector<double> s;
+  for (int i : of) {
+    const auto& q = prims[static_cast<std::size_t>(i)].quality;
+    if (q && q->sigma && *q->sigma > 0.0) s.push_back(*q->sigma);
+  }
+  if (s.empty()) return 0.0;
+  std::sort(s.begin(), s.end());
+  return s.size() % 2 == 1 ? s[s.size() / 2] : 0.5 * (s[s.size() / 2 - 1] + s[s.size() / 2]);
+}
+
 ordered_json quality_json(const std::optional<geo::FitQuality>& q) {
   if (!q) return nullptr;
   return ordered_json::parse(geo::fit_quality_to_json(*q));
@@ -53,8 +94,10 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   const auto corner = cell_origin(cell, size);
   const kernel::Vec3 cell_origin3(corner[0], corner[1], 0.0);
 
-  // Primitives of every tile near the cell, in tile order, those meeting the halo.
+  // Primitives of every tile near the cell, in tile order, those meeting the halo; the tiles'
+  // structure points in the halo, in the cell frame.
   std::vector<CellPrimitive> prims;
+  std::vector<kernel::Vec3> points;
   for (const auto& fit : payload.at("fits")) {
     const std::string key = fit.at("scene").at("key").get<std::string>();
     if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe scene key " + key};
@@ -68,6 +111,10 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     const auto& o = fit.at("origin");
     const kernel::Vec3 tile_origin(o[0].get<double>(), o[1].get<double>(), o[2].get<double>());
     const std::string tile = "t" + std::to_string(fit.at("tile").get<long long>());
+    if (Failure f = read_cell_points(run_dir, fit, tile_origin - cell_origin3, size, halo, points);
+        !f.ok()) {
+      return f;
+    }
     for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
       const geo::ScenePrimitive& p = scene->primitives[i];
       // A clipped primitive lies inside its plain solid (no Boolean to build): one whose plain
@@ -194,6 +241,22 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
 
   add_building_lods(objects.objects, config.kernel.chordal_tolerance,
                     config.kernel.linear_tolerance);
+  // How far each object's points lie from its model (3DBAG's RMSE of a LoD2.2).
+  long long points_over_none = 0;
+  {
+    std::vector<const kernel::Shape*> shapes;
+    std::vector<double> sigma;
+    for (std::size_t i = 0; i < objects.objects.size(); ++i) {
+      shapes.push_back(&objects.objects[i].model.shape);
+      sigma.push_back(median_sigma(prims, kept_objects[i].primitives));
+    }
+    const auto fits =
+        measure_model_fit(shapes, sigma, points, config.kernel.chordal_tolerance, points_over_none);
+    for (std::size_t i = 0; i < objects.objects.size(); ++i) {
+      objects.objects[i].model_fit = fits[i];
+      object_records[i]["model_fit"] = model_fit_json(fits[i]);
+    }
+  }
   // The blocks go in the records: the index job reads them rather than computing them again.
   for (std::size_t i = 0; i < objects.objects.size(); ++i) {
     ordered_json blocks;
@@ -256,6 +319,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                         {"objects_unfused", invalid},
                         {"objects_escalated", s.objects_escalated},
                         {"objects_timed_out", s.objects_timed_out},
+                        {"structure_points_in_halo", points.size()},
+                        {"structure_points_over_no_object", points_over_none},
                         {"snap", snap_report_json(s.snap)}};
   ordered_json manifest;
   manifest["run"] = config.run.name;

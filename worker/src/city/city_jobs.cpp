@@ -345,10 +345,15 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
       box.add(kernel::Vec3(b.at(0).get<double>(), b.at(1).get<double>(), b.at(2).get<double>()));
       box.add(kernel::Vec3(b.at(3).get<double>(), b.at(4).get<double>(), b.at(5).get<double>()));
       if (!detail::meets_halo(box, cell, size, halo)) continue;
-      near.push_back({{"fit", it->first},
-                      {"tile", t.index},
-                      {"scene", it->second.at("scene")},
-                      {"origin", it->second.at("origin")}});
+      ordered_json fit = {{"fit", it->first},
+                          {"tile", t.index},
+                          {"scene", it->second.at("scene")},
+                          {"origin", it->second.at("origin")}};
+      // The points its objects are measured against (model_fit.h), when the fit kept them.
+      if (it->second.contains("structure_points")) {
+        fit["structure_points"] = it->second.at("structure_points");
+      }
+      near.push_back(std::move(fit));
     }
     cell_fits[name] = std::move(near);
   }

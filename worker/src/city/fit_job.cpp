@@ -9,6 +9,7 @@
 
 #include "city/city_internal.h"
 #include "city/fit_tile.h"
+#include "city/model_fit.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -72,6 +73,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   clock.enter("fit");
   fit::FitPipelineOptions options = fit_options(config);
   options.interrupt.stop = stop;
+  options.keep_structure_points = true;  // published for the cells' model fit (model_fit.h)
   FittedTile tile;
   std::string name =
       std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
@@ -170,6 +172,18 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     ops::metrics().add_bytes_fetched(range_stats->bytes);
   }
   record["scene"] = {{"key", key}, {"sha256", sha}, {"bytes", text.size()}};
+  // The points the model is to explain, in the tile frame: each cell measures its objects'
+  // distances to them.
+  if (!fit.structure_points.empty()) {
+    const std::string points = encode_points(fit.structure_points);
+    const std::string points_sha = sha256_hex(points);
+    const std::string points_key = "points/" + points_sha + ".pts";
+    if (Failure f = publish_object(run_dir, points_key, points); !f.ok()) return f;
+    record["structure_points"] = {{"key", points_key},
+                                  {"sha256", points_sha},
+                                  {"bytes", points.size()},
+                                  {"count", fit.structure_points.size()}};
+  }
   record["crs"] = tile.scene.frame ? tile.scene.frame->crs : std::string();
   record["origin"] = origin;
   record["seed"] = options.ransac.seed;

@@ -7,6 +7,7 @@
 
 #include "city/block_records.h"
 #include "city/city_internal.h"
+#include "city/model_fit.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/native_format.h"
@@ -76,6 +77,10 @@ std::optional<ReportBuilding> report_building(const IndexObject& object, double 
   const FitSummary fit = fit_summary(object.primitives);
   b.fit_rms = fit.rms;
   b.fit_within_2sigma = fit.within_2sigma;
+  if (const auto& m = object.model_fit) {
+    b.model_rmse = m->rmse;
+    b.model_within_2sigma = m->within_2sigma;
+  }
   if (const auto& h = object.heights) {
     b.h_ground = h->ground + origin_z;
     b.h_roof_70p = h->roof_70p + origin_z;
@@ -202,6 +207,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
         return f;
       }
       all_blocks = all_blocks && has_blocks;
+      if (Failure f = read_model_fit(entry, io.model_fit); !f.ok()) return f;
       std::map<std::string, geo::FitQuality> quality;
       for (const auto& p : entry.at("primitives")) {
         const ordered_json& q = p.at("quality");
@@ -380,8 +386,13 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   if (tile_children > 0) listed.insert("tiles/tileset.json");
   for (const auto& entry : report_entries) listed.insert(entry.at("key").get<std::string>());
   for (const std::string& key : report_files.nondeterministic_keys) listed.insert(key);
-  for (const auto& [key, record] : fits)
+  for (const auto& [key, record] : fits) {
     listed.insert(record.at("scene").at("key").get<std::string>());
+    // The points the objects were measured against (model_fit.h): the model fit reproducible.
+    if (record.contains("structure_points")) {
+      listed.insert(record.at("structure_points").at("key").get<std::string>());
+    }
+  }
   for (const auto& [key, record] : cells) {
     const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
     listed.insert(cell_manifest);

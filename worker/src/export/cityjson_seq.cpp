@@ -549,6 +549,12 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   if (fit.rms) a["fit_rms"] = *fit.rms;
   if (fit.coverage) a["fit_coverage"] = *fit.coverage;
   if (fit.within_2sigma) a["fit_within_2sigma"] = *fit.within_2sigma;
+  // All of its points against its model, as 3DBAG's b3_rmse_lod22.
+  if (const auto& m = object.model_fit) {
+    a["model_rmse"] = m->rmse;
+    a["model_points"] = m->points;
+    if (m->within_2sigma) a["model_within_2sigma"] = *m->within_2sigma;
+  }
   if (geometry) {
     a["closed"] = geometry->closed;
     if (geometry->collapsed_triangles > 0) a["collapsed_triangles"] = geometry->collapsed_triangles;

@@ -91,7 +91,10 @@ CREATE TABLE objects (
   footprint_id TEXT,
   outline TEXT,
   fit_within_2sigma REAL,
-  lod13_error TEXT
+  lod13_error TEXT,
+  model_rmse REAL,
+  model_points INTEGER,
+  model_within_2sigma REAL
 );
 CREATE TABLE lod12 (
   fid INTEGER PRIMARY KEY AUTOINCREMENT,
@@ -399,9 +402,9 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
       "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
       "fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max, "
       "roof_surfaces, fuse_error, lod12_error, footprint_id, outline, fit_within_2sigma, "
-      "lod13_error) "
+      "lod13_error, model_rmse, model_points, model_within_2sigma) "
       "VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,"
-      "?23,?24,?25,?26,?27,?28,?29,?30,?31)");
+      "?23,?24,?25,?26,?27,?28,?29,?30,?31,?32,?33,?34)");
   SqliteStatement rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)");
   SqliteStatement block(db,
                         "INSERT INTO lod12 (fid, geom, object_id, cell, h_ground, h_top) "
@@ -444,6 +447,7 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
     st.bind(23, o.h_roof_70p).bind(24, o.h_roof_max).bind(25, o.roof_surfaces);
     st.bind(26, o.fuse_error).bind(27, o.lod12_error).bind(28, o.footprint_id).bind(29, o.outline);
     st.bind(30, o.fit_within_2sigma).bind(31, o.lod13_error);
+    st.bind(32, o.model_rmse).bind(33, o.model_points).bind(34, o.model_within_2sigma);
     CSGTILE_TRY(st.run());
     // SQLite's R-tree stores 32-bit floats, rounded outwards.
     auto index = [](SqliteStatement& tree, std::int64_t id, const kernel::BoundingBox& b) {

@@ -42,6 +42,11 @@ struct ObjectRecord {
   std::vector<Polygon3> lod12_boundary;  ///< in the SRS
   bool has_lod13 = false;
   std::vector<Polygon3> lod13_boundary;  ///< in the SRS
+  /// IndexObject::model_fit: its points' RMS distance to its model, their count and share
+  /// within 2σ.
+  std::optional<double> model_rmse = {};
+  std::optional<std::int64_t> model_points = {};
+  std::optional<double> model_within_2sigma = {};
 };
 
 struct ShapeRecord {

@@ -427,6 +427,8 @@ std::string buildings_table(const ReportInput& in) {
     const ReportBuilding& y = *b.object->building;
     const bool x_full = x.lod == "2.2", y_full = y.lod == "2.2";
     if (x_full != y_full) return !x_full;
+    const double xm = x.model_rmse.value_or(-1.0), ym = y.model_rmse.value_or(-1.0);
+    if (xm != ym) return xm > ym;
     const double xr = x.fit_rms.value_or(-1.0), yr = y.fit_rms.value_or(-1.0);
     if (xr != yr) return xr > yr;
     return a.object->id < b.object->id;
@@ -436,8 +438,9 @@ std::string buildings_table(const ReportInput& in) {
   std::string html = "<p>" + std::to_string(full) + " of " + count_of(rows.size(), "building") +
                      " reached LoD2.2; every building with a block has LoD1.2 too.</p>\n";
   html +=
-      "<table class=\"buildings\">\n<tr><th>object</th><th>cell</th><th>LoD</th><th>fit RMS "
-      "(m)</th><th>within 2σ</th><th>ground (m)</th><th>roof 70% (m)</th><th>roof "
+      "<table class=\"buildings\">\n<tr><th>object</th><th>cell</th><th>LoD</th><th>points to "
+      "model: RMSE (m)</th><th>within 2σ</th><th>fit RMS (m)</th><th>fit within 2σ</th><th>ground "
+      "(m)</th><th>roof 70% (m)</th><th>roof "
       "surfaces</th><th>footprint</th>"
       "<th>problem</th>"
       "</tr>\n";
@@ -452,17 +455,19 @@ std::string buildings_table(const ReportInput& in) {
     html += std::string("<tr") + (b.lod == "2.2" ? "" : " class=\"bad\"") + "><td>" +
             escape_html(rows[k].object->id) + "</td><td>" + escape_html(*rows[k].cell) +
             "</td><td>" + escape_html(b.lod.empty() ? "none" : b.lod) + "</td><td class=\"num\">" +
-            metres(b.fit_rms) + "</td><td class=\"num\">" + share(b.fit_within_2sigma) +
-            "</td><td class=\"num\">" + metres(b.h_ground) + "</td><td class=\"num\">" +
-            metres(b.h_roof_70p) + "</td><td class=\"num\">" + std::to_string(b.roof_surfaces) +
-            "</td><td>" + escape_html(b.footprint_id.empty() ? "derived" : b.footprint_id) +
-            "</td><td>" + escape_html(b.problem) + "</td></tr>\n";
+            metres(b.model_rmse) + "</td><td class=\"num\">" + share(b.model_within_2sigma) +
+            "</td><td class=\"num\">" + metres(b.fit_rms) + "</td><td class=\"num\">" +
+            share(b.fit_within_2sigma) + "</td><td class=\"num\">" + metres(b.h_ground) +
+            "</td><td class=\"num\">" + metres(b.h_roof_70p) + "</td><td class=\"num\">" +
+            std::to_string(b.roof_surfaces) + "</td><td>" +
+            escape_html(b.footprint_id.empty() ? "derived" : b.footprint_id) + "</td><td>" +
+            escape_html(b.problem) + "</td></tr>\n";
   }
   html += "</table>\n";
   if (rows.size() > kRows) {
     html += "<p class=\"note\">" + std::to_string(rows.size() - kRows) +
-            " more buildings, better ones, are in the GeoPackage (objects: lod, fit_rms, "
-            "heights).</p>\n";
+            " more buildings, better ones, are in the GeoPackage (objects: lod, model_rmse, "
+            "fit_rms, heights).</p>\n";
   }
   return html;
 }

@@ -50,6 +50,10 @@ struct ReportBuilding {
   std::string problem;         ///< why LoD2.2 or LoD1.2 is missing; empty when neither is
   std::string footprint_id{};  ///< the footprint it stands on; empty: outline derived
   std::optional<double> fit_within_2sigma{};  ///< share of its fitted points within 2σ
+  /// All of its points against its model (IndexObject::model_fit): RMS distance (metres) and
+  /// share within 2σ; buildings are ranked by it when present.
+  std::optional<double> model_rmse{};
+  std::optional<double> model_within_2sigma{};
 };
 
 struct ReportObject {

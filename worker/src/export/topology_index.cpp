@@ -430,6 +430,11 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
     o.fit_rms = fit.rms;
     o.fit_coverage = fit.coverage;
     o.fit_within_2sigma = fit.within_2sigma;
+    if (const auto& m = object.model_fit) {
+      o.model_rmse = m->rmse;
+      o.model_points = m->points;
+      o.model_within_2sigma = m->within_2sigma;
+    }
     auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
                                       maps[static_cast<int>(ShapeKind::Edge)], options);
     if (boundary.ok()) {

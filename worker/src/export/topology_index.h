@@ -44,6 +44,16 @@ struct PrimitiveInfo {
   std::optional<double> within_2sigma;  ///< share of its points within 2σ of its solid
 };
 
+/// How far an object's points lie from its model, as 3DBAG measures a LoD2.2 (b3_rmse_lod22):
+/// the points standing over the object (city/model_fit.h), their RMS 3D distance to its
+/// boundary and the share of them within 2σ (σ: its fit's noise estimate).
+struct ModelFit {
+  long long points = 0;
+  double rmse = 0.0;              ///< metres
+  std::optional<double> sigma{};  ///< metres; absent when its fit gave none
+  std::optional<double> within_2sigma{};
+};
+
 /// One object of the index: a solid (or a compound of solids) with its CSG history.
 struct IndexObject {
   std::string id;          ///< unique in the index; becomes objects.object_id
@@ -67,6 +77,8 @@ struct IndexObject {
   /// level's height); `lod13_error` says why a building with a LoD1.2 block has none.
   std::optional<kernel::CsgModel> lod13 = {};
   std::string lod13_error = {};
+  /// Its points' distances to its model, when the run kept the points (city runs).
+  std::optional<ModelFit> model_fit = {};
 };
 
 /// Moves an object's model by `by`: its shape and, so that its history stays in the shape's

@@ -160,6 +160,7 @@ struct FitPipelineOptions {
   /// Not a setting: looked at between stages and regions; once it fires, the fit returns
   /// Cancelled (a worker shutting down, a job's time limit).
   kernel::Interrupt interrupt{};
+  bool keep_structure_points = {};  ///< fill FitOutput::structure_points
   bool operator==(const FitPipelineOptions&) const = default;
 };
 
@@ -223,6 +224,10 @@ struct FitOutput {
   /// downsampled point.
   std::vector<Segment> segments;
   std::vector<std::int32_t> point_segment;
+  /// When keep_structure_points was set: the points the model is to explain — the fitted cloud
+  /// (above the ground, of a kept class, not outliers; downsampled when `voxel` is set)
+  /// without the points taken for vegetation, in the cloud's order.
+  std::vector<kernel::Vec3> structure_points = {};
 };
 
 /// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
