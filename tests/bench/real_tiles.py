@@ -762,6 +762,12 @@ def self_test():
     check("top-surface coverage", fig["whole_tile"]["coverage"], 0.5)
     check("top-surface within 0.3 m", fig["whole_tile"]["within_0.3m"], 0.5)
     check("top-surface rmse", fig["whole_tile"]["rmse_m"], 0.1, 1e-9)
+    # A perfect model's share: one height per cell within 0.3 m of at most 3 of these 4
+    # (a steep roof's spread), and of the one point of the other cell.
+    best = top_surface.best_possible({(0, 0): [0.5, 0.0, 2.5, 0.1], (1, 0): [7.0]}, 5)
+    check("best possible within 0.3 m", best["within_0.3m"], 4 / 5)
+    check("best possible within 0.1 m", best["within_0.1m"], 3 / 5)
+    check("best possible within 1 m", best["within_1m"], 4 / 5)
 
     path = os.path.join(os.environ.get("TMPDIR", "/tmp"),
                         "real_tiles_self_test_%d.png" % os.getpid())

@@ -10,6 +10,8 @@ cell:
                  no model count as not within);
   rmse_m, median_m  of |z - top| over the covered points;
   false_area     model cells holding no building point, as a share of the model's cells;
+  best_possible  within_<t>m that a perfect model would reach: one top per cell cannot be
+                 within t of every point of a cell on a steep roof or a facade;
 each over the whole tile and over the points inside the published footprints (when given).
 
 The vertical line meets a box, a cylinder and an extrusion (vertical or lying), each cut by
@@ -225,6 +227,28 @@ def _figures(dist, count):
     return out
 
 
+def best_possible(zs_by_cell, count):
+    """The most any model can reach under this measure: with one top per cell, the share of
+    the points within t of the best single height of their cell (a window of 2t over its
+    sorted heights). A sloped roof spreads a cell's points by slope × cell, a facade by the
+    wall's height: those points are out of reach whatever the model."""
+    out = {}
+    if count == 0:
+        return out
+    for t in THRESHOLDS:
+        best = 0
+        for zs in zs_by_cell.values():
+            zs = sorted(zs)
+            j = most = 0
+            for k in range(len(zs)):
+                while zs[k] - zs[j] > 2 * t:
+                    j += 1
+                most = max(most, k - j + 1)
+            best += most
+        out["within_%gm" % t] = best / count
+    return out
+
+
 def measure_top_surface(prims, pts, cell=0.5, inside=None, cells=None):
     """The figures of the module comment. `pts` = (xs, ys, zs, cls) in the fit frame;
     `inside(x, y)` (optional) tells whether a point lies in a published footprint. `cells`
@@ -244,20 +268,27 @@ def measure_top_surface(prims, pts, cell=0.5, inside=None, cells=None):
     tops = top_surface(prims, x0, y0, nx, ny, cell)
     occupied = set()
     whole, inner = [], []
+    whole_z, inner_z = {}, {}
     for i in building:
         key = (int((xs[i] - x0) / cell), int((ys[i] - y0) / cell))
         occupied.add(key)
+        whole_z.setdefault(key, []).append(zs[i])
+        is_inner = inside is not None and inside(xs[i], ys[i])
+        if is_inner:
+            inner_z.setdefault(key, []).append(zs[i])
         top = tops.get(key)
         d = None if top is None else abs(zs[i] - top)
         if cells is not None:
             cells.setdefault("residuals", {}).setdefault(key, []).append(
                 None if top is None else zs[i] - top)
         whole.append(d)
-        if inside is not None and inside(xs[i], ys[i]):
+        if is_inner:
             inner.append(d)
     out = {"cell_m": cell, "whole_tile": _figures(whole, len(whole))}
+    out["whole_tile"]["best_possible"] = best_possible(whole_z, len(whole))
     if inside is not None:
         out["inside_footprints"] = _figures(inner, len(inner))
+        out["inside_footprints"]["best_possible"] = best_possible(inner_z, len(inner))
     if cells is not None:
         cells.update({"x0": x0, "y0": y0, "nx": nx, "ny": ny, "tops": tops})
     out["model_cells"] = len(tops)
