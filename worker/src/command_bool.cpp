@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "csgtile/geo/scene.h"
+#include "csgtile/geo/scene_model.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/csg.h"
@@ -35,7 +36,7 @@ struct BoolReport {
 
 // Runs the scene; the failure code is Ok when the scene was evaluated (valid or not).
 Failure evaluate(const std::string& path, const std::string& out, const kernel::SnapOptions& snap,
-                 BoolReport& report) {
+                 double tolerance, BoolReport& report) {
   const auto start = std::chrono::steady_clock::now();
   auto scene = geo::read_scene(path);
   if (!scene.ok()) {
@@ -45,39 +46,22 @@ Failure evaluate(const std::string& path, const std::string& out, const kernel::
   }
   report.name = scene->name;
   report.op = geo::boolean_op_name(scene->op);
-  std::vector<kernel::PrimitiveSpec> specs;
-  for (const auto& p : scene->primitives) specs.push_back(p.spec);
+  geo::Scene built = std::move(scene).value();
   if (snap.distance > 0.0 || snap.angle > 0.0) {
+    std::vector<kernel::PrimitiveSpec> specs;
+    for (const auto& p : built.primitives) specs.push_back(p.spec);
     kernel::SnapReport snapped;
     auto moved = kernel::snap_primitives(specs, snap, &snapped);
     if (!moved.ok()) return {ErrorCode::InputInvalid, moved.error().message};
-    specs = std::move(moved).value();
+    for (std::size_t i = 0; i < specs.size(); ++i) built.primitives[i].spec = moved.value()[i];
     report.snap = snapped;
   }
-  std::vector<kernel::CsgModel> leaves;
-  std::vector<kernel::Shape> solids;
-  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
-    const auto& p = scene->primitives[i];
-    auto leaf = kernel::csg_primitive(specs[i], p.id);
-    if (!leaf.ok()) {
-      return {from_kernel(leaf.error().code), "primitives[" + std::to_string(i) + "] (" +
-                                                  kernel::primitive_type_name(p.spec.type) +
-                                                  "): " + leaf.error().message};
-    }
-    solids.push_back(leaf.value().shape);
-    leaves.push_back(std::move(leaf).value());
-  }
-  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
-  if (scene->op == geo::BooleanOp::None) {
-    auto set = kernel::ShapeFactory::compound(std::move(solids));
-    if (!set.ok()) return {from_kernel(set.error().code), set.error().message};
-    model.value().shape = set.value();
-  } else {
-    const kernel::BooleanOp op = scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
-                                 : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
-                                                                       : kernel::BooleanOp::Cut;
-    model = kernel::csg_combine(leaves, op);
-  }
+  // The scene build job's path (geo/scene_model.h), at kernel.linear_tolerance.
+  geo::SceneModelOptions options;
+  options.tolerance = tolerance;
+  auto leaves = geo::scene_leaves(built, options);
+  if (!leaves.ok()) return {from_kernel(leaves.error().code), leaves.error().message};
+  kernel::Result<kernel::CsgModel> model = geo::combine_scene(built.op, leaves.value(), options);
   if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
   if (!out.empty()) {
     if (auto st = kernel::write_native_model_file(out, model.value()); !st.ok()) {
@@ -113,6 +97,10 @@ void register_bool(CLI::App& app, Action& action) {
   cmd->add_option("--out", *model_path,
                   "Write the result as a native model (.csgt) with its CSG tree and face history");
   cmd->add_flag("--json", *json, "Print one JSON object with the spec's result fields");
+  auto config_path = std::make_shared<std::string>();
+  cmd->add_option("--config", *config_path,
+                  "csgtile config: its kernel.linear_tolerance builds the primitives and runs "
+                  "the Booleans (default: the config defaults)");
   auto snap = std::make_shared<kernel::SnapOptions>();
   auto snap_degrees = std::make_shared<double>(0.0);
   cmd->add_option("--snap-distance", snap->distance,
@@ -122,11 +110,18 @@ void register_bool(CLI::App& app, Action& action) {
   cmd->add_option("--snap-angle", *snap_degrees,
                   "Fuzzy mode: primitive axes within this angle (degrees) become one direction")
       ->check(CLI::Range(0.0, 45.0));
-  cmd->callback([&action, file, json, model_path, snap, snap_degrees] {
+  cmd->callback([&action, file, json, model_path, snap, snap_degrees, config_path] {
     *snap = snap_options(snap->distance, *snap_degrees);
-    action = [file, json, model_path, snap] {
+    action = [file, json, model_path, snap, config_path] {
+      config::Config config;
+      if (!config_path->empty()) {
+        auto loaded = load_run_config(*config_path, RunChecks::CrsOnly);
+        if (!loaded) return error_info(ErrorCode::ConfigInvalid).exit_code;
+        config = std::move(*loaded);
+      }
       BoolReport r;
-      const Failure failure = evaluate(*file, *model_path, *snap, r);
+      const Failure failure =
+          evaluate(*file, *model_path, *snap, config.kernel.linear_tolerance, r);
       auto count = [&](kernel::ShapeKind k) { return r.counts[static_cast<int>(k)]; };
       if (*json) {
         nlohmann::ordered_json out;

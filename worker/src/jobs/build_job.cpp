@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "csgtile/geo/scene.h"
+#include "csgtile/geo/scene_model.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/csg.h"
@@ -59,56 +60,43 @@ Failure run_build_job(const Job& job, const JobContext& context, std::string& re
   record["scene"] = scene->name;
   record["op"] = geo::boolean_op_name(scene->op);
   ordered_json objects = ordered_json::array();
-  std::vector<kernel::CsgModel> leaves;
-  for (std::size_t i = 0; i < scene->primitives.size(); ++i) {
+  // The one path from a scene to a CSG model (geo/scene_model.h), at the configured tolerance.
+  geo::SceneModelOptions scene_options;
+  scene_options.tolerance = config.kernel.linear_tolerance;
+  scene_options.interrupt.stop = stop;
+  clock.enter("build");
+  auto built = geo::scene_leaves(scene.value(), scene_options);
+  if (!built.ok()) {
+    return {from_kernel(built.error().code), input + ": " + built.error().message};
+  }
+  std::vector<kernel::CsgModel>& leaves = built.value();
+  clock.enter("check");
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
     const auto& p = scene->primitives[i];
-    const std::string id = p.id.empty() ? "p" + std::to_string(i) : p.id;
-    clock.enter("build");
-    auto leaf = kernel::csg_primitive(p.spec, id, config.kernel.linear_tolerance);
-    auto solid = leaf.ok() ? kernel::Result<kernel::Shape>(leaf.value().shape)
-                           : kernel::Result<kernel::Shape>(leaf.error());
-    const std::string where = input + ": primitives[" + std::to_string(i) + "] (" +
-                              kernel::primitive_type_name(p.spec.type) + ")";
-    if (!solid.ok()) return {from_kernel(solid.error().code), where + ": " + solid.error().message};
-    clock.enter("check");
-    const kernel::CheckReport check = kernel::check_shape(solid.value());
+    const kernel::Shape& solid = leaves[i].shape;
+    const kernel::CheckReport check = kernel::check_shape(solid);
     if (!check.valid()) {
       return {ErrorCode::GeometryInvalid,
-              where + ": " + kernel::check_status_name(check.issues.front().status) + ": " +
+              input + ": primitives[" + std::to_string(i) + "] (" +
+                  kernel::primitive_type_name(p.spec.type) +
+                  "): " + kernel::check_status_name(check.issues.front().status) + ": " +
                   check.issues.front().message};
     }
-    const kernel::MassProperties mp = kernel::mass_properties(solid.value());
+    const kernel::MassProperties mp = kernel::mass_properties(solid);
     ordered_json o;
-    o["id"] = id;
+    o["id"] = p.id.empty() ? "p" + std::to_string(i) : p.id;
     o["type"] = kernel::primitive_type_name(p.spec.type);
     o["volume"] = mp.volume;
     o["area"] = mp.area;
     o["bounds"] = {mp.bounds.min.x(), mp.bounds.min.y(), mp.bounds.min.z(),
                    mp.bounds.max.x(), mp.bounds.max.y(), mp.bounds.max.z()};
     objects.push_back(std::move(o));
-    leaves.push_back(std::move(leaf).value());
   }
   ops::metrics().add_primitives_built(leaves.size());
   clock.enter(scene->op == geo::BooleanOp::None ? "build" : "boolean");
-  // A scene with an operation is unified by the exact Booleans; a plain set stays a set.
-  kernel::BooleanOptions boolean_options;
-  boolean_options.tolerance = config.kernel.linear_tolerance;
-  boolean_options.interrupt.stop = stop;
-  // Boolean results keep their CSG tree and face history (native CSG section).
-  kernel::Result<kernel::CsgModel> model = kernel::CsgModel{};
-  if (scene->op == geo::BooleanOp::None) {
-    std::vector<kernel::Shape> solids;
-    for (const auto& leaf : leaves) solids.push_back(leaf.shape);
-    auto set = kernel::ShapeFactory::compound(std::move(solids));
-    if (!set.ok()) return {from_kernel(set.error().code), input + ": " + set.error().message};
-    model.value().shape = set.value();
-  } else {
-    model = kernel::csg_combine(leaves,
-                                scene->op == geo::BooleanOp::Fuse     ? kernel::BooleanOp::Fuse
-                                : scene->op == geo::BooleanOp::Common ? kernel::BooleanOp::Common
-                                                                      : kernel::BooleanOp::Cut,
-                                boolean_options);
-  }
+  // A scene with an operation is unified by the exact Booleans (its CSG tree and face history
+  // kept: native CSG section); a plain set stays a set.
+  kernel::Result<kernel::CsgModel> model = geo::combine_scene(scene->op, leaves, scene_options);
   if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
   clock.enter("publish");
   // Content-addressed: the same model always lands under the same key, so a job that runs
