@@ -210,7 +210,7 @@ else:
 
 root = json.load(open(f"{rundir}/tiles/tileset.json"))
 children = root["root"]["children"]
-assert len(children) == sum(1 for _, _, cm in cells if "objects" in cm["tiles"]), children
+assert len(children) == sum(1 for _, _, cm in cells if cm["tiles"]), children
 for child in children:
     path = os.path.normpath(f"{rundir}/tiles/{child['content']['uri']}")
     assert os.path.exists(path), path

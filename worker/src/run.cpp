@@ -21,6 +21,7 @@
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/worker/publish.h"
 #include "export/cityjson_seq.h"
+#include "export/manifest.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
 #include "fetch/fetch.h"
@@ -400,15 +401,12 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   // earlier) may have published exactly this already; then nothing is rebuilt.
   JobRecords records;
   for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
-  ordered_json head;
-  head["run"] = config.run.name;
-  head["csgtile_version"] = CSGTILE_VERSION;
-  head["config_sha256"] = output_config_sha256(config);
-  head["seed"] = config.run.seed;
-  head["jobs"] = records.jobs;
-  head["dead"] = dead_jobs_json(summary.dead);
+  const ordered_json head = manifest_head(config, "scenes");
+  ordered_json published = head;  // and the jobs it was published from
+  published["jobs"] = records.jobs;
+  published["dead"] = dead_jobs_json(summary.dead);
   summary.manifest = summary.run_dir / "manifest.json";
-  if (already_published(summary.manifest, head, summary.run_dir)) {
+  if (already_published(summary.manifest, published, summary.run_dir)) {
     log.info("run", "already published", {{"manifest", summary.manifest.string()}});
     return publish::publish_run_directory(config, summary.run_dir, log);
   }
@@ -443,42 +441,17 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     log.info("tiles", "not written", {{"reason", tiles.skipped}});
   }
   for (const std::string& w : tiles.warnings) log.log(config::LogLevel::Warn, "tiles", w);
-  ordered_json manifest = std::move(head);
-  // Stage timings differ from run to run: they go to timings.json, which the manifest names
-  // but does not hash, so manifest.json stays byte-identical.
-  if (Failure f = write_timings(summary.run_dir, config.run.name, records); !f.ok()) return f;
-  manifest["timings"] = "timings.json";
-  manifest["index"] = {{"key", index.key},
-                       {"sha256", index.sha256},
-                       {"bytes", index.bytes},
-                       {"srs_id", index.srs_id},
-                       {"objects", index.stats.objects},
-                       {"shapes", index.stats.shapes},
-                       {"relations", index.stats.relations},
-                       {"unknown_relations", index.stats.unknown_relations},
-                       {"warnings", index.stats.warnings}};
-  manifest["cityjson"] = {{"key", cityjson.key},
-                          {"sha256", cityjson.sha256},
-                          {"bytes", cityjson.bytes},
-                          {"features", cityjson.stats.features},
-                          {"collapsed_triangles", cityjson.stats.collapsed_triangles},
-                          {"open_objects", cityjson.stats.open_objects},
-                          {"warnings", cityjson.stats.warnings}};
-  if (tiles.written) {
-    manifest["tiles"] = {{"key", tiles.key},
-                         {"sha256", tiles.sha256},
-                         {"bytes", tiles.bytes},
-                         {"content", tiles.content},
-                         {"content_sha256", tiles.content_sha256},
-                         {"content_bytes", tiles.content_bytes},
-                         {"objects", tiles.objects},
-                         {"triangles", tiles.triangles},
-                         {"warnings", tiles.warnings}};
-  } else {
-    manifest["tiles"] = nullptr;
-    manifest["tiles_skipped"] = tiles.skipped;
+  ordered_json manifest = head;
+  manifest["index"] = index_entry(index);
+  manifest["cityjson"] = cityjson_entry(cityjson);
+  manifest["tiles"] = tiles_entry(tiles);
+  if (!tiles.written) manifest["tiles_skipped"] = tiles.skipped;
+  std::string text;
+  if (Failure f = write_run_manifest(summary.run_dir, config.run.name, std::move(manifest), records,
+                                     summary.dead, text);
+      !f.ok()) {
+    return f;
   }
-  if (Failure f = write_file_atomic(summary.manifest, manifest.dump(2) + "\n"); !f.ok()) return f;
   return publish::publish_run_directory(config, summary.run_dir, log);
 }
 

@@ -16,6 +16,7 @@
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/publish.h"
 #include "export/cityjson_seq.h"
+#include "export/manifest.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
 #include "ops/stage_clock.h"
@@ -322,25 +323,18 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                         {"structure_points_in_halo", points.size()},
                         {"structure_points_over_no_object", points_over_none},
                         {"snap", snap_report_json(s.snap)}};
-  ordered_json manifest;
-  manifest["run"] = config.run.name;
+  // The run manifest's head and export entries (export/manifest.h), then the cell's own.
+  ordered_json manifest = manifest_head(config, "cell");
   manifest["cell"] = name;
   manifest["origin"] = {corner[0], corner[1], 0.0};
   manifest["crs"] = crs_text;
-  manifest["csgtile_version"] = CSGTILE_VERSION;
-  manifest["config_sha256"] = output_config_sha256(config);
-  manifest["seed"] = config.run.seed;
   manifest["files"] = files;
   manifest["objects"] = object_records;
   manifest["stats"] = stats;
-  manifest["index"] = {{"objects", index.stats.objects},
-                       {"shapes", index.stats.shapes},
-                       {"relations", index.stats.relations}};
-  manifest["cityjson"] = {{"features", cityjson.stats.features},
-                          {"open_objects", cityjson.stats.open_objects}};
-  manifest["tiles"] =
-      tiles.written ? ordered_json({{"objects", tiles.objects}, {"triangles", tiles.triangles}})
-                    : ordered_json({{"skipped", tiles.skipped}});
+  manifest["index"] = index_entry(index);
+  manifest["cityjson"] = cityjson_entry(cityjson);
+  manifest["tiles"] = tiles_entry(tiles);
+  if (!tiles.written) manifest["tiles_skipped"] = tiles.skipped;
   manifest["problems"] = problems;
   const std::string manifest_text = manifest.dump(2) + "\n";
   if (Failure f = write_file_atomic(cell_dir / "manifest.json", manifest_text); !f.ok()) return f;

@@ -13,6 +13,7 @@
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/publish.h"
+#include "export/manifest.h"
 #include "export/report.h"
 #include "export/run_index.h"
 #include "job_records.h"
@@ -238,23 +239,18 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   std::string tileset;
   std::size_t tile_children = 0;
   if (Failure f = root_tileset(run_dir, cells, tileset, tile_children); !f.ok()) return f;
-  ordered_json tiles_entry = nullptr;
+  ordered_json root_tiles = nullptr;
   if (tile_children > 0) {
     if (Failure f = write_file_atomic(run_dir / "tiles/tileset.json", tileset); !f.ok()) return f;
-    tiles_entry = {{"key", "tiles/tileset.json"},
-                   {"sha256", sha256_hex(tileset)},
-                   {"bytes", tileset.size()},
-                   {"cells", tile_children}};
+    root_tiles = {{"key", "tiles/tileset.json"},
+                  {"sha256", sha256_hex(tileset)},
+                  {"bytes", tileset.size()},
+                  {"cells", tile_children}};
   }
 
   // The manifest: every job's record (timings moved to timings.json), dead jobs, the cells'
   // manifests and the run-level files. Written last: a reader who finds it finds the rest.
-  ordered_json manifest;
-  manifest["run"] = run;
-  manifest["kind"] = "city";
-  manifest["csgtile_version"] = CSGTILE_VERSION;
-  manifest["config_sha256"] = output_config_sha256(config);
-  manifest["seed"] = config.run.seed;
+  ordered_json manifest = manifest_head(config, "city");
   manifest["crs"] = crs_text;
   manifest["crs_to_wgs84"] = datum_transformation;
   manifest["crs_heights"] = height_transformation;
@@ -292,20 +288,9 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                         {"per_type", per_type},        {"cells", cells.size()},
                         {"objects", object_count}};
   manifest["cells"] = cell_list;
-  manifest["index"] = {{"key", index.key},
-                       {"sha256", index.sha256},
-                       {"bytes", index.bytes},
-                       {"srs_id", index.srs_id},
-                       {"objects", index.stats.objects},
-                       {"shapes", index.stats.shapes},
-                       {"relations", index.stats.relations},
-                       {"warnings", index.stats.warnings}};
-  manifest["tiles"] = tiles_entry;
-  manifest["jobs"] = std::move(records.jobs);
-  manifest["dead"] = dead_jobs_json(dead);
+  manifest["index"] = index_entry(index);
+  manifest["tiles"] = root_tiles;
   manifest["problems"] = problems;
-  manifest["timings"] = "timings.json";
-  if (Failure f = write_timings(run_dir, run, records); !f.ok()) return f;
 
   // The report (report.h): figures of the run, the cells' footprints and 3D views.
   ReportInput report;
@@ -378,8 +363,12 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   manifest["report"] = {{"key", "report/index.html"},
                         {"files", report_entries},
                         {"not_deterministic", report_files.nondeterministic_keys}};
-  const std::string manifest_text = manifest.dump(2) + "\n";
-  if (Failure f = write_file_atomic(run_dir / "manifest.json", manifest_text); !f.ok()) return f;
+  std::string manifest_text;
+  if (Failure f =
+          write_run_manifest(run_dir, run, std::move(manifest), records, dead, manifest_text);
+      !f.ok()) {
+    return f;
+  }
   // Only what the manifests name is published (leftovers of an earlier run in the same
   // directory, e.g. cells of another cell size, stay local).
   std::set<std::string> listed = {"manifest.json", "timings.json", "tiles.json", index.key};
