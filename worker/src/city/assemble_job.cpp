@@ -8,6 +8,7 @@
 #include "city/block_records.h"
 #include "city/city_internal.h"
 #include "city/model_fit.h"
+#include "city/relation_records.h"
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/scene.h"
@@ -349,6 +350,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
                         {"bytes", manifest_text.size()}};
   record["tiles"] = tiles.written ? ordered_json(dir_key + "/" + tiles.key) : ordered_json();
   record["objects"] = object_records;
+  // Its objects' relations: the run index takes them instead of classifying them again.
+  record["relations"] = relations_json(index.stats.relation_pairs, objects.objects);
   record["stats"] = stats;
   record["problems"] = problems;
   result = record.dump();

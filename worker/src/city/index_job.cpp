@@ -8,6 +8,7 @@
 #include "city/block_records.h"
 #include "city/city_internal.h"
 #include "city/model_fit.h"
+#include "city/relation_records.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/native_format.h"
@@ -229,6 +230,20 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   if (!all_blocks) {
     add_building_lods(objects.objects, config.kernel.chordal_tolerance,
                       config.kernel.linear_tolerance);
+  }
+  // The relations of objects of one cell as their cell classified them (all cells must give
+  // them; a record of an older worker makes the index classify every pair itself).
+  {
+    std::map<std::string, std::size_t> index_of;
+    for (std::size_t i = 0; i < objects.objects.size(); ++i) index_of[objects.objects[i].id] = i;
+    std::vector<ObjectRelation> known;
+    bool all_found = true;
+    for (const auto& [key, record] : cells) {
+      bool found = false;
+      if (Failure f = read_relations(record, index_of, known, found); !f.ok()) return f;
+      all_found = all_found && found;
+    }
+    if (all_found) objects.cell_relations = std::move(known);
   }
   RunIndexReport index;
   if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;

@@ -108,8 +108,9 @@ bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma
 
 }  // namespace
 
-std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& solids,
-                                              double linear_tolerance, int threads) {
+std::vector<ObjectRelation> compute_relations(
+    const std::vector<kernel::Shape>& solids, double linear_tolerance, int threads,
+    const std::function<bool(std::size_t, std::size_t)>& skip) {
   kernel::BooleanOptions options;
   options.tolerance = linear_tolerance;
   // An object made of several solids that overlap (a plain set of primitives) is measured and
@@ -141,8 +142,9 @@ std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& 
     for (std::size_t oj = oi + 1; oj < order.size(); ++oj) {
       const std::size_t j = order[oj];
       if (measured[j].box.min.x() > measured[i].box.max.x()) break;
-      if (measured[i].box.intersects(measured[j].box))
-        pairs.emplace_back(std::min(i, j), std::max(i, j));
+      if (!measured[i].box.intersects(measured[j].box)) continue;
+      if (skip && skip(std::min(i, j), std::max(i, j))) continue;
+      pairs.emplace_back(std::min(i, j), std::max(i, j));
     }
   }
   std::sort(pairs.begin(), pairs.end());

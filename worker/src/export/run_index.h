@@ -54,6 +54,10 @@ struct RunObjects {
   /// CRS coordinates of the objects' origin: p_crs = origin + p (zero without a CRS).
   kernel::Vec3 origin = kernel::Vec3::Zero();
   std::vector<std::string> warnings;  ///< e.g. inputs that do not share one CRS
+  /// The relations of objects of the same cell as the cells classified them (indices into
+  /// `objects`, a < b), when every cell gave them: the index classifies only pairs across
+  /// cells (IndexOptions::relations_within_cells_known).
+  std::optional<std::vector<ObjectRelation>> cell_relations = {};
 };
 
 /// Collects the done jobs among `results` (queue key → job record), in run.inputs order:

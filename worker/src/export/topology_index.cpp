@@ -452,8 +452,29 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
   if (options.relations) {
     std::vector<Shape> solids;
     for (const IndexObject& o : objects) solids.push_back(o.model.shape);
-    for (const ObjectRelation& r :
-         compute_relations(solids, options.linear_tolerance, options.threads)) {
+    // Pairs within a cell come classified from the cell's job when it says so; the others are
+    // classified here. One list in (a, b) order either way.
+    std::function<bool(std::size_t, std::size_t)> skip;
+    if (options.relations_within_cells_known) {
+      skip = [&objects](std::size_t i, std::size_t j) {
+        return objects[i].cell == objects[j].cell;
+      };
+    }
+    std::vector<ObjectRelation> related =
+        compute_relations(solids, options.linear_tolerance, options.threads, skip);
+    if (options.relations_within_cells_known) {
+      for (const ObjectRelation& r : options.known_relations) {
+        if (r.a < r.b && r.b < objects.size() && objects[r.a].cell == objects[r.b].cell) {
+          related.push_back(r);
+        }
+      }
+      std::stable_sort(related.begin(), related.end(),
+                       [](const ObjectRelation& x, const ObjectRelation& y) {
+                         return std::pair(x.a, x.b) < std::pair(y.a, y.b);
+                       });
+    }
+    stats.relation_pairs = related;
+    for (const ObjectRelation& r : related) {
       // Both directions, so that "relations of O" is one index lookup.
       for (int side = 0; side < 2; ++side) {
         RelationRecord rec;

@@ -109,6 +109,21 @@ struct FitSummary {
 };
 FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives);
 
+enum class RelationKind { Touches, Overlaps, Contains, Within, Equals, Unknown };
+/// "touches", "overlaps", "contains", "within", "equals", "unknown".
+const char* relation_kind_name(RelationKind kind);
+/// The relation seen from the other object (contains ↔ within; the others are symmetric).
+RelationKind converse(RelationKind kind);
+
+/// The relation of object a to object b (a < b).
+struct ObjectRelation {
+  std::size_t a = 0, b = 0;
+  RelationKind kind = RelationKind::Unknown;
+  double shared_area = 0.0;    ///< touches: area of the common boundary
+  double common_volume = 0.0;  ///< overlaps, contains, within, equals: volume of a ∩ b
+  std::string reason;          ///< unknown: the Boolean error that stopped the classification
+};
+
 /// The spatial reference system of the objects layer (a gpkg_spatial_ref_sys row).
 struct IndexSrs {
   int srs_id = -1;
@@ -136,6 +151,11 @@ struct IndexOptions {
   /// gpkg_contents.last_change of every table. Fixed by default so that the same objects give
   /// the same bytes; a caller that wants the wall clock passes it (format %Y-%m-%dT%H:%M:%fZ).
   std::string last_change = "1970-01-01T00:00:00.000Z";
+  /// When set, the relations of objects of the same `cell` were classified already (by the
+  /// job that built the cell): they are taken from `known_relations` (indices into the
+  /// objects, a < b) and only pairs across cells are classified here.
+  bool relations_within_cells_known = false;
+  std::vector<ObjectRelation> known_relations = {};
 };
 
 /// What a write produced.
@@ -147,6 +167,8 @@ struct IndexStats {
   std::uint64_t bytes = 0;
   /// Objects whose boundary could not be tessellated (written with a NULL geometry), etc.
   std::vector<std::string> warnings;
+  /// The related pairs written (indices into the objects, a < b, in (a, b) order).
+  std::vector<ObjectRelation> relation_pairs = {};
 };
 
 /// Writes the index to `path` atomically: the GeoPackage is built in a temporary file beside
@@ -161,21 +183,6 @@ kernel::Status write_topology_index(const std::filesystem::path& path,
 
 // ---- relations ------------------------------------------------------------------------------
 
-enum class RelationKind { Touches, Overlaps, Contains, Within, Equals, Unknown };
-/// "touches", "overlaps", "contains", "within", "equals", "unknown".
-const char* relation_kind_name(RelationKind kind);
-/// The relation seen from the other object (contains ↔ within; the others are symmetric).
-RelationKind converse(RelationKind kind);
-
-/// The relation of object a to object b (a < b).
-struct ObjectRelation {
-  std::size_t a = 0, b = 0;
-  RelationKind kind = RelationKind::Unknown;
-  double shared_area = 0.0;    ///< touches: area of the common boundary
-  double common_volume = 0.0;  ///< overlaps, contains, within, equals: volume of a ∩ b
-  std::string reason;          ///< unknown: the Boolean error that stopped the classification
-};
-
 /// Relations between solids (or compounds of solids) in one frame. Candidate pairs are those
 /// whose bounding boxes, grown by `linear_tolerance`, meet; each is classified exactly:
 /// vol(a ∩ b) > 0 → overlaps, or contains / within / equals when a ∩ b is one of them (equal
@@ -184,8 +191,10 @@ struct ObjectRelation {
 /// along edges or at points give no row. A Boolean error gives kind Unknown with the error as
 /// the reason. Rows are sorted by (a, b). Pairs are classified on `threads` threads (0: one per
 /// core); the result does not depend on it. Deterministic; never throws.
-std::vector<ObjectRelation> compute_relations(const std::vector<kernel::Shape>& solids,
-                                              double linear_tolerance, int threads = 0);
+/// `skip` (optional): candidate pairs (i < j) for which it returns true are not classified.
+std::vector<ObjectRelation> compute_relations(
+    const std::vector<kernel::Shape>& solids, double linear_tolerance, int threads = 0,
+    const std::function<bool(std::size_t, std::size_t)>& skip = {});
 
 // ---- reading ---------------------------------------------------------------------------------
 
