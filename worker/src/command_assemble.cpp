@@ -47,21 +47,12 @@ ordered_json box_json(const kernel::BoundingBox& b) {
 }
 
 ordered_json stats_json(const assembly::AssemblyStats& s) {
-  ordered_json j;
-  j["primitives"] = s.primitives;
-  j["primitives_read"] = s.primitives_read;
-  j["primitives_failed"] = s.primitives_failed;
-  j["candidate_pairs"] = s.candidate_pairs;
-  j["culled_pairs"] = s.culled_pairs;
-  j["exact_tests"] = s.exact_tests;
-  j["interacting_pairs"] = s.interacting_pairs;
+  ordered_json j = {{"primitives", s.primitives}};
+  j.update(assembly_counts_json(s));
   j["objects"] = s.objects;
   j["objects_failed"] = s.objects_failed;
-  j["objects_escalated"] = s.objects_escalated;
-  j["objects_timed_out"] = s.objects_timed_out;
   j["objects_past_halo"] = s.objects_past_halo;
   j["active_voxels"] = s.active_voxels;
-  j["snap"] = snap_report_json(s.snap);
   j["seconds"] = {{"build", s.seconds_build},         {"broad_phase", s.seconds_broad},
                   {"voxel_culling", s.seconds_voxel}, {"exact_tests", s.seconds_exact},
                   {"fuse", s.seconds_fuse},           {"total", s.seconds_total}};

@@ -218,16 +218,7 @@ int run_fit(const FitCommand& c) {
   seconds["read"] = read_seconds;
   for (const auto& [stage, s] : f.seconds) seconds[stage] = s;
   seconds["total"] = since(start);
-  out["points"] = f.input_points;
-  out["ground_points"] = f.ground_points;
-  out["other_class_points"] = f.other_class_points;
-  out["outlier_points"] = f.outlier_points;
-  out["vegetation_points"] = f.vegetation_points;
-  out["fitted_points"] = f.fitted_points;
-  out["small_cluster_points"] = f.small_cluster_points;
-  out["assigned_points"] = f.assigned_points;
-  out["unassigned_points"] = f.unassigned_points;
-  out["regions"] = f.regions;
+  out.update(city::fit_counts_json(f));
   if (!footprints.source.empty()) out["footprints"] = city::footprints_record(footprints, tile);
   out["cluster_tolerance"] = f.cluster_tolerance;
   Json regions = Json::array();

@@ -1,7 +1,7 @@
 #pragma once
-// The fuzzy mode (kernel/snap.h) as the worker's config and commands give it and as its records
-// write it: one conversion, one JSON form for `csgtile bool`, `csgtile assemble` and the city
-// run's assemble jobs.
+// The fuzzy mode (kernel/snap.h) as the worker's config and commands give it, and the assembly's
+// outcome as its records write it: one conversion, one JSON form for `csgtile bool`, `csgtile
+// assemble` and the city run's assemble jobs.
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -27,6 +27,21 @@ inline nlohmann::ordered_json snap_report_json(const kernel::SnapReport& r) {
           {"faces_snapped", r.faces_snapped},
           {"max_turn_degrees", r.max_turn * 180.0 / M_PI},
           {"max_move", r.max_move}};
+}
+
+/// The assembly's deterministic counts (no timings), as `csgtile assemble` and a city cell's
+/// record give them: primitives read and failed; candidate, culled, exactly tested and
+/// interacting pairs; objects escalated and timed out; what the snap moved.
+inline nlohmann::ordered_json assembly_counts_json(const assembly::AssemblyStats& s) {
+  return {{"primitives_read", s.primitives_read},
+          {"primitives_failed", s.primitives_failed},
+          {"candidate_pairs", s.candidate_pairs},
+          {"culled_pairs", s.culled_pairs},
+          {"exact_tests", s.exact_tests},
+          {"interacting_pairs", s.interacting_pairs},
+          {"objects_escalated", s.objects_escalated},
+          {"objects_timed_out", s.objects_timed_out},
+          {"snap", snap_report_json(s.snap)}};
 }
 
 /// How an object fused after escalation (AssembledObject::escalation): snap_distance,

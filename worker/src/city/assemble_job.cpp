@@ -310,20 +310,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     files.push_back(std::move(entry));
   }
   const assembly::AssemblyStats& s = a.stats;
-  ordered_json stats = {{"primitives_read", s.primitives_read},
-                        {"primitives_failed", s.primitives_failed},
-                        {"candidate_pairs", s.candidate_pairs},
-                        {"culled_pairs", s.culled_pairs},
-                        {"exact_tests", s.exact_tests},
-                        {"interacting_pairs", s.interacting_pairs},
-                        {"objects_in_halo", s.objects},
-                        {"objects", kept.size()},
-                        {"objects_unfused", invalid},
-                        {"objects_escalated", s.objects_escalated},
-                        {"objects_timed_out", s.objects_timed_out},
-                        {"structure_points_in_halo", points.size()},
-                        {"structure_points_over_no_object", points_over_none},
-                        {"snap", snap_report_json(s.snap)}};
+  ordered_json stats = assembly_counts_json(s);
+  stats["objects_in_halo"] = s.objects;
+  stats["objects"] = kept.size();
+  stats["objects_unfused"] = invalid;
+  stats["structure_points_in_halo"] = points.size();
+  stats["structure_points_over_no_object"] = points_over_none;
   // The run manifest's head and export entries (export/manifest.h), then the cell's own.
   ordered_json manifest = manifest_head(config, "cell");
   manifest["cell"] = name;

@@ -189,15 +189,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["seed"] = options.ransac.seed;
   // The fit section as the canonical config JSON writes it: same options, same hash.
   record["fit_options_sha256"] = sha256_hex(config::to_json(config.fit));
-  record["points"] = fit.input_points;
-  record["ground_points"] = fit.ground_points;
-  record["other_class_points"] = fit.other_class_points;
-  record["outlier_points"] = fit.outlier_points;
-  record["vegetation_points"] = fit.vegetation_points;
-  record["fitted_points"] = fit.fitted_points;
-  record["assigned_points"] = fit.assigned_points;
-  record["unassigned_points"] = fit.unassigned_points;
-  record["regions"] = fit.regions;
+  record.update(fit_counts_json(fit));
   if (!footprints.source.empty()) record["footprints"] = footprints_record(footprints, tile);
   record["primitives"] = tile.scene.primitives.size();
   ordered_json per_type = ordered_json::object();

@@ -13,6 +13,19 @@
 
 namespace csgtile::worker::city {
 
+nlohmann::ordered_json fit_counts_json(const fit::FitOutput& f) {
+  return {{"points", f.input_points},
+          {"ground_points", f.ground_points},
+          {"other_class_points", f.other_class_points},
+          {"outlier_points", f.outlier_points},
+          {"vegetation_points", f.vegetation_points},
+          {"fitted_points", f.fitted_points},
+          {"small_cluster_points", f.small_cluster_points},
+          {"assigned_points", f.assigned_points},
+          {"unassigned_points", f.unassigned_points},
+          {"regions", f.regions}};
+}
+
 nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
                                          const FittedTile& tile) {
   return {{"source", source.source},

@@ -48,6 +48,11 @@ struct FittedTile {
 nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
                                          const FittedTile& tile);
 
+/// The fit's point counts as `csgtile fit --json` and a fit job's record give them: points,
+/// ground_points, other_class_points, outlier_points, vegetation_points, fitted_points,
+/// small_cluster_points, assigned_points, unassigned_points, regions.
+nlohmann::ordered_json fit_counts_json(const fit::FitOutput& output);
+
 /// Where a tile's points come from: a local file, or a random-access source (a URL read by
 /// range requests); with a region, only the points inside it (a COPC file reads only the
 /// octree nodes that meet it).
