@@ -13,9 +13,9 @@
 #include <memory>
 #include <numeric>
 
-#include "broad_phase.h"
 #include "csgtile/assembly/voxel_cull.h"
 #include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/broad_phase.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "escalation.h"
@@ -166,7 +166,9 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     for (std::size_t i = 0; i < n; ++i) {
       if (read[i]) live[i] = boxes[i];
     }
-    candidates = detail::overlapping_boxes(live);
+    for (const auto& [a, b] : kernel::overlapping_boxes(live)) {
+      candidates.emplace_back(static_cast<int>(a), static_cast<int>(b));
+    }
   } else {
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t j = i + 1; j < n; ++j) {

@@ -18,6 +18,7 @@
 #include "boolean/fuse_groups.h"
 #include "boolean/fuse_tree.h"
 #include "boolean/model.h"
+#include "csgtile/kernel/broad_phase.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 
@@ -112,26 +113,15 @@ std::vector<std::vector<std::size_t>> fuse_groups(const std::vector<Shape>& shap
     boxes[i] = bounding_box(shapes[i]);
     boxes[i].enlarge(tolerance);
   }
-  // Sweep along x: candidate pairs are boxes whose x-intervals overlap.
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return boxes[a].min.x() < boxes[b].min.x() || (boxes[a].min.x() == boxes[b].min.x() && a < b);
-  });
+  // Components of the broad phase's pairs; a component's root is its smallest member.
   std::vector<std::size_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
   std::function<std::size_t(std::size_t)> root = [&](std::size_t x) {
     return parent[x] == x ? x : parent[x] = root(parent[x]);
   };
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t a = order[i];
-    for (std::size_t j = i + 1; j < n && boxes[order[j]].min.x() <= boxes[a].max.x(); ++j) {
-      const std::size_t b = order[j];
-      if (boxes[a].intersects(boxes[b])) {
-        const std::size_t ra = root(a), rb = root(b);
-        parent[std::max(ra, rb)] = std::min(ra, rb);
-      }
-    }
+  for (const auto& [a, b] : overlapping_boxes(boxes)) {
+    const std::size_t ra = root(a), rb = root(b);
+    parent[std::max(ra, rb)] = std::min(ra, rb);
   }
   std::map<std::size_t, std::vector<std::size_t>> groups;  // keyed by smallest member: input order
   for (std::size_t i = 0; i < n; ++i) groups[root(i)].push_back(i);

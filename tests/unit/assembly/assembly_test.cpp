@@ -10,7 +10,6 @@
 #include <set>
 #include <stop_token>
 
-#include "broad_phase.h"
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/assembly/voxel_cull.h"
 #include "csgtile/kernel/boolean.h"
@@ -37,29 +36,6 @@ std::vector<AssemblyPrimitive> labelled(const std::vector<PrimitiveSpec>& specs)
   std::vector<AssemblyPrimitive> out;
   for (std::size_t i = 0; i < specs.size(); ++i) out.push_back({specs[i], "p" + std::to_string(i)});
   return out;
-}
-
-TEST(BroadPhase, FindsExactlyTheOverlappingBoxes) {
-  std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> u(0, 100), s(0, 8);
-  std::vector<BoundingBox> boxes(400);
-  for (auto& b : boxes) {
-    const Vec3 p(u(rng), u(rng), u(rng) / 10);
-    b.add(p);
-    b.add(p + Vec3(s(rng), s(rng), s(rng)));
-  }
-  std::set<std::pair<int, int>> brute;
-  for (int i = 0; i < 400; ++i) {
-    for (int j = i + 1; j < 400; ++j) {
-      if (boxes[static_cast<std::size_t>(i)].intersects(boxes[static_cast<std::size_t>(j)]))
-        brute.insert({i, j});
-    }
-  }
-  const auto pairs = detail::overlapping_boxes(boxes);
-  const std::set<std::pair<int, int>> found(pairs.begin(), pairs.end());
-  EXPECT_EQ(found, brute);
-  EXPECT_TRUE(std::is_sorted(pairs.begin(), pairs.end()));
-  EXPECT_GT(brute.size(), 50u);
 }
 
 // A random primitive of a type whose sections with the others the kernel computes, in a

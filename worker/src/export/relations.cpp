@@ -2,15 +2,15 @@
 // with the kernel's Booleans (a ∩ b for overlap and containment, a ∪ b for the shared area of
 // touching objects).
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <exception>
-#include <numeric>
-#include <system_error>
-#include <thread>
 
 #include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/broad_phase.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "export/topology_index.h"
@@ -128,63 +128,35 @@ std::vector<ObjectRelation> compute_relations(
     measured[i] = {mp.volume, mp.area, mp.bounds};
     measured[i].box.enlarge(linear_tolerance);
   }
-  // Sweep along x: after sorting by min.x, the candidates of i are the following solids whose
-  // min.x is not beyond i's max.x.
-  std::vector<std::size_t> order(solids.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) {
-    return measured[p].box.min.x() < measured[q].box.min.x();
-  });
+  // Candidate pairs from the kernel's broad phase (boxes grown by the tolerance).
+  std::vector<kernel::BoundingBox> boxes(measured.size());
+  for (std::size_t i = 0; i < measured.size(); ++i) boxes[i] = measured[i].box;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  for (std::size_t oi = 0; oi < order.size(); ++oi) {
-    const std::size_t i = order[oi];
-    if (measured[i].box.empty()) continue;
-    for (std::size_t oj = oi + 1; oj < order.size(); ++oj) {
-      const std::size_t j = order[oj];
-      if (measured[j].box.min.x() > measured[i].box.max.x()) break;
-      if (!measured[i].box.intersects(measured[j].box)) continue;
-      if (skip && skip(std::min(i, j), std::max(i, j))) continue;
-      pairs.emplace_back(std::min(i, j), std::max(i, j));
-    }
+  for (const auto& pair : kernel::overlapping_boxes(boxes)) {
+    if (!skip || !skip(pair.first, pair.second)) pairs.push_back(pair);
   }
-  std::sort(pairs.begin(), pairs.end());
 
-  // Pairs are independent (shapes are immutable and shared safely between threads): workers
-  // take them in turn and each result lands in its pair's slot, so the output does not
-  // depend on the number of threads or on scheduling.
+  // Pairs are independent (shapes are immutable and shared safely between threads): each
+  // result lands in its pair's slot, so the output does not depend on the number of threads
+  // or on scheduling. `threads` bounds TBB's arena (0: TBB's default, one per core).
   std::vector<ObjectRelation> slots(pairs.size());
   std::vector<char> related(pairs.size(), 0);
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t k = next++; k < pairs.size(); k = next++) {
-      const auto [i, j] = pairs[k];
-      ObjectRelation& r = slots[k];
-      r.a = i;
-      r.b = j;
-      try {
-        related[k] = classify(shapes[i], shapes[j], measured[i], measured[j], options, r) ? 1 : 0;
-      } catch (const std::exception& e) {
-        // The kernel does not throw across its API; an allocation failure still might.
-        r.kind = RelationKind::Unknown;
-        r.reason = std::string("exception: ") + e.what();
-        related[k] = 1;
-      }
+  const auto classify_pair = [&](std::size_t k) {
+    const auto [i, j] = pairs[k];
+    ObjectRelation& r = slots[k];
+    r.a = i;
+    r.b = j;
+    try {
+      related[k] = classify(shapes[i], shapes[j], measured[i], measured[j], options, r) ? 1 : 0;
+    } catch (const std::exception& e) {
+      // The kernel does not throw across its API; an allocation failure still might.
+      r.kind = RelationKind::Unknown;
+      r.reason = std::string("exception: ") + e.what();
+      related[k] = 1;
     }
   };
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const std::size_t count =
-      std::min<std::size_t>(threads > 0 ? static_cast<std::size_t>(threads) : hardware,
-                            std::max<std::size_t>(pairs.size(), 1));
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < count; ++t) {
-    try {
-      pool.emplace_back(work);
-    } catch (const std::system_error&) {
-      break;  // no more threads: the ones running (and this one) take every pair
-    }
-  }
-  work();
-  for (std::thread& t : pool) t.join();
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] { tbb::parallel_for(std::size_t{0}, pairs.size(), classify_pair); });
 
   std::vector<ObjectRelation> out;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
