@@ -162,6 +162,16 @@ TEST(RunReport, PageShowsTheFiguresOfASmallRun) {
   }
 }
 
+// The report's "Buildings, worst first" section up to its table's end; empty when missing.
+std::string buildings_table(const ReportInput& in, const fs::path& run) {
+  ReportFiles files;
+  if (!write_run_report(in, run, files).ok()) return {};
+  const std::string page = read_file(run / "report" / "index.html");
+  const auto section = page.find("<h2 id=\"buildings\">Buildings, worst first</h2>");
+  if (section == std::string::npos) return {};
+  return page.substr(section, page.find("</table>", section) - section);
+}
+
 // Buildings worst first: one whose parts did not fuse (LoD1.2 only, its reason shown), then
 // by fit RMS, largest first.
 TEST(RunReport, BuildingsAreListedWorstFirst) {
@@ -176,12 +186,8 @@ TEST(RunReport, BuildingsAreListedWorstFirst) {
   in.cells[0].objects[1].building = rough;
   ReportObject block{"block", {"extrusion"}, 300.0, false, {}, failed};
   in.cells[1].objects.push_back(block);
-  ReportFiles files;
-  ASSERT_TRUE(write_run_report(in, run, files).ok());
-  const std::string page = read_file(run / "report" / "index.html");
-  const auto section = page.find("<h2 id=\"buildings\">Buildings, worst first</h2>");
-  ASSERT_NE(section, std::string::npos);
-  const std::string table = page.substr(section, page.find("</table>", section) - section);
+  const std::string table = buildings_table(in, run);
+  ASSERT_FALSE(table.empty());
   EXPECT_NE(table.find("2 of 3 buildings reached LoD2.2"), std::string::npos) << table;
   const auto first = table.find("<td>block</td>");
   const auto second = table.find("<td>shed</td>");
@@ -210,12 +216,8 @@ TEST(RunReport, BuildingsAreRankedByTheirPointsDistanceToTheModel) {
   loose_fit.model_rmse = 0.21;
   in.cells[0].objects[0].building = tight_fit;
   in.cells[0].objects[1].building = loose_fit;
-  ReportFiles files;
-  ASSERT_TRUE(write_run_report(in, run, files).ok());
-  const std::string page = read_file(run / "report" / "index.html");
-  const auto section = page.find("<h2 id=\"buildings\">Buildings, worst first</h2>");
-  ASSERT_NE(section, std::string::npos);
-  const std::string table = page.substr(section, page.find("</table>", section) - section);
+  const std::string table = buildings_table(in, run);
+  ASSERT_FALSE(table.empty());
   EXPECT_LT(table.find("<td>house</td>"), table.find("<td>shed</td>")) << table;
   EXPECT_NE(table.find("<th>points to model: RMSE (m)</th>"), std::string::npos) << table;
   EXPECT_NE(table.find("<td class=\"num\">0.87</td><td class=\"num\">42 %</td><td "
