@@ -26,6 +26,7 @@
 #include "csgtile/worker/publish.h"
 #include "fetch/fetch.h"
 #include "fetch/input.h"
+#include "little_endian.h"
 
 namespace csgtile::worker::detail {
 
@@ -77,11 +78,8 @@ Json vec_json(const kernel::Vec3& v) { return Json::array({v.x(), v.y(), v.z()})
 Failure write_segments(const std::string& prefix, const fit::FitOutput& f,
                        const std::array<double, 3>& origin) {
   std::string bytes;
-  bytes.resize(f.point_segment.size() * 4);
-  for (std::size_t i = 0; i < f.point_segment.size(); ++i) {
-    const auto v = static_cast<std::uint32_t>(f.point_segment[i]);
-    for (int b = 0; b < 4; ++b) bytes[i * 4 + b] = static_cast<char>((v >> (8 * b)) & 0xFFu);
-  }
+  bytes.reserve(f.point_segment.size() * 4);
+  for (const std::int32_t s : f.point_segment) put_u32(bytes, static_cast<std::uint32_t>(s));
   std::vector<long long> points(f.segments.size(), 0);
   for (auto s : f.point_segment) {
     if (s >= 0) ++points[static_cast<std::size_t>(s)];

@@ -12,6 +12,7 @@
 
 #include "csgtile/kernel/mesh_distance.h"
 #include "csgtile/kernel/tessellation.h"
+#include "little_endian.h"
 
 namespace csgtile::worker::city::detail {
 
@@ -19,28 +20,15 @@ namespace {
 
 constexpr std::string_view kMagic = "CSGTPTS1";
 
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int b = 0; b < 4; ++b) out.push_back(static_cast<char>((v >> (8 * b)) & 0xFFu));
-}
-
-std::uint32_t get_u32(const char* p) {
-  std::uint32_t v = 0;
-  for (int b = 0; b < 4; ++b)
-    v |= static_cast<std::uint32_t>(static_cast<unsigned char>(p[b])) << (8 * b);
-  return v;
-}
-
 }  // namespace
 
 std::string encode_points(std::span<const kernel::Vec3> points) {
   std::string out(kMagic);
   const auto n = static_cast<std::uint64_t>(points.size());
-  put_u32(out, static_cast<std::uint32_t>(n & 0xFFFFFFFFu));
-  put_u32(out, static_cast<std::uint32_t>(n >> 32));
+  put_u64(out, n);
   out.reserve(out.size() + points.size() * 12);
   for (const kernel::Vec3& p : points) {
-    for (int k = 0; k < 3; ++k)
-      put_u32(out, std::bit_cast<std::uint32_t>(static_cast<float>(p[k])));
+    for (int k = 0; k < 3; ++k) put_f32(out, static_cast<float>(p[k]));
   }
   return out;
 }
@@ -53,8 +41,7 @@ Failure decode_points(std::string_view bytes, const std::string& what,
             what + ": not a points file (no " + std::string(kMagic) + " header)"};
   }
   const char* p = bytes.data() + kMagic.size();
-  const std::uint64_t n =
-      static_cast<std::uint64_t>(get_u32(p)) | (static_cast<std::uint64_t>(get_u32(p + 4)) << 32);
+  const std::uint64_t n = get_u64(p);
   const std::size_t body = bytes.size() - kMagic.size() - 8;
   if (n > body / 12 || n * 12 != body) {
     return {ErrorCode::InputInvalid, what + ": holds " + std::to_string(body) +

@@ -2,6 +2,7 @@
 // it, then both are framed as GLB chunks.
 
 #include "export/gltf_writer.h"
+#include "little_endian.h"
 
 #include <algorithm>
 #include <bit>
@@ -31,16 +32,6 @@ constexpr std::size_t kMaxRows = std::size_t{1} << 24;
 // Views start at multiples of 8: EXT_structural_metadata's alignment for its columns, and
 // more than glTF's 4 for vertex attributes.
 constexpr std::size_t kViewAlignment = 8;
-
-// Little-endian encoders, independent of the host's byte order.
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFu));
-}
-void put_u64(std::string& out, std::uint64_t v) {
-  for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFu));
-}
-void put_f32(std::string& out, float v) { put_u32(out, std::bit_cast<std::uint32_t>(v)); }
-void put_f64(std::string& out, double v) { put_u64(out, std::bit_cast<std::uint64_t>(v)); }
 
 void pad(std::string& out, std::size_t alignment, char fill) {
   while (out.size() % alignment != 0) out.push_back(fill);
