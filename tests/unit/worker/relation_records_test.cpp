@@ -1,4 +1,4 @@
-// Relations classified once (city/relation_records.h, IndexOptions::relations_within_cells_known):
+// Relations classified once (city/relation_records.h, IndexOptions::cell_relations):
 // pairs inside a cell come from the cell's record, pairs across cells are classified by the
 // run's index, and the record round-trips whichever way its ids come.
 
@@ -74,8 +74,7 @@ TEST(CellRelations, PairsInsideACellAreTakenPairsAcrossCellsAreClassified) {
   EXPECT_EQ(known[0].b, 2u);
 
   IndexOptions reuse;
-  reuse.relations_within_cells_known = true;
-  reuse.known_relations = known;
+  reuse.cell_relations = known;
   ASSERT_TRUE(write_topology_index(dir.path() / "reuse.gpkg", run, reuse, &stats).ok());
   ASSERT_EQ(stats.relation_pairs.size(), 2u);
   EXPECT_LT(std::pair(stats.relation_pairs[0].a, stats.relation_pairs[0].b),

@@ -205,10 +205,7 @@ Failure write_run_index(const config::Config& config, const RunObjects& run,
   options.chordal_tolerance = config.kernel.chordal_tolerance;
   options.linear_tolerance = config.kernel.linear_tolerance;
   options.threads = config.run.threads;
-  if (run.cell_relations) {
-    options.relations_within_cells_known = true;
-    options.known_relations = *run.cell_relations;
-  }
+  options.cell_relations = run.cell_relations;
   if (run.crs) {
     geo::Crs horizontal = *run.crs;
     horizontal.vertical.reset();  // srs_id names the horizontal EPSG code

@@ -56,7 +56,7 @@ struct RunObjects {
   std::vector<std::string> warnings;  ///< e.g. inputs that do not share one CRS
   /// The relations of objects of the same cell as the cells classified them (indices into
   /// `objects`, a < b), when every cell gave them: the index classifies only pairs across
-  /// cells (IndexOptions::relations_within_cells_known).
+  /// cells (IndexOptions::cell_relations).
   std::optional<std::vector<ObjectRelation>> cell_relations = {};
 };
 

@@ -455,15 +455,15 @@ kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objec
     // Pairs within a cell come classified from the cell's job when it says so; the others are
     // classified here. One list in (a, b) order either way.
     std::function<bool(std::size_t, std::size_t)> skip;
-    if (options.relations_within_cells_known) {
+    if (options.cell_relations) {
       skip = [&objects](std::size_t i, std::size_t j) {
         return objects[i].cell == objects[j].cell;
       };
     }
     std::vector<ObjectRelation> related =
         compute_relations(solids, options.linear_tolerance, options.threads, skip);
-    if (options.relations_within_cells_known) {
-      for (const ObjectRelation& r : options.known_relations) {
+    if (options.cell_relations) {
+      for (const ObjectRelation& r : *options.cell_relations) {
         if (r.a < r.b && r.b < objects.size() && objects[r.a].cell == objects[r.b].cell) {
           related.push_back(r);
         }

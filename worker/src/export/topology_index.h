@@ -151,11 +151,10 @@ struct IndexOptions {
   /// gpkg_contents.last_change of every table. Fixed by default so that the same objects give
   /// the same bytes; a caller that wants the wall clock passes it (format %Y-%m-%dT%H:%M:%fZ).
   std::string last_change = "1970-01-01T00:00:00.000Z";
-  /// When set, the relations of objects of the same `cell` were classified already (by the
-  /// job that built the cell): they are taken from `known_relations` (indices into the
-  /// objects, a < b) and only pairs across cells are classified here.
-  bool relations_within_cells_known = false;
-  std::vector<ObjectRelation> known_relations = {};
+  /// When given, the relations of objects of the same `cell` were classified already (by the
+  /// job that built the cell): they are taken from here (indices into the objects, a < b) and
+  /// only pairs across cells are classified.
+  std::optional<std::vector<ObjectRelation>> cell_relations = {};
 };
 
 /// What a write produced.
