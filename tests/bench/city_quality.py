@@ -15,8 +15,12 @@ view OUT/<run>_distance.png (0.5 m pixels, north up): the farthest building poin
 pixel white within 0.3 m, orange within 1 m, red farther, black with no surface near; other
 points grey; footprints outlined blue.
 
+With --split SIZE the tile is first cut by `csgtile tile` into LAS tiles of SIZE metres and
+the run reads their directory (a run of several tiles: buildings across tile edges must come
+out as from the whole tile); the runs are named <tile>_<mode>_split<SIZE>.
+
 Usage: city_quality.py CSGTILE WORK_DIR [--data DIR] [--tiles delft,ams] [--runs derived,footprints]
-                       [--min-within RUN=V ...] [--max-rmse RUN=V ...]
+                       [--split SIZE] [--min-within RUN=V ...] [--max-rmse RUN=V ...]
 Prints one JSON object. With --min-within / --max-rmse (RUN e.g. delft_footprints: the share
 within 0.3 m and the RMSE inside the footprints), exit 1 when a run misses its bound (a CLI
 test). Exit 77 when no tile is present. Standard library only.
@@ -25,6 +29,8 @@ import argparse
 import json
 import math
 import os
+import shutil
+import subprocess
 import sys
 import time
 
@@ -121,6 +127,7 @@ def main():
     ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--tiles", default="delft,ams")
     ap.add_argument("--runs", default="derived,footprints")
+    ap.add_argument("--split", type=float, default=0.0)
     ap.add_argument("--min-within", action="append", default=[])
     ap.add_argument("--max-rmse", action="append", default=[])
     args = ap.parse_args()
@@ -137,8 +144,15 @@ def main():
             continue
         points = read_las(las)
         buildings = read_footprints(kind, fp, layer)
+        suffix = ""
+        if args.split > 0:
+            suffix = f"_split{args.split:g}"
+            run_input = os.path.join(args.work, tile + suffix)
+            shutil.rmtree(run_input, ignore_errors=True)
+            subprocess.run([args.csgtile, "tile", las, "--size", f"{args.split:g}",
+                            "--out", run_input], check=True, capture_output=True)
         for mode in args.runs.split(","):
-            name = f"{tile}_{mode}"
+            name = f"{tile}_{mode}{suffix}"
             source = city_speed.footprints_source(fp, args.work) if mode == "footprints" else ""
             timing = city_speed.one_run(args.csgtile, args.work, name, run_input, source, layer)
             start = time.monotonic()

@@ -15,6 +15,11 @@ coordinate lists) — and for each run:
     shared area (their party wall: Delft's row houses);
   * every footprint building is one fused solid (LoD2.2; measured: Delft 27 of 27, Amsterdam
     8 of 8).
+The Delft tile is also cut by `csgtile tile` into 50 m tiles (its LAS reference
+3dfier/ahn3_cropped_2.las) and run as a directory of tiles: buildings across the tiles' edges
+are fitted once, by one tile with its neighbours' points, so the same footprints give the same
+buildings as the whole tile, one object each (before: a footprint across two tiles gave an
+object per tile).
 A run whose footprints name a layer the source lacks stops before any job (exit 78, naming
 city.footprints and the layers there are). Prints the counts as JSON. Skips with a message when the shared data is absent; val3dity and
 GDAL are required when the data is present.
@@ -35,11 +40,16 @@ runs = {
     "delft": (os.path.join(data, "laz", "ahn3_cropped_2.laz"),
               os.path.join(data, "3dfier", "bgt_pand.sqlite"), "buildingpart",
               "identificatiebagpnd"),
+    "delft_tiles": (os.path.join(work, "delft_tiles_in"),
+                    os.path.join(data, "3dfier", "bgt_pand.sqlite"), "buildingpart",
+                    "identificatiebagpnd"),
     "ams": (os.path.join(data, "ams", "ahn_2386_9702.las"),
             os.path.join(data, "ams", "bgt_buildings_demo.csv"), "", "id"),
 }
 val3dity = os.path.join(source, "..", "shared", "tools", "val3dity", "val3dity")
-missing = [p for r in runs.values() for p in r[:2] if not os.path.exists(p)]
+delft_las = os.path.join(data, "3dfier", "ahn3_cropped_2.las")
+missing = [p for k, r in runs.items() for p in r[:2] if k != "delft_tiles" and not os.path.exists(p)]
+missing += [] if os.path.exists(delft_las) else [delft_las]
 if missing:
     print(f"skip: shared data absent ({', '.join(missing)})")
     sys.exit(0)
@@ -47,6 +57,9 @@ if not os.path.exists(val3dity):
     sys.exit(f"val3dity is required beside the shared data: {val3dity} is missing")
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
+subprocess.run([binary, "tile", delft_las, "--size", "50", "--out", runs["delft_tiles"][0]],
+               check=True, capture_output=True)
+assert len(os.listdir(runs["delft_tiles"][0])) >= 6, os.listdir(runs["delft_tiles"][0])
 
 
 def source_ids(path, layer, id_field):
@@ -144,12 +157,22 @@ for name, (tile, footprints, layer, id_field) in runs.items():
     walls = [(a, b, s) for a, b, s in db.execute(
         "SELECT object_id, other_id, shared_area FROM object_relations WHERE relation = 'touches'")
         if fp.get(a) and fp.get(b) and fp[a] != fp[b] and s and s > 1.0]
-    if name == "delft":
+    if name.startswith("delft"):
         assert walls, (name, "no party wall between two footprint buildings")
+    if name == "delft_tiles":
+        # Each tile read its neighbours and left the buildings they make to them; the same
+        # footprints made buildings as in the whole tile.
+        assert all(r["neighbours"]["read"] > 0 for r in fits), [r["neighbours"] for r in fits]
+        assert sum(r["neighbours"]["footprints_left_to_neighbours"] for r in fits) > 0, fits
+        assert set(footprint_ids) == summary["delft"]["ids"], (
+            sorted(set(footprint_ids) ^ summary["delft"]["ids"]))
     summary[name] = {"footprints_read": read, "footprint_regions": made,
                      "footprint_buildings": len(footprint_ids), "unfused": unfused,
                      "buildings": buildings, "features_valid": valid,
                      "solids_checked": solids,
                      "party_walls": len(walls) // 2,
-                     "party_wall_area_m2": round(sum(s for _, _, s in walls) / 2, 1)}
+                     "party_wall_area_m2": round(sum(s for _, _, s in walls) / 2, 1),
+                     "ids": set(footprint_ids)}
+for v in summary.values():
+    del v["ids"]
 print(json.dumps(summary))

@@ -12,6 +12,7 @@ namespace csgtile::fit {
 
 namespace {
 
+using kernel::Vec2;
 using kernel::Vec3;
 
 // Sliding minimum (or maximum) of a row of values over a window of 2·half + 1, ignoring
@@ -111,7 +112,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options,
                                           std::span<const geo::Footprint> footprints,
-                                          std::span<const std::uint8_t> returns) {
+                                          std::span<const std::uint8_t> returns,
+                                          const TileShare* share) {
   using kernel::ErrorCode;
   auto bad = [](const std::string& what) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option " + what};
@@ -120,6 +122,10 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     return bad("classes: size differs from points");
   if (!returns.empty() && returns.size() != points.size())
     return bad("returns: size differs from points");
+  if (share != nullptr &&
+      (share->foreign.size() != points.size() || share->footprints.size() != footprints.size())) {
+    return bad("tile share: size differs from the points or the footprints");
+  }
   if (options.outliers.neighbours < 2) return bad("outliers.neighbours must be >= 2");
   if (!(options.outliers.std_ratio > 0.0)) return bad("outliers.std_ratio must be > 0");
   if (!(options.voxel.size >= 0.0) || !std::isfinite(options.voxel.size))
@@ -234,6 +240,19 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   const std::vector<Vec3> cloud = voxel_downsample(clean, options.voxel);
   out.fitted_points = static_cast<long long>(cloud.size());
+  // A neighbour's point of the fitted cloud (with downsampling: the nearest cleaned point's).
+  std::vector<std::uint8_t> foreign;
+  if (share != nullptr) {
+    for (std::uint8_t f : share->foreign) out.neighbour_points += f ? 1 : 0;
+    foreign.assign(cloud.size(), 0);
+    const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
+    const std::vector<std::int32_t> nearest =
+        same ? std::vector<std::int32_t>{} : detail::nearest_of(cloud, clean);
+    for (std::size_t k = 0; k < cloud.size(); ++k) {
+      const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
+      if (c >= 0) foreign[k] = share->foreign[clean_index[static_cast<std::size_t>(c)]];
+    }
+  }
   out.seconds.emplace_back("voxels", seconds_since(start));
 
   if (options.interrupt.fired()) return options.interrupt.error("before the fit's normals stage");
@@ -281,7 +300,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
     footprints = straight_footprints;
   }
-  if (footprints.empty() && out.vegetation_points == 0) {
+  if (footprints.empty() && out.vegetation_points == 0 && share == nullptr) {
     clusters = euclidean_clusters(cloud, options.clusters, &out.cluster_tolerance);
     region_footprint.assign(clusters.size(), -1);
   } else {
@@ -289,9 +308,17 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     std::vector<std::vector<std::uint32_t>> members(footprints.size());
     std::vector<std::uint32_t> loose;  // cloud indices of the points in no footprint
     std::vector<Vec3> rest;
+    auto kind_of = [&](int f) {
+      return share != nullptr ? share->footprints[static_cast<std::size_t>(f)] : ShareKind::whole;
+    };
     for (std::uint32_t i = 0; i < cloud.size(); ++i) {
       if (excluded[i]) continue;
       if (of[i] >= 0) {
+        const ShareKind kind = kind_of(of[i]);
+        if (kind == ShareKind::none || (kind == ShareKind::own_points && foreign[i])) {
+          ++out.points_left_to_neighbours;  // that footprint's building is a neighbour's
+          continue;
+        }
         members[static_cast<std::size_t>(of[i])].push_back(i);
       } else {
         loose.push_back(i);
@@ -299,6 +326,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       }
     }
     for (std::size_t f = 0; f < footprints.size(); ++f) {
+      if (kind_of(static_cast<int>(f)) == ShareKind::none) continue;
       if (members[f].size() < 8) {
         out.rejected.push_back({"footprint " + footprints[f].id,
                                 "only " + std::to_string(members[f].size()) +
@@ -314,13 +342,36 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     out.footprint_regions = static_cast<int>(clusters.size());
     for (auto& c : euclidean_clusters(rest, options.clusters, &out.cluster_tolerance)) {
       for (auto& i : c) i = loose[i];
+      if (share != nullptr && share->clusters) {
+        // The cluster's share, from its points' box (the same in every tile that sees the
+        // whole cluster).
+        Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+        for (auto i : c) {
+          lo = lo.cwiseMin(Vec2(cloud[i].x(), cloud[i].y()));
+          hi = hi.cwiseMax(Vec2(cloud[i].x(), cloud[i].y()));
+        }
+        const ShareKind kind = share->clusters(lo, hi, out.cluster_tolerance);
+        if (kind == ShareKind::none) {
+          ++out.clusters_left_to_neighbours;
+          out.points_left_to_neighbours += static_cast<long long>(c.size());
+          continue;
+        }
+        if (kind == ShareKind::own_points) {
+          ++out.clusters_split_with_neighbours;
+          const auto size = c.size();
+          std::erase_if(c, [&](std::uint32_t i) { return foreign[i] != 0; });
+          out.points_left_to_neighbours += static_cast<long long>(size - c.size());
+          if (c.empty()) continue;
+        }
+      }
       clusters.push_back(std::move(c));
       region_footprint.push_back(-1);
     }
   }
   long long clustered = 0;
   for (const auto& c : clusters) clustered += static_cast<long long>(c.size());
-  out.small_cluster_points = out.fitted_points - out.vegetation_points - clustered;
+  out.small_cluster_points =
+      out.fitted_points - out.vegetation_points - clustered - out.points_left_to_neighbours;
   out.seconds.emplace_back("clusters", seconds_since(start));
 
   if (options.regions.enabled && footprints.empty()) {
@@ -459,7 +510,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   }
   if (options.keep_structure_points) {
     for (std::size_t k = 0; k < cloud.size(); ++k) {
-      if (!excluded[k]) out.structure_points.push_back(cloud[k]);
+      if (!excluded[k] && (foreign.empty() || !foreign[k]))
+        out.structure_points.push_back(cloud[k]);
     }
   }
   out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);

@@ -75,6 +75,48 @@ std::string polygons_of(const OGRGeometry& g, std::vector<FootprintPolygon>& out
   return std::string("a ") + OGRGeometryTypeToName(g.getGeometryType()) + " is no polygon";
 }
 
+// The polygons among a geometry's parts; lines and points (where a footprint only touches
+// the box it was cut to) are no part of it.
+void polygon_parts(const OGRGeometry& g, std::vector<FootprintPolygon>& out) {
+  const OGRwkbGeometryType type = wkbFlatten(g.getGeometryType());
+  if (g.IsEmpty()) return;
+  if (type == wkbMultiPolygon || type == wkbGeometryCollection) {
+    const auto& coll = *g.toGeometryCollection();
+    for (int k = 0; k < coll.getNumGeometries(); ++k) polygon_parts(*coll.getGeometryRef(k), out);
+  } else if (type == wkbPolygon) {
+    std::vector<FootprintPolygon> one;
+    if (polygons_of(g, one).empty()) out.insert(out.end(), one.begin(), one.end());
+  }
+}
+
+// An axis-aligned box as a polygon.
+std::unique_ptr<OGRPolygon> box_polygon(const std::array<double, 4>& b) {
+  auto rect = std::make_unique<OGRPolygon>();
+  OGRLinearRing ring;
+  ring.addPoint(b[0], b[1]);
+  ring.addPoint(b[2], b[1]);
+  ring.addPoint(b[2], b[3]);
+  ring.addPoint(b[0], b[3]);
+  ring.addPoint(b[0], b[1]);
+  rect->addRing(&ring);
+  return rect;
+}
+
+// The union of boxes (one box: itself); null when GEOS fails.
+std::unique_ptr<OGRGeometry> union_of_boxes(const std::vector<std::array<double, 4>>& boxes) {
+  if (boxes.size() == 1) return box_polygon(boxes.front());
+  OGRMultiPolygon all;
+  for (const auto& b : boxes) all.addGeometryDirectly(box_polygon(b).release());
+  CPLErrorReset();
+  return std::unique_ptr<OGRGeometry>(all.UnionCascaded());
+}
+
+// The geometry cut to a region; null when GEOS fails (last_gdal_error says why).
+std::unique_ptr<OGRGeometry> cut_to(const OGRGeometry& g, const OGRGeometry& region) {
+  CPLErrorReset();
+  return std::unique_ptr<OGRGeometry>(g.Intersection(&region));
+}
+
 }  // namespace
 
 kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
@@ -180,6 +222,15 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
   } else {
     layer->SetSpatialFilter(nullptr);
   }
+  std::unique_ptr<OGRGeometry> clip_region, cut_region;
+  if (!query.clip.empty()) {
+    clip_region = union_of_boxes(query.clip);
+    if (!clip_region) {
+      return kernel::Error{ErrorCode::InvalidArgument,
+                           what + ": the region to cut footprints to: " + last_gdal_error()};
+    }
+  }
+  if (query.cut) cut_region = box_polygon(*query.cut);
   layer->ResetReading();
   for (auto& feature : *layer) {
     const std::string fid = std::to_string(feature->GetFID());
@@ -196,25 +247,16 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
       out.skipped.push_back(name + ": does not reproject: " + last_gdal_error());
       continue;
     }
+    OGREnvelope e;
+    geometry->getEnvelope(&e);
+    fp.envelope = {e.MinX, e.MinY, e.MaxX, e.MaxY};
     if (query.bbox) {
-      OGREnvelope e;
-      geometry->getEnvelope(&e);
       const auto& b = *query.bbox;
       if (e.MaxX < b[0] || e.MinX > b[2] || e.MaxY < b[1] || e.MinY > b[3]) continue;
     }
     std::unique_ptr<OGRGeometry> clipped;
-    if (query.bbox && query.clip_to_bbox) {
-      const auto& b = *query.bbox;
-      OGRPolygon rect;
-      OGRLinearRing ring;
-      ring.addPoint(b[0], b[1]);
-      ring.addPoint(b[2], b[1]);
-      ring.addPoint(b[2], b[3]);
-      ring.addPoint(b[0], b[3]);
-      ring.addPoint(b[0], b[1]);
-      rect.addRing(&ring);
-      CPLErrorReset();
-      clipped.reset(geometry->Intersection(&rect));
+    if (clip_region) {
+      clipped = cut_to(*geometry, *clip_region);
       if (!clipped) {
         out.skipped.push_back(name + ": cannot be cut to the bounds: " + last_gdal_error());
         continue;
@@ -225,6 +267,14 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
     if (auto why = polygons_of(*geometry, fp.polygons); !why.empty()) {
       out.skipped.push_back(name + ": " + why);
       continue;
+    }
+    if (query.cut) {
+      const std::unique_ptr<OGRGeometry> part = cut_to(*geometry, *cut_region);
+      if (!part) {
+        out.skipped.push_back(name + ": cannot be cut to the tile: " + last_gdal_error());
+        continue;
+      }
+      polygon_parts(*part, fp.cut);
     }
     out.footprints.push_back(std::move(fp));
   }

@@ -490,5 +490,116 @@ TEST(FitSegment, DerivedOptionsGiveTheSameShapesInAnyUnit) {
   EXPECT_EQ(metres->segments[static_cast<std::size_t>(cyl)].surface.type, ShapeType::Cylinder);
 }
 
+// A tile among neighbours (TileShare): the points of x > 1 are a neighbour's. A cluster the
+// share gives to a neighbour is not fitted (its points counted as left to it), one kept whole
+// is fitted with the neighbour's points, one kept to its own points loses the neighbour's;
+// the structure points are this tile's own only.
+struct Shared {
+  std::vector<std::uint8_t> foreign;
+  TileShare share;
+};
+Shared split_at_x1(const Cloud& c, ShareKind beam_and_column) {
+  Shared s;
+  for (const Vec3& p : c.points) s.foreign.push_back(p.x() > 1.0 ? 1 : 0);
+  s.share.foreign = s.foreign;
+  // The column and beam are the cluster whose box reaches past x = 1.
+  s.share.clusters = [beam_and_column](const kernel::Vec2&, const kernel::Vec2& hi, double) {
+    return hi.x() > 1.0 ? beam_and_column : ShareKind::whole;
+  };
+  return s;
+}
+FitPipelineOptions scene_options() {
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  o.keep_structure_points = true;
+  return o;
+}
+
+TEST(FitSegment, TileShareLeavesANeighboursClusterToIt) {
+  const Cloud c = small_scene();
+  Shared s = split_at_x1(c, ShareKind::none);
+  const auto out = fit_point_cloud(c.points, {}, scene_options(), {}, {}, &s.share);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 0);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Box)], 0);
+  EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Sphere)], 1);
+  EXPECT_EQ(out->clusters_left_to_neighbours, 1);
+  EXPECT_GT(out->points_left_to_neighbours, 6000);  // the column's and the beam's
+  EXPECT_EQ(out->neighbour_points, std::count(s.foreign.begin(), s.foreign.end(), std::uint8_t{1}));
+  for (const Vec3& p : out->structure_points) EXPECT_LE(p.x(), 1.0);
+  // The column's own points are still this tile's structure points (it publishes its own).
+  EXPECT_TRUE(std::any_of(out->structure_points.begin(), out->structure_points.end(),
+                          [](const Vec3& p) { return p.z() > 1.0 && p.norm() < 2.0; }));
+}
+
+TEST(FitSegment, TileShareKeepsAWholeClusterWithTheNeighboursPoints) {
+  const Cloud c = small_scene();
+  Shared s = split_at_x1(c, ShareKind::whole);
+  const auto whole = fit_point_cloud(c.points, {}, scene_options(), {}, {}, &s.share);
+  ASSERT_TRUE(whole.ok()) << whole.error().message;
+  EXPECT_EQ(whole->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
+  EXPECT_EQ(whole->per_type[static_cast<int>(PrimitiveType::Box)], 1);
+  EXPECT_EQ(whole->clusters_left_to_neighbours, 0);
+  EXPECT_EQ(whole->points_left_to_neighbours, 0);
+  // The beam reaches x = 2.7 (its far part from the neighbour's points).
+  double beam_end = 0.0;
+  for (const auto& p : whole->primitives) {
+    if (p.spec.type != PrimitiveType::Box) continue;
+    auto solid = kernel::build_primitive(p.spec, 1e-7);
+    ASSERT_TRUE(solid.ok());
+    beam_end = kernel::bounding_box(solid.value()).max.x();
+  }
+  EXPECT_GT(beam_end, 2.5);
+
+  // Kept to its own points, the beam stops where this tile's points do.
+  s = split_at_x1(c, ShareKind::own_points);
+  const auto own = fit_point_cloud(c.points, {}, scene_options(), {}, {}, &s.share);
+  ASSERT_TRUE(own.ok()) << own.error().message;
+  EXPECT_EQ(own->clusters_split_with_neighbours, 1);
+  EXPECT_GT(own->points_left_to_neighbours, 0);
+  for (const auto& p : own->primitives) {
+    auto solid = kernel::build_primitive(p.spec, 1e-7);
+    ASSERT_TRUE(solid.ok());
+    EXPECT_LT(kernel::bounding_box(solid.value()).max.x(), 1.2) << p.id;
+  }
+}
+
+// A footprint whose building a neighbour makes: its points are left out and it is no
+// "footprint without building"; kept whole, its primitives carry its id. Spans of the wrong
+// size are an error naming the share.
+TEST(FitSegment, TileShareOfFootprints) {
+  const Cloud c = small_scene();
+  geo::Footprint sphere;
+  sphere.id = "sphere-house";
+  sphere.polygons.push_back({{{-4.5, 0.5}, {-1.5, 0.5}, {-1.5, 3.5}, {-4.5, 3.5}}, {}});
+  const std::vector<geo::Footprint> footprints{sphere};
+  std::vector<std::uint8_t> foreign(c.points.size(), 0);
+  std::vector<ShareKind> kinds{ShareKind::none};
+  TileShare share;
+  share.foreign = foreign;
+  share.footprints = kinds;
+  const auto left = fit_point_cloud(c.points, {}, scene_options(), footprints, {}, &share);
+  ASSERT_TRUE(left.ok()) << left.error().message;
+  EXPECT_EQ(left->footprint_regions, 0);
+  EXPECT_TRUE(left->footprints_without_building.empty());
+  EXPECT_GE(left->points_left_to_neighbours, 4000);
+  for (const auto& p : left->primitives) EXPECT_TRUE(p.building.empty()) << p.id;
+
+  kinds = {ShareKind::whole};
+  const auto kept = fit_point_cloud(c.points, {}, scene_options(), footprints, {}, &share);
+  ASSERT_TRUE(kept.ok()) << kept.error().message;
+  EXPECT_EQ(kept->footprint_regions, 1);
+  EXPECT_TRUE(std::any_of(kept->primitives.begin(), kept->primitives.end(),
+                          [](const auto& p) { return p.building == "sphere-house"; }));
+
+  kinds.clear();
+  share.footprints = kinds;
+  const auto bad = fit_point_cloud(c.points, {}, scene_options(), footprints, {}, &share);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("tile share"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace csgtile::fit

@@ -89,7 +89,8 @@ TEST(Footprints, ReprojectsToTheRunCrsAndFiltersByItsBounds) {
   ASSERT_EQ(near.value().footprints.size(), 1u);
   EXPECT_EQ(near.value().footprints[0].id, "A1");
   // ... and cut to them: A1 ends at x = 155005 (its hole, west of it, stays).
-  FootprintQuery cut{"EPSG:28992", std::array<double, 4>{154900, 462900, 155005, 463100}, true};
+  FootprintQuery cut{"EPSG:28992", std::array<double, 4>{154900, 462900, 155005, 463100}};
+  cut.clip = {*cut.bbox};
   auto clipped = read_footprints({(dir / "b.geojson").string(), "", "bag_id"}, cut);
   ASSERT_TRUE(clipped.ok()) << clipped.error().message;
   ASSERT_EQ(clipped.value().footprints.size(), 1u);
@@ -100,6 +101,23 @@ TEST(Footprints, ReprojectsToTheRunCrsAndFiltersByItsBounds) {
   EXPECT_DOUBLE_EQ(x_max, 155005.0);
   EXPECT_NEAR(x_min, 155000.0 - 14.2, 3.0);
   EXPECT_EQ(p.holes.size(), 1u);
+  // Cut to the union of two boxes meeting at x = 155002 (two tiles' extents): one polygon, no
+  // slit along the seam; and also cut to the first box alone (Footprint::cut), its envelope
+  // the whole feature's.
+  cut.clip = {{154900, 462900, 155002, 463100}, {155002, 462900, 155005, 463100}};
+  cut.cut = std::array<double, 4>{154900, 462900, 155002, 463100};
+  auto seam = read_footprints({(dir / "b.geojson").string(), "", "bag_id"}, cut);
+  ASSERT_TRUE(seam.ok()) << seam.error().message;
+  ASSERT_EQ(seam.value().footprints.size(), 1u);
+  const Footprint& f = seam.value().footprints[0];
+  ASSERT_EQ(f.polygons.size(), 1u);
+  EXPECT_EQ(f.polygons[0].outer.size(), p.outer.size());
+  ASSERT_EQ(f.cut.size(), 1u);
+  double cut_max = -INFINITY;
+  for (const kernel::Vec2& q : f.cut[0].outer) cut_max = std::max(cut_max, q.x());
+  EXPECT_DOUBLE_EQ(cut_max, 155002.0);
+  EXPECT_GT(f.envelope[2], 155005.0);
+  EXPECT_NEAR(f.envelope[0], x_min, 1e-6);
 }
 
 TEST(Footprints, ErrorsNameWhatIsWrong) {

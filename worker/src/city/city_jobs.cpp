@@ -5,13 +5,16 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 
 #include "city/city_internal.h"
+#include "city/tile_share.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
@@ -142,14 +145,28 @@ std::string index_key(const std::string& run) { return "index:" + run + ":run"; 
 namespace {
 
 /// One fit job's tile: an input file, or one cell of a COPC input (`cell` set: the job reads
-/// the octree nodes meeting the cell grown by city.halo and keeps the primitives anchored in
-/// the cell). `id` names it in queue keys and labels: the input, with " @<cell>" for cells.
+/// the octree nodes meeting the cell grown by city.halo and shares the buildings across its
+/// edges with the neighbouring cells, tile_share.h). `id` names it in queue keys and labels:
+/// the input, with " @<cell>" for cells.
 struct Tile {
   std::string id;
   std::string input;
   std::optional<detail::Cell> cell;
   std::size_t index = 0;
+  /// Of a LAS/LAZ tile in a run of several: its header's xy bounds (its fit reads the points
+  /// of the tiles around it, tile_share.h).
+  std::optional<Extent> extent = {};
 };
+
+bool is_las_name(const std::string& input) {
+  std::string path = input.substr(0, input.find_first_of("?#"));
+  for (char& c : path) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  auto ends = [&](const char* e) {
+    const std::size_t n = std::char_traits<char>::length(e);
+    return path.size() > n && path.compare(path.size() - n, n, e) == 0;
+  };
+  return ends(".las") || ends(".laz");
+}
 
 bool is_copc_name(const std::string& input) {
   std::string path = input.substr(0, input.find_first_of("?#"));
@@ -220,6 +237,21 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
       out.push_back({input + " @" + cell.name(), input, cell, out.size()});
     }
   }
+  // Several LAS/LAZ tiles: each one's extent from its header, so that each fit reads its
+  // neighbours' points near its edges. A header that cannot be read leaves its tile without
+  // (its fit job fails with the reader's reason).
+  const auto plain = std::count_if(out.begin(), out.end(),
+                                   [](const Tile& t) { return !t.cell && is_las_name(t.input); });
+  if (plain < 2) return {};
+  for (Tile& t : out) {
+    if (t.cell || !is_las_name(t.input)) continue;
+    std::unique_ptr<geo::LasReader> reader;
+    if (!fetch::open_las(t.input, fetch::policy_of(config.fetch), reader).ok()) continue;
+    const geo::LasHeader& h = reader->header();
+    if (h.min[0] <= h.max[0] && h.min[1] <= h.max[1]) {
+      t.extent = Extent{h.min[0], h.min[1], h.max[0], h.max[1]};
+    }
+  }
   return {};
 }
 
@@ -242,6 +274,12 @@ std::vector<Tile> tile_inputs(const config::Config& config) {
   for (const auto& t : doc["tiles"]) {
     if (t.is_string()) {
       out.push_back({t.get<std::string>(), t.get<std::string>(), std::nullopt, out.size()});
+    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
+               t.contains("extent") && t["extent"].is_array() && t["extent"].size() == 4) {
+      Extent e{};
+      for (std::size_t k = 0; k < 4; ++k) e[k] = t["extent"][k].get<double>();
+      const std::string input = t["input"].get<std::string>();
+      out.push_back({input, input, std::nullopt, out.size(), e});
     } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
                t.contains("cell") && t["cell"].is_array() && t["cell"].size() == 2 &&
                t["cell"][0].is_number_integer() && t["cell"][1].is_number_integer()) {
@@ -268,15 +306,43 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
     for (const Tile& t : expanded) {
       if (t.cell) {
         doc["tiles"].push_back({{"input", t.input}, {"cell", {t.cell->column, t.cell->row}}});
+      } else if (t.extent) {
+        doc["tiles"].push_back({{"input", t.input}, {"extent", *t.extent}});
       } else {
         doc["tiles"].push_back(t.input);
       }
     }
     if (Failure f = write_file_atomic(tiles_file(config), doc.dump(2) + "\n"); !f.ok()) return f;
   }
-  for (const Tile& t : tile_inputs(config)) {
+  // Each LAS/LAZ tile's neighbours: the tiles that can own a building it sees.
+  const std::vector<Tile> tiles = tile_inputs(config);
+  // A cell of a COPC input: the cell's square.
+  auto extent_of = [&config](const Tile& t) -> std::optional<Extent> {
+    if (!t.cell) return t.extent;
+    const auto o = detail::cell_origin(*t.cell, config.city.cell_size);
+    return Extent{o[0], o[1], o[0] + config.city.cell_size, o[1] + config.city.cell_size};
+  };
+  std::vector<TileExtent> extents;
+  std::vector<std::size_t> of_tile(tiles.size(), SIZE_MAX);
+  for (const Tile& t : tiles) {
+    const auto e = extent_of(t);
+    if (!e) continue;
+    of_tile[t.index] = extents.size();
+    extents.push_back({t.index, t.input, *e});
+  }
+  const auto near = neighbours_of(extents, 2.0 * config.city.halo);
+  for (const Tile& t : tiles) {
     nlohmann::json payload = {{"input", t.input}, {"tile", t.index}};
     if (t.cell) payload["cell"] = {t.cell->column, t.cell->row};
+    if (of_tile[t.index] != SIZE_MAX) {
+      payload["extent"] = extents[of_tile[t.index]].extent;
+      payload["neighbours"] = nlohmann::json::array();
+      for (std::size_t k : near[of_tile[t.index]]) {
+        const TileExtent& n = extents[k];
+        payload["neighbours"].push_back(
+            {{"input", n.input}, {"tile", n.tile}, {"extent", n.extent}});
+      }
+    }
     if (queue.enqueue(fit_key(config.run.name, t.id), "fit", payload.dump(), failure)) ++added;
     if (!failure.ok()) return failure;
   }

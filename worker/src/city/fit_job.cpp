@@ -36,8 +36,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
   }
   // A cell of a COPC input: only the octree nodes meeting the cell and its halo are read
-  // (by range requests for a URL: no download of the file), and only the primitives
-  // anchored in the cell are kept (the neighbouring cells' jobs keep theirs).
+  // (by range requests for a URL: no download of the file); the buildings across its edges
+  // are shared with the neighbouring cells (tile_share.h).
   std::optional<Cell> only_cell;
   TileSource source;
   if (payload.contains("cell")) {
@@ -70,6 +70,43 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     source.path = local.path;
   }
 
+  // A LAS/LAZ tile among others: the tiles around it, and the local files of those whose
+  // points its fit reads (tile_share.h).
+  std::optional<TileNeighbours> around;
+  std::vector<std::string> unfetched;
+  if (payload.contains("extent") && payload.contains("neighbours")) {
+    auto extent_of = [](const nlohmann::json& e) {
+      Extent out{};
+      for (std::size_t k = 0; k < 4; ++k) out[k] = e.at(k).get<double>();
+      return out;
+    };
+    around.emplace();
+    around->where.self = {payload.value("tile", std::size_t{0}), input,
+                          extent_of(payload["extent"])};
+    around->where.halo = config.city.halo;
+    // A COPC cell's read holds its halo: the neighbouring cells' points come with it.
+    around->own_read_is_shared = only_cell.has_value();
+    const Extent region = around->where.read_region();
+    for (const auto& n : payload["neighbours"]) {
+      TileExtent t{n.at("tile").get<std::size_t>(), n.at("input").get<std::string>(),
+                   extent_of(n.at("extent"))};
+      std::filesystem::path path;
+      if (t.input != input && t.extent[2] >= region[0] && t.extent[0] <= region[2] &&
+          t.extent[3] >= region[1] && t.extent[1] <= region[3]) {
+        fetch::LocalInput near;
+        // A failure in transit is retried (the job's result must not depend on it).
+        if (Failure f = fetch::resolve_input(t.input, config, near); !f.ok()) {
+          if (f.code == ErrorCode::Network) return f;
+          unfetched.push_back(t.input + ": " + f.message);
+        } else {
+          path = near.path;
+        }
+      }
+      around->where.neighbours.push_back(std::move(t));
+      around->paths.push_back(std::move(path));
+    }
+  }
+
   clock.enter("fit");
   fit::FitPipelineOptions options = fit_options(config);
   options.interrupt.stop = stop;
@@ -80,7 +117,8 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   if (only_cell) name += "_" + only_cell->name();
   const geo::FootprintSource footprints{config.city.footprints, config.city.footprints_layer,
                                         config.city.footprints_id};
-  if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile, footprints);
+  if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile, footprints,
+                           around ? &*around : nullptr);
       !f.ok()) {
     // A range read that failed in transit keeps its own code (Network: the job is retried).
     if (range_stats && !range_stats->last_failure.ok()) return range_stats->last_failure;
@@ -141,7 +179,9 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     if (box.empty())
       return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
     const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
-    if (only_cell && (cell.column != only_cell->column || cell.row != only_cell->row)) {
+    // Among neighbours the tile share decided which buildings are this fit's; a cell
+    // without (a run enqueued before) keeps the primitives anchored in it.
+    if (only_cell && !around && (cell.column != only_cell->column || cell.row != only_cell->row)) {
       ++other_cells;  // anchored in a neighbour cell: that cell's job keeps it
       continue;
     }
@@ -165,7 +205,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["tile"] = payload.value("tile", 0);
   if (only_cell) {
     record["cell"] = only_cell->name();
-    record["primitives_of_other_cells"] = other_cells;
+    if (!around) record["primitives_of_other_cells"] = other_cells;
   }
   if (range_stats) {
     record["range_reads"] = {{"requests", range_stats->requests}, {"bytes", range_stats->bytes}};
@@ -191,6 +231,10 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["fit_options_sha256"] = sha256_hex(config::to_json(config.fit));
   record.update(fit_counts_json(fit));
   if (!footprints.source.empty()) record["footprints"] = footprints_record(footprints, tile);
+  if (around) {
+    record["neighbours"] = neighbours_record(tile);
+    for (const std::string& u : unfetched) record["neighbours"]["skipped"].push_back(u);
+  }
   record["primitives"] = tile.scene.primitives.size();
   ordered_json per_type = ordered_json::object();
   for (const geo::ScenePrimitive& p : tile.scene.primitives) {

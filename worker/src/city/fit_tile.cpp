@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <span>
 
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/las.h"
@@ -26,6 +27,40 @@ nlohmann::ordered_json fit_counts_json(const fit::FitOutput& f) {
           {"regions", f.regions}};
 }
 
+nlohmann::ordered_json neighbours_record(const FittedTile& tile) {
+  return {{"read", tile.neighbours_read},
+          {"skipped", tile.neighbours_skipped},
+          {"points", tile.output.neighbour_points},
+          {"points_left_to_neighbours", tile.output.points_left_to_neighbours},
+          {"clusters_left_to_neighbours", tile.output.clusters_left_to_neighbours},
+          {"clusters_split", tile.output.clusters_split_with_neighbours},
+          {"footprints_left_to_neighbours", tile.footprints_left_to_neighbours},
+          {"footprints_split", tile.footprints_split}};
+}
+
+namespace {
+
+// Appends every point of `reader` (coordinates less `origin`, classes when `classes_wanted`,
+// returns). Errors: the reader's.
+Failure append_points(geo::PointReader& reader, const kernel::Vec3& origin, bool classes_wanted,
+                      std::vector<kernel::Vec3>& raw, std::vector<std::uint8_t>& classes,
+                      std::vector<std::uint8_t>& returns) {
+  const bool has_classes = reader.info().fields.classification;
+  geo::PointBatch batch;
+  for (;;) {
+    auto n = reader.read(batch, 1 << 16);
+    if (!n.ok()) return {from_kernel(n.error().code), n.error().message};
+    if (n.value() == 0) return {};
+    for (const auto& p : batch.points) {
+      raw.push_back(kernel::Vec3(p.x, p.y, p.z) - origin);
+      if (classes_wanted) classes.push_back(has_classes ? p.classification : 0);
+      returns.push_back(p.number_of_returns);
+    }
+  }
+}
+
+}  // namespace
+
 nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
                                          const FittedTile& tile) {
   return {{"source", source.source},
@@ -38,7 +73,7 @@ nlohmann::ordered_json footprints_record(const geo::FootprintSource& source,
 
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
                  const std::string& crs_override, FittedTile& out,
-                 const geo::FootprintSource& footprints) {
+                 const geo::FootprintSource& footprints, const TileNeighbours* around) {
   const auto start = std::chrono::steady_clock::now();
   out = FittedTile{};
   // Every point is read (the pipeline needs the whole tile), in the local frame. Only
@@ -96,16 +131,9 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   std::vector<kernel::Vec3> raw;
   std::vector<std::uint8_t> classes, returns;
   const bool has_classes = reader.info().fields.classification;
-  geo::PointBatch batch;
-  for (;;) {
-    auto n = reader.read(batch, 1 << 16);
-    if (!n.ok()) return {from_kernel(n.error().code), n.error().message};
-    if (n.value() == 0) break;
-    for (const auto& p : batch.points) {
-      raw.emplace_back(p.x, p.y, p.z);
-      if (has_classes) classes.push_back(p.classification);
-      returns.push_back(p.number_of_returns);
-    }
+  if (Failure f = append_points(reader, kernel::Vec3::Zero(), has_classes, raw, classes, returns);
+      !f.ok()) {
+    return f;
   }
   // The tile-local frame: the LAS offset when the points lie within 10 km of it, else (other
   // formats, or an offset of 0 under national coordinates of 1e5 m, as AHN3's) the floor of
@@ -122,16 +150,65 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       origin = {std::floor(x0), std::floor(y0), las == nullptr ? 0.0 : origin[2]};
     }
   }
+  // A read that holds the neighbours' points too: each point is its owner's (decided in CRS
+  // coordinates, as every tile decides it).
+  std::vector<std::uint8_t> foreign;
+  if (around != nullptr) {
+    foreign.reserve(raw.size());
+    for (const auto& p : raw) {
+      const bool own = !around->own_read_is_shared || owns_point(around->where, {p.x(), p.y()});
+      foreign.push_back(own ? 0 : 1);
+    }
+  }
   const kernel::Vec3 o(origin[0], origin[1], origin[2]);
   for (auto& p : raw) p -= o;
+
+  // The neighbours' points in the read region (those of a tile in another CRS are not read).
+  const std::size_t own_points = raw.size();
+  if (around != nullptr) {
+    const Extent r = around->where.read_region();
+    geo::PointReadOptions near_options = read_options;
+    near_options.region = geo::Bounds3{{r[0], r[1], -INFINITY}, {r[2], r[3], INFINITY}};
+    for (std::size_t k = 0; k < around->paths.size(); ++k) {
+      if (around->paths[k].empty()) continue;  // not near enough
+      const std::string& input = around->where.neighbours[k].input;
+      // A neighbour that cannot be read is its own job's failure; here it is named.
+      auto near = geo::open_point_file(around->paths[k], near_options);
+      if (!near.ok()) {
+        out.neighbours_skipped.push_back(input + ": " + near.error().message);
+        continue;
+      }
+      const auto* near_las = dynamic_cast<const geo::LasReader*>(near.value().get());
+      if (las != nullptr && near_las != nullptr) {
+        auto own = geo::las_file_crs(las->crs(), "");
+        auto theirs = geo::las_file_crs(near_las->crs(), "");
+        if (own.ok() != theirs.ok() ||
+            (own.ok() && geo::crs_difference(own.value(), theirs.value()))) {
+          out.neighbours_skipped.push_back(input + ": its CRS differs from this tile's");
+          continue;
+        }
+      }
+      const std::size_t before = raw.size();
+      if (Failure f = append_points(*near.value(), o, has_classes, raw, classes, returns);
+          !f.ok()) {
+        raw.resize(before), returns.resize(before);
+        if (has_classes) classes.resize(before);
+        out.neighbours_skipped.push_back(input + ": " + f.message);
+        continue;
+      }
+      ++out.neighbours_read;
+    }
+    foreign.resize(raw.size(), 1);
+  }
   out.read_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // Footprints meeting the points' extent, cut to it, in the tile's frame.
+  // Footprints meeting the points' extent, cut to it, in the tile's frame; among neighbours,
+  // those meeting the read region, each also cut to the tile's extent.
   std::vector<geo::Footprint> buildings;
   if (!footprints.source.empty()) {
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-    for (const auto& p : raw) {
+    for (const auto& p : std::span(raw).first(own_points)) {
       if (!p.allFinite()) continue;
       x0 = std::min(x0, p.x()), y0 = std::min(y0, p.y());
       x1 = std::max(x1, p.x()), y1 = std::max(y1, p.y());
@@ -141,7 +218,20 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       geo::FootprintQuery query;
       query.target_crs = crs_text;
       query.bbox = std::array<double, 4>{x0 + o.x(), y0 + o.y(), x1 + o.x(), y1 + o.y()};
-      query.clip_to_bbox = true;
+      query.clip = {*query.bbox};
+      if (around != nullptr) {
+        // Among neighbours: over the read region, cut to where the tiles' data is (their
+        // extents grown by the footprint buffer: no slit along the seams between them), and
+        // each also cut to this tile's extent (for a building fitted in parts).
+        query.bbox = around->where.read_region();
+        query.clip = {around->where.self.extent};
+        for (const TileExtent& t : around->where.neighbours) query.clip.push_back(t.extent);
+        for (auto& e : query.clip) {
+          e = {e[0] - fit::kFootprintBuffer, e[1] - fit::kFootprintBuffer,
+               e[2] + fit::kFootprintBuffer, e[3] + fit::kFootprintBuffer};
+        }
+        query.cut = around->where.self.extent;
+      }
       auto read = geo::read_footprints(footprints, query);
       if (!read.ok()) {
         return {read.error().code == kernel::ErrorCode::IoError ? ErrorCode::Io
@@ -151,10 +241,12 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       buildings = std::move(read.value().footprints);
       out.footprints_skipped = std::move(read.value().skipped);
       for (auto& b : buildings) {
-        for (auto& polygon : b.polygons) {
-          for (auto& q : polygon.outer) q -= kernel::Vec2(o.x(), o.y());
-          for (auto& h : polygon.holes) {
-            for (auto& q : h) q -= kernel::Vec2(o.x(), o.y());
+        for (auto* polygons : {&b.polygons, &b.cut}) {
+          for (auto& polygon : *polygons) {
+            for (auto& q : polygon.outer) q -= kernel::Vec2(o.x(), o.y());
+            for (auto& h : polygon.holes) {
+              for (auto& q : h) q -= kernel::Vec2(o.x(), o.y());
+            }
           }
         }
       }
@@ -162,9 +254,35 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     out.footprints_read = static_cast<long long>(buildings.size());
   }
 
+  // Among neighbours: which buildings are this tile's (tile_share.h), in CRS coordinates.
+  std::vector<fit::ShareKind> kinds;
+  fit::TileShare share;
+  if (around != nullptr) {
+    const kernel::Vec2 o2(o.x(), o.y());
+    for (geo::Footprint& b : buildings) {
+      // From the footprint as every tile reads it (its envelope before any cut).
+      const kernel::Vec2 buffer(fit::kFootprintBuffer, fit::kFootprintBuffer);
+      const kernel::Vec2 lo(b.envelope[0], b.envelope[1]), hi(b.envelope[2], b.envelope[3]);
+      fit::ShareKind kind = footprint_share(around->where, lo - buffer, hi + buffer);
+      if (kind == fit::ShareKind::own_points && b.cut.empty()) kind = fit::ShareKind::none;
+      if (kind == fit::ShareKind::own_points) {
+        b.polygons = b.cut;  // this tile's part
+        out.footprints_split.push_back(b.id);
+      }
+      if (kind == fit::ShareKind::none) ++out.footprints_left_to_neighbours;
+      kinds.push_back(kind);
+    }
+    share.foreign = foreign;
+    share.footprints = kinds;
+    share.clusters = [around, o2](const kernel::Vec2& lo, const kernel::Vec2& hi, double tol) {
+      return cluster_share(around->where, lo + o2, hi + o2, tol);
+    };
+  }
+
   // Returns per pulse: only formats that record them (every LAS and LAZ).
   if (las == nullptr) returns.clear();
-  auto fitted = fit::fit_point_cloud(raw, classes, options, buildings, returns);
+  auto fitted = fit::fit_point_cloud(raw, classes, options, buildings, returns,
+                                     around != nullptr ? &share : nullptr);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
   out.origin = origin;

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "city/tile_share.h"
 #include "csgtile/config/config.h"
 #include "csgtile/fit/segment.h"
 #include "csgtile/geo/byte_source.h"
@@ -40,7 +41,30 @@ struct FittedTile {
   /// that gave none, with their reasons.
   long long footprints_read = 0;
   std::vector<std::string> footprints_skipped;
+  /// With neighbours (TileNeighbours): the tiles read, and those not read with their reasons;
+  /// footprints whose building a neighbour makes, and those larger than the halo, fitted in
+  /// parts (this tile's: the footprint cut to its extent).
+  long long neighbours_read = 0;
+  std::vector<std::string> neighbours_skipped = {};
+  long long footprints_left_to_neighbours = 0;
+  std::vector<std::string> footprints_split = {};
 };
+
+/// The tiles around a tile of a run of several, whose points its fit reads within the halo
+/// (tile_share.h): where they are, and each neighbour's local file (the job resolves URLs),
+/// in the order of `where.neighbours`; an empty path for one not to be read (it does not meet
+/// the read region, or could not be fetched: named in FittedTile::neighbours_skipped).
+struct TileNeighbours {
+  TileNeighbourhood where;
+  std::vector<std::filesystem::path> paths;
+  /// The tile's own read holds its neighbours' points too (a cell of a COPC input, read with
+  /// its halo): each point is its owner's (owns_point).
+  bool own_read_is_shared = false;
+};
+
+/// A fit record's account of the neighbours (fit jobs): tiles read and skipped, their points,
+/// the points, clusters and footprints left to them or split with them.
+nlohmann::ordered_json neighbours_record(const FittedTile& tile);
 
 /// The footprints' part of a fit's record (fit jobs, `csgtile fit --json`): the source, the
 /// footprints read, the buildings made and their points, the ids without a building and the
@@ -68,9 +92,13 @@ struct TileSource {
 /// to its CRS (as stored when the tile has none), make one building each (fit_point_cloud). Errors:
 /// as the readers (Io, InputInvalid, Unsupported), ConfigInvalid (bad options or override),
 /// InputInvalid / Io (footprints that cannot be read, naming them).
+/// With `around`, the neighbours' points in this tile's read region are read too, and each
+/// building across its edges is fitted by one tile (fit::TileShare); footprints are read over
+/// the read region, uncut.
 Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipelineOptions& options,
                  const std::string& crs_override, FittedTile& out,
-                 const geo::FootprintSource& footprints = {});
+                 const geo::FootprintSource& footprints = {},
+                 const TileNeighbours* around = nullptr);
 inline Failure fit_tile(const std::filesystem::path& path, const std::string& name,
                         const fit::FitPipelineOptions& options, const std::string& crs_override,
                         FittedTile& out) {

@@ -25,6 +25,10 @@ struct FootprintPolygon {
 struct Footprint {
   std::string id;  ///< the id attribute's value, or the feature id when none was named
   std::vector<FootprintPolygon> polygons;
+  /// With FootprintQuery::cut: the polygons cut to that box (empty when none is left).
+  std::vector<FootprintPolygon> cut = {};
+  /// The feature's envelope, reprojected, before any cut: [xmin, ymin, xmax, ymax].
+  std::array<double, 4> envelope = {};
 };
 
 /// Where footprints come from.
@@ -41,8 +45,12 @@ struct FootprintQuery {
   std::string target_crs;
   /// Only features whose reprojected envelope meets [xmin, ymin, xmax, ymax] (target CRS).
   std::optional<std::array<double, 4>> bbox;
-  /// ... and their polygons cut to it (a tile's buildings end where its data ends).
-  bool clip_to_bbox = false;
+  /// Their polygons cut to the union of these boxes (a run's buildings end where its data
+  /// ends); none: as they are.
+  std::vector<std::array<double, 4>> clip = {};
+  /// Also gives each footprint's polygons cut to [xmin, ymin, xmax, ymax] (Footprint::cut),
+  /// beside its polygons as they are (a tile's part of a building larger than its halo).
+  std::optional<std::array<double, 4>> cut = {};
   /// Only check: open the source, find the layer and the attribute, make the transformation;
   /// read no feature (a run's configuration checked before its jobs start).
   bool check_only = false;

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -228,6 +229,35 @@ struct FitOutput {
   /// (above the ground, of a kept class, not outliers; downsampled when `voxel` is set)
   /// without the points taken for vegetation, in the cloud's order.
   std::vector<kernel::Vec3> structure_points = {};
+  /// With a TileShare: the neighbours' points given, and the fitted points left to the
+  /// neighbours' fits (in buildings they make, or own points of a building kept `none`).
+  long long neighbour_points = 0;
+  long long points_left_to_neighbours = 0;
+  int clusters_left_to_neighbours = 0;
+  int clusters_split_with_neighbours = 0;  ///< kept `own_points`: larger than the halo
+};
+
+/// Which of a building's points a tile's fit keeps, in a run of several tiles.
+enum class ShareKind {
+  whole,       ///< all of them, its neighbours' too: the building is this fit's
+  own_points,  ///< this tile's own: the building is larger than the halo, each tile fits its part
+  none,        ///< none: a neighbouring tile's fit makes it
+};
+
+/// A tile fitted with its neighbours' points (each tile of a run read with the points of the
+/// tiles around it within city.halo), so that a building across a tile edge is fitted once,
+/// whole, by one tile's fit: which points are the neighbours' and which buildings are this
+/// fit's. Points in no kept building are never fitted twice.
+struct TileShare {
+  /// Per input point: 1 for a neighbour's. They serve the terrain and the buildings kept
+  /// `whole`; they are never among the structure points (each tile publishes its own).
+  std::span<const std::uint8_t> foreign;
+  /// Per footprint (the `footprints` given): how much of its building this fit makes.
+  std::span<const ShareKind> footprints;
+  /// For each cluster of the points in no footprint, from its points' xy box and the
+  /// clustering distance: how much of it this fit keeps. Null: every cluster whole.
+  std::function<ShareKind(const kernel::Vec2& lo, const kernel::Vec2& hi, double tolerance)>
+      clusters;
 };
 
 /// Ground → outliers → voxels → normals → clusters (→ grown regions) → per region: RANSAC,
@@ -238,12 +268,14 @@ struct FitOutput {
 /// one building standing exactly on it (PrimitiveOptions::footprint), its primitives carrying
 /// its id (ScenePrimitive::building); only the other points are clustered. A footprint with
 /// too few points is a rejection naming it. Errors: InvalidArgument for bad options (naming
-/// the option), Cancelled (options.interrupt fired).
+/// the option), Cancelled (options.interrupt fired). With `share`, the points and buildings
+/// of a tile among neighbours (TileShare); its spans sized as the points and the footprints.
 kernel::Result<FitOutput> fit_point_cloud(std::span<const kernel::Vec3> points,
                                           std::span<const std::uint8_t> classes,
                                           const FitPipelineOptions& options,
                                           std::span<const geo::Footprint> footprints = {},
-                                          std::span<const std::uint8_t> returns = {});
+                                          std::span<const std::uint8_t> returns = {},
+                                          const TileShare* share = nullptr);
 
 /// How far past a footprint's boundary its building's points reach (eaves), metres.
 inline constexpr double kFootprintBuffer = 1.0;
