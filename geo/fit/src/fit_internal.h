@@ -162,6 +162,9 @@ struct Proposal {
   double area = 0.0;
   std::vector<int> shapes;  ///< ascending
   std::string what;
+  /// Stands under the proposal before it (a dome's drum): supported by that one's points, not
+  /// by its own coverage (walls a scan from the air does not see).
+  bool carried = false;
 };
 
 /// Inputs shared by the proposers: the region's points and normals, its shapes, which points
@@ -181,6 +184,14 @@ struct ProposalInput {
 /// indices of in.shapes): those a proposal explaining `members` absorbs.
 std::vector<int> planes_explained_by(const ProposalInput& in,
                                      const std::vector<std::uint32_t>& members);
+
+/// Domes seen from the air (domes.cpp): a sphere whose points are the upper cap of a roof — up
+/// to its top and all around its vertical axis, described better by the sphere than by a plane
+/// (information criterion on the same points) — becomes the sphere cut at the cap's base, then,
+/// when the base stands above the terrain, the drum under it: a vertical cylinder of the base's
+/// radius from the terrain (`carried`). Needs PrimitiveOptions::ground. Reasons for spheres
+/// that make none are appended to `rejected`.
+std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejection>& rejected);
 
 /// Revolutions from coaxial cylinders and cones (two or more) and the planes ⟂ their axis
 /// within their radius. Groups whose profile is a plain cylinder or cone stay those.

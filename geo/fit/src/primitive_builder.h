@@ -107,7 +107,7 @@ class Builder {
   double region_sigma();
   bool take(const detail::Proposal& proposal);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
-            const std::string& what);
+            const std::string& what, bool carried = false);
 
   std::span<const Vec3> points_;
   std::span<const Vec3> normals_;

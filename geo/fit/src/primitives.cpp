@@ -60,7 +60,7 @@ std::optional<Location> placement(const Eigen::Matrix3d& rotation, const Vec3& o
 }
 
 void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
-                   const std::string& what) {
+                   const std::string& what, bool carried) {
   auto solid = kernel::build_primitive(spec, o_.linear_tolerance);
   if (!solid.ok()) {
     out_.rejected.push_back({what, std::string("kernel: ") + solid.error().message,
@@ -74,8 +74,9 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
     return;
   }
   const double coverage = coverage_of(points_, members, cell_, area);
-  if (std::string why = detail::unsupported(spec, kernel::bounding_box(solid.value()), coverage,
-                                            region_box_, cell_, o_);
+  // A carried primitive's support is the one it stands under.
+  if (std::string why = detail::unsupported(spec, kernel::bounding_box(solid.value()),
+                                            carried ? 1.0 : coverage, region_box_, cell_, o_);
       !why.empty()) {
     out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
     return;
@@ -259,7 +260,7 @@ std::string Builder::coaxial_overlap(const PrimitiveSpec& spec) const {
 // shapes then make nothing of their own. True when kept.
 bool Builder::take(const detail::Proposal& proposal) {
   const std::size_t before = out_.primitives.size();
-  emit(proposal.spec, proposal.members, proposal.area, proposal.what);
+  emit(proposal.spec, proposal.members, proposal.area, proposal.what, proposal.carried);
   if (out_.primitives.size() == before) return false;
   for (int s : proposal.shapes) absorbed_[static_cast<std::size_t>(s)] = 1;
   return true;
@@ -292,6 +293,17 @@ FittedPrimitives Builder::run() {
       for (const auto& p : detail::propose_footprint_block(in, out_.rejected)) take(p);
     }
     return std::move(out_);
+  }
+  if (o_.extrusions) {
+    // Domes first: their points are no roof planes'. A drum only under its kept dome.
+    bool dome_kept = false;
+    for (const auto& p : detail::propose_domes(in, out_.rejected)) {
+      if (!p.carried) {
+        dome_kept = take(p);
+      } else if (dome_kept) {
+        take(p);
+      }
+    }
   }
   if (o_.revolutions) {
     for (const auto& p : detail::propose_revolutions(in, out_.rejected)) take(p);

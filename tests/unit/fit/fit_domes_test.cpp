@@ -1,0 +1,133 @@
+// Domes seen from the air (issue #18 item 3, propose_domes): a dome on a drum becomes the
+// sphere cut at its base over the drum's cylinder, each to a few centimetres of the truth; a
+// sphere the cap test or the evidence does not support stays what it was.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "csgtile/fit/fit.h"
+#include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/primitives.h"
+#include "fit_clouds.h"
+
+namespace csgtile::fit {
+namespace {
+
+using kernel::PrimitiveType;
+using kernel::Vec3;
+using testing::Cloud;
+using testing::Draw;
+
+// Flat terrain at z = 0 over [-20, 60]².
+GroundGrid flat_ground() {
+  GroundGrid g;
+  g.x0 = g.y0 = -20.0;
+  g.cell = 2.0;
+  g.nx = g.ny = 40;
+  g.z.assign(1600, -0.03);
+  g.mean.assign(1600, 0.0);
+  return g;
+}
+
+// A dome of radius r on a drum, centred at (cx, cy, drum): seen from the air at 10 points per
+// m² (uniform over the disc, z on the sphere) over the angles [0, span], σ along the normal,
+// and the drum's wall at 1 point per m² (a few oblique rays).
+Cloud dome_on_drum(double cx, double cy, double r, double drum, double span, double sigma,
+                   std::uint64_t seed) {
+  Draw d(seed);
+  Cloud c;
+  const auto roof = static_cast<int>(10.0 * 0.5 * span * r * r);
+  while (static_cast<int>(c.points.size()) < roof) {
+    const double a = d.uniform(0.0, span), rho = r * std::sqrt(d.uniform());
+    const Vec3 p(cx + rho * std::cos(a), cy + rho * std::sin(a),
+                 drum + std::sqrt(std::max(r * r - rho * rho, 0.0)));
+    c.add(p, (p - Vec3(cx, cy, drum)).normalized(), sigma, d);
+  }
+  const auto wall = static_cast<int>(span * r * drum);
+  for (int k = 0; k < wall; ++k) {
+    const double a = d.uniform(0.0, span);
+    const Vec3 n(std::cos(a), std::sin(a), 0.0);
+    c.add(Vec3(cx, cy, d.uniform(0.0, drum)) + r * n, n, sigma, d);
+  }
+  return c;
+}
+
+FittedPrimitives fit(const Cloud& c, const GroundGrid& ground) {
+  RansacOptions o;
+  o.epsilon = 0.02;
+  o.min_points = 40;
+  o.seed = 5;
+  auto shapes = detect_shapes(c.points, c.normals, o);
+  EXPECT_TRUE(shapes.ok());
+  PrimitiveOptions options;
+  options.ground = &ground;
+  return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
+}
+
+std::string describe(const FittedPrimitives& f) {
+  std::string s;
+  for (const auto& p : f.primitives)
+    s += std::string(kernel::primitive_type_name(p.spec.type)) + " ";
+  for (const auto& r : f.rejected) s += "| " + r.what + ": " + r.reason + " ";
+  return s;
+}
+
+TEST(FitDomes, DomeOnADrumIsTheSphereCutAtItsBaseOverACylinder) {
+  const GroundGrid ground = flat_ground();
+  const Cloud c = dome_on_drum(20, 20, 6.0, 8.0, 2.0 * std::numbers::pi, 0.02, 3);
+  const FittedPrimitives f = fit(c, ground);
+  ASSERT_EQ(f.primitives.size(), 2U) << describe(f);
+  const kernel::PrimitiveSpec& dome = f.primitives[0].spec;
+  const kernel::PrimitiveSpec& drum = f.primitives[1].spec;
+  ASSERT_EQ(dome.type, PrimitiveType::Sphere) << describe(f);
+  ASSERT_EQ(drum.type, PrimitiveType::Cylinder) << describe(f);
+  EXPECT_NEAR(dome.radius, 6.0, 0.05);
+  const Vec3 centre = dome.placement.apply_point(Vec3::Zero());
+  EXPECT_NEAR((centre - Vec3(20, 20, 8)).norm(), 0.0, 0.05);
+  // Cut at its equator: nothing of it below the drum's top.
+  ASSERT_EQ(dome.clips.size(), 1U);
+  EXPECT_NEAR(centre.z() - dome.clips[0].w(), 8.0, 0.05);
+  EXPECT_NEAR(drum.radius, 6.0, 0.05);
+  const Vec3 foot = drum.placement.apply_point(Vec3::Zero());
+  EXPECT_NEAR(foot.z(), 0.0, 0.05);
+  EXPECT_NEAR(foot.z() + drum.height, centre.z(), 1e-9);  // the drum meets the dome's cut
+  // Volumes: the hemisphere 2/3 π r³ and the drum π r² h.
+  auto a = kernel::build_primitive(dome, 1e-7);
+  auto b = kernel::build_primitive(drum, 1e-7);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_NEAR(kernel::mass_properties(a.value()).volume, 2.0 / 3.0 * std::numbers::pi * 216.0, 10.0);
+  EXPECT_NEAR(kernel::mass_properties(b.value()).volume, std::numbers::pi * 36.0 * 8.0, 10.0);
+  // Every point is explained by the two.
+  EXPECT_GE(f.assigned_points, static_cast<long long>(0.98 * static_cast<double>(c.points.size())));
+}
+
+TEST(FitDomes, HalfADomeIsNoDome) {
+  // Seen over half its turn (the rest hidden): no cap around its axis, no drum made up.
+  const GroundGrid ground = flat_ground();
+  const Cloud c = dome_on_drum(20, 20, 6.0, 8.0, std::numbers::pi, 0.02, 4);
+  const FittedPrimitives f = fit(c, ground);
+  for (const auto& p : f.primitives) EXPECT_NE(p.spec.type, PrimitiveType::Cylinder) << describe(f);
+  bool named = false;
+  for (const auto& r : f.rejected) {
+    named = named || r.reason.find("no dome: its points span 180 degrees") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << describe(f);
+}
+
+TEST(FitDomes, ABallSeenAllAroundIsNoDome) {
+  // A sphere scanned below its equator too (a tank, a sculpture) is a sphere, not a dome.
+  const GroundGrid ground = flat_ground();
+  const Cloud c = testing::sphere_cloud(Vec3(20, 20, 5), 3.0, -2.5, 4000, 0.01, 6);
+  const FittedPrimitives f = fit(c, ground);
+  ASSERT_FALSE(f.primitives.empty()) << describe(f);
+  EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
+  EXPECT_TRUE(f.primitives[0].spec.clips.empty()) << describe(f);
+  bool named = false;
+  for (const auto& r : f.rejected) named = named || r.reason.find("a ball") != std::string::npos;
+  EXPECT_TRUE(named) << describe(f);
+}
+
+}  // namespace
+}  // namespace csgtile::fit
