@@ -113,7 +113,8 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
 }
 
 std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
-                                              std::vector<Rejection>& rejected) {
+                                              std::vector<Rejection>& rejected,
+                                              std::optional<double> top) {
   std::vector<Proposal> out;
   const PrimitiveOptions& o = *in.options;
   if (o.ground == nullptr || o.footprint == nullptr || o.footprint->empty()) return out;
@@ -124,11 +125,11 @@ std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
     pts.push_back(i);
     heights.push_back(in.points[i].z());
   }
-  const std::string what = "footprint block (LoD1.2)";
-  if (heights.empty()) return out;
+  const std::string what = top ? "footprint under its dome" : "footprint block (LoD1.2)";
+  if (heights.empty() && !top) return out;
   std::sort(heights.begin(), heights.end());
   const double roof =
-      heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
+      top ? *top : heights[static_cast<std::size_t>(0.7 * static_cast<double>(heights.size() - 1))];
   for (std::size_t k = 0; k < o.footprint->size(); ++k) {
     const geo::FootprintPolygon& fp = (*o.footprint)[k];
     RoofOutline outline;  // in the world frame: (a, b) = (x, y)

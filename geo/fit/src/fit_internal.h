@@ -288,9 +288,10 @@ std::vector<Proposal> propose_blocks(const ProposalInput& in,
 
 /// The LoD1.2 block of a building's footprint (PrimitiveOptions::footprint) when its roof
 /// partition made nothing: each polygon extruded from the terrain around it to the 70th
-/// percentile of the region's points' heights.
+/// percentile of the region's points' heights, or to `top` when given (the base of a dome).
 std::vector<Proposal> propose_footprint_block(const ProposalInput& in,
-                                              std::vector<Rejection>& rejected);
+                                              std::vector<Rejection>& rejected,
+                                              std::optional<double> top = std::nullopt);
 
 /// Per point of the cloud: 1 when it is vegetation (VegetationOptions), from each point's
 /// surface variation and whether its pulse returned several times (`several`, per point).

@@ -106,6 +106,9 @@ class Builder {
   // region has too few points to tell.
   double region_sigma();
   bool take(const detail::Proposal& proposal);
+  // A building in its footprint whose points a dome takes (nearly) all: the dome on the
+  // footprint's prism up to the dome's base. False, changing nothing, otherwise.
+  bool domed_footprint(const detail::ProposalInput& in);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what, bool carried = false);
 

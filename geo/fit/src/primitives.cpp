@@ -15,6 +15,7 @@
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "fit_internal.h"
+#include "plane2d.h"
 #include "primitive_builder.h"
 #include "synth/ray_internal.h"
 
@@ -266,6 +267,92 @@ bool Builder::take(const detail::Proposal& proposal) {
   return true;
 }
 
+bool Builder::domed_footprint(const detail::ProposalInput& in) {
+  std::vector<Rejection> reasons;
+  const auto domes = detail::propose_domes(in, reasons);
+  if (domes.empty() || domes.front().carried) {
+    out_.rejected.insert(out_.rejected.end(), reasons.begin(), reasons.end());
+    return false;
+  }
+  const detail::Proposal& dome = domes.front();
+  // The points the dome and its drum (the wall the prism stands for) explain.
+  std::vector<char> explained(points_.size(), 0);
+  for (std::size_t k = 0; k < domes.size() && (k == 0 || domes[k].carried); ++k) {
+    for (auto i : domes[k].members) explained[i] = 1;
+  }
+  long long rest = 0;
+  for (std::uint32_t i = 0; i < points_.size(); ++i) rest += !used_[i] && !explained[i] ? 1 : 0;
+  const long long allowed =
+      std::max<long long>(ransac_.min_points, static_cast<long long>(0.05 * points_.size()));
+  if (rest > allowed) {
+    out_.rejected.push_back({dome.what,
+                             "no domed building: " + std::to_string(rest) +
+                                 " points of its footprint lie outside the dome",
+                             static_cast<long long>(dome.members.size())});
+    return false;
+  }
+  // The dome stands on a drum inside the footprint's prism: its cut is a disc a centimetre
+  // within the footprint (raised where the footprint is narrower than the dome's base: a round
+  // footprint digitised as a polygon is no circle), the drum that disc's cylinder from just
+  // above the terrain up to the cut, the prism a step (a centimetre) lower. A cut sphere
+  // sitting on a larger planar face is a contact the Boolean engine does not yet fuse, nor
+  // walls meeting the sphere nearly tangent: the dome meets only its drum, exactly, and the
+  // drum crosses the prism's top.
+  const Vec3 c = dome.spec.placement.apply_point(Vec3::Zero());
+  const Vec2 axis(c.x(), c.y());
+  double inside = INFINITY;
+  bool holds = false;
+  for (const geo::FootprintPolygon& fp : *o_.footprint) {
+    bool in_hole = false;
+    for (const auto& h : fp.holes) in_hole = in_hole || detail::inside_ring(axis, h);
+    holds = holds || (detail::inside_ring(axis, fp.outer) && !in_hole);
+    auto ring = [&](const std::vector<Vec2>& r) {
+      for (std::size_t k = 0; k < r.size(); ++k) {
+        const Vec2 a = r[k], d = r[(k + 1) % r.size()] - a;
+        const double t =
+            d.squaredNorm() > 0 ? std::clamp((axis - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+        inside = std::min(inside, (a + t * d - axis).norm());
+      }
+    };
+    ring(fp.outer);
+    for (const auto& h : fp.holes) ring(h);
+  }
+  if (!holds) {
+    out_.rejected.push_back({dome.what, "no domed building: its axis lies outside its footprint",
+                             static_cast<long long>(dome.members.size())});
+    return false;
+  }
+  const double step = std::max(0.01, 10.0 * o_.linear_tolerance);
+  detail::Proposal on = dome;
+  const double radius = on.spec.radius;
+  double base = c.z() - on.spec.clips[0].w();
+  double disc = std::sqrt(std::max(radius * radius - (base - c.z()) * (base - c.z()), 0.0));
+  if (disc > inside - step) {
+    disc = std::max(inside - step, 0.0);
+    base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
+    on.spec.clips[0].w() = c.z() - base;
+  }
+  auto prisms = detail::propose_footprint_block(in, out_.rejected, base - step);
+  if (prisms.empty() || !(disc > step)) return false;
+  const double ground = prisms.front().spec.placement.apply_point(Vec3::Zero()).z();
+  detail::Proposal drum;
+  drum.spec.type = PrimitiveType::Cylinder;
+  drum.spec.radius = disc;
+  drum.spec.height = base - ground - step;
+  auto foot = placement(Eigen::Matrix3d::Identity(), Vec3(c.x(), c.y(), ground + step));
+  if (!foot || !(drum.spec.height > step)) return false;
+  drum.spec.placement = *foot;
+  drum.carried = true;
+  drum.what = dome.what + " drum";
+  if (!take(on)) return false;
+  take(drum);
+  for (auto& p : prisms) {
+    std::erase_if(p.members, [&](std::uint32_t i) { return used_[i] != 0; });
+    take(p);
+  }
+  return true;
+}
+
 double Builder::region_sigma() {
   if (!sigma_) {
     // The RANSAC's own estimate when it derived its epsilon, else the same estimate (the 5 %
@@ -285,8 +372,9 @@ FittedPrimitives Builder::run() {
   absorbed_.assign(shapes_.shapes.size(), 0);
   const detail::ProposalInput in = proposal_input();
   if (o_.footprint != nullptr && !o_.footprint->empty()) {
-    // A building in its footprint: its roof partition, else the footprint's block; nothing
-    // else (one building per footprint, standing exactly on it).
+    // A building in its footprint: a dome on it, else its roof partition, else the
+    // footprint's block; nothing else (one building per footprint, standing exactly on it).
+    if (domed_footprint(in)) return std::move(out_);
     bool any = false;
     for (const auto& p : detail::propose_roof_partition(in, out_.rejected)) any = take(p) || any;
     if (!any) {

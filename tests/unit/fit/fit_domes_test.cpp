@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "csgtile/fit/fit.h"
+#include "csgtile/geo/footprints.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/primitives.h"
 #include "fit_clouds.h"
@@ -97,10 +98,44 @@ TEST(FitDomes, DomeOnADrumIsTheSphereCutAtItsBaseOverACylinder) {
   auto a = kernel::build_primitive(dome, 1e-7);
   auto b = kernel::build_primitive(drum, 1e-7);
   ASSERT_TRUE(a.ok() && b.ok());
-  EXPECT_NEAR(kernel::mass_properties(a.value()).volume, 2.0 / 3.0 * std::numbers::pi * 216.0, 10.0);
+  EXPECT_NEAR(kernel::mass_properties(a.value()).volume, 2.0 / 3.0 * std::numbers::pi * 216.0,
+              10.0);
   EXPECT_NEAR(kernel::mass_properties(b.value()).volume, std::numbers::pi * 36.0 * 8.0, 10.0);
   // Every point is explained by the two.
   EXPECT_GE(f.assigned_points, static_cast<long long>(0.98 * static_cast<double>(c.points.size())));
+}
+
+TEST(FitDomes, ADomeInItsFootprintStandsOnADrumInsideTheFootprintsPrism) {
+  // The footprint a square of 14 m around the drum: the dome on its drum (the disc a
+  // centimetre within the footprint), the prism of the footprint a centimetre lower.
+  const GroundGrid ground = flat_ground();
+  const Cloud c = dome_on_drum(20, 20, 6.0, 8.0, 2.0 * std::numbers::pi, 0.02, 3);
+  RansacOptions o;
+  o.epsilon = 0.02;
+  o.min_points = 40;
+  o.seed = 5;
+  auto shapes = detect_shapes(c.points, c.normals, o);
+  ASSERT_TRUE(shapes.ok());
+  const std::vector<geo::FootprintPolygon> footprint{
+      {{{13, 13}, {27, 13}, {27, 27}, {13, 27}}, {}}};
+  PrimitiveOptions options;
+  options.ground = &ground;
+  options.footprint = &footprint;
+  const FittedPrimitives f =
+      primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
+  ASSERT_EQ(f.primitives.size(), 3U) << describe(f);
+  EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
+  EXPECT_EQ(f.primitives[1].spec.type, PrimitiveType::Cylinder) << describe(f);
+  EXPECT_EQ(f.primitives[2].spec.type, PrimitiveType::Extrusion) << describe(f);
+  const Vec3 centre = f.primitives[0].spec.placement.apply_point(Vec3::Zero());
+  EXPECT_NEAR(centre.z() - f.primitives[0].spec.clips[0].w(), 8.0, 0.05);  // cut at the equator
+  EXPECT_NEAR(f.primitives[1].spec.radius, 6.0, 0.05);
+  auto prism = kernel::build_primitive(f.primitives[2].spec, 1e-7);
+  ASSERT_TRUE(prism.ok());
+  const kernel::BoundingBox box = kernel::bounding_box(prism.value());
+  EXPECT_NEAR(box.min.x(), 13.0, 1e-6);
+  EXPECT_NEAR(box.max.y(), 27.0, 1e-6);
+  EXPECT_NEAR(box.max.z(), 8.0 - 0.01, 0.05);
 }
 
 TEST(FitDomes, HalfADomeIsNoDome) {
