@@ -9,8 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
-
-#include <Eigen/Eigenvalues>
+#include <optional>
 
 #include "fit_internal.h"
 #include "primitive_builder.h"
@@ -28,22 +27,15 @@ double information(const std::vector<double>& residuals, double cap, int paramet
   return n * std::log(rss / n) + parameters * std::log(n);
 }
 
-// Distances of the points to their least-squares plane.
+// Distances of the points to their least-squares plane (none: the points' spread).
 std::vector<double> plane_residuals(std::span<const Vec3> points,
                                     const std::vector<std::uint32_t>& members) {
-  Vec3 mean = Vec3::Zero();
-  for (auto i : members) mean += points[i];
-  mean /= static_cast<double>(members.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (auto i : members) {
-    const Vec3 d = points[i] - mean;
-    cov += d * d.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  const Vec3 n = eig.eigenvectors().col(0);
+  const std::optional<Surface> plane = fit_plane(points, members);
   std::vector<double> out;
   out.reserve(members.size());
-  for (auto i : members) out.push_back(std::abs((points[i] - mean).dot(n)));
+  for (auto i : members) {
+    out.push_back(plane ? std::abs(surface_distance(*plane, points[i])) : INFINITY);
+  }
   return out;
 }
 

@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "csgtile/fit/fit.h"
 #include "csgtile/kernel/location.h"
 
 namespace csgtile::fit::testing {
@@ -142,6 +143,18 @@ inline double line_angle_deg(const Vec3& a, const Vec3& b) {
 inline double line_distance(const Vec3& p, const Vec3& q, const Vec3& a) {
   const Vec3 v = p - q;
   return (v - v.dot(a) * a).norm();
+}
+
+/// Flat terrain at z = 0 over [-20, 60]² (cells of 2 m), each cell's lowest point 3 cm below
+/// it: the ground grid of the airborne tests.
+inline GroundGrid flat_ground() {
+  GroundGrid g;
+  g.x0 = g.y0 = -20.0;
+  g.cell = 2.0;
+  g.nx = g.ny = 40;
+  g.z.assign(1600, -0.03);
+  g.mean.assign(1600, 0.0);
+  return g;
 }
 
 }  // namespace csgtile::fit::testing

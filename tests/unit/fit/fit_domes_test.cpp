@@ -20,17 +20,7 @@ using kernel::PrimitiveType;
 using kernel::Vec3;
 using testing::Cloud;
 using testing::Draw;
-
-// Flat terrain at z = 0 over [-20, 60]².
-GroundGrid flat_ground() {
-  GroundGrid g;
-  g.x0 = g.y0 = -20.0;
-  g.cell = 2.0;
-  g.nx = g.ny = 40;
-  g.z.assign(1600, -0.03);
-  g.mean.assign(1600, 0.0);
-  return g;
-}
+using testing::flat_ground;
 
 // A dome of radius r on a drum, centred at (cx, cy, drum): seen from the air at 10 points per
 // m² (uniform over the disc, z on the sphere) over the angles [0, span], σ along the normal,

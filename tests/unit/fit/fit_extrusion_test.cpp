@@ -19,6 +19,7 @@ using kernel::PrimitiveType;
 using kernel::Vec2;
 using kernel::Vec3;
 using testing::Cloud;
+using testing::flat_ground;
 
 FittedPrimitives fit(const Cloud& c, std::uint64_t seed = 3) {
   RansacOptions o;
@@ -164,16 +165,6 @@ FittedPrimitives fit_airborne(const Cloud& c, const GroundGrid& ground, bool ext
   options.ground = &ground;
   options.extrusions = extrusions;
   return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
-}
-
-GroundGrid flat_ground() {
-  GroundGrid g;
-  g.x0 = g.y0 = -20.0;
-  g.cell = 2.0;
-  g.nx = g.ny = 40;
-  g.z.assign(1600, -0.03);  // the lowest point of each cell lies below the terrain
-  g.mean.assign(1600, 0.0);
-  return g;
 }
 
 // IoU of the fitted extrusion's footprint (placed) with the truth (outer minus hole).

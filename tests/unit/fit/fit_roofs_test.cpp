@@ -24,17 +24,7 @@ using kernel::PrimitiveType;
 using kernel::Vec2;
 using kernel::Vec3;
 using testing::Cloud;
-
-// Flat terrain at z = 0 over [-20, 60]².
-GroundGrid flat_ground() {
-  GroundGrid g;
-  g.x0 = g.y0 = -20.0;
-  g.cell = 2.0;
-  g.nx = g.ny = 40;
-  g.z.assign(1600, -0.03);  // the lowest point of each cell lies below the terrain
-  g.mean.assign(1600, 0.0);
-  return g;
-}
+using testing::flat_ground;
 
 RansacOptions airborne_ransac() {
   RansacOptions o;
