@@ -182,12 +182,18 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   const auto listed = [](const std::vector<std::uint8_t>& list, std::uint8_t c) {
     return std::find(list.begin(), list.end(), c) != list.end();
   };
-  const bool classified =
-      classes.size() == points.size() &&
-      std::any_of(classes.begin(), classes.end(), [](std::uint8_t c) { return c > 1; });
-  const bool by_keep =
-      classified && std::any_of(classes.begin(), classes.end(),
-                                [&](std::uint8_t c) { return listed(options.classes.keep, c); });
+  // Among neighbours, from this tile's own points (a neighbour classified otherwise does not
+  // change how this tile's points are read).
+  auto own = [&](std::size_t i) { return share == nullptr || share->foreign[i] == 0; };
+  bool classified = false, by_keep = false;
+  if (classes.size() == points.size()) {
+    for (std::size_t i = 0; i < classes.size(); ++i) {
+      if (!own(i)) continue;
+      classified = classified || classes[i] > 1;
+      by_keep = by_keep || listed(options.classes.keep, classes[i]);
+    }
+    by_keep = by_keep && classified;
+  }
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
     if (!ground[i] && classified &&

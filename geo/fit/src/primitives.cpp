@@ -331,10 +331,19 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
     disc = std::max(inside - step, 0.0);
     base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
     on.spec.clips[0].w() = c.z() - base;
+    on.area = 2.0 * std::numbers::pi * radius * (c.z() + radius - base);  // the cap left
   }
   auto prisms = detail::propose_footprint_block(in, out_.rejected, base - step);
   if (prisms.empty() || !(disc > step)) return false;
-  const double ground = prisms.front().spec.placement.apply_point(Vec3::Zero()).z();
+  // The terrain under the dome: that of the prism whose profile holds its axis.
+  double ground = prisms.front().spec.placement.apply_point(Vec3::Zero()).z();
+  for (const auto& p : prisms) {
+    const Vec3 local = p.spec.placement.inverse().apply_point(c);
+    if (detail::inside_ring(Vec2(local.x(), local.y()), p.spec.profile)) {
+      ground = p.spec.placement.apply_point(Vec3::Zero()).z();
+      break;
+    }
+  }
   detail::Proposal drum;
   drum.spec.type = PrimitiveType::Cylinder;
   drum.spec.radius = disc;
@@ -344,6 +353,11 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
   drum.spec.placement = *foot;
   drum.carried = true;
   drum.what = dome.what + " drum";
+  // The drum is checked before the dome is kept: a dome without it would float.
+  if (auto solid = kernel::build_primitive(drum.spec, o_.linear_tolerance);
+      !solid.ok() || !kernel::check_shape(solid.value()).valid()) {
+    return false;
+  }
   if (!take(on)) return false;
   take(drum);
   for (auto& p : prisms) {

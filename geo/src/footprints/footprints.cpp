@@ -255,26 +255,30 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
       if (e.MaxX < b[0] || e.MinX > b[2] || e.MaxY < b[1] || e.MinY > b[3]) continue;
     }
     std::unique_ptr<OGRGeometry> clipped;
+    if (auto why = polygons_of(*geometry, fp.polygons); !why.empty()) {
+      out.skipped.push_back(name + ": " + why);
+      continue;
+    }
     if (clip_region) {
       clipped = cut_to(*geometry, *clip_region);
       if (!clipped) {
         out.skipped.push_back(name + ": cannot be cut to the bounds: " + last_gdal_error());
         continue;
       }
-      if (clipped->IsEmpty()) continue;
+      // Its polygons inside the region; lines and points where it only touches it are none.
+      fp.polygons.clear();
+      polygon_parts(*clipped, fp.polygons);
+      if (fp.polygons.empty()) continue;
       geometry = clipped.get();
-    }
-    if (auto why = polygons_of(*geometry, fp.polygons); !why.empty()) {
-      out.skipped.push_back(name + ": " + why);
-      continue;
     }
     if (query.cut) {
       const std::unique_ptr<OGRGeometry> part = cut_to(*geometry, *cut_region);
-      if (!part) {
-        out.skipped.push_back(name + ": cannot be cut to the tile: " + last_gdal_error());
-        continue;
+      if (part) {
+        polygon_parts(*part, fp.cut);
+      } else {
+        out.skipped.push_back(name + ": cannot be cut to the tile (no part of it is made here): " +
+                              last_gdal_error());
       }
-      polygon_parts(*part, fp.cut);
     }
     out.footprints.push_back(std::move(fp));
   }

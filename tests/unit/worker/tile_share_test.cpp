@@ -82,6 +82,11 @@ TEST(TileShare, ClustersSeenWholeGoToTheirOwner) {
   // (tile 1, holding the centre 100.1) cannot, keeps its own points too.
   EXPECT_EQ(cluster_share(around(1), Vec2(80.2, 10), Vec2(120, 20), 0.5), ShareKind::own_points);
   EXPECT_EQ(cluster_share(around(0), Vec2(80.2, 10), Vec2(120, 20), 0.5), ShareKind::own_points);
+  // Seen whole by tiles 0 and 1 but reaching tile 3, which sees only part of it (its read
+  // region starts at y = 80): tile 3 keeps its own points, the owner (tile 1) fits it whole.
+  EXPECT_EQ(cluster_share(around(3), Vec2(95, 75), Vec2(108, 105), 0.5), ShareKind::own_points);
+  EXPECT_EQ(cluster_share(around(1), Vec2(95, 75), Vec2(108, 105), 0.5), ShareKind::whole);
+  EXPECT_EQ(cluster_share(around(0), Vec2(95, 75), Vec2(108, 105), 0.5), ShareKind::none);
   // Entirely a neighbour's, within this tile's halo: the neighbour's.
   EXPECT_EQ(cluster_share(around(0), Vec2(105, 10), Vec2(115, 20), 0.5), ShareKind::none);
 }

@@ -1,6 +1,7 @@
 // The `fit` job of a city run: one LIDAR tile → its fitted primitives, published as a scene
 // file in the tile's frame, with the cells holding their anchors (city_jobs.h).
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -87,12 +88,15 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     // A COPC cell's read holds its halo: the neighbouring cells' points come with it.
     around->own_read_is_shared = only_cell.has_value();
     const Extent region = around->where.read_region();
+    std::set<std::string> read_inputs;
     for (const auto& n : payload["neighbours"]) {
       TileExtent t{n.at("tile").get<std::size_t>(), n.at("input").get<std::string>(),
                    extent_of(n.at("extent"))};
       std::filesystem::path path;
-      if (t.input != input && t.extent[2] >= region[0] && t.extent[0] <= region[2] &&
-          t.extent[3] >= region[1] && t.extent[1] <= region[3]) {
+      // Each input read once (the cells of a COPC input share it; this tile's own is read).
+      if (t.input != input && !read_inputs.count(t.input) && t.extent[2] >= region[0] &&
+          t.extent[0] <= region[2] && t.extent[3] >= region[1] && t.extent[1] <= region[3]) {
+        read_inputs.insert(t.input);
         fetch::LocalInput near;
         // A failure in transit is retried (the job's result must not depend on it).
         if (Failure f = fetch::resolve_input(t.input, config, near); !f.ok()) {

@@ -223,7 +223,10 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
         // Among neighbours: over the read region, cut to where the tiles' data is (their
         // extents grown by the footprint buffer: no slit along the seams between them), and
         // each also cut to this tile's extent (for a building fitted in parts).
-        query.bbox = around->where.read_region();
+        // Footprints whose buffer (eaves) reaches into the read region hold some of its points.
+        const Extent r = around->where.read_region();
+        const double b = fit::kFootprintBuffer;
+        query.bbox = std::array<double, 4>{r[0] - b, r[1] - b, r[2] + b, r[3] + b};
         query.clip = {around->where.self.extent};
         for (const TileExtent& t : around->where.neighbours) query.clip.push_back(t.extent);
         for (auto& e : query.clip) {

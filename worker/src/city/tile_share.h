@@ -58,7 +58,11 @@ fit::ShareKind footprint_share(const TileNeighbourhood& n, const kernel::Vec2& l
 /// How much of a cluster of points this tile keeps, from the cluster's box as this tile sees it
 /// (CRS coordinates) and the clustering distance: a cluster that reaches within `tolerance` of
 /// where this tile's read region ends may go on past it (own_points); one that lies within the
-/// owner's read region is the owner's (whole there, none elsewhere).
+/// owner's read region is the owner's (whole there, none elsewhere). A tile that sees only part
+/// of a cluster its owner sees whole (a cluster reaching a third tile beyond that tile's halo,
+/// at a corner) keeps its own points of it: the assembly fuses that part with the owner's whole
+/// (a duplicate rather than a loss; requiring every tile to see it whole split many more
+/// buildings: Delft in 50 m tiles, within 0.3 m 0.947 → 0.905).
 fit::ShareKind cluster_share(const TileNeighbourhood& n, const kernel::Vec2& lo,
                              const kernel::Vec2& hi, double tolerance);
 
