@@ -134,12 +134,7 @@ TEST(FitPartition, PinchesAreJoined) {
 // Flat terrain at z = 0 over [-20, 60]², seen from the air around a building over
 // [x0, x1] × [y0, y1]: no ground under its roof.
 GroundGrid ground_around(double x0, double y0, double x1, double y1) {
-  GroundGrid g;
-  g.x0 = g.y0 = -20.0;
-  g.cell = 2.0;
-  g.nx = g.ny = 40;
-  g.z.assign(1600, -0.03);
-  g.mean.assign(1600, 0.0);
+  GroundGrid g = testing::flat_ground();
   for (int j = 0; j < g.ny; ++j) {
     for (int i = 0; i < g.nx; ++i) {
       const double x = g.x0 + (i + 0.5) * g.cell, y = g.y0 + (j + 0.5) * g.cell;
