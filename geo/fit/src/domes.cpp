@@ -47,6 +47,26 @@ std::string format(const char* text, double a, double b) {
 
 }  // namespace
 
+void cut_dome(Proposal& dome, double base) {
+  const double cz = dome.spec.placement.apply_point(Vec3::Zero()).z();
+  const double r = dome.spec.radius;
+  // Kept where z_local >= base - cz: (0, 0, -1)·p <= cz - base.
+  dome.spec.clips = {Eigen::Vector4d(0.0, 0.0, -1.0, cz - base)};
+  dome.area = 2.0 * std::numbers::pi * r * (cz + r - base);
+}
+
+std::optional<kernel::PrimitiveSpec> drum_spec(const Vec2& axis, double radius, double z0,
+                                               double height) {
+  kernel::PrimitiveSpec spec;
+  spec.type = PrimitiveType::Cylinder;
+  spec.radius = radius;
+  spec.height = height;
+  auto foot = placement(Eigen::Matrix3d::Identity(), Vec3(axis.x(), axis.y(), z0));
+  if (!foot) return std::nullopt;
+  spec.placement = *foot;
+  return spec;
+}
+
 std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejection>& rejected) {
   std::vector<Proposal> out;
   const PrimitiveOptions& o = *in.options;
@@ -133,11 +153,10 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
     Proposal dome;
     dome.spec.type = PrimitiveType::Sphere;
     dome.spec.radius = radius;
-    // Kept where z_local >= floor - c.z: (0, 0, -1)·p <= c.z - floor.
-    dome.spec.clips.push_back(Eigen::Vector4d(0.0, 0.0, -1.0, c.z() - floor));
     auto at = placement(Eigen::Matrix3d::Identity(), c);
     if (!at) continue;
     dome.spec.placement = *at;
+    cut_dome(dome, floor);
     // Its points: the cap's, and every other point of the region it explains (within 3 ε of
     // the cap or inside it: the noise's tails), which no roof part is then made of.
     for (std::size_t i = 0; i < in.points.size(); ++i) {
@@ -147,18 +166,14 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
         claimed[i] = 1;
       }
     }
-    dome.area = 2.0 * std::numbers::pi * radius * (top - floor);
     dome.shapes = {static_cast<int>(s)};
     dome.what = what + " (dome)";
     out.push_back(std::move(dome));
     if (base - ground < o.min_building_height * 0.5) continue;  // a dome on the ground
     Proposal drum;
-    drum.spec.type = PrimitiveType::Cylinder;
-    drum.spec.radius = base_radius;
-    drum.spec.height = base - ground;
-    auto foot = placement(Eigen::Matrix3d::Identity(), Vec3(c.x(), c.y(), ground));
-    if (!foot) continue;
-    drum.spec.placement = *foot;
+    auto spec = drum_spec(Vec2(c.x(), c.y()), base_radius, ground, base - ground);
+    if (!spec) continue;
+    drum.spec = std::move(*spec);
     // Its points: its wall's where the scan saw them, and any inside it, the dome's aside.
     for (std::size_t i = 0; i < in.points.size(); ++i) {
       const Vec3& p = in.points[i];

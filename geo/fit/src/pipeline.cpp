@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "csgtile/fit/segment.h"
 #include "fit_internal.h"
@@ -246,17 +247,31 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   const std::vector<Vec3> cloud = voxel_downsample(clean, options.voxel);
   out.fitted_points = static_cast<long long>(cloud.size());
-  // A neighbour's point of the fitted cloud (with downsampling: the nearest cleaned point's).
+  // Each fitted point's input point: its own (no downsampling), else the nearest cleaned
+  // point's (-1: none); found once, when first asked.
+  std::optional<std::vector<std::int64_t>> cloud_input;
+  auto input_of = [&]() -> const std::vector<std::int64_t>& {
+    if (!cloud_input) {
+      const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
+      const std::vector<std::int32_t> nearest =
+          same ? std::vector<std::int32_t>{} : detail::nearest_of(cloud, clean);
+      cloud_input.emplace(cloud.size(), -1);
+      for (std::size_t k = 0; k < cloud.size(); ++k) {
+        const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
+        if (c >= 0) (*cloud_input)[k] = clean_index[static_cast<std::size_t>(c)];
+      }
+    }
+    return *cloud_input;
+  };
+  // A neighbour's point of the fitted cloud.
   std::vector<std::uint8_t> foreign;
   if (share != nullptr) {
     for (std::uint8_t f : share->foreign) out.neighbour_points += f ? 1 : 0;
     foreign.assign(cloud.size(), 0);
-    const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
-    const std::vector<std::int32_t> nearest =
-        same ? std::vector<std::int32_t>{} : detail::nearest_of(cloud, clean);
     for (std::size_t k = 0; k < cloud.size(); ++k) {
-      const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
-      if (c >= 0) foreign[k] = share->foreign[clean_index[static_cast<std::size_t>(c)]];
+      if (const std::int64_t i = input_of()[k]; i >= 0) {
+        foreign[k] = share->foreign[static_cast<std::size_t>(i)];
+      }
     }
   }
   out.seconds.emplace_back("voxels", seconds_since(start));
@@ -273,15 +288,13 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   std::vector<char> excluded(cloud.size(), 0);
   if (options.vegetation.enabled && !classified && !cloud.empty()) {
     start = std::chrono::steady_clock::now();
-    // Each fitted point's pulse: its own (no downsampling), else the nearest cleaned point's.
+    // Each fitted point's pulse: its input point's.
     std::vector<char> several(cloud.size(), 0);
     if (!returns.empty()) {
-      const bool same = !(options.voxel.size > 0.0) && cloud.size() == clean.size();
-      const std::vector<std::int32_t> nearest =
-          same ? std::vector<std::int32_t>{} : detail::nearest_of(cloud, clean);
       for (std::size_t k = 0; k < cloud.size(); ++k) {
-        const std::int32_t c = same ? static_cast<std::int32_t>(k) : nearest[k];
-        if (c >= 0) several[k] = returns[clean_index[static_cast<std::size_t>(c)]] > 1 ? 1 : 0;
+        if (const std::int64_t i = input_of()[k]; i >= 0) {
+          several[k] = returns[static_cast<std::size_t>(i)] > 1 ? 1 : 0;
+        }
       }
     }
     excluded = detail::vegetation_mask(cloud, curvature, several, options.vegetation);

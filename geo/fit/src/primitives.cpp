@@ -300,22 +300,11 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
   // drum crosses the prism's top.
   const Vec3 c = dome.spec.placement.apply_point(Vec3::Zero());
   const Vec2 axis(c.x(), c.y());
-  double inside = INFINITY;
+  double inside = INFINITY;  // the axis's distance to the footprint's boundary
   bool holds = false;
   for (const geo::FootprintPolygon& fp : *o_.footprint) {
-    bool in_hole = false;
-    for (const auto& h : fp.holes) in_hole = in_hole || detail::inside_ring(axis, h);
-    holds = holds || (detail::inside_ring(axis, fp.outer) && !in_hole);
-    auto ring = [&](const std::vector<Vec2>& r) {
-      for (std::size_t k = 0; k < r.size(); ++k) {
-        const Vec2 a = r[k], d = r[(k + 1) % r.size()] - a;
-        const double t =
-            d.squaredNorm() > 0 ? std::clamp((axis - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-        inside = std::min(inside, (a + t * d - axis).norm());
-      }
-    };
-    ring(fp.outer);
-    for (const auto& h : fp.holes) ring(h);
+    holds = holds || detail::inside_polygon(axis, fp.outer, fp.holes);
+    inside = std::min(inside, detail::boundary_distance(axis, fp.outer, fp.holes));
   }
   if (!holds) {
     out_.rejected.push_back({dome.what, "no domed building: its axis lies outside its footprint",
@@ -330,8 +319,7 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
   if (disc > inside - step) {
     disc = std::max(inside - step, 0.0);
     base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
-    on.spec.clips[0].w() = c.z() - base;
-    on.area = 2.0 * std::numbers::pi * radius * (c.z() + radius - base);  // the cap left
+    detail::cut_dome(on, base);
   }
   auto prisms = detail::propose_footprint_block(in, out_.rejected, base - step);
   if (prisms.empty() || !(disc > step)) return false;
@@ -344,13 +332,10 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
       break;
     }
   }
+  auto spec = detail::drum_spec(axis, disc, ground + step, base - ground - step);
+  if (!spec || !(spec->height > step)) return false;
   detail::Proposal drum;
-  drum.spec.type = PrimitiveType::Cylinder;
-  drum.spec.radius = disc;
-  drum.spec.height = base - ground - step;
-  auto foot = placement(Eigen::Matrix3d::Identity(), Vec3(c.x(), c.y(), ground + step));
-  if (!foot || !(drum.spec.height > step)) return false;
-  drum.spec.placement = *foot;
+  drum.spec = std::move(*spec);
   drum.carried = true;
   drum.what = dome.what + " drum";
   // The drum is checked before the dome is kept: a dome without it would float.

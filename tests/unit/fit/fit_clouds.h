@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "csgtile/fit/fit.h"
 #include "csgtile/kernel/location.h"
 
@@ -155,6 +157,32 @@ inline GroundGrid flat_ground() {
   g.z.assign(1600, -0.03);
   g.mean.assign(1600, 0.0);
   return g;
+}
+
+/// How an airborne region is fitted in the roof tests: the RANSAC's inlier distance and seed
+/// (at least 40 points a shape), extrusions on or off, and the building's footprint if any.
+struct AirborneFit {
+  double epsilon = 0.02;  ///< the fit's default, as on the real tiles
+  std::uint64_t seed = 3;
+  bool extrusions = true;
+  const std::vector<geo::FootprintPolygon>* footprint = nullptr;
+};
+
+/// A region seen from the air: its RANSAC shapes made primitives standing on `ground`.
+inline FittedPrimitives fit_airborne(const Cloud& c, const GroundGrid& ground,
+                                     const AirborneFit& how = {}) {
+  RansacOptions o;
+  o.epsilon = how.epsilon;
+  o.min_points = 40;
+  o.seed = how.seed;
+  auto shapes = detect_shapes(c.points, c.normals, o);
+  EXPECT_TRUE(shapes.ok());
+  if (!shapes.ok()) return {};
+  PrimitiveOptions options;
+  options.ground = &ground;
+  options.extrusions = how.extrusions;
+  options.footprint = how.footprint;
+  return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
 }
 
 }  // namespace csgtile::fit::testing

@@ -45,16 +45,9 @@ Cloud dome_on_drum(double cx, double cy, double r, double drum, double span, dou
   return c;
 }
 
-FittedPrimitives fit(const Cloud& c, const GroundGrid& ground) {
-  RansacOptions o;
-  o.epsilon = 0.02;
-  o.min_points = 40;
-  o.seed = 5;
-  auto shapes = detect_shapes(c.points, c.normals, o);
-  EXPECT_TRUE(shapes.ok());
-  PrimitiveOptions options;
-  options.ground = &ground;
-  return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
+FittedPrimitives fit(const Cloud& c, const GroundGrid& ground,
+                     const std::vector<geo::FootprintPolygon>* footprint = nullptr) {
+  return testing::fit_airborne(c, ground, {.seed = 5, .footprint = footprint});
 }
 
 std::string describe(const FittedPrimitives& f) {
@@ -100,19 +93,9 @@ TEST(FitDomes, ADomeInItsFootprintStandsOnADrumInsideTheFootprintsPrism) {
   // centimetre within the footprint), the prism of the footprint a centimetre lower.
   const GroundGrid ground = flat_ground();
   const Cloud c = dome_on_drum(20, 20, 6.0, 8.0, 2.0 * std::numbers::pi, 0.02, 3);
-  RansacOptions o;
-  o.epsilon = 0.02;
-  o.min_points = 40;
-  o.seed = 5;
-  auto shapes = detect_shapes(c.points, c.normals, o);
-  ASSERT_TRUE(shapes.ok());
   const std::vector<geo::FootprintPolygon> footprint{
       {{{13, 13}, {27, 13}, {27, 27}, {13, 27}}, {}}};
-  PrimitiveOptions options;
-  options.ground = &ground;
-  options.footprint = &footprint;
-  const FittedPrimitives f =
-      primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
+  const FittedPrimitives f = fit(c, ground, &footprint);
   ASSERT_EQ(f.primitives.size(), 3U) << describe(f);
   EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
   EXPECT_EQ(f.primitives[1].spec.type, PrimitiveType::Cylinder) << describe(f);

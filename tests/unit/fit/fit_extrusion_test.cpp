@@ -154,18 +154,8 @@ Cloud roof_cloud(const std::vector<Vec2>& outer, const std::vector<Vec2>& hole, 
   return c;
 }
 
-FittedPrimitives fit_airborne(const Cloud& c, const GroundGrid& ground, bool extrusions = true) {
-  RansacOptions o;
-  o.epsilon = 0.03;
-  o.min_points = 40;
-  o.seed = 3;
-  auto shapes = detect_shapes(c.points, c.normals, o);
-  EXPECT_TRUE(shapes.ok());
-  PrimitiveOptions options;
-  options.ground = &ground;
-  options.extrusions = extrusions;
-  return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
-}
+// The roofs' points are exact to 1 cm: ε 3 cm.
+const testing::AirborneFit kRoofs{.epsilon = 0.03};
 
 // IoU of the fitted extrusion's footprint (placed) with the truth (outer minus hole).
 double footprint_iou(const kernel::PrimitiveSpec& s, const std::vector<Vec2>& outer,
@@ -187,7 +177,7 @@ double footprint_iou(const kernel::PrimitiveSpec& s, const std::vector<Vec2>& ou
 TEST(FitExtrusion, LShapedRoofSeenFromTheAirIsOneExtrusionToTheGround) {
   const std::vector<Vec2> l{{0, 0}, {20, 0}, {20, 8}, {8, 8}, {8, 20}, {0, 20}};
   const GroundGrid ground = flat_ground();
-  const auto f = fit_airborne(roof_cloud(l, {}, 10.0, 7), ground);
+  const auto f = fit_airborne(roof_cloud(l, {}, 10.0, 7), ground, kRoofs);
   ASSERT_EQ(count(f, PrimitiveType::Extrusion), 1);
   EXPECT_EQ(f.primitives.size(), 1U);
   const auto& p = f.primitives[0].spec;
@@ -201,18 +191,20 @@ TEST(FitExtrusion, LShapedRoofSeenFromTheAirIsOneExtrusionToTheGround) {
   EXPECT_NEAR(p.placement.apply_point(Vec3::Zero()).z(), 0.0, 0.02);
   EXPECT_GE(footprint_iou(p, l, {}), 0.95);
   // The same input gives the same extrusion; switched off, none.
-  const auto again = fit_airborne(roof_cloud(l, {}, 10.0, 7), ground);
+  const auto again = fit_airborne(roof_cloud(l, {}, 10.0, 7), ground, kRoofs);
   ASSERT_EQ(again.primitives.size(), 1U);
   EXPECT_EQ(again.primitives[0].spec.profile, p.profile);
-  EXPECT_EQ(
-      count(fit_airborne(roof_cloud(l, {}, 10.0, 7), ground, false), PrimitiveType::Extrusion), 0);
+  EXPECT_EQ(count(fit_airborne(roof_cloud(l, {}, 10.0, 7), ground,
+                               {.epsilon = 0.03, .extrusions = false}),
+                  PrimitiveType::Extrusion),
+            0);
 }
 
 TEST(FitExtrusion, CourtyardRoofHasAHole) {
   const std::vector<Vec2> outer{{0, 0}, {24, 0}, {24, 24}, {0, 24}};
   const std::vector<Vec2> yard{{8, 8}, {16, 8}, {16, 16}, {8, 16}};
   const GroundGrid ground = flat_ground();
-  const auto f = fit_airborne(roof_cloud(outer, yard, 8.0, 8), ground);
+  const auto f = fit_airborne(roof_cloud(outer, yard, 8.0, 8), ground, kRoofs);
   ASSERT_EQ(count(f, PrimitiveType::Extrusion), 1);
   const auto& p = f.primitives[0].spec;
   ASSERT_EQ(p.holes.size(), 1U);
@@ -222,7 +214,7 @@ TEST(FitExtrusion, CourtyardRoofHasAHole) {
 TEST(FitExtrusion, RectangularRoofStaysABox) {
   const std::vector<Vec2> rect{{0, 0}, {12, 0}, {12, 8}, {0, 8}};
   const GroundGrid ground = flat_ground();
-  const auto f = fit_airborne(roof_cloud(rect, {}, 6.0, 9), ground);
+  const auto f = fit_airborne(roof_cloud(rect, {}, 6.0, 9), ground, kRoofs);
   EXPECT_EQ(count(f, PrimitiveType::Extrusion), 0);
   EXPECT_EQ(count(f, PrimitiveType::Box), 1);
 }

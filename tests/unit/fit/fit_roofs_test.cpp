@@ -24,6 +24,7 @@ using kernel::PrimitiveType;
 using kernel::Vec2;
 using kernel::Vec3;
 using testing::Cloud;
+using testing::fit_airborne;
 using testing::flat_ground;
 
 RansacOptions airborne_ransac() {
@@ -32,16 +33,6 @@ RansacOptions airborne_ransac() {
   o.min_points = 40;
   o.seed = 3;
   return o;
-}
-
-FittedPrimitives fit_airborne(const Cloud& c, const GroundGrid& ground, bool extrusions = true) {
-  const RansacOptions o = airborne_ransac();
-  auto shapes = detect_shapes(c.points, c.normals, o);
-  EXPECT_TRUE(shapes.ok());
-  PrimitiveOptions options;
-  options.ground = &ground;
-  options.extrusions = extrusions;
-  return primitives_from_shapes(c.points, c.normals, shapes.value(), options, o, 0);
 }
 
 std::string describe(const FittedPrimitives& f) {
@@ -187,7 +178,7 @@ TEST(FitRoofs, BoxNeverReachesBelowTheTerrain) {
     c.points.push_back(far.points[i]);
     c.normals.push_back(far.normals[i]);
   }
-  const auto f = fit_airborne(c, ground, false);
+  const auto f = fit_airborne(c, ground, {.extrusions = false});
   for (const auto& p : f.primitives) {
     EXPECT_GE(z_range(p.spec).first, -0.25) << describe(f);
   }

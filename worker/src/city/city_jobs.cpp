@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <set>
+#include <string_view>
 
 #include "city/city_internal.h"
 #include "city/tile_share.h"
@@ -158,21 +159,20 @@ struct Tile {
   std::optional<Extent> extent = {};
 };
 
-bool is_las_name(const std::string& input) {
+// Whether the input's path (its query and fragment aside) ends, in any case, with `suffix`
+// after at least one character.
+bool name_ends_with(const std::string& input, std::string_view suffix) {
   std::string path = input.substr(0, input.find_first_of("?#"));
   for (char& c : path) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  auto ends = [&](const char* e) {
-    const std::size_t n = std::char_traits<char>::length(e);
-    return path.size() > n && path.compare(path.size() - n, n, e) == 0;
-  };
-  return ends(".las") || ends(".laz");
+  return path.size() > suffix.size() &&
+         path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-bool is_copc_name(const std::string& input) {
-  std::string path = input.substr(0, input.find_first_of("?#"));
-  for (char& c : path) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return path.size() > 9 && path.compare(path.size() - 9, 9, ".copc.laz") == 0;
+bool is_las_name(const std::string& input) {
+  return name_ends_with(input, ".las") || name_ends_with(input, ".laz");
 }
+
+bool is_copc_name(const std::string& input) { return name_ends_with(input, ".copc.laz"); }
 
 // The cells a COPC input's header bounds cover (its header read locally, or by range
 // requests for a URL). Errors: as the readers and the fetcher.

@@ -74,7 +74,6 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   // A LAS/LAZ tile among others: the tiles around it, and the local files of those whose
   // points its fit reads (tile_share.h).
   std::optional<TileNeighbours> around;
-  std::vector<std::string> unfetched;
   if (payload.contains("extent") && payload.contains("neighbours")) {
     auto extent_of = [](const nlohmann::json& e) {
       Extent out{};
@@ -94,14 +93,13 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
                    extent_of(n.at("extent"))};
       std::filesystem::path path;
       // Each input read once (the cells of a COPC input share it; this tile's own is read).
-      if (t.input != input && !read_inputs.count(t.input) && t.extent[2] >= region[0] &&
-          t.extent[0] <= region[2] && t.extent[3] >= region[1] && t.extent[1] <= region[3]) {
+      if (t.input != input && !read_inputs.count(t.input) && extents_meet(t.extent, region)) {
         read_inputs.insert(t.input);
         fetch::LocalInput near;
         // A failure in transit is retried (the job's result must not depend on it).
         if (Failure f = fetch::resolve_input(t.input, config, near); !f.ok()) {
           if (f.code == ErrorCode::Network) return f;
-          unfetched.push_back(t.input + ": " + f.message);
+          around->skipped.push_back(t.input + ": " + f.message);
         } else {
           path = near.path;
         }
@@ -235,10 +233,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   record["fit_options_sha256"] = sha256_hex(config::to_json(config.fit));
   record.update(fit_counts_json(fit));
   if (!footprints.source.empty()) record["footprints"] = footprints_record(footprints, tile);
-  if (around) {
-    record["neighbours"] = neighbours_record(tile);
-    for (const std::string& u : unfetched) record["neighbours"]["skipped"].push_back(u);
-  }
+  if (around) record["neighbours"] = neighbours_record(tile);
   record["primitives"] = tile.scene.primitives.size();
   ordered_json per_type = ordered_json::object();
   for (const geo::ScenePrimitive& p : tile.scene.primitives) {

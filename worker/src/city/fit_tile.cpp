@@ -166,6 +166,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   // The neighbours' points in the read region (those of a tile in another CRS are not read).
   const std::size_t own_points = raw.size();
   if (around != nullptr) {
+    out.neighbours_skipped = around->skipped;
     const Extent r = around->where.read_region();
     geo::PointReadOptions near_options = read_options;
     near_options.region = geo::Bounds3{{r[0], r[1], -INFINITY}, {r[2], r[3], INFINITY}};
@@ -224,14 +225,10 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
         // extents grown by the footprint buffer: no slit along the seams between them), and
         // each also cut to this tile's extent (for a building fitted in parts).
         // Footprints whose buffer (eaves) reaches into the read region hold some of its points.
-        const Extent r = around->where.read_region();
-        const double b = fit::kFootprintBuffer;
-        query.bbox = std::array<double, 4>{r[0] - b, r[1] - b, r[2] + b, r[3] + b};
-        query.clip = {around->where.self.extent};
-        for (const TileExtent& t : around->where.neighbours) query.clip.push_back(t.extent);
-        for (auto& e : query.clip) {
-          e = {e[0] - fit::kFootprintBuffer, e[1] - fit::kFootprintBuffer,
-               e[2] + fit::kFootprintBuffer, e[3] + fit::kFootprintBuffer};
+        query.bbox = grown(around->where.read_region(), fit::kFootprintBuffer);
+        query.clip = {grown(around->where.self.extent, fit::kFootprintBuffer)};
+        for (const TileExtent& t : around->where.neighbours) {
+          query.clip.push_back(grown(t.extent, fit::kFootprintBuffer));
         }
         query.cut = around->where.self.extent;
       }

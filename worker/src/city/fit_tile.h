@@ -53,10 +53,12 @@ struct FittedTile {
 /// The tiles around a tile of a run of several, whose points its fit reads within the halo
 /// (tile_share.h): where they are, and each neighbour's local file (the job resolves URLs),
 /// in the order of `where.neighbours`; an empty path for one not to be read (it does not meet
-/// the read region, or could not be fetched: named in FittedTile::neighbours_skipped).
+/// the read region, or could not be fetched: named in `skipped`, then in
+/// FittedTile::neighbours_skipped).
 struct TileNeighbours {
   TileNeighbourhood where;
   std::vector<std::filesystem::path> paths;
+  std::vector<std::string> skipped;  ///< "input: reason" of those the job could not fetch
   /// The tile's own read holds its neighbours' points too (a cell of a COPC input, read with
   /// its halo): each point is its owner's (owns_point).
   bool own_read_is_shared = false;

@@ -3,6 +3,7 @@
 #include "city/tile_share.h"
 
 #include <algorithm>
+#include <vector>
 
 #include "csgtile/kernel/broad_phase.h"
 
@@ -10,25 +11,25 @@ namespace csgtile::worker::city {
 
 namespace {
 
-Extent grown(const Extent& e, double by) { return {e[0] - by, e[1] - by, e[2] + by, e[3] + by}; }
-
 bool holds(const Extent& e, const kernel::Vec2& p) {
   return p.x() >= e[0] && p.x() <= e[2] && p.y() >= e[1] && p.y() <= e[3];
 }
 
 bool meets(const Extent& e, const kernel::Vec2& lo, const kernel::Vec2& hi) {
-  return hi.x() >= e[0] && lo.x() <= e[2] && hi.y() >= e[1] && lo.y() <= e[3];
+  return extents_meet(e, {lo.x(), lo.y(), hi.x(), hi.y()});
 }
 
 bool within(const Extent& e, const kernel::Vec2& lo, const kernel::Vec2& hi) {
   return lo.x() >= e[0] && hi.x() <= e[2] && lo.y() >= e[1] && hi.y() <= e[3];
 }
 
-// The first tile in run order whose extent holds `p`, null when none does.
-const TileExtent* holder(const TileNeighbourhood& n, const kernel::Vec2& p) {
-  const TileExtent* best = holds(n.self.extent, p) ? &n.self : nullptr;
+// The first tile in run order (this one or a neighbour) whose extent passes `test`; null when
+// none does.
+template <typename Test>
+const TileExtent* first(const TileNeighbourhood& n, Test test) {
+  const TileExtent* best = test(n.self.extent) ? &n.self : nullptr;
   for (const TileExtent& t : n.neighbours) {
-    if ((best == nullptr || t.tile < best->tile) && holds(t.extent, p)) best = &t;
+    if ((best == nullptr || t.tile < best->tile) && test(t.extent)) best = &t;
   }
   return best;
 }
@@ -38,23 +39,23 @@ const TileExtent* holder(const TileNeighbourhood& n, const kernel::Vec2& p) {
 // between tiles); null when none does.
 const TileExtent* owner(const TileNeighbourhood& n, const kernel::Vec2& lo,
                         const kernel::Vec2& hi) {
-  if (const TileExtent* t = holder(n, 0.5 * (lo + hi))) return t;
-  std::vector<const TileExtent*> tiles{&n.self};
-  for (const TileExtent& t : n.neighbours) tiles.push_back(&t);
-  std::sort(tiles.begin(), tiles.end(),
-            [](const TileExtent* a, const TileExtent* b) { return a->tile < b->tile; });
-  for (const TileExtent* t : tiles) {
-    if (meets(t->extent, lo, hi)) return t;
-  }
-  return nullptr;
+  const kernel::Vec2 centre = 0.5 * (lo + hi);
+  if (const TileExtent* t = first(n, [&](const Extent& e) { return holds(e, centre); })) return t;
+  return first(n, [&](const Extent& e) { return meets(e, lo, hi); });
 }
 
 }  // namespace
 
+Extent grown(const Extent& e, double by) { return {e[0] - by, e[1] - by, e[2] + by, e[3] + by}; }
+
+bool extents_meet(const Extent& a, const Extent& b) {
+  return a[2] >= b[0] && a[0] <= b[2] && a[3] >= b[1] && a[1] <= b[3];
+}
+
 Extent TileNeighbourhood::read_region() const { return grown(self.extent, halo); }
 
 bool owns_point(const TileNeighbourhood& n, const kernel::Vec2& p) {
-  return holder(n, p) == &n.self;
+  return first(n, [&](const Extent& e) { return holds(e, p); }) == &n.self;
 }
 
 std::vector<std::vector<std::size_t>> neighbours_of(const std::vector<TileExtent>& all,

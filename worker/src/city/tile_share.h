@@ -22,6 +22,11 @@ namespace csgtile::worker::city {
 /// A tile's xy extent (its LAS header's bounds), in CRS coordinates: [xmin, ymin, xmax, ymax].
 using Extent = std::array<double, 4>;
 
+/// `e` grown by `by` on every side (shrunk for a negative `by`).
+Extent grown(const Extent& e, double by);
+/// Whether two extents meet (closed).
+bool extents_meet(const Extent& a, const Extent& b);
+
 struct TileExtent {
   std::size_t tile = 0;  ///< its position in the run's tiles (owners are found in this order)
   std::string input;     ///< path or URL
