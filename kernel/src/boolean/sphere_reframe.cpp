@@ -18,13 +18,29 @@
 
 namespace csgtile::kernel::detail {
 
+namespace {
+
+// A whole sphere as the builder makes it: one loop of its two poles (degenerate edges) and
+// its seam used both ways. A cap cut from a sphere also has one loop of four uses (its rim,
+// the seam twice, one pole) but is not whole: its rim must stay.
+bool is_full_sphere(const BFace& face, const BModel& model) {
+  if (face.surface->kind() != SurfaceKind::Sphere || face.loops.size() != 1 ||
+      face.loops[0].size() != 4)
+    return false;
+  int poles = 0;
+  for (const BUse& u : face.loops[0]) {
+    if (model.edges[static_cast<std::size_t>(u.edge)].degenerate()) ++poles;
+  }
+  return poles == 2;
+}
+
+}  // namespace
+
 void BooleanEngine::reframe_spheres() {
   const double tol = options_.tolerance;
   for (std::size_t f = 0; f < model_.faces.size(); ++f) {
     BFace& face = model_.faces[f];
-    if (face.surface->kind() != SurfaceKind::Sphere || face.loops.size() != 1 ||
-        face.loops[0].size() != 4)
-      continue;
+    if (!is_full_sphere(face, model_)) continue;
     const auto& sphere = static_cast<const SphereSurface&>(*face.surface);
     const Vec3 center = sphere.frame().origin;
     const double r = sphere.radius();
