@@ -105,5 +105,22 @@ TEST(BooleanCaps, SunkCapAllOperations) {
   }
 }
 
+// A zone of a sphere (cut by two parallel planes: two rims, no pole; one loop of four uses as
+// well) standing on the box's top.
+TEST(BooleanCaps, SphereZoneOnABoxTop) {
+  const Shape box = make_box(20, 20, 8).value();
+  PrimitiveSpec s;
+  s.type = PrimitiveType::Sphere;
+  s.radius = 3;
+  s.clips = {Eigen::Vector4d(0, 0, -1, 1), Eigen::Vector4d(0, 0, 1, 2)};  // -1 <= z <= 2
+  s.placement = Location::translation(Vec3(10, 10, 9));
+  const Shape zone = build_primitive(s).value();
+  const double want = 3200 + cap_volume(3, -1) - cap_volume(3, 2);
+  const Shape fused = valid(boolean_operation(box, zone, BooleanOp::Fuse), "fuse");
+  if (!fused.is_null()) {
+    EXPECT_NEAR(volume(fused), want, 1e-9 * want);
+  }
+}
+
 }  // namespace
 }  // namespace csgtile::kernel
