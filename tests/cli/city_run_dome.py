@@ -10,8 +10,8 @@ with default settings, and:
   * val3dity finds every feature of the CityJSONSeq valid (skipped with a message when the
     validator is absent).
 The same with a footprint (a 48-gon around the drum, GeoJSON read by GDAL): one Building
-carrying the footprint's id, the dome on its drum inside the footprint's prism, volume within
-1 %, valid.
+carrying the footprint's id, the dome standing on the footprint's prism, volume within 1 %,
+valid.
 Prints one JSON line of figures. Usage: city_run_dome.py CSGTILE SOURCE_DIR WORK_DIR
 """
 import glob
@@ -87,7 +87,7 @@ if not os.path.exists(val3dity):
 figures = {}
 for name, extra, under in (
         ("derived", "", "cylinder"),
-        ("footprint", f"city:\n  footprints: {footprint}\n  footprints_id: id\n", "cylinder extrusion")):
+        ("footprint", f"city:\n  footprints: {footprint}\n  footprints_id: id\n", "extrusion")):
     config = os.path.join(work, f"{name}.yaml")
     with open(config, "w") as f:
         f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {work}/{name}\n"

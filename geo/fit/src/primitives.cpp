@@ -291,13 +291,10 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
                              static_cast<long long>(dome.members.size())});
     return false;
   }
-  // The dome stands on a drum inside the footprint's prism: its cut is a disc a centimetre
-  // within the footprint (raised where the footprint is narrower than the dome's base: a round
-  // footprint digitised as a polygon is no circle), the drum that disc's cylinder from just
-  // above the terrain up to the cut, the prism a step (a centimetre) lower. A cut sphere
-  // sitting on a larger planar face is a contact the Boolean engine does not yet fuse, nor
-  // walls meeting the sphere nearly tangent: the dome meets only its drum, exactly, and the
-  // drum crosses the prism's top.
+  // The dome stands on the footprint's prism: its cut is a disc a centimetre within the
+  // footprint (raised where the footprint is narrower than the dome's base: a round footprint
+  // digitised as a polygon is no circle), the prism's top that disc's plane. The dome's rim
+  // then lies in the prism's top, clear of its walls (no wall meets the sphere nearly tangent).
   const Vec3 c = dome.spec.placement.apply_point(Vec3::Zero());
   const Vec2 axis(c.x(), c.y());
   double inside = INFINITY;  // the axis's distance to the footprint's boundary
@@ -321,30 +318,9 @@ bool Builder::domed_footprint(const detail::ProposalInput& in) {
     base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
     detail::cut_dome(on, base);
   }
-  auto prisms = detail::propose_footprint_block(in, out_.rejected, base - step);
-  if (prisms.empty() || !(disc > step)) return false;
-  // The terrain under the dome: that of the prism whose profile holds its axis.
-  double ground = prisms.front().spec.placement.apply_point(Vec3::Zero()).z();
-  for (const auto& p : prisms) {
-    const Vec3 local = p.spec.placement.inverse().apply_point(c);
-    if (detail::inside_ring(Vec2(local.x(), local.y()), p.spec.profile)) {
-      ground = p.spec.placement.apply_point(Vec3::Zero()).z();
-      break;
-    }
-  }
-  auto spec = detail::drum_spec(axis, disc, ground + step, base - ground - step);
-  if (!spec || !(spec->height > step)) return false;
-  detail::Proposal drum;
-  drum.spec = std::move(*spec);
-  drum.carried = true;
-  drum.what = dome.what + " drum";
-  // The drum is checked before the dome is kept: a dome without it would float.
-  if (auto solid = kernel::build_primitive(drum.spec, o_.linear_tolerance);
-      !solid.ok() || !kernel::check_shape(solid.value()).valid()) {
-    return false;
-  }
-  if (!take(on)) return false;
-  take(drum);
+  if (!(disc > step)) return false;
+  auto prisms = detail::propose_footprint_block(in, out_.rejected, base);
+  if (prisms.empty() || !take(on)) return false;
   for (auto& p : prisms) {
     std::erase_if(p.members, [&](std::uint32_t i) { return used_[i] != 0; });
     take(p);

@@ -9,6 +9,9 @@
 
 #include "csgtile/fit/fit.h"
 #include "csgtile/geo/footprints.h"
+#include "csgtile/kernel/boolean.h"
+#include "csgtile/kernel/check.h"
+#include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/primitives.h"
 #include "fit_clouds.h"
@@ -88,27 +91,35 @@ TEST(FitDomes, DomeOnADrumIsTheSphereCutAtItsBaseOverACylinder) {
   EXPECT_GE(f.assigned_points, static_cast<long long>(0.98 * static_cast<double>(c.points.size())));
 }
 
-TEST(FitDomes, ADomeInItsFootprintStandsOnADrumInsideTheFootprintsPrism) {
-  // The footprint a square of 14 m around the drum: the dome on its drum (the disc a
-  // centimetre within the footprint), the prism of the footprint a centimetre lower.
+TEST(FitDomes, ADomeInItsFootprintStandsOnTheFootprintsPrism) {
+  // The footprint a square of 14 m around the drum: the dome cut where its disc lies a
+  // centimetre within the footprint, the footprint's prism up to that disc's plane (the rim in
+  // the prism's top: a cap on a larger planar face, which the assembly fuses exactly).
   const GroundGrid ground = flat_ground();
   const Cloud c = dome_on_drum(20, 20, 6.0, 8.0, 2.0 * std::numbers::pi, 0.02, 3);
   const std::vector<geo::FootprintPolygon> footprint{
       {{{13, 13}, {27, 13}, {27, 27}, {13, 27}}, {}}};
   const FittedPrimitives f = fit(c, ground, &footprint);
-  ASSERT_EQ(f.primitives.size(), 3U) << describe(f);
+  ASSERT_EQ(f.primitives.size(), 2U) << describe(f);
   EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
-  EXPECT_EQ(f.primitives[1].spec.type, PrimitiveType::Cylinder) << describe(f);
-  EXPECT_EQ(f.primitives[2].spec.type, PrimitiveType::Extrusion) << describe(f);
+  EXPECT_EQ(f.primitives[1].spec.type, PrimitiveType::Extrusion) << describe(f);
   const Vec3 centre = f.primitives[0].spec.placement.apply_point(Vec3::Zero());
-  EXPECT_NEAR(centre.z() - f.primitives[0].spec.clips[0].w(), 8.0, 0.05);  // cut at the equator
-  EXPECT_NEAR(f.primitives[1].spec.radius, 6.0, 0.05);
-  auto prism = kernel::build_primitive(f.primitives[2].spec, 1e-7);
+  const double base = centre.z() - f.primitives[0].spec.clips[0].w();
+  EXPECT_NEAR(base, 8.0, 0.05);  // cut at the equator
+  EXPECT_NEAR(f.primitives[0].spec.radius, 6.0, 0.05);
+  auto prism = kernel::build_primitive(f.primitives[1].spec, 1e-7);
+  auto dome = kernel::build_primitive(f.primitives[0].spec, 1e-7);
   ASSERT_TRUE(prism.ok());
+  ASSERT_TRUE(dome.ok());
   const kernel::BoundingBox box = kernel::bounding_box(prism.value());
   EXPECT_NEAR(box.min.x(), 13.0, 1e-6);
   EXPECT_NEAR(box.max.y(), 27.0, 1e-6);
-  EXPECT_NEAR(box.max.z(), 8.0 - 0.01, 0.05);
+  EXPECT_NEAR(box.max.z(), base, 1e-9);
+  // One valid solid: the dome fused onto the prism's top.
+  auto fused = kernel::boolean_operation(prism.value(), dome.value(), kernel::BooleanOp::Fuse);
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(kernel::check_shape(fused.value()).valid());
+  EXPECT_EQ(kernel::map_child_shapes(fused.value(), kernel::ShapeKind::Solid).size(), 1U);
 }
 
 TEST(FitDomes, HalfADomeIsNoDome) {
