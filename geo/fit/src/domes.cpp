@@ -45,8 +45,16 @@ std::string format(const char* text, double a, double b) {
   return buffer;
 }
 
-// A drum: the vertical cylinder about `axis` (x, y) of `radius` and `height` from z0 up;
-// nullopt when it cannot be placed.
+}  // namespace
+
+void cut_dome(Proposal& dome, double base) {
+  const double cz = dome.spec.placement.apply_point(Vec3::Zero()).z();
+  const double r = dome.spec.radius;
+  // Kept where z_local >= base - cz: (0, 0, -1)·p <= cz - base.
+  dome.spec.clips = {Eigen::Vector4d(0.0, 0.0, -1.0, cz - base)};
+  dome.area = 2.0 * std::numbers::pi * r * (cz + r - base);
+}
+
 std::optional<kernel::PrimitiveSpec> drum_spec(const Vec2& axis, double radius, double z0,
                                                double height) {
   kernel::PrimitiveSpec spec;
@@ -57,16 +65,6 @@ std::optional<kernel::PrimitiveSpec> drum_spec(const Vec2& axis, double radius, 
   if (!foot) return std::nullopt;
   spec.placement = *foot;
   return spec;
-}
-
-}  // namespace
-
-void cut_dome(Proposal& dome, double base) {
-  const double cz = dome.spec.placement.apply_point(Vec3::Zero()).z();
-  const double r = dome.spec.radius;
-  // Kept where z_local >= base - cz: (0, 0, -1)·p <= cz - base.
-  dome.spec.clips = {Eigen::Vector4d(0.0, 0.0, -1.0, cz - base)};
-  dome.area = 2.0 * std::numbers::pi * r * (cz + r - base);
 }
 
 std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejection>& rejected) {

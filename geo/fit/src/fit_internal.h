@@ -197,6 +197,11 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
 /// the area of the cap left.
 void cut_dome(Proposal& dome, double base);
 
+/// A drum: the vertical cylinder about `axis` (x, y) of `radius` and `height` from z0 up;
+/// nullopt when it cannot be placed.
+std::optional<kernel::PrimitiveSpec> drum_spec(const kernel::Vec2& axis, double radius, double z0,
+                                               double height);
+
 /// Revolutions from coaxial cylinders and cones (two or more) and the planes ⟂ their axis
 /// within their radius. Groups whose profile is a plain cylinder or cone stay those.
 /// Reasons for groups that make no revolution are appended to `rejected`.

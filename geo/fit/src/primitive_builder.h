@@ -106,9 +106,15 @@ class Builder {
   // region has too few points to tell.
   double region_sigma();
   bool take(const detail::Proposal& proposal);
-  // A building in its footprint whose points a dome takes (nearly) all: the dome on the
-  // footprint's prism up to the dome's base. False, changing nothing, otherwise.
+  // A building in its footprint carrying a dome: when the dome takes (nearly) all its points,
+  // the dome on the footprint's prism up to the dome's base, else domed_roof. False, changing
+  // nothing but the rejections, otherwise.
   bool domed_footprint(const detail::ProposalInput& in);
+  // A dome over part of its footprint (`explained`: the points it and its drum take): the
+  // roof partition of the rest, the dome (on a drum when its base stands above the roof)
+  // standing on that roof. False, changing nothing but the rejections, otherwise.
+  bool domed_roof(const detail::ProposalInput& in, const detail::Proposal& dome,
+                  const std::vector<char>& explained);
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what, bool carried = false);
 

@@ -267,67 +267,6 @@ bool Builder::take(const detail::Proposal& proposal) {
   return true;
 }
 
-bool Builder::domed_footprint(const detail::ProposalInput& in) {
-  std::vector<Rejection> reasons;
-  const auto domes = detail::propose_domes(in, reasons);
-  if (domes.empty() || domes.front().carried) {
-    out_.rejected.insert(out_.rejected.end(), reasons.begin(), reasons.end());
-    return false;
-  }
-  const detail::Proposal& dome = domes.front();
-  // The points the dome and its drum (the wall the prism stands for) explain.
-  std::vector<char> explained(points_.size(), 0);
-  for (std::size_t k = 0; k < domes.size() && (k == 0 || domes[k].carried); ++k) {
-    for (auto i : domes[k].members) explained[i] = 1;
-  }
-  long long rest = 0;
-  for (std::uint32_t i = 0; i < points_.size(); ++i) rest += !used_[i] && !explained[i] ? 1 : 0;
-  const long long allowed =
-      std::max<long long>(ransac_.min_points, static_cast<long long>(0.05 * points_.size()));
-  if (rest > allowed) {
-    out_.rejected.push_back({dome.what,
-                             "no domed building: " + std::to_string(rest) +
-                                 " points of its footprint lie outside the dome",
-                             static_cast<long long>(dome.members.size())});
-    return false;
-  }
-  // The dome stands on the footprint's prism: its cut is a disc a centimetre within the
-  // footprint (raised where the footprint is narrower than the dome's base: a round footprint
-  // digitised as a polygon is no circle), the prism's top that disc's plane. The dome's rim
-  // then lies in the prism's top, clear of its walls (no wall meets the sphere nearly tangent).
-  const Vec3 c = dome.spec.placement.apply_point(Vec3::Zero());
-  const Vec2 axis(c.x(), c.y());
-  double inside = INFINITY;  // the axis's distance to the footprint's boundary
-  bool holds = false;
-  for (const geo::FootprintPolygon& fp : *o_.footprint) {
-    holds = holds || detail::inside_polygon(axis, fp.outer, fp.holes);
-    inside = std::min(inside, detail::boundary_distance(axis, fp.outer, fp.holes));
-  }
-  if (!holds) {
-    out_.rejected.push_back({dome.what, "no domed building: its axis lies outside its footprint",
-                             static_cast<long long>(dome.members.size())});
-    return false;
-  }
-  const double step = std::max(0.01, 10.0 * o_.linear_tolerance);
-  detail::Proposal on = dome;
-  const double radius = on.spec.radius;
-  double base = c.z() - on.spec.clips[0].w();
-  double disc = std::sqrt(std::max(radius * radius - (base - c.z()) * (base - c.z()), 0.0));
-  if (disc > inside - step) {
-    disc = std::max(inside - step, 0.0);
-    base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
-    detail::cut_dome(on, base);
-  }
-  if (!(disc > step)) return false;
-  auto prisms = detail::propose_footprint_block(in, out_.rejected, base);
-  if (prisms.empty() || !take(on)) return false;
-  for (auto& p : prisms) {
-    std::erase_if(p.members, [&](std::uint32_t i) { return used_[i] != 0; });
-    take(p);
-  }
-  return true;
-}
-
 double Builder::region_sigma() {
   if (!sigma_) {
     // The RANSAC's own estimate when it derived its epsilon, else the same estimate (the 5 %
