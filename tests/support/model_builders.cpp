@@ -47,6 +47,19 @@ std::pair<kernel::PrimitiveSpec, kernel::PrimitiveSpec> fitted_column_and_beam()
   return {column, beam};
 }
 
+std::vector<kernel::PrimitiveSpec> fitted_column_in_two_pieces() {
+  const kernel::PrimitiveSpec lower = cylinder(0.15, 4.0, kernel::Location());
+  const kernel::PrimitiveSpec upper =
+      cylinder(0.15, 3.0,
+               kernel::Location::translation(kernel::Vec3(1e-6, 0, 2.5)) *
+                   kernel::Location::rotation(kernel::Vec3::Zero(), kernel::Vec3::UnitX(), 1e-4));
+  const double top = 2.5 + 3.0 * std::cos(1e-4);
+  const kernel::PrimitiveSpec beam =
+      box(kernel::Vec3(3.0, 0.2, 0.3),
+          kernel::Location::translation(kernel::Vec3(-0.1, -0.1, top - 1e-4 - 0.3)));
+  return {lower, upper, beam};
+}
+
 kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size) {
   return box(size, kernel::Location::translation(at));
 }

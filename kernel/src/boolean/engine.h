@@ -116,6 +116,14 @@ class BooleanEngine {
                              Curve2dPtr& pb, double& t0, double& t1, std::vector<Hit>& hits,
                              std::size_t hits_on_a, double reach);
 
+  // A section crossing a boundary edge at a grazing angle (a plane almost parallel to a
+  // disc, a section almost along a rim) is found at points up to tolerance / sin(angle) apart
+  // by the different sections that end there. A hit with no vertex of its edge within
+  // tolerance moves to the nearest of the edge's vertices (its ends and splits) within
+  // kReuseReach tolerances that lies on the section within tolerance: one vertex where the
+  // sections meet, not two a few tolerances apart joined by sliver edges.
+  void reuse_edge_vertices(const Curve& curve, double t0, double t1, std::vector<Hit>& hits);
+
   // A boundary edge of face f passing through p (within tolerance), or -1.
   int boundary_edge_through(std::size_t f, const Vec3& p);
 

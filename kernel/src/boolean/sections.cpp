@@ -145,6 +145,8 @@ Status BooleanEngine::add_section(std::size_t fa, std::size_t fb, CurvePtr curve
                           std::max(edge_tolerance, options_.tolerance));
     edge_tolerance =
         std::max(edge_tolerance, static_cast<const PolylineCurve&>(*curve).tolerance());
+  } else {
+    reuse_edge_vertices(*curve, t0, t1, hits);
   }
   std::vector<double> cuts{t0, t1};
   for (const Hit& h : hits) cuts.push_back(h.t);
@@ -347,6 +349,35 @@ void BooleanEngine::snap_traced_crossings(std::size_t fa, std::size_t fb, CurveP
   curve = std::make_shared<PolylineCurve>(std::move(new_points), deviation);
   pa = std::make_shared<Polyline2d>(std::move(new_a));
   pb = std::make_shared<Polyline2d>(std::move(new_b));
+}
+
+void BooleanEngine::reuse_edge_vertices(const Curve& curve, double t0, double t1,
+                                        std::vector<Hit>& hits) {
+  const double tol = options_.tolerance;
+  for (Hit& h : hits) {
+    const BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
+    if (e.degenerate()) continue;
+    const Vec3 p = curve.point(h.t);
+    std::vector<std::pair<double, int>> known = e.splits;
+    known.emplace_back(e.t0, e.v0);
+    known.emplace_back(e.t1, e.v1);
+    bool near = false;
+    for (const auto& [s, v] : known) {
+      near = near || (model_.vertices[static_cast<std::size_t>(v)].point - p).norm() <= tol;
+    }
+    if (near) continue;  // vertex_at finds it
+    double best = kReuseReach * tol;
+    for (const auto& [s, v] : known) {
+      const Vec3& w = model_.vertices[static_cast<std::size_t>(v)].point;
+      const double d = (w - p).norm();
+      if (d > best) continue;
+      const double t = curve.closest_parameter(w, t0, t1);
+      if ((curve.point(t) - w).norm() > tol) continue;
+      best = d;
+      h.t = t;
+      h.s = s;
+    }
+  }
 }
 
 int BooleanEngine::boundary_edge_through(std::size_t f, const Vec3& p) {

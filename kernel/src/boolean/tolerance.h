@@ -141,6 +141,11 @@ inline double traced_sag(double linear, double size) {
 /// measured deviation) of the crossing found on the chords; farther, it is another crossing.
 inline constexpr double kTracedSnapReach = 100.0;
 
+/// A closed-form section's crossing with a boundary edge reuses a vertex of that edge this
+/// many linear tolerances away when the vertex lies on the section within tolerance (a grazing
+/// crossing found a few tolerances apart by the sections that end there).
+inline constexpr double kReuseReach = 100.0;
+
 // ---- Numerical constants (not tolerances) ------------------------------------------------------
 
 /// Newton refinement of a pcurve crossing stops when the two points are this fraction of the

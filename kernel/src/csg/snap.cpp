@@ -62,6 +62,13 @@ double* planar_extent(PrimitiveSpec& p, int k) {
   }
 }
 
+// Whether the primitive is a surface of revolution about its local z axis through its local
+// origin (its axis line is what step 5 snaps).
+bool revolves(const PrimitiveSpec& p) {
+  return p.type == PrimitiveType::Cylinder || p.type == PrimitiveType::Cone ||
+         p.type == PrimitiveType::Torus || p.type == PrimitiveType::Revolution;
+}
+
 struct Direction {
   Vec3 sum = Vec3::Zero();
   Vec3 rep = Vec3::Zero();
@@ -258,6 +265,74 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
       counts.max_move = std::max(counts.max_move, std::abs(face->to - face->offset));
     }
   }
+  // 5. Axes of revolution (cylinders, cones, tori, revolutions) along one direction whose
+  // lines lie within the distance of each other become one line (their mean), and cylinders
+  // on one line whose radii differ by at most the distance one radius: a column fitted in two
+  // pieces is one column, not two surfaces micrometres apart crossing at grazing angles.
+  struct Line {
+    int cluster;
+    Vec3 sum = Vec3::Zero(), rep = Vec3::Zero();
+    std::vector<std::size_t> members;
+  };
+  std::vector<Line> lines;
+  std::vector<Vec3> across(n, Vec3::Zero());  // each primitive's axis point ⟂ its direction
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!revolves(out[i])) continue;
+    const AxisUse& u = uses[i][2];
+    const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
+    const Vec3 q = out[i].placement.translation() + shift[i];
+    across[i] = q - q.dot(dir) * dir;
+    Line* line = nullptr;
+    for (Line& l : lines) {
+      if (!line && l.cluster == u.cluster && (l.rep - across[i]).norm() <= options.distance)
+        line = &l;
+    }
+    if (!line) line = &lines.emplace_back(Line{u.cluster, Vec3::Zero(), Vec3::Zero(), {}});
+    line->members.push_back(i);
+    line->sum += across[i];
+    line->rep = line->sum / static_cast<double>(line->members.size());
+  }
+  for (const Line& l : lines) {
+    if (l.members.size() < 2) continue;
+    ++counts.lines;
+    for (std::size_t i : l.members) {
+      const Vec3 move = l.rep - across[i];
+      if (move.isZero(0.0)) continue;
+      shift[i] += move;
+      ++counts.axes_moved;
+      counts.max_move = std::max(counts.max_move, move.norm());
+    }
+    // Radii of its cylinders, in groups within the distance (sorted), each group its mean.
+    std::vector<std::size_t> cylinders;
+    for (std::size_t i : l.members) {
+      if (out[i].type == PrimitiveType::Cylinder) cylinders.push_back(i);
+    }
+    std::stable_sort(cylinders.begin(), cylinders.end(), [&](std::size_t a, std::size_t b) {
+      return out[a].radius * out[a].placement.scale() < out[b].radius * out[b].placement.scale();
+    });
+    auto world_radius = [&](std::size_t i) { return out[i].radius * out[i].placement.scale(); };
+    for (std::size_t g = 0; g < cylinders.size();) {
+      std::size_t end = g + 1;
+      while (end < cylinders.size() &&
+             world_radius(cylinders[end]) - world_radius(cylinders[g]) <= options.distance)
+        ++end;
+      if (end - g >= 2) {
+        double mean = 0.0;
+        for (std::size_t k = g; k < end; ++k) mean += world_radius(cylinders[k]);
+        mean /= static_cast<double>(end - g);
+        for (std::size_t k = g; k < end; ++k) {
+          PrimitiveSpec& c = out[cylinders[k]];
+          const double moved = std::abs(mean - world_radius(cylinders[k]));
+          if (moved == 0.0) continue;
+          ++counts.radii_snapped;
+          counts.max_move = std::max(counts.max_move, moved);
+          c.radius = mean / c.placement.scale();
+        }
+      }
+      g = end;
+    }
+  }
+
   for (std::size_t i = 0; i < n; ++i) {
     if (shift[i].isZero(0.0)) continue;
     PrimitiveSpec& p = out[i];

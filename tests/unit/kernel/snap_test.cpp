@@ -25,13 +25,21 @@ Location turned(const Vec3& t, const Vec3& axis, double angle) {
 
 // A fitted column (0.7 mrad off vertical) and a fitted beam whose top lies 0.1 mm under the
 // column's top: the two planes cross inside the column's top disc, and the exact fuse meets
-// a sliver 0.1 mm thin (it fails). Snapped with 5 mm and 0.5°: one direction up, one plane on
-// top, and the fuse is one valid solid.
+// a sliver 0.1 mm thin, its ends crossing the column's rim at grazing angles. The exact fuse
+// holds (it failed with free edges until such crossings reused one vertex), its volumes
+// adding up; snapped with 5 mm and 0.5°: one direction up, one plane on top, and the fuse is
+// one valid solid too.
 TEST(Snap, FittedColumnAndBeamFuseOnceSnapped) {
   const auto [column, beam] = test::fitted_column_and_beam();
-  auto exact = boolean_operation(build_primitive(column).value(), build_primitive(beam).value(),
-                                 BooleanOp::Fuse);
-  EXPECT_FALSE(exact.ok() && check_shape(exact.value()).valid()) << "the exact fuse now holds";
+  const Shape sa = build_primitive(column).value(), sb = build_primitive(beam).value();
+  auto exact = boolean_operation(sa, sb, BooleanOp::Fuse);
+  ASSERT_TRUE(exact.ok()) << exact.error().message;
+  EXPECT_TRUE(check_shape(exact.value()).valid());
+  auto common = boolean_operation(sa, sb, BooleanOp::Common);
+  ASSERT_TRUE(common.ok()) << common.error().message;
+  const double va = mass_properties(sa).volume, vb = mass_properties(sb).volume;
+  EXPECT_NEAR(mass_properties(exact.value()).volume + mass_properties(common.value()).volume,
+              va + vb, 1e-9 * (va + vb));
 
   SnapReport report;
   auto snapped = snap_primitives({column, beam}, {0.005, 0.5 * std::numbers::pi / 180}, &report);
@@ -58,6 +66,53 @@ TEST(Snap, FittedColumnAndBeamFuseOnceSnapped) {
                         mass_properties(build_primitive(beam).value()).volume;
   EXPECT_LT(mass_properties(fused.value()).volume, before);
   EXPECT_GT(mass_properties(fused.value()).volume, before - 0.05);
+}
+
+// A column fitted in two pieces (axes 1 µm and 0.1 mrad apart, radii equal) and a beam at its
+// top: the exact fuse of the pieces fails (their sides cross at grazing angles); snapped, the
+// pieces share one axis line and the three fuse into one valid solid.
+TEST(Snap, ColumnFittedInTwoPiecesIsOneColumn) {
+  const std::vector<PrimitiveSpec> pieces = test::fitted_column_in_two_pieces();
+  auto exact = boolean_operation(build_primitive(pieces[0]).value(),
+                                 build_primitive(pieces[1]).value(), BooleanOp::Fuse);
+  EXPECT_FALSE(exact.ok() && check_shape(exact.value()).valid()) << "the exact fuse now holds";
+  SnapReport report;
+  auto snapped = snap_primitives(pieces, {0.005, 0.5 * std::numbers::pi / 180}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  const PrimitiveSpec& lower = snapped.value()[0];
+  const PrimitiveSpec& upper = snapped.value()[1];
+  EXPECT_EQ(report.lines, 1);
+  EXPECT_EQ(report.axes_moved, 2);
+  EXPECT_EQ(report.radii_snapped, 0);  // equal already
+  EXPECT_EQ(upper.placement.rotation().col(2), Vec3::UnitZ());
+  EXPECT_EQ(lower.placement.translation().head<2>(), upper.placement.translation().head<2>());
+  EXPECT_LE(report.max_move, 0.005);
+  std::vector<Shape> solids;
+  for (const PrimitiveSpec& p : snapped.value()) solids.push_back(build_primitive(p).value());
+  auto fused = boolean_fuse_all(solids);
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+  EXPECT_EQ(map_child_shapes(fused.value(), ShapeKind::Solid).size(), 1u);
+}
+
+// Coaxial cylinders whose radii differ by less than the distance get one radius; farther
+// radii, or axes farther apart than the distance, stay.
+TEST(Snap, NearlyEqualCoaxialRadiiBecomeOne) {
+  const Location up = Location::translation(Vec3(0, 0, 1));
+  const std::vector<PrimitiveSpec> specs = {
+      test::cylinder(1.0, 2.0, Location()), test::cylinder(1.0004, 2.0, up),
+      test::cylinder(1.5, 2.0, Location::translation(Vec3(0, 0, 2))),
+      test::cylinder(1.0, 2.0, Location::translation(Vec3(0.01, 0, 3)))};
+  SnapReport report;
+  auto snapped = snap_primitives(specs, {0.001, 0.0}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  EXPECT_EQ(report.lines, 1);
+  EXPECT_EQ(report.radii_snapped, 2);
+  EXPECT_DOUBLE_EQ(snapped.value()[0].radius, 1.0002);
+  EXPECT_DOUBLE_EQ(snapped.value()[1].radius, 1.0002);
+  EXPECT_EQ(snapped.value()[2].radius, 1.5);
+  EXPECT_EQ(snapped.value()[3].radius, 1.0);
+  EXPECT_EQ(snapped.value()[3].placement.translation(), Vec3(0.01, 0, 3));
 }
 
 // Beyond the distance or the angle, nothing moves; the two faces of a box thinner than the

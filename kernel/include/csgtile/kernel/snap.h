@@ -11,7 +11,10 @@
 /// one direction (their mean; the vertical itself within `angle` of it, the world's z being
 /// up; directions within `angle` of a right angle to each other become exactly orthogonal),
 /// and parallel plane faces (box faces, the caps of cylinders, cones and
-/// extrusions) whose planes lie within `distance` of each other become one plane. Each
+/// extrusions) whose planes lie within `distance` of each other become one plane; parallel
+/// axes of surfaces of revolution (cylinders, cones, tori, revolutions) within `distance` of
+/// each other become one axis line, and cylinders on one line whose radii differ by at most
+/// `distance` one radius. Each
 /// primitive turns about its own centre; a face moves along its normal by at most `distance`
 /// (its primitive's size changes accordingly); clip planes stay where they are in the world.
 /// The two faces of one primitive never merge. Deterministic (input order).
@@ -33,7 +36,10 @@ struct SnapReport {
   int planes = 0;         ///< planes shared by two or more faces
   int faces_snapped = 0;  ///< faces moved onto a shared plane
   double max_turn = 0.0;  ///< largest rotation of a primitive (radians)
-  double max_move = 0.0;  ///< largest move of a face along its normal (world units)
+  double max_move = 0.0;  ///< largest move of a face, an axis or a radius (world units)
+  int lines = 0;          ///< axis lines shared by two or more surfaces of revolution
+  int axes_moved = 0;     ///< surfaces of revolution moved onto a shared axis line
+  int radii_snapped = 0;  ///< cylinder radii changed to a shared radius
 };
 
 /// The primitives with their near-coincidences snapped (see the file comment). Errors:
