@@ -45,7 +45,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   if (!(spacing > 0.0)) return out;
   const auto& shapes = in.shapes->shapes;
   const double cos_wall = std::cos(75.0 * std::numbers::pi / 180.0);
-  // Points on walls take no part in the roof's heights.
+  // Points on walls take no part in the roof's heights: the inliers of steep planes, and
+  // points whose own normal is steep (walls seen too sparsely for a plane of their own, which
+  // would otherwise pull the cells along a building's edge down to flat pieces under its roof).
   std::vector<char> wall(in.points.size(), 0);
   for (std::size_t s = 0; s < shapes.size(); ++s) {
     if (shapes[s].surface.type != ShapeType::Plane ||
@@ -53,6 +55,11 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       continue;
     }
     for (auto i : shapes[s].inliers) wall[i] = 1;
+  }
+  if (in.normals.size() == in.points.size()) {
+    for (std::size_t i = 0; i < in.points.size(); ++i) {
+      if (in.normals[i].allFinite() && std::abs(in.normals[i].z()) < cos_wall) wall[i] = 1;
+    }
   }
   std::vector<std::uint32_t> pts;
   std::vector<Vec2> flat;

@@ -167,5 +167,34 @@ TEST(FitFootprints, PointsOutsideEveryFootprintStillMakeTheirBuilding) {
   EXPECT_LT(derived, 110.0);
 }
 
+// A flat roof (20 × 12 m at 8 m, 10 points per m²) with its walls seen at about two points per
+// m², not all of them taken into wall planes: the walls' points take no part in the roof's
+// heights, so no cell along the edge becomes a lower flat piece (4 did: notches along the
+// walls). Every part's top is the roof, the volume the block's.
+TEST(FitFootprints, WallPointsLeaveTheRoofWhole) {
+  testing::Draw d(17);
+  Cloud c = testing::rectangle_cloud(Vec3(0, 0, 8), Vec3(20, 0, 0), Vec3(0, 12, 0), 0.316, 0.02, 9);
+  for (int k = 0; k < 1000; ++k) {  // the walls, 64 m round, 8 m high
+    const double t = d.uniform(0.0, 64.0), z = d.uniform(0.0, 8.0);
+    const auto [p, n] = t < 20.0   ? std::pair{Vec3(t, 0, z), Vec3(0, -1, 0)}
+                        : t < 32.0 ? std::pair{Vec3(20, t - 20, z), Vec3(1, 0, 0)}
+                        : t < 52.0 ? std::pair{Vec3(52 - t, 12, z), Vec3(0, 1, 0)}
+                                   : std::pair{Vec3(0, 64 - t, z), Vec3(-1, 0, 0)};
+    c.add(p, n, 0.02, d);
+  }
+  const GroundGrid ground = testing::flat_ground();
+  const std::vector<geo::FootprintPolygon> footprint{{{{0, 0}, {20, 0}, {20, 12}, {0, 12}}, {}}};
+  const FittedPrimitives f = testing::fit_airborne(c, ground, {.footprint = &footprint});
+  ASSERT_FALSE(f.primitives.empty());
+  double volume = 0.0;
+  for (const auto& p : f.primitives) {
+    auto solid = kernel::build_primitive(p.spec, 1e-7);
+    ASSERT_TRUE(solid.ok()) << solid.error().message;
+    EXPECT_NEAR(kernel::bounding_box(solid.value()).max.z(), 8.0, 0.05);
+    volume += kernel::mass_properties(solid.value()).volume;
+  }
+  EXPECT_NEAR(volume, 20.0 * 12.0 * 8.0, 0.01 * 20.0 * 12.0 * 8.0);
+}
+
 }  // namespace
 }  // namespace csgtile::fit
