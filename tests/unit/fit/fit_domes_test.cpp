@@ -213,5 +213,39 @@ TEST(FitDomes, ADomeOnPartOfAFlatRoofStandsOnIt) {
   }
 }
 
+// The same without a footprint: the dome (on its drum from the terrain) and the roof partition
+// of the derived outline fuse into one valid solid; the volume within 2 % (the derived outline
+// stands on the outermost points, a little inside the true walls).
+TEST(FitDomes, ADomeOnPartOfAFlatRoofWithoutAFootprint) {
+  GroundGrid ground = flat_ground();  // no terrain seen under the building
+  for (int j = 0; j < ground.ny; ++j) {
+    for (int i = 0; i < ground.nx; ++i) {
+      const double x = ground.x0 + (i + 0.5) * ground.cell, y = ground.y0 + (j + 0.5) * ground.cell;
+      if (x > 10 && x < 40 && y > 10 && y < 30) {
+        ground.z[static_cast<std::size_t>(j * ground.nx + i)] = std::nan("");
+      }
+    }
+  }
+  for (const double drum : {0.0, 2.0}) {
+    SCOPED_TRACE("drum " + std::to_string(drum));
+    const FittedPrimitives f = fit(domed_roof(drum, 11), ground);
+    ASSERT_GE(f.primitives.size(), 2U) << describe(f);
+    EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
+    std::vector<kernel::Shape> solids;
+    for (const auto& p : f.primitives) {
+      auto solid = kernel::build_primitive(p.spec, 1e-7);
+      ASSERT_TRUE(solid.ok()) << solid.error().message;
+      solids.push_back(solid.value());
+    }
+    auto fused = kernel::boolean_fuse_all(solids);
+    ASSERT_TRUE(fused.ok()) << fused.error().message;
+    EXPECT_TRUE(kernel::check_shape(fused.value()).valid());
+    EXPECT_EQ(kernel::map_child_shapes(fused.value(), kernel::ShapeKind::Solid).size(), 1U);
+    const double truth =
+        600.0 * 10.0 + std::numbers::pi * 16.0 * drum + 2.0 / 3.0 * std::numbers::pi * 64.0;
+    EXPECT_NEAR(kernel::mass_properties(fused.value()).volume, truth, 0.02 * truth) << describe(f);
+  }
+}
+
 }  // namespace
 }  // namespace csgtile::fit
