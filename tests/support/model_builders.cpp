@@ -1,5 +1,7 @@
 #include "model_builders.h"
 
+#include "csgtile/kernel/check.h"
+
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -58,6 +60,15 @@ std::vector<kernel::PrimitiveSpec> fitted_column_in_two_pieces() {
       box(kernel::Vec3(3.0, 0.2, 0.3),
           kernel::Location::translation(kernel::Vec3(-0.1, -0.1, top - 1e-4 - 0.3)));
   return {lower, upper, beam};
+}
+
+kernel::Shape valid_solid(const kernel::Result<kernel::Shape>& r, const std::string& what) {
+  EXPECT_TRUE(r.ok()) << what << ": " << (r.ok() ? "" : r.error().message);
+  if (!r.ok()) return kernel::Shape();
+  const kernel::CheckReport report = kernel::check_shape(r.value());
+  EXPECT_TRUE(report.valid()) << what << ": "
+                              << (report.valid() ? "" : report.issues.front().message);
+  return r.value();
 }
 
 kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size) {

@@ -30,6 +30,9 @@ std::pair<kernel::PrimitiveSpec, kernel::PrimitiveSpec> fitted_column_and_beam()
 /// grazing angles and their exact fuse fails; snapped (one axis line, one direction, one top
 /// plane) the three fuse.
 std::vector<kernel::PrimitiveSpec> fitted_column_in_two_pieces();
+/// A Boolean's result expected to be a valid shape (gtest failures naming `what` otherwise):
+/// the shape, or a null shape when the operation failed.
+kernel::Shape valid_solid(const kernel::Result<kernel::Shape>& r, const std::string& what);
 /// A box of `size` with its minimum corner at `at`.
 kernel::PrimitiveSpec box_at(const kernel::Vec3& at, const kernel::Vec3& size);
 /// A vertical cylinder of radius r and height h with its base centre at `at`.

@@ -182,6 +182,33 @@ Cloud domed_roof(double drum, std::uint64_t seed) {
   return c;
 }
 
+// The fitted primitives built and fused: one valid solid expected; its volume (NaN when the
+// fuse fails).
+double fused_volume(const FittedPrimitives& f) {
+  std::vector<kernel::Shape> solids;
+  for (const auto& p : f.primitives) {
+    auto solid = kernel::build_primitive(p.spec, 1e-7);
+    if (!solid.ok()) {
+      ADD_FAILURE() << solid.error().message;
+      return std::nan("");
+    }
+    solids.push_back(solid.value());
+  }
+  auto fused = kernel::boolean_fuse_all(solids);
+  if (!fused.ok()) {
+    ADD_FAILURE() << fused.error().message;
+    return std::nan("");
+  }
+  EXPECT_TRUE(kernel::check_shape(fused.value()).valid());
+  EXPECT_EQ(kernel::map_child_shapes(fused.value(), kernel::ShapeKind::Solid).size(), 1U);
+  return kernel::mass_properties(fused.value()).volume;
+}
+
+// The true volume of domed_roof(drum).
+double domed_roof_volume(double drum) {
+  return 600.0 * 10.0 + std::numbers::pi * 16.0 * drum + 2.0 / 3.0 * std::numbers::pi * 64.0;
+}
+
 // The dome over part of its footprint's roof: the roof partition of the rest of the footprint,
 // the dome (on its drum, when it has one) standing on that roof; the parts fuse into one valid
 // solid of the true volume within 1 %.
@@ -194,22 +221,11 @@ TEST(FitDomes, ADomeOnPartOfAFlatRoofStandsOnIt) {
     const FittedPrimitives f = fit(domed_roof(drum, 11), ground, &footprint);
     ASSERT_GE(f.primitives.size(), 2U) << describe(f);
     EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
-    std::vector<kernel::Shape> solids;
     int cylinders = 0;
-    for (const auto& p : f.primitives) {
-      auto solid = kernel::build_primitive(p.spec, 1e-7);
-      ASSERT_TRUE(solid.ok()) << solid.error().message;
-      solids.push_back(solid.value());
-      cylinders += p.spec.type == PrimitiveType::Cylinder ? 1 : 0;
-    }
+    for (const auto& p : f.primitives) cylinders += p.spec.type == PrimitiveType::Cylinder ? 1 : 0;
     EXPECT_EQ(cylinders, drum > 0.0 ? 1 : 0) << describe(f);
-    auto fused = kernel::boolean_fuse_all(solids);
-    ASSERT_TRUE(fused.ok()) << fused.error().message;
-    EXPECT_TRUE(kernel::check_shape(fused.value()).valid());
-    EXPECT_EQ(kernel::map_child_shapes(fused.value(), kernel::ShapeKind::Solid).size(), 1U);
-    const double truth =
-        600.0 * 10.0 + std::numbers::pi * 16.0 * drum + 2.0 / 3.0 * std::numbers::pi * 64.0;
-    EXPECT_NEAR(kernel::mass_properties(fused.value()).volume, truth, 0.01 * truth) << describe(f);
+    const double truth = domed_roof_volume(drum);
+    EXPECT_NEAR(fused_volume(f), truth, 0.01 * truth) << describe(f);
   }
 }
 
@@ -231,19 +247,8 @@ TEST(FitDomes, ADomeOnPartOfAFlatRoofWithoutAFootprint) {
     const FittedPrimitives f = fit(domed_roof(drum, 11), ground);
     ASSERT_GE(f.primitives.size(), 2U) << describe(f);
     EXPECT_EQ(f.primitives[0].spec.type, PrimitiveType::Sphere) << describe(f);
-    std::vector<kernel::Shape> solids;
-    for (const auto& p : f.primitives) {
-      auto solid = kernel::build_primitive(p.spec, 1e-7);
-      ASSERT_TRUE(solid.ok()) << solid.error().message;
-      solids.push_back(solid.value());
-    }
-    auto fused = kernel::boolean_fuse_all(solids);
-    ASSERT_TRUE(fused.ok()) << fused.error().message;
-    EXPECT_TRUE(kernel::check_shape(fused.value()).valid());
-    EXPECT_EQ(kernel::map_child_shapes(fused.value(), kernel::ShapeKind::Solid).size(), 1U);
-    const double truth =
-        600.0 * 10.0 + std::numbers::pi * 16.0 * drum + 2.0 / 3.0 * std::numbers::pi * 64.0;
-    EXPECT_NEAR(kernel::mass_properties(fused.value()).volume, truth, 0.02 * truth) << describe(f);
+    const double truth = domed_roof_volume(drum);
+    EXPECT_NEAR(fused_volume(f), truth, 0.02 * truth) << describe(f);
   }
 }
 

@@ -11,20 +11,14 @@
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/primitives.h"
+#include "model_builders.h"
 
 namespace csgtile::kernel {
 namespace {
 
 double volume(const Shape& s) { return mass_properties(s).volume; }
 
-Shape valid(Result<Shape> r, const std::string& what) {
-  EXPECT_TRUE(r.ok()) << what << ": " << (r.ok() ? "" : r.error().message);
-  if (!r.ok()) return Shape();
-  const CheckReport report = check_shape(r.value());
-  EXPECT_TRUE(report.valid()) << what << ": "
-                              << (report.valid() ? "" : report.issues.front().message);
-  return r.value();
-}
+Shape valid(const Result<Shape>& r, const std::string& what) { return test::valid_solid(r, what); }
 
 // A sphere of radius r centred at `centre`, cut to z >= centre.z + base (base in (-r, r)).
 Shape cap(double r, const Vec3& centre, double base) {

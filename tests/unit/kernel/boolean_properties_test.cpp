@@ -18,6 +18,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "mass/mass_internal.h"
+#include "model_builders.h"
 #include "random_shapes.h"
 #include "test_support.h"
 
@@ -27,14 +28,7 @@ namespace {
 double volume(const Shape& s) { return mass_properties(s).volume; }
 std::size_t solids(const Shape& s) { return map_child_shapes(s, ShapeKind::Solid).size(); }
 
-Shape valid(Result<Shape> r, const std::string& what) {
-  EXPECT_TRUE(r.ok()) << what << ": " << (r.ok() ? "" : r.error().message);
-  if (!r.ok()) return Shape();
-  const CheckReport report = check_shape(r.value());
-  EXPECT_TRUE(report.valid()) << what << ": "
-                              << (report.valid() ? "" : report.issues.front().message);
-  return r.value();
-}
+Shape valid(const Result<Shape>& r, const std::string& what) { return test::valid_solid(r, what); }
 
 Shape box_at(const Vec3& size, const Location& at) {
   return make_box(size.x(), size.y(), size.z()).value().moved(at);
