@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "fit_internal.h"
+#include "plane2d.h"
 #include "primitive_builder.h"
 
 namespace csgtile::fit::detail {
@@ -74,6 +75,7 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
   const double eps = in.ransac->epsilon;
   // Points an earlier dome of this call claims (proposals are kept after the call).
   std::vector<char> claimed(*in.used);
+  std::vector<Vec2> region_hull;  // the region's outline, found when first needed
   for (std::size_t s = 0; s < in.shapes->shapes.size(); ++s) {
     const DetectedShape& shape = in.shapes->shapes[s];
     if (shape.surface.type != ShapeType::Sphere || (*in.absorbed)[s]) continue;
@@ -145,6 +147,17 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
     }
     double ground = lowest_ground_under(*o.ground, circle);
     if (!std::isfinite(ground)) ground = o.ground->median_near(c.x(), c.y(), 2.0 * base_radius);
+    if (!std::isfinite(ground)) {
+      // A dome amid a larger roof: the terrain around the whole region, as its building's.
+      if (region_hull.empty()) {
+        std::vector<Vec2> flat;
+        for (const Vec3& p : in.points) {
+          if (p.allFinite()) flat.emplace_back(p.x(), p.y());
+        }
+        region_hull = convex_hull(std::move(flat));
+      }
+      ground = lowest_ground_under(*o.ground, region_hull);
+    }
     if (!std::isfinite(ground)) {
       reject("no terrain under it");
       continue;
