@@ -57,18 +57,39 @@ def write_las(path, points):
 
 
 rnd = random.Random(7)
-points = []
 step = 1 / math.sqrt(10)
 n = int(60 / step)
-for i in range(n):
-    for j in range(n):
-        x = CX - 30 + (i + rnd.random()) * step
-        y = CY - 30 + (j + rnd.random()) * step
-        r = math.hypot(x - CX, y - CY)
-        if r < R:
-            points.append((x, y, H + math.sqrt(R * R - r * r) + rnd.gauss(0, 0.02), 6))
-        else:
-            points.append((x, y, rnd.gauss(0, 0.02), 2))
+
+
+def seen_from_above(roof):
+    """60 x 60 m around (CX, CY) at 10 points per m² (jittered grid, σ 2 cm): a building point
+    (class 6) at roof(x, y) where it is not None, else the ground (class 2) at z = 0."""
+    out = []
+    for i in range(n):
+        for j in range(n):
+            x = CX - 30 + (i + rnd.random()) * step
+            y = CY - 30 + (j + rnd.random()) * step
+            z = roof(x, y)
+            out.append((x, y, (z if z is not None else 0.0) + rnd.gauss(0, 0.02),
+                        6 if z is not None else 2))
+    return out
+
+
+def write_footprint(path, fid, ring):
+    """One polygon feature (its `id` attribute fid) in RD New, as GeoJSON."""
+    with open(path, "w") as f:
+        json.dump({"type": "FeatureCollection",
+                   "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}},
+                   "features": [{"type": "Feature", "properties": {"id": fid},
+                                 "geometry": {"type": "Polygon", "coordinates": [ring]}}]}, f)
+
+
+def dome_roof(x, y):
+    r = math.hypot(x - CX, y - CY)
+    return H + math.sqrt(R * R - r * r) if r < R else None
+
+
+points = seen_from_above(dome_roof)
 for _ in range(int(2 * math.pi * R * H)):
     a, z, rr = rnd.random() * 2 * math.pi, rnd.random() * H, R + rnd.gauss(0, 0.02)
     points.append((CX + rr * math.cos(a), CY + rr * math.sin(a), z, 6))
@@ -78,26 +99,20 @@ write_las(tile, points)
 footprint = os.path.join(work, "footprint.geojson")
 ring = [[CX + R * math.cos(2 * math.pi * k / 48), CY + R * math.sin(2 * math.pi * k / 48)]
         for k in range(48)]
-with open(footprint, "w") as f:
-    json.dump({"type": "FeatureCollection",
-               "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}},
-               "features": [{"type": "Feature", "properties": {"id": "dome-1"},
-                             "geometry": {"type": "Polygon", "coordinates": [ring + ring[:1]]}}]},
-              f)
+write_footprint(footprint, "dome-1", ring + ring[:1])
 # A flat roof (30 x 20 m, 10 m high) carrying a dome of radius 4 m on part of it, its walls at
 # 1 point per m², in a rectangular footprint.
 RW, RD, RH, RR = 30.0, 20.0, 10.0, 4.0
-roof_points = []
-for i in range(n):
-    for j in range(n):
-        x = CX - 30 + (i + rnd.random()) * step
-        y = CY - 30 + (j + rnd.random()) * step
-        r = math.hypot(x - CX, y - CY)
-        if abs(x - CX) < RW / 2 and abs(y - CY) < RD / 2:
-            z = RH + (math.sqrt(RR * RR - r * r) if r < RR else 0.0)
-            roof_points.append((x, y, z + rnd.gauss(0, 0.02), 6))
-        else:
-            roof_points.append((x, y, rnd.gauss(0, 0.02), 2))
+
+
+def domed_flat_roof(x, y):
+    if abs(x - CX) >= RW / 2 or abs(y - CY) >= RD / 2:
+        return None
+    r = math.hypot(x - CX, y - CY)
+    return RH + (math.sqrt(RR * RR - r * r) if r < RR else 0.0)
+
+
+roof_points = seen_from_above(domed_flat_roof)
 for _ in range(int(2 * (RW + RD) * RH)):
     t, z = rnd.random() * 2 * (RW + RD), rnd.random() * RH
     if t < RW:
@@ -114,22 +129,17 @@ write_las(roof_tile, roof_points)
 roof_footprint = os.path.join(work, "roof_footprint.geojson")
 box = [[CX - RW / 2, CY - RD / 2], [CX + RW / 2, CY - RD / 2], [CX + RW / 2, CY + RD / 2],
        [CX - RW / 2, CY + RD / 2], [CX - RW / 2, CY - RD / 2]]
-with open(roof_footprint, "w") as f:
-    json.dump({"type": "FeatureCollection",
-               "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::28992"}},
-               "features": [{"type": "Feature", "properties": {"id": "roof-1"},
-                             "geometry": {"type": "Polygon", "coordinates": [box]}}]},
-              f)
+write_footprint(roof_footprint, "roof-1", box)
 
 val3dity = os.path.join(source, "..", "shared", "tools", "val3dity", "val3dity")
 if not os.path.exists(val3dity):
     print(f"val3dity absent ({val3dity}): validity not checked", file=sys.stderr)
 figures = {}
-drum_truth = 0.5 * 48 * R * R * math.sin(2 * math.pi / 48) * H + 2.0 / 3.0 * math.pi * R ** 3
+footprint_truth = 0.5 * 48 * R * R * math.sin(2 * math.pi / 48) * H + 2.0 / 3.0 * math.pi * R ** 3
 cases = (
     ("derived", tile, "", "cylinder", "", math.pi * R * R * H + 2.0 / 3.0 * math.pi * R ** 3),
     ("footprint", tile, f"city:\n  footprints: {footprint}\n  footprints_id: id\n", "extrusion",
-     "dome-1", drum_truth),
+     "dome-1", footprint_truth),
     ("roof", roof_tile, f"city:\n  footprints: {roof_footprint}\n  footprints_id: id\n",
      "extrusion", "roof-1", RW * RD * RH + 2.0 / 3.0 * math.pi * RR ** 3))
 for name, tile, extra, under, footprint_id, truth in cases:

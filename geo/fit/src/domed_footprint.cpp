@@ -20,6 +20,10 @@ namespace {
 // wall seen.
 constexpr long long kMinDrumWall = 5;
 
+// How far a dome's rim keeps from walls, or sinks into roofs of several heights: a centimetre
+// (ten tolerances where the tolerance is coarser).
+double contact_step(const PrimitiveOptions& o) { return std::max(0.01, 10.0 * o.linear_tolerance); }
+
 // The height of the roof the parts (extrusions clipped by their roof planes, placed upright)
 // give at `xy`: the highest over the parts whose outline holds it; nullopt where none does.
 std::optional<double> roof_top_at(const std::vector<Proposal>& parts, const Vec2& xy) {
@@ -77,11 +81,10 @@ bool Builder::domed_footprint(const ProposalInput& in) {
   // footprint (raised where the footprint is narrower than the dome's base: a round footprint
   // digitised as a polygon is no circle), the prism's top that disc's plane. The dome's rim
   // then lies in the prism's top, clear of its walls (no wall meets the sphere nearly tangent).
-  const double step = std::max(0.01, 10.0 * o_.linear_tolerance);
+  const double step = contact_step(o_);
   Proposal on = dome;
   const double radius = on.spec.radius;
-  double base = c.z() - on.spec.clips[0].w();
-  double disc = std::sqrt(std::max(radius * radius - (base - c.z()) * (base - c.z()), 0.0));
+  auto [base, disc] = cap_base(on);
   if (disc > inside - step) {
     disc = std::max(inside - step, 0.0);
     base = c.z() + std::sqrt(std::max(radius * radius - disc * disc, 0.0));
@@ -106,19 +109,17 @@ bool Builder::domed_roof(const ProposalInput& in, const Proposal& dome,
   };
   // The roof partition of the rest of the footprint: the dome's points (and its drum's) take
   // no part in it; the cells under the dome take their neighbours' roofs.
+  std::vector<char> rest_used(used_.size());
+  for (std::size_t i = 0; i < used_.size(); ++i) rest_used[i] = used_[i] || explained[i];
+  ProposalInput rest = in;
+  rest.used = &rest_used;
   std::vector<Rejection> reasons;
-  std::vector<Proposal> parts;
-  {
-    const std::vector<char> before = used_;
-    for (std::size_t i = 0; i < used_.size(); ++i) used_[i] = used_[i] || explained[i];
-    parts = propose_roof_partition(in, reasons);
-    used_ = before;
-  }
+  std::vector<Proposal> parts = propose_roof_partition(rest, reasons);
   if (parts.empty()) return refuse("the rest of its footprint has no roof partition");
   // The roof under the dome's base circle (and its axis), from the parts.
   const Vec3 c = dome.spec.placement.apply_point(Vec3::Zero());
-  const double radius = dome.spec.radius, base = c.z() - dome.spec.clips[0].w();
-  const double rim = std::sqrt(std::max(radius * radius - (base - c.z()) * (base - c.z()), 0.0));
+  const double radius = dome.spec.radius;
+  const auto [base, rim] = cap_base(dome);
   double lo = INFINITY, hi = -INFINITY;
   for (int k = -1; k < 64; ++k) {
     const double a = 2.0 * std::numbers::pi * k / 64.0;
@@ -132,7 +133,7 @@ bool Builder::domed_roof(const ProposalInput& in, const Proposal& dome,
   if (hi >= c.z() + radius) return refuse("the roof under it stands above its top");
   // Where it stands: on a flat roof, on the roof's plane; on roofs of several heights or
   // slopes, a step below the lowest (the disc buried in the roof, no contact at one point).
-  const double step = std::max(0.01, 10.0 * o_.linear_tolerance);
+  const double step = contact_step(o_);
   const double level = hi - lo <= o_.linear_tolerance ? lo : lo - step;
   // A drum between the roof and the dome's base where the roof lies below the sphere's
   // equator, or where its wall is seen (points around the base circle, between the roof and

@@ -56,6 +56,12 @@ void cut_dome(Proposal& dome, double base) {
   dome.area = 2.0 * std::numbers::pi * r * (cz + r - base);
 }
 
+CapBase cap_base(const Proposal& dome) {
+  const double cz = dome.spec.placement.apply_point(Vec3::Zero()).z();
+  const double r = dome.spec.radius, z = cz - dome.spec.clips[0].w();
+  return {z, std::sqrt(std::max(r * r - (z - cz) * (z - cz), 0.0))};
+}
+
 std::optional<kernel::PrimitiveSpec> drum_spec(const Vec2& axis, double radius, double z0,
                                                double height) {
   kernel::PrimitiveSpec spec;

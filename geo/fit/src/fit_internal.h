@@ -197,6 +197,14 @@ std::vector<Proposal> propose_domes(const ProposalInput& in, std::vector<Rejecti
 /// the area of the cap left.
 void cut_dome(Proposal& dome, double base);
 
+/// Where a cut dome (a sphere proposal with its one clip, cut_dome) meets its cut: the height
+/// of its base and the radius of its rim there.
+struct CapBase {
+  double z = 0.0;
+  double rim = 0.0;
+};
+CapBase cap_base(const Proposal& dome);
+
 /// A drum: the vertical cylinder about `axis` (x, y) of `radius` and `height` from z0 up;
 /// nullopt when it cannot be placed.
 std::optional<kernel::PrimitiveSpec> drum_spec(const kernel::Vec2& axis, double radius, double z0,

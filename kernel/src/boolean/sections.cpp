@@ -358,25 +358,28 @@ void BooleanEngine::reuse_edge_vertices(const Curve& curve, double t0, double t1
     const BEdge& e = model_.edges[static_cast<std::size_t>(h.edge)];
     if (e.degenerate()) continue;
     const Vec3 p = curve.point(h.t);
-    std::vector<std::pair<double, int>> known = e.splits;
-    known.emplace_back(e.t0, e.v0);
-    known.emplace_back(e.t1, e.v1);
-    bool near = false;
-    for (const auto& [s, v] : known) {
-      near = near || (model_.vertices[static_cast<std::size_t>(v)].point - p).norm() <= tol;
-    }
-    if (near) continue;  // vertex_at finds it
+    // The edge's vertices (its splits and its ends) with their parameters.
+    auto for_each_vertex = [&](const auto& visit) {
+      for (const auto& [s, v] : e.splits) visit(s, v);
+      visit(e.t0, e.v0);
+      visit(e.t1, e.v1);
+    };
+    double nearest = INFINITY;
+    for_each_vertex([&](double, int v) {
+      nearest = std::min(nearest, (model_.vertices[static_cast<std::size_t>(v)].point - p).norm());
+    });
+    if (nearest <= tol || nearest > kReuseReach * tol) continue;  // vertex_at finds it; none near
     double best = kReuseReach * tol;
-    for (const auto& [s, v] : known) {
+    for_each_vertex([&](double s, int v) {
       const Vec3& w = model_.vertices[static_cast<std::size_t>(v)].point;
       const double d = (w - p).norm();
-      if (d > best) continue;
+      if (d > best) return;
       const double t = curve.closest_parameter(w, t0, t1);
-      if ((curve.point(t) - w).norm() > tol) continue;
+      if ((curve.point(t) - w).norm() > tol) return;
       best = d;
       h.t = t;
       h.s = s;
-    }
+    });
   }
 }
 

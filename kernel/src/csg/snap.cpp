@@ -307,10 +307,10 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     for (std::size_t i : l.members) {
       if (out[i].type == PrimitiveType::Cylinder) cylinders.push_back(i);
     }
-    std::stable_sort(cylinders.begin(), cylinders.end(), [&](std::size_t a, std::size_t b) {
-      return out[a].radius * out[a].placement.scale() < out[b].radius * out[b].placement.scale();
-    });
     auto world_radius = [&](std::size_t i) { return out[i].radius * out[i].placement.scale(); };
+    std::stable_sort(cylinders.begin(), cylinders.end(), [&](std::size_t a, std::size_t b) {
+      return world_radius(a) < world_radius(b);
+    });
     for (std::size_t g = 0; g < cylinders.size();) {
       std::size_t end = g + 1;
       while (end < cylinders.size() &&

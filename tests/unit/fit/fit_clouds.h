@@ -135,6 +135,23 @@ inline Cloud rectangle_cloud(const Vec3& corner, const Vec3& e1, const Vec3& e2,
   return c;
 }
 
+/// The walls of an axis-aligned rectangular building over [lo, hi] (x, y), from z = 0 up to
+/// `height`: `count` points drawn uniformly along its perimeter (from lo, +x first, then +y,
+/// -x, -y) and in z, each along its wall's outward normal with `noise`.
+inline void add_rectangle_walls(Cloud& c, const kernel::Vec2& lo, const kernel::Vec2& hi,
+                                double height, int count, double noise, Draw& d) {
+  const double w = hi.x() - lo.x(), h = hi.y() - lo.y();
+  for (int k = 0; k < count; ++k) {
+    const double t = d.uniform(0.0, 2.0 * (w + h)), z = d.uniform(0.0, height);
+    const auto [p, n] = t < w       ? std::pair{Vec3(lo.x() + t, lo.y(), z), Vec3(0, -1, 0)}
+                        : t < w + h ? std::pair{Vec3(hi.x(), lo.y() + t - w, z), Vec3(1, 0, 0)}
+                        : t < 2 * w + h
+                            ? std::pair{Vec3(hi.x() - (t - w - h), hi.y(), z), Vec3(0, 1, 0)}
+                            : std::pair{Vec3(lo.x(), hi.y() - (t - 2 * w - h), z), Vec3(-1, 0, 0)};
+    c.add(p, n, noise, d);
+  }
+}
+
 /// Angle in degrees between two lines (directions up to sign).
 inline double line_angle_deg(const Vec3& a, const Vec3& b) {
   const double c = std::min(1.0, std::abs(a.normalized().dot(b.normalized())));

@@ -165,14 +165,7 @@ Cloud domed_roof(double drum, std::uint64_t seed) {
       c.add(Vec3(x, y, h), Vec3::UnitZ(), 0.02, d);
     }
   }
-  for (int k = 0; k < 1000; ++k) {  // the walls, 100 m round
-    const double t = d.uniform(0.0, 100.0), z = d.uniform(0.0, h);
-    const auto [p, n] = t < 30.0   ? std::pair{Vec3(10 + t, 10, z), Vec3(0, -1, 0)}
-                        : t < 50.0 ? std::pair{Vec3(40, 10 + t - 30, z), Vec3(1, 0, 0)}
-                        : t < 80.0 ? std::pair{Vec3(40 - (t - 50), 30, z), Vec3(0, 1, 0)}
-                                   : std::pair{Vec3(10, 30 - (t - 80), z), Vec3(-1, 0, 0)};
-    c.add(p, n, 0.02, d);
-  }
+  testing::add_rectangle_walls(c, {10, 10}, {40, 30}, h, 1000, 0.02, d);
   const auto wall = static_cast<int>(2.0 * std::numbers::pi * r * drum);
   for (int k = 0; k < wall; ++k) {
     const double a = d.uniform(0.0, 2.0 * std::numbers::pi);

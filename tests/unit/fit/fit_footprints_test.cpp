@@ -174,14 +174,7 @@ TEST(FitFootprints, PointsOutsideEveryFootprintStillMakeTheirBuilding) {
 TEST(FitFootprints, WallPointsLeaveTheRoofWhole) {
   testing::Draw d(17);
   Cloud c = testing::rectangle_cloud(Vec3(0, 0, 8), Vec3(20, 0, 0), Vec3(0, 12, 0), 0.316, 0.02, 9);
-  for (int k = 0; k < 1000; ++k) {  // the walls, 64 m round, 8 m high
-    const double t = d.uniform(0.0, 64.0), z = d.uniform(0.0, 8.0);
-    const auto [p, n] = t < 20.0   ? std::pair{Vec3(t, 0, z), Vec3(0, -1, 0)}
-                        : t < 32.0 ? std::pair{Vec3(20, t - 20, z), Vec3(1, 0, 0)}
-                        : t < 52.0 ? std::pair{Vec3(52 - t, 12, z), Vec3(0, 1, 0)}
-                                   : std::pair{Vec3(0, 64 - t, z), Vec3(-1, 0, 0)};
-    c.add(p, n, 0.02, d);
-  }
+  testing::add_rectangle_walls(c, {0, 0}, {20, 12}, 8.0, 1000, 0.02, d);
   const GroundGrid ground = testing::flat_ground();
   const std::vector<geo::FootprintPolygon> footprint{{{{0, 0}, {20, 0}, {20, 12}, {0, 12}}, {}}};
   const FittedPrimitives f = testing::fit_airborne(c, ground, {.footprint = &footprint});
