@@ -2,7 +2,9 @@
 #include <sys/vfs.h>
 
 #include <algorithm>
+#include <chrono>
 #include <iterator>
+#include <thread>
 
 #include "csgtile/worker/queue.h"
 #include "queue/queue_random.h"
@@ -132,7 +134,9 @@ class SqliteQueue final : public JobQueue {
 
   bool exec(const char* sql, Failure& failure) {
     char* message = nullptr;
-    if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+    const int code = sqlite3_exec(db_, sql, nullptr, nullptr, &message);
+    if (code != SQLITE_OK) {
+      last_busy_ = (code & 0xff) == SQLITE_BUSY || (code & 0xff) == SQLITE_LOCKED;
       failure = {ErrorCode::Io, std::string("sqlite: ") + (message ? message : "error")};
       sqlite3_free(message);
       return false;
@@ -140,13 +144,36 @@ class SqliteQueue final : public JobQueue {
     return true;
   }
 
+  // Puts the file in WAL mode and brings its schema up to date. Switching a rollback-journal
+  // file to WAL needs an exclusive lock, and where waiting for it could deadlock (two
+  // processes opening the same new or old file, each holding a shared lock) SQLite answers
+  // "database is locked" at once instead of calling the busy handler; the opening is then
+  // tried again, for as long as the busy timeout allows.
+  bool prepare(std::chrono::milliseconds patience, Failure& failure) {
+    const auto deadline = std::chrono::steady_clock::now() + patience;
+    // Not the seeded QueueRandom: its draws are the queue's reproducible sequence.
+    std::chrono::milliseconds pause{2};
+    for (;;) {
+      last_busy_ = false;
+      if (exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", failure) &&
+          migrate(failure)) {
+        return true;
+      }
+      if (!last_busy_ || std::chrono::steady_clock::now() >= deadline) return false;
+      std::this_thread::sleep_for(pause);
+      pause = std::min(pause * 2, std::chrono::milliseconds(50));
+    }
+  }
+
   // Brings the file to kSchemaVersion in one BEGIN IMMEDIATE transaction: processes opening
   // the same file at once migrate it once, the others find it done.
   bool migrate(Failure& failure) {
     if (!exec("BEGIN IMMEDIATE", failure)) return false;
     const auto abandon = [&] {
+      const bool busy = last_busy_;
       Failure ignored;
       exec("ROLLBACK", ignored);
+      last_busy_ = busy;
       return false;
     };
     if (!exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)", failure)) {
@@ -366,6 +393,8 @@ class SqliteQueue final : public JobQueue {
 
  private:
   bool error(Failure& failure) {
+    const int code = sqlite3_errcode(db_);
+    last_busy_ = code == SQLITE_BUSY || code == SQLITE_LOCKED;
     failure = {ErrorCode::Io, std::string("sqlite: ") + sqlite3_errmsg(db_)};
     return false;
   }
@@ -373,6 +402,7 @@ class SqliteQueue final : public JobQueue {
   sqlite3* db_;
   QueuePolicy policy_;
   detail::QueueRandom random_;
+  bool last_busy_ = false;  // the last failed statement met a lock
 };
 
 }  // namespace
@@ -402,12 +432,10 @@ std::unique_ptr<JobQueue> open_sqlite_queue(const std::filesystem::path& path,
     sqlite3_close(db);
     return nullptr;
   }
-  sqlite3_busy_timeout(db, 10000);
+  constexpr std::chrono::milliseconds kBusyTimeout{10000};
+  sqlite3_busy_timeout(db, static_cast<int>(kBusyTimeout.count()));
   auto queue = std::make_unique<SqliteQueue>(db, policy);
-  if (!queue->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;", failure) ||
-      !queue->migrate(failure)) {
-    return nullptr;
-  }
+  if (!queue->prepare(kBusyTimeout, failure)) return nullptr;
   return queue;
 }
 
