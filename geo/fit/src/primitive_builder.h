@@ -86,6 +86,9 @@ class Builder {
   bool round_section(const std::vector<std::uint32_t>& members, const PlanePatch& seed,
                      const std::array<double, 4>& section) const;
   void boxes();
+  // Boxes seen in pieces joined into one member, members' ends into what they run into
+  // (members.cpp).
+  void join_members();
   void curved(int index);
   void blocks();
   // What the proposal steps see of the region (points, shapes, what is used or absorbed).
@@ -115,6 +118,10 @@ class Builder {
   // standing on that roof. False, changing nothing but the rejections, otherwise.
   bool domed_roof(const detail::ProposalInput& in, const detail::Proposal& dome,
                   const std::vector<char>& explained);
+  // The region's points, other than `own` (sorted), inside the primitive by more than `deep`
+  // along each axis direction.
+  long long points_deep_inside(const PrimitiveSpec& spec, double deep,
+                               const std::vector<std::uint32_t>& own) const;
   void emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
             const std::string& what, bool carried = false);
 
@@ -132,6 +139,8 @@ class Builder {
   kernel::BoundingBox region_box_;  // of the region's finite points
   FittedPrimitives out_;
   std::optional<double> sigma_;  // region_sigma()
+  // The points of each primitive in out_.primitives (what emit was given), in its order.
+  std::vector<std::vector<std::uint32_t>> emitted_members_;
 };
 
 }  // namespace csgtile::fit::detail

@@ -82,6 +82,23 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
     out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
     return;
   }
+  if (!carried && o_.footprint == nullptr &&
+      (spec.type == PrimitiveType::Box || spec.type == PrimitiveType::Extrusion)) {
+    // A solid's inside is never seen: a surface's worth of points (min_points) measured deep
+    // inside it (beyond the noise margin from every side) are another object's, and the solid
+    // claims space the scan saw through (a block over the bays of a frame). A building in its
+    // footprint stands on it whatever it holds.
+    const double deep = std::max(4.0 * ransac_.epsilon, 0.5 * cell_);
+    const long long inside = points_deep_inside(spec, deep, members);
+    if (inside >= std::max<long long>(ransac_.min_points, 3)) {
+      out_.rejected.push_back(
+          {what,
+           std::to_string(inside) + " points (its own: " + std::to_string(members.size()) +
+               ") lie deep inside it (more than " + std::to_string(deep) + " from its boundary)",
+           static_cast<long long>(members.size())});
+      return;
+    }
+  }
   geo::ScenePrimitive p;
   p.spec = std::move(spec);
   p.id = "r" + std::to_string(region_) + "-" + std::to_string(out_.primitives.size());
@@ -121,6 +138,47 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
   out_.assigned_points += q.inliers;
   for (auto i : members) used_[i] = 1;
   out_.primitives.push_back(std::move(p));
+  emitted_members_.push_back(members);
+}
+
+long long Builder::points_deep_inside(const PrimitiveSpec& spec, double deep,
+                                      const std::vector<std::uint32_t>& own) const {
+  std::vector<std::uint32_t> sorted_copy;
+  const std::vector<std::uint32_t>* sorted = &own;
+  if (!std::is_sorted(own.begin(), own.end())) {
+    sorted_copy = own;
+    std::sort(sorted_copy.begin(), sorted_copy.end());
+    sorted = &sorted_copy;
+  }
+  const auto prepared = geo::detail::prepare_primitive(spec);
+  const kernel::BoundingBox& box = prepared.world_bounds;
+  const std::array<Vec3, 6> steps{Vec3(deep, 0, 0),  Vec3(-deep, 0, 0), Vec3(0, deep, 0),
+                                  Vec3(0, -deep, 0), Vec3(0, 0, deep),  Vec3(0, 0, -deep)};
+  long long count = 0;
+  for (std::uint32_t i = 0; i < points_.size(); ++i) {
+    const Vec3& q = points_[i];
+    if (!q.allFinite() || q.x() < box.min.x() + deep || q.x() > box.max.x() - deep ||
+        q.y() < box.min.y() + deep || q.y() > box.max.y() - deep || q.z() < box.min.z() + deep ||
+        q.z() > box.max.z() - deep || !geo::detail::primitive_contains(prepared, q)) {
+      continue;
+    }
+    bool deep_inside = true;
+    for (const Vec3& step : steps) {
+      if (!geo::detail::primitive_contains(prepared, q + step)) {
+        deep_inside = false;
+        break;
+      }
+    }
+    if (!deep_inside) continue;
+    // Its own points count when the RANSAC found them on a curved surface: a column inside a
+    // block is no part of it.
+    const int shape = i < shapes_.assignment.size() ? shapes_.assignment[i] : -1;
+    const bool curved =
+        shape >= 0 &&
+        shapes_.shapes[static_cast<std::size_t>(shape)].surface.type != ShapeType::Plane;
+    count += curved || !std::binary_search(sorted->begin(), sorted->end(), i) ? 1 : 0;
+  }
+  return count;
 }
 
 void Builder::curved(int index) {
@@ -349,6 +407,7 @@ FittedPrimitives Builder::run() {
     }
     curved(static_cast<int>(s));
   }
+  if (o_.boxes) join_members();
   if (o_.extrusions) blocks();
   return std::move(out_);
 }

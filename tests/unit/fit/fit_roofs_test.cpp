@@ -68,6 +68,25 @@ std::pair<double, double> z_range(const kernel::PrimitiveSpec& s) {
   return {lo, hi};
 }
 
+// Whether a box or an unclipped extrusion holds the world point `q`.
+bool holds(const kernel::PrimitiveSpec& s, const Vec3& q) {
+  const Vec3 l = s.placement.inverse().apply_point(q);
+  if (s.type == PrimitiveType::Box) {
+    return l.x() >= 0 && l.y() >= 0 && l.z() >= 0 && l.x() <= s.size.x() && l.y() <= s.size.y() &&
+           l.z() <= s.size.z();
+  }
+  if (s.type != PrimitiveType::Extrusion || l.z() < 0 || l.z() > s.height) return false;
+  bool in = false;  // even-odd over the outer ring
+  for (std::size_t i = 0, j = s.profile.size() - 1; i < s.profile.size(); j = i++) {
+    const Vec2 &a = s.profile[i], &b = s.profile[j];
+    if ((a.y() > l.y()) != (b.y() > l.y()) &&
+        l.x() < a.x() + (l.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
 // A roof surface seen from the air: points uniform (10 per m²) over the parallelogram
 // corner + [0,1]·e1 + [0,1]·e2, with Gaussian noise σ along its normal.
 Cloud roof(const Vec3& corner, const Vec3& e1, const Vec3& e2, double sigma, std::uint64_t seed) {
@@ -182,6 +201,34 @@ TEST(FitRoofs, BoxNeverReachesBelowTheTerrain) {
   for (const auto& p : f.primitives) {
     EXPECT_GE(z_range(p.spec).first, -0.25) << describe(f);
   }
+}
+
+// A flat canopy 6 x 6 m at 3 m on five posts, the posts scanned all round (a terrestrial
+// scan of a frame's bays): the canopy's outline down to the terrain would be a block holding
+// the posts. Points measured deep inside a solid contradict it: no box or extrusion may hold
+// the posts' points, and the refusal is named.
+TEST(FitRoofs, NoBlockHoldsThePostsUnderACanopy) {
+  const GroundGrid ground = flat_ground();
+  Cloud c = testing::rectangle_cloud(Vec3(0, 0, 3), Vec3(6, 0, 0), Vec3(0, 6, 0), 0.05, 0.002, 4);
+  std::uint64_t seed = 40;
+  const std::vector<Vec2> posts{{0.5, 0.5}, {5.5, 0.5}, {0.5, 5.5}, {5.5, 5.5}, {3.0, 3.0}};
+  for (const Vec2& q : posts) {
+    c.append(testing::cylinder_cloud(Vec3(q.x(), q.y(), 0.0), Vec3::UnitZ(), 0.15, 2.95, 0.0,
+                                     2.0 * std::numbers::pi, 3000, 0.002, seed++));
+  }
+  const auto f = fit_airborne(c, ground);
+  int posts_found = 0;
+  for (const auto& p : f.primitives) {
+    if (p.spec.type == PrimitiveType::Cylinder) {
+      ++posts_found;
+      continue;
+    }
+    for (const Vec2& q : posts) {
+      EXPECT_FALSE(holds(p.spec, Vec3(q.x(), q.y(), 1.5))) << describe(f);
+    }
+  }
+  EXPECT_EQ(posts_found, 5) << describe(f);
+  EXPECT_NE(describe(f).find("lie deep inside it"), std::string::npos) << describe(f);
 }
 
 TEST(FitRoofs, CoaxialOverlappingConesMakeOnePrimitive) {

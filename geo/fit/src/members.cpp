@@ -1,0 +1,290 @@
+// Members of a frame, joined after the boxes and cylinders are built: a beam whose face the
+// scan saw in pieces (a shadow across it) is one box, and a beam's end reaches the axis of
+// the column or the middle of the member it runs into, as a frame's members meet, instead of
+// stopping at the surface where its points stop.
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "primitive_builder.h"
+#include "synth/ray_internal.h"
+
+namespace csgtile::fit::detail {
+
+namespace {
+
+// An elongated box in its own terms: its centre line from `start` along `u` over [0, length],
+// its section's axes `a`, `b` and half-sizes.
+struct Member {
+  Vec3 start, u, a, b;
+  double length = 0.0, half_a = 0.0, half_b = 0.0;
+};
+
+// The box as a member, when its longest side is at least twice its others.
+std::optional<Member> as_member(const PrimitiveSpec& spec) {
+  if (spec.type != PrimitiveType::Box || !spec.clips.empty()) return std::nullopt;
+  const Eigen::Matrix3d& r = spec.placement.rotation();
+  const double scale = spec.placement.scale();
+  int k = 0;
+  for (int i = 1; i < 3; ++i) {
+    if (spec.size[i] > spec.size[k]) k = i;
+  }
+  const int i = (k + 1) % 3, j = (k + 2) % 3;
+  if (spec.size[k] < 2.0 * std::max(spec.size[i], spec.size[j])) return std::nullopt;
+  Member m;
+  m.u = r.col(k);
+  m.a = r.col(i);
+  m.b = r.col(j);
+  m.length = scale * spec.size[k];
+  m.half_a = 0.5 * scale * spec.size[i];
+  m.half_b = 0.5 * scale * spec.size[j];
+  m.start = spec.placement.translation() + m.half_a * m.a + m.half_b * m.b;
+  return m;
+}
+
+// The box spec of a member.
+std::optional<PrimitiveSpec> member_spec(const Member& m) {
+  const Vec3 corner = m.start - m.half_a * m.a - m.half_b * m.b;
+  const auto loc = placement(frame(m.u, m.a), corner);
+  if (!loc) return std::nullopt;
+  PrimitiveSpec spec;
+  spec.type = PrimitiveType::Box;
+  spec.size = Vec3(m.length, 2.0 * m.half_a, 2.0 * m.half_b);
+  spec.placement = *loc;
+  return spec;
+}
+
+double box_area(const Vec3& s) { return 2.0 * (s.x() * s.y() + s.y() * s.z() + s.x() * s.z()); }
+
+}  // namespace
+
+// Two boxes are one member seen in pieces when their axes are parallel (within the angle
+// tolerance), their sections equal and on one line (within the fit's noise margin), and
+// nothing lies between them along that line: no other primitive, and no points facing along
+// it within the section (an end face, a column the scan saw but the fit did not make). The
+// gap they leave is at most the shorter piece (a shadow is no longer than what is seen on
+// both sides of it). Then each member's ends reach into what they run into: when the centre
+// line, continued past an end by at most the noise margin, enters a column (a cylinder whose
+// axis is across it) or a member crossing it, the end moves to that column's axis or that
+// member's middle. Changed boxes are built again (emit) with their points; one refused keeps
+// the boxes it came from.
+void Builder::join_members() {
+  const double tight = std::max(2.0 * ransac_.epsilon, 0.5 * cell_);
+  const double reach = std::max(tight, cell_);
+  const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol_ * cos_tol_));
+  std::vector<geo::detail::PreparedPrimitive> prepared;
+  prepared.reserve(out_.primitives.size());
+  for (const auto& p : out_.primitives) prepared.push_back(geo::detail::prepare_primitive(p.spec));
+  std::vector<std::optional<Member>> members(out_.primitives.size());
+  for (std::size_t k = 0; k < members.size(); ++k) members[k] = as_member(out_.primitives[k].spec);
+  std::vector<std::vector<std::size_t>> joined;  // groups of primitive indices, one member each
+  std::vector<int> group_of(members.size(), -1);
+  std::vector<Member> merged;
+  // Whether anything stands on the centre line of `m` over (t0, t1).
+  auto blocked = [&](const Member& m, double t0, double t1, std::size_t x, std::size_t y) {
+    const double step = std::max(0.25 * cell_, 1e-3);
+    for (double t = t0; t <= t1; t += step) {
+      const Vec3 q = m.start + t * m.u;
+      for (std::size_t k = 0; k < prepared.size(); ++k) {
+        if (k == x || k == y) continue;
+        const auto& box = prepared[k].world_bounds;
+        if (q.x() < box.min.x() || q.x() > box.max.x() || q.y() < box.min.y() ||
+            q.y() > box.max.y() || q.z() < box.min.z() || q.z() > box.max.z()) {
+          continue;
+        }
+        if (geo::detail::primitive_contains(prepared[k], q)) return true;
+      }
+    }
+    int facing = 0;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (normals_.empty() || !points_[i].allFinite()) continue;
+      const Vec3 d = points_[i] - m.start;
+      const double t = d.dot(m.u);
+      if (t <= t0 || t >= t1) continue;
+      if (std::abs(d.dot(m.a)) > m.half_a + tight || std::abs(d.dot(m.b)) > m.half_b + tight) {
+        continue;
+      }
+      if (std::abs(normals_[i].dot(m.u)) >= 0.5 && ++facing >= 3) return true;
+    }
+    return false;
+  };
+  for (std::size_t x = 0; x < members.size(); ++x) {
+    if (!members[x] || group_of[x] >= 0) continue;
+    Member m = *members[x];
+    std::vector<std::size_t> group{x};
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (std::size_t y = 0; y < members.size(); ++y) {
+        if (y == x || !members[y] || group_of[y] >= 0 ||
+            std::find(group.begin(), group.end(), y) != group.end()) {
+          continue;
+        }
+        const Member& o = *members[y];
+        if (std::abs(o.u.dot(m.u)) < cos_tol_) continue;
+        // The other's section axes matched to ours, sizes and centre lines compared.
+        const bool swapped = std::abs(o.a.dot(m.a)) < std::abs(o.b.dot(m.a));
+        const double oa = swapped ? o.half_b : o.half_a, ob = swapped ? o.half_a : o.half_b;
+        const double size_tol = std::max(tight, 0.1 * std::min(m.half_a, m.half_b));
+        if (std::abs(oa - m.half_a) > size_tol || std::abs(ob - m.half_b) > size_tol) continue;
+        const Vec3 d = o.start - m.start;
+        if (std::abs(d.dot(m.a)) > size_tol || std::abs(d.dot(m.b)) > size_tol) continue;
+        const double s0 = d.dot(m.u), s1 = s0 + o.length * o.u.dot(m.u);
+        const double lo = std::min(s0, s1), hi = std::max(s0, s1);
+        const double gap = lo > m.length ? lo - m.length : hi < 0.0 ? -hi : 0.0;
+        if (gap > std::min(m.length, hi - lo)) continue;
+        if (gap > 0.0 &&
+            (lo > m.length ? blocked(m, m.length, lo, x, y) : blocked(m, hi, 0.0, x, y))) {
+          continue;
+        }
+        // One member over both: the longer piece's frame, the union of the two extents.
+        const double t0 = std::min(0.0, lo), t1 = std::max(m.length, hi);
+        m.start += t0 * m.u;
+        m.length = t1 - t0;
+        group.push_back(y);
+        grew = true;
+      }
+    }
+    for (std::size_t k : group) group_of[k] = static_cast<int>(joined.size());
+    joined.push_back(std::move(group));
+    merged.push_back(m);
+  }
+  // Ends into what they run into.
+  for (std::size_t g = 0; g < merged.size(); ++g) {
+    Member& m = merged[g];
+    const auto& group = joined[g];
+    for (const double side : {-1.0, 1.0}) {
+      const Vec3 end = m.start + (side > 0.0 ? m.length : 0.0) * m.u;
+      const Vec3 out = side * m.u;
+      double best = INFINITY;  // distance past the end to the target's axis or middle
+      for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
+        if (std::find(group.begin(), group.end(), k) != group.end()) continue;
+        const PrimitiveSpec& t = out_.primitives[k].spec;
+        Vec3 axis, origin;
+        double half = 0.0, across = 0.0, extent = 0.0;  // along `out`, beside the line, axial
+        if (t.type == PrimitiveType::Cylinder) {
+          axis = t.placement.rotation().col(2);
+          origin = t.placement.translation();
+          half = across = t.placement.scale() * t.radius;
+          extent = t.placement.scale() * t.height;
+        } else if (const auto& c = members[k]) {
+          axis = c->u;
+          origin = c->start;
+          extent = c->length;
+          const bool a_along = std::abs(c->a.dot(out)) >= std::abs(c->b.dot(out));
+          half = a_along ? c->half_a : c->half_b;
+          across = a_along ? c->half_b : c->half_a;
+        } else {
+          continue;
+        }
+        if (std::abs(axis.dot(out)) > sin_tol) continue;
+        // The target's axis line and the member's centre line: where they pass closest.
+        const Vec3 w = end - origin;
+        const double b = axis.dot(out), dd = out.dot(w), e = axis.dot(w);
+        const double denom = 1.0 - b * b;
+        if (denom <= 1e-12) continue;
+        const double s = (b * e - dd) / denom;           // along `out` from the end
+        const double along_axis = (e - b * dd) / denom;  // along the target's axis
+        const Vec3 gap = (end + s * out) - (origin + along_axis * axis);
+        if (gap.norm() > across) continue;
+        if (along_axis < -tight || along_axis > extent + tight) continue;
+        // The end between the target's near surface (less the noise margin) and its axis.
+        if (s < 0.0 || s > half + reach) continue;
+        best = std::min(best, s);
+      }
+      if (!std::isfinite(best)) continue;
+      if (side > 0.0) {
+        m.length += best;
+      } else {
+        m.start -= best * m.u;
+        m.length += best;
+      }
+    }
+  }
+  // Rebuild what changed, in the order of the first primitive of each group.
+  std::vector<geo::ScenePrimitive> kept;
+  std::vector<std::vector<std::uint32_t>> kept_members;
+  std::vector<std::pair<std::size_t, std::size_t>> rebuilt;  // (group, position in kept)
+  for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
+    const int g = group_of[k];
+    const bool changed =
+        g >= 0 && (joined[static_cast<std::size_t>(g)].size() > 1 ||
+                   std::abs(merged[static_cast<std::size_t>(g)].length - members[k]->length) > 0.0);
+    if (!changed) {
+      kept.push_back(std::move(out_.primitives[k]));
+      kept_members.push_back(std::move(emitted_members_[k]));
+      continue;
+    }
+    if (joined[static_cast<std::size_t>(g)].front() != k) continue;  // rebuilt with its group
+    rebuilt.emplace_back(static_cast<std::size_t>(g), kept.size());
+    kept.emplace_back();  // placeholder
+    kept_members.emplace_back();
+  }
+  if (rebuilt.empty()) {
+    out_.primitives = std::move(kept);
+    emitted_members_ = std::move(kept_members);
+    return;
+  }
+  std::vector<geo::ScenePrimitive> originals = std::move(out_.primitives);
+  std::vector<std::vector<std::uint32_t>> original_members = std::move(emitted_members_);
+  out_.primitives.clear();
+  emitted_members_.clear();
+  std::vector<std::pair<std::size_t, geo::ScenePrimitive>> made;  // position in kept
+  std::vector<std::pair<std::size_t, std::vector<std::uint32_t>>> made_members;
+  for (const auto& [g, at] : rebuilt) {
+    std::vector<std::uint32_t> points;
+    std::string what = "member of";
+    for (std::size_t k : joined[g]) {
+      const auto& own = original_members[k];
+      points.insert(points.end(), own.begin(), own.end());
+      what += " " + originals[k].id;
+      --out_.per_type[static_cast<std::size_t>(originals[k].spec.type)];
+      out_.assigned_points -= originals[k].quality ? originals[k].quality->inliers : 0;
+    }
+    std::sort(points.begin(), points.end());
+    points.erase(std::unique(points.begin(), points.end()), points.end());
+    auto spec = member_spec(merged[g]);
+    const std::size_t before = out_.primitives.size();
+    if (spec) {
+      const double area = box_area(spec->size);
+      emit(std::move(*spec), points, area, what);
+    }
+    if (out_.primitives.size() > before) {
+      made.emplace_back(at, std::move(out_.primitives.back()));
+      made_members.emplace_back(at, std::move(emitted_members_.back()));
+      out_.primitives.pop_back();
+      emitted_members_.pop_back();
+      continue;
+    }
+    // Refused: the pieces stay as they were (placed after the placeholder's position).
+    for (std::size_t k : joined[g]) {
+      ++out_.per_type[static_cast<std::size_t>(originals[k].spec.type)];
+      out_.assigned_points += originals[k].quality ? originals[k].quality->inliers : 0;
+      made.emplace_back(at, originals[k]);
+      made_members.emplace_back(at, original_members[k]);
+    }
+  }
+  // Placeholders replaced in order; ids numbered again by position.
+  std::vector<geo::ScenePrimitive> result;
+  std::vector<std::vector<std::uint32_t>> result_members;
+  std::size_t next = 0;
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const bool placeholder = next < made.size() && made[next].first == k;
+    if (!placeholder) {
+      result.push_back(std::move(kept[k]));
+      result_members.push_back(std::move(kept_members[k]));
+      continue;
+    }
+    for (; next < made.size() && made[next].first == k; ++next) {
+      result.push_back(std::move(made[next].second));
+      result_members.push_back(std::move(made_members[next].second));
+    }
+  }
+  for (std::size_t k = 0; k < result.size(); ++k) {
+    result[k].id = "r" + std::to_string(region_) + "-" + std::to_string(k);
+  }
+  out_.primitives = std::move(result);
+  emitted_members_ = std::move(result_members);
+}
+
+}  // namespace csgtile::fit::detail
