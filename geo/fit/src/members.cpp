@@ -59,6 +59,90 @@ double box_area(const Vec3& s) { return 2.0 * (s.x() * s.y() + s.y() * s.z() + s
 
 }  // namespace
 
+// A beam seen on one face only (its other faces hidden or too sparse for a depth) takes the
+// section its siblings show: among the boxes parallel to it, those with a side as wide as the
+// face give the depth across it (their median). Which side of the face the box lies on is
+// told by the columns: a frame's members run through their axes, so the side whose centre
+// line passes through the axis of a column at one of its ends (within the noise margin, or
+// a quarter of the depth) is taken; when neither or both do, no box is made.
+void Builder::one_face_members() {
+  const double tight = std::max(2.0 * ransac_.epsilon, 0.5 * cell_);
+  const double reach = std::max(tight, cell_);
+  const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol_ * cos_tol_));
+  std::vector<Member> siblings;
+  for (const auto& p : out_.primitives) {
+    if (auto m = as_member(p.spec)) siblings.push_back(*m);
+  }
+  for (PlanePatch& seed : patches_) {
+    if (seed.used || seed.coverage < o_.min_seed_coverage) continue;
+    if (seed.sagitta > 0.5 * ransac_.epsilon) continue;
+    const double length = seed.umax - seed.umin, width = seed.vmax - seed.vmin;
+    if (length < 3.0 * width || width < o_.min_box_thickness) continue;
+    std::vector<double> depths;
+    for (const Member& m : siblings) {
+      if (std::abs(m.u.dot(seed.u)) < cos_tol_) continue;
+      const double size_tol = std::max(2.0 * ransac_.epsilon, 0.1 * width);
+      if (std::abs(2.0 * m.half_a - width) <= size_tol) depths.push_back(2.0 * m.half_b);
+      if (std::abs(2.0 * m.half_b - width) <= size_tol) depths.push_back(2.0 * m.half_a);
+    }
+    if (depths.empty()) continue;
+    std::nth_element(depths.begin(),
+                     depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
+    const double depth = depths[depths.size() / 2];
+    if (depth < o_.min_box_thickness) continue;
+    const Vec3 mid = seed.origin + 0.5 * (seed.vmin + seed.vmax) * seed.v;
+    int chosen = 0;
+    for (const double side : {-1.0, 1.0}) {
+      const Vec3 line = mid + 0.5 * depth * side * seed.n;  // centre line through origin + a·u
+      bool through = false;
+      for (const auto& p : out_.primitives) {
+        if (p.spec.type != PrimitiveType::Cylinder) continue;
+        const Vec3 axis = p.spec.placement.rotation().col(2);
+        if (std::abs(axis.dot(seed.u)) > sin_tol) continue;
+        const double r = p.spec.placement.scale() * p.spec.radius;
+        const Vec3 w = line - p.spec.placement.translation();
+        const double b = axis.dot(seed.u), dd = seed.u.dot(w), e = axis.dot(w);
+        const double denom = 1.0 - b * b;
+        if (denom <= 1e-12) continue;
+        const double a = (b * e - dd) / denom;  // along u from `line`
+        const double t = (e - b * dd) / denom;  // along the column's axis
+        const Vec3 gap = (line + a * seed.u) - (p.spec.placement.translation() + t * axis);
+        const double at_end = std::min(std::abs(a - seed.umin), std::abs(a - seed.umax));
+        if (gap.norm() <= std::max(2.0 * ransac_.epsilon, 0.25 * depth) &&
+            at_end <= r + reach + length && t >= -tight &&
+            t <= p.spec.placement.scale() * p.spec.height + tight) {
+          through = true;
+          break;
+        }
+      }
+      if (through) chosen = chosen == 0 ? static_cast<int>(side) : 2;
+    }
+    if (chosen != -1 && chosen != 1) continue;
+    const double c0 = chosen < 0 ? -depth : 0.0, c1 = chosen < 0 ? 0.0 : depth;
+    std::vector<std::uint32_t> members;
+    for (std::uint32_t i = 0; i < points_.size(); ++i) {
+      if (used_[i] || !points_[i].allFinite()) continue;
+      const Vec3 d = points_[i] - seed.origin;
+      const double a = d.dot(seed.u), b = d.dot(seed.v), c = d.dot(seed.n);
+      if (a >= seed.umin - tight && a <= seed.umax + tight && b >= seed.vmin - tight &&
+          b <= seed.vmax + tight && c >= c0 - tight && c <= c1 + tight) {
+        members.push_back(i);
+      }
+    }
+    seed.used = true;
+    const Eigen::Matrix3d rot = frame(seed.u, seed.v);
+    const auto loc = placement(
+        rot, seed.origin + seed.umin * rot.col(0) + seed.vmin * rot.col(1) + c0 * rot.col(2));
+    if (!loc) continue;
+    PrimitiveSpec spec;
+    spec.type = PrimitiveType::Box;
+    spec.size = Vec3(length, width, depth);
+    spec.placement = *loc;
+    emit(std::move(spec), members, box_area(Vec3(length, width, depth)),
+         "box from plane " + std::to_string(seed.shape) + " seen on one face");
+  }
+}
+
 // Two boxes are one member seen in pieces when their axes are parallel (within the angle
 // tolerance), their sections equal and on one line (within the fit's noise margin), and
 // nothing lies between them along that line: no other primitive, and no points facing along
@@ -82,12 +166,12 @@ void Builder::join_members() {
   std::vector<int> group_of(members.size(), -1);
   std::vector<Member> merged;
   // Whether anything stands on the centre line of `m` over (t0, t1).
-  auto blocked = [&](const Member& m, double t0, double t1, std::size_t x, std::size_t y) {
+  auto blocked = [&](const Member& m, double t0, double t1, const std::vector<std::size_t>& skip) {
     const double step = std::max(0.25 * cell_, 1e-3);
     for (double t = t0; t <= t1; t += step) {
       const Vec3 q = m.start + t * m.u;
       for (std::size_t k = 0; k < prepared.size(); ++k) {
-        if (k == x || k == y) continue;
+        if (std::find(skip.begin(), skip.end(), k) != skip.end()) continue;
         const auto& box = prepared[k].world_bounds;
         if (q.x() < box.min.x() || q.x() > box.max.x() || q.y() < box.min.y() ||
             q.y() > box.max.y() || q.z() < box.min.z() || q.z() > box.max.z()) {
@@ -133,8 +217,10 @@ void Builder::join_members() {
         const double lo = std::min(s0, s1), hi = std::max(s0, s1);
         const double gap = lo > m.length ? lo - m.length : hi < 0.0 ? -hi : 0.0;
         if (gap > std::min(m.length, hi - lo)) continue;
+        std::vector<std::size_t> skip = group;
+        skip.push_back(y);
         if (gap > 0.0 &&
-            (lo > m.length ? blocked(m, m.length, lo, x, y) : blocked(m, hi, 0.0, x, y))) {
+            (lo > m.length ? blocked(m, m.length, lo, skip) : blocked(m, hi, 0.0, skip))) {
           continue;
         }
         // One member over both: the longer piece's frame, the union of the two extents.
@@ -157,6 +243,9 @@ void Builder::join_members() {
       const Vec3 end = m.start + (side > 0.0 ? m.length : 0.0) * m.u;
       const Vec3 out = side * m.u;
       double best = INFINITY;  // distance past the end to the target's axis or middle
+      double far = INFINITY;   // the same for a target farther than the noise margin
+      std::size_t far_target = 0;
+      double far_half = 0.0;
       for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
         if (std::find(group.begin(), group.end(), k) != group.end()) continue;
         const PrimitiveSpec& t = out_.primitives[k].spec;
@@ -189,8 +278,25 @@ void Builder::join_members() {
         if (gap.norm() > across) continue;
         if (along_axis < -tight || along_axis > extent + tight) continue;
         // The end between the target's near surface (less the noise margin) and its axis.
-        if (s < 0.0 || s > half + reach) continue;
-        best = std::min(best, s);
+        if (s < 0.0) continue;
+        if (s <= half + reach) {
+          best = std::min(best, s);
+        } else if (s - half <= m.length && s < far) {
+          far = s;
+          far_target = k;
+          far_half = half;
+        }
+      }
+      if (!std::isfinite(best) && std::isfinite(far)) {
+        // A free end (a member meets another; it does not stop in the air) goes on to the
+        // next member along its line, no farther than its own length, over a stretch where
+        // nothing stands and no points face along it (a shadow, not an end).
+        std::vector<std::size_t> skip = group;
+        skip.push_back(far_target);
+        // Up to the target's near side (its own surface faces along the line).
+        const double open = std::max(0.0, far - far_half - reach);
+        const double t0 = side > 0.0 ? m.length : -open, t1 = side > 0.0 ? m.length + open : 0.0;
+        if (!blocked(m, t0, t1, skip)) best = far;
       }
       if (!std::isfinite(best)) continue;
       if (side > 0.0) {

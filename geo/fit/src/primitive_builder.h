@@ -89,6 +89,9 @@ class Builder {
   // Boxes seen in pieces joined into one member, members' ends into what they run into
   // (members.cpp).
   void join_members();
+  // Elongated planes left without a box given the section of their parallel siblings, on the
+  // side of the face whose centre line runs through a column's axis (members.cpp).
+  void one_face_members();
   void curved(int index);
   void blocks();
   // What the proposal steps see of the region (points, shapes, what is used or absorbed).

@@ -407,7 +407,10 @@ FittedPrimitives Builder::run() {
     }
     curved(static_cast<int>(s));
   }
-  if (o_.boxes) join_members();
+  if (o_.boxes) {
+    one_face_members();
+    join_members();
+  }
   if (o_.extrusions) blocks();
   return std::move(out_);
 }

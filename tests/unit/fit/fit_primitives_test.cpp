@@ -361,13 +361,27 @@ TEST(FitPrimitives, TwoBeamsWithTheirEndsSeenStayTwo) {
   for (const double l : lengths) EXPECT_NEAR(l, 1.1, 0.03);
 }
 
+// The cloud without its points inside the axis-aligned box [lo, hi] (a column's surface where
+// a beam covers it: the scan never sees it).
+Cloud without_box(const Cloud& c, const Vec3& lo, const Vec3& hi) {
+  Cloud out;
+  for (std::size_t i = 0; i < c.points.size(); ++i) {
+    const Vec3& p = c.points[i];
+    if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) continue;
+    out.points.push_back(p);
+    out.normals.push_back(c.normals[i]);
+  }
+  return out;
+}
+
 // A beam running into a column (radius 0.15), seen up to the column's surface: its end
 // reaches the column's axis, where the frame's members meet, so that the two overlap and
 // fuse into one solid instead of touching along a line.
 TEST(FitPrimitives, BeamEndingInAColumnReachesItsAxis) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c = testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
-                                    2.0 * std::numbers::pi, 6000, 0.002, 100);
+  Cloud c = without_box(testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
+                                                2.0 * std::numbers::pi, 6000, 0.002, 100),
+                        Vec3(-1, -0.1, 3.3), Vec3(1, 0.1, 3.6));
   const double x0 = std::sqrt(0.15 * 0.15 - 0.1 * 0.1);  // where the beam's sides leave it
   const Vec3 corner(x0, -0.1, 3.3);
   c.append(testing::rectangle_cloud(corner, lz, (3.0 - x0) * ex, 0.01, 0.002, 101));
@@ -384,6 +398,44 @@ TEST(FitPrimitives, BeamEndingInAColumnReachesItsAxis) {
   ASSERT_EQ(boxes.size(), 1U);
   EXPECT_NEAR(sorted_size(boxes[0])[2], 3.0, 0.03);
   EXPECT_LT((box_centre(boxes[0]) - Vec3(1.5, 0.0, 3.45)).norm(), 0.02);
+}
+
+// A beam (0.2 x 0.3) between two columns (radius 0.15, at x = 0 and 3 on y = 0) seen on one
+// side only, over its middle 1.4 m (shadows at both ends), and a parallel sibling beam 3 m
+// away seen on both sides and below. The first takes the section its sibling shows, on the
+// side of its face where its centre line runs through the columns' axes, and its free ends
+// go on to them: one box from axis to axis.
+TEST(FitPrimitives, BeamSeenOnOneFaceTakesItsSiblingsSectionAndReachesTheColumns) {
+  const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
+  Cloud c;
+  std::uint64_t seed = 110;
+  for (const double x : {0.0, 3.0}) {
+    c.append(without_box(testing::cylinder_cloud(Vec3(x, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
+                                                 2.0 * std::numbers::pi, 6000, 0.002, seed++),
+                         Vec3(x - 1, -0.1, 3.3), Vec3(x + 1, 0.1, 3.6)));
+  }
+  const Vec3 sibling(0.0, 2.9, 3.3);
+  c.append(testing::rectangle_cloud(sibling, lz, 3.0 * ex, 0.01, 0.002, seed++));
+  c.append(testing::rectangle_cloud(sibling + ly, 3.0 * ex, lz, 0.01, 0.002, seed++));
+  c.append(testing::rectangle_cloud(sibling, 3.0 * ex, ly, 0.015, 0.002, seed++));
+  c.append(testing::rectangle_cloud(Vec3(0.8, -0.1, 3.3), lz, 1.4 * ex, 0.01, 0.002, seed++));
+  const Fitted f = fit(c);
+  std::vector<kernel::PrimitiveSpec> boxes;
+  for (const auto& p : f.primitives.primitives) {
+    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
+  }
+  std::string why;
+  for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
+  ASSERT_EQ(boxes.size(), 2U) << why;
+  std::sort(boxes.begin(), boxes.end(),
+            [](const auto& a, const auto& b) { return box_centre(a).y() < box_centre(b).y(); });
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto size = sorted_size(boxes[k]);
+    EXPECT_NEAR(size[0], 0.2, 0.02);
+    EXPECT_NEAR(size[1], 0.3, 0.02);
+    EXPECT_NEAR(size[2], 3.0, 0.03);
+    EXPECT_LT((box_centre(boxes[k]) - Vec3(1.5, 3.0 * static_cast<double>(k), 3.45)).norm(), 0.02);
+  }
 }
 
 // A narrow strip of a column that the RANSAC took for a plane (a flat-enough piece of a
