@@ -193,6 +193,52 @@ SynthScene gate_scene(std::uint64_t seed) {
   return b.finish();
 }
 
+// Another frame, so that nothing fitted to the gate passes unseen (issue #21): a 6 × 5 grid
+// of columns 2.1 m apart (radius 0.12, 3.6 m high), turned 23° about z, carrying top beams of
+// 0.12 × 0.30 along both rows flush with the column tops, and ties of the same section at two
+// heights (along x at 1.5 m, along y at 2.4 m). 30 cylinders, 25 + 24 top beams and as many
+// ties: 98 boxes.
+SynthScene frame_scene(std::uint64_t seed) {
+  SceneBuilder b("frame", seed);
+  constexpr int kAlongX = 6, kAlongY = 5;
+  constexpr double kSpacing = 2.1;
+  constexpr double kRadius = 0.12;
+  constexpr double kHeight = 3.6;
+  constexpr double kWidth = 0.12;
+  constexpr double kDepth = 0.30;
+  const Location turn = rotation_z(23.0 * kPi / 180.0);
+  const Vec3 middle(0.5 * (kAlongX - 1) * kSpacing, 0.5 * (kAlongY - 1) * kSpacing, 0.0);
+  auto at = [&](int i, int j) -> Vec3 { return Vec3(i * kSpacing, j * kSpacing, 0.0) - middle; };
+  for (int i = 0; i < kAlongX; ++i) {
+    for (int j = 0; j < kAlongY; ++j) {
+      b.add(id("column-%02d-%02d", i, j), cylinder(turn.apply_point(at(i, j)), kRadius, kHeight));
+    }
+  }
+  // Members from column axis to column axis: along x, then along y, at a height of their
+  // underside.
+  auto member_x = [&](int i, int j, double bottom) {
+    return box(Vec3(kSpacing, kWidth, kDepth),
+               turn * Location::translation(at(i, j) + Vec3(0.0, -kWidth / 2, bottom)));
+  };
+  auto member_y = [&](int i, int j, double bottom) {
+    return box(Vec3(kWidth, kSpacing, kDepth),
+               turn * Location::translation(at(i, j) + Vec3(-kWidth / 2, 0.0, bottom)));
+  };
+  for (int j = 0; j < kAlongY; ++j) {
+    for (int i = 0; i + 1 < kAlongX; ++i) {
+      b.add(id("beam-x-%02d-%02d", i, j), member_x(i, j, kHeight - kDepth));
+      b.add(id("tie-x-%02d-%02d", i, j), member_x(i, j, 1.5));
+    }
+  }
+  for (int i = 0; i < kAlongX; ++i) {
+    for (int j = 0; j + 1 < kAlongY; ++j) {
+      b.add(id("beam-y-%02d-%02d", i, j), member_y(i, j, kHeight - kDepth));
+      b.add(id("tie-y-%02d-%02d", i, j), member_y(i, j, 2.4));
+    }
+  }
+  return b.finish();
+}
+
 // A city block of about 100 m × 100 m: four quarters around a plaza crossing.
 SynthScene city_block_scene(std::uint64_t seed) {
   SceneBuilder b("city-block", seed);
@@ -359,13 +405,14 @@ SynthScene random_scene(std::uint64_t seed, int count) {
 }  // namespace
 
 const std::vector<std::string>& synth_scene_names() {
-  static const std::vector<std::string> names{"gate", "city-block", "random"};
+  static const std::vector<std::string> names{"gate", "frame", "city-block", "random"};
   return names;
 }
 
 kernel::Result<SynthScene> make_synth_scene(std::string_view name, std::uint64_t seed,
                                             int random_count) {
   if (name == "gate") return gate_scene(seed);
+  if (name == "frame") return frame_scene(seed);
   if (name == "city-block") return city_block_scene(seed);
   if (name == "random") {
     if (random_count < 1 || random_count > 100000) {

@@ -423,6 +423,32 @@ TEST(SynthScenes, GateHas81ColumnsAnd148Beams) {
   }
 }
 
+// The frame variant of issue #21: other spacing, sections and rotation than the gate.
+TEST(SynthScenes, FrameIsTurnedAndHasItsOwnSections) {
+  auto frame = make_synth_scene("frame", 1);
+  ASSERT_TRUE(frame.ok());
+  int cylinders = 0, boxes = 0;
+  for (const auto& p : frame->scene.primitives) {
+    ASSERT_TRUE(kernel::build_primitive(p.spec).ok()) << p.id;
+    if (p.spec.type == kernel::PrimitiveType::Cylinder) {
+      ++cylinders;
+      EXPECT_NEAR(p.spec.radius, 0.12, 1e-12);
+    } else if (p.spec.type == kernel::PrimitiveType::Box) {
+      ++boxes;
+      std::vector<double> size{p.spec.size.x(), p.spec.size.y(), p.spec.size.z()};
+      std::sort(size.begin(), size.end());
+      EXPECT_NEAR(size[0], 0.12, 1e-12);
+      EXPECT_NEAR(size[1], 0.30, 1e-12);
+      EXPECT_NEAR(size[2], 2.1, 1e-12);
+      // Turned 23° about z: no member runs along the x or y axis.
+      const Vec3 x = p.spec.placement.rotation().col(0);
+      EXPECT_NEAR(std::atan2(x.y(), x.x()), 23.0 * std::numbers::pi / 180.0, 1e-9);
+    }
+  }
+  EXPECT_EQ(cylinders, 30);
+  EXPECT_EQ(boxes, 98);
+}
+
 TEST(SynthScenes, CityBlockAndRandomUseAllSevenTypesAndBuildValidSolids) {
   for (const char* name : {"city-block", "random"}) {
     SCOPED_TRACE(name);
@@ -446,7 +472,7 @@ TEST(SynthScenes, UnknownNameListsTheValidOnes) {
   auto scene = make_synth_scene("castle", 1);
   ASSERT_FALSE(scene.ok());
   EXPECT_EQ(scene.error().code, kernel::ErrorCode::InvalidArgument);
-  EXPECT_THAT(scene.error().message, HasSubstr("gate, city-block, random"));
+  EXPECT_THAT(scene.error().message, HasSubstr("gate, frame, city-block, random"));
 }
 
 TEST(SynthScenes, SameSeedSameSceneOtherSeedOtherHeights) {
