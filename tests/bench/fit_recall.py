@@ -273,12 +273,17 @@ def visible_counts(las_path, count):
     return hits
 
 
-def main():
-    ap = argparse.ArgumentParser()
+def scan_arguments(ap):
+    """The truth, fit and scan arguments every recall script takes."""
     ap.add_argument("--truth", required=True)
     ap.add_argument("--fit", required=True)
     ap.add_argument("--las")
     ap.add_argument("--min-points", type=int, default=50)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    scan_arguments(ap)
     ap.add_argument("--radius", type=float, default=0.02)
     ap.add_argument("--angle", type=float, default=5.0)
     ap.add_argument("--position", type=float, default=0.02)

@@ -130,10 +130,7 @@ def overlaps(a, b):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--truth", required=True)
-    ap.add_argument("--fit", required=True)
-    ap.add_argument("--las")
-    ap.add_argument("--min-points", type=int, default=50)
+    fr.scan_arguments(ap)
     ap.add_argument("--iou", type=float, default=0.7)
     ap.add_argument("--samples", type=int, default=400)
     ap.add_argument("--seed", type=int, default=1)

@@ -7,7 +7,11 @@ cannot lose beams unnoticed while their position is still short of the ±2 cm of
 match. Also: a missing input and a config with an unknown key exit non-zero with a message
 naming the problem.
 
-Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISION [MIN_BOXES_5CM]
+Usage: fit_synth_recall.py CSGTILE WORKDIR RECALL_SCRIPT MIN_RECALL MIN_PRECISION [MIN_BOXES_5CM
+                           [MIN_BEAMS_IOU MIN_IOU_PRECISION]]
+
+The last two are issue #21's measure (tests/bench/member_recall.py beside RECALL_SCRIPT: same
+type and volume IoU >= 0.7, one to one): the beams found and the precision.
 """
 import json
 import os
@@ -27,6 +31,8 @@ def run(*args, check=True):
 def main():
     bin_, work, recall, min_recall, min_precision = sys.argv[1:6]
     min_boxes = int(sys.argv[6]) if len(sys.argv) > 6 else 0
+    min_beams = int(sys.argv[7]) if len(sys.argv) > 7 else 0
+    min_iou_precision = float(sys.argv[8]) if len(sys.argv) > 8 else 0.0
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     las, truth = os.path.join(work, "gate.las"), os.path.join(work, "gate.json")
@@ -56,6 +62,15 @@ def main():
     print("boxes matched within 5 cm:", boxes)
     if boxes < min_boxes:
         sys.exit("boxes matched within 5 cm: %d < %d" % (boxes, min_boxes))
+    members = os.path.join(os.path.dirname(recall), "member_recall.py")
+    p = run(sys.executable, members, "--truth", truth, "--fit", os.path.join(work, "fit0.json"),
+            "--las", las)
+    found = json.loads(p.stdout)
+    beams = found["kinds"].get("beam", {}).get("found", 0)
+    print("by volume IoU >= 0.7: beams %d, precision %.3f" % (beams, found["precision"]))
+    if beams < min_beams or found["precision"] < min_iou_precision:
+        sys.exit("members by volume IoU: %d beams (min %d), precision %.3f (min %.3f)"
+                 % (beams, min_beams, found["precision"], min_iou_precision))
 
     p = run(bin_, "fit", os.path.join(work, "missing.las"), "--out", os.path.join(work, "x.json"), check=False)
     if p.returncode == 0 or "missing.las" not in p.stderr:
