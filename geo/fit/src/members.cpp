@@ -63,8 +63,9 @@ double box_area(const Vec3& s) { return 2.0 * (s.x() * s.y() + s.y() * s.z() + s
 // section its siblings show: among the boxes parallel to it, those with a side as wide as the
 // face give the depth across it (their median). Which side of the face the box lies on is
 // told by the columns: a frame's members run through their axes, so the side whose centre
-// line passes through the axis of a column at one of its ends (within the noise margin, or
-// a quarter of the depth) is taken; when neither or both do, no box is made.
+// line passes through the axis of a column (within twice epsilon or a quarter of the depth)
+// no farther beyond one of its ends than its own length is taken; when neither or both do, no
+// box is made. join_members then takes its ends to the columns.
 void Builder::one_face_members() {
   const double tight = std::max(2.0 * ransac_.epsilon, 0.5 * cell_);
   const double reach = std::max(tight, cell_);
