@@ -151,6 +151,27 @@ double robust_noise(std::span<const Vec3> points, const PlanePatch& seed) {
 
 }  // namespace
 
+std::vector<std::uint32_t> Builder::unused_in(const PlanePatch& seed, const SeedBox& box,
+                                              double grow) const {
+  std::vector<std::uint32_t> inside;
+  for (std::uint32_t i = 0; i < points_.size(); ++i) {
+    if (used_[i] || !points_[i].allFinite()) continue;
+    const Vec3 d = points_[i] - seed.origin;
+    const double a = d.dot(seed.u), b = d.dot(seed.v), c = d.dot(seed.n);
+    if (a >= box.u0 - grow && a <= box.u1 + grow && b >= box.v0 - grow && b <= box.v1 + grow &&
+        c >= box.c0 - grow && c <= box.c1 + grow) {
+      inside.push_back(i);
+    }
+  }
+  return inside;
+}
+
+std::optional<PrimitiveSpec> seed_box_spec(const PlanePatch& seed, const SeedBox& box) {
+  const Eigen::Matrix3d rot = frame(seed.u, seed.v);
+  const Vec3 corner = seed.origin + box.u0 * rot.col(0) + box.v0 * rot.col(1) + box.c0 * rot.col(2);
+  return box_spec(rot, corner, Vec3(box.u1 - box.u0, box.v1 - box.v0, box.c1 - box.c0));
+}
+
 // The unused points over the seed's rectangle (grown by `across` on its long edges) within
 // max_box_depth of it, in its frame, with the axis their normals follow.
 std::vector<Builder::Framed> Builder::framed_near(const PlanePatch& seed, double across,
@@ -537,16 +558,12 @@ void Builder::boxes() {
     // Members: every unused point inside the box (grown by the noise margin), whatever
     // surface the RANSAC gave it (edges of a beam are sometimes thin cylinders); planes
     // mostly inside are used up.
-    std::vector<std::uint32_t> members;
+    const SeedBox extent{u0, u1, v0, v1, c0, c1};
+    std::vector<std::uint32_t> members = unused_in(seed, extent, tight);
     auto inside_box = [&](const Vec3& c) {
       return c.x() >= u0 - tight && c.x() <= u1 + tight && c.y() >= v0 - tight &&
              c.y() <= v1 + tight && c.z() >= c0 - tight && c.z() <= c1 + tight;
     };
-    for (std::uint32_t i = 0; i < points_.size(); ++i) {
-      if (!used_[i] && points_[i].allFinite() && inside_box(local(points_[i]))) {
-        members.push_back(i);
-      }
-    }
     seed.used = true;
     if (round_section(members, seed, {v0, v1, c0, c1})) {
       out_.rejected.push_back({"box from plane " + std::to_string(seed.shape),
@@ -560,18 +577,10 @@ void Builder::boxes() {
       for (auto i : other.members) in += inside_box(local(points_[i])) ? 1 : 0;
       if (in * 10 >= other.members.size() * 8) other.used = true;
     }
-    std::sort(members.begin(), members.end());
-    const Eigen::Matrix3d rot = frame(seed.u, seed.v);
-    const Vec3 corner = seed.origin + u0 * rot.col(0) + v0 * rot.col(1) + c0 * rot.col(2);
-    auto loc = placement(rot, corner);
-    if (!loc) continue;
-    PrimitiveSpec spec;
-    spec.type = PrimitiveType::Box;
-    spec.size = Vec3(u1 - u0, v1 - v0, c1 - c0);
-    spec.placement = *loc;
-    const double area = 2.0 * (spec.size.x() * spec.size.y() + spec.size.y() * spec.size.z() +
-                               spec.size.x() * spec.size.z());
-    emit(std::move(spec), members, area, "box from plane " + std::to_string(seed.shape));
+    auto spec = seed_box_spec(seed, extent);
+    if (!spec) continue;
+    const double area = box_area(spec->size);
+    emit(std::move(*spec), members, area, "box from plane " + std::to_string(seed.shape));
   }
   for (const auto& patch : patches_) {
     if (patch.used) continue;

@@ -45,17 +45,41 @@ std::optional<Member> as_member(const PrimitiveSpec& spec) {
 
 // The box spec of a member.
 std::optional<PrimitiveSpec> member_spec(const Member& m) {
-  const Vec3 corner = m.start - m.half_a * m.a - m.half_b * m.b;
-  const auto loc = placement(frame(m.u, m.a), corner);
-  if (!loc) return std::nullopt;
-  PrimitiveSpec spec;
-  spec.type = PrimitiveType::Box;
-  spec.size = Vec3(m.length, 2.0 * m.half_a, 2.0 * m.half_b);
-  spec.placement = *loc;
-  return spec;
+  return box_spec(frame(m.u, m.a), m.start - m.half_a * m.a - m.half_b * m.b,
+                  Vec3(m.length, 2.0 * m.half_a, 2.0 * m.half_b));
 }
 
-double box_area(const Vec3& s) { return 2.0 * (s.x() * s.y() + s.y() * s.z() + s.x() * s.z()); }
+// Where two lines p + s·u and q + t·w (unit directions) pass closest: s, t and the distance
+// between the two points; nullopt when they are parallel.
+struct Closest {
+  double s = 0.0, t = 0.0, distance = 0.0;
+};
+std::optional<Closest> closest_approach(const Vec3& p, const Vec3& u, const Vec3& q,
+                                        const Vec3& w) {
+  const Vec3 d = p - q;
+  const double b = w.dot(u), dd = u.dot(d), e = w.dot(d);
+  const double denom = 1.0 - b * b;
+  if (denom <= 1e-12) return std::nullopt;
+  Closest c;
+  c.s = (b * e - dd) / denom;
+  c.t = (e - b * dd) / denom;
+  c.distance = ((p + c.s * u) - (q + c.t * w)).norm();
+  return c;
+}
+
+// The margins of a frame's members: `tight` the noise margin of a face, `reach` how far short
+// of another member an end may stop and still meet it, `sin_tol` the sine of the fit's angle
+// tolerance (how far from across a crossing axis may turn).
+struct Margins {
+  double tight = 0.0, reach = 0.0, sin_tol = 0.0;
+};
+Margins margins(double epsilon, double cell, double cos_tol) {
+  Margins m;
+  m.tight = std::max(2.0 * epsilon, 0.5 * cell);
+  m.reach = std::max(m.tight, cell);
+  m.sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol * cos_tol));
+  return m;
+}
 
 }  // namespace
 
@@ -67,9 +91,7 @@ double box_area(const Vec3& s) { return 2.0 * (s.x() * s.y() + s.y() * s.z() + s
 // no farther beyond one of its ends than its own length is taken; when neither or both do, no
 // box is made. join_members then takes its ends to the columns.
 void Builder::one_face_members() {
-  const double tight = std::max(2.0 * ransac_.epsilon, 0.5 * cell_);
-  const double reach = std::max(tight, cell_);
-  const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol_ * cos_tol_));
+  const auto [tight, reach, sin_tol] = margins(ransac_.epsilon, cell_, cos_tol_);
   std::vector<Member> siblings;
   for (const auto& p : out_.primitives) {
     if (auto m = as_member(p.spec)) siblings.push_back(*m);
@@ -101,17 +123,13 @@ void Builder::one_face_members() {
         const Vec3 axis = p.spec.placement.rotation().col(2);
         if (std::abs(axis.dot(seed.u)) > sin_tol) continue;
         const double r = p.spec.placement.scale() * p.spec.radius;
-        const Vec3 w = line - p.spec.placement.translation();
-        const double b = axis.dot(seed.u), dd = seed.u.dot(w), e = axis.dot(w);
-        const double denom = 1.0 - b * b;
-        if (denom <= 1e-12) continue;
-        const double a = (b * e - dd) / denom;  // along u from `line`
-        const double t = (e - b * dd) / denom;  // along the column's axis
-        const Vec3 gap = (line + a * seed.u) - (p.spec.placement.translation() + t * axis);
-        const double at_end = std::min(std::abs(a - seed.umin), std::abs(a - seed.umax));
-        if (gap.norm() <= std::max(2.0 * ransac_.epsilon, 0.25 * depth) &&
-            at_end <= r + reach + length && t >= -tight &&
-            t <= p.spec.placement.scale() * p.spec.height + tight) {
+        const auto pass = closest_approach(line, seed.u, p.spec.placement.translation(), axis);
+        if (!pass) continue;
+        const double at_end =
+            std::min(std::abs(pass->s - seed.umin), std::abs(pass->s - seed.umax));
+        if (pass->distance <= std::max(2.0 * ransac_.epsilon, 0.25 * depth) &&
+            at_end <= r + reach + length && pass->t >= -tight &&
+            pass->t <= p.spec.placement.scale() * p.spec.height + tight) {
           through = true;
           break;
         }
@@ -120,26 +138,13 @@ void Builder::one_face_members() {
     }
     if (chosen != -1 && chosen != 1) continue;
     const double c0 = chosen < 0 ? -depth : 0.0, c1 = chosen < 0 ? 0.0 : depth;
-    std::vector<std::uint32_t> members;
-    for (std::uint32_t i = 0; i < points_.size(); ++i) {
-      if (used_[i] || !points_[i].allFinite()) continue;
-      const Vec3 d = points_[i] - seed.origin;
-      const double a = d.dot(seed.u), b = d.dot(seed.v), c = d.dot(seed.n);
-      if (a >= seed.umin - tight && a <= seed.umax + tight && b >= seed.vmin - tight &&
-          b <= seed.vmax + tight && c >= c0 - tight && c <= c1 + tight) {
-        members.push_back(i);
-      }
-    }
+    const SeedBox extent{seed.umin, seed.umax, seed.vmin, seed.vmax, c0, c1};
+    const std::vector<std::uint32_t> members = unused_in(seed, extent, tight);
     seed.used = true;
-    const Eigen::Matrix3d rot = frame(seed.u, seed.v);
-    const auto loc = placement(
-        rot, seed.origin + seed.umin * rot.col(0) + seed.vmin * rot.col(1) + c0 * rot.col(2));
-    if (!loc) continue;
-    PrimitiveSpec spec;
-    spec.type = PrimitiveType::Box;
-    spec.size = Vec3(length, width, depth);
-    spec.placement = *loc;
-    emit(std::move(spec), members, box_area(Vec3(length, width, depth)),
+    auto spec = seed_box_spec(seed, extent);
+    if (!spec) continue;
+    const double area = box_area(spec->size);
+    emit(std::move(*spec), members, area,
          "box from plane " + std::to_string(seed.shape) + " seen on one face");
   }
 }
@@ -155,9 +160,7 @@ void Builder::one_face_members() {
 // member's middle. Changed boxes are built again (emit) with their points; one refused keeps
 // the boxes it came from.
 void Builder::join_members() {
-  const double tight = std::max(2.0 * ransac_.epsilon, 0.5 * cell_);
-  const double reach = std::max(tight, cell_);
-  const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol_ * cos_tol_));
+  const auto [tight, reach, sin_tol] = margins(ransac_.epsilon, cell_, cos_tol_);
   std::vector<geo::detail::PreparedPrimitive> prepared;
   prepared.reserve(out_.primitives.size());
   for (const auto& p : out_.primitives) prepared.push_back(geo::detail::prepare_primitive(p.spec));
@@ -269,15 +272,10 @@ void Builder::join_members() {
         }
         if (std::abs(axis.dot(out)) > sin_tol) continue;
         // The target's axis line and the member's centre line: where they pass closest.
-        const Vec3 w = end - origin;
-        const double b = axis.dot(out), dd = out.dot(w), e = axis.dot(w);
-        const double denom = 1.0 - b * b;
-        if (denom <= 1e-12) continue;
-        const double s = (b * e - dd) / denom;           // along `out` from the end
-        const double along_axis = (e - b * dd) / denom;  // along the target's axis
-        const Vec3 gap = (end + s * out) - (origin + along_axis * axis);
-        if (gap.norm() > across) continue;
-        if (along_axis < -tight || along_axis > extent + tight) continue;
+        const auto pass = closest_approach(end, out, origin, axis);
+        if (!pass || pass->distance > across) continue;
+        if (pass->t < -tight || pass->t > extent + tight) continue;
+        const double s = pass->s;  // along `out` from the end
         // The end between the target's near surface (less the noise margin) and its axis.
         if (s < 0.0) continue;
         if (s <= half + reach) {
@@ -308,90 +306,53 @@ void Builder::join_members() {
       }
     }
   }
-  // Rebuild what changed, in the order of the first primitive of each group.
-  std::vector<geo::ScenePrimitive> kept;
-  std::vector<std::vector<std::uint32_t>> kept_members;
-  std::vector<std::pair<std::size_t, std::size_t>> rebuilt;  // (group, position in kept)
-  for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
-    const int g = group_of[k];
-    const bool changed =
-        g >= 0 && (joined[static_cast<std::size_t>(g)].size() > 1 ||
-                   std::abs(merged[static_cast<std::size_t>(g)].length - members[k]->length) > 0.0);
-    if (!changed) {
-      kept.push_back(std::move(out_.primitives[k]));
-      kept_members.push_back(std::move(emitted_members_[k]));
-      continue;
-    }
-    if (joined[static_cast<std::size_t>(g)].front() != k) continue;  // rebuilt with its group
-    rebuilt.emplace_back(static_cast<std::size_t>(g), kept.size());
-    kept.emplace_back();  // placeholder
-    kept_members.emplace_back();
-  }
-  if (rebuilt.empty()) {
-    out_.primitives = std::move(kept);
-    emitted_members_ = std::move(kept_members);
-    return;
-  }
+  // Rebuild what changed where the first of its pieces stood; a refused rebuild leaves its
+  // pieces there as they were. Ids are numbered again by position.
   std::vector<geo::ScenePrimitive> originals = std::move(out_.primitives);
   std::vector<std::vector<std::uint32_t>> original_members = std::move(emitted_members_);
   out_.primitives.clear();
   emitted_members_.clear();
-  std::vector<std::pair<std::size_t, geo::ScenePrimitive>> made;  // position in kept
-  std::vector<std::pair<std::size_t, std::vector<std::uint32_t>>> made_members;
-  for (const auto& [g, at] : rebuilt) {
+  bool renumber = false;
+  for (std::size_t k = 0; k < originals.size(); ++k) {
+    const int g = group_of[k];
+    const bool changed =
+        g >= 0 && (joined[static_cast<std::size_t>(g)].size() > 1 ||
+                   merged[static_cast<std::size_t>(g)].length != members[k]->length);
+    if (!changed) {
+      out_.primitives.push_back(std::move(originals[k]));
+      emitted_members_.push_back(std::move(original_members[k]));
+      continue;
+    }
+    const auto& group = joined[static_cast<std::size_t>(g)];
+    if (group.front() != k) continue;  // rebuilt with the first of its group
+    renumber = true;
     std::vector<std::uint32_t> points;
     std::string what = "member of";
-    for (std::size_t k : joined[g]) {
-      const auto& own = original_members[k];
-      points.insert(points.end(), own.begin(), own.end());
-      what += " " + originals[k].id;
-      --out_.per_type[static_cast<std::size_t>(originals[k].spec.type)];
-      out_.assigned_points -= originals[k].quality ? originals[k].quality->inliers : 0;
+    for (std::size_t j : group) {
+      points.insert(points.end(), original_members[j].begin(), original_members[j].end());
+      what += " " + originals[j].id;
+      --out_.per_type[static_cast<std::size_t>(originals[j].spec.type)];
+      out_.assigned_points -= originals[j].quality ? originals[j].quality->inliers : 0;
     }
     std::sort(points.begin(), points.end());
     points.erase(std::unique(points.begin(), points.end()), points.end());
-    auto spec = member_spec(merged[g]);
     const std::size_t before = out_.primitives.size();
-    if (spec) {
+    if (auto spec = member_spec(merged[static_cast<std::size_t>(g)])) {
       const double area = box_area(spec->size);
       emit(std::move(*spec), points, area, what);
     }
-    if (out_.primitives.size() > before) {
-      made.emplace_back(at, std::move(out_.primitives.back()));
-      made_members.emplace_back(at, std::move(emitted_members_.back()));
-      out_.primitives.pop_back();
-      emitted_members_.pop_back();
-      continue;
-    }
-    // Refused: the pieces stay as they were (placed after the placeholder's position).
-    for (std::size_t k : joined[g]) {
-      ++out_.per_type[static_cast<std::size_t>(originals[k].spec.type)];
-      out_.assigned_points += originals[k].quality ? originals[k].quality->inliers : 0;
-      made.emplace_back(at, originals[k]);
-      made_members.emplace_back(at, original_members[k]);
+    if (out_.primitives.size() > before) continue;
+    for (std::size_t j : group) {
+      ++out_.per_type[static_cast<std::size_t>(originals[j].spec.type)];
+      out_.assigned_points += originals[j].quality ? originals[j].quality->inliers : 0;
+      out_.primitives.push_back(std::move(originals[j]));
+      emitted_members_.push_back(std::move(original_members[j]));
     }
   }
-  // Placeholders replaced in order; ids numbered again by position.
-  std::vector<geo::ScenePrimitive> result;
-  std::vector<std::vector<std::uint32_t>> result_members;
-  std::size_t next = 0;
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    const bool placeholder = next < made.size() && made[next].first == k;
-    if (!placeholder) {
-      result.push_back(std::move(kept[k]));
-      result_members.push_back(std::move(kept_members[k]));
-      continue;
-    }
-    for (; next < made.size() && made[next].first == k; ++next) {
-      result.push_back(std::move(made[next].second));
-      result_members.push_back(std::move(made_members[next].second));
-    }
+  if (!renumber) return;
+  for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
+    out_.primitives[k].id = "r" + std::to_string(region_) + "-" + std::to_string(k);
   }
-  for (std::size_t k = 0; k < result.size(); ++k) {
-    result[k].id = "r" + std::to_string(region_) + "-" + std::to_string(k);
-  }
-  out_.primitives = std::move(result);
-  emitted_members_ = std::move(result_members);
 }
 
 }  // namespace csgtile::fit::detail

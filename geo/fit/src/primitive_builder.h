@@ -38,6 +38,21 @@ Eigen::Matrix3d frame(const Vec3& x, const Vec3& y);
 // The location with this rotation and origin, or nullopt when it is no rigid motion.
 std::optional<Location> placement(const Eigen::Matrix3d& rotation, const Vec3& origin);
 
+// A box of `size` along the rotation's columns from `corner`, or nullopt as placement.
+std::optional<PrimitiveSpec> box_spec(const Eigen::Matrix3d& rotation, const Vec3& corner,
+                                      const Vec3& size);
+
+// A box's surface area.
+double box_area(const Vec3& size);
+
+// A box in a seed plane's frame: [u0, u1] along u, [v0, v1] along v, [c0, c1] along n.
+struct SeedBox {
+  double u0 = 0, u1 = 0, v0 = 0, v1 = 0, c0 = 0, c1 = 0;
+};
+
+// The box `box` in the seed's frame (corner at (u0, v0, c0)), or nullopt as placement.
+std::optional<PrimitiveSpec> seed_box_spec(const PlanePatch& seed, const SeedBox& box);
+
 class Builder {
  public:
   Builder(std::span<const Vec3> points, std::span<const Vec3> normals, const RansacResult& shapes,
@@ -86,6 +101,9 @@ class Builder {
   bool round_section(const std::vector<std::uint32_t>& members, const PlanePatch& seed,
                      const std::array<double, 4>& section) const;
   void boxes();
+  // The unused finite points within `box` grown by `grow` on every side, in index order.
+  std::vector<std::uint32_t> unused_in(const PlanePatch& seed, const SeedBox& box,
+                                       double grow) const;
   // Boxes seen in pieces joined into one member, members' ends into what they run into
   // (members.cpp).
   void join_members();

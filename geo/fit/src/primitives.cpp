@@ -60,6 +60,21 @@ std::optional<Location> placement(const Eigen::Matrix3d& rotation, const Vec3& o
   return loc.value();
 }
 
+std::optional<PrimitiveSpec> box_spec(const Eigen::Matrix3d& rotation, const Vec3& corner,
+                                      const Vec3& size) {
+  auto loc = placement(rotation, corner);
+  if (!loc) return std::nullopt;
+  PrimitiveSpec spec;
+  spec.type = PrimitiveType::Box;
+  spec.size = size;
+  spec.placement = *loc;
+  return spec;
+}
+
+double box_area(const Vec3& size) {
+  return 2.0 * (size.x() * size.y() + size.y() * size.z() + size.x() * size.z());
+}
+
 void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members, double area,
                    const std::string& what, bool carried) {
   auto solid = kernel::build_primitive(spec, o_.linear_tolerance);

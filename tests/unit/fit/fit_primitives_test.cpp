@@ -41,6 +41,22 @@ Fitted fit(const Cloud& c, double epsilon = 0.01) {
 
 Vec3 box_centre(const kernel::PrimitiveSpec& s) { return s.placement.apply_point(0.5 * s.size); }
 
+// The boxes among the fitted primitives, in their order.
+std::vector<kernel::PrimitiveSpec> boxes_of(const FittedPrimitives& f) {
+  std::vector<kernel::PrimitiveSpec> boxes;
+  for (const auto& p : f.primitives) {
+    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
+  }
+  return boxes;
+}
+
+// Every rejection with its reason, for failure messages.
+std::string rejections(const FittedPrimitives& f) {
+  std::string why;
+  for (const auto& r : f.rejected) why += r.what + ": " + r.reason + "; ";
+  return why;
+}
+
 TEST(FitPrimitives, BeamSeenFromThreeSidesIsOneBox) {
   // A 3 × 0.2 × 0.3 beam turned 30° about z, scanned on its two long sides and its bottom.
   const double turn = 30.0 * std::numbers::pi / 180.0;
@@ -267,12 +283,8 @@ TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
   Fitted f;
   f.shapes = shapes.value();
   f.primitives = primitives_from_shapes(c.points, normals, f.shapes, boxes_only, o, 0);
-  std::vector<kernel::PrimitiveSpec> boxes;
-  for (const auto& p : f.primitives.primitives) {
-    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
-  }
-  std::string why;
-  for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
+  std::vector<kernel::PrimitiveSpec> boxes = boxes_of(f.primitives);
+  const std::string why = rejections(f.primitives);
   ASSERT_EQ(boxes.size(), 3U) << why;
   std::sort(boxes.begin(), boxes.end(),
             [](const auto& a, const auto& b) { return box_centre(a).x() < box_centre(b).x(); });
@@ -328,9 +340,7 @@ TEST(FitPrimitives, BeamSeenInTwoPiecesIsOneMember) {
     c.append(testing::rectangle_cloud(corner, 1.1 * ex, ly, 0.015, 0.002, seed++));
   }
   const Fitted f = fit(c);
-  std::string why;
-  for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
-  ASSERT_EQ(f.primitives.primitives.size(), 1U) << why;
+  ASSERT_EQ(f.primitives.primitives.size(), 1U) << rejections(f.primitives);
   const auto& p = f.primitives.primitives[0].spec;
   ASSERT_EQ(p.type, PrimitiveType::Box);
   EXPECT_LT((box_centre(p) - Vec3(1.5, 0.1, 3.85)).norm(), 0.02);
@@ -388,12 +398,10 @@ TEST(FitPrimitives, BeamEndingInAColumnReachesItsAxis) {
   c.append(testing::rectangle_cloud(corner + ly, (3.0 - x0) * ex, lz, 0.01, 0.002, 102));
   c.append(testing::rectangle_cloud(corner, (3.0 - x0) * ex, ly, 0.015, 0.002, 103));
   const Fitted f = fit(c);
-  std::vector<kernel::PrimitiveSpec> boxes;
-  int cylinders = 0;
-  for (const auto& p : f.primitives.primitives) {
-    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
-    cylinders += p.spec.type == PrimitiveType::Cylinder ? 1 : 0;
-  }
+  const std::vector<kernel::PrimitiveSpec> boxes = boxes_of(f.primitives);
+  const auto cylinders =
+      std::count_if(f.primitives.primitives.begin(), f.primitives.primitives.end(),
+                    [](const auto& p) { return p.spec.type == PrimitiveType::Cylinder; });
   ASSERT_EQ(cylinders, 1);
   ASSERT_EQ(boxes.size(), 1U);
   EXPECT_NEAR(sorted_size(boxes[0])[2], 3.0, 0.03);
@@ -420,12 +428,8 @@ TEST(FitPrimitives, BeamSeenOnOneFaceTakesItsSiblingsSectionAndReachesTheColumns
   c.append(testing::rectangle_cloud(sibling, 3.0 * ex, ly, 0.015, 0.002, seed++));
   c.append(testing::rectangle_cloud(Vec3(0.8, -0.1, 3.3), lz, 1.4 * ex, 0.01, 0.002, seed++));
   const Fitted f = fit(c);
-  std::vector<kernel::PrimitiveSpec> boxes;
-  for (const auto& p : f.primitives.primitives) {
-    if (p.spec.type == PrimitiveType::Box) boxes.push_back(p.spec);
-  }
-  std::string why;
-  for (const auto& r : f.primitives.rejected) why += r.what + ": " + r.reason + "; ";
+  std::vector<kernel::PrimitiveSpec> boxes = boxes_of(f.primitives);
+  const std::string why = rejections(f.primitives);
   ASSERT_EQ(boxes.size(), 2U) << why;
   std::sort(boxes.begin(), boxes.end(),
             [](const auto& a, const auto& b) { return box_centre(a).y() < box_centre(b).y(); });

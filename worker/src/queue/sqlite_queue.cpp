@@ -169,11 +169,9 @@ class SqliteQueue final : public JobQueue {
   // the same file at once migrate it once, the others find it done.
   bool migrate(Failure& failure) {
     if (!exec("BEGIN IMMEDIATE", failure)) return false;
+    // Its own result is of no interest, and it must not hide why the migration stopped.
     const auto abandon = [&] {
-      const bool busy = last_busy_;
-      Failure ignored;
-      exec("ROLLBACK", ignored);
-      last_busy_ = busy;
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
       return false;
     };
     if (!exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL)", failure)) {
