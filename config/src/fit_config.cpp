@@ -57,6 +57,7 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "ransac", "relabel", fit.ransac.relabel);
   take(f, "ransac", "by_evidence", fit.ransac.by_evidence);
   take(f, "ransac", "edges_to_smaller", fit.ransac.edges_to_smaller);
+  take(f, "ransac", "cluster_scale", fit.ransac.cluster_scale);
   take(f, "primitives", "boxes", fit.primitives.boxes);
   take(f, "primitives", "max_box_depth", fit.primitives.max_box_depth);
   take(f, "primitives", "min_box_thickness", fit.primitives.min_box_thickness);
@@ -108,7 +109,8 @@ json fit_to_json(const FitConfig& fit) {
                    {"max_candidates", fit.ransac.max_candidates},
                    {"relabel", fit.ransac.relabel},
                    {"by_evidence", fit.ransac.by_evidence},
-                   {"edges_to_smaller", fit.ransac.edges_to_smaller}};
+                   {"edges_to_smaller", fit.ransac.edges_to_smaller},
+                   {"cluster_scale", fit.ransac.cluster_scale}};
   out["primitives"] = {{"boxes", fit.primitives.boxes},
                        {"max_box_depth", fit.primitives.max_box_depth},
                        {"min_box_thickness", fit.primitives.min_box_thickness},

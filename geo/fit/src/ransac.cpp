@@ -92,6 +92,8 @@ class Detector {
     return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
   }
   std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
+  std::optional<Surface> cylinder_across_plane(const Surface& plane,
+                                               std::span<const std::uint32_t> inliers) const;
   double probability(double n, std::uint64_t draws) const {
     const double remaining = static_cast<double>(std::max<std::size_t>(remaining_count_, 1));
     // A good minimal sample needs the seed in the shape, the right level, and the other
@@ -149,6 +151,7 @@ class Detector {
   geo::detail::Random random_;
   double cos_alpha_ = 0.0;
   double noise_ = 0.0;  // estimated noise (derived epsilon), else 0
+  bool exact_ = false;  // epsilon derived and the noise under a twentieth of it
   std::vector<char> has_normal_;
   std::vector<int> assignment_;
   std::vector<std::uint32_t> remaining_;  // may hold assigned points until compacted
@@ -315,14 +318,65 @@ std::optional<Surface> Detector::cylinder_from_normals(
   return detail::refine_surface(s, points_, inliers);
 }
 
+// A cylinder through the points of a plane that bend away from it: their heights over the
+// plane as a quadratic h(u, v); the direction it curves most along is across the axis, its
+// curvature 1/r. Refined by least squares; nullopt when the points do not curve.
+std::optional<Surface> Detector::cylinder_across_plane(
+    const Surface& plane, std::span<const std::uint32_t> inliers) const {
+  if (inliers.size() < 8) return std::nullopt;
+  Vec3 e1, e2;
+  detail::orthonormal_basis(plane.axis, e1, e2);
+  Vec3 centre = Vec3::Zero();
+  for (auto i : inliers) centre += points_[i];
+  centre /= static_cast<double>(inliers.size());
+  Eigen::MatrixXd a(inliers.size(), 6);
+  Eigen::VectorXd h(inliers.size());
+  for (std::size_t k = 0; k < inliers.size(); ++k) {
+    const Vec3 d = points_[inliers[k]] - centre;
+    const double u = d.dot(e1), v = d.dot(e2);
+    a.row(static_cast<Eigen::Index>(k)) << u * u, u * v, v * v, u, v, 1.0;
+    h(static_cast<Eigen::Index>(k)) = d.dot(plane.axis);
+  }
+  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(h);
+  if (!c.allFinite()) return std::nullopt;
+  Eigen::Matrix2d hessian;
+  hessian << 2.0 * c(0), c(1), c(1), 2.0 * c(2);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(hessian);
+  if (eig.info() != Eigen::Success) return std::nullopt;
+  const int most = std::abs(eig.eigenvalues()(0)) > std::abs(eig.eigenvalues()(1)) ? 0 : 1;
+  const double k = eig.eigenvalues()(most);
+  if (!(std::abs(k) > 0.0) || !std::isfinite(k)) return std::nullopt;
+  const Eigen::Vector2d along = eig.eigenvectors().col(1 - most);
+  Surface s;
+  s.type = ShapeType::Cylinder;
+  s.radius = 1.0 / std::abs(k);
+  if (!(s.radius < o_.max_radius)) return std::nullopt;
+  s.axis = detail::canonical_axis((along.x() * e1 + along.y() * e2).normalized());
+  // The centre of curvature lies on the side the points bend towards.
+  s.point = centre + (k > 0.0 ? 1.0 : -1.0) * s.radius * plane.axis;
+  return detail::refine_surface(s, points_, inliers);
+}
+
 // Type selection by evidence: the plane and the cylinder that fit the same points are
 // compared by the criterion above; another type replaces the shape when it keeps nearly all
 // of its points and scores clearly better.
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
-  // A plane stays a plane: edge points it took from its neighbours would bend a cylinder
-  // towards them (simpler() already turned planar curved shapes into planes).
-  if (s.type == ShapeType::Plane) return std::nullopt;
+  if (s.type == ShapeType::Plane) {
+    // A plane stays a plane unless its points are clearly not flat and a cylinder through
+    // them is exact (a narrow strip of a wide cylinder): on exact clouds only, since on noisy
+    // ones the edge points it took from its neighbours would bend a cylinder towards them
+    // (and a bent plane is never exact).
+    if (!exact_) return std::nullopt;
+    const double floor = 0.05 * o_.epsilon;
+    if (!(rms_of(s, inliers) > 2.0 * floor)) return std::nullopt;
+    auto cylinder = cylinder_across_plane(s, inliers);
+    if (!cylinder || !keeps_most(*cylinder, inliers)) return std::nullopt;
+    if (!(rms_of(*cylinder, inliers) <= floor)) return std::nullopt;
+    const double margin = 2.0 * std::log(static_cast<double>(inliers.size()));
+    if (criterion(*cylinder, inliers) < criterion(s, inliers) - margin) return cylinder;
+    return std::nullopt;
+  }
   std::vector<Surface> options;
   if (auto plane = detail::fit_plane(points_, inliers)) options.push_back(*plane);
   if (s.type != ShapeType::Cylinder && o_.shapes[static_cast<int>(ShapeType::Cylinder)]) {
@@ -576,7 +630,8 @@ std::pair<Vec3, Vec3> Detector::bounds(std::span<const std::uint32_t> members) c
 void Detector::derive_scale(std::span<const std::uint32_t> members,
                             const detail::NeighbourSample& sample, RansacResult& result) {
   const auto [lo, hi] = bounds(members);
-  if (!(o_.epsilon > 0.0)) {
+  const bool derived = !(o_.epsilon > 0.0);
+  if (derived) {
     // The noise where the region is flattest (a low quantile: curvature and edges raise the
     // others), and a tenth of the spacing for exact points.
     result.noise = sample.noise(0.05);
@@ -588,6 +643,7 @@ void Detector::derive_scale(std::span<const std::uint32_t> members,
   }
   if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
   noise_ = result.noise;
+  exact_ = derived && noise_ <= 0.05 * o_.epsilon;
   result.epsilon = o_.epsilon;
   result.min_points = o_.min_points;
   result.max_radius = o_.max_radius;
@@ -629,8 +685,9 @@ RansacResult Detector::run() {
   const auto [lo, hi] = bounds(members);
   // Connectivity: three typical spacings, but enough for the sparser parts of the cloud too
   // (terrestrial scans mix dense near surfaces with sparse far ones).
-  double beta = o_.cluster_epsilon > 0.0 ? o_.cluster_epsilon
-                                         : std::max(1.5 * result.spacing, sample.reach(0.9));
+  double beta = o_.cluster_epsilon > 0.0
+                    ? o_.cluster_epsilon
+                    : o_.cluster_scale * std::max(1.5 * result.spacing, sample.reach(0.9));
   beta = std::max(beta, o_.epsilon);
   result.cluster_epsilon = beta;
   grid_ = std::make_unique<PointGrid>(points_, members, beta, o_.seed);
@@ -705,6 +762,9 @@ kernel::Result<RansacResult> detect_shapes(std::span<const Vec3> points,
   if (!(options.normal_deviation_deg > 0.0 && options.normal_deviation_deg < 90.0)) {
     return kernel::Error{ErrorCode::InvalidArgument,
                          "fit option normal_deviation_deg must be in (0, 90)"};
+  }
+  if (!(options.cluster_scale > 0.0) || !std::isfinite(options.cluster_scale)) {
+    return kernel::Error{ErrorCode::InvalidArgument, "fit option cluster_scale must be > 0"};
   }
   if (!(options.cluster_epsilon >= 0.0) || !std::isfinite(options.cluster_epsilon)) {
     return kernel::Error{ErrorCode::InvalidArgument, "fit option cluster_epsilon must be >= 0"};

@@ -81,6 +81,7 @@ struct FitRansacConfig {
   bool relabel = false;           ///< each point to the neighbouring shape it fits best, then refit
   bool by_evidence = false;       ///< shape types chosen by an information criterion
   bool edges_to_smaller = false;  ///< a point on two shapes to the smaller (exact clouds)
+  double cluster_scale = 1.0;     ///< times the derived connectivity (cluster_epsilon 0)
   bool operator==(const FitRansacConfig&) const = default;
 };
 
