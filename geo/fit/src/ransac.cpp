@@ -422,7 +422,25 @@ std::optional<Surface> Detector::simpler(const Surface& s, std::span<const std::
       return refined;
     }
   }
-  if (s.type == ShapeType::Torus) {
+  if (s.type == ShapeType::Torus && !inliers.empty()) {
+    // A torus whose tube is seen over a short arc of a large circle: the cylinder along the
+    // tube, its axis the circle's tangent at the points' centroid.
+    Vec3 centroid = Vec3::Zero();
+    for (auto i : inliers) centroid += points_[i];
+    centroid /= static_cast<double>(inliers.size());
+    const Vec3 w = centroid - s.point - (centroid - s.point).dot(s.axis) * s.axis;
+    if (w.norm() > 0.0) {
+      const Vec3 u = w.normalized();
+      Surface tube;
+      tube.type = ShapeType::Cylinder;
+      tube.axis = detail::canonical_axis(s.axis.cross(u).normalized());
+      tube.point = s.point + s.radius * u;
+      tube.radius = s.radius2;
+      if (auto refined = detail::refine_surface(tube, points_, inliers);
+          refined && refined->radius < o_.max_radius && keeps(*refined)) {
+        return refined;
+      }
+    }
     Surface sphere;
     sphere.type = ShapeType::Sphere;
     sphere.point = s.point;

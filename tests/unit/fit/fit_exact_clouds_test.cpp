@@ -1,6 +1,7 @@
 // Shape detection on exact clouds (CAD objects, issue #24): a narrow strip of a wide cylinder
-// is a cylinder when the cloud's own noise is nil, a flat face stays a plane, and the
-// connectivity scale keeps coplanar faces with a narrow gap apart.
+// is a cylinder when the cloud's own noise is nil, a cylinder taken for a wide torus is the
+// cylinder along the torus's tube, a flat face stays a plane, and the connectivity scale keeps
+// coplanar faces with a narrow gap apart.
 
 #include <gtest/gtest.h>
 
@@ -50,6 +51,31 @@ TEST(FitExactClouds, StripOfAWideCylinderIsACylinderOnExactPoints) {
       EXPECT_EQ(s.surface.type, ShapeType::Plane);
     }
   }
+}
+
+// A cylinder's wall is also a torus whose tube runs along a large circle: when a torus is what
+// the RANSAC drew (here the only type it may draw), the cylinder along its tube (axis the
+// circle's tangent) keeps the points with fewer parameters and replaces it.
+TEST(FitExactClouds, CylinderTakenForAWideTorusIsACylinder) {
+  const Vec3 axis = Vec3(1, 0.2, 0.1).normalized();
+  const Cloud c = testing::cylinder_cloud(Vec3(0, 0, 1), axis, 0.5, 3.0, 0.0, 2.0, 3000, 0.0, 13);
+  RansacOptions o;
+  o.epsilon = 0.0;
+  o.min_points = 0;
+  o.max_radius = 0.0;
+  o.by_evidence = true;
+  o.seed = 5;
+  o.shapes = {false, false, false, false, true};
+  NormalOptions n;
+  n.neighbours = 8;
+  const auto result = detect_shapes(c.points, estimate_normals(c.points, n), o);
+  ASSERT_TRUE(result.ok());
+  ASSERT_FALSE(result->shapes.empty()) << result->reason;
+  const DetectedShape& s = result->shapes.front();
+  ASSERT_EQ(s.surface.type, ShapeType::Cylinder);  // was a torus of R 15.4 over 1 237 points
+  EXPECT_NEAR(s.surface.radius, 0.5, 0.005);
+  EXPECT_LT(testing::line_angle_deg(s.surface.axis, axis), 1.0);
+  EXPECT_GT(s.inliers.size(), 2950U);
 }
 
 // A flat face of exact points stays a plane with types by evidence (its points do not bend).
