@@ -92,6 +92,8 @@ class Detector {
     return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
   }
   std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
+  std::optional<Surface> cone_from_normals(std::span<const std::uint32_t> inliers,
+                                           const Vec3& inside) const;
   std::optional<Surface> cylinder_across_plane(const Surface& plane,
                                                std::span<const std::uint32_t> inliers) const;
   double probability(double n, std::uint64_t draws) const {
@@ -357,6 +359,54 @@ std::optional<Surface> Detector::cylinder_across_plane(
   return detail::refine_surface(s, points_, inliers);
 }
 
+// A cone through points with normals: turned towards `inside` (a point on the cone's concave
+// side, e.g. the centre of a sphere fitted to the same points), a cone's normals all make the
+// angle 90° − θ with its axis, so their tips lie on one plane whose normal is the axis (the
+// least principal direction of their centred scatter) at distance sin θ from the origin; the
+// apex is the point every tangent plane passes through (least squares). Refined by least
+// squares; nullopt for too few normals, a cylinder (θ under a degree) or a singular apex.
+std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t> inliers,
+                                                   const Vec3& inside) const {
+  std::vector<Vec3> in;
+  std::vector<std::uint32_t> used;
+  for (auto i : inliers) {
+    if (!has_normal_[i]) continue;
+    in.push_back(normals_[i].dot(inside - points_[i]) < 0.0 ? Vec3(-normals_[i]) : normals_[i]);
+    used.push_back(i);
+  }
+  if (in.size() < 6) return std::nullopt;
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& n : in) mean += n;
+  mean /= static_cast<double>(in.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Vec3& n : in) scatter += (n - mean) * (n - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  if (eig.info() != Eigen::Success) return std::nullopt;
+  Vec3 axis = eig.eigenvectors().col(0).normalized();
+  double sin_angle = mean.dot(axis);
+  if (sin_angle < 0.0) {
+    axis = -axis;
+    sin_angle = -sin_angle;
+  }
+  if (!(sin_angle > std::sin(std::numbers::pi / 180.0)) || !(sin_angle < 1.0)) return std::nullopt;
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Vec3 b = Vec3::Zero();
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    const Eigen::Matrix3d nn = in[k] * in[k].transpose();
+    a += nn;
+    b += nn * points_[used[k]];
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(a);
+  if (!lu.isInvertible()) return std::nullopt;
+  Surface s;
+  s.type = ShapeType::Cone;
+  s.point = lu.solve(b);
+  s.axis = axis;
+  s.angle = std::asin(sin_angle);
+  if (!s.point.allFinite()) return std::nullopt;
+  return detail::refine_surface(s, points_, inliers);
+}
+
 // Type selection by evidence: the plane and the cylinder that fit the same points are
 // compared by the criterion above; another type replaces the shape when it keeps nearly all
 // of its points and scores clearly better.
@@ -381,6 +431,10 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
   if (auto plane = detail::fit_plane(points_, inliers)) options.push_back(*plane);
   if (s.type != ShapeType::Cylinder && o_.shapes[static_cast<int>(ShapeType::Cylinder)]) {
     if (auto cylinder = cylinder_from_normals(inliers)) options.push_back(*cylinder);
+  }
+  if (s.type == ShapeType::Sphere && o_.shapes[static_cast<int>(ShapeType::Cone)]) {
+    // A wide cone's belt is nearly a sphere's: its normals tell them apart.
+    if (auto cone = cone_from_normals(inliers, s.point)) options.push_back(*cone);
   }
   double best = criterion(s, inliers) - 2.0 * std::log(static_cast<double>(inliers.size()));
   std::optional<Surface> chosen;

@@ -1,7 +1,8 @@
 // Shape detection on exact clouds (CAD objects, issue #24): a narrow strip of a wide cylinder
-// is a cylinder when the cloud's own noise is nil, a cylinder taken for a wide torus is the
-// cylinder along the torus's tube, a flat face stays a plane, and the connectivity scale keeps
-// coplanar faces with a narrow gap apart.
+// is a cylinder when the cloud's own noise is nil; a cylinder taken for a wide torus is the
+// cylinder along the torus's tube; a flat cone taken for a wide sphere is a cone (by its
+// normals); a flat face stays a plane; the connectivity scale keeps coplanar faces with a
+// narrow gap apart.
 
 #include <gtest/gtest.h>
 
@@ -76,6 +77,32 @@ TEST(FitExactClouds, CylinderTakenForAWideTorusIsACylinder) {
   EXPECT_NEAR(s.surface.radius, 0.5, 0.005);
   EXPECT_LT(testing::line_angle_deg(s.surface.axis, axis), 1.0);
   EXPECT_GT(s.inliers.size(), 2950U);
+}
+
+// A flat cone (half-angle 85°) seen on a belt is within epsilon of a wide sphere too, and the
+// RANSAC draws that sphere first; the points' normals, all at 5° from the cone's axis, show
+// the cone: fitted from them, it keeps the points and scores better.
+TEST(FitExactClouds, FlatConeTakenForAWideSphereIsACone) {
+  const Vec3 apex(0, 0, 1), axis = Vec3(0.1, 0.2, 1).normalized();
+  const double angle = 85.0 * std::numbers::pi / 180.0;
+  const Cloud c = testing::cone_cloud(apex, axis, angle, 1.0, 3.0, 3000, 0.0, 17);
+  RansacOptions o;
+  o.epsilon = 0.0;
+  o.min_points = 0;
+  o.max_radius = 0.0;
+  o.by_evidence = true;
+  o.seed = 5;
+  NormalOptions n;
+  n.neighbours = 8;
+  const auto result = detect_shapes(c.points, estimate_normals(c.points, n), o);
+  ASSERT_TRUE(result.ok());
+  ASSERT_EQ(result->shapes.size(), 1U) << result->reason;
+  const DetectedShape& s = result->shapes.front();
+  ASSERT_EQ(s.surface.type, ShapeType::Cone);  // was a sphere of radius 291 over 2 639 points
+  EXPECT_NEAR(s.surface.angle, angle, 0.01);
+  EXPECT_LT((s.surface.point - apex).norm(), 0.01);
+  EXPECT_GT(s.surface.axis.dot(axis), std::cos(0.5 * std::numbers::pi / 180.0));
+  EXPECT_EQ(s.inliers.size(), c.points.size());
 }
 
 // A flat face of exact points stays a plane with types by evidence (its points do not bend).

@@ -73,13 +73,13 @@ struct RansacOptions {
   /// half the other's points — a hole's or fillet's rim, not the face's. For exact clouds; on
   /// noisy ones epsilon is wide and small shapes would take a face's points.
   bool edges_to_smaller = false;
-  /// Each extracted shape's type is chosen by evidence: the plane, cylinder or sphere fitting
-  /// the same points replaces it when it keeps them and scores better by an information
-  /// criterion (n·ln(RSS/n) + k·ln n, the residual floored at the noise); a simpler surface
-  /// replaces a curved one only when it also scores no worse. On exact clouds (noise under a
-  /// twentieth of epsilon) a plane whose points bend away from it is a cylinder when one
-  /// through them is exact (RMS within that floor) and scores better: a narrow strip of a
-  /// wide cylinder.
+  /// Each extracted shape's type is chosen by evidence: the plane or cylinder (for a sphere
+  /// also the cone, from the points' normals) fitting the same points replaces it when it
+  /// keeps them and scores better by an information criterion (n·ln(RSS/n) + k·ln n, the
+  /// residual floored at the noise); a simpler surface replaces a curved one only when it also
+  /// scores no worse. On exact clouds (noise under a twentieth of epsilon) a plane whose points
+  /// bend away from it is a cylinder when one through them is exact (RMS within that floor)
+  /// and scores better: a narrow strip of a wide cylinder.
   bool by_evidence = false;
   /// Factor on the connectivity derived when cluster_epsilon is 0 (1.5 × the spacing, or the
   /// 90 % quantile of the distance to the 16th neighbour where larger): below 1, coplanar faces
