@@ -19,6 +19,18 @@ namespace {
 using kernel::Vec3;
 using testing::Cloud;
 
+// Every scale option derived from the cloud (the exact-cloud rules need its own noise), types
+// by evidence.
+RansacOptions derived_with_evidence(std::uint64_t seed) {
+  RansacOptions o;
+  o.epsilon = 0.0;
+  o.min_points = 0;
+  o.max_radius = 0.0;
+  o.by_evidence = true;
+  o.seed = seed;
+  return o;
+}
+
 // Exact points on a strip of a cylinder of radius 20, 2 wide and 4 long: 0.025 from flat at
 // its middle, within the epsilon a plane needs, so the RANSAC takes it for a plane. With the
 // epsilon derived from the cloud (its noise is nil) the evidence says cylinder; with an
@@ -33,12 +45,8 @@ TEST(FitExactClouds, StripOfAWideCylinderIsACylinderOnExactPoints) {
   const auto normals = estimate_normals(c.points, n);
   for (const double epsilon : {0.0, 0.05}) {
     SCOPED_TRACE(epsilon == 0.0 ? "derived epsilon" : "epsilon given");
-    RansacOptions o;
+    RansacOptions o = derived_with_evidence(3);
     o.epsilon = epsilon;
-    o.min_points = 0;
-    o.max_radius = 0.0;
-    o.by_evidence = true;
-    o.seed = 3;
     const auto result = detect_shapes(c.points, normals, o);
     ASSERT_TRUE(result.ok()) << result.error().message;
     ASSERT_EQ(result->shapes.size(), 1U) << result->reason;
@@ -60,12 +68,7 @@ TEST(FitExactClouds, StripOfAWideCylinderIsACylinderOnExactPoints) {
 TEST(FitExactClouds, CylinderTakenForAWideTorusIsACylinder) {
   const Vec3 axis = Vec3(1, 0.2, 0.1).normalized();
   const Cloud c = testing::cylinder_cloud(Vec3(0, 0, 1), axis, 0.5, 3.0, 0.0, 2.0, 3000, 0.0, 13);
-  RansacOptions o;
-  o.epsilon = 0.0;
-  o.min_points = 0;
-  o.max_radius = 0.0;
-  o.by_evidence = true;
-  o.seed = 5;
+  RansacOptions o = derived_with_evidence(5);
   o.shapes = {false, false, false, false, true};
   NormalOptions n;
   n.neighbours = 8;
@@ -86,12 +89,7 @@ TEST(FitExactClouds, FlatConeTakenForAWideSphereIsACone) {
   const Vec3 apex(0, 0, 1), axis = Vec3(0.1, 0.2, 1).normalized();
   const double angle = 85.0 * std::numbers::pi / 180.0;
   const Cloud c = testing::cone_cloud(apex, axis, angle, 1.0, 3.0, 3000, 0.0, 17);
-  RansacOptions o;
-  o.epsilon = 0.0;
-  o.min_points = 0;
-  o.max_radius = 0.0;
-  o.by_evidence = true;
-  o.seed = 5;
+  RansacOptions o = derived_with_evidence(5);
   NormalOptions n;
   n.neighbours = 8;
   const auto result = detect_shapes(c.points, estimate_normals(c.points, n), o);
@@ -109,12 +107,7 @@ TEST(FitExactClouds, FlatConeTakenForAWideSphereIsACone) {
 TEST(FitExactClouds, FlatFaceOfExactPointsStaysAPlane) {
   const Cloud c =
       testing::rectangle_cloud(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 4, 0.5), 0.05, 0.0, 12);
-  RansacOptions o;
-  o.epsilon = 0.0;
-  o.min_points = 0;
-  o.max_radius = 0.0;
-  o.by_evidence = true;
-  o.seed = 3;
+  RansacOptions o = derived_with_evidence(3);
   const auto result = detect_shapes(c.points, estimate_normals(c.points, {}), o);
   ASSERT_TRUE(result.ok());
   ASSERT_EQ(result->shapes.size(), 1U) << result->reason;
