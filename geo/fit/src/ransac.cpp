@@ -12,8 +12,9 @@
 //    1 - (1 - n / (N · levels))^draws, reaches `probability`; drawing stops when that holds
 //    for a shape of min_points;
 //  - an extracted shape is refitted by least squares, its component recomputed, and the refit
-//    kept only when it explains at least as many points; a curved shape that a plane (or a
-//    cone that a cylinder) explains as well is replaced by the simpler one.
+//    kept only when it explains at least as many points; a curved shape that a plane (a cone
+//    or torus that a cylinder, a torus that a sphere) explains as well is replaced by the
+//    simpler one.
 
 #include <algorithm>
 #include <cmath>
@@ -407,9 +408,10 @@ std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t
   return detail::refine_surface(s, points_, inliers);
 }
 
-// Type selection by evidence: the plane and the cylinder that fit the same points are
-// compared by the criterion above; another type replaces the shape when it keeps nearly all
-// of its points and scores clearly better.
+// Type selection by evidence: the plane and the cylinder (for a sphere also the cone) that fit
+// the same points are compared by the criterion above; another type replaces the shape when
+// it keeps nearly all of its points and scores clearly better. A plane is only questioned on
+// exact clouds.
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
   if (s.type == ShapeType::Plane) {
