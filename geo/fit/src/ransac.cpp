@@ -95,6 +95,8 @@ class Detector {
   std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
   std::optional<Surface> cone_from_normals(std::span<const std::uint32_t> inliers,
                                            const Vec3& inside) const;
+  std::optional<Surface> wall_through_ring(const Surface& plane,
+                                           std::span<const std::uint32_t> inliers);
   std::optional<Surface> cylinder_across_plane(const Surface& plane,
                                                std::span<const std::uint32_t> inliers) const;
   double probability(double n, std::uint64_t draws) const {
@@ -360,6 +362,44 @@ std::optional<Surface> Detector::cylinder_across_plane(
   return detail::refine_surface(s, points_, inliers);
 }
 
+// A plane whose points lie on one circle of it is the ring where a cylinder's wall (a hole, a
+// pin) meets the plane: when points of other shapes or none lie on that cylinder next to the
+// ring but off its plane (the wall's rims and rows), the cylinder.
+std::optional<Surface> Detector::wall_through_ring(const Surface& plane,
+                                                   std::span<const std::uint32_t> inliers) {
+  if (inliers.size() < 6) return std::nullopt;
+  Vec3 e1, e2;
+  detail::orthonormal_basis(plane.axis, e1, e2);
+  const Vec3 origin = points_[inliers[0]];
+  std::vector<kernel::Vec2> in_plane;
+  for (auto i : inliers) {
+    const Vec3 d = points_[i] - origin;
+    in_plane.emplace_back(d.dot(e1), d.dot(e2));
+  }
+  const auto circle = detail::fit_circle(in_plane);
+  if (!circle || !(circle->radius < o_.max_radius)) return std::nullopt;
+  Surface s;
+  s.type = ShapeType::Cylinder;
+  s.axis = detail::canonical_axis(plane.axis);
+  s.point = origin + circle->centre.x() * e1 + circle->centre.y() * e2;
+  s.radius = circle->radius;
+  // On the circle: every point within the noise floor of the cylinder.
+  const double floor = 0.05 * o_.epsilon;
+  if (!(rms_of(s, inliers) <= floor)) return std::nullopt;
+  std::size_t off = 0;
+  for_points_near(inliers, [&](std::uint32_t j) {
+    if (std::abs(surface_distance(s, points_[j])) <= o_.epsilon &&
+        std::abs(surface_distance(plane, points_[j])) > o_.epsilon) {
+      ++off;
+    }
+  });
+  if (2 * off < inliers.size()) return std::nullopt;
+  // The ring's normals are those of the plane it was taken for (a sparse wall's points find
+  // their neighbours on the ring): no evidence against the wall.
+  for (auto i : inliers) has_normal_[i] = 0;
+  return s;
+}
+
 // A cone through points with normals: turned towards `inside` (a point on the cone's concave
 // side, e.g. the centre of a sphere fitted to the same points), a cone's normals all make the
 // angle 90° − θ with its axis, so their tips lie on one plane whose normal is the axis (the
@@ -411,7 +451,7 @@ std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t
 // Type selection by evidence: the plane and the cylinder (for a sphere also the cone) that fit
 // the same points are compared by the criterion above; another type replaces the shape when
 // it keeps nearly all of its points and scores clearly better. A plane is only questioned on
-// exact clouds.
+// exact clouds: a ring of a hole's wall, a strip of a wide cylinder.
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
   if (s.type == ShapeType::Plane) {
@@ -420,6 +460,7 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
     // ones the edge points it took from its neighbours would bend a cylinder towards them
     // (and a bent plane is never exact).
     if (!exact_) return std::nullopt;
+    if (auto wall = wall_through_ring(s, inliers)) return wall;
     const double floor = 0.05 * o_.epsilon;
     if (!(rms_of(s, inliers) > 2.0 * floor)) return std::nullopt;
     auto cylinder = cylinder_across_plane(s, inliers);

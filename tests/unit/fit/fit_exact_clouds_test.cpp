@@ -1,8 +1,8 @@
 // Shape detection on exact clouds (CAD objects, issue #24): a narrow strip of a wide cylinder
 // is a cylinder when the cloud's own noise is nil; a cylinder taken for a wide torus is the
 // cylinder along the torus's tube; a flat cone taken for a wide sphere is a cone (by its
-// normals); a flat face stays a plane; the connectivity scale keeps coplanar faces with a
-// narrow gap apart.
+// normals); a hole's wall seen as one ring of points is a cylinder; a flat face stays a plane;
+// the connectivity scale keeps coplanar faces with a narrow gap apart.
 
 #include <gtest/gtest.h>
 
@@ -101,6 +101,50 @@ TEST(FitExactClouds, FlatConeTakenForAWideSphereIsACone) {
   EXPECT_LT((s.surface.point - apex).norm(), 0.01);
   EXPECT_GT(s.surface.axis.dot(axis), std::cos(0.5 * std::numbers::pi / 180.0));
   EXPECT_EQ(s.inliers.size(), c.points.size());
+}
+
+// A hole of radius 1 through a plate 3 thick, sampled as sparsely as its plates: its wall is
+// one ring of points half-way down between its rims (each a ring of the plates' points too).
+// A sparse wall's points find their neighbours on that ring, so their normals are the ring
+// plane's (given so here, as the estimator gives them on Fit4CAD's holes), and the RANSAC takes
+// the ring for a plane. Its points lie on one circle, though, and the rims lie on the same
+// cylinder off its plane: the wall is that cylinder, and takes its rims from the plates.
+TEST(FitExactClouds, HoleSeenAsOneRingOfPointsIsACylinder) {
+  Cloud c;
+  testing::Draw d(23);
+  const double r = 1.0, h = 3.0;
+  for (const double z : {0.0, h}) {
+    for (int k = 0; k < 300; ++k) {
+      const double t = d.uniform(0.0, 2.0 * std::numbers::pi);
+      const double rho = std::sqrt(d.uniform(1.2 * r * r, 225.0));
+      c.add(Vec3(rho * std::cos(t), rho * std::sin(t), z), Vec3::UnitZ(), 0.0, d);
+    }
+    for (int k = 0; k < 8; ++k) {  // the rim: on the plate and on the wall
+      const double t = 2.0 * std::numbers::pi * k / 8.0;
+      c.add(Vec3(r * std::cos(t), r * std::sin(t), z), Vec3::UnitZ(), 0.0, d);
+    }
+  }
+  for (int k = 0; k < 24; ++k) {  // the middle ring, with the ring plane's normal
+    const double t = 2.0 * std::numbers::pi * (k + 0.5) / 24.0;
+    c.add(Vec3(r * std::cos(t), r * std::sin(t), h / 2.0), Vec3::UnitZ(), 0.0, d);
+  }
+  RansacOptions o = derived_with_evidence(7);
+  o.relabel = true;
+  o.edges_to_smaller = true;
+  o.probability = 0.9999;
+  const auto result = detect_shapes(c.points, c.normals, o);
+  ASSERT_TRUE(result.ok());
+  const DetectedShape* wall = nullptr;
+  for (const auto& s : result->shapes) {
+    if (s.surface.type == ShapeType::Cylinder) wall = &s;
+    if (s.surface.type == ShapeType::Plane) {  // the plates, no plane through the ring
+      EXPECT_GT(std::abs(std::abs(s.surface.point.dot(s.surface.axis)) - h / 2.0), 1.0);
+    }
+  }
+  ASSERT_NE(wall, nullptr);
+  EXPECT_NEAR(wall->surface.radius, r, 0.01);
+  EXPECT_GT(std::abs(wall->surface.axis.z()), 0.9999);
+  EXPECT_EQ(wall->inliers.size(), 40U);  // the middle ring and both rims
 }
 
 // A flat face of exact points stays a plane with types by evidence (its points do not bend).

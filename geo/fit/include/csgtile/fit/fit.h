@@ -79,7 +79,9 @@ struct RansacOptions {
   /// residual floored at the noise); a simpler surface replaces a curved one only when it also
   /// scores no worse. On exact clouds (noise under a twentieth of epsilon) a plane whose points
   /// bend away from it is a cylinder when one through them is exact (RMS within that floor)
-  /// and scores better: a narrow strip of a wide cylinder.
+  /// and scores better: a narrow strip of a wide cylinder; and a plane whose points lie on one
+  /// circle of it, with points of the cylinder through that circle off its plane next to it,
+  /// is that cylinder: a hole's wall seen as one ring of points between its rims.
   bool by_evidence = false;
   /// Factor on the connectivity derived when cluster_epsilon is 0 (1.5 × the spacing, or the
   /// 90 % quantile of the distance to the 16th neighbour where larger): below 1, coplanar faces
