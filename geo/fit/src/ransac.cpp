@@ -35,6 +35,8 @@ using detail::PointGrid;
 using kernel::Vec3;
 
 constexpr int kSampledPerCell = 4;
+// A twentieth of epsilon: the residual floor of exact points (see Detector::noise_floor).
+constexpr double kFloorShare = 0.05;
 constexpr double kSampleFactor = 4.0;
 
 struct Candidate {
@@ -92,6 +94,19 @@ class Detector {
     }
     return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
   }
+  // The residual below which points count as exact: the noise, at least a twentieth of epsilon.
+  double noise_floor() const { return std::max(noise_, kFloorShare * o_.epsilon); }
+  // How much better (by the criterion) another type must score to replace a shape.
+  static double evidence_margin(std::span<const std::uint32_t> inliers) {
+    return 2.0 * std::log(static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
+  }
+  Vec3 centroid_of(std::span<const std::uint32_t> inliers) const {
+    Vec3 c = Vec3::Zero();
+    for (auto i : inliers) c += points_[i];
+    return c / static_cast<double>(std::max<std::size_t>(inliers.size(), 1));
+  }
+  std::optional<Surface> circle_along(const Vec3& axis,
+                                      std::span<const std::uint32_t> inliers) const;
   std::optional<Surface> cylinder_from_normals(std::span<const std::uint32_t> inliers) const;
   std::optional<Surface> cone_from_normals(std::span<const std::uint32_t> inliers,
                                            const Vec3& inside) const;
@@ -281,7 +296,7 @@ double Detector::criterion(const Surface& s, std::span<const std::uint32_t> inli
     const double d = surface_distance(s, points_[i]);
     rss += d * d;
   }
-  const double floor = std::max(noise_, 0.05 * o_.epsilon);
+  const double floor = noise_floor();
   return n * std::log(std::max(rss / n, floor * floor)) +
          detail::parameter_count(s.type) * std::log(n);
 }
@@ -301,10 +316,18 @@ std::optional<Surface> Detector::cylinder_from_normals(
   if (count < 5) return std::nullopt;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
   if (eig.info() != Eigen::Success) return std::nullopt;
-  const Vec3 axis = eig.eigenvectors().col(0).normalized();
+  const auto s = circle_along(eig.eigenvectors().col(0).normalized(), inliers);
+  if (!s) return std::nullopt;
+  return detail::refine_surface(*s, points_, inliers);
+}
+
+// The cylinder along `axis` through the least-squares circle of the points seen along it (not
+// refined); nullopt when no circle fits or its radius reaches max_radius.
+std::optional<Surface> Detector::circle_along(const Vec3& axis,
+                                              std::span<const std::uint32_t> inliers) const {
+  if (inliers.empty()) return std::nullopt;
   Vec3 e1, e2;
   detail::orthonormal_basis(axis, e1, e2);
-  // The circle of the points seen along the axis.
   const Vec3 origin = points_[inliers[0]];
   std::vector<kernel::Vec2> across;
   across.reserve(inliers.size());
@@ -313,14 +336,13 @@ std::optional<Surface> Detector::cylinder_from_normals(
     across.emplace_back(d.dot(e1), d.dot(e2));
   }
   const auto circle = detail::fit_circle(across);
-  if (!circle) return std::nullopt;
+  if (!circle || !(circle->radius < o_.max_radius)) return std::nullopt;
   Surface s;
   s.type = ShapeType::Cylinder;
   s.axis = detail::canonical_axis(axis);
   s.point = origin + circle->centre.x() * e1 + circle->centre.y() * e2;
   s.radius = circle->radius;
-  if (!(s.radius < o_.max_radius)) return std::nullopt;
-  return detail::refine_surface(s, points_, inliers);
+  return s;
 }
 
 // A cylinder through the points of a plane that bend away from it: their heights over the
@@ -331,9 +353,7 @@ std::optional<Surface> Detector::cylinder_across_plane(
   if (inliers.size() < 8) return std::nullopt;
   Vec3 e1, e2;
   detail::orthonormal_basis(plane.axis, e1, e2);
-  Vec3 centre = Vec3::Zero();
-  for (auto i : inliers) centre += points_[i];
-  centre /= static_cast<double>(inliers.size());
+  const Vec3 centre = centroid_of(inliers);
   Eigen::MatrixXd a(inliers.size(), 6);
   Eigen::VectorXd h(inliers.size());
   for (std::size_t k = 0; k < inliers.size(); ++k) {
@@ -368,27 +388,12 @@ std::optional<Surface> Detector::cylinder_across_plane(
 std::optional<Surface> Detector::wall_through_ring(const Surface& plane,
                                                    std::span<const std::uint32_t> inliers) {
   if (inliers.size() < 6) return std::nullopt;
-  Vec3 e1, e2;
-  detail::orthonormal_basis(plane.axis, e1, e2);
-  const Vec3 origin = points_[inliers[0]];
-  std::vector<kernel::Vec2> in_plane;
-  for (auto i : inliers) {
-    const Vec3 d = points_[i] - origin;
-    in_plane.emplace_back(d.dot(e1), d.dot(e2));
-  }
-  const auto circle = detail::fit_circle(in_plane);
-  if (!circle || !(circle->radius < o_.max_radius)) return std::nullopt;
-  Surface s;
-  s.type = ShapeType::Cylinder;
-  s.axis = detail::canonical_axis(plane.axis);
-  s.point = origin + circle->centre.x() * e1 + circle->centre.y() * e2;
-  s.radius = circle->radius;
+  const auto wall = circle_along(plane.axis, inliers);
   // On the circle: every point within the noise floor of the cylinder.
-  const double floor = 0.05 * o_.epsilon;
-  if (!(rms_of(s, inliers) <= floor)) return std::nullopt;
+  if (!wall || !(rms_of(*wall, inliers) <= noise_floor())) return std::nullopt;
   std::size_t off = 0;
   for_points_near(inliers, [&](std::uint32_t j) {
-    if (std::abs(surface_distance(s, points_[j])) <= o_.epsilon &&
+    if (std::abs(surface_distance(*wall, points_[j])) <= o_.epsilon &&
         std::abs(surface_distance(plane, points_[j])) > o_.epsilon) {
       ++off;
     }
@@ -397,7 +402,7 @@ std::optional<Surface> Detector::wall_through_ring(const Surface& plane,
   // The ring's normals are those of the plane it was taken for (a sparse wall's points find
   // their neighbours on the ring): no evidence against the wall.
   for (auto i : inliers) has_normal_[i] = 0;
-  return s;
+  return wall;
 }
 
 // A cone through points with normals: turned towards `inside` (a point on the cone's concave
@@ -461,13 +466,14 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
     // (and a bent plane is never exact).
     if (!exact_) return std::nullopt;
     if (auto wall = wall_through_ring(s, inliers)) return wall;
-    const double floor = 0.05 * o_.epsilon;
+    const double floor = noise_floor();
     if (!(rms_of(s, inliers) > 2.0 * floor)) return std::nullopt;
     auto cylinder = cylinder_across_plane(s, inliers);
     if (!cylinder || !keeps_most(*cylinder, inliers)) return std::nullopt;
     if (!(rms_of(*cylinder, inliers) <= floor)) return std::nullopt;
-    const double margin = 2.0 * std::log(static_cast<double>(inliers.size()));
-    if (criterion(*cylinder, inliers) < criterion(s, inliers) - margin) return cylinder;
+    if (criterion(*cylinder, inliers) < criterion(s, inliers) - evidence_margin(inliers)) {
+      return cylinder;
+    }
     return std::nullopt;
   }
   std::vector<Surface> options;
@@ -479,7 +485,7 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
     // A wide cone's belt is nearly a sphere's: its normals tell them apart.
     if (auto cone = cone_from_normals(inliers, s.point)) options.push_back(*cone);
   }
-  double best = criterion(s, inliers) - 2.0 * std::log(static_cast<double>(inliers.size()));
+  double best = criterion(s, inliers) - evidence_margin(inliers);
   std::optional<Surface> chosen;
   for (const Surface& alt : options) {
     if (!keeps_most(alt, inliers)) continue;
@@ -522,9 +528,7 @@ std::optional<Surface> Detector::simpler(const Surface& s, std::span<const std::
   if (s.type == ShapeType::Torus && !inliers.empty()) {
     // A torus whose tube is seen over a short arc of a large circle: the cylinder along the
     // tube, its axis the circle's tangent at the points' centroid.
-    Vec3 centroid = Vec3::Zero();
-    for (auto i : inliers) centroid += points_[i];
-    centroid /= static_cast<double>(inliers.size());
+    const Vec3 centroid = centroid_of(inliers);
     const Vec3 w = centroid - s.point - (centroid - s.point).dot(s.axis) * s.axis;
     if (w.norm() > 0.0) {
       const Vec3 u = w.normalized();
@@ -758,7 +762,7 @@ void Detector::derive_scale(std::span<const std::uint32_t> members,
   }
   if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
   noise_ = result.noise;
-  exact_ = derived && noise_ <= 0.05 * o_.epsilon;
+  exact_ = derived && noise_ <= kFloorShare * o_.epsilon;
   result.epsilon = o_.epsilon;
   result.min_points = o_.min_points;
   result.max_radius = o_.max_radius;
