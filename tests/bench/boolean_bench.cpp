@@ -1,6 +1,7 @@
-// Boolean benchmark: n-ary fuse of a synthetic city block (boxes and columns on a grid,
-// about 30% overlapping a neighbour) for n = 10, 100, 1000 (and 5000 with --big), and of the
-// timber gate of `csgtile synth` (81 columns, 148 beams), against the pairwise fold of the
+// Boolean benchmark: n-ary fuse of a synthetic city block (tests/support/random_city.h's
+// city_block: boxes and columns on a grid, about 30% overlapping a neighbour) for n = 10,
+// 100, 1000 (and 5000 with --big), and of the timber gate of `csgtile synth` (81 columns,
+// 148 beams), against the pairwise fold of the
 // same primitives in the same process (up to --fold-max), plus the volumes (equal for both
 // methods). Prints one JSON object; "native_fnv1a" is a 64-bit FNV-1a hash of the n-ary
 // result's native bytes (write_native), so that two builds can be shown to give the same
@@ -18,7 +19,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <random>
 #include <string>
 
 #include "csgtile/geo/synth.h"
@@ -27,37 +27,11 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/primitives.h"
+#include "random_city.h"
 
 using namespace csgtile::kernel;
 
 namespace {
-
-// Buildings of one or two boxes per lot and a column at some corners; neighbours overlap in
-// about 30% of the lots (a wing reaching into the next lot, a column against a wall).
-std::vector<Shape> city_block(int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Shape> out;
-  const int side = static_cast<int>(std::ceil(std::sqrt(n / 1.5)));
-  for (int lot = 0; static_cast<int>(out.size()) < n; ++lot) {
-    const double x0 = (lot % side) * 12.0, y0 = (lot / side) * 12.0;
-    const double w = 6 + 3 * u(rng), d = 6 + 3 * u(rng), h = 5 + 20 * u(rng);
-    out.push_back(make_box(w, d, h).value().moved(Location::translation(Vec3(x0, y0, 0))));
-    if (static_cast<int>(out.size()) < n && u(rng) < 0.3) {
-      // A wing reaching into the gap and beyond the lot: overlaps the main box.
-      const double ww = 3 + 4 * u(rng), wd = 2 + 2 * u(rng), wh = 3 + 6 * u(rng);
-      out.push_back(make_box(ww, wd, wh)
-                        .value()
-                        .moved(Location::translation(Vec3(x0 + w - 1, y0 + 1 + u(rng), 0))));
-    }
-    if (static_cast<int>(out.size()) < n && u(rng) < 0.2) {
-      const double r = 0.3 + 0.3 * u(rng);
-      out.push_back(
-          make_cylinder(r, h + 2).value().moved(Location::translation(Vec3(x0 + w, y0 + d, 0))));
-    }
-  }
-  return out;
-}
 
 unsigned long long fnv1a(const std::string& bytes) {
   unsigned long long h = 14695981039346656037ull;
@@ -96,7 +70,8 @@ int main(int argc, char** argv) {
     const bool is_gate = size == 0;
     std::vector<Shape> prims;
     if (!is_gate) {
-      prims = city_block(n, 42);
+      for (const auto& spec : csgtile::test::city_block(n, 42))
+        prims.push_back(build_primitive(spec).value());
     } else {
       auto gate = csgtile::geo::make_synth_scene("gate", 1);
       if (!gate.ok()) {

@@ -99,4 +99,26 @@ std::vector<PrimitiveSpec> random_city(int n, std::uint64_t seed, const CityOpti
   return out;
 }
 
+std::vector<PrimitiveSpec> city_block(int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<PrimitiveSpec> out;
+  const int side = static_cast<int>(std::ceil(std::sqrt(n / 1.5)));
+  for (int lot = 0; static_cast<int>(out.size()) < n; ++lot) {
+    const double x0 = (lot % side) * 12.0, y0 = (lot / side) * 12.0;
+    const double w = 6 + 3 * u(rng), d = 6 + 3 * u(rng), h = 5 + 20 * u(rng);
+    out.push_back(box(w, d, h, Location::translation(Vec3(x0, y0, 0))));
+    if (static_cast<int>(out.size()) < n && u(rng) < 0.3) {
+      // A wing reaching into the gap and beyond the lot: overlaps the main box.
+      const double ww = 3 + 4 * u(rng), wd = 2 + 2 * u(rng), wh = 3 + 6 * u(rng);
+      out.push_back(box(ww, wd, wh, Location::translation(Vec3(x0 + w - 1, y0 + 1 + u(rng), 0))));
+    }
+    if (static_cast<int>(out.size()) < n && u(rng) < 0.2) {
+      const double r = 0.3 + 0.3 * u(rng);
+      out.push_back(column(r, h + 2, Location::translation(Vec3(x0 + w, y0 + d, 0))));
+    }
+  }
+  return out;
+}
+
 }  // namespace csgtile::test

@@ -22,4 +22,9 @@ struct CityOptions {
 std::vector<kernel::PrimitiveSpec> random_city(int n, std::uint64_t seed,
                                                const CityOptions& options = {});
 
+/// The Boolean benchmarks' city block: exactly n primitives (n ≥ 0) on a grid of 12 m lots,
+/// each an axis-aligned box 6–9 m wide and 5–25 m tall, 30 % with a wing box reaching into
+/// the next lot (overlapping), 20 % with a column at the box's corner. Deterministic for a seed.
+std::vector<kernel::PrimitiveSpec> city_block(int n, std::uint64_t seed);
+
 }  // namespace csgtile::test
