@@ -188,7 +188,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   std::vector<std::pair<int, int>> survivors;
   if (options.voxel_culling && !candidates.empty()) {
     VoxelCuller culler(options.voxel_size, options.tolerance);
-    culler.build(shapes, candidates);
+    culler.build(shapes, candidates, &exact_boxes);
     for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
     std::vector<char> keep(candidates.size(), 0);
     tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
@@ -312,8 +312,10 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
         if (stacked.ok()) o.model = std::move(stacked).value();
       }
     }
-    o.box = kernel::bounding_box(o.model.shape);
-    o.volume = kernel::mass_properties(o.model.shape).volume;
+    // A lone primitive's box is its leaf's (the compound holds the same faces and edges).
+    o.box = groups[g].size() == 1 ? exact_boxes[static_cast<std::size_t>(groups[g].front())]
+                                  : kernel::bounding_box(o.model.shape);
+    o.volume = kernel::shape_volume(o.model.shape);
   });
   // Objects cut short by the assembly's own interrupt (not their time limit) are not results.
   if (auto s = stopped("fusing objects"); !s.ok()) return s.error();

@@ -91,7 +91,8 @@ VoxelCuller::VoxelCuller(VoxelCuller&&) noexcept = default;
 VoxelCuller& VoxelCuller::operator=(VoxelCuller&&) noexcept = default;
 
 void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
-                        const std::vector<std::pair<int, int>>& pairs) {
+                        const std::vector<std::pair<int, int>>& pairs,
+                        const std::vector<kernel::BoundingBox>* boxes) {
   Impl& d = *impl_;
   const std::size_t n = shapes.size();
   d.masks.assign(n, nullptr);
@@ -102,7 +103,7 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
     used[static_cast<std::size_t>(a)] = used[static_cast<std::size_t>(b)] = 1;
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     if (!used[i] || shapes[i].is_null()) return;
-    d.boxes[i] = kernel::bounding_box(shapes[i]);
+    d.boxes[i] = boxes && i < boxes->size() ? (*boxes)[i] : kernel::bounding_box(shapes[i]);
     d.boxes[i].enlarge(d.tolerance);
   });
   // Where each shell matters: the overlaps of its box with its partners' boxes, grown by

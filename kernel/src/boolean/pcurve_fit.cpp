@@ -160,8 +160,14 @@ Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& s
       return out;
     };
     const Eigen::Vector4d fu = fit(0), fv = fit(1);
-    result = std::make_shared<Trig2d>(Vec2(fu(0), fv(0)), Vec2(fu(1), fv(1)), Vec2(fu(2), fv(2)),
-                                      Vec2(fu(3), fv(3)));
+    if (fu(1) == 0.0 && fu(2) == 0.0 && fv(1) == 0.0 && fv(2) == 0.0) {
+      // No trigonometric part: c + t·d is a line of the parameter plane (a ruling of a
+      // cylinder, a circle along a cylinder's u), the same points, sampled as a line.
+      result = std::make_shared<Line2d>(Vec2(fu(0), fv(0)), Vec2(fu(3), fv(3)));
+    } else {
+      result = std::make_shared<Trig2d>(Vec2(fu(0), fv(0)), Vec2(fu(1), fv(1)),
+                                        Vec2(fu(2), fv(2)), Vec2(fu(3), fv(3)));
+    }
   }
   if (!result) return nullptr;
   // A line's projection on a plane differs from it only along the normal, by an affine

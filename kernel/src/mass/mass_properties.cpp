@@ -540,12 +540,23 @@ BoundingBox bounding_box(const Shape& shape) {
     add_face_patch(box, shape);
     return box;
   }
-  for (const Shape& v : Explorer(shape, ShapeKind::Vertex)) box.add(vertex_point(v));
-  const ShapeIndex edges = map_child_shapes(shape, ShapeKind::Edge);
-  for (const Shape& e : edges.shapes()) add_edge_bounds(box, e);
-  const ShapeIndex faces = map_child_shapes(shape, ShapeKind::Face);
-  for (const Shape& f : faces.shapes()) add_face_patch(box, f);
+  // Walked directly too: an edge met again through its other face adds nothing to a union,
+  // and walking it twice costs less than the index of distinct edges.
+  if (shape.kind() == ShapeKind::Vertex) {
+    box.add(vertex_point(shape));
+    return box;
+  }
+  if (shape.kind() == ShapeKind::Edge) add_edge_bounds(box, shape);
+  add_descendants(box, shape);
+  for (const Shape& f : Explorer(shape, ShapeKind::Face)) add_face_patch(box, f);
   return box;
+}
+
+double shape_volume(const Shape& shape) {
+  if (shape.is_null()) return 0.0;
+  Moments total{};
+  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<Moments>(face);
+  return total[1];
 }
 
 MassProperties mass_properties(const Shape& shape) {

@@ -24,6 +24,10 @@ struct MassProperties {
 /// Shapes without faces give zeros. O(edges).
 MassProperties mass_properties(const Shape& shape);
 
+/// mass_properties(shape).volume, the same integral to the last bit, without the area,
+/// centroid and bounding box.
+double shape_volume(const Shape& shape);
+
 /// Exact bounding box (see MassProperties::bounds).
 BoundingBox bounding_box(const Shape& shape);
 

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/shape.h"
 
 namespace csgtile::assembly {
@@ -29,9 +30,11 @@ class VoxelCuller {
 
   /// Voxelises, in parallel, each shape that takes part in a candidate pair (indices into
   /// `shapes`), where its partners' boxes are. A shape that cannot be tessellated is kept
-  /// whole (it may meet anything).
+  /// whole (it may meet anything). `boxes`, when given, are the shapes' bounding boxes
+  /// (kernel::bounding_box, one per shape) the caller already has; otherwise they are computed.
   void build(const std::vector<kernel::Shape>& shapes,
-             const std::vector<std::pair<int, int>>& pairs);
+             const std::vector<std::pair<int, int>>& pairs,
+             const std::vector<kernel::BoundingBox>* boxes = nullptr);
 
   /// False only when shapes i and j cannot be in contact (see the file comment).
   bool may_meet(std::size_t i, std::size_t j) const;
