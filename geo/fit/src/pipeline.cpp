@@ -6,6 +6,10 @@
 #include <cmath>
 #include <optional>
 
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+#include <tbb/task_arena.h>
+
 #include "csgtile/fit/segment.h"
 #include "fit_internal.h"
 
@@ -437,71 +441,109 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   std::vector<std::int32_t> cloud_segment;
   if (options.keep_segments) cloud_segment.assign(cloud.size(), -1);
 
-  start = std::chrono::steady_clock::now();
-  double primitives_seconds = 0.0;
-  for (std::size_t r = 0; r < clusters.size(); ++r) {
-    if (options.interrupt.fired()) {
-      return options.interrupt.error("while fitting region " + std::to_string(r) + " of " +
-                                     std::to_string(clusters.size()));
-    }
+  // The regions are independent (each its own seed): detected and fitted at once, on up to
+  // `threads` cores, then gathered in region order, so the output is the same on any number
+  // of threads.
+  struct RegionFit {
+    std::optional<kernel::Error> error;
     std::vector<Vec3> p, n;
-    p.reserve(clusters[r].size());
-    n.reserve(clusters[r].size());
-    for (auto i : clusters[r]) {
-      p.push_back(cloud[i]);
-      n.push_back(normals[i]);
+    RansacOptions ransac;
+    RansacResult detected;
+    FittedPrimitives fitted;
+    double detect_seconds = 0.0, primitives_seconds = 0.0;
+  };
+  std::vector<RegionFit> fits(clusters.size());
+  auto fit_region = [&](std::size_t r) {
+    RegionFit& f = fits[r];
+    if (options.interrupt.fired()) {
+      f.error = options.interrupt.error("while fitting region " + std::to_string(r) + " of " +
+                                        std::to_string(clusters.size()));
+      return;
     }
-    RansacOptions ransac = options.ransac;
-    ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
+    const auto t0 = std::chrono::steady_clock::now();
+    f.p.reserve(clusters[r].size());
+    f.n.reserve(clusters[r].size());
+    for (auto i : clusters[r]) {
+      f.p.push_back(cloud[i]);
+      f.n.push_back(normals[i]);
+    }
+    f.ransac = options.ransac;
+    f.ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
+    auto detected = detect_shapes(f.p, f.n, f.ransac);
+    if (!detected.ok()) {
+      f.error = detected.error();
+      return;
+    }
+    f.detected = std::move(detected).value();
+    // Options the region derived from its points (0 in the options) are the primitives' too.
+    if (f.detected.epsilon > 0.0) f.ransac.epsilon = f.detected.epsilon;
+    if (f.detected.min_points > 0) f.ransac.min_points = f.detected.min_points;
+    if (f.detected.max_radius > 0.0) f.ransac.max_radius = f.detected.max_radius;
+    f.detect_seconds = seconds_since(t0);
     const int footprint = region_footprint[r];
+    // A building region without a surface is still a building: its block (LoD1.2).
+    if (f.detected.shapes.empty() &&
+        ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr)) {
+      return;
+    }
+    const auto t1 = std::chrono::steady_clock::now();
     PrimitiveOptions region_options = primitive_options;
     if (footprint >= 0) {
       region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
     }
-    auto detected = detect_shapes(p, n, ransac);
-    if (!detected.ok()) return detected.error();
-    // Options the region derived from its points (0 in the options) are the primitives' too.
-    if (detected.value().epsilon > 0.0) ransac.epsilon = detected.value().epsilon;
-    if (detected.value().min_points > 0) ransac.min_points = detected.value().min_points;
-    if (detected.value().max_radius > 0.0) ransac.max_radius = detected.value().max_radius;
-    out.candidates += detected.value().candidates;
-    if (options.keep_detections) out.detections.push_back({p, n, detected.value()});
+    f.fitted = primitives_from_shapes(f.p, f.n, f.detected, region_options, f.ransac,
+                                      static_cast<int>(r));
+    if (footprint >= 0) {
+      for (auto& prim : f.fitted.primitives)
+        prim.building = footprints[static_cast<std::size_t>(footprint)].id;
+    }
+    f.primitives_seconds = seconds_since(t1);
+  };
+  {
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+      tbb::parallel_for(std::size_t{0}, clusters.size(), fit_region, tbb::simple_partitioner());
+    });
+  }
+  double ransac_seconds = 0.0, primitives_seconds = 0.0;
+  for (std::size_t r = 0; r < clusters.size(); ++r) {
+    RegionFit& f = fits[r];
+    if (f.error) return *f.error;
+    ransac_seconds += f.detect_seconds;
+    primitives_seconds += f.primitives_seconds;
+    const RansacResult& detected = f.detected;
+    const int footprint = region_footprint[r];
+    out.candidates += detected.candidates;
     if (options.keep_segments) {
       const auto first = static_cast<std::int32_t>(out.segments.size());
-      for (const auto& shape : detected.value().shapes) {
+      for (const auto& shape : detected.shapes) {
         out.segments.push_back({static_cast<int>(r), shape.surface,
                                 static_cast<long long>(shape.inliers.size()), shape.rms});
       }
-      const auto& assignment = detected.value().assignment;
+      const auto& assignment = detected.assignment;
       for (std::size_t k = 0; k < clusters[r].size() && k < assignment.size(); ++k) {
         if (assignment[k] >= 0) cloud_segment[clusters[r][k]] = first + assignment[k];
       }
     }
     FitRegion stats;
-    stats.points = static_cast<long long>(p.size());
-    stats.spacing = detected.value().spacing;
-    stats.cluster_epsilon = detected.value().cluster_epsilon;
-    stats.epsilon = ransac.epsilon;
-    stats.min_points = ransac.min_points;
-    stats.shapes = static_cast<int>(detected.value().shapes.size());
-    stats.candidates = detected.value().candidates;
+    stats.points = static_cast<long long>(f.p.size());
+    stats.spacing = detected.spacing;
+    stats.cluster_epsilon = detected.cluster_epsilon;
+    stats.epsilon = f.ransac.epsilon;
+    stats.min_points = f.ransac.min_points;
+    stats.shapes = static_cast<int>(detected.shapes.size());
+    stats.candidates = detected.candidates;
     if (footprint >= 0) stats.building = footprints[static_cast<std::size_t>(footprint)].id;
     out.region_stats.push_back(stats);
-    if (detected.value().shapes.empty()) {
-      out.rejected.push_back({"region " + std::to_string(r), detected.value().reason,
-                              static_cast<long long>(p.size())});
-      // A building region without a surface is still a building: its block (LoD1.2).
-      if ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr)
+    if (detected.shapes.empty()) {
+      out.rejected.push_back({"region " + std::to_string(r), detected.reason,
+                              static_cast<long long>(f.p.size())});
+      if ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr) {
+        if (options.keep_detections) out.detections.push_back({f.p, f.n, f.detected});
         continue;
+      }
     }
-    const auto t = std::chrono::steady_clock::now();
-    auto fitted =
-        primitives_from_shapes(p, n, detected.value(), region_options, ransac, static_cast<int>(r));
-    if (footprint >= 0) {
-      for (auto& prim : fitted.primitives)
-        prim.building = footprints[static_cast<std::size_t>(footprint)].id;
-    }
-    primitives_seconds += seconds_since(t);
+    FittedPrimitives& fitted = f.fitted;
     out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
     for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));
     for (auto& rej : fitted.rejected) {
@@ -510,6 +552,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
     for (std::size_t k = 0; k < out.per_type.size(); ++k) out.per_type[k] += fitted.per_type[k];
     out.assigned_points += fitted.assigned_points;
+    if (options.keep_detections) out.detections.push_back({f.p, f.n, f.detected});
+    RegionFit().p.swap(f.p);  // what a region held is released as it is gathered
   }
   // One ground per building: parts standing within the ground filter's height tolerance of
   // each other stand on one base (no sliver steps when they are fused).
@@ -533,7 +577,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
         out.structure_points.push_back(cloud[k]);
     }
   }
-  out.seconds.emplace_back("ransac", seconds_since(start) - primitives_seconds);
+  // Seconds of the regions' detections and fits, summed over the regions (CPU time).
+  out.seconds.emplace_back("ransac", ransac_seconds);
   out.seconds.emplace_back("primitives", primitives_seconds);
   return out;
 }

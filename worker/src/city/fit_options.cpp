@@ -1,4 +1,5 @@
-// The config's `fit:` section (with run.seed and kernel.linear_tolerance) → geo/fit's options.
+// The config's `fit:` section (with run.seed, run.threads and kernel.linear_tolerance) →
+// geo/fit's options.
 
 #include "city/fit_tile.h"
 
@@ -67,6 +68,7 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.primitives.min_curved_coverage = c.primitives.min_curved_coverage;
   o.primitives.max_overreach = c.primitives.max_overreach;
   o.primitives.linear_tolerance = config.kernel.linear_tolerance;
+  o.threads = config.run.threads;  // the regions on run.threads cores
   return o;
 }
 

@@ -162,6 +162,9 @@ struct FitPipelineOptions {
   /// Cancelled (a worker shutting down, a job's time limit).
   kernel::Interrupt interrupt{};
   bool keep_structure_points = {};  ///< fill FitOutput::structure_points
+  /// Regions detected and fitted at once (TBB): 0 all cores, 1 one. Not a setting of the
+  /// result: the output is the same for every value (regions are gathered in order).
+  int threads = {};
   bool operator==(const FitPipelineOptions&) const = default;
 };
 
