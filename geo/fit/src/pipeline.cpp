@@ -6,6 +6,7 @@
 #include <cmath>
 #include <optional>
 
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
@@ -491,8 +492,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (footprint >= 0) {
       region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
     }
-    f.fitted = primitives_from_shapes(f.p, f.n, f.detected, region_options, f.ransac,
-                                      static_cast<int>(r));
+    f.fitted =
+        primitives_from_shapes(f.p, f.n, f.detected, region_options, f.ransac, static_cast<int>(r));
     if (footprint >= 0) {
       for (auto& prim : f.fitted.primitives)
         prim.building = footprints[static_cast<std::size_t>(footprint)].id;
@@ -500,7 +501,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     f.primitives_seconds = seconds_since(t1);
   };
   {
-    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    // More threads than cores would only be refused by TBB (with a warning).
+    const int cores = tbb::info::default_concurrency();
+    tbb::task_arena arena(options.threads > 0 ? std::min(options.threads, cores) : cores);
     arena.execute([&] {
       tbb::parallel_for(std::size_t{0}, clusters.size(), fit_region, tbb::simple_partitioner());
     });
@@ -536,8 +539,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (footprint >= 0) stats.building = footprints[static_cast<std::size_t>(footprint)].id;
     out.region_stats.push_back(stats);
     if (detected.shapes.empty()) {
-      out.rejected.push_back({"region " + std::to_string(r), detected.reason,
-                              static_cast<long long>(f.p.size())});
+      out.rejected.push_back(
+          {"region " + std::to_string(r), detected.reason, static_cast<long long>(f.p.size())});
       if ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr) {
         if (options.keep_detections) out.detections.push_back({f.p, f.n, f.detected});
         continue;

@@ -601,5 +601,40 @@ TEST(FitSegment, TileShareOfFootprints) {
   EXPECT_NE(bad.error().message.find("tile share"), std::string::npos);
 }
 
+// The regions are fitted in parallel (FitPipelineOptions::threads) and gathered in order: the
+// same scene JSON, segments and statistics on 1, 2 and 8 threads (small_scene's column and
+// beam are one region, the sphere another).
+TEST(FitSegment, TheSameFitOnEveryThreadCount) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o;
+  o.ransac.epsilon = 0.01;
+  o.ground.cell = 0.5;
+  o.ground.window = 4.0;
+  o.keep_segments = true;
+  std::string first;
+  std::vector<std::int32_t> first_segments;
+  for (const int threads : {1, 2, 8}) {
+    o.threads = threads;
+    const auto out = fit_point_cloud(c.points, {}, o);
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    EXPECT_GE(out->region_stats.size(), 2u);
+    Scene s;
+    s.primitives = out->primitives;
+    std::string text = scene_to_json(s) + " candidates " + std::to_string(out->candidates) +
+                       " assigned " + std::to_string(out->assigned_points) + " rejected " +
+                       std::to_string(out->rejected.size());
+    for (const auto& r : out->region_stats)
+      text += " " + std::to_string(r.points) + "/" + std::to_string(r.shapes);
+    if (threads == 1) {
+      first = text;
+      first_segments = out->point_segment;
+      EXPECT_FALSE(out->primitives.empty());
+    } else {
+      EXPECT_EQ(text, first) << threads << " threads";
+      EXPECT_EQ(out->point_segment, first_segments) << threads << " threads";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace csgtile::fit
