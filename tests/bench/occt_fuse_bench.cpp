@@ -20,7 +20,8 @@
 // Each side runs --repeat times (default 3, alternating) and its fastest run is reported (a
 // failed run is reported as such).
 // Run: build/tests/bench/occt_fuse_bench [--scenes city_block:1000,city_block:5000,
-//        assembly:5000,gate] [--repeat 3]
+//        assembly:5000,gate] [--repeat 3] [--sides both|csgtile|occt]
+// (--sides csgtile runs csgtile's side alone, e.g. under a profiler; the ratio is then -1)
 // (built only when CMake finds OpenCASCADE: deploy/bench-deps.sh installs it).
 
 #include <sys/resource.h>
@@ -329,12 +330,16 @@ void print_side(const char* name, const Side& s) {
 int main(int argc, char** argv) {
   std::string list = "city_block:1000,city_block:5000,assembly:5000,gate";
   int repeat = 3;
+  std::string sides = "both";
   for (int i = 1; i + 1 < argc; ++i) {
     if (!std::strcmp(argv[i], "--scenes"))
       list = argv[++i];
     else if (!std::strcmp(argv[i], "--repeat"))
       repeat = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--sides"))
+      sides = argv[++i];
   }
+  const bool run_ours = sides != "occt", run_occt = sides != "csgtile";
   std::vector<Scene> scenes;
   try {
     scenes = parse_scenes(list);
@@ -358,9 +363,11 @@ int main(int argc, char** argv) {
     // Best of `repeat` children per side (the sides alternate: one machine state for both).
     Side ours, occt;
     for (int r = 0; r < repeat; ++r) {
-      const Side a =
-          in_child([&] { return scene.assembly ? csgtile_assemble(specs) : csgtile_fuse(specs); });
-      const Side b = in_child([&] { return occt_fuse(specs); });
+      const Side a = run_ours ? in_child([&] {
+        return scene.assembly ? csgtile_assemble(specs) : csgtile_fuse(specs);
+      })
+                              : Side{};
+      const Side b = run_occt ? in_child([&] { return occt_fuse(specs); }) : Side{};
       if (r == 0 || !a.ok || (ours.ok && a.seconds < ours.seconds)) ours = a;
       if (r == 0 || !b.ok || (occt.ok && b.seconds < occt.seconds)) occt = b;
     }

@@ -476,6 +476,14 @@ namespace {
 void add_edge_bounds(BoundingBox& box, const Shape& e) {
   const EdgeData& d = *e.body().edge();
   if (d.degenerate()) return;
+  if (d.curve->kind() == CurveKind::Line) {
+    // The moved line as transformed() makes it, on the stack (boxes of many edges).
+    const auto& line = static_cast<const LineCurve&>(*d.curve);
+    const LineCurve moved(e.location().apply_point(line.origin()),
+                          e.location().apply_direction(line.direction()));
+    box.add(moved.bounds(d.first, d.last));
+    return;
+  }
   box.add(d.curve->transformed(e.location())->bounds(d.first, d.last));
 }
 
