@@ -24,7 +24,8 @@ packages=(
   # them (Boost.Geometry, headers only)
   libgdal-dev libboost-dev
   # geo fitting: PCL 1.13 (outlier removal, voxel grid, kd-tree neighbourhoods, Euclidean
-  # clustering; only common/search/kdtree/filters/segmentation are linked, with FLANN)
+  # clustering; PCL's templates are instantiated in our code, only libpcl_common and FLANN
+  # are linked)
   libpcl-dev
   # config
   libyaml-cpp-dev libvalijson-dev nlohmann-json3-dev

@@ -3,6 +3,10 @@
 // this file; its types never leave it. PCL works in float: the points are tile-local, so float
 // keeps them to a few micrometres.
 
+// PCL's templates are instantiated here (PCL_NO_PRECOMPILE) rather than taken from its
+// libraries' precompiled instances: the binary then needs no libpcl_segmentation, which pulls
+// in libpcl_features and libpcl_ml, whose symbols every csgtile process had to bind at start.
+#define PCL_NO_PRECOMPILE
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>

@@ -165,8 +165,8 @@ Curve2dPtr fit_pcurve(const Curve& curve, double t0, double t1, const Surface& s
       // cylinder, a circle along a cylinder's u), the same points, sampled as a line.
       result = std::make_shared<Line2d>(Vec2(fu(0), fv(0)), Vec2(fu(3), fv(3)));
     } else {
-      result = std::make_shared<Trig2d>(Vec2(fu(0), fv(0)), Vec2(fu(1), fv(1)),
-                                        Vec2(fu(2), fv(2)), Vec2(fu(3), fv(3)));
+      result = std::make_shared<Trig2d>(Vec2(fu(0), fv(0)), Vec2(fu(1), fv(1)), Vec2(fu(2), fv(2)),
+                                        Vec2(fu(3), fv(3)));
     }
   }
   if (!result) return nullptr;
