@@ -7,17 +7,13 @@
 // peak RSS, and the time scaling exponent of the full runs.
 // Run: build/tests/bench/assemble_bench [--max N] [--all-pairs-max N] [--threads T]
 
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "child_run.h"
 #include "csgtile/assembly/assembly.h"
 #include "random_city.h"
 
@@ -40,16 +36,13 @@ struct Payload {
   int ok;
 };
 
-// Runs one configuration in a child; the child writes its figures through a pipe.
+// Runs one configuration in a forked child (tests/support/child_run.h): its peak memory is
+// its own.
 Run run_child(int n, const std::string& mode, int threads) {
   Run r;
   r.n = n;
   r.mode = mode;
-  int fd[2];
-  if (pipe(fd) != 0) return r;
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fd[0]);
+  const auto run = test::run_in_child<Payload>([&] {
     std::vector<assembly::AssemblyPrimitive> prims;
     const auto specs = test::random_city(n, 42);
     for (std::size_t i = 0; i < specs.size(); ++i)
@@ -59,35 +52,20 @@ Run run_child(int n, const std::string& mode, int threads) {
     o.voxel_culling = mode != "no_culling";
     o.broad_phase = mode != "no_broad_phase";
     auto a = assembly::assemble(prims, o);
-    Run out;
-    out.ok = a.ok();
+    Payload p{};
+    p.ok = a.ok() ? 1 : 0;
     if (a.ok()) {
-      out.stats = a->stats;
-      for (const auto& obj : a->objects) out.volume += obj.volume;
+      p.stats = a->stats;
+      for (const auto& obj : a->objects) p.volume += obj.volume;
     }
-    const Payload p{out.stats, out.volume, out.ok ? 1 : 0};
-    const ssize_t w = write(fd[1], &p, sizeof p);
-    _exit(w == static_cast<ssize_t>(sizeof p) ? 0 : 1);
+    return p;
+  });
+  r.peak_kb = run.peak_kb;
+  if (run.result) {
+    r.stats = run.result->stats;
+    r.volume = run.result->volume;
+    r.ok = run.result->ok == 1;
   }
-  close(fd[1]);
-  std::array<char, sizeof(Payload)> bytes{};
-  std::size_t have = 0;
-  while (have < bytes.size()) {
-    const ssize_t got = read(fd[0], bytes.data() + have, bytes.size() - have);
-    if (got <= 0) break;
-    have += static_cast<std::size_t>(got);
-  }
-  close(fd[0]);
-  Payload p{};
-  if (have == bytes.size()) std::memcpy(&p, bytes.data(), sizeof p);
-  r.stats = p.stats;
-  r.volume = p.volume;
-  r.ok = have == bytes.size() && p.ok == 1;
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  r.peak_kb = usage.ru_maxrss;
-  r.ok = r.ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
   return r;
 }
 

@@ -24,10 +24,6 @@
 // (--sides csgtile runs csgtile's side alone, e.g. under a profiler; the ratio is then -1)
 // (built only when CMake finds OpenCASCADE: deploy/bench-deps.sh installs it).
 
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakePolygon.hxx>
@@ -60,6 +56,7 @@
 #include <string>
 #include <vector>
 
+#include "child_run.h"
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/geo/synth.h"
 #include "csgtile/kernel/boolean.h"
@@ -85,42 +82,14 @@ struct Side {
   char error[160] = {};
 };
 
-long peak_rss_kb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_maxrss;
-}
-
-// Runs `work` in a forked child and returns what it wrote to the pipe (ok = 0 when the child
-// died or failed).
+// Runs `work` in a forked child (tests/support/child_run.h): its peak memory is its own.
 Side in_child(const std::function<Side()>& work) {
-  Side out;
-  int fd[2];
-  if (pipe(fd) != 0) return out;
-  std::fflush(stdout);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fd[0]);
-    Side s = work();
-    s.peak_kb = peak_rss_kb();
-    const ssize_t w = write(fd[1], &s, sizeof s);
-    _exit(w == static_cast<ssize_t>(sizeof s) ? 0 : 1);
-  }
-  close(fd[1]);
-  std::array<char, sizeof(Side)> bytes{};
-  std::size_t have = 0;
-  while (have < bytes.size()) {
-    const ssize_t got = read(fd[0], bytes.data() + have, bytes.size() - have);
-    if (got <= 0) break;
-    have += static_cast<std::size_t>(got);
-  }
-  close(fd[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (have == bytes.size()) std::memcpy(&out, bytes.data(), sizeof out);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+  const auto run = test::run_in_child(work);
+  Side out = run.result.value_or(Side{});
+  out.peak_kb = run.peak_kb;
+  if (!run.result) {
     out.ok = 0;
-    std::snprintf(out.error, sizeof out.error, "child ended with status %d", status);
+    std::snprintf(out.error, sizeof out.error, "child ended with status %d", run.status);
   }
   return out;
 }

@@ -166,12 +166,18 @@ Cloud small_scene() {
   return c;
 }
 
-TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
-  const Cloud c = small_scene();
+// The pipeline options of these scenes of a few metres: 1 cm inliers, a 0.5 m ground grid.
+FitPipelineOptions small_scene_options() {
   FitPipelineOptions o;
   o.ransac.epsilon = 0.01;
   o.ground.cell = 0.5;
   o.ground.window = 4.0;
+  return o;
+}
+
+TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
+  const Cloud c = small_scene();
+  FitPipelineOptions o = small_scene_options();
   const auto out = fit_point_cloud(c.points, {}, o);
   ASSERT_TRUE(out.ok()) << out.error().message;
   EXPECT_EQ(out->per_type[static_cast<int>(PrimitiveType::Cylinder)], 1);
@@ -186,10 +192,7 @@ TEST(FitSegment, PipelineFindsTheColumnTheBeamAndTheSphere) {
 // limit the fit stays within changes nothing.
 TEST(FitSegment, AStopRequestCancelsTheFit) {
   const Cloud c = small_scene();
-  FitPipelineOptions o;
-  o.ransac.epsilon = 0.01;
-  o.ground.cell = 0.5;
-  o.ground.window = 4.0;
+  FitPipelineOptions o = small_scene_options();
   std::stop_source source;
   source.request_stop();
   o.interrupt.stop = source.get_token();
@@ -286,10 +289,7 @@ TEST(FitSegment, PipelineOutputIsTheSameBytesForTheSameSeed) {
 
 TEST(FitSegment, PipelineWithRegionGrowingKeepsEveryClusterPointAndIsDeterministic) {
   const Cloud c = small_scene();
-  FitPipelineOptions o;
-  o.ransac.epsilon = 0.01;
-  o.ground.cell = 0.5;
-  o.ground.window = 4.0;
+  FitPipelineOptions o = small_scene_options();
   const auto whole = fit_point_cloud(c.points, {}, o);
   ASSERT_TRUE(whole.ok()) << whole.error().message;
   o.regions.enabled = true;
@@ -393,10 +393,7 @@ namespace {
 // the surface of its voxel's point.
 TEST(FitSegment, SegmentsLabelEveryInputPointWithItsSurface) {
   const testing::Cloud c = small_scene();
-  FitPipelineOptions o;
-  o.ransac.epsilon = 0.01;
-  o.ground.cell = 0.5;
-  o.ground.window = 4.0;
+  FitPipelineOptions o = small_scene_options();
   o.keep_segments = true;
   // The ground plane (the first cloud of small_scene) classified as such: ground by class.
   const std::size_t ground = 10 * 10 * 100;
@@ -509,10 +506,7 @@ Shared split_at_x1(const Cloud& c, ShareKind beam_and_column) {
   return s;
 }
 FitPipelineOptions scene_options() {
-  FitPipelineOptions o;
-  o.ransac.epsilon = 0.01;
-  o.ground.cell = 0.5;
-  o.ground.window = 4.0;
+  FitPipelineOptions o = small_scene_options();
   o.keep_structure_points = true;
   return o;
 }
@@ -606,10 +600,7 @@ TEST(FitSegment, TileShareOfFootprints) {
 // beam are one region, the sphere another).
 TEST(FitSegment, TheSameFitOnEveryThreadCount) {
   const Cloud c = small_scene();
-  FitPipelineOptions o;
-  o.ransac.epsilon = 0.01;
-  o.ground.cell = 0.5;
-  o.ground.window = 4.0;
+  FitPipelineOptions o = small_scene_options();
   o.keep_segments = true;
   std::string first;
   std::vector<std::int32_t> first_segments;
