@@ -477,11 +477,13 @@ void add_edge_bounds(BoundingBox& box, const Shape& e) {
   const EdgeData& d = *e.body().edge();
   if (d.degenerate()) return;
   if (d.curve->kind() == CurveKind::Line) {
-    // The moved line as transformed() makes it, on the stack (boxes of many edges).
+    // The moved line as transformed() makes it, on the stack (boxes of many edges). Its
+    // direction stays unit, so the edge's arc-length range scales with the location (as the
+    // Booleans' edges take it): unscaled, a box under a scale of 0.5 came out twice its size.
+    const Location& loc = e.location();
     const auto& line = static_cast<const LineCurve&>(*d.curve);
-    const LineCurve moved(e.location().apply_point(line.origin()),
-                          e.location().apply_direction(line.direction()));
-    box.add(moved.bounds(d.first, d.last));
+    const LineCurve moved(loc.apply_point(line.origin()), loc.apply_direction(line.direction()));
+    box.add(moved.bounds(d.first * loc.scale(), d.last * loc.scale()));
     return;
   }
   box.add(d.curve->transformed(e.location())->bounds(d.first, d.last));

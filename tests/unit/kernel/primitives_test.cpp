@@ -162,6 +162,17 @@ TEST(Primitive, ExactBoundingBoxes) {
   EXPECT_NEAR(quarter.max.y(), 2, 1e-14);
 }
 
+// A scaled placement scales the box: a line edge's parameter is arc length in its body, so
+// under a location of scale s it runs over s times that range on the moved line.
+TEST(Primitive, BoundingBoxUnderAScaledPlacement) {
+  for (const double s : {0.5, 2.0}) {
+    const Shape box = make_box(1, 2, 3).value().moved(Location::scaling(s));
+    const BoundingBox b = bounding_box(box);
+    EXPECT_LT(b.min.norm(), 1e-14) << s << ": " << b.min.transpose();
+    EXPECT_TRUE(b.max.isApprox(Vec3(s, 2 * s, 3 * s), 1e-14)) << s << ": " << b.max.transpose();
+  }
+}
+
 TEST(Primitive, RejectsBadParametersWithNamedErrors) {
   EXPECT_EQ(make_box(0, 1, 1).error().code, ErrorCode::InvalidArgument);
   EXPECT_EQ(make_cylinder(-1, 1).error().code, ErrorCode::InvalidArgument);
