@@ -566,10 +566,24 @@ Result<Crs> crs_from_proj_text(std::string_view text, const std::string& what) {
 
 std::string proj_wkt1(const std::string& definition) {
   if (definition.empty()) return std::string();
+  // The export depends on the definition alone (PROJ's database is fixed for a process), and
+  // every cell of a run asks for the run's CRS again (its GeoPackage's spatial reference):
+  // remembered, a few definitions at most.
+  constexpr std::size_t kRemembered = 64;
+  static std::mutex mutex;
+  static std::map<std::string, std::string> remembered;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = remembered.find(definition); it != remembered.end()) return it->second;
+  }
   Object crs(proj_create(context(), definition.c_str()));
   if (!crs) return std::string();
   const char* options[] = {"MULTILINE=NO", nullptr};
-  return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
+  std::string wkt = text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (remembered.size() >= kRemembered) remembered.clear();
+  remembered.emplace(definition, wkt);
+  return wkt;
 }
 
 namespace {
