@@ -11,6 +11,9 @@ export CSGTILE_REQUIRE_GDAL="${CSGTILE_REQUIRE_GDAL:-1}"
 # ... and PostgreSQL 15: the PostgreSQL queue's tests must then run against it, not skip.
 export CSGTILE_REQUIRE_POSTGRES="${CSGTILE_REQUIRE_POSTGRES:-1}"
 deploy/setup.sh
+# OpenCASCADE 7.6 and CGAL 5.5 (Debian): the baselines of tests/bench and the Booleans'
+# independent check against OpenCASCADE (ctest bench.occt_volumes_agree).
+deploy/bench-deps.sh
 jobs="$(nproc)"
 
 echo "== optimised build and full test suite"
