@@ -447,9 +447,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // of threads.
   struct RegionFit {
     std::optional<kernel::Error> error;
-    std::vector<Vec3> p, n;
+    std::size_t points = 0;
+    std::vector<Vec3> p, n;  // kept past the fit for FitOutput::detections only
     RansacOptions ransac;
     RansacResult detected;
+    bool with_primitives = false;  // primitives_from_shapes ran (`fitted` is the region's)
     FittedPrimitives fitted;
     double detect_seconds = 0.0, primitives_seconds = 0.0;
   };
@@ -462,6 +464,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       return;
     }
     const auto t0 = std::chrono::steady_clock::now();
+    f.points = clusters[r].size();
     f.p.reserve(clusters[r].size());
     f.n.reserve(clusters[r].size());
     for (auto i : clusters[r]) {
@@ -483,22 +486,27 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     f.detect_seconds = seconds_since(t0);
     const int footprint = region_footprint[r];
     // A building region without a surface is still a building: its block (LoD1.2).
-    if (f.detected.shapes.empty() &&
-        ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr)) {
-      return;
+    f.with_primitives =
+        !f.detected.shapes.empty() ||
+        (primitive_options.ground != nullptr && (primitive_options.blocks || footprint >= 0));
+    if (f.with_primitives) {
+      const auto t1 = std::chrono::steady_clock::now();
+      PrimitiveOptions region_options = primitive_options;
+      if (footprint >= 0) {
+        region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
+      }
+      f.fitted = primitives_from_shapes(f.p, f.n, f.detected, region_options, f.ransac,
+                                        static_cast<int>(r));
+      if (footprint >= 0) {
+        for (auto& prim : f.fitted.primitives)
+          prim.building = footprints[static_cast<std::size_t>(footprint)].id;
+      }
+      f.primitives_seconds = seconds_since(t1);
     }
-    const auto t1 = std::chrono::steady_clock::now();
-    PrimitiveOptions region_options = primitive_options;
-    if (footprint >= 0) {
-      region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
+    if (!options.keep_detections) {  // the region's copy of its points is done with
+      std::vector<Vec3>().swap(f.p);
+      std::vector<Vec3>().swap(f.n);
     }
-    f.fitted =
-        primitives_from_shapes(f.p, f.n, f.detected, region_options, f.ransac, static_cast<int>(r));
-    if (footprint >= 0) {
-      for (auto& prim : f.fitted.primitives)
-        prim.building = footprints[static_cast<std::size_t>(footprint)].id;
-    }
-    f.primitives_seconds = seconds_since(t1);
   };
   {
     // More threads than cores would only be refused by TBB (with a warning).
@@ -529,7 +537,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       }
     }
     FitRegion stats;
-    stats.points = static_cast<long long>(f.p.size());
+    stats.points = static_cast<long long>(f.points);
     stats.spacing = detected.spacing;
     stats.cluster_epsilon = detected.cluster_epsilon;
     stats.epsilon = f.ransac.epsilon;
@@ -540,23 +548,22 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     out.region_stats.push_back(stats);
     if (detected.shapes.empty()) {
       out.rejected.push_back(
-          {"region " + std::to_string(r), detected.reason, static_cast<long long>(f.p.size())});
-      if ((!primitive_options.blocks && footprint < 0) || primitive_options.ground == nullptr) {
-        if (options.keep_detections) out.detections.push_back({f.p, f.n, f.detected});
-        continue;
+          {"region " + std::to_string(r), detected.reason, static_cast<long long>(f.points)});
+    }
+    if (f.with_primitives) {
+      FittedPrimitives& fitted = f.fitted;
+      out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
+      for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));
+      for (auto& rej : fitted.rejected) {
+        rej.what = "region " + std::to_string(r) + " " + rej.what;
+        out.rejected.push_back(std::move(rej));
       }
+      for (std::size_t k = 0; k < out.per_type.size(); ++k) out.per_type[k] += fitted.per_type[k];
+      out.assigned_points += fitted.assigned_points;
     }
-    FittedPrimitives& fitted = f.fitted;
-    out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
-    for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));
-    for (auto& rej : fitted.rejected) {
-      rej.what = "region " + std::to_string(r) + " " + rej.what;
-      out.rejected.push_back(std::move(rej));
+    if (options.keep_detections) {
+      out.detections.push_back({std::move(f.p), std::move(f.n), std::move(f.detected)});
     }
-    for (std::size_t k = 0; k < out.per_type.size(); ++k) out.per_type[k] += fitted.per_type[k];
-    out.assigned_points += fitted.assigned_points;
-    if (options.keep_detections) out.detections.push_back({f.p, f.n, f.detected});
-    RegionFit().p.swap(f.p);  // what a region held is released as it is gathered
   }
   // One ground per building: parts standing within the ground filter's height tolerance of
   // each other stand on one base (no sliver steps when they are fused).

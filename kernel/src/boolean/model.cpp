@@ -5,6 +5,7 @@
 #include "boolean/pcurve_fit.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "geometry/geometry_internal.h"
 
 namespace csgtile::kernel::detail {
 
@@ -84,8 +85,7 @@ Status import_operand(BModel& model, const Shape& shape, int operand) {
     const EdgeData& d = *edge.body().edge();
     BEdge e;
     const Location& loc = edge.location();
-    // Length parameters (lines) scale with the location; angles do not.
-    const double k_param = (d.curve && d.curve->kind() == CurveKind::Line) ? loc.scale() : 1.0;
+    const double k_param = d.curve ? detail::moved_parameter_scale(*d.curve, loc) : 1.0;
     e.t0 = d.first * k_param;
     e.t1 = d.last * k_param;
     e.tolerance = std::max(d.tolerance * loc.scale(), model.tolerance());

@@ -13,10 +13,17 @@
 #include <utility>
 
 #include "csgtile/kernel/bounding_box.h"
+#include "csgtile/kernel/curve.h"
 #include "csgtile/kernel/frame.h"
 #include "csgtile/kernel/surface.h"
 
 namespace csgtile::kernel::detail {
+
+/// The factor on an edge's parameter range once its curve is moved by `loc` (transformed()):
+/// a line keeps a unit direction, so its arc length scales; angles do not.
+inline double moved_parameter_scale(const Curve& curve, const Location& loc) {
+  return curve.kind() == CurveKind::Line ? loc.scale() : 1.0;
+}
 
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kTwoPi = 2.0 * std::numbers::pi;

@@ -476,17 +476,17 @@ namespace {
 void add_edge_bounds(BoundingBox& box, const Shape& e) {
   const EdgeData& d = *e.body().edge();
   if (d.degenerate()) return;
+  const Location& loc = e.location();
+  // The edge's range on the moved curve (a line's arc length scales with the location).
+  const double k = detail::moved_parameter_scale(*d.curve, loc);
   if (d.curve->kind() == CurveKind::Line) {
-    // The moved line as transformed() makes it, on the stack (boxes of many edges). Its
-    // direction stays unit, so the edge's arc-length range scales with the location (as the
-    // Booleans' edges take it): unscaled, a box under a scale of 0.5 came out twice its size.
-    const Location& loc = e.location();
+    // The moved line as transformed() makes it, on the stack (boxes of many edges).
     const auto& line = static_cast<const LineCurve&>(*d.curve);
     const LineCurve moved(loc.apply_point(line.origin()), loc.apply_direction(line.direction()));
-    box.add(moved.bounds(d.first * loc.scale(), d.last * loc.scale()));
+    box.add(moved.bounds(d.first * k, d.last * k));
     return;
   }
-  box.add(d.curve->transformed(e.location())->bounds(d.first, d.last));
+  box.add(d.curve->transformed(loc)->bounds(d.first * k, d.last * k));
 }
 
 // A plane's extremes lie on its boundary; a curved face can bulge between its edges, so the
@@ -562,18 +562,24 @@ BoundingBox bounding_box(const Shape& shape) {
   return box;
 }
 
-double shape_volume(const Shape& shape) {
-  if (shape.is_null()) return 0.0;
+namespace {
+
+// Area, volume and first moments summed over the faces (zeros for a null shape).
+Moments moments_of(const Shape& shape) {
   Moments total{};
+  if (shape.is_null()) return total;
   for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<Moments>(face);
-  return total[1];
+  return total;
 }
+
+}  // namespace
+
+double shape_volume(const Shape& shape) { return moments_of(shape)[1]; }
 
 MassProperties mass_properties(const Shape& shape) {
   MassProperties mp;
   if (shape.is_null()) return mp;
-  Moments total{};
-  for (const Shape& face : Explorer(shape, ShapeKind::Face)) total += face_moments<Moments>(face);
+  const Moments total = moments_of(shape);
   mp.area = total[0];
   mp.volume = total[1];
   if (mp.volume != 0.0) {
