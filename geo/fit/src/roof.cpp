@@ -89,14 +89,17 @@ std::vector<std::vector<std::array<int, 2>>> trace(const std::vector<char>& occ,
 // metre along the edge) and, on one wall, on one line. The line is fitted to them (principal
 // axis, refitted once without the points farther than twice its thickness: balconies, window
 // recesses) and taken when there are enough of them (ten, and one per metre of the edge's
-// middle), most lie on it, it is thin (within kFacadeSpread) and runs within kFacadeTurn of
-// the edge; nullopt otherwise (the wall unseen, as airborne scans mostly leave it). The
-// thickness allowed is a facade's relief (recessed windows, brick, ornament). Points are
+// middle), most lie on it and it is thin (within kFacadeSpread); nullopt otherwise (the wall
+// unseen, as airborne scans mostly leave it). The thickness allowed is a facade's relief
+// (window reveals, pilasters, ornament: AHN4's facades spread 0.2-0.35 m RMS); a lower roof
+// beside the edge spreads wider and is refused. The line keeps its own direction when that
+// runs within kFacadeTurn of the edge, else the edge's (a short edge of a curved facade, whose
+// points give its position better than its direction). Points are
 // looked for from kFacadeReach inside the edge (under eaves) to a cell outside it, over the
 // edge's middle (`band`). The line is its unit direction (along the edge's) and the centre of
 // its points.
 constexpr double kFacadeDrop = 2.0;
-constexpr double kFacadeSpread = 0.2;
+constexpr double kFacadeSpread = 0.35;
 constexpr double kFacadeReach = 1.5;
 constexpr double kFacadeTurn = 20.0;  // degrees
 
@@ -148,7 +151,7 @@ std::optional<FacadeLine> facade_line(const std::vector<NearEdge>& band, const V
   a = axis(kept);
   if (a.thickness > kFacadeSpread) return std::nullopt;
   Vec2 dir = a.dir.dot(along) >= 0.0 ? a.dir : Vec2(-a.dir);
-  if (dir.dot(along) < std::cos(kFacadeTurn * std::numbers::pi / 180.0)) return std::nullopt;
+  if (dir.dot(along) < std::cos(kFacadeTurn * std::numbers::pi / 180.0)) dir = along;
   return FacadeLine{dir, a.centre};
 }
 

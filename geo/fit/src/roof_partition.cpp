@@ -298,13 +298,26 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         plane_points.push_back(std::move(mine));
       }
     }
+    // A plane within the angle tolerance of horizontal is made horizontal only where the
+    // horizontal still explains its points: over them (a 5 % trim at each end) the tilted
+    // plane rises less than half of `tau` above or below the median height. A wide, slightly
+    // sloping roof keeps its slope.
     for (std::size_t k = 0; k < planes.size(); ++k) {
       if (planes[k].n.z() < cos_tol) continue;
       std::vector<double> z;
       for (auto i : plane_points[k]) z.push_back(in.points[i].z());
       std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+      const double level = z[z.size() / 2];
+      std::vector<double> off;
+      off.reserve(plane_points[k].size());
+      for (auto i : plane_points[k]) {
+        off.push_back(std::abs(planes[k].z(in.points[i].x(), in.points[i].y()) - level));
+      }
+      const auto q = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(off.size() - 1));
+      std::nth_element(off.begin(), off.begin() + q, off.end());
+      if (off[static_cast<std::size_t>(q)] > 0.5 * tau) continue;
       planes[k].n = Vec3::UnitZ();
-      planes[k].d = z[z.size() / 2];
+      planes[k].d = level;
     }
   }
   std::vector<std::vector<int>> candidates(ncell);
