@@ -70,6 +70,12 @@ kernel::Status check_options(const AssemblyOptions& o) {
   return {};
 }
 
+// A primitive with a curved face: everything but boxes and extrusions (straight-edged
+// profiles, planar clips).
+bool is_curved(const kernel::PrimitiveSpec& spec) {
+  return spec.type != kernel::PrimitiveType::Box && spec.type != kernel::PrimitiveType::Extrusion;
+}
+
 bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& outer) {
   return inner.min.x() >= outer.min.x() && inner.min.y() >= outer.min.y() &&
          inner.max.x() <= outer.max.x() && inner.max.y() <= outer.max.y();
@@ -187,14 +193,37 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   }
   std::vector<std::pair<int, int>> survivors;
   if (options.voxel_culling && !candidates.empty()) {
-    VoxelCuller culler(options.voxel_size, options.tolerance);
-    culler.build(shapes, candidates, &exact_boxes);
-    for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
-    std::vector<char> keep(candidates.size(), 0);
-    tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
-      keep[k] = culler.may_meet(static_cast<std::size_t>(candidates[k].first),
-                                static_cast<std::size_t>(candidates[k].second));
-    });
+    // Voxels pay where the exact test costs more than the two shells: pairs with a curved
+    // solid, or whose face counts multiply to voxel_min_face_product or more. Other pairs
+    // (two boxes, a box and an L-shaped prism) go straight to the exact test; pairs whose
+    // boxes do not meet (without the broad phase) are dropped here.
+    std::vector<char> keep(candidates.size(), 0), voxel(candidates.size(), 0);
+    std::vector<std::pair<int, int>> costly;
+    const double product = options.voxel_min_face_product;
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      const auto a = static_cast<std::size_t>(candidates[k].first),
+                 b = static_cast<std::size_t>(candidates[k].second);
+      if (!boxes[a].intersects(boxes[b])) continue;
+      const bool curved = is_curved(primitives[a].spec) || is_curved(primitives[b].spec);
+      const double faces = static_cast<double>(leaves[a].face_sources.size()) *
+                           static_cast<double>(leaves[b].face_sources.size());
+      if (curved || faces >= product) {
+        voxel[k] = 1;
+        costly.push_back(candidates[k]);
+      } else {
+        keep[k] = 1;
+      }
+    }
+    if (!costly.empty()) {
+      VoxelCuller culler(options.voxel_size, options.tolerance);
+      culler.build(shapes, costly, &exact_boxes);
+      for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
+      tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
+        if (!voxel[k]) return;
+        keep[k] = culler.may_meet(static_cast<std::size_t>(candidates[k].first),
+                                  static_cast<std::size_t>(candidates[k].second));
+      });
+    }
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       if (keep[k]) survivors.push_back(candidates[k]);
     }

@@ -253,24 +253,32 @@ std::string model_bytes(const std::vector<AssembledObject>& objects) {
 
 TEST(Assembly, OutputDoesNotDependOnThreadsOrCulling) {
   const auto prims = labelled(test::random_city(150, 21));
-  AssemblyOptions one, two, nocull, nobroad;
+  AssemblyOptions one, two, nocull, nobroad, adaptive;
   one.threads = 1;
   two.threads = 2;
+  one.voxel_min_face_product = two.voxel_min_face_product = 0.0;  // every pair by its voxels
   nocull.voxel_culling = false;
   nobroad.broad_phase = false;
   auto a1 = assemble(prims, one), a2 = assemble(prims, two), a3 = assemble(prims, nocull),
-       a4 = assemble(prims, nobroad);
-  ASSERT_TRUE(a1.ok() && a2.ok() && a3.ok() && a4.ok());
+       a4 = assemble(prims, nobroad), a5 = assemble(prims, adaptive);
+  ASSERT_TRUE(a1.ok() && a2.ok() && a3.ok() && a4.ok() && a5.ok());
   const std::string bytes = model_bytes(a1->objects);
   EXPECT_EQ(bytes, model_bytes(a2->objects));
   EXPECT_EQ(bytes, model_bytes(a3->objects));
   EXPECT_EQ(bytes, model_bytes(a4->objects));
+  EXPECT_EQ(bytes, model_bytes(a5->objects));
   // Culling only removed pairs that the exact test would have called disjoint.
   EXPECT_EQ(a1->stats.interacting_pairs, a3->stats.interacting_pairs);
+  EXPECT_EQ(a5->stats.interacting_pairs, a3->stats.interacting_pairs);
   EXPECT_GT(a1->stats.culled_pairs, 0);
   EXPECT_EQ(a3->stats.culled_pairs, 0);
   EXPECT_EQ(a4->stats.candidate_pairs, 150 * 149 / 2);
   EXPECT_LE(a1->stats.exact_tests, a3->stats.exact_tests);
+  // By default pairs of prisms skip the voxels: fewer voxels, more exact tests than culling
+  // every pair, never more than culling none.
+  EXPECT_LT(a5->stats.active_voxels, a1->stats.active_voxels);
+  EXPECT_GE(a5->stats.exact_tests, a1->stats.exact_tests);
+  EXPECT_LE(a5->stats.exact_tests, a3->stats.exact_tests);
 }
 
 // Object identity for comparing assemblies: id, primitives, volume bits.
