@@ -16,6 +16,8 @@ packages=(
   libeigen3-dev libgmp-dev
   # kernel/assembly: OpenVDB voxel culling and TBB (OpenVDB's headers need Boost's)
   libopenvdb-dev libtbb-dev libboost-dev
+  # the csgtile binary's allocator (worker/CMakeLists.txt)
+  libjemalloc-dev
   # geo: georeferencing (GeographicLib); PROJ's cs2cs is the tests' independent oracle
   libgeographiclib-dev proj-bin
   # geo: CRS definitions and transformations (PROJ, with its data)
