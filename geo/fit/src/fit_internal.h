@@ -73,7 +73,9 @@ double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32
 /// The `quantile` of the RMS distance of a point's neighbourhood (it and its 16 nearest) to
 /// their least-squares plane, over the same sample: the noise of the scan where its surfaces
 /// are flat at the scale of a neighbourhood (a low quantile: curvature and edges raise the
-/// others); 0 for fewer than 17 points.
+/// others); 0 for fewer than 17 points. A neighbourhood on both sides of a plate thinner than
+/// itself counts each side's spread about its own level, not their separation (grid.cpp,
+/// sheet_residual).
 double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                       double quantile);
 

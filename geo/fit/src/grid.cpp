@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
+
 #include "fit_internal.h"
 
 namespace csgtile::fit::detail {
@@ -84,9 +86,85 @@ namespace {
 // the sample; empty when the points are too few or all duplicates).
 constexpr std::size_t kNeighbours = 16;
 
-// With `residuals`: also, per sampled point found, the RMS distance of its neighbourhood (the
-// point and its 16 nearest) to their least-squares plane — the scan's noise where the surface
-// is flat, more on curved parts and edges.
+// The noise of a neighbourhood: its points' RMS distance to their least-squares plane; but
+// where they lie on two sheets (both sides of a plate or a wall thinner than the
+// neighbourhood), that plane runs between the sheets and the RMS is half their separation,
+// not noise. Two sheets are found as the best split of the points into two levels along the
+// plane's normal (1-D two-means, each side three points or more), the normal then taken again
+// from the two sides' pooled spread about their own centres (the sheets' common direction,
+// which a lopsided sample tilts the first plane away from), and split again. They are two
+// when their levels lie more than four times their own spread apart (one noisy sheet: under
+// three times) and at least `min_gap` apart; the noise is then that spread. Sheets closer than
+// `min_gap` are one surface seen twice (overlapping flight strips, a registration offset),
+// whose offset is noise to any model of it.
+template <std::size_t N>
+double sheet_residual(std::span<const Vec3> points, const std::array<std::uint32_t, N>& hood,
+                      const Vec3& centre, Vec3 normal, double min_gap) {
+  std::array<double, N> d{};
+  auto levels = [&](const Vec3& n) {
+    for (std::size_t h = 0; h < N; ++h) d[h] = (points[hood[h]] - centre).dot(n);
+  };
+  levels(normal);
+  double sum = 0.0;
+  for (double v : d) sum += v * v;
+  const double rms = std::sqrt(sum / static_cast<double>(N));
+  // The best split into levels below and above a threshold: `within` (RMS about each side's
+  // mean), the gap between the means and the threshold.
+  struct Split {
+    double within = INFINITY, gap = 0.0, at = 0.0;
+  };
+  auto split = [&]() {
+    std::array<double, N> sorted = d;
+    std::sort(sorted.begin(), sorted.end());
+    Split best;
+    double low = 0.0, low2 = 0.0, all = 0.0, all2 = 0.0;
+    for (double v : sorted) {
+      all += v;
+      all2 += v * v;
+    }
+    for (std::size_t k = 0; k + 1 < N; ++k) {
+      low += sorted[k];
+      low2 += sorted[k] * sorted[k];
+      const auto a = static_cast<double>(k + 1), b = static_cast<double>(N - k - 1);
+      if (k + 1 < 3 || N - k - 1 < 3) continue;
+      const double ma = low / a, mb = (all - low) / b;
+      const double ss = (low2 - a * ma * ma) + ((all2 - low2) - b * mb * mb);
+      if (ss < best.within) best = {ss, mb - ma, 0.5 * (sorted[k] + sorted[k + 1])};
+    }
+    best.within = std::sqrt(std::max(best.within, 0.0) / static_cast<double>(N));
+    return best;
+  };
+  Split s = split();
+  if (!std::isfinite(s.within)) return rms;
+  // The sheets' own normal: the least direction of the pooled spread about each side's centre.
+  Vec3 mean[2] = {Vec3::Zero(), Vec3::Zero()};
+  double count[2] = {0.0, 0.0};
+  for (std::size_t h = 0; h < N; ++h) {
+    const int side = d[h] > s.at;
+    mean[side] += points[hood[h]];
+    count[side] += 1.0;
+  }
+  mean[0] /= count[0];
+  mean[1] /= count[1];
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t h = 0; h < N; ++h) {
+    const Vec3 q = points[hood[h]] - mean[d[h] > s.at];
+    cov += q * q.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Vec3 n = eig.eigenvectors().col(0);
+  if (n.allFinite() && n.norm() > 0.5) {
+    normal = n.normalized();
+    levels(normal);
+    s = split();
+    if (!std::isfinite(s.within)) return rms;
+  }
+  return s.gap > 4.0 * s.within && s.gap >= min_gap ? std::min(s.within, rms) : rms;
+}
+
+// With `residuals`: also, per sampled point found, the noise of its neighbourhood (the point
+// and its 16 nearest, sheet_residual) — the scan's noise where the surface is flat, more on
+// curved parts and edges.
 std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
                                             std::span<const std::uint32_t> members,
                                             std::vector<double>* residuals = nullptr) {
@@ -141,12 +219,8 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
           std::copy(who.begin(), who.end(), hood.begin() + 1);
           // A neighbourhood that spans no plane (collinear) says nothing of the noise.
           if (const auto plane = fit_plane(points, hood)) {
-            double sum = 0.0;
-            for (auto j : hood) {
-              const double d = (points[j] - plane->point).dot(plane->axis);
-              sum += d * d;
-            }
-            residuals->push_back(std::sqrt(sum / static_cast<double>(hood.size())));
+            residuals->push_back(
+                sheet_residual(points, hood, plane->point, plane->axis, best.back() / 8.0));
           }
         }
       }

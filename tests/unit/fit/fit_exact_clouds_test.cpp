@@ -159,6 +159,26 @@ TEST(FitExactClouds, FlatFaceOfExactPointsStaysAPlane) {
   EXPECT_EQ(result->shapes[0].inliers.size(), c.points.size());
 }
 
+// A plate thinner than a neighbourhood: two exact faces 0.6 apart, points 0.5 apart, so
+// every point's 16 nearest hold points of both faces. The derived noise is each face's (nil),
+// not half their separation (0.3, which made epsilon 0.9 and one plane of both), so each face
+// is a plane of its own points.
+TEST(FitExactClouds, BothFacesOfAThinPlateAreTheirOwnPlanes) {
+  Cloud c = testing::rectangle_cloud(Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(0, 10, 0), 0.5, 0.0, 1);
+  c.append(testing::rectangle_cloud(Vec3(0, 0, 0.6), Vec3(10, 0, 0), Vec3(0, 10, 0), 0.5, 0.0, 2));
+  const auto shapes = detect_shapes(c.points, c.normals, derived_with_evidence(3));
+  ASSERT_TRUE(shapes.ok());
+  EXPECT_LT(shapes->noise, 0.01);
+  int faces = 0;
+  for (const auto& s : shapes->shapes) {
+    if (s.surface.type != ShapeType::Plane || s.inliers.size() < 200) continue;
+    ++faces;
+    const double z = c.points[s.inliers.front()].z();
+    for (auto i : s.inliers) EXPECT_NEAR(c.points[i].z(), z, 1e-9);
+  }
+  EXPECT_EQ(faces, 2);
+}
+
 // Two coplanar faces with a gap of four point spacings between them: one shape at the derived
 // connectivity, two at half of it; cluster_epsilon reports the scaled value.
 TEST(FitExactClouds, ClusterScaleKeepsCoplanarFacesAcrossAGapApart) {
