@@ -446,9 +446,12 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
   }
   // Free cells become flat pieces: connected cells whose highest roof points differ by less
-  // than a step, each at the 70th percentile of its points' heights.
+  // than a step, each at the 70th percentile of its points' heights. The step is the largest
+  // residual the labelling accepts (the cost's cap, 2 tau), at least a quarter of the lowest
+  // building: a roof structure a metre above the roof around it is its own piece (a 1 m step
+  // made one piece of both, at a height explaining neither).
   {
-    const double step = std::max(1.0, 0.25 * o.min_building_height);
+    const double step = std::max(2.0 * tau, 0.25 * o.min_building_height);
     std::vector<double> top(ncell, NAN);  // of all points: a wall's cell is as high as it
     for (std::size_t c = 0; c < ncell; ++c) {
       for (auto i : in_cell[c]) {

@@ -300,6 +300,29 @@ TEST(FitRoofPartition, AGentleSlopeKeepsItsRiseANearlyFlatRoofIsLevel) {
   }
 }
 
+// A roof no plane explains (a green roof: heights spread over 0.4 m, normals scattered) in
+// two levels 0.8 m apart, the higher over x > 6. The cells no plane takes are split into
+// pieces where their heights step by more than the largest residual the labelling accepts
+// (2 tau: 0.5 m here), so each level is its own flat piece at its own height; a 1 m step let
+// one piece at the 70th percentile of both (10.8 m) cover the lower level too.
+TEST(FitRoofPartition, RoofsNoPlaneExplainsKeepTheirHeightSteps) {
+  const GroundGrid ground = ground_around(0, 0, 12, 8);
+  testing::Draw d(71);
+  Cloud c;
+  const int count = static_cast<int>(12 * 8 / 0.1);
+  for (int i = 0; i < count; ++i) {
+    const double x = d.uniform(0, 12), y = d.uniform(0, 8);
+    const double z = (x > 6 ? 10.8 : 10.0) + d.uniform(-0.2, 0.2);
+    c.add(Vec3(x, y, z), Vec3(d.normal(), d.normal(), d.normal()).normalized(), 0.0, d);
+  }
+  const auto p = partition(c, ground);
+  ASSERT_FALSE(p.parts.empty());
+  for (double y = 1.0; y <= 7.0; y += 1.0) {
+    EXPECT_NEAR(top_at(p, 2.5, y), 10.0, 0.2) << "y " << y;
+    EXPECT_NEAR(top_at(p, 9.5, y), 10.8, 0.2) << "y " << y;
+  }
+}
+
 TEST(FitRoofPartition, NoPartitionWhereTheGroundIsSeenUnderTheRoof) {
   // The gable above, over terrain seen everywhere (a canopy scanned from the ground, a frame
   // of beams): no partition, and the reason is named.
