@@ -222,38 +222,41 @@ TEST(FitRoofPartition, GableHouseIsTwoPartsMeetingAtTheRidge) {
   }
 }
 
+// The box around every part of a partition.
+kernel::BoundingBox model_extent(const Partitioned& p) {
+  kernel::BoundingBox all;
+  for (const auto& s : p.solids) all.add(kernel::bounding_box(s));
+  return all;
+}
+
+// The four facades of a 12 × 8 m building from 0.5 m to 5 m, `depth` outside its walls.
+void add_facades(Cloud& c, double depth, std::uint64_t seed) {
+  c.append(roof(Vec3(0, -depth, 0.5), Vec3(12, 0, 0), Vec3(0, 0, 4.5), seed));
+  c.append(roof(Vec3(12 + depth, 0, 0.5), Vec3(0, 8, 0), Vec3(0, 0, 4.5), seed + 1));
+  c.append(roof(Vec3(12, 8 + depth, 0.5), Vec3(-12, 0, 0), Vec3(0, 0, 4.5), seed + 2));
+  c.append(roof(Vec3(-depth, 8, 0.5), Vec3(0, -8, 0), Vec3(0, 0, 4.5), seed + 3));
+}
+
+void expect_extent(const Partitioned& p, double x0, double y0, double x1, double y1,
+                   double tolerance) {
+  ASSERT_FALSE(p.parts.empty());
+  const kernel::BoundingBox box = model_extent(p);
+  EXPECT_NEAR(box.min.x(), x0, tolerance);
+  EXPECT_NEAR(box.max.x(), x1, tolerance);
+  EXPECT_NEAR(box.min.y(), y0, tolerance);
+  EXPECT_NEAR(box.max.y(), y1, tolerance);
+}
+
 // A flat roof (12 × 8 m at 6 m) whose eaves reach 0.6 m past its walls. Seen from the air
 // alone, the outline ends where the roof does; where the scan also sees the facades (points
 // down the walls, as AHN4's are), the walls stand on them.
 TEST(FitRoofPartition, WallsStandOnTheFacadesWhereTheScanSeesThemElseAtTheEaves) {
   const GroundGrid ground = ground_around(0, 0, 12, 8);
   const Cloud eaves = roof(Vec3(-0.6, -0.6, 6), Vec3(13.2, 0, 0), Vec3(0, 9.2, 0), 1);
-  auto extent = [](const Partitioned& p) {
-    kernel::BoundingBox all;
-    for (const auto& s : p.solids) all.add(kernel::bounding_box(s));
-    return all;
-  };
-  {
-    const auto p = partition(eaves, ground);
-    ASSERT_FALSE(p.parts.empty());
-    const auto box = extent(p);
-    EXPECT_NEAR(box.min.x(), -0.6, 0.3);
-    EXPECT_NEAR(box.max.x(), 12.6, 0.3);
-    EXPECT_NEAR(box.min.y(), -0.6, 0.3);
-    EXPECT_NEAR(box.max.y(), 8.6, 0.3);
-  }
+  expect_extent(partition(eaves, ground), -0.6, -0.6, 12.6, 8.6, 0.3);
   Cloud seen = eaves;
-  seen.append(roof(Vec3(0, 0, 0.5), Vec3(12, 0, 0), Vec3(0, 0, 4.5), 2));
-  seen.append(roof(Vec3(12, 0, 0.5), Vec3(0, 8, 0), Vec3(0, 0, 4.5), 3));
-  seen.append(roof(Vec3(12, 8, 0.5), Vec3(-12, 0, 0), Vec3(0, 0, 4.5), 4));
-  seen.append(roof(Vec3(0, 8, 0.5), Vec3(0, -8, 0), Vec3(0, 0, 4.5), 5));
-  const auto p = partition(seen, ground);
-  ASSERT_FALSE(p.parts.empty());
-  const auto box = extent(p);
-  EXPECT_NEAR(box.min.x(), 0.0, 0.1);
-  EXPECT_NEAR(box.max.x(), 12.0, 0.1);
-  EXPECT_NEAR(box.min.y(), 0.0, 0.1);
-  EXPECT_NEAR(box.max.y(), 8.0, 0.1);
+  add_facades(seen, 0.0, 2);
+  expect_extent(partition(seen, ground), 0.0, 0.0, 12.0, 8.0, 0.1);
 }
 
 // The same building, its facades in relief as real ones are (window reveals 0.35 m deep,
@@ -262,21 +265,10 @@ TEST(FitRoofPartition, WallsStandOnTheFacadesWhereTheScanSeesThemElseAtTheEaves)
 TEST(FitRoofPartition, WallsStandOnFacadesInRelief) {
   const GroundGrid ground = ground_around(0, 0, 12, 8);
   Cloud c = roof(Vec3(-0.6, -0.6, 6), Vec3(13.2, 0, 0), Vec3(0, 9.2, 0), 1);
-  std::uint64_t seed = 10;
-  for (const double depth : {-0.35, 0.0, 0.35}) {  // + outwards
-    c.append(roof(Vec3(0, -depth, 0.5), Vec3(12, 0, 0), Vec3(0, 0, 4.5), ++seed));
-    c.append(roof(Vec3(12 + depth, 0, 0.5), Vec3(0, 8, 0), Vec3(0, 0, 4.5), ++seed));
-    c.append(roof(Vec3(12, 8 + depth, 0.5), Vec3(-12, 0, 0), Vec3(0, 0, 4.5), ++seed));
-    c.append(roof(Vec3(-depth, 8, 0.5), Vec3(0, -8, 0), Vec3(0, 0, 4.5), ++seed));
-  }
-  const auto p = partition(c, ground);
-  ASSERT_FALSE(p.parts.empty());
-  kernel::BoundingBox box;
-  for (const auto& s : p.solids) box.add(kernel::bounding_box(s));
-  EXPECT_NEAR(box.min.x(), 0.0, 0.15);
-  EXPECT_NEAR(box.max.x(), 12.0, 0.15);
-  EXPECT_NEAR(box.min.y(), 0.0, 0.15);
-  EXPECT_NEAR(box.max.y(), 8.0, 0.15);
+  add_facades(c, -0.35, 10);  // + outwards
+  add_facades(c, 0.0, 14);
+  add_facades(c, 0.35, 18);
+  expect_extent(partition(c, ground), 0.0, 0.0, 12.0, 8.0, 0.15);
 }
 
 // Near-horizontal roof planes are made horizontal only where a level roof still explains
