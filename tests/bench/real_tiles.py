@@ -453,6 +453,19 @@ class TileRaster:
         self.outline = bytearray(size)
 
 
+def grid_neighbours(k, nx, ny):
+    """The 4-neighbours of cell k (row-major, nx × ny) inside the grid."""
+    i, j = k % nx, k // nx
+    if i > 0:
+        yield k - 1
+    if i + 1 < nx:
+        yield k + 1
+    if j > 0:
+        yield k - nx
+    if j + 1 < ny:
+        yield k + nx
+
+
 def measure_footprints(res, raster, buildings, origin):
     """IoU of the modelled footprints with the published ones, overall and per building."""
     ox, oy = origin[0], origin[1]
@@ -487,11 +500,13 @@ def measure_footprints(res, raster, buildings, origin):
     grid.fill([[(min(fx), min(fy)), (max(fx), min(fy)), (max(fx), max(fy)), (min(fx), max(fy))]],
               lambda k: layer.__setitem__(k, 1))
     res["footprint_layer_bbox"] = [min(fx) + ox, min(fy) + oy, max(fx) + ox, max(fy) + oy]
+    counted = {}
     for label, mask in (("", layer), ("_whole_tile", None)):
         cells = [k for k in range(size) if mask is None or mask[k]]
         published = sum(1 for k in cells if owner[k] >= 0)
         modelled = sum(1 for k in cells if model[k])
         inter = sum(1 for k in cells if owner[k] >= 0 and model[k])
+        counted[label] = (published, modelled, inter)
         union = published + modelled - inter
         res["compared_m2" + label] = sum(1 for k in cells if extent[k]) * cell * cell
         res["published_footprint_m2" + label] = published * cell * cell
@@ -515,20 +530,15 @@ def measure_footprints(res, raster, buildings, origin):
             k = comp[h]
             h += 1
             touches = touches or owner[k] >= 0
-            i, j = k % nx, k // nx
-            for ii, jj in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)):
-                if 0 <= ii < nx and 0 <= jj < ny:
-                    m = jj * nx + ii
-                    if model[m] and layer[m] and not seen[m]:
-                        seen[m] = 1
-                        comp.append(m)
+            for m in grid_neighbours(k, nx, ny):
+                if model[m] and layer[m] and not seen[m]:
+                    seen[m] = 1
+                    comp.append(m)
         if not touches:
             unmatched += len(comp)
             pieces += 1
-    cells = [k for k in range(size) if layer[k]]
-    published = sum(1 for k in cells if owner[k] >= 0)
-    inter = sum(1 for k in cells if owner[k] >= 0 and model[k])
-    union = published + sum(1 for k in cells if model[k]) - unmatched - inter
+    published, modelled, inter = counted[""]
+    union = published + modelled - unmatched - inter
     res["unmatched_model_components"] = pieces
     res["unmatched_model_m2"] = unmatched * cell * cell
     res["iou_matched"] = inter / union if union else None
@@ -542,14 +552,11 @@ def measure_footprints(res, raster, buildings, origin):
         k = queue.popleft()
         if dist[k] >= steps:
             continue
-        i, j = k % nx, k // nx
-        for ii, jj in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)):
-            if 0 <= ii < nx and 0 <= jj < ny:
-                m = jj * nx + ii
-                if dist[m] < 0:
-                    dist[m] = dist[k] + 1
-                    zone[m] = zone[k]
-                    queue.append(m)
+        for m in grid_neighbours(k, nx, ny):
+            if dist[m] < 0:
+                dist[m] = dist[k] + 1
+                zone[m] = zone[k]
+                queue.append(m)
     cells_b = [0] * len(buildings)
     inter_b = [0] * len(buildings)
     extra_b = [0] * len(buildings)

@@ -447,7 +447,6 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // of threads.
   struct RegionFit {
     std::optional<kernel::Error> error;
-    std::size_t points = 0;
     std::vector<Vec3> p, n;  // kept past the fit for FitOutput::detections only
     RansacOptions ransac;
     RansacResult detected;
@@ -464,7 +463,6 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       return;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    f.points = clusters[r].size();
     f.p.reserve(clusters[r].size());
     f.n.reserve(clusters[r].size());
     for (auto i : clusters[r]) {
@@ -537,7 +535,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
       }
     }
     FitRegion stats;
-    stats.points = static_cast<long long>(f.points);
+    stats.points = static_cast<long long>(clusters[r].size());
     stats.spacing = detected.spacing;
     stats.cluster_epsilon = detected.cluster_epsilon;
     stats.epsilon = f.ransac.epsilon;
@@ -547,8 +545,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (footprint >= 0) stats.building = footprints[static_cast<std::size_t>(footprint)].id;
     out.region_stats.push_back(stats);
     if (detected.shapes.empty()) {
-      out.rejected.push_back(
-          {"region " + std::to_string(r), detected.reason, static_cast<long long>(f.points)});
+      out.rejected.push_back({"region " + std::to_string(r), detected.reason,
+                              static_cast<long long>(clusters[r].size())});
     }
     if (f.with_primitives) {
       FittedPrimitives& fitted = f.fitted;

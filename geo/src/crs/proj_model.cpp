@@ -486,16 +486,17 @@ Result<Crs> lookup(int code, int vertical_code) {
   return finish(crs_from_pj(crs.p, label), label, label);
 }
 
-template <typename Key>
+// What PROJ made of a key, remembered for the process (PROJ's database is fixed for it).
+template <typename Key, typename Value = Result<Crs>>
 class Memo {
  public:
   template <typename Make>
-  Result<Crs> get(const Key& key, Make make) {
+  Value get(const Key& key, Make make) {
     {
       const std::lock_guard<std::mutex> lock(mutex_);
       if (auto it = memo_.find(key); it != memo_.end()) return it->second;
     }
-    Result<Crs> found = make();
+    Value found = make();
     const std::lock_guard<std::mutex> lock(mutex_);
     // The bound keeps hostile inputs (random codes, mutated WKT) from growing it without end.
     if (memo_.size() < kCapacity) memo_.emplace(key, found);
@@ -505,7 +506,7 @@ class Memo {
  private:
   static constexpr std::size_t kCapacity = 1024;
   std::mutex mutex_;
-  std::map<Key, Result<Crs>> memo_;
+  std::map<Key, Value> memo_;
 };
 
 }  // namespace
@@ -566,24 +567,14 @@ Result<Crs> crs_from_proj_text(std::string_view text, const std::string& what) {
 
 std::string proj_wkt1(const std::string& definition) {
   if (definition.empty()) return std::string();
-  // The export depends on the definition alone (PROJ's database is fixed for a process), and
-  // every cell of a run asks for the run's CRS again (its GeoPackage's spatial reference):
-  // remembered, a few definitions at most.
-  constexpr std::size_t kRemembered = 64;
-  static std::mutex mutex;
-  static std::map<std::string, std::string> remembered;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (const auto it = remembered.find(definition); it != remembered.end()) return it->second;
-  }
-  Object crs(proj_create(context(), definition.c_str()));
-  if (!crs) return std::string();
-  const char* options[] = {"MULTILINE=NO", nullptr};
-  std::string wkt = text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (remembered.size() >= kRemembered) remembered.clear();
-  remembered.emplace(definition, wkt);
-  return wkt;
+  // Every cell of a run asks for the run's CRS again (its GeoPackage's spatial reference).
+  static Memo<std::string, std::string> memo;
+  return memo.get(definition, [&]() -> std::string {
+    Object crs(proj_create(context(), definition.c_str()));
+    if (!crs) return std::string();
+    const char* options[] = {"MULTILINE=NO", nullptr};
+    return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
+  });
 }
 
 namespace {

@@ -197,9 +197,8 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     // solid, or whose face counts multiply to voxel_min_face_product or more. Other pairs
     // (two boxes, a box and an L-shaped prism) go straight to the exact test; pairs whose
     // boxes do not meet (without the broad phase) are dropped here.
-    std::vector<char> keep(candidates.size(), 0), voxel(candidates.size(), 0);
-    std::vector<std::pair<int, int>> costly;
-    const double product = options.voxel_min_face_product;
+    std::vector<char> keep(candidates.size(), 0);
+    std::vector<std::size_t> costly;  // into candidates
     for (std::size_t k = 0; k < candidates.size(); ++k) {
       const auto a = static_cast<std::size_t>(candidates[k].first),
                  b = static_cast<std::size_t>(candidates[k].second);
@@ -207,21 +206,21 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       const bool curved = is_curved(primitives[a].spec) || is_curved(primitives[b].spec);
       const double faces = static_cast<double>(leaves[a].face_sources.size()) *
                            static_cast<double>(leaves[b].face_sources.size());
-      if (curved || faces >= product) {
-        voxel[k] = 1;
-        costly.push_back(candidates[k]);
+      if (curved || faces >= options.voxel_min_face_product) {
+        costly.push_back(k);
       } else {
         keep[k] = 1;
       }
     }
     if (!costly.empty()) {
+      std::vector<std::pair<int, int>> pairs;
+      for (std::size_t k : costly) pairs.push_back(candidates[k]);
       VoxelCuller culler(options.voxel_size, options.tolerance);
-      culler.build(shapes, costly, &exact_boxes);
+      culler.build(shapes, pairs, &exact_boxes);
       for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
-      tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t k) {
-        if (!voxel[k]) return;
-        keep[k] = culler.may_meet(static_cast<std::size_t>(candidates[k].first),
-                                  static_cast<std::size_t>(candidates[k].second));
+      tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t c) {
+        keep[costly[c]] = culler.may_meet(static_cast<std::size_t>(pairs[c].first),
+                                          static_cast<std::size_t>(pairs[c].second));
       });
     }
     for (std::size_t k = 0; k < candidates.size(); ++k) {
