@@ -112,7 +112,7 @@ Failure assemble_into(const std::vector<assembly::AssemblyPrimitive>& prims,
   const ordered_json body = result_json(result.value(), prims, volume);
   if (auto f = write_file_atomic(dir / "assembly.json", body.dump(1) + "\n"); !f.ok()) return f;
   report = ordered_json();
-  if (options.cell) report["cell"] = {options.cell->i, options.cell->j};
+  if (options.cell) report["cell"] = {options.cell->cell.column, options.cell->cell.row};
   report["model"] = (dir / "model.csgt").string();
   report["total_volume"] = volume;
   report["statistics"] = stats_json(result->stats);
@@ -155,29 +155,28 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
   }
   // Cells: the one asked for, or every cell holding a primitive's anchor.
   assembly::CellSpec grid;
-  grid.size = args.cell_size;
-  grid.halo = args.halo;
-  std::vector<std::pair<long long, long long>> cells;
+  grid.grid.size = args.cell_size;
+  grid.grid.halo = args.halo;
+  std::vector<kernel::GridCell> cells;
   if (args.cell.size() == 2) {
-    cells.emplace_back(args.cell[0], args.cell[1]);
+    cells.push_back({args.cell[0], args.cell[1]});
   } else {
-    std::set<std::pair<long long, long long>> any;
+    std::set<kernel::GridCell> any;
     for (const auto& p : prims) {
       auto solid = kernel::build_primitive(p.spec, args.tolerance);
       if (!solid.ok()) continue;
       const kernel::BoundingBox b = kernel::bounding_box(solid.value());
-      any.insert(assembly::cell_of(grid, b.min.x(), b.min.y()));
+      any.insert(grid.grid.cell_of(b.min.x(), b.min.y()));
     }
     cells.assign(any.begin(), any.end());
   }
   double volume = 0;
   ordered_json list = ordered_json::array();
-  for (const auto& [i, j] : cells) {
-    grid.i = i;
-    grid.j = j;
+  for (const kernel::GridCell& cell : cells) {
+    grid.cell = cell;
     options.cell = grid;
     ordered_json r;
-    const auto dir = out / ("cell_" + std::to_string(i) + "_" + std::to_string(j));
+    const auto dir = out / ("cell_" + std::to_string(cell.column) + "_" + std::to_string(cell.row));
     if (auto f = assemble_into(prims, options, dir, r); !f.ok()) return f;
     volume += r["total_volume"].get<double>();
     list.push_back(std::move(r));

@@ -14,6 +14,7 @@
 
 #include "commands.h"
 #include "csgtile/geo/las.h"
+#include "csgtile/kernel/grid.h"
 #include "csgtile/worker/errors.h"
 #include "fetch/fetch.h"
 
@@ -35,7 +36,7 @@ struct OpenTile {
 
 int run_tile(const TileCommand& c) {
   nlohmann::ordered_json out{{"input", c.input}, {"size", c.size}};
-  std::map<std::pair<std::int64_t, std::int64_t>, OpenTile> tiles;
+  std::map<kernel::GridCell, OpenTile> tiles;
   auto fail = [&](ErrorCode code, const std::string& message) {
     for (auto& [id, t] : tiles) {
       t.writer.reset();
@@ -77,6 +78,7 @@ int run_tile(const TileCommand& c) {
   if (crs.has_geotiff) options.geo_keys = crs.keys;
   options.global_encoding = h.global_encoding;
 
+  const kernel::Grid grid{0.0, 0.0, c.size, 0.0};
   geo::PointBatch batch;
   std::uint64_t points = 0;
   for (;;) {
@@ -85,18 +87,14 @@ int run_tile(const TileCommand& c) {
     if (n.value() == 0) break;
     for (std::size_t i = 0; i < batch.size(); ++i) {
       const geo::Point& p = batch.points[i];
-      const std::pair<std::int64_t, std::int64_t> id{
-          static_cast<std::int64_t>(std::floor(p.x / c.size)),
-          static_cast<std::int64_t>(std::floor(p.y / c.size))};
+      const kernel::GridCell id = grid.cell_of(p.x, p.y);
       auto it = tiles.find(id);
       if (it == tiles.end()) {
         OpenTile t;
-        t.target = std::filesystem::path(c.out) / (stem + "_c" + std::to_string(id.first) + "_r" +
-                                                   std::to_string(id.second) + ".las");
+        t.target = std::filesystem::path(c.out) / (stem + "_" + id.name() + ".las");
         t.temp = t.target.string() + ".tmp";
         geo::LasWriteOptions o = options;
-        o.offset = {static_cast<double>(id.first) * c.size, static_cast<double>(id.second) * c.size,
-                    h.offset[2]};
+        o.offset = {grid.edge_x(id.column), grid.edge_y(id.row), h.offset[2]};
         if (batch.layout) o.extra = *batch.layout;
         auto writer = geo::LasWriter::create(t.temp, o);
         if (!writer.ok()) return fail(from_kernel(writer.error().code), writer.error().message);

@@ -1,14 +1,12 @@
 // The city grid and the tile index.
 //
 // Invariant: cell_of(x, y) == c exactly when core_bounds(c) holds (x, y) half-open. Both use
-// edge_x / edge_y (origin + index·size, one rounding), and cell_of corrects the floor of the
-// division by comparing with those edges, so rounding in the division cannot put a point in
-// a cell whose published bounds do not contain it.
+// kernel::Grid's edges (origin + index·size, one rounding), whose cell_of corrects the floor
+// of the division against them.
 
 #include "csgtile/geo/tiling.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <tuple>
 #include <utility>
@@ -30,32 +28,6 @@ bool Bounds2::intersects(const Bounds2& o) const {
   return min_x <= o.max_x && o.min_x <= max_x && min_y <= o.max_y && o.min_y <= max_y;
 }
 
-std::string CellId::to_string() const {
-  return "c" + std::to_string(column) + "_r" + std::to_string(row);
-}
-
-Result<CellId> CellId::parse(std::string_view text) {
-  auto fail = [&] {
-    return Error{ErrorCode::InvalidArgument,
-                 "cell id '" + std::string(text) + "' is not c<column>_r<row>"};
-  };
-  if (text.size() < 5 || text[0] != 'c') return fail();
-  const auto sep = text.find("_r");
-  if (sep == std::string_view::npos) return fail();
-  CellId id;
-  const char* b1 = text.data() + 1;
-  const char* e1 = text.data() + sep;
-  const char* b2 = text.data() + sep + 2;
-  const char* e2 = text.data() + text.size();
-  auto r1 = std::from_chars(b1, e1, id.column);
-  auto r2 = std::from_chars(b2, e2, id.row);
-  if (r1.ec != std::errc() || r1.ptr != e1 || r2.ec != std::errc() || r2.ptr != e2 || b1 == e1 ||
-      b2 == e2) {
-    return fail();
-  }
-  return id;
-}
-
 Result<CityGrid> CityGrid::create(const Crs& crs, const GridSpec& spec) {
   if (!std::isfinite(spec.origin_x) || !std::isfinite(spec.origin_y) ||
       !std::isfinite(spec.cell_size) || !std::isfinite(spec.halo)) {
@@ -71,54 +43,31 @@ Result<CityGrid> CityGrid::create(const Crs& crs, const GridSpec& spec) {
   return CityGrid(crs, spec);
 }
 
-double CityGrid::edge_x(std::int64_t column) const {
-  return spec_.origin_x + static_cast<double>(column) * spec_.cell_size;
-}
-double CityGrid::edge_y(std::int64_t row) const {
-  return spec_.origin_y + static_cast<double>(row) * spec_.cell_size;
+GridCell CityGrid::cell_of(double x, double y) const { return grid_.cell_of(x, y); }
+
+Bounds2 CityGrid::core_bounds(GridCell c) const {
+  return Bounds2{grid_.edge_x(c.column), grid_.edge_y(c.row), grid_.edge_x(c.column + 1),
+                 grid_.edge_y(c.row + 1)};
 }
 
-CellId CityGrid::cell_of(double x, double y) const {
-  auto index = [&](double v, double origin, auto edge) -> std::int64_t {
-    const double q = std::floor((v - origin) / spec_.cell_size);
-    // Outside the precondition (NaN, or beyond 2^52 cells where edges stop being distinct
-    // doubles) return a clamped index instead of overflowing the cast or looping.
-    if (!(std::fabs(q) < 4503599627370496.0))
-      return q > 0 ? (std::int64_t{1} << 52) : -(std::int64_t{1} << 52);
-    auto i = static_cast<std::int64_t>(q);
-    // The division is off by at most one cell; a few steps settle it against the edges.
-    for (int step = 0; step < 4 && v < edge(i); ++step) --i;
-    for (int step = 0; step < 4 && v >= edge(i + 1); ++step) ++i;
-    return i;
-  };
-  CellId id;
-  id.column = index(x, spec_.origin_x, [this](std::int64_t i) { return edge_x(i); });
-  id.row = index(y, spec_.origin_y, [this](std::int64_t i) { return edge_y(i); });
-  return id;
-}
-
-Bounds2 CityGrid::core_bounds(CellId c) const {
-  return Bounds2{edge_x(c.column), edge_y(c.row), edge_x(c.column + 1), edge_y(c.row + 1)};
-}
-
-Bounds2 CityGrid::halo_bounds(CellId c) const {
+Bounds2 CityGrid::halo_bounds(GridCell c) const {
   const Bounds2 core = core_bounds(c);
   const double h = spec_.halo;
   return Bounds2{core.min_x - h, core.min_y - h, core.max_x + h, core.max_y + h};
 }
 
-bool CityGrid::in_core(CellId c, double x, double y) const {
+bool CityGrid::in_core(GridCell c, double x, double y) const {
   const Bounds2 b = core_bounds(c);
   return x >= b.min_x && x < b.max_x && y >= b.min_y && y < b.max_y;
 }
 
-bool CityGrid::in_halo(CellId c, double x, double y) const {
+bool CityGrid::in_halo(GridCell c, double x, double y) const {
   const Bounds2 b = halo_bounds(c);
   return x >= b.min_x && x <= b.max_x && y >= b.min_y && y <= b.max_y;
 }
 
-Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool include_halo,
-                                                    std::size_t max_cells) const {
+Result<std::vector<GridCell>> CityGrid::cells_meeting(const Bounds2& bounds, bool include_halo,
+                                                      std::size_t max_cells) const {
   if (!bounds.is_valid()) return Error{ErrorCode::InvalidArgument, "cells_meeting: invalid bounds"};
   const double h = include_halo ? spec_.halo : 0.0;
   // Candidates: cells whose core meets the bounds grown by the halo; then the exact test.
@@ -128,12 +77,12 @@ Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool 
     return Error{ErrorCode::InvalidArgument,
                  "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};
   }
-  const CellId lo = cell_of(bounds.min_x - h, bounds.min_y - h);
-  const CellId hi = cell_of(bounds.max_x + h, bounds.max_y + h);
-  std::vector<CellId> out;
-  for (std::int64_t row = lo.row - 1; row <= hi.row + 1; ++row) {
-    for (std::int64_t column = lo.column - 1; column <= hi.column + 1; ++column) {
-      const CellId c{column, row};
+  const GridCell lo = cell_of(bounds.min_x - h, bounds.min_y - h);
+  const GridCell hi = cell_of(bounds.max_x + h, bounds.max_y + h);
+  std::vector<GridCell> out;
+  for (std::int64_t column = lo.column - 1; column <= hi.column + 1; ++column) {
+    for (std::int64_t row = lo.row - 1; row <= hi.row + 1; ++row) {
+      const GridCell c{column, row};
       const Bounds2 b = include_halo ? halo_bounds(c) : core_bounds(c);
       // Cores are half-open: a box touching a core's upper edge does not meet it.
       const bool meets = include_halo ? b.intersects(bounds)
@@ -147,7 +96,7 @@ Result<std::vector<CellId>> CityGrid::cells_meeting(const Bounds2& bounds, bool 
       }
     }
   }
-  return out;  // row-major loops: already in (row, column) order
+  return out;  // column-major loops: already in (column, row) order
 }
 
 Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds> inputs,
@@ -156,7 +105,7 @@ Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds
     return std::tie(a.name, a.bounds.min_x, a.bounds.min_y, a.bounds.max_x, a.bounds.max_y) <
            std::tie(b.name, b.bounds.min_x, b.bounds.min_y, b.bounds.max_x, b.bounds.max_y);
   });
-  std::vector<std::pair<CellId, std::size_t>> pairs;
+  std::vector<std::pair<GridCell, std::size_t>> pairs;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     if (!inputs[i].bounds.is_valid()) {
       return Error{ErrorCode::InvalidArgument, "input '" + inputs[i].name + "' has invalid bounds"};
@@ -165,7 +114,7 @@ Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds
     if (!cells.ok())
       return Error{ErrorCode::InvalidArgument,
                    "input '" + inputs[i].name + "': " + cells.error().message};
-    for (const CellId& c : cells.value()) pairs.emplace_back(c, i);
+    for (const GridCell& c : cells.value()) pairs.emplace_back(c, i);
   }
   std::sort(pairs.begin(), pairs.end());
   TileIndex index(grid);
@@ -178,14 +127,14 @@ Result<TileIndex> TileIndex::build(const CityGrid& grid, std::vector<InputBounds
   return index;
 }
 
-std::span<const std::size_t> TileIndex::inputs_for(CellId cell) const {
+std::span<const std::size_t> TileIndex::inputs_for(GridCell cell) const {
   auto it = std::lower_bound(cells_.begin(), cells_.end(), cell,
-                             [](const CellInputs& a, const CellId& b) { return a.cell < b; });
+                             [](const CellInputs& a, const GridCell& b) { return a.cell < b; });
   if (it == cells_.end() || !(it->cell == cell)) return {};
   return it->inputs;
 }
 
-std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell,
+std::vector<std::size_t> select_points(const CityGrid& grid, GridCell cell,
                                        std::span<const kernel::Vec3> points, bool include_halo) {
   std::vector<std::size_t> out;
   for (std::size_t i = 0; i < points.size(); ++i) {

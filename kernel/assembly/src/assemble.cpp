@@ -59,11 +59,11 @@ kernel::Status check_options(const AssemblyOptions& o) {
     return kernel::Status(ErrorCode::InvalidArgument, "assembly: tolerance must be finite and > 0");
   }
   if (o.cell) {
-    if (!(o.cell->size > 0) || !std::isfinite(o.cell->size)) {
+    if (!(o.cell->grid.size > 0) || !std::isfinite(o.cell->grid.size)) {
       return kernel::Status(ErrorCode::InvalidArgument,
                             "assembly: cell size must be finite and > 0");
     }
-    if (!(o.cell->halo >= 0) || !std::isfinite(o.cell->halo)) {
+    if (!(o.cell->grid.halo >= 0) || !std::isfinite(o.cell->grid.halo)) {
       return kernel::Status(ErrorCode::InvalidArgument, "assembly: halo must be finite and >= 0");
     }
   }
@@ -82,11 +82,6 @@ bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& oute
 }
 
 }  // namespace
-
-std::pair<long long, long long> cell_of(const CellSpec& grid, double x, double y) {
-  return {static_cast<long long>(std::floor((x - grid.origin_x) / grid.size)),
-          static_cast<long long>(std::floor((y - grid.origin_y) / grid.size))};
-}
 
 kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitives,
                                   const AssemblyOptions& options) {
@@ -129,12 +124,11 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   // Cell region: the cell grown by its halo (XY); a primitive is read when its box meets it.
   std::optional<kernel::BoundingBox> region;
   if (options.cell) {
-    const CellSpec& c = *options.cell;
+    const kernel::Grid& g = options.cell->grid;
+    const kernel::GridCell c = options.cell->cell;
     kernel::BoundingBox r;
-    r.min = kernel::Vec3(c.origin_x + static_cast<double>(c.i) * c.size - c.halo,
-                         c.origin_y + static_cast<double>(c.j) * c.size - c.halo, -HUGE_VAL);
-    r.max = kernel::Vec3(c.origin_x + static_cast<double>(c.i + 1) * c.size + c.halo,
-                         c.origin_y + static_cast<double>(c.j + 1) * c.size + c.halo, HUGE_VAL);
+    r.min = kernel::Vec3(g.edge_x(c.column) - g.halo, g.edge_y(c.row) - g.halo, -HUGE_VAL);
+    r.max = kernel::Vec3(g.edge_x(c.column + 1) + g.halo, g.edge_y(c.row + 1) + g.halo, HUGE_VAL);
     region = r;
   }
   std::vector<char> read(n, 0);
@@ -285,8 +279,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     kernel::BoundingBox box;
     for (int i : list) box.add(exact_boxes[static_cast<std::size_t>(i)]);
     if (options.cell) {
-      const auto [ci, cj] = cell_of(*options.cell, box.min.x(), box.min.y());
-      if (ci != options.cell->i || cj != options.cell->j) continue;
+      if (options.cell->grid.cell_of(box.min.x(), box.min.y()) != options.cell->cell) continue;
     }
     groups.push_back(list);
     group_boxes.push_back(box);

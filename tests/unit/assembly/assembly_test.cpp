@@ -299,18 +299,17 @@ TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
     max_extent = std::max({max_extent, o.box.size().x(), o.box.size().y()});
   for (double size : {25.0, 40.0, 95.0}) {
     CellSpec grid;
-    grid.size = size;
-    grid.halo = max_extent + 1;
+    grid.grid.size = size;
+    grid.grid.halo = max_extent + 1;
     BoundingBox all;
     for (const auto& o : whole->objects) all.add(o.box);
-    const auto [i0, j0] = cell_of(grid, all.min.x(), all.min.y());
-    const auto [i1, j1] = cell_of(grid, all.max.x(), all.max.y());
+    const auto [i0, j0] = grid.grid.cell_of(all.min.x(), all.min.y());
+    const auto [i1, j1] = grid.grid.cell_of(all.max.x(), all.max.y());
     std::map<std::string, std::pair<std::vector<int>, double>> got;
     int published = 0;
-    for (long long i = i0; i <= i1; ++i) {
-      for (long long j = j0; j <= j1; ++j) {
-        grid.i = i;
-        grid.j = j;
+    for (std::int64_t i = i0; i <= i1; ++i) {
+      for (std::int64_t j = j0; j <= j1; ++j) {
+        grid.cell = {i, j};
         AssemblyOptions options;
         options.cell = grid;
         auto cell = assemble(prims, options);
@@ -320,9 +319,7 @@ TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
           ++published;
           EXPECT_TRUE(got.emplace(o.id, std::make_pair(o.primitives, o.volume)).second)
               << o.id << " published twice";
-          const auto [ci, cj] = cell_of(grid, o.box.min.x(), o.box.min.y());
-          EXPECT_EQ(ci, i);
-          EXPECT_EQ(cj, j);
+          EXPECT_EQ(grid.grid.cell_of(o.box.min.x(), o.box.min.y()), grid.cell);
         }
       }
     }
@@ -341,7 +338,7 @@ TEST(Assembly, ObjectPastTheHaloIsReported) {
     specs.push_back(s);
   }
   AssemblyOptions options;
-  options.cell = CellSpec{0, 0, 10, 0, 0, 5};
+  options.cell = CellSpec{kernel::Grid{0, 0, 10, 5}, kernel::GridCell{0, 0}};
   auto a = assemble(labelled(specs), options);
   ASSERT_TRUE(a.ok());
   ASSERT_EQ(a->objects.size(), 1u);
@@ -507,7 +504,7 @@ TEST(Assembly, BadOptionsAreNamed) {
   ASSERT_FALSE(a.ok());
   EXPECT_NE(a.error().message.find("voxel size"), std::string::npos);
   o = {};
-  o.cell = CellSpec{0, 0, -5, 0, 0, 1};
+  o.cell = CellSpec{kernel::Grid{0, 0, -5, 1}, kernel::GridCell{0, 0}};
   a = assemble({}, o);
   ASSERT_FALSE(a.ok());
   EXPECT_NE(a.error().message.find("cell size"), std::string::npos);

@@ -37,12 +37,12 @@ TEST(TilingGrid, EveryPointIsInExactlyOneCore) {
       if (i % 3 == 0)
         x = spec.origin_x + edge(rng) * spec.cell_size;  // exactly on (computed) edges
       if (i % 5 == 0) y = spec.origin_y + edge(rng) * spec.cell_size;
-      const CellId c = g.cell_of(x, y);
-      ASSERT_TRUE(g.in_core(c, x, y)) << c.to_string() << " x=" << x << " y=" << y;
+      const GridCell c = g.cell_of(x, y);
+      ASSERT_TRUE(g.in_core(c, x, y)) << c.name() << " x=" << x << " y=" << y;
       int cores = 0;
       for (int dr = -1; dr <= 1; ++dr) {
         for (int dc = -1; dc <= 1; ++dc)
-          cores += g.in_core(CellId{c.column + dc, c.row + dr}, x, y) ? 1 : 0;
+          cores += g.in_core(GridCell{c.column + dc, c.row + dr}, x, y) ? 1 : 0;
       }
       ASSERT_EQ(cores, 1) << "x=" << x << " y=" << y;
       ASSERT_TRUE(g.in_halo(c, x, y));
@@ -52,8 +52,8 @@ TEST(TilingGrid, EveryPointIsInExactlyOneCore) {
 
 TEST(TilingGrid, HalosOverlapNeighbours) {
   const CityGrid g = grid(0, 0, 100, 10);
-  const CellId a{3, 4};
-  const CellId east{4, 4};
+  const GridCell a{3, 4};
+  const GridCell east{4, 4};
   const Bounds2 ha = g.halo_bounds(a);
   const Bounds2 he = g.halo_bounds(east);
   EXPECT_DOUBLE_EQ(ha.max_x - he.min_x, 20.0);  // 2·halo
@@ -72,7 +72,7 @@ TEST(TilingGrid, HalosOverlapNeighbours) {
 TEST(TilingGrid, HostileCoordinatesNeitherHangNorOverflow) {
   const CityGrid g = grid(0, 0, 0.5, 0.1);
   for (double v : std::initializer_list<double>{NAN, INFINITY, -INFINITY, 1e300, -1e300, 1e17}) {
-    const CellId c = g.cell_of(v, v);
+    const GridCell c = g.cell_of(v, v);
     EXPECT_FALSE(g.in_core(c, v, v)) << v;
   }
   auto far = g.cells_meeting(Bounds2{1e300, 1e300, 1e300, 1e300}, true);
@@ -94,28 +94,28 @@ TEST(TilingGrid, CellsMeetingBoundsAreOrderedAndExact) {
   const CityGrid g = grid(0, 0, 100, 10);
   auto cores = g.cells_meeting(Bounds2{150, 150, 250, 250}, false);
   ASSERT_TRUE(cores.ok());
-  EXPECT_EQ(cores.value(), (std::vector<CellId>{{1, 1}, {2, 1}, {1, 2}, {2, 2}}));
+  EXPECT_EQ(cores.value(), (std::vector<GridCell>{{1, 1}, {1, 2}, {2, 1}, {2, 2}}));
   // Touching a core's upper edge does not meet that core (half-open) ...
   auto touching = g.cells_meeting(Bounds2{150, 150, 200, 199}, false);
-  EXPECT_EQ(touching.value(), (std::vector<CellId>{{1, 1}, {2, 1}}));
+  EXPECT_EQ(touching.value(), (std::vector<GridCell>{{1, 1}, {2, 1}}));
   // ... but halos are closed: 10 units of halo reach into the neighbours.
   auto halos = g.cells_meeting(Bounds2{150, 150, 185, 185}, true);
-  EXPECT_EQ(halos.value(), (std::vector<CellId>{{1, 1}}));
+  EXPECT_EQ(halos.value(), (std::vector<GridCell>{{1, 1}}));
   auto halos2 = g.cells_meeting(Bounds2{150, 150, 191, 191}, true);
-  EXPECT_EQ(halos2.value(), (std::vector<CellId>{{1, 1}, {2, 1}, {1, 2}, {2, 2}}));
+  EXPECT_EQ(halos2.value(), (std::vector<GridCell>{{1, 1}, {1, 2}, {2, 1}, {2, 2}}));
   EXPECT_FALSE(g.cells_meeting(Bounds2{0, 0, 1e9, 1e9}, true).ok());
   EXPECT_FALSE(g.cells_meeting(Bounds2{5, 0, 1, 1}, true).ok());
 }
 
-TEST(TilingCellId, TextRoundTrip) {
-  for (const CellId c : {CellId{0, 0}, CellId{12, -3}, CellId{-7, 123456789}}) {
-    auto back = CellId::parse(c.to_string());
-    ASSERT_TRUE(back.ok()) << c.to_string();
+TEST(TilingGridCell, TextRoundTrip) {
+  for (const GridCell c : {GridCell{0, 0}, GridCell{12, -3}, GridCell{-7, 123456789}}) {
+    auto back = GridCell::parse(c.name());
+    ASSERT_TRUE(back.ok()) << c.name();
     EXPECT_EQ(back.value(), c);
   }
-  EXPECT_EQ(CellId({12, -3}).to_string(), "c12_r-3");
+  EXPECT_EQ(GridCell({12, -3}).name(), "c12_r-3");
   for (const char* bad : {"", "c1", "c1_r", "x1_r2", "c1_r2x", "c_r2", "c1_x2"})
-    EXPECT_FALSE(CellId::parse(bad).ok()) << bad;
+    EXPECT_FALSE(GridCell::parse(bad).ok()) << bad;
 }
 
 std::vector<InputBounds> random_inputs(std::uint64_t seed, int n) {
@@ -151,7 +151,7 @@ TEST(TilingIndex, DeterministicWhateverTheInputOrder) {
       EXPECT_EQ(again.value().inputs()[i].name, first.value().inputs()[i].name);
     }
   }
-  // Cells in (row, column) order; inputs ascending; names sorted.
+  // Cells in (column, row) order; inputs ascending; names sorted.
   const auto& cells = first.value().cells();
   EXPECT_TRUE(
       std::is_sorted(cells.begin(), cells.end(),
@@ -170,13 +170,13 @@ TEST(TilingIndex, EachInputFeedsExactlyTheCellsWhoseHaloItMeets) {
   const auto& inputs = index.value().inputs();
   for (std::int64_t row = -2; row < 13; ++row) {
     for (std::int64_t column = -2; column < 13; ++column) {
-      const CellId cell{column, row};
+      const GridCell cell{column, row};
       std::vector<std::size_t> expected;
       for (std::size_t i = 0; i < inputs.size(); ++i) {
         if (g.halo_bounds(cell).intersects(inputs[i].bounds)) expected.push_back(i);
       }
       const auto got = index.value().inputs_for(cell);
-      EXPECT_EQ(std::vector<std::size_t>(got.begin(), got.end()), expected) << cell.to_string();
+      EXPECT_EQ(std::vector<std::size_t>(got.begin(), got.end()), expected) << cell.name();
     }
   }
 }
@@ -186,14 +186,14 @@ TEST(TilingIndex, PointsOfSeveralFilesGatheredWithTheHalo) {
   auto index = TileIndex::build(g, {InputBounds{"b.las", Bounds2{95, 0, 195, 100}},
                                     InputBounds{"a.las", Bounds2{0, 0, 100, 100}}});
   ASSERT_TRUE(index.ok());
-  const auto feeding = index.value().inputs_for(CellId{0, 0});
+  const auto feeding = index.value().inputs_for(GridCell{0, 0});
   ASSERT_EQ(feeding.size(), 2u);
   EXPECT_EQ(index.value().inputs()[feeding[0]].name, "a.las");
   const std::vector<Vec3> file_a = {{5, 5, 0}, {99, 50, 0}, {50, 99.5, 0}};
   const std::vector<Vec3> file_b = {{100, 50, 1}, {109, 50, 2}, {111, 50, 3}};
-  EXPECT_EQ(select_points(g, CellId{0, 0}, file_a, false), (std::vector<std::size_t>{0, 1, 2}));
-  EXPECT_EQ(select_points(g, CellId{0, 0}, file_b, false), (std::vector<std::size_t>{}));
-  EXPECT_EQ(select_points(g, CellId{0, 0}, file_b, true), (std::vector<std::size_t>{0, 1}));
+  EXPECT_EQ(select_points(g, GridCell{0, 0}, file_a, false), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(select_points(g, GridCell{0, 0}, file_b, false), (std::vector<std::size_t>{}));
+  EXPECT_EQ(select_points(g, GridCell{0, 0}, file_b, true), (std::vector<std::size_t>{0, 1}));
   EXPECT_FALSE(TileIndex::build(g, {InputBounds{"bad.las", Bounds2{1, 1, 0, 0}}}).ok());
 }
 

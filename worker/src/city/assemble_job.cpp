@@ -90,11 +90,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   if (payload.is_discarded() || !payload.contains("cell") || !payload.contains("fits")) {
     return {ErrorCode::Internal, "job " + job.key + " has a malformed payload"};
   }
-  const Cell cell{payload.at("column").get<std::int64_t>(), payload.at("row").get<std::int64_t>()};
+  const kernel::GridCell cell{payload.at("column").get<std::int64_t>(),
+                              payload.at("row").get<std::int64_t>()};
   const std::string name = cell.name();
-  const double size = config.city.cell_size, halo = config.city.halo;
-  const auto corner = cell_origin(cell, size);
-  const kernel::Vec3 cell_origin3(corner[0], corner[1], 0.0);
+  const kernel::Grid grid = run_grid(config);
+  const double size = grid.size, halo = grid.halo;
+  const kernel::Vec3 cell_origin3(grid.edge_x(cell.column), grid.edge_y(cell.row), 0.0);
 
   // Primitives of every tile near the cell, in tile order, those meeting the halo; the tiles'
   // structure points in the halo, in the cell frame.
@@ -127,12 +128,12 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
         kernel::BoundingBox outer =
             primitive_crs_box(plain, tile_origin, config.kernel.linear_tolerance);
         outer.enlarge(config.kernel.linear_tolerance);
-        if (!outer.empty() && !meets_halo(outer, cell, size, halo)) continue;
+        if (!outer.empty() && !grid.meets_halo(outer, cell)) continue;
       }
       const kernel::BoundingBox box =
           primitive_crs_box(p.spec, tile_origin, config.kernel.linear_tolerance);
       if (box.empty()) continue;  // the fit job left out primitives that do not build
-      if (!meets_halo(box, cell, size, halo)) continue;
+      if (!grid.meets_halo(box, cell)) continue;
       CellPrimitive cp;
       cp.primitive.spec = p.spec;
       cp.primitive.spec.placement =
@@ -176,15 +177,15 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<const assembly::AssembledObject*> kept;
   for (const assembly::AssembledObject& object : a.objects) {
     kernel::BoundingBox box;
-    std::optional<Cell> anchor;
+    std::optional<kernel::GridCell> anchor;
     for (int i : object.primitives) {
       const kernel::BoundingBox& b = prims[static_cast<std::size_t>(i)].crs_box;
       box.add(b);
-      const Cell c = cell_of(b.min.x(), b.min.y(), size);
-      if (!anchor || cell_less(c, *anchor)) anchor = c;
+      const kernel::GridCell c = grid.cell_of(b.min.x(), b.min.y());
+      if (!anchor || c < *anchor) anchor = c;
     }
-    if (!anchor || anchor->column != cell.column || anchor->row != cell.row) continue;
-    if (!within_halo(box, cell, size, halo)) {
+    if (!anchor || *anchor != cell) continue;
+    if (!grid.within_halo(box, cell)) {
       problems.push_back("object " + object.id + " reaches past the halo of cell " + name +
                          " (city.halo " + ordered_json(halo).dump() +
                          "): it may be cut; raise city.halo");
@@ -319,7 +320,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   // The run manifest's head and export entries (export/manifest.h), then the cell's own.
   ordered_json manifest = manifest_head(config, "cell");
   manifest["cell"] = name;
-  manifest["origin"] = {corner[0], corner[1], 0.0};
+  manifest["origin"] = {cell_origin3.x(), cell_origin3.y(), 0.0};
   manifest["crs"] = crs_text;
   manifest["files"] = files;
   manifest["objects"] = object_records;
@@ -336,7 +337,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   record["cell"] = name;
   record["column"] = cell.column;
   record["row"] = cell.row;
-  record["origin"] = {corner[0], corner[1], 0.0};
+  record["origin"] = {cell_origin3.x(), cell_origin3.y(), 0.0};
   record["manifest"] = {{"key", dir_key + "/manifest.json"},
                         {"sha256", sha256_hex(manifest_text)},
                         {"bytes", manifest_text.size()}};

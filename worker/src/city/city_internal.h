@@ -1,7 +1,6 @@
 #pragma once
 // Shared pieces of the city jobs (city_jobs.h): the cell grid, files and records.
 
-#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -11,6 +10,7 @@
 #include "csgtile/config/config.h"
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/grid.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/job_support.h"
@@ -21,25 +21,11 @@ namespace csgtile::worker::city::detail {
 
 using nlohmann::ordered_json;
 
-/// A cell of the run's grid: squares of city.cell_size aligned to multiples of it.
-struct Cell {
-  std::int64_t column = 0, row = 0;
-  std::string name() const;  ///< "c<column>_r<row>"
-};
-
-/// The cell holding (x, y): floor(x / size), floor(y / size). Every decision about which cell
-/// an anchor is in goes through here, so that all jobs agree bit for bit.
-Cell cell_of(double x, double y, double size);
-/// Minimum corner of the cell's core.
-std::array<double, 2> cell_origin(const Cell& cell, double size);
-/// Whether the xy extent of `box` meets the cell grown by `halo` (closed).
-bool meets_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
-/// Whether the xy extent of `box` lies within the cell grown by `halo`.
-bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo);
-
-/// Total order of cells (column, then row): an object's cell is the least of its primitives'
-/// anchor cells, which every one of them had an assemble job for.
-bool cell_less(const Cell& a, const Cell& b);
+/// The run's grid (kernel/grid.h): squares of city.cell_size aligned to multiples of it, with
+/// city.halo. Every decision about which cell an anchor is in goes through its cell_of, so that
+/// all jobs agree bit for bit; an object's cell is the least (GridCell's order) of its
+/// primitives' anchor cells, which every one of them had an assemble job for.
+kernel::Grid run_grid(const config::Config& config);
 
 /// The box in CRS coordinates of a primitive read from a fit's scene file (tile `origin`
 /// added), or an empty box when it cannot be built. The fit job (on its scene file's parsed

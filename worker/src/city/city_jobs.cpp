@@ -27,33 +27,8 @@ namespace csgtile::worker::city {
 
 namespace detail {
 
-std::string Cell::name() const { return "c" + std::to_string(column) + "_r" + std::to_string(row); }
-
-Cell cell_of(double x, double y, double size) {
-  return {static_cast<std::int64_t>(std::floor(x / size)),
-          static_cast<std::int64_t>(std::floor(y / size))};
-}
-
-std::array<double, 2> cell_origin(const Cell& cell, double size) {
-  return {static_cast<double>(cell.column) * size, static_cast<double>(cell.row) * size};
-}
-
-bool meets_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo) {
-  if (box.empty()) return false;
-  const auto o = cell_origin(cell, size);
-  return box.max.x() >= o[0] - halo && box.min.x() <= o[0] + size + halo &&
-         box.max.y() >= o[1] - halo && box.min.y() <= o[1] + size + halo;
-}
-
-bool within_halo(const kernel::BoundingBox& box, const Cell& cell, double size, double halo) {
-  if (box.empty()) return true;
-  const auto o = cell_origin(cell, size);
-  return box.min.x() >= o[0] - halo && box.max.x() <= o[0] + size + halo &&
-         box.min.y() >= o[1] - halo && box.max.y() <= o[1] + size + halo;
-}
-
-bool cell_less(const Cell& a, const Cell& b) {
-  return a.column != b.column ? a.column < b.column : a.row < b.row;
+kernel::Grid run_grid(const config::Config& config) {
+  return kernel::Grid{0.0, 0.0, config.city.cell_size, config.city.halo};
 }
 
 kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const kernel::Vec3& origin,
@@ -152,7 +127,7 @@ namespace {
 struct Tile {
   std::string id;
   std::string input;
-  std::optional<detail::Cell> cell;
+  std::optional<kernel::GridCell> cell;
   std::size_t index = 0;
   /// Of a LAS/LAZ tile in a run of several: its header's xy bounds (its fit reads the points
   /// of the tiles around it, tile_share.h).
@@ -177,17 +152,17 @@ bool is_copc_name(const std::string& input) { return name_ends_with(input, ".cop
 // The cells a COPC input's header bounds cover (its header read locally, or by range
 // requests for a URL). Errors: as the readers and the fetcher.
 Failure copc_cells(const std::string& input, const config::Config& config,
-                   std::vector<detail::Cell>& cells) {
+                   std::vector<kernel::GridCell>& cells) {
   cells.clear();
   std::unique_ptr<geo::LasReader> reader;
   if (Failure f = fetch::open_las(input, fetch::policy_of(config.fetch), reader); !f.ok()) {
     return f;
   }
   const geo::LasHeader& h = reader->header();
-  const double size = config.city.cell_size;
+  const kernel::Grid grid = detail::run_grid(config);
   if (!(h.min[0] <= h.max[0]) || !(h.min[1] <= h.max[1])) return {};  // no points
-  const detail::Cell low = detail::cell_of(h.min[0], h.min[1], size);
-  const detail::Cell high = detail::cell_of(h.max[0], h.max[1], size);
+  const kernel::GridCell low = grid.cell_of(h.min[0], h.min[1]);
+  const kernel::GridCell high = grid.cell_of(h.max[0], h.max[1]);
   const double count = static_cast<double>(high.column - low.column + 1) *
                        static_cast<double>(high.row - low.row + 1);
   if (count > 1e6) {
@@ -231,9 +206,9 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
       out.push_back({input, input, std::nullopt, out.size()});
       continue;
     }
-    std::vector<detail::Cell> cells;
+    std::vector<kernel::GridCell> cells;
     if (Failure f = copc_cells(input, config, cells); !f.ok()) return f;
-    for (const detail::Cell& cell : cells) {
+    for (const kernel::GridCell& cell : cells) {
       out.push_back({input + " @" + cell.name(), input, cell, out.size()});
     }
   }
@@ -283,7 +258,8 @@ std::vector<Tile> tile_inputs(const config::Config& config) {
     } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
                t.contains("cell") && t["cell"].is_array() && t["cell"].size() == 2 &&
                t["cell"][0].is_number_integer() && t["cell"][1].is_number_integer()) {
-      const detail::Cell cell{t["cell"][0].get<std::int64_t>(), t["cell"][1].get<std::int64_t>()};
+      const kernel::GridCell cell{t["cell"][0].get<std::int64_t>(),
+                                  t["cell"][1].get<std::int64_t>()};
       const std::string input = t["input"].get<std::string>();
       out.push_back({input + " @" + cell.name(), input, cell, out.size()});
     }
@@ -319,8 +295,9 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   // A cell of a COPC input: the cell's square.
   auto extent_of = [&config](const Tile& t) -> std::optional<Extent> {
     if (!t.cell) return t.extent;
-    const auto o = detail::cell_origin(*t.cell, config.city.cell_size);
-    return Extent{o[0], o[1], o[0] + config.city.cell_size, o[1] + config.city.cell_size};
+    const kernel::Grid grid = detail::run_grid(config);
+    return Extent{grid.edge_x(t.cell->column), grid.edge_y(t.cell->row),
+                  grid.edge_x(t.cell->column + 1), grid.edge_y(t.cell->row + 1)};
   };
   std::vector<TileExtent> extents;
   std::vector<std::size_t> of_tile(tiles.size(), SIZE_MAX);
@@ -384,8 +361,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   // left out of every cell (the index job names them).
   std::optional<std::string> crs;
   std::map<std::string, std::vector<ordered_json>> cell_fits;  // cell name → fits meeting its halo
-  std::map<std::string, detail::Cell> cells;
-  const double size = config.city.cell_size, halo = config.city.halo;
+  std::map<std::string, kernel::GridCell> cells;
+  const kernel::Grid grid = detail::run_grid(config);
   for (const Tile& t : tiles) {
     const auto it = fits.find(fit_key(run, t.id));
     if (it == fits.end()) continue;
@@ -397,7 +374,7 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
       const auto& c = name;
       cells.emplace(
           c.at("name").get<std::string>(),
-          detail::Cell{c.at("column").get<std::int64_t>(), c.at("row").get<std::int64_t>()});
+          kernel::GridCell{c.at("column").get<std::int64_t>(), c.at("row").get<std::int64_t>()});
     }
   }
   for (const auto& [name, cell] : cells) {
@@ -410,7 +387,7 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
       kernel::BoundingBox box;
       box.add(kernel::Vec3(b.at(0).get<double>(), b.at(1).get<double>(), b.at(2).get<double>()));
       box.add(kernel::Vec3(b.at(3).get<double>(), b.at(4).get<double>(), b.at(5).get<double>()));
-      if (!detail::meets_halo(box, cell, size, halo)) continue;
+      if (!grid.meets_halo(box, cell)) continue;
       ordered_json fit = {{"fit", it->first},
                           {"tile", t.index},
                           {"scene", it->second.at("scene")},

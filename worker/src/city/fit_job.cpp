@@ -39,19 +39,20 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   // A cell of a COPC input: only the octree nodes meeting the cell and its halo are read
   // (by range requests for a URL: no download of the file); the buildings across its edges
   // are shared with the neighbouring cells (tile_share.h).
-  std::optional<Cell> only_cell;
+  std::optional<kernel::GridCell> only_cell;
   TileSource source;
   if (payload.contains("cell")) {
     const auto& c = payload["cell"];
     if (!c.is_array() || c.size() != 2 || !c[0].is_number_integer() || !c[1].is_number_integer()) {
       return {ErrorCode::Internal, "job " + job.key + " has a malformed cell"};
     }
-    only_cell = Cell{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()};
-    const auto corner = cell_origin(*only_cell, config.city.cell_size);
+    only_cell = kernel::GridCell{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()};
+    const kernel::Grid grid = run_grid(config);
     geo::Bounds3 region;
-    region.min = {corner[0] - config.city.halo, corner[1] - config.city.halo, -INFINITY};
-    region.max = {corner[0] + config.city.cell_size + config.city.halo,
-                  corner[1] + config.city.cell_size + config.city.halo, INFINITY};
+    region.min = {grid.edge_x(only_cell->column) - grid.halo,
+                  grid.edge_y(only_cell->row) - grid.halo, -INFINITY};
+    region.max = {grid.edge_x(only_cell->column + 1) + grid.halo,
+                  grid.edge_y(only_cell->row + 1) + grid.halo, INFINITY};
     source.region = region;
     input = payload["input"].get<std::string>();
     if (fetch::is_remote_url(input)) {
@@ -173,17 +174,18 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   auto published = geo::parse_scene(text);
   if (!published.ok()) return {ErrorCode::Internal, input + ": " + published.error().message};
   kernel::BoundingBox bounds;
-  std::map<std::string, Cell> anchors;
+  std::map<std::string, kernel::GridCell> anchors;
+  const kernel::Grid grid = run_grid(config);
   std::size_t other_cells = 0;
   std::vector<geo::ScenePrimitive> in_cell;
   for (const geo::ScenePrimitive& p : published->primitives) {
     const kernel::BoundingBox box = primitive_crs_box(p.spec, o, config.kernel.linear_tolerance);
     if (box.empty())
       return {ErrorCode::Internal, input + ": primitive " + p.id + " does not rebuild"};
-    const Cell cell = cell_of(box.min.x(), box.min.y(), config.city.cell_size);
+    const kernel::GridCell cell = grid.cell_of(box.min.x(), box.min.y());
     // Among neighbours the tile share decided which buildings are this fit's; a cell
     // without (a run enqueued before) keeps the primitives anchored in it.
-    if (only_cell && !around && (cell.column != only_cell->column || cell.row != only_cell->row)) {
+    if (only_cell && !around && cell != *only_cell) {
       ++other_cells;  // anchored in a neighbour cell: that cell's job keeps it
       continue;
     }

@@ -3,16 +3,16 @@
 /// The city grid: square cells in one CRS, each with a halo, and the index saying which input
 /// files feed which cell.
 ///
-/// Cell (column, row) has the core [x0 + column·size, x0 + (column+1)·size) ×
-/// [y0 + row·size, y0 + (row+1)·size), half-open, so every point lies in exactly one core;
-/// cell_of agrees with core_bounds bit for bit (both use the same arithmetic). Its halo bounds
-/// are the core grown by `halo` on every side, closed; halos of neighbours overlap by 2·halo.
-/// All coordinates are in the grid CRS's units (feet for a foot CRS, degrees for a
-/// geographic one).
+/// The cells are kernel::GridCell of a kernel::Grid (kernel/grid.h): cell (column, row) has
+/// the core [x0 + column·size, x0 + (column+1)·size) × [y0 + row·size, y0 + (row+1)·size),
+/// half-open, so every point lies in exactly one core; cell_of agrees with core_bounds bit for
+/// bit. Its halo bounds are the core grown by `halo` on every side, closed; halos of
+/// neighbours overlap by 2·halo. All coordinates are in the grid CRS's units (feet for a foot
+/// CRS, degrees for a geographic one).
 ///
-/// Determinism: cells are ordered by (row, column); inputs are put in a canonical order (by
-/// name, then bounds) before indexing, so the index does not depend on the order files were
-/// listed in.
+/// Determinism: cells are ordered by (column, row), GridCell's order; inputs are put in a
+/// canonical order (by name, then bounds) before indexing, so the index does not depend on
+/// the order files were listed in.
 
 #include <compare>
 #include <cstddef>
@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "csgtile/geo/crs.h"
+#include "csgtile/kernel/grid.h"
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/result.h"
 
@@ -38,22 +39,7 @@ struct Bounds2 {
   bool intersects(const Bounds2& other) const;
 };
 
-/// A cell of the grid. Ordered by (row, column).
-struct CellId {
-  std::int64_t column = 0;
-  std::int64_t row = 0;
-
-  std::strong_ordering operator<=>(const CellId& other) const {
-    if (auto c = row <=> other.row; c != 0) return c;
-    return column <=> other.column;
-  }
-  bool operator==(const CellId& other) const = default;
-
-  /// "c<column>_r<row>", e.g. "c12_r-3": stable, used in object keys.
-  std::string to_string() const;
-  /// Inverse of to_string. Errors: InvalidArgument naming the text.
-  static kernel::Result<CellId> parse(std::string_view text);
-};
+using kernel::GridCell;
 
 /// Grid definition, in the grid CRS's units.
 struct GridSpec {
@@ -75,23 +61,25 @@ class CityGrid {
 
   /// The cell whose core holds (x, y). Precondition: finite, and within ±2^52 cells of the
   /// origin; otherwise a clamped cell is returned (whose core does not hold the point).
-  CellId cell_of(double x, double y) const;
-  Bounds2 core_bounds(CellId cell) const;
-  Bounds2 halo_bounds(CellId cell) const;
-  bool in_core(CellId cell, double x, double y) const;  ///< half-open
-  bool in_halo(CellId cell, double x, double y) const;  ///< closed
+  GridCell cell_of(double x, double y) const;
+  Bounds2 core_bounds(GridCell cell) const;
+  Bounds2 halo_bounds(GridCell cell) const;
+  bool in_core(GridCell cell, double x, double y) const;  ///< half-open
+  bool in_halo(GridCell cell, double x, double y) const;  ///< closed
   /// Cells whose halo (or core, when include_halo is false) meets `bounds` (closed), in
-  /// (row, column) order. Errors: InvalidArgument for invalid bounds or more than
+  /// (column, row) order. Errors: InvalidArgument for invalid bounds or more than
   /// `max_cells` cells.
-  kernel::Result<std::vector<CellId>> cells_meeting(const Bounds2& bounds, bool include_halo,
-                                                    std::size_t max_cells = 1'000'000) const;
+  kernel::Result<std::vector<GridCell>> cells_meeting(const Bounds2& bounds, bool include_halo,
+                                                      std::size_t max_cells = 1'000'000) const;
 
  private:
-  CityGrid(Crs crs, GridSpec spec) : crs_(std::move(crs)), spec_(spec) {}
-  double edge_x(std::int64_t column) const;
-  double edge_y(std::int64_t row) const;
+  CityGrid(Crs crs, GridSpec spec)
+      : crs_(std::move(crs)),
+        spec_(spec),
+        grid_{spec.origin_x, spec.origin_y, spec.cell_size, spec.halo} {}
   Crs crs_;
   GridSpec spec_;
+  kernel::Grid grid_;
 };
 
 /// One input file's extent in the grid CRS (a LAS header's bounds, transformed with
@@ -104,7 +92,7 @@ struct InputBounds {
 /// The inputs feeding one cell (its halo meets their bounds): indices into
 /// TileIndex::inputs(), ascending.
 struct CellInputs {
-  CellId cell;
+  GridCell cell;
   std::vector<std::size_t> inputs;
 };
 
@@ -119,10 +107,10 @@ class TileIndex {
   const CityGrid& grid() const { return grid_; }
   /// The inputs in canonical order (by name, then bounds).
   const std::vector<InputBounds>& inputs() const { return inputs_; }
-  /// Every cell fed by at least one input, in (row, column) order.
+  /// Every cell fed by at least one input, in (column, row) order.
   const std::vector<CellInputs>& cells() const { return cells_; }
   /// The inputs of one cell (empty when none). O(log cells).
-  std::span<const std::size_t> inputs_for(CellId cell) const;
+  std::span<const std::size_t> inputs_for(GridCell cell) const;
 
  private:
   explicit TileIndex(CityGrid grid) : grid_(std::move(grid)) {}
@@ -133,7 +121,7 @@ class TileIndex {
 
 /// Indices of `points` (x, y in the grid CRS) inside a cell's core or halo, ascending: the
 /// points of several files are gathered by calling this per file in the index's order.
-std::vector<std::size_t> select_points(const CityGrid& grid, CellId cell,
+std::vector<std::size_t> select_points(const CityGrid& grid, GridCell cell,
                                        std::span<const kernel::Vec3> points, bool include_halo);
 
 /// Bounds of `bounds` (in `from`) expressed in `to`: the box around `samples_per_edge` points

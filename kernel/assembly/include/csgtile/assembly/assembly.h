@@ -16,6 +16,7 @@
 
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/grid.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/kernel/snap.h"
 
@@ -30,19 +31,13 @@ struct AssemblyPrimitive {
   std::string group{};
 };
 
-/// A square cell (i, j) of a grid in the XY plane: [ox + i·size, ox + (i+1)·size) × the
-/// same in y. Its halo is the band of width `halo` around it: primitives meeting the cell
-/// or its halo are read; an object belongs to the cell holding its anchor, the minimum
-/// (x, y) corner of its bounding box.
+/// A cell of a grid (kernel/grid.h) and the grid: primitives meeting the cell's halo are
+/// read; an object belongs to the cell holding its anchor, the minimum (x, y) corner of its
+/// bounding box. Objects larger than the halo are reported.
 struct CellSpec {
-  double origin_x = 0, origin_y = 0;
-  double size = 0;  ///< > 0
-  long long i = 0, j = 0;
-  double halo = 0;  ///< ≥ 0; objects larger than the halo are reported
+  kernel::Grid grid;  ///< size > 0, halo ≥ 0
+  kernel::GridCell cell;
 };
-
-/// The cell (i, j) of the grid holding point (x, y).
-std::pair<long long, long long> cell_of(const CellSpec& grid, double x, double y);
 
 struct AssemblyOptions {
   double tolerance = kernel::kDefaultTolerance;  ///< contact tolerance, world units
