@@ -27,6 +27,7 @@
 #include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "job_records.h"
+#include "jobs/export_settings.h"
 #include "jobs/job_table.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
@@ -401,20 +402,24 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
   // earlier) may have published exactly this already; then nothing is rebuilt.
   JobRecords records;
   for (const auto& [key, result] : results) records.add(key, ordered_json::parse(result));
-  const ordered_json head = manifest_head(config, "scenes");
+  const ordered_json head = manifest_head(jobs::manifest_identity(config), "scenes");
   ordered_json published = head;  // and the jobs it was published from
   published["jobs"] = records.jobs;
   published["dead"] = dead_jobs_json(summary.dead);
   summary.manifest = summary.run_dir / "manifest.json";
   if (already_published(summary.manifest, published, summary.run_dir)) {
     log.info("run", "already published", {{"manifest", summary.manifest.string()}});
-    return publish::publish_run_directory(config, summary.run_dir, log);
+    return publish::publish_run_directory(jobs::publish_target(config), summary.run_dir, log);
   }
   // The run's exports (export/), published before the manifest names them.
+  const RunExportOptions settings = jobs::export_options(config);
   RunObjects objects;
-  if (Failure f = collect_run_objects(config, results, summary.run_dir, objects); !f.ok()) return f;
+  if (Failure f =
+          collect_run_objects(jobs::run_jobs(config), settings, results, summary.run_dir, objects);
+      !f.ok())
+    return f;
   RunIndexReport index;
-  if (Failure f = write_run_index(config, objects, summary.run_dir, index); !f.ok()) return f;
+  if (Failure f = write_run_index(settings, objects, summary.run_dir, index); !f.ok()) return f;
   log.info("index", "written",
            {{"key", index.key},
             {"objects", std::to_string(index.stats.objects)},
@@ -422,7 +427,8 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
             {"seconds", std::to_string(index.seconds)}});
   for (const std::string& w : index.stats.warnings) log.info("index", w);
   CityJsonReport cityjson;
-  if (Failure f = write_run_cityjson(config, objects, summary.run_dir, cityjson); !f.ok()) return f;
+  if (Failure f = write_run_cityjson(settings, objects, summary.run_dir, cityjson); !f.ok())
+    return f;
   log.info("cityjson", "written",
            {{"key", cityjson.key},
             {"features", std::to_string(cityjson.stats.features)},
@@ -431,7 +437,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
     log.log(config::LogLevel::Warn, "cityjson", w);
   }
   TilesReport tiles;
-  if (Failure f = write_run_tiles(config, objects, summary.run_dir, tiles); !f.ok()) return f;
+  if (Failure f = write_run_tiles(settings, objects, summary.run_dir, tiles); !f.ok()) return f;
   if (tiles.written) {
     log.info("tiles", "written",
              {{"key", tiles.key},
@@ -452,7 +458,7 @@ Failure publish_run(const config::Config& config, JobQueue& queue_ref, const Log
       !f.ok()) {
     return f;
   }
-  return publish::publish_run_directory(config, summary.run_dir, log);
+  return publish::publish_run_directory(jobs::publish_target(config), summary.run_dir, log);
 }
 
 }  // namespace csgtile::worker

@@ -2,6 +2,7 @@
 // manifest, jobs, dead jobs and timings last, timings outside the hashed bytes.
 
 #include "export/manifest.h"
+#include "jobs/export_settings.h"
 
 #include <gtest/gtest.h>
 
@@ -23,7 +24,7 @@ TEST(RunManifest, EveryKindStartsWithTheSameHead) {
   config.run.name = "delft";
   config.run.seed = 42;
   for (const char* kind : {"scenes", "city", "cell"}) {
-    const ordered_json head = manifest_head(config, kind);
+    const ordered_json head = manifest_head(jobs::manifest_identity(config), kind);
     EXPECT_EQ(keys_of(head), (std::vector<std::string>{"run", "kind", "csgtile_version",
                                                        "config_sha256", "seed"}));
     EXPECT_EQ(head["kind"], kind);
@@ -33,7 +34,8 @@ TEST(RunManifest, EveryKindStartsWithTheSameHead) {
   }
   config::Config other = config;
   other.run.seed = 43;  // another seed: another publication
-  EXPECT_NE(manifest_head(config, "city"), manifest_head(other, "city"));
+  EXPECT_NE(manifest_head(jobs::manifest_identity(config), "city"),
+            manifest_head(jobs::manifest_identity(other), "city"));
 }
 
 TEST(RunManifest, ExportsAreListedAlikeAndTilesOnlyWhenWritten) {
@@ -66,7 +68,7 @@ TEST(RunManifest, JobsDeadAndTimingsComeLastAndTimingsStayOutOfTheHashedBytes) {
   records.add("fit:r:a", ordered_json::parse(R"({"points": 5, "timings": {"stages": {"fit": 1.5},
               "seconds": 1.5, "worker": "w", "attempt": 1}})"));
   const std::vector<DeadJob> dead{{"fit:r:b", "input_invalid: b: not LAS", 3}};
-  ordered_json manifest = manifest_head(config, "city");
+  ordered_json manifest = manifest_head(jobs::manifest_identity(config), "city");
   manifest["problems"] = ordered_json::array();
   std::string text;
   ASSERT_TRUE(write_run_manifest(dir.path(), "r", manifest, records, dead, text).ok());

@@ -20,6 +20,7 @@
 #include "export/manifest.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
+#include "jobs/export_settings.h"
 #include "ops/stage_clock.h"
 #include "snap_json.h"
 
@@ -288,12 +289,13 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
       !f.ok()) {
     return f;
   }
+  const RunExportOptions settings = jobs::export_options(config);
   RunIndexReport index;
-  if (Failure f = write_run_index(config, objects, cell_dir, index); !f.ok()) return f;
+  if (Failure f = write_run_index(settings, objects, cell_dir, index); !f.ok()) return f;
   CityJsonReport cityjson;
-  if (Failure f = write_run_cityjson(config, objects, cell_dir, cityjson); !f.ok()) return f;
+  if (Failure f = write_run_cityjson(settings, objects, cell_dir, cityjson); !f.ok()) return f;
   TilesReport tiles;
-  if (Failure f = write_run_tiles(config, objects, cell_dir, tiles); !f.ok()) return f;
+  if (Failure f = write_run_tiles(settings, objects, cell_dir, tiles); !f.ok()) return f;
   for (const std::string& w : index.stats.warnings) problems.push_back("index: " + w);
   for (const std::string& w : cityjson.stats.warnings) problems.push_back("cityjson: " + w);
   for (const std::string& w : tiles.warnings) problems.push_back("tiles: " + w);
@@ -318,7 +320,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   stats["structure_points_in_halo"] = points.size();
   stats["structure_points_over_no_object"] = points_over_none;
   // The run manifest's head and export entries (export/manifest.h), then the cell's own.
-  ordered_json manifest = manifest_head(config, "cell");
+  ordered_json manifest = manifest_head(jobs::manifest_identity(config), "cell");
   manifest["cell"] = name;
   manifest["origin"] = {cell_origin3.x(), cell_origin3.y(), 0.0};
   manifest["crs"] = crs_text;

@@ -18,6 +18,7 @@
 #include "export/report.h"
 #include "export/run_index.h"
 #include "job_records.h"
+#include "jobs/export_settings.h"
 #include "ops/stage_clock.h"
 #include "publish/publish_run.h"
 #include "snap_json.h"
@@ -228,8 +229,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   }
   // Records written before blocks were kept: compute them all here, as the cells would have.
   if (!all_blocks) {
-    add_building_lods(objects.objects, config.kernel.chordal_tolerance,
-                      config.kernel.linear_tolerance);
+    const RunExportOptions settings = jobs::export_options(config);
+    add_building_lods(objects.objects, settings.chordal_tolerance, settings.linear_tolerance);
   }
   // The relations of objects of one cell as their cell classified them (all cells must give
   // them; a record of an older worker makes the index classify every pair itself).
@@ -246,7 +247,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     if (all_found) objects.cell_relations = std::move(known);
   }
   RunIndexReport index;
-  if (Failure f = write_run_index(config, objects, run_dir, index); !f.ok()) return f;
+  if (Failure f = write_run_index(jobs::export_options(config), objects, run_dir, index); !f.ok())
+    return f;
   log.info("index", "written",
            {{"key", index.key}, {"objects", std::to_string(index.stats.objects)}});
 
@@ -265,7 +267,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
 
   // The manifest: every job's record (timings moved to timings.json), dead jobs, the cells'
   // manifests and the run-level files. Written last: a reader who finds it finds the rest.
-  ordered_json manifest = manifest_head(config, "city");
+  ordered_json manifest = manifest_head(jobs::manifest_identity(config), "city");
   manifest["crs"] = crs_text;
   manifest["crs_to_wgs84"] = datum_transformation;
   manifest["crs_heights"] = height_transformation;
@@ -411,7 +413,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       for (const std::string& block : block_keys(object)) listed.insert(block);
     }
   }
-  if (Failure f = publish::publish_run_directory(config, run_dir, log, &listed); !f.ok()) return f;
+  if (Failure f =
+          publish::publish_run_directory(jobs::publish_target(config), run_dir, log, &listed);
+      !f.ok())
+    return f;
 
   ordered_json record;
   record["manifest"] = {{"key", "manifest.json"},

@@ -773,12 +773,12 @@ kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects
   return dump_line(header) + features;
 }
 
-Failure write_run_cityjson(const config::Config& config, const RunObjects& run,
+Failure write_run_cityjson(const RunExportOptions& settings, const RunObjects& run,
                            const std::filesystem::path& run_dir, CityJsonReport& report) {
   CityJsonOptions options;
   options.crs = run.crs;
   options.origin = run.origin;
-  options.chordal_tolerance = config.kernel.chordal_tolerance;
+  options.chordal_tolerance = settings.chordal_tolerance;
   auto text = cityjson_seq(run.objects, options, &report.stats);
   if (!text.ok()) return {ErrorCode::Internal, text.error().message};
   if (Failure f = write_file_atomic(run_dir / report.key, text.value()); !f.ok()) return f;

@@ -25,7 +25,6 @@
 #include <string>
 #include <vector>
 
-#include "csgtile/config/config.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/result.h"
 #include "csgtile/worker/errors.h"
@@ -85,9 +84,9 @@ struct CityJsonReport {
 };
 
 /// Writes run_dir/<report.key> atomically from the run's objects, in their common CRS (see
-/// collect_run_objects) at kernel.chordal_tolerance. Errors: Io (cannot write), Internal
+/// collect_run_objects) at settings.chordal_tolerance. Errors: Io (cannot write), Internal
 /// (objects the exporter refuses).
-Failure write_run_cityjson(const config::Config& config, const RunObjects& run,
+Failure write_run_cityjson(const RunExportOptions& settings, const RunObjects& run,
                            const std::filesystem::path& run_dir, CityJsonReport& report);
 
 }  // namespace csgtile::worker

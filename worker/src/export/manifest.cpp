@@ -2,20 +2,19 @@
 
 #include "export/manifest.h"
 
-#include "csgtile/worker/job_support.h"
 #include "csgtile/worker/publish.h"
 
 namespace csgtile::worker {
 
 using nlohmann::ordered_json;
 
-ordered_json manifest_head(const config::Config& config, std::string_view kind) {
+ordered_json manifest_head(const ManifestIdentity& identity, std::string_view kind) {
   ordered_json head;
-  head["run"] = config.run.name;
+  head["run"] = identity.run;
   head["kind"] = std::string(kind);
   head["csgtile_version"] = CSGTILE_VERSION;
-  head["config_sha256"] = output_config_sha256(config);
-  head["seed"] = config.run.seed;
+  head["config_sha256"] = identity.config_sha256;
+  head["seed"] = identity.seed;
   return head;
 }
 

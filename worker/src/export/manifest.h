@@ -3,13 +3,13 @@
 // manifest starts with the same head, names its exports with the same entries, and ends with
 // its jobs, dead jobs and timings; it is written last, so a reader who finds it finds the rest.
 
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include "csgtile/config/config.h"
 #include "csgtile/worker/errors.h"
 #include "csgtile/worker/queue.h"
 #include "export/cityjson_seq.h"
@@ -19,9 +19,17 @@
 
 namespace csgtile::worker {
 
-/// What identifies a publication: {"run", "kind" ("scenes" or "city"), "csgtile_version",
-/// "config_sha256", "seed"}.
-nlohmann::ordered_json manifest_head(const config::Config& config, std::string_view kind);
+/// What identifies a publication besides its kind and csgtile's version; the job layer builds
+/// it from the config (jobs/export_settings.h).
+struct ManifestIdentity {
+  std::string run;            ///< run.name
+  std::string config_sha256;  ///< output_config_sha256 (job_support.h)
+  std::uint64_t seed = 0;     ///< run.seed
+};
+
+/// What identifies a publication: {"run", "kind" ("scenes", "city" or "cell"),
+/// "csgtile_version", "config_sha256", "seed"}.
+nlohmann::ordered_json manifest_head(const ManifestIdentity& identity, std::string_view kind);
 
 /// An export as manifests list it: its key, SHA-256 and size, then its writer's figures.
 nlohmann::ordered_json index_entry(const RunIndexReport& index);

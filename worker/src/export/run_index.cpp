@@ -120,7 +120,7 @@ std::vector<IndexObject> job_index_objects(std::size_t input_index, const kernel
   return out;
 }
 
-Failure collect_run_objects(const config::Config& config,
+Failure collect_run_objects(const RunJobs& run_jobs, const RunExportOptions& options,
                             const std::vector<std::pair<std::string, std::string>>& results,
                             const std::filesystem::path& run_dir, RunObjects& out) {
   out = RunObjects{};
@@ -132,10 +132,10 @@ Failure collect_run_objects(const config::Config& config,
   };
   std::vector<Job> jobs;
   std::set<std::string> seen;
-  for (std::size_t i = 0; i < config.run.inputs.size(); ++i) {
-    const std::string& input = config.run.inputs[i];
+  for (std::size_t i = 0; i < run_jobs.inputs.size(); ++i) {
+    const std::string& input = run_jobs.inputs[i];
     if (!seen.insert(input).second) continue;  // one job per distinct input
-    const auto it = by_key.find("build:" + config.run.name + ":" + input);
+    const auto it = by_key.find("build:" + run_jobs.run + ":" + input);
     if (it == by_key.end()) continue;  // dead or not run: reported in the manifest
     const auto record = nlohmann::json::parse(it->second, nullptr, false);
     if (record.is_discarded() || !record.contains("model") || !record["model"].contains("key") ||
@@ -194,17 +194,17 @@ Failure collect_run_objects(const config::Config& config,
     }
     for (IndexObject& object : mine) out.objects.push_back(std::move(object));
   }
-  add_building_lods(out.objects, config.kernel.chordal_tolerance, config.kernel.linear_tolerance);
+  add_building_lods(out.objects, options.chordal_tolerance, options.linear_tolerance);
   return {};
 }
 
-Failure write_run_index(const config::Config& config, const RunObjects& run,
+Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
                         const std::filesystem::path& run_dir, RunIndexReport& report) {
   const auto start = std::chrono::steady_clock::now();
   IndexOptions options;
-  options.chordal_tolerance = config.kernel.chordal_tolerance;
-  options.linear_tolerance = config.kernel.linear_tolerance;
-  options.threads = config.run.threads;
+  options.chordal_tolerance = settings.chordal_tolerance;
+  options.linear_tolerance = settings.linear_tolerance;
+  options.threads = settings.threads;
   options.cell_relations = run.cell_relations;
   if (run.crs) {
     geo::Crs horizontal = *run.crs;

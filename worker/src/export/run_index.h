@@ -10,7 +10,6 @@
 #include <utility>
 #include <vector>
 
-#include "csgtile/config/config.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/worker/errors.h"
@@ -60,20 +59,35 @@ struct RunObjects {
   std::optional<std::vector<ObjectRelation>> cell_relations = {};
 };
 
+/// What the run's exporters (index, CityJSON, 3D Tiles) take from the configuration; the
+/// job layer builds it (jobs/export_settings.h), the exporters never see the config.
+struct RunExportOptions {
+  double chordal_tolerance = 0.0;  ///< kernel.chordal_tolerance: tessellation, LoD rings
+  double linear_tolerance = 0.0;   ///< kernel.linear_tolerance: LoD footprints and checks
+  int threads = 0;                 ///< run.threads: the index's relations; 0 = all cores
+};
+
+/// The jobs of a scene run whose objects are collected: `inputs` in run order (one build job
+/// each, keyed "build:<run>:<input>").
+struct RunJobs {
+  std::string run;
+  std::vector<std::string> inputs;
+};
+
 /// Collects the done jobs among `results` (queue key → job record), in run.inputs order:
 /// models read back from their published keys, scenes re-read for fit quality and frames.
 /// When every job's scene has the same CRS ("crs"/"origin" keys) and it has an EPSG code, all
 /// objects are placed relative to the first job's origin, which becomes `origin`; otherwise
 /// they stay in model coordinates. Errors: Io (cannot read a model), InputInvalid (a model
 /// that does not parse), Internal (a malformed job record).
-Failure collect_run_objects(const config::Config& config,
+Failure collect_run_objects(const RunJobs& jobs, const RunExportOptions& options,
                             const std::vector<std::pair<std::string, std::string>>& results,
                             const std::filesystem::path& run_dir, RunObjects& out);
 
 /// Writes run_dir/index.gpkg from the run's objects: the objects layer is in their common CRS
 /// (EPSG code as srs_id) when they have one, else in the undefined Cartesian SRS.
 /// Errors: Io (cannot write the index), as write_topology_index otherwise.
-Failure write_run_index(const config::Config& config, const RunObjects& run,
+Failure write_run_index(const RunExportOptions& options, const RunObjects& run,
                         const std::filesystem::path& run_dir, RunIndexReport& report);
 
 }  // namespace csgtile::worker

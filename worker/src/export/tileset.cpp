@@ -110,7 +110,7 @@ std::string tileset_json(const Region& region, const std::array<double, 16>& tra
   return tileset.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
-Failure write_run_tiles(const config::Config& config, const RunObjects& run,
+Failure write_run_tiles(const RunExportOptions& settings, const RunObjects& run,
                         const std::filesystem::path& run_dir, TilesReport& report) {
   report = TilesReport{};
   // A run without tiles leaves none from an earlier run for a reader to mistake for its own.
@@ -136,7 +136,7 @@ Failure write_run_tiles(const config::Config& config, const RunObjects& run,
   options.to_enu = [frame = georef.value(), origin = run.origin](const Vec3& p) {
     return frame.to_local(origin + p);
   };
-  options.chordal_tolerance = config.kernel.chordal_tolerance;
+  options.chordal_tolerance = settings.chordal_tolerance;
   options.generator = "csgtile " CSGTILE_VERSION;
   auto made = tile_content(run.objects, options);
   if (!made.ok()) {
@@ -150,7 +150,7 @@ Failure write_run_tiles(const config::Config& config, const RunObjects& run,
   TilesetOptions tileset;
   tileset.content_uri = std::filesystem::path(report.content).filename().string();
   const double metres_per_unit = run.crs->is_projected() ? run.crs->linear_unit.metres : 1.0;
-  tileset.tile_geometric_error = config.kernel.chordal_tolerance * metres_per_unit;
+  tileset.tile_geometric_error = settings.chordal_tolerance * metres_per_unit;
   tileset.geometric_error =
       std::max((content.high - content.low).norm(), tileset.tile_geometric_error);
   const std::string text = tileset_json(enu_box_region(georef.value(), content.low, content.high),

@@ -18,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "csgtile/config/config.h"
 #include "csgtile/geo/georeference.h"
 #include "csgtile/kernel/result.h"
 #include "csgtile/worker/errors.h"
@@ -66,11 +65,11 @@ struct TilesReport {
 };
 
 /// Writes run_dir/tiles/model.glb, then run_dir/tiles/tileset.json, atomically, from the
-/// run's objects at kernel.chordal_tolerance. Without a common CRS (or with one that cannot
+/// run's objects at settings.chordal_tolerance. Without a common CRS (or with one that cannot
 /// be placed on WGS 84, or without an object to draw) nothing is written, stale tiles from
 /// an earlier run are removed and report.skipped says why: 3D Tiles need a georeference.
 /// Errors: Io (cannot write), Internal (objects the exporter refuses).
-Failure write_run_tiles(const config::Config& config, const RunObjects& run,
+Failure write_run_tiles(const RunExportOptions& settings, const RunObjects& run,
                         const std::filesystem::path& run_dir, TilesReport& report);
 
 }  // namespace csgtile::worker
