@@ -1,8 +1,8 @@
 #pragma once
 // Plane geometry shared by the fitting module's proposers (extrusion.cpp, roof.cpp,
-// primitives.cpp): rings (closed polygons as vertex lists, no repeated closing vertex;
-// counter-clockwise has positive area), polygons with holes, the convex hull, the smallest
-// rectangle around a polygon, and the frame and placement of a fitted solid.
+// primitives.cpp): the convex hull, the smallest rectangle around a polygon, and the frame
+// and placement of a fitted solid. Rings and polygons (closed vertex lists, no repeated
+// closing vertex; counter-clockwise has positive area) are the kernel's (polygon2d.h).
 
 #include <optional>
 #include <vector>
@@ -11,11 +11,22 @@
 #include <Eigen/Geometry>
 
 #include "csgtile/kernel/location.h"
+#include "csgtile/kernel/polygon2d.h"
 
 namespace csgtile::fit::detail {
 
 using kernel::Vec2;
 using kernel::Vec3;
+
+// Rings and polygons: kernel/polygon2d.h.
+using kernel::boundary_distance;
+using kernel::douglas_peucker;
+using kernel::inside_polygon;
+using kernel::inside_ring;
+using kernel::polygon_area;
+using kernel::polygon_perimeter;
+using kernel::ring_area;
+using kernel::segment_distance;
 
 /// z of the cross product a × b (positive when b turns left from a).
 inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
@@ -24,37 +35,6 @@ inline double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y(
 inline double cross2(const Vec2& o, const Vec2& a, const Vec2& b) {
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
-
-/// Signed area of a ring (shoelace): positive counter-clockwise.
-double ring_area(const std::vector<Vec2>& ring);
-
-/// Whether `p` lies inside the ring (even-odd rule; either orientation).
-bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring);
-
-/// Distance from `p` to the segment a–b (to `a` when the segment has no length).
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b);
-
-/// Douglas–Peucker on the chain points[i..j] (indices modulo points.size(), so a ring's arc
-/// wraps round): marks in `keep` the vertices a simplification within `tol` keeps between
-/// the ends (the ends themselves are the caller's).
-void douglas_peucker(const std::vector<Vec2>& points, std::size_t i, std::size_t j, double tol,
-                     std::vector<char>& keep);
-
-/// Whether `p` lies inside `outer` and in none of the `holes`.
-bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
-                    const std::vector<std::vector<Vec2>>& holes);
-
-/// Distance from `p` to the nearest edge of `outer` or of one of the `holes` (infinity when
-/// all rings are empty).
-double boundary_distance(const Vec2& p, const std::vector<Vec2>& outer,
-                         const std::vector<std::vector<Vec2>>& holes);
-
-/// Total edge length of `outer` and its `holes`.
-double polygon_perimeter(const std::vector<Vec2>& outer,
-                         const std::vector<std::vector<Vec2>>& holes);
-
-/// Area of `outer` less the areas of its `holes`, whatever the rings' orientations.
-double polygon_area(const std::vector<Vec2>& outer, const std::vector<std::vector<Vec2>>& holes);
 
 /// Convex hull (Andrew's monotone chain): counter-clockwise, no repeated or collinear point.
 /// Fewer than 3 distinct points come back sorted (by x, then y) as they are.

@@ -27,31 +27,11 @@ struct Node {
   int count = 0;
 };
 
-// A ray prepared for box tests.
-struct BoxRay {
-  Vec3 origin;
-  Vec3 inverse;                // 1 / direction, ±inf for zero components
-  std::array<bool, 3> flat{};  // direction component exactly 0
-
-  // Entry distance into `box` if the ray meets it within [0, t_max], else +inf.
-  double enter(const kernel::BoundingBox& box, double t_max) const {
-    double t0 = 0.0;
-    double t1 = t_max;
-    for (int i = 0; i < 3; ++i) {
-      if (flat[static_cast<std::size_t>(i)]) {
-        if (origin[i] < box.min[i] || origin[i] > box.max[i]) return kInf;
-        continue;
-      }
-      double a = (box.min[i] - origin[i]) * inverse[i];
-      double b = (box.max[i] - origin[i]) * inverse[i];
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-      if (t0 > t1) return kInf;
-    }
-    return t0;
-  }
-};
+// Entry distance of the ray into `box` if it meets it within [0, t_max], else +inf.
+double enter(const kernel::BoxRay& ray, const kernel::BoundingBox& box, double t_max) {
+  double t0 = 0.0, t1 = t_max;
+  return ray.clip(box, t0, t1) ? t0 : kInf;
+}
 
 }  // namespace
 
@@ -128,19 +108,14 @@ std::optional<RayHit> RayCaster::first_hit(const Vec3& origin, const Vec3& direc
     }
   }
   if (impl_->nodes.empty()) return best;
-  BoxRay ray;
-  ray.origin = origin;
-  for (int i = 0; i < 3; ++i) {
-    ray.flat[static_cast<std::size_t>(i)] = direction[i] == 0.0;
-    ray.inverse[i] = 1.0 / direction[i];
-  }
+  const kernel::BoxRay ray(origin, direction);
   std::array<int, 128> stack{};
   int top = 0;
-  if (ray.enter(impl_->nodes[0].box, limit) < kInf) stack[static_cast<std::size_t>(top++)] = 0;
+  if (enter(ray, impl_->nodes[0].box, limit) < kInf) stack[static_cast<std::size_t>(top++)] = 0;
   while (top > 0) {
     const Node& node =
         impl_->nodes[static_cast<std::size_t>(stack[static_cast<std::size_t>(--top)])];
-    if (ray.enter(node.box, limit) == kInf) continue;  // the best hit moved closer
+    if (enter(ray, node.box, limit) == kInf) continue;  // the best hit moved closer
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int index = impl_->order[static_cast<std::size_t>(i)];
@@ -155,8 +130,9 @@ std::optional<RayHit> RayCaster::first_hit(const Vec3& origin, const Vec3& direc
       }
       continue;
     }
-    const double t_left = ray.enter(impl_->nodes[static_cast<std::size_t>(node.left)].box, limit);
-    const double t_right = ray.enter(impl_->nodes[static_cast<std::size_t>(node.right)].box, limit);
+    const double t_left = enter(ray, impl_->nodes[static_cast<std::size_t>(node.left)].box, limit);
+    const double t_right =
+        enter(ray, impl_->nodes[static_cast<std::size_t>(node.right)].box, limit);
     // Push the farther child first so that the nearer one is visited first.
     const bool left_first = t_left <= t_right;
     const int near_child = left_first ? node.left : node.right;

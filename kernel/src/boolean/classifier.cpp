@@ -37,22 +37,9 @@ BoundingBox moved_box(const BoundingBox& local, const Location& location) {
 
 // The part [lo, hi] of the ray o + t·d, t ≥ 0, inside the box; false when it misses.
 bool clip_ray(const BoundingBox& box, const Vec3& o, const Vec3& d, double& lo, double& hi) {
-  if (box.empty()) return false;
   lo = 0.0;
   hi = kInfinity;
-  for (int i = 0; i < 3; ++i) {
-    if (d[i] == 0.0) {
-      if (o[i] < box.min[i] || o[i] > box.max[i]) return false;
-      continue;
-    }
-    double a = (box.min[i] - o[i]) / d[i];
-    double b = (box.max[i] - o[i]) / d[i];
-    if (a > b) std::swap(a, b);
-    lo = std::max(lo, a);
-    hi = std::min(hi, b);
-    if (lo > hi) return false;
-  }
-  return true;
+  return BoxRay(o, d).clip(box, lo, hi);
 }
 
 double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
@@ -442,24 +429,6 @@ std::uint32_t BoxTree::build_node(std::vector<std::uint32_t>& order,
   nodes_[index].left = left;
   nodes_[index].right = right;
   return index;
-}
-
-bool BoxTree::meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction,
-                        double t_max) {
-  double lo = 0.0, hi = t_max;
-  for (int i = 0; i < 3; ++i) {
-    if (std::isinf(inverse_direction[i])) {
-      if (origin[i] < box.min[i] || origin[i] > box.max[i]) return false;
-      continue;
-    }
-    double a = (box.min[i] - origin[i]) * inverse_direction[i];
-    double b = (box.max[i] - origin[i]) * inverse_direction[i];
-    if (a > b) std::swap(a, b);
-    lo = std::max(lo, a);
-    hi = std::min(hi, b);
-    if (lo > hi) return false;
-  }
-  return true;
 }
 
 // ---- SolidClassifier ------------------------------------------------------------------------

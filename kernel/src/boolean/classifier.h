@@ -127,8 +127,6 @@ class BoxTree {
   };
   std::uint32_t build_node(std::vector<std::uint32_t>& order, const std::vector<BoundingBox>& boxes,
                            std::uint32_t first, std::uint32_t count);
-  static bool meets_ray(const BoundingBox& box, const Vec3& origin, const Vec3& inverse_direction,
-                        double t_max);
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> items_;
 };
@@ -157,13 +155,14 @@ void BoxTree::visit_point(const Vec3& p, double margin, F&& f) const {
 template <class F>
 void BoxTree::visit_ray(const Vec3& origin, const Vec3& direction, double t_max, F&& f) const {
   if (nodes_.empty()) return;
-  const Vec3 inverse_direction = direction.cwiseInverse();
+  const BoxRay ray(origin, direction);
   std::uint32_t stack[64];
   int size = 0;
   stack[size++] = 0;
   while (size > 0) {
     const Node& node = nodes_[stack[--size]];
-    if (!meets_ray(node.box, origin, inverse_direction, t_max)) continue;
+    double t0 = 0.0, t1 = t_max;
+    if (!ray.clip(node.box, t0, t1)) continue;
     if (node.count > 0) {
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i) f(items_[i]);
     } else {

@@ -4,7 +4,7 @@
 #include <map>
 #include <string>
 
-#include "builders/polygon2d.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "csgtile/kernel/primitives.h"
 
 namespace csgtile::kernel {
@@ -123,33 +123,31 @@ Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
                              double tolerance) {
   if (!positive_finite(h)) return Error{ErrorCode::InvalidArgument, "extrusion height must be > 0"};
   std::vector<std::vector<Vec2>> rings;
-  rings.push_back(detail::clean_ring(outer, tolerance));
-  for (const auto& hole : holes) rings.push_back(detail::clean_ring(hole, tolerance));
+  rings.push_back(clean_ring(outer, tolerance));
+  for (const auto& hole : holes) rings.push_back(clean_ring(hole, tolerance));
   for (std::size_t r = 0; r < rings.size(); ++r) {
     const std::string name = r == 0 ? "outer ring" : "hole " + std::to_string(r - 1);
     for (const Vec2& p : rings[r]) {
       if (!p.allFinite())
         return Error{ErrorCode::InvalidArgument, name + " has a non-finite point"};
     }
-    if (rings[r].size() < 3 || std::abs(detail::signed_area2(rings[r])) <= tolerance * tolerance) {
+    if (rings[r].size() < 3 || std::abs(ring_area(rings[r])) <= 0.5 * tolerance * tolerance) {
       return Error{ErrorCode::DegenerateGeometry, name + " has no area"};
     }
-    if (detail::ring_self_intersects(rings[r])) {
+    if (ring_self_intersects(rings[r])) {
       return Error{ErrorCode::DegenerateGeometry, name + " intersects itself"};
     }
     // Outer counter-clockwise, holes clockwise: the material is on the left of every ring.
-    const bool ccw = detail::signed_area2(rings[r]) > 0;
+    const bool ccw = ring_area(rings[r]) > 0;
     if (ccw != (r == 0)) std::reverse(rings[r].begin(), rings[r].end());
     if (r > 0) {
-      if (detail::rings_intersect(rings[0], rings[r]) ||
-          !detail::point_in_ring(rings[r][0], rings[0])) {
+      if (rings_intersect(rings[0], rings[r]) || !inside_ring(rings[r][0], rings[0])) {
         return Error{ErrorCode::DegenerateGeometry,
                      name + " is not strictly inside the outer ring"};
       }
       for (std::size_t s = 1; s < r; ++s) {
-        if (detail::rings_intersect(rings[s], rings[r]) ||
-            detail::point_in_ring(rings[r][0], rings[s]) ||
-            detail::point_in_ring(rings[s][0], rings[r])) {
+        if (rings_intersect(rings[s], rings[r]) || inside_ring(rings[r][0], rings[s]) ||
+            inside_ring(rings[s][0], rings[r])) {
           return Error{ErrorCode::DegenerateGeometry,
                        name + " overlaps hole " + std::to_string(s - 1)};
         }

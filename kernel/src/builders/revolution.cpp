@@ -13,7 +13,7 @@
 #include <optional>
 #include <string>
 
-#include "builders/polygon2d.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "csgtile/kernel/primitives.h"
 
 namespace csgtile::kernel {
@@ -292,14 +292,14 @@ Result<Shape> make_revolution(const std::vector<Vec2>& profile, double angle, do
     if (p.x() <= tolerance) p.x() = 0.0;  // on the axis, exactly
     ring.push_back(p);
   }
-  ring = detail::clean_ring(ring, tolerance);
-  if (ring.size() < 3 || std::abs(detail::signed_area2(ring)) <= tolerance * tolerance) {
+  ring = clean_ring(ring, tolerance);
+  if (ring.size() < 3 || std::abs(ring_area(ring)) <= 0.5 * tolerance * tolerance) {
     return Error{ErrorCode::DegenerateGeometry, "revolution profile has no area"};
   }
-  if (detail::ring_self_intersects(ring)) {
+  if (ring_self_intersects(ring)) {
     return Error{ErrorCode::DegenerateGeometry, "revolution profile intersects itself"};
   }
-  if (detail::signed_area2(ring) < 0) std::reverse(ring.begin(), ring.end());
+  if (ring_area(ring) < 0) std::reverse(ring.begin(), ring.end());
   return RevolutionBuilder(std::move(ring), std::min(angle, kTwoPi), tolerance).build();
 }
 

@@ -2,7 +2,10 @@
 /// \file
 /// Axis-aligned bounding box.
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
+#include <utility>
 
 #include "csgtile/kernel/location.h"
 
@@ -39,6 +42,34 @@ struct BoundingBox {
     return (min.array() <= p.array()).all() && (p.array() <= max.array()).all();
   }
   Vec3 size() const { return empty() ? Vec3::Zero() : Vec3(max - min); }
+};
+
+/// A ray origin + t·direction prepared for slab tests against boxes: the one ray–box test of
+/// the solid classifier's rays, its box tree and the scan simulator's hierarchy.
+struct BoxRay {
+  Vec3 origin;
+  Vec3 inverse;  ///< 1 / direction per axis; ±inf where the direction is 0 (the ray is flat)
+
+  BoxRay(const Vec3& o, const Vec3& direction) : origin(o), inverse(direction.cwiseInverse()) {}
+
+  /// Narrows [t0, t1] to the parameters of the ray inside `box` (closed: touching counts);
+  /// false when none is left. On a flat axis the origin must lie within the box's slab.
+  bool clip(const BoundingBox& box, double& t0, double& t1) const {
+    if (box.empty()) return false;
+    for (int i = 0; i < 3; ++i) {
+      if (std::isinf(inverse[i])) {
+        if (origin[i] < box.min[i] || origin[i] > box.max[i]) return false;
+        continue;
+      }
+      double a = (box.min[i] - origin[i]) * inverse[i];
+      double b = (box.max[i] - origin[i]) * inverse[i];
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a);
+      t1 = std::min(t1, b);
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
 };
 
 }  // namespace csgtile::kernel

@@ -1,11 +1,15 @@
-#include "builders/polygon2d.h"
+// Rings and polygons in the plane (polygon2d.h).
+
+#include "csgtile/kernel/polygon2d.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace csgtile::kernel::detail {
+namespace csgtile::kernel {
 
 namespace {
+// z of the cross product a × b.
+double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 double cross(const Vec2& o, const Vec2& a, const Vec2& b) {
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
@@ -28,14 +32,88 @@ bool segments_touch(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) 
 }
 }  // namespace
 
-double signed_area2(const std::vector<Vec2>& ring) {
+double ring_area(const std::vector<Vec2>& ring) {
   double a = 0.0;
-  for (std::size_t i = 0, n = ring.size(); i < n; ++i) {
-    const Vec2& p = ring[i];
-    const Vec2& q = ring[(i + 1) % n];
-    a += p.x() * q.y() - q.x() * p.y();
+  for (std::size_t i = 0; i < ring.size(); ++i) a += cross2(ring[i], ring[(i + 1) % ring.size()]);
+  return 0.5 * a;
+}
+
+bool inside_ring(const Vec2& p, const std::vector<Vec2>& ring) {
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
+    const Vec2& a = ring[i];
+    const Vec2& b = ring[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      in = !in;
+    }
   }
-  return a;
+  return in;
+}
+
+bool inside_polygon(const Vec2& p, const std::vector<Vec2>& outer,
+                    const std::vector<std::vector<Vec2>>& holes) {
+  bool in = inside_ring(p, outer);
+  for (const auto& hole : holes) in = in && !inside_ring(p, hole);
+  return in;
+}
+
+double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+double boundary_distance(const Vec2& p, const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes) {
+  double side = INFINITY;
+  auto edges = [&](const std::vector<Vec2>& ring) {
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      side = std::min(side, segment_distance(p, ring[i], ring[(i + 1) % ring.size()]));
+    }
+  };
+  edges(outer);
+  for (const auto& hole : holes) edges(hole);
+  return side;
+}
+
+double polygon_perimeter(const std::vector<Vec2>& outer,
+                         const std::vector<std::vector<Vec2>>& holes) {
+  double perimeter = 0.0;
+  auto edges = [&](const std::vector<Vec2>& ring) {
+    for (std::size_t k = 0; k < ring.size(); ++k) {
+      perimeter += (ring[(k + 1) % ring.size()] - ring[k]).norm();
+    }
+  };
+  edges(outer);
+  for (const auto& hole : holes) edges(hole);
+  return perimeter;
+}
+
+double polygon_area(const std::vector<Vec2>& outer, const std::vector<std::vector<Vec2>>& holes) {
+  double area = std::abs(ring_area(outer));
+  for (const auto& hole : holes) area -= std::abs(ring_area(hole));
+  return area;
+}
+
+void douglas_peucker(const std::vector<Vec2>& points, std::size_t i, std::size_t j, double tol,
+                     std::vector<char>& keep) {
+  const std::size_t n = points.size();
+  if ((j + n - i) % n < 2) return;
+  double worst = -1.0;
+  std::size_t at = i;
+  for (std::size_t k = (i + 1) % n; k != j; k = (k + 1) % n) {
+    const double d = segment_distance(points[k], points[i], points[j]);
+    if (d > worst) {
+      worst = d;
+      at = k;
+    }
+  }
+  if (worst <= tol) return;
+  keep[at] = 1;
+  douglas_peucker(points, i, at, tol, keep);
+  douglas_peucker(points, at, j, tol, keep);
 }
 
 std::vector<Vec2> clean_ring(const std::vector<Vec2>& ring, double eps) {
@@ -92,17 +170,4 @@ bool rings_intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
   return false;
 }
 
-bool point_in_ring(const Vec2& p, const std::vector<Vec2>& ring) {
-  bool inside = false;
-  for (std::size_t i = 0, n = ring.size(), j = n - 1; i < n; j = i++) {
-    const Vec2& a = ring[i];
-    const Vec2& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
-
-}  // namespace csgtile::kernel::detail
+}  // namespace csgtile::kernel
