@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Quick start, command 2 (and what CI runs): installs what is missing, then
 #   1. an optimised build with warnings as errors, and every test (ctest);
-#   2. an ASan+UBSan build, and the kernel, assembly, geo, config and CLI tests under it;
-#   3. a libFuzzer build (clang) and a short bounded run of each fuzz target.
-# Set CSGTILE_SKIP_SANITIZE=1 or CSGTILE_SKIP_FUZZ=1 to leave out step 2 or 3 locally.
+#   2. clang-tidy (.clang-tidy, warnings as errors) on every source of kernel/, geo/, config/
+#      and worker/ (clang-format is checked by a test of step 1, label boundaries);
+#   3. an ASan+UBSan build, and the kernel, assembly, geo, config and CLI tests under it;
+#   4. a libFuzzer build (clang) and a short bounded run of each fuzz target.
+# Set CSGTILE_SKIP_TIDY=1, CSGTILE_SKIP_SANITIZE=1 or CSGTILE_SKIP_FUZZ=1 to leave out step 2, 3
+# or 4 locally.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # setup.sh installs GDAL: its validators must then run, not skip.
@@ -39,6 +42,11 @@ export CSGTILE_REQUIRE_REPORT_VIEWER="${CSGTILE_REQUIRE_REPORT_VIEWER:-1}"
 # The seeded Boolean property tests run ten times their default case counts here (4 000 box
 # pairs, 400 mixed-primitive pairs); the sanitizer stage keeps the defaults.
 CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --output-on-failure -j"$jobs"
+
+if [ "${CSGTILE_SKIP_TIDY:-0}" != 1 ]; then
+  echo "== clang-tidy: every source of kernel/, geo/, config/ and worker/"
+  tests/boundaries/check_tidy.sh build
+fi
 
 if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "== ASan+UBSan build: kernel, assembly, geo, fit, config and CLI tests"

@@ -1,11 +1,11 @@
+#include <unistd.h>
+
 #include <cctype>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "document.h"
-
-extern char** environ;  // POSIX; declared by no standard header
 
 namespace csgtile::config {
 
@@ -61,7 +61,7 @@ std::string suffix(const std::string& variable) {
 void apply_one(const std::string& variable, const std::string& value, Document& document,
                std::vector<Problem>& problems) {
   const std::vector<std::string> segments =
-      split(std::string_view(variable).substr(kPrefix.size()), kSeparator);
+      split(std::string_view{variable}.substr(kPrefix.size()), kSeparator);
   json::json_pointer pointer;
   std::string path;
   const json* schema = &schema_document();
@@ -132,7 +132,7 @@ void apply_environment(const Environment& env, Document& document, std::vector<P
   for (const auto& [variable, value] : env) {
     if (!variable.starts_with(kPrefix)) continue;
     // Without "__" the variable is not an override (CSGTILE_LOG_LEVEL, or read by a tool).
-    if (std::string_view(variable).substr(kPrefix.size()).find(kSeparator) ==
+    if (std::string_view{variable}.substr(kPrefix.size()).find(kSeparator) ==
         std::string_view::npos) {
       continue;
     }

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <random>
+#include <system_error>
 
 #include "ops/metrics.h"
 
@@ -16,7 +17,7 @@ std::string sha256_hex(std::string_view bytes) {
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr);
-  static const char* kHex = "0123456789abcdef";
+  static constexpr char kHex[] = "0123456789abcdef";
   std::string out;
   for (unsigned int i = 0; i < length; ++i) {
     out.push_back(kHex[digest[i] >> 4]);
@@ -27,7 +28,7 @@ std::string sha256_hex(std::string_view bytes) {
 
 namespace {
 Failure io_error(const std::string& what, const std::filesystem::path& path, int err) {
-  return {ErrorCode::Io, what + " " + path.string() + ": " + std::strerror(err)};
+  return {ErrorCode::Io, what + " " + path.string() + ": " + std::generic_category().message(err)};
 }
 }  // namespace
 

@@ -96,15 +96,20 @@ struct RunOutcome {
 /// The returned thread must be joined once the future is ready, or left to the process's end.
 std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, JobQueue& queue, const Logger& log,
-                      std::stop_token stop, std::future<RunOutcome>& outcome) {
-  // packaged_task carries an exception of the job to the loop's future.get(), where it
-  // surfaces as it did when jobs ran on the loop's thread.
+                      const std::stop_token& stop, std::future<RunOutcome>& outcome) {
   std::packaged_task<RunOutcome()> task([job, run_dir, &config, &queue, &log, stop] {
     hold_stop_signals();  // delivered to the loop's threads, never interrupting the job's I/O
     const LogJobScope log_scope(config.run.name, job.key, job.attempts);  // thread-local
     RunOutcome out;
     const jobs::JobContext context{run_dir, config, queue, log, stop};
-    out.failure = jobs::run_job(job, context, out.result, &out.timings);
+    // An exception out of a job (memory exhausted, a library's throw) fails that job with its
+    // reason; the worker goes on with the next one.
+    try {
+      out.failure = jobs::run_job(job, context, out.result, &out.timings);
+    } catch (const std::exception& e) {
+      out.result.clear();
+      out.failure = {ErrorCode::Internal, "job " + job.key + " threw: " + e.what()};
+    }
     return out;
   });
   outcome = task.get_future();

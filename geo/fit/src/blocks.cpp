@@ -15,7 +15,6 @@
 
 namespace csgtile::fit::detail {
 
-using kernel::PrimitiveType;
 using kernel::Vec2;
 
 std::vector<Proposal> propose_blocks(const ProposalInput& in,

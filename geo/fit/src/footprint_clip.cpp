@@ -50,7 +50,7 @@ std::vector<Vec2> from_ring(const bg::model::ring<BPoint, false>& ring) {
 
 struct FootprintClip::Impl {
   BMulti shape;
-  BBox box;
+  BBox box{};
 };
 
 FootprintClip::FootprintClip(const std::vector<geo::FootprintPolygon>& polygons, const Vec2& u,

@@ -280,10 +280,12 @@ double GroundGrid::lowest_near(double x, double y, double radius) const {
   if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
   // Clamped in double before the conversion: a far or huge coordinate stays in range.
   const auto clamp_x = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
+    return static_cast<int>(
+        std::clamp(std::floor((v - x0) / cell), 0.0, static_cast<double>(nx - 1)));
   };
   const auto clamp_y = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
+    return static_cast<int>(
+        std::clamp(std::floor((v - y0) / cell), 0.0, static_cast<double>(ny - 1)));
   };
   double best = NAN;
   for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {
@@ -302,10 +304,12 @@ double GroundGrid::median_near(double x, double y, double radius) const {
   if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(radius)) return NAN;
   // Clamped in double before the conversion: a far or huge coordinate stays in range.
   const auto clamp_x = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - x0) / cell), 0.0, double(nx - 1)));
+    return static_cast<int>(
+        std::clamp(std::floor((v - x0) / cell), 0.0, static_cast<double>(nx - 1)));
   };
   const auto clamp_y = [&](double v) {
-    return static_cast<int>(std::clamp(std::floor((v - y0) / cell), 0.0, double(ny - 1)));
+    return static_cast<int>(
+        std::clamp(std::floor((v - y0) / cell), 0.0, static_cast<double>(ny - 1)));
   };
   std::vector<double> found;
   for (int j = clamp_y(y - radius); j <= clamp_y(y + radius); ++j) {

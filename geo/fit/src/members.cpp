@@ -160,7 +160,9 @@ void Builder::one_face_members() {
 // member's middle. Changed boxes are built again (emit) with their points; one refused keeps
 // the boxes it came from.
 void Builder::join_members() {
-  const auto [tight, reach, sin_tol] = margins(ransac_.epsilon, cell_, cos_tol_);
+  // Plain variables, not a structured binding: the lambdas below capture them.
+  const Margins margin = margins(ransac_.epsilon, cell_, cos_tol_);
+  const double tight = margin.tight, reach = margin.reach, sin_tol = margin.sin_tol;
   std::vector<geo::detail::PreparedPrimitive> prepared;
   prepared.reserve(out_.primitives.size());
   for (const auto& p : out_.primitives) prepared.push_back(geo::detail::prepare_primitive(p.spec));

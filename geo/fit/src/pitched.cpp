@@ -188,7 +188,7 @@ std::vector<Proposal> propose_pitched_roofs(const ProposalInput& in,
     const auto& seed_shape = shapes[static_cast<std::size_t>(seed)];
     const std::string what = "pitched roof from plane " + std::to_string(seed);
     const Vec3 h = horizontal_of(seed_shape.surface.axis.normalized());
-    const Vec3 e = h;
+    const Vec3& e = h;
     const Vec3 d = Vec3::UnitZ().cross(e).normalized();  // across, horizontal
     Vec3 centre = Vec3::Zero();
     {

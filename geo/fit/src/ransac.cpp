@@ -388,7 +388,7 @@ std::optional<Surface> Detector::cylinder_across_plane(
 std::optional<Surface> Detector::wall_through_ring(const Surface& plane,
                                                    std::span<const std::uint32_t> inliers) {
   if (inliers.size() < 6) return std::nullopt;
-  const auto wall = circle_along(plane.axis, inliers);
+  auto wall = circle_along(plane.axis, inliers);
   // On the circle: every point within the noise floor of the cylinder.
   if (!wall || !(rms_of(*wall, inliers) <= noise_floor())) return std::nullopt;
   std::size_t off = 0;

@@ -152,8 +152,10 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   if (bounds != nullptr) {
     area_in.assign(ncell, 0.0);
     for (std::size_t c = 0; c < ncell; ++c) {
-      const double ca = ga + static_cast<double>(c % static_cast<std::size_t>(nx)) * cell;
-      const double cb = gb + static_cast<double>(c / static_cast<std::size_t>(nx)) * cell;
+      const std::size_t column = c % static_cast<std::size_t>(nx);
+      const std::size_t row = c / static_cast<std::size_t>(nx);
+      const double ca = ga + static_cast<double>(column) * cell;
+      const double cb = gb + static_cast<double>(row) * cell;
       area_in[c] = clip->area_in(ca, cb, ca + cell, cb + cell);
       mask[c] = area_in[c] > 1e-6 * cell * cell ? 1 : 0;
     }
@@ -553,7 +555,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     changed = unpinch(grid) > 0 || changed;
     if (!changed) break;
   }
-  if (unpinch(grid) > 0 && unpinch(grid) > 0) {
+  // Two more passes (each changes the grid): still pinched after both, the partition fails.
+  const bool pinched = unpinch(grid) > 0;
+  if (pinched && unpinch(grid) > 0) {
     rejected.push_back({"roof partition", "its parts could not be made free of pinches",
                         static_cast<long long>(pts.size())});
     return out;

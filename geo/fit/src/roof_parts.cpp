@@ -14,7 +14,6 @@
 
 namespace csgtile::fit::detail {
 
-using kernel::PrimitiveType;
 using kernel::Vec2;
 
 std::vector<Proposal> propose_roof_parts(const ProposalInput& in,

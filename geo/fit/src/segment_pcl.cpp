@@ -192,7 +192,8 @@ Vec3 face_normal(std::span<const Vec3> near) {
   const auto& values = eig.eigenvalues();
   if (!(values(1) > 1e-4 * values(2))) return best_n;
   const Vec3 n = eig.eigenvectors().col(0);
-  return n.allFinite() ? Vec3(n.normalized()) : best_n;
+  if (!n.allFinite()) return best_n;
+  return n.normalized();
 }
 
 }  // namespace

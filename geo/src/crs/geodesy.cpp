@@ -71,10 +71,10 @@ class DomainChecks final : public ProjectionEngine {
     inner_->reverse(easting, northing, lat, lon);
   }
   void reverse_many(double* x, double* y, std::size_t count) const override {
-    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
     if (utm_zone_ != 0) {
       for (std::size_t i = 0; i < count; ++i) {
-        if (!in_utm_window(x[i], y[i])) x[i] = y[i] = nan;
+        if (!in_utm_window(x[i], y[i])) x[i] = y[i] = kNan;
       }
     }
     inner_->reverse_many(x, y, count);
@@ -205,13 +205,13 @@ void CrsMath::to_gravity_related(GeodeticPoint& g) const {
 
 void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
                                std::span<GeodeticPoint> out) const {
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
   if (!engine_) {
     for (std::size_t i = 0; i < in.size(); ++i) {
       try {
         out[i] = to_geodetic(in[i]);
       } catch (const std::exception&) {
-        out[i] = GeodeticPoint{nan, nan, nan};
+        out[i] = GeodeticPoint{kNan, kNan, kNan};
       }
     }
     return;
@@ -226,8 +226,8 @@ void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
     for (std::size_t i = 0; i < n; ++i) {
       const kernel::Vec3& p = in[start + i];
       const bool ok = std::isfinite(p.x()) && std::isfinite(p.y());
-      x[i] = ok ? p.x() * xy_to_metres_ : nan;
-      y[i] = ok ? p.y() * xy_to_metres_ : nan;
+      x[i] = ok ? p.x() * xy_to_metres_ : kNan;
+      y[i] = ok ? p.y() * xy_to_metres_ : kNan;
     }
     engine_->reverse_many(x, y, n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -236,7 +236,7 @@ void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
       g.longitude_deg = y[i];
       g.height_m = in[start + i].z() * z_to_metres_;
       if (!std::isfinite(g.latitude_deg) || !std::isfinite(g.longitude_deg)) {
-        g = GeodeticPoint{nan, nan, nan};
+        g = GeodeticPoint{kNan, kNan, kNan};
       } else {
         if (prime_meridian_deg_ != 0.0) {
           g.longitude_deg =
@@ -245,7 +245,7 @@ void CrsMath::to_geodetic_many(std::span<const kernel::Vec3> in,
         try {
           to_ellipsoidal(g);
         } catch (const std::exception&) {
-          g = GeodeticPoint{nan, nan, nan};
+          g = GeodeticPoint{kNan, kNan, kNan};
         }
       }
     }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <system_error>
 
 namespace csgtile::geo::detail {
 
@@ -39,7 +40,7 @@ class FileSource final : public ByteSource {
         if (errno == EINTR) continue;
         return {ErrorCode::IoError, name() + ": read failed at offset " +
                                         std::to_string(offset + done) + ": " +
-                                        std::strerror(errno)};
+                                        std::generic_category().message(errno)};
       }
       // The file shrank under us: a short read is an I/O failure, not corrupt data.
       if (n == 0) {
@@ -83,13 +84,15 @@ kernel::Result<std::unique_ptr<ByteSource>> open_file_source(const std::filesyst
   const std::string name = path.string();
   const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
-    return kernel::Error{ErrorCode::IoError, name + ": cannot open: " + std::strerror(errno)};
+    return kernel::Error{ErrorCode::IoError,
+                         name + ": cannot open: " + std::generic_category().message(errno)};
   }
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int err = errno;
     ::close(fd);
-    return kernel::Error{ErrorCode::IoError, name + ": cannot stat: " + std::strerror(err)};
+    return kernel::Error{ErrorCode::IoError,
+                         name + ": cannot stat: " + std::generic_category().message(err)};
   }
   if (!S_ISREG(st.st_mode)) {
     ::close(fd);

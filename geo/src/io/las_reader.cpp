@@ -557,7 +557,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     }
     s.laz = std::make_unique<detail::laz::LazRecords>(
         src, std::move(spec).value(), std::move(chunks).value(), h.record_length,
-        options.all_attributes ? detail::laz::kAllLayers : detail::laz::kLayerZ);
+        options.all_attributes ? detail::laz::AllLayers : detail::laz::LayerZ);
   }
 
   // Extra bytes and their descriptors.

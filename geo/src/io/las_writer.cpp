@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <system_error>
 
 #include "csgtile/geo/las.h"
 #include "io/endian.h"
@@ -173,7 +174,7 @@ struct LasWriter::State {
   }
 
   kernel::Status io_error(const std::string& what) const {
-    return {ErrorCode::IoError, name + ": " + what + ": " + std::strerror(errno)};
+    return {ErrorCode::IoError, name + ": " + what + ": " + std::generic_category().message(errno)};
   }
   kernel::Status put(const std::vector<std::uint8_t>& bytes) {
     if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size()) {
@@ -278,7 +279,8 @@ kernel::Result<std::unique_ptr<LasWriter>> LasWriter::create(const std::filesyst
 
   s.file = std::fopen(name.c_str(), "wb");
   if (s.file == nullptr) {
-    return Error{ErrorCode::IoError, name + ": cannot create: " + std::strerror(errno)};
+    return Error{ErrorCode::IoError,
+                 name + ": cannot create: " + std::generic_category().message(errno)};
   }
   if (auto st = s.put(std::vector<std::uint8_t>(detail::las_header_size(minor), 0)); !st.ok()) {
     return st.error();

@@ -21,8 +21,8 @@
 namespace csgtile::kernel::detail {
 
 const char* surface_name(SurfaceKind k) {
-  static const char* kNames[] = {"plane", "cylinder",  "cone",      "sphere",
-                                 "torus", "extrusion", "revolution"};
+  static const char* const kNames[] = {"plane", "cylinder",  "cone",      "sphere",
+                                       "torus", "extrusion", "revolution"};
   return kNames[static_cast<int>(k)];
 }
 

@@ -27,7 +27,7 @@ Curve2dPtr aligned_fit(const BEdge& edge, const Surface& surface, const Vec3& po
 
 // A face piece after splitting, with its fate.
 struct Piece {
-  int face;  // index into model.faces
+  int face = 0;  // index into model.faces
   Region region;
   bool keep = false;
   bool flip = false;  // orientation reversed in the result (cut: B's pieces)

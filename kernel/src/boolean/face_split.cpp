@@ -167,7 +167,7 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
     // edge of the hole lies on the other side of that edge: the hole is the reverse of part
     // of its boundary (a lens cut off by two section edges), the probe on its outline.
     const std::vector<Vec2> pts = sample_use(m, hole.front(), 8);
-    const Vec2 probe = pts[pts.size() / 2];
+    const Vec2& probe = pts[pts.size() / 2];
     int best = -1;
     for (std::size_t i = 0; i < outers.size(); ++i) {
       const bool shares_edge = std::any_of(hole.begin(), hole.end(), [&](const BUse& h) {

@@ -46,20 +46,20 @@ const GaussLegendreRule& gauss_legendre_rule() {
   // Function-local static: computed once, thread-safe initialisation.
   static const GaussLegendreRule rule = [] {
     GaussLegendreRule r;
-    constexpr int n = GaussLegendreRule::kOrder;
-    for (int i = 0; i < n; ++i) {
+    constexpr int kN = GaussLegendreRule::kOrder;
+    for (int i = 0; i < kN; ++i) {
       // Classical starting guess for the i-th root of P_n; Newton converges in a few steps.
-      double x = std::cos(kPi * (i + 0.75) / (n + 0.5));
+      double x = std::cos(kPi * (i + 0.75) / (kN + 0.5));
       double derivative = 1.0;
       for (int iteration = 0; iteration < 100; ++iteration) {
         double p0 = 1.0;
         double p1 = x;
-        for (int k = 1; k < n; ++k) {
+        for (int k = 1; k < kN; ++k) {
           const double p2 = ((2.0 * k + 1.0) * x * p1 - k * p0) / (k + 1.0);
           p0 = p1;
           p1 = p2;
         }
-        derivative = n * (x * p1 - p0) / (x * x - 1.0);
+        derivative = kN * (x * p1 - p0) / (x * x - 1.0);
         const double step = p1 / derivative;
         x -= step;
         if (std::abs(step) < 1e-17) break;
@@ -67,12 +67,12 @@ const GaussLegendreRule& gauss_legendre_rule() {
       // Recompute P_n' at the converged root for the weight.
       double p0 = 1.0;
       double p1 = x;
-      for (int k = 1; k < n; ++k) {
+      for (int k = 1; k < kN; ++k) {
         const double p2 = ((2.0 * k + 1.0) * x * p1 - k * p0) / (k + 1.0);
         p0 = p1;
         p1 = p2;
       }
-      derivative = n * (x * p1 - p0) / (x * x - 1.0);
+      derivative = kN * (x * p1 - p0) / (x * x - 1.0);
       const auto index = static_cast<std::size_t>(i);
       r.nodes[index] = x;
       r.weights[index] = 2.0 / ((1.0 - x * x) * derivative * derivative);

@@ -244,7 +244,7 @@ Vec2 RevolutionSurface::closest_parameters(const Vec3& p) const {
     const double v = meridian_->closest_parameter(in_plane, t0, t1);
     return Vec2(detail::wrap_two_pi(side > 0.0 ? angle : angle + detail::kPi), v);
   };
-  const Vec2 same = invert_on_side(1.0);
+  Vec2 same = invert_on_side(1.0);
   if (rho == 0.0) return same;  // both sides are the same point
   const Vec2 mirrored = invert_on_side(-1.0);
   const Vec3 s_same = point(same.x(), same.y());

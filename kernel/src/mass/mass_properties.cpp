@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
-#include <cstring>
+#include <cstdint>
 #include <numbers>
 #include <optional>
 #include <type_traits>
@@ -34,7 +35,7 @@ std::array<double, N>& operator+=(std::array<double, N>& a, const std::array<dou
 }
 template <std::size_t N>
 std::array<double, N> scaled(const std::array<double, N>& m, double s) {
-  std::array<double, N> out;
+  std::array<double, N> out{};
   for (std::size_t i = 0; i < N; ++i) out[i] = m[i] * s;
   return out;
 }
@@ -126,7 +127,9 @@ M integrate_panels(const F& f, double a, double b, int panels) {
   return integrate_panels_indexed<M>([&](double x, std::size_t) { return f(x); }, a, b, panels);
 }
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
 
 template <class M>
 class FaceIntegrator {

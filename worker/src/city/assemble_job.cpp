@@ -157,7 +157,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.threads = config.run.threads;
   options.snap = snap_options(config.city.snap_distance, config.city.snap_angle_degrees);
   options.escalate_to = config.city.snap_escalate_to;
-  options.interrupt.stop = stop;
+  options.interrupt.stop = std::move(stop);
   options.object_time_limit = config.city.building_timeout_seconds;
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {

@@ -112,7 +112,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
 
   clock.enter("fit");
   fit::FitPipelineOptions options = fit_options(config);
-  options.interrupt.stop = stop;
+  options.interrupt.stop = std::move(stop);
   options.keep_structure_points = true;  // published for the cells' model fit (model_fit.h)
   FittedTile tile;
   std::string name =

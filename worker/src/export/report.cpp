@@ -221,7 +221,8 @@ std::string rms_histogram(const std::vector<double>& all) {
   } else {
     std::sort(values.begin(), values.end());
     const auto quantile = [&](double q) {
-      return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5)];
+      return values[static_cast<std::size_t>(
+          std::llround(q * static_cast<double>(values.size() - 1)))];
     };
     const std::size_t wanted = std::clamp<std::size_t>(
         static_cast<std::size_t>(std::ceil(std::sqrt(values.size()))), 5, 30);

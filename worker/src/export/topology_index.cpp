@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
+#include <system_error>
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/explorer.h"
@@ -556,8 +557,9 @@ kernel::Status write_topology_index(const std::filesystem::path& path,
     if (f != nullptr) std::fclose(f);
   }
   if (written.ok() && std::rename(tmp.c_str(), path.c_str()) != 0) {
-    written = kernel::Status(kernel::ErrorCode::IoError,
-                             "cannot rename into " + path.string() + ": " + std::strerror(errno));
+    written =
+        kernel::Status(kernel::ErrorCode::IoError, "cannot rename into " + path.string() + ": " +
+                                                       std::generic_category().message(errno));
   }
   if (!written.ok()) {
     std::filesystem::remove(tmp, ec);

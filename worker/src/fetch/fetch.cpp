@@ -256,7 +256,7 @@ Attempt transfer_once(const std::string& url, const std::vector<std::string>& he
       attempt.failure = {ErrorCode::Internal, "libcurl could not build the request headers"};
       return attempt;
     }
-    list.release();
+    static_cast<void>(list.release());  // owned by the list curl_slist_append returned
     list.reset(grown);
   }
   set_common_options(c, policy, sink.refused_address, error_text);
@@ -389,6 +389,9 @@ Failure s3_target(const UrlParts& parts, const std::string& original, const Poli
     request.extra_headers.emplace_back("x-amz-security-token", credentials.session_token);
   }
   const SigV4Result signature = sign_v4(request, credentials.access_key, credentials.secret_key);
+  if (!signature.error.empty()) {
+    return {ErrorCode::Internal, "cannot sign the request to " + host + ": " + signature.error};
+  }
   target.url = ep.scheme + "://" + host + request.canonical_path;
   target.headers = signature.headers;
   return {};
@@ -552,7 +555,8 @@ Failure parse_request(const std::string& text, Request& request) {
 Credentials s3_credentials() {
   Credentials c;
   auto env = [](const char* name) {
-    const char* value = std::getenv(name);
+    // The environment is read, never set, once the worker runs.
+    const char* value = std::getenv(name);  // NOLINT(concurrency-mt-unsafe)
     return value != nullptr ? std::string(value) : std::string();
   };
   c.access_key = env("AWS_ACCESS_KEY_ID");
@@ -567,7 +571,7 @@ Credentials s3_credentials() {
   std::ifstream in(file);
   std::string line;
   bool in_profile = false;
-  auto trim = [](std::string s) {
+  auto trim = [](const std::string& s) {
     const std::size_t b = s.find_first_not_of(" \t\r");
     const std::size_t e = s.find_last_not_of(" \t\r");
     return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
@@ -748,7 +752,7 @@ Attempt s3_exchange_once(const UrlParts& parts, const std::string& url, const S3
       attempt.failure = {ErrorCode::Internal, "libcurl could not build the request"};
       return attempt;
     }
-    list.release();
+    static_cast<void>(list.release());  // owned by the list curl_slist_append returned
     list.reset(grown);
   }
   struct Body {

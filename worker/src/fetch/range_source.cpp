@@ -31,8 +31,8 @@ struct Reply {
 };
 
 struct Receive {
-  std::string* body;
-  std::uint64_t cap;
+  std::string* body = nullptr;
+  std::uint64_t cap = 0;
   bool over_cap = false;
 };
 
@@ -254,7 +254,7 @@ class HttpRangeSource final : public geo::ByteSource {
     for (const std::string& h : headers) {
       curl_slist* grown = curl_slist_append(list.get(), h.c_str());
       if (grown == nullptr) return {ErrorCode::Internal, "libcurl could not build the headers"};
-      list.release();
+      static_cast<void>(list.release());  // owned by the list curl_slist_append returned
       list.reset(grown);
     }
     CURL* c = curl.get();

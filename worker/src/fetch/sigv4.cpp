@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <ctime>
-#include <stdexcept>
+#include <optional>
 
 namespace csgtile::worker::fetch {
 namespace {
@@ -23,13 +23,14 @@ std::string to_hex(const unsigned char* bytes, std::size_t n) {
   return out;
 }
 
-std::string hmac_sha256(const std::string& key, const std::string& data) {
+// HMAC-SHA256 of `data` under `key`; nullopt when OpenSSL fails.
+std::optional<std::string> hmac_sha256(const std::string& key, const std::string& data) {
   unsigned char mac[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   if (HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
            reinterpret_cast<const unsigned char*>(data.data()), data.size(), mac,
            &length) == nullptr) {
-    throw std::runtime_error("HMAC-SHA256 failed");
+    return std::nullopt;
   }
   return std::string(reinterpret_cast<const char*>(mac), length);
 }
@@ -103,12 +104,19 @@ SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,
   result.string_to_sign = "AWS4-HMAC-SHA256\n" + request.amz_date + "\n" + scope + "\n" +
                           sha256_hex(result.canonical_request);
 
-  const std::string k_date = hmac_sha256("AWS4" + secret_key, day);
-  const std::string k_region = hmac_sha256(k_date, request.region);
-  const std::string k_service = hmac_sha256(k_region, request.service);
-  const std::string k_signing = hmac_sha256(k_service, "aws4_request");
-  const std::string mac = hmac_sha256(k_signing, result.string_to_sign);
-  result.signature = to_hex(reinterpret_cast<const unsigned char*>(mac.data()), mac.size());
+  // The signing key: the secret chained through the scope's parts, then the string to sign.
+  const std::string terminator = "aws4_request";
+  std::optional<std::string> mac = "AWS4" + secret_key;
+  const std::string* const parts[] = {&day, &request.region, &request.service, &terminator,
+                                      &result.string_to_sign};
+  for (const std::string* part : parts) {
+    mac = hmac_sha256(*mac, *part);
+    if (!mac) {
+      result.error = "HMAC-SHA256 failed in OpenSSL";
+      return result;
+    }
+  }
+  result.signature = to_hex(reinterpret_cast<const unsigned char*>(mac->data()), mac->size());
   result.authorization = "AWS4-HMAC-SHA256 Credential=" + access_key + "/" + scope +
                          ", SignedHeaders=" + signed_headers + ", Signature=" + result.signature;
 

@@ -34,6 +34,9 @@ struct SigV4Result {
   /// Every header to send (besides Host, which libcurl sets from the URL): x-amz-date,
   /// x-amz-content-sha256, the extra headers and Authorization, as "name: value".
   std::vector<std::string> headers;
+  /// Non-empty when the request could not be signed (OpenSSL's HMAC failed); the rest is then
+  /// incomplete and must not be sent.
+  std::string error = {};
 };
 
 SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,

@@ -22,6 +22,7 @@
 #include <cstring>
 #include <exception>
 #include <nlohmann/json.hpp>
+#include <system_error>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -268,7 +269,7 @@ void serve_connection(const OpsServer& server, int fd, std::chrono::milliseconds
     response = {431, "text/plain; charset=utf-8", "request head too large\n"};
   } else {
     // Request line: METHOD SP TARGET SP HTTP/1.x
-    const std::string_view line = std::string_view(request).substr(0, request.find("\r\n"));
+    const std::string_view line = std::string_view{request}.substr(0, request.find("\r\n"));
     const std::size_t a = line.find(' ');
     const std::size_t b = a == std::string_view::npos ? a : line.find(' ', a + 1);
     if (b == std::string_view::npos || line.substr(b + 1).rfind("HTTP/1.", 0) != 0 ||
@@ -319,8 +320,8 @@ std::unique_ptr<OpsServer> OpsServer::start(OpsOptions options, Failure& failure
       (listen.host.find(':') != std::string::npos ? "[" + listen.host + "]" : listen.host) + ":" +
       std::to_string(listen.port);
   const auto io_error = [&](const std::string& what, int err) {
-    std::string message =
-        "metrics endpoint: cannot " + what + " " + where + ": " + std::strerror(err);
+    std::string message = "metrics endpoint: cannot " + what + " " + where + ": " +
+                          std::generic_category().message(err);
     if (err == EADDRINUSE) {
       message +=
           " (another process holds the port: choose another with --metrics-listen or "

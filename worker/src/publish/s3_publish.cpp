@@ -22,7 +22,7 @@ std::string printable(std::string_view text) {
   for (const char ch : text.substr(0, 200)) {
     const auto c = static_cast<unsigned char>(ch);
     if (c < 0x20 || c == 0x7f) {
-      static const char* kHex = "0123456789abcdef";
+      static constexpr char kHex[] = "0123456789abcdef";
       out += "\\x";
       out.push_back(kHex[c >> 4]);
       out.push_back(kHex[c & 15]);

@@ -44,7 +44,7 @@ class TileMapping {
   const kernel::BoundingBox& box() const { return box_; }
 
  private:
-  TileMapping(Georeferencer georeferencer) : georeferencer_(std::move(georeferencer)) {}
+  explicit TileMapping(Georeferencer georeferencer) : georeferencer_(std::move(georeferencer)) {}
   kernel::Vec3 evaluate(const kernel::Vec3& p) const;
 
   Georeferencer georeferencer_;

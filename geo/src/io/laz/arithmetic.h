@@ -226,8 +226,8 @@ class ArithmeticDecoder {
 /// Integer decoder: value = prediction + corrector, wrapped into the value's bit range.
 class IntegerDecoder {
  public:
-  IntegerDecoder(std::uint32_t bits = 16, std::uint32_t contexts = 1, std::uint32_t bits_high = 8,
-                 std::uint32_t range = 0);
+  explicit IntegerDecoder(std::uint32_t bits = 16, std::uint32_t contexts = 1,
+                          std::uint32_t bits_high = 8, std::uint32_t range = 0);
   std::int32_t decode(ArithmeticDecoder& dec, std::int32_t prediction, std::uint32_t context = 0);
   /// Bit length class of the last corrector.
   std::uint32_t k() const { return k_; }

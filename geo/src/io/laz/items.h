@@ -38,18 +38,18 @@ std::string item_label(const Item& item);
 /// Layers of the layered (point formats 6-10) compressor a caller may leave undecoded. XY,
 /// return numbers, scanner channel and classification are always decoded.
 enum LayerMask : std::uint32_t {
-  kLayerZ = 1u << 0,
-  kLayerFlags = 1u << 1,  // classification flags, scan direction, edge of flight line
-  kLayerIntensity = 1u << 2,
-  kLayerScanAngle = 1u << 3,
-  kLayerUserData = 1u << 4,
-  kLayerPointSource = 1u << 5,
-  kLayerGpsTime = 1u << 6,
-  kLayerRgb = 1u << 7,
-  kLayerNir = 1u << 8,
-  kLayerWavePacket = 1u << 9,
-  kLayerExtraBytes = 1u << 10,
-  kAllLayers = (1u << 11) - 1,
+  LayerZ = 1u << 0,
+  LayerFlags = 1u << 1,  // classification flags, scan direction, edge of flight line
+  LayerIntensity = 1u << 2,
+  LayerScanAngle = 1u << 3,
+  LayerUserData = 1u << 4,
+  LayerPointSource = 1u << 5,
+  LayerGpsTime = 1u << 6,
+  LayerRgb = 1u << 7,
+  LayerNir = 1u << 8,
+  LayerWavePacket = 1u << 9,
+  LayerExtraBytes = 1u << 10,
+  AllLayers = (1u << 11) - 1,
 };
 
 /// An item of the point-wise compressors (1 and 2): one arithmetic stream for all items.

@@ -105,14 +105,14 @@ class Point14V3 final : public LayeredItemDecoder {
   void start(ByteStream& chunk, const std::uint8_t* raw, std::uint32_t& context,
              std::uint32_t requested) override {
     xy().take(chunk, true);
-    layers_[1].take(chunk, (requested & kLayerZ) != 0);
+    layers_[1].take(chunk, (requested & LayerZ) != 0);
     layers_[2].take(chunk, true);  // classification
-    layers_[3].take(chunk, (requested & kLayerFlags) != 0);
-    layers_[4].take(chunk, (requested & kLayerIntensity) != 0);
-    layers_[5].take(chunk, (requested & kLayerScanAngle) != 0);
-    layers_[6].take(chunk, (requested & kLayerUserData) != 0);
-    layers_[7].take(chunk, (requested & kLayerPointSource) != 0);
-    layers_[8].take(chunk, (requested & kLayerGpsTime) != 0);
+    layers_[3].take(chunk, (requested & LayerFlags) != 0);
+    layers_[4].take(chunk, (requested & LayerIntensity) != 0);
+    layers_[5].take(chunk, (requested & LayerScanAngle) != 0);
+    layers_[6].take(chunk, (requested & LayerUserData) != 0);
+    layers_[7].take(chunk, (requested & LayerPointSource) != 0);
+    layers_[8].take(chunk, (requested & LayerGpsTime) != 0);
     const Point14 first = Point14::read(raw);
     current_ = first.channel;
     context = current_;
@@ -306,8 +306,8 @@ class Rgb14V3 final : public LayeredItemDecoder {
   }
   void start(ByteStream& chunk, const std::uint8_t* raw, std::uint32_t& context,
              std::uint32_t requested) override {
-    rgb_.take(chunk, (requested & kLayerRgb) != 0);
-    if (nir_) nir_layer_.take(chunk, (requested & kLayerNir) != 0);
+    rgb_.take(chunk, (requested & LayerRgb) != 0);
+    if (nir_) nir_layer_.take(chunk, (requested & LayerNir) != 0);
     std::array<std::uint16_t, 4> first{};
     for (int i = 0; i < (nir_ ? 4 : 3); ++i) first[i] = load_le<std::uint16_t>(raw + 2 * i);
     channels_.start(context, [&](const State*) { return make(first); });
@@ -366,7 +366,7 @@ class WavePacket14V3 final : public LayeredItemDecoder {
   void read_sizes(ByteStream& chunk) override { layer_.size = chunk.get_u32(); }
   void start(ByteStream& chunk, const std::uint8_t* raw, std::uint32_t& context,
              std::uint32_t requested) override {
-    layer_.take(chunk, (requested & kLayerWavePacket) != 0);
+    layer_.take(chunk, (requested & LayerWavePacket) != 0);
     channels_.start(context, [&](const State*) { return make(raw); });
   }
   void next(std::uint8_t* out, std::uint32_t& context) override {
@@ -405,7 +405,7 @@ class Byte14V3 final : public LayeredItemDecoder {
   }
   void start(ByteStream& chunk, const std::uint8_t* raw, std::uint32_t& context,
              std::uint32_t requested) override {
-    for (auto& layer : layers_) layer.take(chunk, (requested & kLayerExtraBytes) != 0);
+    for (auto& layer : layers_) layer.take(chunk, (requested & LayerExtraBytes) != 0);
     channels_.start(context, [&](const State*) { return make(raw); });
   }
   void next(std::uint8_t* out, std::uint32_t& context) override {

@@ -44,6 +44,7 @@ struct FaceOrigin {
   int operand = 0;
   int face = 0;
   friend bool operator==(const FaceOrigin&, const FaceOrigin&) = default;
+  // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 misreads a defaulted <=>
   friend auto operator<=>(const FaceOrigin&, const FaceOrigin&) = default;
 };
 

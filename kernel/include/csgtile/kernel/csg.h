@@ -38,6 +38,7 @@ struct FaceSource {
   int node = 0;
   int face = 0;
   friend bool operator==(const FaceSource&, const FaceSource&) = default;
+  // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 misreads a defaulted <=>
   friend auto operator<=>(const FaceSource&, const FaceSource&) = default;
 };
 

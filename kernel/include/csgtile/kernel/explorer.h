@@ -43,7 +43,7 @@ class Explorer {
     friend class Explorer;
     struct Frame {
       Shape shape;
-      std::size_t next_child;
+      std::size_t next_child = 0;
     };
     Iterator() = default;
     Iterator(const Shape& root, ShapeKind find, std::optional<ShapeKind> avoid);

@@ -19,6 +19,7 @@ struct GridCell {
   std::int64_t column = 0;
   std::int64_t row = 0;
 
+  // NOLINTNEXTLINE(modernize-use-nullptr): clang-tidy 14 misreads a defaulted <=>
   std::strong_ordering operator<=>(const GridCell& other) const = default;
   bool operator==(const GridCell& other) const = default;
 
