@@ -9,6 +9,7 @@
 #include "boolean/line_surface.h"
 #include "boolean/tolerance.h"
 #include "csgtile/kernel/explorer.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "predicates/predicates.h"
 
 namespace csgtile::kernel::detail {
@@ -40,14 +41,6 @@ bool clip_ray(const BoundingBox& box, const Vec3& o, const Vec3& d, double& lo, 
   lo = 0.0;
   hi = kInfinity;
   return BoxRay(o, d).clip(box, lo, hi);
-}
-
-double segment_distance(const Vec2& q, const Vec2& a, const Vec2& b) {
-  const Vec2 ab = b - a;
-  const double len2 = ab.squaredNorm();
-  double s = len2 > 0.0 ? (q - a).dot(ab) / len2 : 0.0;
-  s = std::clamp(s, 0.0, 1.0);
-  return (a + s * ab - q).norm();
 }
 
 // Bound on |c''(t)| of a pcurve (0 when it is straight between its breakpoints).

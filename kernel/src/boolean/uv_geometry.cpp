@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "boolean/tolerance.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "predicates/predicates.h"
 
 namespace csgtile::kernel::detail {
@@ -26,13 +27,6 @@ std::vector<double> sample_parameters(const BModel& m, const BUse& use, int samp
     out.push_back(use.forward ? e.t0 + (e.t1 - e.t0) * f : e.t1 - (e.t1 - e.t0) * f);
   }
   return out;
-}
-
-double segment_distance(const Vec2& p, const Vec2& a, const Vec2& b) {
-  const Vec2 d = b - a;
-  const double l2 = d.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((p - a).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * d)).norm();
 }
 
 // Side of `uv` with respect to the arc (walked t0 → t1): +1 left, −1 right, 0 within

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "csgtile/fit/fit.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "fit_clouds.h"
 
 namespace csgtile::fit {
@@ -35,18 +36,7 @@ long long count(const FittedPrimitives& f, PrimitiveType t) {
   return f.per_type[static_cast<std::size_t>(t)];
 }
 
-bool inside(const Vec2& p, const std::vector<Vec2>& ring) {
-  bool in = false;
-  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-    const Vec2& a = ring[i];
-    const Vec2& b = ring[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      in = !in;
-    }
-  }
-  return in;
-}
+bool inside(const Vec2& p, const std::vector<Vec2>& ring) { return kernel::inside_ring(p, ring); }
 
 // Walls (outward normals for a counter-clockwise ring) of a vertical prism, heights [0, h].
 Cloud walls(const std::vector<Vec2>& ring, double h, double spacing, std::uint64_t seed) {
