@@ -100,7 +100,7 @@ Failure assemble_into(const std::vector<assembly::AssemblyPrimitive>& prims,
   auto result = assembly::assemble(prims, options);
   if (!result.ok()) return {ErrorCode::InputInvalid, result.error().message};
   auto model = assembly::city_model(result->objects);
-  if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
+  if (!model.ok()) return failure_of(model.error());
   double volume = 0;
   for (const auto& o : result->objects) volume += o.volume;
   std::error_code ec;

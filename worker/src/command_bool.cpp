@@ -60,9 +60,9 @@ Failure evaluate(const std::string& path, const std::string& out, const kernel::
   geo::SceneModelOptions options;
   options.tolerance = tolerance;
   auto leaves = geo::scene_leaves(built, options);
-  if (!leaves.ok()) return {from_kernel(leaves.error().code), leaves.error().message};
+  if (!leaves.ok()) return failure_of(leaves.error());
   kernel::Result<kernel::CsgModel> model = geo::combine_scene(built.op, leaves.value(), options);
-  if (!model.ok()) return {from_kernel(model.error().code), model.error().message};
+  if (!model.ok()) return failure_of(model.error());
   if (!out.empty()) {
     if (auto st = kernel::write_native_model_file(out, model.value()); !st.ok()) {
       return {ErrorCode::Io, st.error().message};

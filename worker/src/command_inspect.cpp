@@ -38,7 +38,7 @@ Failure read_all(const std::string& path, std::string& bytes) {
 
 Failure inspect_native(const std::string& path, const std::string& bytes, Json& out) {
   auto model = kernel::read_native_model(bytes);
-  if (!model.ok()) return {from_kernel(model.error().code), path + ": " + model.error().message};
+  if (!model.ok()) return failure_of(model.error(), path);
   const auto counts = kernel::count_shapes(model->shape);
   const auto mp = kernel::mass_properties(model->shape);
   const auto check = kernel::check_shape(model->shape);

@@ -53,4 +53,9 @@ ErrorCode from_kernel(kernel::ErrorCode code) {
   return ErrorCode::Internal;
 }
 
+Failure failure_of(const kernel::Error& error, const std::string& context) {
+  return {from_kernel(error.code),
+          context.empty() ? error.message : context + ": " + error.message};
+}
+
 }  // namespace csgtile::worker

@@ -131,5 +131,16 @@ TEST(ErrorTable, ExitCodesAreDistinctAndAvoidReservedValues) {
   }
 }
 
+TEST(ErrorTable, KernelErrorsBecomeFailuresWithTheirContext) {
+  const kernel::Error error{kernel::ErrorCode::CorruptData, "bad checksum"};
+  const Failure bare = failure_of(error);
+  EXPECT_EQ(bare.code, ErrorCode::InputInvalid);
+  EXPECT_EQ(bare.message, "bad checksum");
+  const Failure named = failure_of(error, "a.csgt");
+  EXPECT_EQ(named.code, from_kernel(kernel::ErrorCode::CorruptData));
+  EXPECT_EQ(named.message, "a.csgt: bad checksum");
+  EXPECT_EQ(failure_of({kernel::ErrorCode::IoError, "x"}).code, ErrorCode::Io);
+}
+
 }  // namespace
 }  // namespace csgtile::worker

@@ -161,7 +161,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.object_time_limit = config.city.building_timeout_seconds;
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
-    return {from_kernel(assembled.error().code), name + ": " + assembled.error().message};
+    return failure_of(assembled.error(), name);
   }
   const assembly::Assembly& a = assembled.value();
 
@@ -283,7 +283,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   const std::string dir_key = "cells/" + name;
   const std::filesystem::path cell_dir = run_dir / dir_key;
   auto city = assembly::city_model(kept_objects);
-  if (!city.ok()) return {from_kernel(city.error().code), name + ": " + city.error().message};
+  if (!city.ok()) return failure_of(city.error(), name);
   if (Failure f =
           write_file_atomic(cell_dir / "model.csgt", kernel::write_native_model(city.value()));
       !f.ok()) {

@@ -21,7 +21,7 @@ Failure read_model(const std::filesystem::path& run_dir, const ordered_json& key
   const std::filesystem::path path = run_dir / key.get<std::string>();
   auto model = kernel::read_native_model_file(path);
   if (!model.ok()) {
-    return {from_kernel(model.error().code), path.string() + ": " + model.error().message};
+    return failure_of(model.error(), path.string());
   }
   out = std::move(model).value();
   if (!by.is_identity()) move_model(*out, by);

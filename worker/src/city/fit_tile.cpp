@@ -49,7 +49,7 @@ Failure append_points(geo::PointReader& reader, const kernel::Vec3& origin, bool
   geo::PointBatch batch;
   for (;;) {
     auto n = reader.read(batch, 1 << 16);
-    if (!n.ok()) return {from_kernel(n.error().code), n.error().message};
+    if (!n.ok()) return failure_of(n.error());
     if (n.value() == 0) return {};
     for (const auto& p : batch.points) {
       raw.push_back(kernel::Vec3(p.x, p.y, p.z) - origin);
@@ -93,7 +93,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   } else {
     opened = geo::open_point_file(source.path, read_options);
   }
-  if (!opened.ok()) return {from_kernel(opened.error().code), opened.error().message};
+  if (!opened.ok()) return failure_of(opened.error());
   geo::PointReader& reader = *opened.value();
   std::array<double, 3> origin{0.0, 0.0, 0.0};
   std::string crs_text;

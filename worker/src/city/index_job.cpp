@@ -182,8 +182,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       if (!is_safe_key(object_key)) return {ErrorCode::Internal, "unsafe object key " + object_key};
       auto model = kernel::read_native_model_file(run_dir / object_key);
       if (!model.ok()) {
-        return {from_kernel(model.error().code),
-                (run_dir / object_key).string() + ": " + model.error().message};
+        return failure_of(model.error(), (run_dir / object_key).string());
       }
       IndexObject io;
       io.id = entry.at("id").get<std::string>();

@@ -146,8 +146,7 @@ Failure collect_run_objects(const RunJobs& run_jobs, const RunExportOptions& opt
     if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe model key " + key};
     auto model = kernel::read_native_model_file(run_dir / key);
     if (!model.ok()) {
-      return {from_kernel(model.error().code),
-              (run_dir / key).string() + ": " + model.error().message};
+      return failure_of(model.error(), (run_dir / key).string());
     }
     Job job{i, std::move(model).value(), std::nullopt};
     // The scene gives fit quality and the frame; an input that went away since its job ran
@@ -221,7 +220,7 @@ Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
   const std::filesystem::path path = run_dir / report.key;
   if (kernel::Status st = write_topology_index(path, run.objects, options, &report.stats);
       !st.ok()) {
-    return {from_kernel(st.error().code), path.string() + ": " + st.error().message};
+    return failure_of(st.error(), path.string());
   }
   for (const std::string& w : run.warnings) report.stats.warnings.push_back(w);
   std::ifstream in(path, std::ios::binary);

@@ -344,7 +344,7 @@ Failure open_las(const std::string& input, const Policy& policy,
   } else {
     opened = geo::LasReader::open(input);
   }
-  if (!opened.ok()) return {from_kernel(opened.error().code), opened.error().message};
+  if (!opened.ok()) return failure_of(opened.error());
   reader = std::move(opened).value();
   return {};
 }

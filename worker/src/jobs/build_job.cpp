@@ -67,7 +67,7 @@ Failure run_build_job(const Job& job, const JobContext& context, std::string& re
   clock.enter("build");
   auto built = geo::scene_leaves(scene.value(), scene_options);
   if (!built.ok()) {
-    return {from_kernel(built.error().code), input + ": " + built.error().message};
+    return failure_of(built.error(), input);
   }
   std::vector<kernel::CsgModel>& leaves = built.value();
   clock.enter("check");
@@ -97,7 +97,7 @@ Failure run_build_job(const Job& job, const JobContext& context, std::string& re
   // A scene with an operation is unified by the exact Booleans (its CSG tree and face history
   // kept: native CSG section); a plain set stays a set.
   kernel::Result<kernel::CsgModel> model = geo::combine_scene(scene->op, leaves, scene_options);
-  if (!model.ok()) return {from_kernel(model.error().code), input + ": " + model.error().message};
+  if (!model.ok()) return failure_of(model.error(), input);
   clock.enter("publish");
   // Content-addressed: the same model always lands under the same key, so a job that runs
   // twice (after a crash) rewrites identical bytes and publishes nothing new.

@@ -49,4 +49,8 @@ struct Failure {
   bool ok() const { return code == ErrorCode::Ok; }
 };
 
+/// A kernel (or geo) error as the worker speaks it: from_kernel's code, and the message after
+/// `context` and ": " when a context is given (what was being read or built).
+Failure failure_of(const kernel::Error& error, const std::string& context = {});
+
 }  // namespace csgtile::worker
