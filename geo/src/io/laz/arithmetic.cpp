@@ -101,6 +101,9 @@ void SymbolModel::update() {
       total_count += (symbol_count[i] = (symbol_count[i] + 1) >> 1);
     }
   }
+  // Every symbol counts at least 1 after the halving, so only a model without symbols (which
+  // the constructor never makes) could reach 0 here.
+  if (total_count == 0) total_count = 1;
   const std::uint32_t scale = 0x80000000u / total_count;
   std::uint32_t sum = 0;
   if (table.empty()) {
