@@ -51,9 +51,8 @@ Bounds2 CityGrid::core_bounds(GridCell c) const {
 }
 
 Bounds2 CityGrid::halo_bounds(GridCell c) const {
-  const Bounds2 core = core_bounds(c);
-  const double h = spec_.halo;
-  return Bounds2{core.min_x - h, core.min_y - h, core.max_x + h, core.max_y + h};
+  const kernel::BoundingBox halo = grid_.halo_box(c);
+  return Bounds2{halo.min.x(), halo.min.y(), halo.max.x(), halo.max.y()};
 }
 
 bool CityGrid::in_core(GridCell c, double x, double y) const {
@@ -69,10 +68,10 @@ bool CityGrid::in_halo(GridCell c, double x, double y) const {
 Result<std::vector<GridCell>> CityGrid::cells_meeting(const Bounds2& bounds, bool include_halo,
                                                       std::size_t max_cells) const {
   if (!bounds.is_valid()) return Error{ErrorCode::InvalidArgument, "cells_meeting: invalid bounds"};
-  const double h = include_halo ? spec_.halo : 0.0;
+  const double h = include_halo ? grid_.halo : 0.0;
   // Candidates: cells whose core meets the bounds grown by the halo; then the exact test.
-  const double span_x = (bounds.max_x - bounds.min_x + 2 * h) / spec_.cell_size + 3;
-  const double span_y = (bounds.max_y - bounds.min_y + 2 * h) / spec_.cell_size + 3;
+  const double span_x = (bounds.max_x - bounds.min_x + 2 * h) / grid_.size + 3;
+  const double span_y = (bounds.max_y - bounds.min_y + 2 * h) / grid_.size + 3;
   if (!(span_x * span_y <= static_cast<double>(max_cells) * 4 + 64)) {
     return Error{ErrorCode::InvalidArgument,
                  "cells_meeting: bounds span more than " + std::to_string(max_cells) + " cells"};

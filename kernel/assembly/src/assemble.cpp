@@ -123,14 +123,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   std::vector<kernel::BoundingBox> exact_boxes(n);
   // Cell region: the cell grown by its halo (XY); a primitive is read when its box meets it.
   std::optional<kernel::BoundingBox> region;
-  if (options.cell) {
-    const kernel::Grid& g = options.cell->grid;
-    const kernel::GridCell c = options.cell->cell;
-    kernel::BoundingBox r;
-    r.min = kernel::Vec3(g.edge_x(c.column) - g.halo, g.edge_y(c.row) - g.halo, -HUGE_VAL);
-    r.max = kernel::Vec3(g.edge_x(c.column + 1) + g.halo, g.edge_y(c.row + 1) + g.halo, HUGE_VAL);
-    region = r;
-  }
+  if (options.cell) region = options.cell->grid.halo_box(options.cell->cell);
   std::vector<char> read(n, 0);
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     auto m = kernel::csg_primitive(input[i].spec, input[i].label, options.tolerance);

@@ -36,13 +36,6 @@ BoundingBox moved_box(const BoundingBox& local, const Location& location) {
   return out;
 }
 
-// The part [lo, hi] of the ray o + t·d, t ≥ 0, inside the box; false when it misses.
-bool clip_ray(const BoundingBox& box, const Vec3& o, const Vec3& d, double& lo, double& hi) {
-  lo = 0.0;
-  hi = kInfinity;
-  return BoxRay(o, d).clip(box, lo, hi);
-}
-
 // Bound on |c''(t)| of a pcurve (0 when it is straight between its breakpoints).
 double second_derivative_bound(const Curve2d& curve) {
   switch (curve.kind()) {
@@ -578,9 +571,10 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
   out.parity.assign(c.groups.size(), 0);
   // Hits that matter lie in the open candidates' boxes: the ray stops where it leaves them.
   double t_max = 0.0;
+  const BoxRay ray(p, direction);
   for (std::size_t k = 0; k < c.groups.size(); ++k) {
-    double lo = 0.0, hi = 0.0;
-    if (c.open[k] != 0 && clip_ray(group_bounds_[c.groups[k]], p, direction, lo, hi)) {
+    double lo = 0.0, hi = kInfinity;
+    if (c.open[k] != 0 && ray.clip(group_bounds_[c.groups[k]], lo, hi)) {
       t_max = std::max(t_max, hi);
     }
   }
@@ -589,11 +583,11 @@ SolidClassifier::RayOutcome SolidClassifier::cast(const Vec3& p, const Vec3& dir
     const int k = c.find(face_group_[f]);
     if (k < 0 || c.open[static_cast<std::size_t>(k)] == 0) return;
     const FaceQuery& face = faces_[f];
-    double lo = 0.0, hi = 0.0;
     const double scale = face.location().scale();
     const Vec3 origin = face.to_local(p);
     const Vec3 local_direction = face.location().rotation().transpose() * direction;
-    if (!clip_ray(face.local_bounds(), origin, local_direction, lo, hi)) return;
+    double lo = 0.0, hi = kInfinity;  // the ray's part in the face's box, in its frame
+    if (!BoxRay(origin, local_direction).clip(face.local_bounds(), lo, hi)) return;
     const ParamBox& box = face.parameter_box();
     const double pad = kUvRelative * (1.0 + (box.u1 - box.u0) + (box.v1 - box.v0));
     const ParamBox range{box.u0 - pad, box.u1 + pad, box.v0 - pad, box.v1 + pad};

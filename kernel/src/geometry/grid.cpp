@@ -51,18 +51,22 @@ GridCell Grid::cell_of(double x, double y) const {
   return cell;
 }
 
+BoundingBox Grid::halo_box(GridCell cell) const {
+  BoundingBox box;
+  box.min = Vec3(edge_x(cell.column) - halo, edge_y(cell.row) - halo, -HUGE_VAL);
+  box.max = Vec3(edge_x(cell.column + 1) + halo, edge_y(cell.row + 1) + halo, HUGE_VAL);
+  return box;
+}
+
 bool Grid::meets_halo(const BoundingBox& box, GridCell cell) const {
-  if (box.empty()) return false;
-  return box.max.x() >= edge_x(cell.column) - halo &&
-         box.min.x() <= edge_x(cell.column + 1) + halo && box.max.y() >= edge_y(cell.row) - halo &&
-         box.min.y() <= edge_y(cell.row + 1) + halo;
+  return box.intersects(halo_box(cell));  // false for an empty box
 }
 
 bool Grid::within_halo(const BoundingBox& box, GridCell cell) const {
   if (box.empty()) return true;
-  return box.min.x() >= edge_x(cell.column) - halo &&
-         box.max.x() <= edge_x(cell.column + 1) + halo && box.min.y() >= edge_y(cell.row) - halo &&
-         box.max.y() <= edge_y(cell.row + 1) + halo;
+  const BoundingBox h = halo_box(cell);
+  return box.min.x() >= h.min.x() && box.max.x() <= h.max.x() && box.min.y() >= h.min.y() &&
+         box.max.y() <= h.max.y();
 }
 
 }  // namespace csgtile::kernel

@@ -293,9 +293,9 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   // Each LAS/LAZ tile's neighbours: the tiles that can own a building it sees.
   const std::vector<Tile> tiles = tile_inputs(config);
   // A cell of a COPC input: the cell's square.
-  auto extent_of = [&config](const Tile& t) -> std::optional<Extent> {
+  const kernel::Grid grid = detail::run_grid(config);
+  auto extent_of = [&grid](const Tile& t) -> std::optional<Extent> {
     if (!t.cell) return t.extent;
-    const kernel::Grid grid = detail::run_grid(config);
     return Extent{grid.edge_x(t.cell->column), grid.edge_y(t.cell->row),
                   grid.edge_x(t.cell->column + 1), grid.edge_y(t.cell->row + 1)};
   };

@@ -47,12 +47,10 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
       return {ErrorCode::Internal, "job " + job.key + " has a malformed cell"};
     }
     only_cell = kernel::GridCell{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()};
-    const kernel::Grid grid = run_grid(config);
+    const kernel::BoundingBox halo = run_grid(config).halo_box(*only_cell);
     geo::Bounds3 region;
-    region.min = {grid.edge_x(only_cell->column) - grid.halo,
-                  grid.edge_y(only_cell->row) - grid.halo, -INFINITY};
-    region.max = {grid.edge_x(only_cell->column + 1) + grid.halo,
-                  grid.edge_y(only_cell->row + 1) + grid.halo, INFINITY};
+    region.min = {halo.min.x(), halo.min.y(), halo.min.z()};
+    region.max = {halo.max.x(), halo.max.y(), halo.max.z()};
     source.region = region;
     input = payload["input"].get<std::string>();
     if (fetch::is_remote_url(input)) {

@@ -227,8 +227,8 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     }
   }
   // Records written before blocks were kept: compute them all here, as the cells would have.
+  const RunExportOptions settings = jobs::export_options(config);
   if (!all_blocks) {
-    const RunExportOptions settings = jobs::export_options(config);
     add_building_lods(objects.objects, settings.chordal_tolerance, settings.linear_tolerance);
   }
   // The relations of objects of one cell as their cell classified them (all cells must give
@@ -246,8 +246,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
     if (all_found) objects.cell_relations = std::move(known);
   }
   RunIndexReport index;
-  if (Failure f = write_run_index(jobs::export_options(config), objects, run_dir, index); !f.ok())
-    return f;
+  if (Failure f = write_run_index(settings, objects, run_dir, index); !f.ok()) return f;
   log.info("index", "written",
            {{"key", index.key}, {"objects", std::to_string(index.stats.objects)}});
 

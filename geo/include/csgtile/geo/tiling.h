@@ -57,7 +57,7 @@ class CityGrid {
   static kernel::Result<CityGrid> create(const Crs& crs, const GridSpec& spec);
 
   const Crs& crs() const { return crs_; }
-  const GridSpec& spec() const { return spec_; }
+  GridSpec spec() const { return {grid_.origin_x, grid_.origin_y, grid_.size, grid_.halo}; }
 
   /// The cell whose core holds (x, y). Precondition: finite, and within ±2^52 cells of the
   /// origin; otherwise a clamped cell is returned (whose core does not hold the point).
@@ -74,11 +74,8 @@ class CityGrid {
 
  private:
   CityGrid(Crs crs, GridSpec spec)
-      : crs_(std::move(crs)),
-        spec_(spec),
-        grid_{spec.origin_x, spec.origin_y, spec.cell_size, spec.halo} {}
+      : crs_(std::move(crs)), grid_{spec.origin_x, spec.origin_y, spec.cell_size, spec.halo} {}
   Crs crs_;
-  GridSpec spec_;
   kernel::Grid grid_;
 };
 

@@ -1,6 +1,7 @@
 #include "io/laz/arithmetic.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cstring>
 
 #include "io/byte_source.h"
@@ -77,6 +78,7 @@ void BitModel::update() {
 }
 
 SymbolModel::SymbolModel(std::uint32_t n) : symbols(n), last_symbol(n - 1) {
+  assert(n >= 1 && "a symbol model has at least one symbol");
   if (n > 16) {
     // A bucket per symbol (LASzip uses one per four): the decoded symbol is the same (the
     // table only brackets the search), and the search rarely needs a bisection step.
@@ -101,10 +103,9 @@ void SymbolModel::update() {
       total_count += (symbol_count[i] = (symbol_count[i] + 1) >> 1);
     }
   }
-  // Every symbol counts at least 1 after the halving, so only a model without symbols (which
-  // the constructor never makes) could reach 0 here.
-  if (total_count == 0) total_count = 1;
-  const std::uint32_t scale = 0x80000000u / total_count;
+  // Not zero: every one of the model's symbols (at least one, see the constructor) counts at
+  // least 1, also after the halving.
+  const std::uint32_t scale = 0x80000000u / total_count;  // NOLINT(clang-analyzer-core.DivideZero)
   std::uint32_t sum = 0;
   if (table.empty()) {
     for (std::uint32_t k = 0; k < symbols; ++k) {

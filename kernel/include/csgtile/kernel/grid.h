@@ -46,6 +46,8 @@ struct Grid {
   /// edges so that rounding cannot disagree with them. Precondition: finite and within ±2^52
   /// cells of the origin; otherwise a clamped cell (whose core does not hold the point).
   GridCell cell_of(double x, double y) const;
+  /// The cell's halo as a box: its core grown by `halo` in x and y, unbounded in z.
+  BoundingBox halo_box(GridCell cell) const;
   /// Whether the xy extent of `box` meets the cell's halo (closed); false for an empty box.
   bool meets_halo(const BoundingBox& box, GridCell cell) const;
   /// Whether the xy extent of `box` lies within the cell's halo; true for an empty box.
