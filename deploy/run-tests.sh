@@ -45,6 +45,9 @@ CSGTILE_PROPERTY_SCALE="${CSGTILE_PROPERTY_SCALE:-10}" ctest --test-dir build --
 
 if [ "${CSGTILE_SKIP_TIDY:-0}" != 1 ]; then
   echo "== clang-tidy: every source of kernel/, geo/, config/ and worker/"
+  # A unit whose preprocessed text was found clean before (same tool, same .clang-tidy) is not
+  # analysed again (tests/boundaries/check_tidy.py; cache in ~/.cache/csgtile-tidy): a cold run
+  # is about 22 minutes on 2 cores, a run after a small change a few.
   tests/boundaries/check_tidy.sh build
 fi
 
@@ -52,14 +55,17 @@ if [ "${CSGTILE_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "== ASan+UBSan build: kernel, assembly, geo, fit, config and CLI tests"
   # The SIGTERM grace tests wait out 90 s of grace periods each: the optimised stage runs them;
   # under the sanitizers they would add three minutes, mostly of waiting, to a stage near CI's
-  # 90-minute budget.
+  # 90-minute budget. So do the quality measurements on the shared data (label quality: the
+  # Fit4CAD, gate, real-tile and city-quality scores, about eight minutes under the
+  # sanitizers): they run the fit and the city pipeline that the fit and cli.run.city* tests
+  # run here too, on more points, and their figures are checked by the optimised stage.
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCSGTILE_WERROR=ON \
         -DCSGTILE_SANITIZE=ON -DCSGTILE_BUILD_TESTS=ON \
         -DCSGTILE_REPORT_NPM_DIR="$PWD/build/npm/node_modules" >/dev/null
   cmake --build build-asan -j"$jobs"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$jobs" -L 'kernel|assembly|geo|fit|config|cli|boundaries' \
-          -E 'sigterm_grace'
+          -LE quality -E 'sigterm_grace'
 fi
 
 if [ "${CSGTILE_SKIP_FUZZ:-0}" != 1 ]; then
