@@ -2,12 +2,25 @@
 
 #include <cstdio>
 #include <exception>
+#include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "commands.h"
 #include "csgtile/worker/errors.h"
 #include "stop_signal.h"
 
 namespace csgtile::worker {
+
+int detail::report_failure(const char* command, const Failure& failure, bool json,
+                           nlohmann::ordered_json& out) {
+  if (json) {
+    out["error"] = std::string(error_info(failure.code).name) + ": " + failure.message;
+    std::cout << out.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+  } else {
+    std::fprintf(stderr, "csgtile %s: %s\n", command, failure.message.c_str());
+  }
+  return error_info(failure.code).exit_code;
+}
 
 int run_cli(int argc, char** argv) {
   // A SIGTERM while a worker starts up must drain it, not kill it: hold the stop signals

@@ -139,22 +139,14 @@ int run_fit(const FitCommand& c) {
   const auto start = std::chrono::steady_clock::now();
   Json out;
   out["input"] = c.input;
-  auto fail = [&](ErrorCode code, const std::string& message) {
-    if (c.json) {
-      out["error"] = std::string(error_info(code).name) + ": " + message;
-      std::cout << out.dump() << "\n";
-    } else {
-      std::fprintf(stderr, "csgtile fit: %s\n", message.c_str());
-    }
-    return error_info(code).exit_code;
-  };
+  auto fail = [&](const Failure& f) { return detail::report_failure("fit", f, c.json, out); };
 
   // The csgtile config (its fit: section, run.seed, run.crs, kernel.linear_tolerance), every
   // problem printed with its key and line; no --config: the defaults.
   config::Config config;
   if (!c.config.empty()) {
     auto loaded = load_run_config(c.config, RunChecks::CrsOnly);
-    if (!loaded) return fail(ErrorCode::ConfigInvalid, c.config + ": invalid config");
+    if (!loaded) return fail({ErrorCode::ConfigInvalid, c.config + ": invalid config"});
     config = std::move(*loaded);
   }
   if (c.seed_given) config.run.seed = c.seed;
@@ -163,7 +155,7 @@ int run_fit(const FitCommand& c) {
   options.keep_detections = !c.dump_shapes.empty();
   options.keep_segments = !c.segments.empty();
   if (!c.crs.empty() && !geo::crs_from_config(c.crs).ok()) {
-    return fail(ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message);
+    return fail({ErrorCode::Usage, "--crs: " + geo::crs_from_config(c.crs).error().message});
   }
   city::FittedTile tile;
   city::TileSource source;
@@ -173,7 +165,7 @@ int run_fit(const FitCommand& c) {
     if (Failure f =
             fetch::open_range_source(c.input, fetch::policy_of(config.fetch), source.remote);
         !f.ok()) {
-      return fail(f.code, f.message);
+      return fail(f);
     }
   }
   const std::string stem =
@@ -185,19 +177,19 @@ int run_fit(const FitCommand& c) {
       c.footprints.empty() ? config.city.footprints_id : c.footprints_id};
   if (Failure f = city::fit_tile(std::move(source), stem, options, crs, tile, footprints);
       !f.ok()) {
-    return fail(f.code, f.message);
+    return fail(f);
   }
   const fit::FitOutput& f = tile.output;
   const double read_seconds = tile.read_seconds;
   const std::string text = geo::scene_to_json(tile.scene);
-  if (Failure w = write_file_atomic(c.out, text); !w.ok()) return fail(w.code, w.message);
+  if (Failure w = write_file_atomic(c.out, text); !w.ok()) return fail(w);
 
   if (!c.dump_shapes.empty() && !write_detections(c.dump_shapes, f.detections)) {
-    return fail(ErrorCode::Io, c.dump_shapes + ": cannot write");
+    return fail({ErrorCode::Io, c.dump_shapes + ": cannot write"});
   }
   if (!c.segments.empty()) {
     if (Failure w = write_segments(c.segments, f, tile.origin); !w.ok()) {
-      return fail(w.code, w.message);
+      return fail(w);
     }
   }
 

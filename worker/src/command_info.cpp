@@ -133,15 +133,7 @@ void print_bounds(const char* label, const geo::Bounds3& b) {
 int run_info(const InfoOptions& o) {
   Json out;
   out["file"] = o.file;
-  auto fail = [&](ErrorCode code, const std::string& message) {
-    if (o.json) {
-      out["error"] = std::string(error_info(code).name) + ": " + message;
-      std::cout << out.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-    } else {
-      std::fprintf(stderr, "csgtile info: %s\n", message.c_str());
-    }
-    return error_info(code).exit_code;
-  };
+  auto fail = [&](const Failure& f) { return detail::report_failure("info", f, o.json, out); };
 
   std::unique_ptr<geo::PointReader> reader;
   geo::LasReader* las = nullptr;
@@ -149,24 +141,24 @@ int run_info(const InfoOptions& o) {
   const bool remote = fetch::is_remote_url(o.file);
   auto format = remote ? kernel::Result<geo::PointFileFormat>(geo::PointFileFormat::Las)
                        : geo::detect_point_format(o.file);
-  if (!format.ok()) return fail(from_kernel(format.error().code), format.error().message);
+  if (!format.ok()) return fail(failure_of(format.error()));
   if (remote) {
     // A URL (http, https, s3): LAS, LAZ or COPC read by range requests, only what is shown.
     fetched = std::make_shared<fetch::RangeStats>();
     std::unique_ptr<geo::LasReader> opened;
     if (Failure f = fetch::open_las(o.file, fetch::Policy{}, opened, fetched); !f.ok()) {
-      return fail(f.code, f.message);
+      return fail(f);
     }
     las = opened.get();
     reader = std::move(opened);
   } else if (format.value() == geo::PointFileFormat::Las) {
     auto opened = geo::LasReader::open(o.file);
-    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+    if (!opened.ok()) return fail(failure_of(opened.error()));
     las = opened.value().get();
     reader = std::move(opened).value();
   } else {
     auto opened = geo::open_point_file(o.file);
-    if (!opened.ok()) return fail(from_kernel(opened.error().code), opened.error().message);
+    if (!opened.ok()) return fail(failure_of(opened.error()));
     reader = std::move(opened).value();
   }
 
@@ -225,7 +217,7 @@ int run_info(const InfoOptions& o) {
   std::optional<std::vector<geo::CopcNode>> copc_nodes;
   if (las != nullptr && las->copc()) {
     auto nodes = las->copc_hierarchy();
-    if (!nodes.ok()) return fail(from_kernel(nodes.error().code), nodes.error().message);
+    if (!nodes.ok()) return fail(failure_of(nodes.error()));
     copc_nodes = std::move(nodes).value();
     const geo::CopcInfo& c = *las->copc();
     int depth = 0;
@@ -246,7 +238,7 @@ int run_info(const InfoOptions& o) {
   out["warnings"] = reader->warnings();
 
   if (scan_error) {
-    return fail(from_kernel(scan_error->code), scan_error->message);
+    return fail(failure_of(*scan_error));
   }
   if (o.json) {
     out["error"] = nullptr;

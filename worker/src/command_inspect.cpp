@@ -65,8 +65,7 @@ Failure inspect_native(const std::string& path, const std::string& bytes, Json& 
 
 Failure inspect_gpkg(const std::string& path, Json& out) {
   SqliteDb db;
-  if (auto s = db.open(path, SQLITE_OPEN_READONLY); !s.ok())
-    return {ErrorCode::Io, s.error().message};
+  if (Failure f = db.open(path, SQLITE_OPEN_READONLY); !f.ok()) return f;
   out["type"] = "geopackage";
   Json tables = Json::object();
   std::vector<std::string> names;

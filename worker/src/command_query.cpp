@@ -42,16 +42,7 @@ std::string optional_text(const std::optional<double>& v) {
 int run_query(const QueryOptions& o) {
   Json out;
   out["index"] = o.index;
-  auto fail = [&](const kernel::Error& e) {
-    const ErrorCode code = from_kernel(e.code);
-    if (o.json) {
-      out["error"] = std::string(error_info(code).name) + ": " + e.message;
-      std::cout << out.dump() << "\n";
-    } else {
-      std::fprintf(stderr, "csgtile query: %s\n", e.message.c_str());
-    }
-    return error_info(code).exit_code;
-  };
+  auto fail = [&](const Failure& f) { return detail::report_failure("query", f, o.json, out); };
   const int questions = !o.children.empty() + !o.ancestors.empty() + !o.relations.empty();
   if (questions != 1 || (!o.ancestors.empty() && o.kind.empty())) {
     std::fprintf(stderr,

@@ -51,47 +51,39 @@ int run_synth(SynthCommand c) {
   out["scene"] = c.options.scene;
   out["mode"] = c.mode;
   out["seed"] = c.options.seed;
-  auto fail = [&](ErrorCode code, const std::string& message) {
-    if (c.json) {
-      out["error"] = std::string(error_info(code).name) + ": " + message;
-      std::cout << out.dump() << "\n";
-    } else {
-      std::fprintf(stderr, "csgtile synth: %s\n", message.c_str());
-    }
-    return error_info(code).exit_code;
-  };
+  auto fail = [&](const Failure& f) { return detail::report_failure("synth", f, c.json, out); };
 
   // Everything the user typed is checked before any file is touched: usage errors (64).
   const auto& names = geo::synth_scene_names();
   if (std::find(names.begin(), names.end(), c.options.scene) == names.end()) {
     std::string list;
     for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-    return fail(ErrorCode::Usage,
-                "unknown scene \"" + c.options.scene + "\"; valid scenes: " + list);
+    return fail(
+        {ErrorCode::Usage, "unknown scene \"" + c.options.scene + "\"; valid scenes: " + list});
   }
   if (c.mode == "airborne") {
     c.options.mode = geo::ScanMode::Airborne;
   } else if (c.mode == "terrestrial") {
     c.options.mode = geo::ScanMode::Terrestrial;
   } else {
-    return fail(ErrorCode::Usage,
-                "unknown mode \"" + c.mode + "\"; valid modes: airborne, terrestrial");
+    return fail(
+        {ErrorCode::Usage, "unknown mode \"" + c.mode + "\"; valid modes: airborne, terrestrial"});
   }
   if (c.point_format != 6 && c.point_format != 7) {
-    return fail(ErrorCode::Usage, "--point-format must be 6 or 7");
+    return fail({ErrorCode::Usage, "--point-format must be 6 or 7"});
   }
   c.options.point_format = static_cast<std::uint8_t>(c.point_format);
-  if (auto s = c.options.validate(); !s.ok()) return fail(ErrorCode::Usage, s.error().message);
+  if (auto s = c.options.validate(); !s.ok()) return fail({ErrorCode::Usage, s.error().message});
   if (c.options.scene == "random" &&
       (c.options.random_primitives < 1 || c.options.random_primitives > 100000)) {
-    return fail(ErrorCode::Usage, "--primitives must be in [1, 100000]");
+    return fail({ErrorCode::Usage, "--primitives must be in [1, 100000]"});
   }
   if (auto crs = geo::crs_from_config(c.options.crs); !crs.ok()) {
-    return fail(ErrorCode::Usage, "--crs: " + crs.error().message);
+    return fail({ErrorCode::Usage, "--crs: " + crs.error().message});
   }
 
   auto summary = geo::synthesize(c.options, c.out, c.truth);
-  if (!summary.ok()) return fail(from_kernel(summary.error().code), summary.error().message);
+  if (!summary.ok()) return fail(failure_of(summary.error()));
   const geo::SynthSummary& s = summary.value();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -37,25 +37,20 @@ struct OpenTile {
 int run_tile(const TileCommand& c) {
   nlohmann::ordered_json out{{"input", c.input}, {"size", c.size}};
   std::map<kernel::GridCell, OpenTile> tiles;
-  auto fail = [&](ErrorCode code, const std::string& message) {
+  auto fail = [&](const Failure& f) {
     for (auto& [id, t] : tiles) {
       t.writer.reset();
       std::error_code ec;
       std::filesystem::remove(t.temp, ec);
     }
-    if (c.json) {
-      out["error"] = std::string(error_info(code).name) + ": " + message;
-      std::cout << out.dump() << "\n";
-    } else {
-      std::fprintf(stderr, "csgtile tile: %s\n", message.c_str());
-    }
-    return error_info(code).exit_code;
+    return detail::report_failure("tile", f, c.json, out);
   };
-  if (!(c.size > 0) || !std::isfinite(c.size)) return fail(ErrorCode::Usage, "--size must be > 0");
+  if (!(c.size > 0) || !std::isfinite(c.size))
+    return fail({ErrorCode::Usage, "--size must be > 0"});
   // A path, or a LAS/LAZ/COPC URL (http, https, s3) read by range requests.
   std::unique_ptr<geo::LasReader> opened;
   if (Failure f = fetch::open_las(c.input, fetch::Policy{}, opened); !f.ok()) {
-    return fail(f.code, f.message);
+    return fail(f);
   }
   geo::LasReader& reader = *opened;
   const geo::LasHeader& h = reader.header();
@@ -63,10 +58,10 @@ int run_tile(const TileCommand& c) {
   // Tiles of an earlier cut (another size) beside the new ones would be read twice by a run
   // over the directory: the output directory must be new or empty.
   if (std::filesystem::exists(c.out, ec) && !std::filesystem::is_empty(c.out, ec)) {
-    return fail(ErrorCode::Usage, c.out + ": not empty; tile into a new directory");
+    return fail({ErrorCode::Usage, c.out + ": not empty; tile into a new directory"});
   }
   std::filesystem::create_directories(c.out, ec);
-  if (ec) return fail(ErrorCode::Io, c.out + ": " + ec.message());
+  if (ec) return fail({ErrorCode::Io, c.out + ": " + ec.message()});
   const std::string stem = std::filesystem::path(c.input).stem().string();
 
   geo::LasWriteOptions options;
@@ -83,7 +78,7 @@ int run_tile(const TileCommand& c) {
   std::uint64_t points = 0;
   for (;;) {
     auto n = reader.read(batch, 1 << 16);
-    if (!n.ok()) return fail(from_kernel(n.error().code), n.error().message);
+    if (!n.ok()) return fail(failure_of(n.error()));
     if (n.value() == 0) break;
     for (std::size_t i = 0; i < batch.size(); ++i) {
       const geo::Point& p = batch.points[i];
@@ -97,7 +92,7 @@ int run_tile(const TileCommand& c) {
         o.offset = {grid.edge_x(id.column), grid.edge_y(id.row), h.offset[2]};
         if (batch.layout) o.extra = *batch.layout;
         auto writer = geo::LasWriter::create(t.temp, o);
-        if (!writer.ok()) return fail(from_kernel(writer.error().code), writer.error().message);
+        if (!writer.ok()) return fail(failure_of(writer.error()));
         t.writer = std::move(writer).value();
         t.batch.layout = batch.layout;
         it = tiles.emplace(id, std::move(t)).first;
@@ -108,7 +103,7 @@ int run_tile(const TileCommand& c) {
     for (auto& [tid, t] : tiles) {
       if (t.batch.empty()) continue;
       if (auto st = t.writer->write(t.batch); !st.ok()) {
-        return fail(from_kernel(st.error().code), t.target.string() + ": " + st.error().message);
+        return fail(failure_of(st.error(), t.target.string()));
       }
       t.batch.clear();
     }
@@ -116,13 +111,13 @@ int run_tile(const TileCommand& c) {
   nlohmann::ordered_json files = nlohmann::ordered_json::array();
   for (auto& [id, t] : tiles) {
     if (auto st = t.writer->close(); !st.ok()) {
-      return fail(from_kernel(st.error().code), t.target.string() + ": " + st.error().message);
+      return fail(failure_of(st.error(), t.target.string()));
     }
     files.push_back({{"file", t.target.string()}, {"points", t.writer->points_written()}});
   }
   for (auto& [id, t] : tiles) {
     std::filesystem::rename(t.temp, t.target, ec);
-    if (ec) return fail(ErrorCode::Io, t.target.string() + ": " + ec.message());
+    if (ec) return fail({ErrorCode::Io, t.target.string() + ": " + ec.message()});
   }
   out["points"] = points;
   out["tiles"] = files;

@@ -3,11 +3,13 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 
 #include "checks/run_checks.h"
 #include "csgtile/config/config.h"
+#include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::detail {
 
@@ -21,6 +23,12 @@ struct GlobalOptions {
 /// Loads a config (and CSGTILE_* overrides) and checks it against the world
 /// (checks/run_checks.h); prints every problem with key and line and returns nullopt on any.
 std::optional<config::Config> load_run_config(const std::string& file, RunChecks what);
+
+/// How a command reports its failure: with --json, `out` (what it had gathered) with "error":
+/// "<code name>: <message>", one line on stdout; otherwise "csgtile <command>: <message>" on
+/// stderr. Returns the exit code of the failure's code.
+int report_failure(const char* command, const Failure& failure, bool json,
+                   nlohmann::ordered_json& out);
 
 /// A registered subcommand's action, returning the exit code.
 using Action = std::function<int()>;

@@ -636,7 +636,7 @@ TEST(CityJsonSeq, BadOptionsAndObjectsAreNamedErrors) {
   zero_scale.scale = 0.0;
   auto r = cityjson_seq({block}, zero_scale);
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().code, kernel::ErrorCode::InvalidArgument);
+  EXPECT_EQ(r.error().code, ErrorCode::InputInvalid);
   r = cityjson_seq({block, block});
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("duplicate id \"b\""), std::string::npos);

@@ -386,6 +386,26 @@ TEST_F(TileContentTest, SameObjectsGiveTheSameBytes) {
   EXPECT_EQ(again.value().glb, content_->glb);
 }
 
+// What the tileset job tells apart: content with no object to show (GeometryInvalid: the job
+// publishes no tileset and says why) from a bad call (InputInvalid).
+TEST(TileContent, NothingToShowAndBadCallsAreDifferentErrors) {
+  const IndexObject block = object("b", leaf(box({0, 0, 0}, {1, 1, 1}), "b"));
+  TileContentOptions outside;
+  outside.to_enu = [](const Vec3&) { return Vec3(std::nan(""), 0.0, 0.0); };
+  auto nothing = tile_content({block}, outside);
+  ASSERT_FALSE(nothing.ok());
+  EXPECT_EQ(nothing.error().code, ErrorCode::GeometryInvalid);
+  EXPECT_NE(nothing.error().message.find("no object has triangles"), std::string::npos);
+  EXPECT_NE(nothing.error().message.find("outside the CRS's domain"), std::string::npos);
+
+  auto twice = tile_content({block, block});
+  ASSERT_FALSE(twice.ok());
+  EXPECT_EQ(twice.error().code, ErrorCode::InputInvalid);
+  TileContentOptions no_tolerance;
+  no_tolerance.chordal_tolerance = 0.0;
+  EXPECT_EQ(tile_content({block}, no_tolerance).error().code, ErrorCode::InputInvalid);
+}
+
 TEST(GltfWriter, BadInputsAreNamedErrors) {
   GltfMesh mesh;
   mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -399,7 +419,7 @@ TEST(GltfWriter, BadInputsAreNamedErrors) {
   auto expect_error = [&](const GltfMesh& m, const PropertyTable& t, const std::string& what) {
     auto r = glb_bytes(m, t);
     ASSERT_FALSE(r.ok()) << what;
-    EXPECT_EQ(r.error().code, kernel::ErrorCode::InvalidArgument);
+    EXPECT_EQ(r.error().code, ErrorCode::InputInvalid);
     EXPECT_NE(r.error().message.find(what), std::string::npos) << r.error().message;
   };
   GltfMesh m = mesh;

@@ -139,9 +139,8 @@ class TopologyIndexTest : public ::testing::Test {
     ASSERT_TRUE(crs.ok());
     options.srs = {28992, "EPSG", 28992, crs->name, geo::crs_to_wkt1(crs.value())};
     options.to_srs = [](const Vec3& p) { return Vec3(p + Vec3(155000, 463000, 0)); };
-    const kernel::Status st =
-        write_topology_index(index_path(), sample_objects(), options, &stats_);
-    ASSERT_TRUE(st.ok()) << st.error().message;
+    const Failure st = write_topology_index(index_path(), sample_objects(), options, &stats_);
+    ASSERT_TRUE(st.ok()) << st.message;
   }
   static void TearDownTestSuite() {
     delete dir_;
@@ -270,7 +269,7 @@ TEST_F(TopologyIndexTest, ShapeIdsFollowObjectKindAndMapOrder) {
   EXPECT_EQ(static_cast<std::size_t>(expected - 1), stats_.shapes);
   const auto unknown = index->shape("no-such/edge/0");
   ASSERT_FALSE(unknown.ok());
-  EXPECT_EQ(unknown.error().code, kernel::ErrorCode::InvalidArgument);
+  EXPECT_EQ(unknown.error().code, ErrorCode::InputInvalid);
   EXPECT_NE(unknown.error().message.find("no-such/edge/0"), std::string::npos);
 }
 
@@ -511,23 +510,21 @@ TEST_F(TopologyIndexTest, SameInputGivesTheSameIdsAndBytes) {
 TEST(TopologyIndexErrors, BadObjectsAndUnwritablePathsAreNamedErrors) {
   test::TempDir dir("csgtile-topology-index-errors-");
   std::vector<IndexObject> twice = {sample_objects()[2], sample_objects()[2]};
-  const kernel::Status duplicate = write_topology_index(dir / "x.gpkg", twice);
+  const Failure duplicate = write_topology_index(dir / "x.gpkg", twice);
   ASSERT_FALSE(duplicate.ok());
-  EXPECT_EQ(duplicate.error().code, kernel::ErrorCode::InvalidArgument);
-  EXPECT_NE(duplicate.error().message.find("\"base\""), std::string::npos);
+  EXPECT_EQ(duplicate.code, ErrorCode::InputInvalid);
+  EXPECT_NE(duplicate.message.find("\"base\""), std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "x.gpkg"));
 
-  const kernel::Status unwritable =
-      write_topology_index("/proc/csgtile/x.gpkg", {sample_objects()[2]});
+  const Failure unwritable = write_topology_index("/proc/csgtile/x.gpkg", {sample_objects()[2]});
   ASSERT_FALSE(unwritable.ok());
-  EXPECT_EQ(unwritable.error().code, kernel::ErrorCode::IoError);
+  EXPECT_EQ(unwritable.code, ErrorCode::Io);
 
   std::ofstream(dir / "not.gpkg") << "plain text, not SQLite";
   const auto not_index = TopologyIndexReader::open(dir / "not.gpkg");
   ASSERT_FALSE(not_index.ok());
-  EXPECT_EQ(not_index.error().code, kernel::ErrorCode::CorruptData);
-  EXPECT_EQ(TopologyIndexReader::open(dir / "missing.gpkg").error().code,
-            kernel::ErrorCode::IoError);
+  EXPECT_EQ(not_index.error().code, ErrorCode::InputInvalid);
+  EXPECT_EQ(TopologyIndexReader::open(dir / "missing.gpkg").error().code, ErrorCode::Io);
 }
 
 // ---- csgtile query ---------------------------------------------------------------------------

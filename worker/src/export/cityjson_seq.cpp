@@ -573,12 +573,11 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   return a;
 }
 
-kernel::Status check_input(const std::vector<IndexObject>& objects,
-                           const CityJsonOptions& options) {
+Failure check_input(const std::vector<IndexObject>& objects, const CityJsonOptions& options) {
   if (!(options.scale > 0.0) || !std::isfinite(options.scale) ||
       !(options.chordal_tolerance > 0.0) || !(options.ground_tolerance >= 0.0) ||
       !options.origin.allFinite()) {
-    return {kernel::ErrorCode::InvalidArgument,
+    return {ErrorCode::InputInvalid,
             "CityJSON: scale and chordal tolerance must be > 0, the ground tolerance >= 0 and "
             "the origin finite"};
   }
@@ -586,13 +585,13 @@ kernel::Status check_input(const std::vector<IndexObject>& objects,
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const IndexObject& o = objects[i];
     const std::string where = "CityJSON: object " + std::to_string(i);
-    if (o.id.empty()) return {kernel::ErrorCode::InvalidArgument, where + " has an empty id"};
+    if (o.id.empty()) return {ErrorCode::InputInvalid, where + " has an empty id"};
     if (!seen.insert(o.id).second) {
-      return {kernel::ErrorCode::InvalidArgument, where + ": duplicate id \"" + o.id + "\""};
+      return {ErrorCode::InputInvalid, where + ": duplicate id \"" + o.id + "\""};
     }
     const Shape& s = o.model.shape;
     if (s.is_null() || kernel::map_child_shapes(s, ShapeKind::Solid).size() == 0) {
-      return {kernel::ErrorCode::InvalidArgument,
+      return {ErrorCode::InputInvalid,
               where + " (\"" + o.id + "\") is not a solid or a compound of solids"};
     }
   }
@@ -633,12 +632,12 @@ std::string cityjson_reference_system(const geo::Crs& crs, std::vector<std::stri
   return "https://www.opengis.net/def/crs/EPSG/0/" + std::to_string(code);
 }
 
-kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
-                                         const CityJsonOptions& options, CityJsonStats* stats) {
+Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
+                                 const CityJsonOptions& options, CityJsonStats* stats) {
   CityJsonStats local;
   CityJsonStats& st = stats != nullptr ? *stats : local;
   st = CityJsonStats{};
-  if (kernel::Status s = check_input(objects, options); !s.ok()) return s.error();
+  if (Failure s = check_input(objects, options); !s.ok()) return s;
 
   std::string features;
   Point low{}, high{};

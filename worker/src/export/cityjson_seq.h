@@ -26,7 +26,6 @@
 #include <vector>
 
 #include "csgtile/geo/crs.h"
-#include "csgtile/kernel/result.h"
 #include "csgtile/worker/errors.h"
 #include "export/run_index.h"
 #include "export/topology_index.h"
@@ -64,11 +63,11 @@ struct CityJsonStats {
 /// solids): one line per object after the header, in the given order, each ending in '\n'.
 /// Keys in a fixed order, numbers in their shortest round-trip form: the same objects and
 /// options give the same bytes. An object whose tessellation fails is written without
-/// geometry and named in the warnings. Errors: InvalidArgument (bad options, empty or
-/// duplicate ids, an object that is not a solid).
-kernel::Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
-                                         const CityJsonOptions& options = {},
-                                         CityJsonStats* stats = nullptr);
+/// geometry and named in the warnings. Error: InputInvalid (bad options, empty or duplicate
+/// ids, an object that is not a solid).
+Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
+                                 const CityJsonOptions& options = {},
+                                 CityJsonStats* stats = nullptr);
 
 /// The CRS URL of metadata.referenceSystem: "https://www.opengis.net/def/crs/EPSG/0/<code>"
 /// with the compound code when EPSG has one for the horizontal + vertical pair (28992 + 5709

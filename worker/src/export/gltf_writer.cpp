@@ -72,9 +72,9 @@ std::size_t column_size(const PropertyColumn& column) {
   return std::visit([](const auto& v) { return v.size(); }, column.values);
 }
 
-kernel::Status check_input(const GltfMesh& mesh, const PropertyTable& table) {
+Failure check_input(const GltfMesh& mesh, const PropertyTable& table) {
   auto bad = [](const std::string& message) {
-    return kernel::Status{kernel::ErrorCode::InvalidArgument, "glTF: " + message};
+    return Failure{ErrorCode::InputInvalid, "glTF: " + message};
   };
   const std::size_t n = mesh.positions.size();
   if (n == 0 || mesh.indices.empty()) return bad("the mesh has no triangles");
@@ -175,9 +175,9 @@ void put_chunk(std::string& out, std::uint32_t type, const std::string& data) {
 
 }  // namespace
 
-kernel::Result<std::string> glb_bytes(const GltfMesh& mesh, const PropertyTable& table,
-                                      const GltfOptions& options) {
-  if (kernel::Status s = check_input(mesh, table); !s.ok()) return s.error();
+Result<std::string> glb_bytes(const GltfMesh& mesh, const PropertyTable& table,
+                              const GltfOptions& options) {
+  if (Failure s = check_input(mesh, table); !s.ok()) return s;
   const std::size_t n = mesh.positions.size();
 
   Binary binary;
@@ -264,7 +264,7 @@ kernel::Result<std::string> glb_bytes(const GltfMesh& mesh, const PropertyTable&
   pad(json, 4, ' ');
   const std::size_t total = 12 + 8 + json.size() + 8 + binary.bytes().size();
   if (total > std::numeric_limits<std::uint32_t>::max()) {
-    return kernel::Error{kernel::ErrorCode::InvalidArgument, "glTF: more than 4 GiB of data"};
+    return Failure{ErrorCode::InputInvalid, "glTF: more than 4 GiB of data"};
   }
   std::string out;
   out.reserve(total);

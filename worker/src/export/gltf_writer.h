@@ -20,7 +20,7 @@
 #include <variant>
 #include <vector>
 
-#include "csgtile/kernel/result.h"
+#include "csgtile/worker/errors.h"
 
 namespace csgtile::worker {
 
@@ -63,10 +63,10 @@ struct GltfOptions {
 /// The GLB bytes of `mesh` with `table`. POSITION gets its min/max (exactly the float32
 /// values stored); feature ids index the table's rows (featureCount = table.count).
 /// Keys in a fixed order, numbers in their shortest round-trip form: the same input gives
-/// the same bytes. Errors: InvalidArgument (an empty mesh or table, sizes that disagree, an
+/// the same bytes. Error: InputInvalid (an empty mesh or table, sizes that disagree, an
 /// index or feature id out of range, a non-finite position or normal, a bad property name,
 /// a table of 2^24 rows or more, more than 4 GiB of data).
-kernel::Result<std::string> glb_bytes(const GltfMesh& mesh, const PropertyTable& table,
-                                      const GltfOptions& options = {});
+Result<std::string> glb_bytes(const GltfMesh& mesh, const PropertyTable& table,
+                              const GltfOptions& options = {});
 
 }  // namespace csgtile::worker

@@ -361,12 +361,12 @@ kernel::BoundingBox boundary_box(const std::vector<Polygon3>& boundary) {
 
 // ---- table writers ------------------------------------------------------------------------------
 
-#define CSGTILE_TRY(expr)                                   \
-  do {                                                      \
-    if (kernel::Status st_ = (expr); !st_.ok()) return st_; \
+#define CSGTILE_TRY(expr)                            \
+  do {                                               \
+    if (Failure st_ = (expr); !st_.ok()) return st_; \
   } while (false)
 
-kernel::Status insert_srs(SqliteDb& db, const IndexSrs& srs) {
+Failure insert_srs(SqliteDb& db, const IndexSrs& srs) {
   SqliteStatement st(
       db,
       "INSERT INTO gpkg_spatial_ref_sys (srs_name, srs_id, organization, "
@@ -395,7 +395,7 @@ kernel::Status insert_srs(SqliteDb& db, const IndexSrs& srs) {
   return {};
 }
 
-kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
+Failure insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
   SqliteStatement st(
       db,
       "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
@@ -477,8 +477,7 @@ kernel::Status insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
 
 // Inserts every row of `rows` with one prepared statement; `bind` binds one row.
 template <class Row, class Bind>
-kernel::Status insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows,
-                           const Bind& bind) {
+Failure insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows, const Bind& bind) {
   SqliteStatement st(db, sql);
   CSGTILE_TRY(st.status());
   for (const Row& r : rows) {
@@ -488,7 +487,7 @@ kernel::Status insert_each(SqliteDb& db, const char* sql, const std::vector<Row>
   return {};
 }
 
-kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+Failure insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
   CSGTILE_TRY(insert_each(
       db,
       "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
@@ -581,7 +580,7 @@ kernel::Status insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptio
   return {};
 }
 
-kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+Failure register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
   kernel::BoundingBox all, blocks, levels;
   for (const ObjectRecord& o : rows.objects) {
     if (o.has_geometry) all.add(boundary_box(o.boundary));
@@ -635,7 +634,7 @@ kernel::Status register_contents(SqliteDb& db, const IndexRows& rows, const Inde
   return {};
 }
 
-kernel::Status write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
   // application_id 'GPKG' and user_version 10300 (GeoPackage 1.3). The file is a temporary
   // that is deleted on failure and fsync'ed by the caller: no journal file, no syncs here.
   CSGTILE_TRY(
@@ -662,12 +661,10 @@ kernel::Status write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions
 
 }  // namespace
 
-kernel::Status write_gpkg(const std::string& path, const IndexRows& rows,
-                          const IndexOptions& options) {
+Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options) {
   SqliteDb db;
-  if (kernel::Status st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok())
-    return st;
-  kernel::Status st = write_all(db, rows, options);
+  if (Failure st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok()) return st;
+  Failure st = write_all(db, rows, options);
   if (!db.close() && st.ok()) st = db.failure("cannot close");
   return st;
 }

@@ -28,8 +28,8 @@ ShapeRow read_shape(const SqliteStatement& st, int first) {
           st.integer(first + 4)};
 }
 
-kernel::Error query_failed(const detail::SqliteDb& db) {
-  return {kernel::ErrorCode::CorruptData,
+Failure query_failed(const detail::SqliteDb& db) {
+  return {ErrorCode::InputInvalid,
           db.path() + ": not a readable topology index: " + sqlite3_errmsg(db.get())};
 }
 
@@ -42,32 +42,30 @@ bool is_kind_name(std::string_view kind) {
 
 }  // namespace
 
-kernel::Result<std::unique_ptr<TopologyIndexReader>> TopologyIndexReader::open(
+Result<std::unique_ptr<TopologyIndexReader>> TopologyIndexReader::open(
     const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
-    return kernel::Error{kernel::ErrorCode::IoError,
-                         "cannot read topology index " + path.string() + ": no such file"};
+    return Failure{ErrorCode::Io, "cannot read topology index " + path.string() + ": no such file"};
   }
   auto impl = std::make_unique<Impl>();
-  if (kernel::Status st = impl->db.open(path.string(), SQLITE_OPEN_READONLY); !st.ok())
-    return st.error();
+  if (Failure st = impl->db.open(path.string(), SQLITE_OPEN_READONLY); !st.ok()) return st;
   // A GeoPackage (application_id 'GPKG') carrying our metadata row.
   SqliteStatement app(impl->db, "PRAGMA application_id");
   if (!app.ok() || app.step() != SQLITE_ROW) return query_failed(impl->db);
   if (app.integer(0) != 0x47504B47) {
-    return kernel::Error{kernel::ErrorCode::CorruptData,
-                         path.string() + ": not a GeoPackage (application_id is not 'GPKG')"};
+    return Failure{ErrorCode::InputInvalid,
+                   path.string() + ": not a GeoPackage (application_id is not 'GPKG')"};
   }
   SqliteStatement format(impl->db, "SELECT value FROM index_metadata WHERE key = 'format'");
   if (!format.ok() || format.step() != SQLITE_ROW || format.text(0) != "csgtile-topology-index") {
-    return kernel::Error{kernel::ErrorCode::CorruptData,
-                         path.string() + ": a GeoPackage without csgtile topology tables"};
+    return Failure{ErrorCode::InputInvalid,
+                   path.string() + ": a GeoPackage without csgtile topology tables"};
   }
   return std::unique_ptr<TopologyIndexReader>(new TopologyIndexReader(std::move(impl)));
 }
 
-kernel::Result<ShapeRow> TopologyIndexReader::shape(std::string_view id_or_key) const {
+Result<ShapeRow> TopologyIndexReader::shape(std::string_view id_or_key) const {
   const bool numeric =
       !id_or_key.empty() && std::all_of(id_or_key.begin(), id_or_key.end(), [](char c) {
         return std::isdigit(static_cast<unsigned char>(c));
@@ -80,8 +78,8 @@ kernel::Result<ShapeRow> TopologyIndexReader::shape(std::string_view id_or_key) 
     const auto [end, error] =
         std::from_chars(id_or_key.data(), id_or_key.data() + id_or_key.size(), id);
     if (error != std::errc() || end != id_or_key.data() + id_or_key.size()) {
-      return kernel::Error{kernel::ErrorCode::InvalidArgument,
-                           "no shape \"" + std::string(id_or_key) + "\" in the index"};
+      return Failure{ErrorCode::InputInvalid,
+                     "no shape \"" + std::string(id_or_key) + "\" in the index"};
     }
     st.bind(1, id);
   } else {
@@ -90,11 +88,11 @@ kernel::Result<ShapeRow> TopologyIndexReader::shape(std::string_view id_or_key) 
   const int rc = st.step();
   if (rc == SQLITE_ROW) return read_shape(st, 0);
   if (rc != SQLITE_DONE) return query_failed(impl_->db);
-  return kernel::Error{kernel::ErrorCode::InvalidArgument,
-                       "no shape \"" + std::string(id_or_key) + "\" in the index"};
+  return Failure{ErrorCode::InputInvalid,
+                 "no shape \"" + std::string(id_or_key) + "\" in the index"};
 }
 
-kernel::Result<std::vector<ChildRow>> TopologyIndexReader::children(std::int64_t shape_id) const {
+Result<std::vector<ChildRow>> TopologyIndexReader::children(std::int64_t shape_id) const {
   SqliteStatement st(impl_->db, std::string("SELECT c.position, c.orientation, c.location, ") +
                                     kShapeColumns +
                                     " FROM shape_children c JOIN shapes s ON s.id = c.child_id "
@@ -110,12 +108,12 @@ kernel::Result<std::vector<ChildRow>> TopologyIndexReader::children(std::int64_t
   return out;
 }
 
-kernel::Result<std::vector<ShapeRow>> TopologyIndexReader::ancestors(std::int64_t shape_id,
-                                                                     std::string_view kind) const {
+Result<std::vector<ShapeRow>> TopologyIndexReader::ancestors(std::int64_t shape_id,
+                                                             std::string_view kind) const {
   if (!is_kind_name(kind)) {
-    return kernel::Error{kernel::ErrorCode::InvalidArgument,
-                         "unknown shape kind \"" + std::string(kind) +
-                             "\" (compound, compsolid, solid, shell, face, wire, edge, vertex)"};
+    return Failure{ErrorCode::InputInvalid,
+                   "unknown shape kind \"" + std::string(kind) +
+                       "\" (compound, compsolid, solid, shell, face, wire, edge, vertex)"};
   }
   // Materialised pair: one index range. Any other pair: walk the references upwards; ancestors
   // of one kind ordered by their index in map_child_shapes, which is the kernel's
@@ -149,15 +147,14 @@ kernel::Result<std::vector<ShapeRow>> TopologyIndexReader::ancestors(std::int64_
   return out;
 }
 
-kernel::Result<std::vector<RelationRow>> TopologyIndexReader::relations(
-    std::string_view object_id) const {
+Result<std::vector<RelationRow>> TopologyIndexReader::relations(std::string_view object_id) const {
   SqliteStatement exists(impl_->db, "SELECT 1 FROM objects WHERE object_id = ?1");
   if (!exists.ok()) return query_failed(impl_->db);
   exists.bind(1, object_id);
   const int found = exists.step();
   if (found == SQLITE_DONE) {
-    return kernel::Error{kernel::ErrorCode::InvalidArgument,
-                         "no object \"" + std::string(object_id) + "\" in the index"};
+    return Failure{ErrorCode::InputInvalid,
+                   "no object \"" + std::string(object_id) + "\" in the index"};
   }
   if (found != SQLITE_ROW) return query_failed(impl_->db);
   SqliteStatement st(impl_->db,
@@ -176,12 +173,12 @@ kernel::Result<std::vector<RelationRow>> TopologyIndexReader::relations(
   return out;
 }
 
-kernel::Result<std::vector<std::vector<std::string>>> TopologyIndexReader::sql(
+Result<std::vector<std::vector<std::string>>> TopologyIndexReader::sql(
     std::string_view statement, const std::vector<std::string>& parameters) const {
   SqliteStatement st(impl_->db, statement);
   if (!st.ok()) {
-    return kernel::Error{kernel::ErrorCode::InvalidArgument,
-                         std::string("bad SQL: ") + sqlite3_errmsg(impl_->db.get())};
+    return Failure{ErrorCode::InputInvalid,
+                   std::string("bad SQL: ") + sqlite3_errmsg(impl_->db.get())};
   }
   for (std::size_t i = 0; i < parameters.size(); ++i)
     st.bind(static_cast<int>(i + 1), parameters[i]);

@@ -118,13 +118,12 @@ inline constexpr std::pair<kernel::ShapeKind, kernel::ShapeKind> kAncestorPairs[
     {kernel::ShapeKind::Face, kernel::ShapeKind::Solid},
 };
 
-/// Builds every row. Errors: InvalidArgument (see write_topology_index).
-kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
-                                           const IndexOptions& options, IndexStats& stats);
+/// Builds every row. Errors: InputInvalid, GeometryInvalid (see write_topology_index).
+Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
+                                   const IndexOptions& options, IndexStats& stats);
 
 /// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it).
-/// Error: IoError naming the path and SQLite's message.
-kernel::Status write_gpkg(const std::string& path, const IndexRows& rows,
-                          const IndexOptions& options);
+/// Error: Io naming the path and SQLite's message.
+Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options);
 
 }  // namespace csgtile::worker::detail

@@ -218,9 +218,8 @@ Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
   }
 
   const std::filesystem::path path = run_dir / report.key;
-  if (kernel::Status st = write_topology_index(path, run.objects, options, &report.stats);
-      !st.ok()) {
-    return failure_of(st.error(), path.string());
+  if (Failure f = write_topology_index(path, run.objects, options, &report.stats); !f.ok()) {
+    return {f.code, path.string() + ": " + f.message};
   }
   for (const std::string& w : run.warnings) report.stats.warnings.push_back(w);
   std::ifstream in(path, std::ios::binary);

@@ -1,7 +1,7 @@
 #pragma once
 // Small RAII wrappers over SQLite for the topology index writer and reader: a connection that
-// closes itself and prepared statements that finalize themselves. Errors are reported as
-// kernel::Status / Result with SQLite's message.
+// closes itself and prepared statements that finalize themselves. Errors are Failures (Io) with
+// SQLite's message.
 
 #include <sqlite3.h>
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-#include "csgtile/kernel/result.h"
+#include "csgtile/worker/errors.h"
 
 namespace csgtile::worker::detail {
 
@@ -21,12 +21,12 @@ class SqliteDb {
   SqliteDb(const SqliteDb&) = delete;
   SqliteDb& operator=(const SqliteDb&) = delete;
 
-  /// Opens `path` with sqlite3_open_v2 `flags`. Error: IoError with SQLite's message.
-  kernel::Status open(const std::string& path, int flags) {
+  /// Opens `path` with sqlite3_open_v2 `flags`. Error: Io with SQLite's message.
+  Failure open(const std::string& path, int flags) {
     close();
     path_ = path;
     if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
-      kernel::Status st = failure("cannot open");
+      Failure st = failure("cannot open");
       close();
       return st;
     }
@@ -43,18 +43,18 @@ class SqliteDb {
   sqlite3* get() const { return db_; }
 
   /// Runs statements without results.
-  kernel::Status exec(const std::string& sql) {
+  Failure exec(const std::string& sql) {
     char* message = nullptr;
     if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
       std::string text = message != nullptr ? message : sqlite3_errmsg(db_);
       sqlite3_free(message);
-      return {kernel::ErrorCode::IoError, path_ + ": " + text + " (in: " + sql.substr(0, 80) + ")"};
+      return {ErrorCode::Io, path_ + ": " + text + " (in: " + sql.substr(0, 80) + ")"};
     }
     return {};
   }
 
-  kernel::Status failure(const std::string& what) const {
-    return {kernel::ErrorCode::IoError,
+  Failure failure(const std::string& what) const {
+    return {ErrorCode::Io,
             what + " " + path_ + ": " + (db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory")};
   }
   const std::string& path() const { return path_; }
@@ -74,8 +74,8 @@ class SqliteStatement {
   SqliteStatement& operator=(const SqliteStatement&) = delete;
 
   bool ok() const { return rc_ == SQLITE_OK && stmt_ != nullptr; }
-  kernel::Status status() const {
-    return ok() ? kernel::Status{} : db_->failure("cannot prepare a statement on");
+  Failure status() const {
+    return ok() ? Failure{} : db_->failure("cannot prepare a statement on");
   }
 
   SqliteStatement& bind(int i, std::int64_t v) {
@@ -110,7 +110,7 @@ class SqliteStatement {
   /// SQLITE_ROW, SQLITE_DONE or an error code.
   int step() { return sqlite3_step(stmt_); }
   /// Steps a statement without result rows, then resets it for the next bindings.
-  kernel::Status run() {
+  Failure run() {
     const int rc = sqlite3_step(stmt_);
     sqlite3_reset(stmt_);
     sqlite3_clear_bindings(stmt_);

@@ -81,15 +81,14 @@ std::array<float, 3> to_y_up(const Vec3& p) {
   return {static_cast<float>(p.x()), static_cast<float>(p.z()), static_cast<float>(-p.y())};
 }
 
-kernel::Status check_input(const std::vector<IndexObject>& objects,
-                           const TileContentOptions& options) {
+Failure check_input(const std::vector<IndexObject>& objects, const TileContentOptions& options) {
   if (!(options.chordal_tolerance > 0.0) || !std::isfinite(options.chordal_tolerance)) {
-    return {kernel::ErrorCode::InvalidArgument, "3D Tiles: the chordal tolerance must be > 0"};
+    return {ErrorCode::InputInvalid, "3D Tiles: the chordal tolerance must be > 0"};
   }
   std::set<std::string> seen;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     if (objects[i].id.empty() || !seen.insert(objects[i].id).second) {
-      return {kernel::ErrorCode::InvalidArgument,
+      return {ErrorCode::InputInvalid,
               "3D Tiles: object " + std::to_string(i) + " has an empty or duplicate id"};
     }
   }
@@ -98,9 +97,9 @@ kernel::Status check_input(const std::vector<IndexObject>& objects,
 
 }  // namespace
 
-kernel::Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
-                                         const TileContentOptions& options) {
-  if (kernel::Status s = check_input(objects, options); !s.ok()) return s.error();
+Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
+                                 const TileContentOptions& options) {
+  if (Failure s = check_input(objects, options); !s.ok()) return s;
   TileContent content;
   GltfMesh mesh;
   std::vector<std::string> ids, cells, types;
@@ -142,7 +141,7 @@ kernel::Result<TileContent> tile_content(const std::vector<IndexObject>& objects
     // The first few reasons; the others are usually the same.
     for (std::size_t i = 0; i < content.warnings.size() && i < 3; ++i)
       why += "; " + content.warnings[i];
-    return kernel::Error{kernel::ErrorCode::DegenerateGeometry, why};
+    return Failure{ErrorCode::GeometryInvalid, why};
   }
 
   PropertyTable table;

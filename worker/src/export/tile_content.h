@@ -19,7 +19,6 @@
 #include <string>
 #include <vector>
 
-#include "csgtile/kernel/result.h"
 #include "csgtile/kernel/shape.h"
 #include "export/topology_index.h"
 
@@ -48,9 +47,9 @@ struct TileContent {
 
 /// The tile content of `objects` (ids unique and non-empty, as for the topology index).
 /// Deterministic: the same objects and options give the same bytes. Errors:
-/// DegenerateGeometry (no object has triangles; the message names the first few),
-/// InvalidArgument (a bad tolerance, duplicate or empty ids, or as glb_bytes).
-kernel::Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
-                                         const TileContentOptions& options = {});
+/// GeometryInvalid (no object has triangles; the message names the first few), InputInvalid
+/// (a bad tolerance, duplicate or empty ids, or as glb_bytes).
+Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
+                                 const TileContentOptions& options = {});
 
 }  // namespace csgtile::worker

@@ -140,7 +140,7 @@ Failure write_run_tiles(const RunExportOptions& settings, const RunObjects& run,
   options.generator = "csgtile " CSGTILE_VERSION;
   auto made = tile_content(run.objects, options);
   if (!made.ok()) {
-    if (made.error().code == kernel::ErrorCode::DegenerateGeometry) {
+    if (made.error().code == ErrorCode::GeometryInvalid) {
       return skip(made.error().message);
     }
     return {ErrorCode::Internal, made.error().message};

@@ -229,27 +229,27 @@ kernel::BoundingBox map_box(const kernel::BoundingBox& box, const IndexOptions& 
   return out;
 }
 
-kernel::Status check_objects(const std::vector<IndexObject>& objects, const IndexOptions& options) {
+Failure check_objects(const std::vector<IndexObject>& objects, const IndexOptions& options) {
   if (!(options.chordal_tolerance > 0.0) || !(options.linear_tolerance > 0.0)) {
-    return {kernel::ErrorCode::InvalidArgument, "topology index: tolerances must be > 0"};
+    return {ErrorCode::InputInvalid, "topology index: tolerances must be > 0"};
   }
   std::set<std::string> seen;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const IndexObject& o = objects[i];
     const std::string where = "topology index: object " + std::to_string(i);
-    if (o.id.empty()) return {kernel::ErrorCode::InvalidArgument, where + " has an empty id"};
+    if (o.id.empty()) return {ErrorCode::InputInvalid, where + " has an empty id"};
     if (!seen.insert(o.id).second) {
-      return {kernel::ErrorCode::InvalidArgument, where + ": duplicate id \"" + o.id + "\""};
+      return {ErrorCode::InputInvalid, where + ": duplicate id \"" + o.id + "\""};
     }
     const Shape& s = o.model.shape;
     if (s.is_null() || (s.kind() != ShapeKind::Solid &&
                         kernel::map_child_shapes(s, ShapeKind::Solid).size() == 0)) {
-      return {kernel::ErrorCode::InvalidArgument,
+      return {ErrorCode::InputInvalid,
               where + " (\"" + o.id + "\") is not a solid or a compound of solids"};
     }
     if (!o.model.face_sources.empty() &&
         o.model.face_sources.size() != kernel::map_child_shapes(s, ShapeKind::Face).size()) {
-      return {kernel::ErrorCode::InvalidArgument,
+      return {ErrorCode::InputInvalid,
               where + " (\"" + o.id + "\"): face_sources do not match the faces"};
     }
   }
@@ -299,9 +299,9 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
 
 }  // namespace
 
-kernel::Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
-                                           const IndexOptions& options, IndexStats& stats) {
-  if (kernel::Status st = check_objects(objects, options); !st.ok()) return st.error();
+Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
+                                   const IndexOptions& options, IndexStats& stats) {
+  if (Failure st = check_objects(objects, options); !st.ok()) return st;
   IndexRows rows;
   std::int64_t next_id = 1;
   for (const IndexObject& object : objects) {
@@ -524,9 +524,9 @@ FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {
   return out;
 }
 
-kernel::Status write_topology_index(const std::filesystem::path& path,
-                                    const std::vector<IndexObject>& objects,
-                                    const IndexOptions& options, IndexStats* stats) {
+Failure write_topology_index(const std::filesystem::path& path,
+                             const std::vector<IndexObject>& objects, const IndexOptions& options,
+                             IndexStats* stats) {
   IndexStats local;
   IndexStats& s = stats != nullptr ? *stats : local;
   s = IndexStats{};
@@ -537,9 +537,7 @@ kernel::Status write_topology_index(const std::filesystem::path& path,
   std::error_code ec;
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
   std::filesystem::create_directories(dir, ec);
-  if (ec)
-    return {kernel::ErrorCode::IoError,
-            "cannot create directory " + dir.string() + ": " + ec.message()};
+  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
   // A temporary beside the target (same file system, so the rename is atomic); pid and a
   // counter keep concurrent writers apart.
   static std::atomic<unsigned> counter{0};
@@ -547,19 +545,18 @@ kernel::Status write_topology_index(const std::filesystem::path& path,
       dir / ("." + path.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
              std::to_string(counter++));
   std::filesystem::remove(tmp, ec);
-  kernel::Status written = detail::write_gpkg(tmp.string(), r, options);
+  Failure written = detail::write_gpkg(tmp.string(), r, options);
   if (written.ok()) {
     // The database is closed; flush its bytes before the rename makes them visible.
     std::FILE* f = std::fopen(tmp.c_str(), "rb+");
     if (f == nullptr || ::fsync(::fileno(f)) != 0) {
-      written = kernel::Status(kernel::ErrorCode::IoError, "cannot flush " + tmp.string());
+      written = {ErrorCode::Io, "cannot flush " + tmp.string()};
     }
     if (f != nullptr) std::fclose(f);
   }
   if (written.ok() && std::rename(tmp.c_str(), path.c_str()) != 0) {
-    written =
-        kernel::Status(kernel::ErrorCode::IoError, "cannot rename into " + path.string() + ": " +
-                                                       std::generic_category().message(errno));
+    written = {ErrorCode::Io, "cannot rename into " + path.string() + ": " +
+                                  std::generic_category().message(errno)};
   }
   if (!written.ok()) {
     std::filesystem::remove(tmp, ec);

@@ -26,8 +26,8 @@
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/assembly/block_model.h"
 #include "csgtile/kernel/csg.h"
-#include "csgtile/kernel/result.h"
 #include "csgtile/kernel/shape.h"
+#include "csgtile/worker/errors.h"
 
 namespace csgtile::worker {
 
@@ -173,12 +173,13 @@ struct IndexStats {
 /// Writes the index to `path` atomically: the GeoPackage is built in a temporary file beside
 /// `path` and renamed over it, so `path` is either the old file or the complete new one; the
 /// temporary is removed on failure. The output is a rollback-journal database (no WAL).
-/// Errors: InvalidArgument (duplicate or empty object ids, a non-solid object, bad options),
-/// IoError (the file cannot be written, naming the path). Deterministic; O(model size) plus
+/// Errors: InputInvalid (duplicate or empty object ids, a non-solid object, bad options),
+/// GeometryInvalid (a face the index cannot store), Io (the file cannot be written, naming the
+/// path). Deterministic; O(model size) plus
 /// two Booleans per object pair whose bounding boxes meet.
-kernel::Status write_topology_index(const std::filesystem::path& path,
-                                    const std::vector<IndexObject>& objects,
-                                    const IndexOptions& options = {}, IndexStats* stats = nullptr);
+Failure write_topology_index(const std::filesystem::path& path,
+                             const std::vector<IndexObject>& objects,
+                             const IndexOptions& options = {}, IndexStats* stats = nullptr);
 
 // ---- relations ------------------------------------------------------------------------------
 
@@ -225,29 +226,27 @@ struct RelationRow {
 class TopologyIndexReader {
  public:
   /// Opens read-only and checks that the file is a GeoPackage with the index tables.
-  /// Errors: IoError (missing or unreadable file), CorruptData (not a GeoPackage or no
-  /// topology tables).
-  static kernel::Result<std::unique_ptr<TopologyIndexReader>> open(
-      const std::filesystem::path& path);
+  /// Errors: Io (missing or unreadable file), InputInvalid (not a GeoPackage or no topology
+  /// tables).
+  static Result<std::unique_ptr<TopologyIndexReader>> open(const std::filesystem::path& path);
   ~TopologyIndexReader();
   TopologyIndexReader(const TopologyIndexReader&) = delete;
   TopologyIndexReader& operator=(const TopologyIndexReader&) = delete;
 
-  /// A shape by numeric id ("42") or key ("3-0/edge/7"). Error: InvalidArgument naming the id.
-  kernel::Result<ShapeRow> shape(std::string_view id_or_key) const;
+  /// A shape by numeric id ("42") or key ("3-0/edge/7"). Error: InputInvalid naming the id.
+  Result<ShapeRow> shape(std::string_view id_or_key) const;
   /// Sub-shape references of a shape, in child order.
-  kernel::Result<std::vector<ChildRow>> children(std::int64_t shape_id) const;
+  Result<std::vector<ChildRow>> children(std::int64_t shape_id) const;
   /// Ancestors of `kind` (e.g. "edge") of a shape, each once, in the kernel's AncestorIndex
   /// order: from shape_ancestors when the pair is materialised, otherwise by walking
-  /// shape_children upwards. Error: InvalidArgument for an unknown kind.
-  kernel::Result<std::vector<ShapeRow>> ancestors(std::int64_t shape_id,
-                                                  std::string_view kind) const;
-  /// Relations of an object, ordered by the other object's id. Error: InvalidArgument when
+  /// shape_children upwards. Error: InputInvalid for an unknown kind.
+  Result<std::vector<ShapeRow>> ancestors(std::int64_t shape_id, std::string_view kind) const;
+  /// Relations of an object, ordered by the other object's id. Error: InputInvalid when
   /// the object is not in the index.
-  kernel::Result<std::vector<RelationRow>> relations(std::string_view object_id) const;
+  Result<std::vector<RelationRow>> relations(std::string_view object_id) const;
   /// Runs one SQL statement with text parameters (?1, ?2, …) and returns every row with each
   /// value as text (NULL as "NULL"): for tests and the README's recipes.
-  kernel::Result<std::vector<std::vector<std::string>>> sql(
+  Result<std::vector<std::vector<std::string>>> sql(
       std::string_view statement, const std::vector<std::string>& parameters = {}) const;
 
  private:

@@ -3,8 +3,11 @@
 /// The one table of csgtile's error codes: message, whether a job may retry, and the
 /// process exit code. Only main() exits; everything else returns these codes.
 
+#include <cassert>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <variant>
 
 #include "csgtile/kernel/result.h"
 
@@ -47,6 +50,31 @@ struct Failure {
   ErrorCode code = ErrorCode::Ok;
   std::string message;
   bool ok() const { return code == ErrorCode::Ok; }
+};
+
+/// Either a value or a Failure: what the worker's own fallible calls return when they have a
+/// value to give (a call with none returns a Failure, ok() when it worked). The worker's
+/// counterpart of kernel::Result, so that one error type crosses the worker's modules.
+template <class T>
+class [[nodiscard]] Result {
+ public:
+  Result(T value) : data_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  /// `failure` must not be ok().
+  Result(Failure failure) : data_(std::move(failure)) {  // NOLINT(google-explicit-constructor)
+    assert(!std::get<1>(data_).ok());
+  }
+  Result(ErrorCode code, std::string message) : Result(Failure{code, std::move(message)}) {}
+
+  bool ok() const { return data_.index() == 0; }
+  const T& value() const& { return std::get<0>(data_); }
+  T& value() & { return std::get<0>(data_); }
+  T&& value() && { return std::get<0>(std::move(data_)); }
+  const T& operator*() const& { return value(); }
+  const T* operator->() const { return &value(); }
+  const Failure& error() const { return std::get<1>(data_); }
+
+ private:
+  std::variant<T, Failure> data_;
 };
 
 /// A kernel (or geo) error as the worker speaks it: from_kernel's code, and the message after
