@@ -6,15 +6,18 @@
 //
 // Precision: the ray is first moved along itself to the point nearest the primitive's centre,
 // so the equations are solved with small coordinates whether the scanner is 2 m or 500 m
-// away; quadratics use the cancellation-free form; the torus quartic is solved by isolating
-// its roots between the roots of its derivatives and polished by Newton steps on the
-// (1-Lipschitz) distance to the torus.
+// away; the quadratics and the torus quartic are solved by the kernel's root finders
+// (csgtile/kernel/polynomial.h: cancellation-free, a root within rounding of a tangency once),
+// the torus's roots then polished by Newton steps on the (1-Lipschitz) distance to the torus.
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <vector>
+
+#include "csgtile/kernel/polynomial.h"
 
 #include "synth/ray_internal.h"
 
@@ -45,25 +48,6 @@ struct Nearest {
   }
 };
 
-// Real roots of a·x² + b·x + c (a may be 0), without cancellation. Returns their count.
-int solve_quadratic(double a, double b, double c, std::array<double, 2>& roots) {
-  if (a == 0.0) {
-    if (b == 0.0) return 0;
-    roots[0] = -c / b;
-    return 1;
-  }
-  const double disc = b * b - 4.0 * a * c;
-  if (disc < 0.0) return 0;
-  const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
-  if (q == 0.0) {  // b = c = 0: a double root at 0
-    roots[0] = 0.0;
-    return 1;
-  }
-  roots[0] = q / a;
-  roots[1] = c / q;
-  return 2;
-}
-
 // The angular limits of a partial revolution: φ = atan2(y, x) in [0, angle].
 struct TurnLimit {
   double angle = kTwoPi;
@@ -85,10 +69,11 @@ void offer_quadric_side(const Vec3& o, const Vec3& u, double a, double k, double
                         double slack, const TurnLimit& turn, Nearest& best) {
   const double w = a + k * o.z();
   const double qa = u.x() * u.x() + u.y() * u.y() - k * k * u.z() * u.z();
-  const double qb = 2.0 * (o.x() * u.x() + o.y() * u.y() - k * u.z() * w);
-  const double qc = o.x() * o.x() + o.y() * o.y() - w * w;
+  const double hb = o.x() * u.x() + o.y() * u.y() - k * u.z() * w;
+  const double xy2 = o.x() * o.x() + o.y() * o.y();
   std::array<double, 2> roots{};
-  const int n = solve_quadratic(qa, qb, qc, roots);
+  bool tangent = false;
+  const int n = kernel::solve_quadratic(qa, hb, xy2 - w * w, xy2 + w * w, roots, tangent);
   for (int i = 0; i < n; ++i) {
     const double s = roots[static_cast<std::size_t>(i)];
     if (!best.admissible(s)) continue;
@@ -135,100 +120,13 @@ void hit_box(const Vec3& o, const Vec3& u, const Vec3& size, double slack, Neare
 
 void hit_sphere(const Vec3& o, const Vec3& u, double r, Nearest& best) {
   std::array<double, 2> roots{};
-  const int n = solve_quadratic(1.0, 2.0 * o.dot(u), o.squaredNorm() - r * r, roots);
+  bool tangent = false;
+  const double o2 = o.squaredNorm();
+  const int n = kernel::solve_quadratic(1.0, o.dot(u), o2 - r * r, o2 + r * r, roots, tangent);
   for (int i = 0; i < n; ++i) {
     const double s = roots[static_cast<std::size_t>(i)];
     best.offer(s, o + s * u);
   }
-}
-
-// Polynomials of degree <= 4, c[0] + c[1]·x + ... + c[degree]·x^degree.
-struct Polynomial {
-  std::array<double, 5> c{};
-  int degree = 0;
-
-  double operator()(double x) const {
-    double v = c[static_cast<std::size_t>(degree)];
-    for (int i = degree - 1; i >= 0; --i) v = v * x + c[static_cast<std::size_t>(i)];
-    return v;
-  }
-  Polynomial derivative() const {
-    Polynomial d;
-    d.degree = degree - 1;
-    for (int i = 1; i <= degree; ++i) {
-      d.c[static_cast<std::size_t>(i - 1)] = i * c[static_cast<std::size_t>(i)];
-    }
-    return d;
-  }
-};
-
-// The root of `f` on [a, b], where f is monotone and f(a), f(b) have opposite signs:
-// Newton steps kept inside the shrinking bracket, bisection when a step leaves it.
-double monotone_root(const Polynomial& f, const Polynomial& df, double a, double b, double fa) {
-  double x = 0.5 * (a + b);
-  for (int iteration = 0; iteration < 200; ++iteration) {
-    const double fx = f(x);
-    if (fx == 0.0) return x;
-    if ((fx < 0.0) == (fa < 0.0)) {
-      a = x;
-      fa = fx;
-    } else {
-      b = x;
-    }
-    const double slope = df(x);
-    double next = slope != 0.0 ? x - fx / slope : a;
-    if (!(next > a && next < b)) next = 0.5 * (a + b);
-    if (next == x || b - a <= 4.0 * std::numeric_limits<double>::epsilon() *
-                                  std::max(std::abs(a), std::abs(b))) {
-      return next;
-    }
-    x = next;
-  }
-  return x;
-}
-
-// Every real root of `f` in [lo, hi], ascending. f is monotone between consecutive roots of
-// f', which are found the same way (recursively down to a quadratic), so no root is missed
-// however close two roots lie; only a root of even multiplicity (a tangency) can be.
-int real_roots(const Polynomial& f, double lo, double hi, std::array<double, 4>& out) {
-  int count = 0;
-  if (f.degree <= 2) {
-    std::array<double, 2> q{};
-    const int n = solve_quadratic(f.degree == 2 ? f.c[2] : 0.0, f.c[1], f.c[0], q);
-    if (n == 2 && q[1] < q[0]) std::swap(q[0], q[1]);
-    for (int i = 0; i < n; ++i) {
-      const double r = q[static_cast<std::size_t>(i)];
-      if (r >= lo && r <= hi) out[static_cast<std::size_t>(count++)] = r;
-    }
-    return count;
-  }
-  const Polynomial df = f.derivative();
-  std::array<double, 4> critical{};
-  const int n_critical = real_roots(df, lo, hi, critical);
-  std::array<double, 6> breaks{};
-  int n_breaks = 0;
-  breaks[static_cast<std::size_t>(n_breaks++)] = lo;
-  for (int i = 0; i < n_critical; ++i) {
-    breaks[static_cast<std::size_t>(n_breaks++)] = critical[static_cast<std::size_t>(i)];
-  }
-  breaks[static_cast<std::size_t>(n_breaks++)] = hi;
-  double x0 = breaks[0];
-  double f0 = f(x0);
-  if (f0 == 0.0) out[static_cast<std::size_t>(count++)] = x0;
-  for (int i = 1; i < n_breaks && count < f.degree; ++i) {
-    const double x1 = breaks[static_cast<std::size_t>(i)];
-    const double f1 = f(x1);
-    if (f1 == 0.0) {
-      if (count == 0 || out[static_cast<std::size_t>(count - 1)] != x1) {
-        out[static_cast<std::size_t>(count++)] = x1;
-      }
-    } else if (f0 != 0.0 && (f0 < 0.0) != (f1 < 0.0)) {
-      out[static_cast<std::size_t>(count++)] = monotone_root(f, df, x0, x1, f0);
-    }
-    x0 = x1;
-    f0 = f1;
-  }
-  return count;
 }
 
 // Distance-to-torus minus r (1-Lipschitz) and its gradient: the Newton polish of a hit.
@@ -262,14 +160,12 @@ void hit_torus(const Vec3& o, const Vec3& u, double major, double minor, Nearest
   const double bxy = o.x() * u.x() + o.y() * u.y();
   const double cxy = o.x() * o.x() + o.y() * o.y();
   const double r4 = 4.0 * major * major;
-  Polynomial quartic;
-  quartic.degree = 4;
-  quartic.c = {e * e - r4 * cxy, 4.0 * e * f - 2.0 * r4 * bxy, 4.0 * f * f + 2.0 * e - r4 * axy,
-               4.0 * f, 1.0};
-  std::array<double, 4> roots{};
-  const int n = real_roots(quartic, lo, hi, roots);
-  for (int i = 0; i < n; ++i) {
-    double s = roots[static_cast<std::size_t>(i)];
+  const std::array<double, 5> quartic = {e * e - r4 * cxy, 4.0 * e * f - 2.0 * r4 * bxy,
+                                         4.0 * f * f + 2.0 * e - r4 * axy, 4.0 * f, 1.0};
+  std::vector<kernel::PolynomialRoot> roots;
+  kernel::polynomial_roots(quartic.data(), 4, lo, hi, roots);
+  for (const kernel::PolynomialRoot& root : roots) {
+    double s = root.x;
     for (int step = 0; step < 3; ++step) {
       Vec3 gradient;
       const double g = torus_distance(o + s * u, major, minor, &gradient);

@@ -1,32 +1,15 @@
 #pragma once
 /// \file
-/// Intersections of a straight line with the kernel's surfaces, and the robust real-root
-/// finder they rest on. Private to the Boolean unit (the point classifier casts rays with it).
+/// Intersections of a straight line with the kernel's surfaces (their roots by polynomial.h).
+/// Private to the Boolean unit (the point classifier casts rays with it).
 
 #include <cstddef>
 #include <vector>
 
+#include "csgtile/kernel/polynomial.h"
 #include "csgtile/kernel/surface.h"
 
 namespace csgtile::kernel::detail {
-
-/// A real root of a polynomial on an interval.
-struct PolynomialRoot {
-  double x;
-  /// The polynomial's value at a critical point x lies within its rounding noise: a double
-  /// (or higher) root, or two roots too close to tell apart.
-  bool multiple;
-};
-
-/// Real roots of c[0] + c[1]·x + … + c[degree]·x^degree in [lo, hi], ascending.
-/// `magnitude`, when given, bounds the absolute rounding error already present in each
-/// coefficient (the size of the terms that were summed to make it); it widens the noise band
-/// used to recognise multiple roots. Each monotone piece between the roots of the derivative
-/// (found recursively) holds at most one root, isolated by safeguarded Newton iteration, so no
-/// root is missed however close two roots are: close pairs come back as one `multiple` root.
-/// Precondition: degree <= 8.
-void polynomial_roots(const double* c, int degree, double lo, double hi,
-                      std::vector<PolynomialRoot>& out, const double* magnitude = nullptr);
 
 /// Where a line meets a surface.
 struct LineSurfaceHit {

@@ -750,34 +750,6 @@ TEST(Classifier, CircularHoleInAPlanarFaceIsExactNearItsRim) {
   EXPECT_TRUE(q.contains_uv(Vec2(2.5, 2.5)));
 }
 
-// ---- roots ---------------------------------------------------------------------------------
-
-TEST(Classifier, PolynomialRootsFindSimpleAndFlagMultipleRoots) {
-  // (x − 1)(x − 2)(x − 3)(x − 4) = x⁴ − 10x³ + 35x² − 50x + 24.
-  const double simple[] = {24, -50, 35, -10, 1};
-  std::vector<PolynomialRoot> roots;
-  polynomial_roots(simple, 4, -10, 10, roots);
-  ASSERT_EQ(roots.size(), 4u);
-  for (int i = 0; i < 4; ++i) {
-    EXPECT_NEAR(roots[static_cast<std::size_t>(i)].x, i + 1.0, 1e-12);
-    EXPECT_FALSE(roots[static_cast<std::size_t>(i)].multiple);
-  }
-  // (x − 1)²(x + 2)(x − 3) = x⁴ − 3x³ − 3x² + 11x − 6.
-  const double doubled[] = {-6, 11, -3, -3, 1};
-  roots.clear();
-  polynomial_roots(doubled, 4, -10, 10, roots);
-  ASSERT_EQ(roots.size(), 3u);
-  EXPECT_NEAR(roots[0].x, -2.0, 1e-12);
-  EXPECT_NEAR(roots[1].x, 1.0, 1e-7);
-  EXPECT_TRUE(roots[1].multiple);
-  EXPECT_NEAR(roots[2].x, 3.0, 1e-12);
-  // Restricted to an interval.
-  roots.clear();
-  polynomial_roots(simple, 4, 1.5, 3.5, roots);
-  ASSERT_EQ(roots.size(), 2u);
-  EXPECT_NEAR(roots[0].x, 2.0, 1e-12);
-}
-
 // ---- determinism, threads, speed ------------------------------------------------------------
 
 TEST(Classifier, IsDeterministicAndThreadSafe) {
