@@ -66,6 +66,7 @@ Config from_document(const json& document) {
   read(document, "queue", "grace_seconds", config.queue.grace_seconds);
   read(document, "queue", "postgres_sslmode", config.queue.postgres_sslmode);
   read(document, "queue", "postgres_sslrootcert", config.queue.postgres_sslrootcert);
+  read(document, "queue", "job_memory_mib", config.queue.job_memory_mib);
   read_enum(document, "log", "level", kLevelNames, config.log.level);
   read_enum(document, "log", "format", kFormatNames, config.log.format);
   read(document, "metrics", "listen", config.metrics.listen);
@@ -201,7 +202,8 @@ std::string to_json(const Config& config) {
                   {"lease_seconds", config.queue.lease_seconds},
                   {"grace_seconds", config.queue.grace_seconds},
                   {"postgres_sslmode", config.queue.postgres_sslmode},
-                  {"postgres_sslrootcert", config.queue.postgres_sslrootcert}};
+                  {"postgres_sslrootcert", config.queue.postgres_sslrootcert},
+                  {"job_memory_mib", config.queue.job_memory_mib}};
   out["log"] = {{"level", std::string(to_string(config.log.level))},
                 {"format", std::string(to_string(config.log.format))}};
   out["metrics"] = {{"listen", config.metrics.listen}};

@@ -7,7 +7,7 @@ namespace csgtile::worker {
 namespace {
 // Exit codes follow sysexits(3) where one fits; 1 and 3 report a command that ran but whose
 // result is not clean (an invalid solid, dead jobs) — see README "Exit codes".
-constexpr std::array<ErrorInfo, 13> kTable{{
+constexpr std::array<ErrorInfo, 14> kTable{{
     {ErrorCode::Ok, "ok", "success", false, 0},
     {ErrorCode::Usage, "usage", "bad command line", false, 64},
     {ErrorCode::ConfigInvalid, "config_invalid", "the configuration is invalid", false, 78},
@@ -23,6 +23,7 @@ constexpr std::array<ErrorInfo, 13> kTable{{
     {ErrorCode::FetchRefused, "fetch_refused", "a fetch was refused (policy, size, HTTP 4xx)",
      false, 77},
     {ErrorCode::Cancelled, "cancelled", "stopped before it finished (a stop request)", true, 80},
+    {ErrorCode::ResourceLimit, "resource_limit", "a job went over its memory bound", false, 81},
 }};
 }  // namespace
 

@@ -12,13 +12,15 @@ constexpr const char* kTimingsKey = "timings";
 }  // namespace
 
 std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
-                         const std::string& worker_id, int attempt) {
+                         const std::string& worker_id, int attempt,
+                         std::optional<double> peak_rss_mib) {
   ordered_json record = ordered_json::parse(result, nullptr, false);
   if (!record.is_object()) return result;
   ordered_json stages = ordered_json::object();
   for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
   record[kTimingsKey] = {
       {"stages", stages}, {"seconds", seconds}, {"worker", worker_id}, {"attempt", attempt}};
+  if (peak_rss_mib) record[kTimingsKey]["peak_rss_mib"] = *peak_rss_mib;
   return record.dump();
 }
 

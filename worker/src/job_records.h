@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include <vector>
@@ -15,12 +16,14 @@
 
 namespace csgtile::worker {
 
-/// `result` (a JSON object) with "timings" added; other text is returned unchanged.
+/// `result` (a JSON object) with "timings" added (and the job's peak resident memory in MiB
+/// when known); other text is returned unchanged.
 std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
-                         const std::string& worker_id, int attempt);
+                         const std::string& worker_id, int attempt,
+                         std::optional<double> peak_rss_mib = std::nullopt);
 
 /// Accumulates done jobs' records: manifest entries {"key", "result"} without timings, and
-/// timings.json entries {"key", "stages", "seconds", "worker", "attempt"}.
+/// timings.json entries {"key", "stages", "seconds", "worker", "attempt", "peak_rss_mib"}.
 struct JobRecords {
   nlohmann::ordered_json jobs = nlohmann::ordered_json::array();
   nlohmann::ordered_json timings = nlohmann::ordered_json::array();

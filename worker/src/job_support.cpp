@@ -2,20 +2,20 @@
 
 #include "csgtile/worker/job_support.h"
 
+#include <nlohmann/json.hpp>
+
 #include "csgtile/worker/publish.h"
 
 namespace csgtile::worker {
 
 std::string output_config_sha256(const config::Config& config) {
-  config::Config hashed = config;
-  hashed.run.output.clear();
-  hashed.run.threads = 0;
-  hashed.queue = {};
-  hashed.log = {};
-  hashed.metrics = {};
-  hashed.fetch = {};
-  hashed.publish = {};
-  return sha256_hex(config::to_json(hashed));
+  // The sections that do not shape outputs are left out of the hashed text altogether (not
+  // reset to their defaults), so that a key added to them later changes no manifest's hash.
+  nlohmann::json hashed = nlohmann::json::parse(config::to_json(config));
+  for (const char* section : {"queue", "log", "metrics", "fetch", "publish"}) hashed.erase(section);
+  hashed["run"].erase("output");
+  hashed["run"].erase("threads");
+  return sha256_hex(hashed.dump());
 }
 
 }  // namespace csgtile::worker

@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -29,6 +32,7 @@
 #include "job_records.h"
 #include "jobs/export_settings.h"
 #include "jobs/job_table.h"
+#include "ops/memory.h"
 #include "ops/metrics.h"
 #include "ops/stage_clock.h"
 #include "publish/publish_run.h"
@@ -125,7 +129,9 @@ std::chrono::milliseconds grace_margin(std::chrono::seconds grace) {
 
 /// Waits until `outcome` is ready, or — once a stop signal came — until the grace period
 /// measured from the signal, less its margin, has passed. Returns whether the job ended.
-bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seconds grace) {
+/// `each_poll` runs at every look (the memory bound's check).
+bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seconds grace,
+                       const std::function<void()>& each_poll) {
   using namespace std::chrono_literals;
   // A signal handler cannot wake a waiting thread, so the flag is looked at this often.
   constexpr auto kPoll = 50ms;
@@ -140,8 +146,37 @@ bool wait_within_grace(const std::future<RunOutcome>& outcome, std::chrono::seco
       until = std::min(until, deadline);
     }
     if (outcome.wait_until(until) == std::future_status::ready) return true;
+    each_poll();
   }
 }
+
+/// queue.job_memory_mib, watched from the work loop: the first look that finds the process's
+/// resident memory over the bound asks the job to stop and remembers what it saw.
+class MemoryBound {
+ public:
+  MemoryBound(int limit_mib, std::stop_source& job_stop)
+      : limit_(static_cast<std::uint64_t>(limit_mib) * kMiB), job_stop_(job_stop) {}
+  void look() {
+    if (limit_ == 0 || seen_ != 0) return;
+    const auto resident = ops::resident_bytes();
+    if (!resident || *resident <= limit_) return;
+    seen_ = *resident;
+    job_stop_.request_stop();
+  }
+  bool exceeded() const { return seen_ != 0; }
+  Failure failure(const std::string& job) const {
+    return {ErrorCode::ResourceLimit,
+            "job " + job + " stopped: the worker's resident memory reached " +
+                std::to_string(seen_ / kMiB) +
+                " MiB, over queue.job_memory_mib = " + std::to_string(limit_ / kMiB)};
+  }
+
+ private:
+  static constexpr std::uint64_t kMiB = 1024 * 1024;
+  std::uint64_t limit_;
+  std::stop_source& job_stop_;
+  std::uint64_t seen_ = 0;
+};
 }  // namespace
 
 Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& log,
@@ -195,12 +230,14 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
                              std::chrono::milliseconds(config.queue.lease_seconds * 1000 / 3));
     std::future<RunOutcome> outcome;
     std::stop_source job_stop;
+    MemoryBound memory(config.queue.job_memory_mib, job_stop);
+    ops::reset_peak_resident();  // the peak recorded for this job is its own
     std::thread runner =
         start_job(*job, run_dir, config, queue, log, job_stop.get_token(), outcome);
     const std::chrono::seconds grace(config.queue.grace_seconds);
     std::optional<RunOutcome> ran;  // once the job's thread has returned
     bool asked_to_stop = false;
-    if (wait_within_grace(outcome, grace)) {
+    if (wait_within_grace(outcome, grace, [&memory] { memory.look(); })) {
       runner.join();
       ran = outcome.get();
     } else {
@@ -246,7 +283,15 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       exit_leaving_threads(0);
     }
     heartbeat.stop();
+    // A job stopped by its memory bound fails with that reason, whatever it returned on the
+    // way out (Cancelled, or a step's error); one that completed before it saw the request
+    // keeps its result.
+    if (memory.exceeded() && !ran->failure.ok()) ran->failure = memory.failure(job->key);
     const Failure& job_failure = ran->failure;
+    std::optional<double> peak_mib;
+    if (const auto peak = ops::peak_resident_bytes()) {
+      peak_mib = std::round(static_cast<double>(*peak) / (1024.0 * 1024.0) * 10.0) / 10.0;
+    }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;
@@ -259,7 +304,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     }
     if (job_failure.ok()) {
       const std::string record =
-          with_timings(ran->result, ran->timings, seconds, worker_id, job->attempts);
+          with_timings(ran->result, ran->timings, seconds, worker_id, job->attempts, peak_mib);
       const bool completed = queue.complete(*job, record, failure);
       if (failure.ok()) {
         ops::metrics().job_finished(completed ? ops::JobOutcome::Done : ops::JobOutcome::LeaseLost,

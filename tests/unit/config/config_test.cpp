@@ -567,7 +567,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
       R"("kernel":{"chordal_tolerance":0.01,"linear_tolerance":1e-07},)"
       R"("log":{"format":"auto","level":"info"},"metrics":{"listen":""},)"
       R"("publish":{"url":""},)"
-      R"("queue":{"backend":"sqlite","grace_seconds":25,"lease_seconds":60,"max_attempts":5,)"
+      R"("queue":{"backend":"sqlite","grace_seconds":25,"job_memory_mib":0,"lease_seconds":60,"max_attempts":5,)"
       R"("postgres_dsn":"","postgres_sslmode":"","postgres_sslrootcert":"",)"
       R"("sqlite_path":""},)"
       R"("run":{"crs":"","inputs":[],"name":"csgtile","output":"out","seed":1,"threads":0}})");

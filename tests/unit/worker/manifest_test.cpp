@@ -38,6 +38,26 @@ TEST(RunManifest, EveryKindStartsWithTheSameHead) {
             manifest_head(jobs::manifest_identity(other), "city"));
 }
 
+TEST(RunManifest, ConfigHashSeesOnlyWhatShapesOutputs) {
+  config::Config config;
+  const std::string base = output_config_sha256(config);
+  config::Config same = config;
+  same.run.output = "elsewhere";
+  same.run.threads = 7;
+  same.queue.max_attempts = 2;
+  same.queue.job_memory_mib = 512;
+  same.log.level = config::LogLevel::Error;
+  same.fetch.attempts = 1;
+  same.publish.url = "s3://bucket/runs";
+  EXPECT_EQ(output_config_sha256(same), base);
+  config::Config other = config;
+  other.kernel.chordal_tolerance *= 2.0;
+  EXPECT_NE(output_config_sha256(other), base);
+  other = config;
+  other.city.cell_size = 100.0;
+  EXPECT_NE(output_config_sha256(other), base);
+}
+
 TEST(RunManifest, ExportsAreListedAlikeAndTilesOnlyWhenWritten) {
   RunIndexReport index;
   index.sha256 = "ab";

@@ -367,6 +367,14 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   }
   for (const std::string& stage : stage_order)
     report.stage_seconds.emplace_back(stage, stage_totals[stage]);
+  for (const auto& t : records.timings) {
+    const auto peak = t.find("peak_rss_mib");
+    if (peak == t.end() || !peak->is_number()) continue;
+    if (report.peak_job.empty() || peak->get<double>() > report.peak_rss_mib) {
+      report.peak_job = t.value("key", std::string());
+      report.peak_rss_mib = peak->get<double>();
+    }
+  }
   ReportFiles report_files;
   if (Failure f = write_run_report(report, run_dir, report_files); !f.ok()) return f;
   ordered_json report_entries = ordered_json::array();

@@ -587,9 +587,13 @@ std::string timings_script(const ReportInput& in) {
   for (const auto& [stage, seconds] : in.stage_seconds) {
     if (std::isfinite(seconds)) stages.push_back({stage, seconds});
   }
+  nlohmann::json timings{{"stages", stages}};
+  if (!in.peak_job.empty() && std::isfinite(in.peak_rss_mib)) {
+    timings["peak"] = {{"job", in.peak_job}, {"mib", in.peak_rss_mib}};
+  }
   return "// Stage timings of this run: not deterministic (see report.h).\n"
          "window.csgtileTimings = " +
-         nlohmann::json{{"stages", stages}}.dump(-1, ' ', true) + ";\n";
+         timings.dump(-1, ' ', true) + ";\n";
 }
 
 }  // namespace

@@ -86,6 +86,10 @@ struct ReportInput {
   std::vector<std::string> dead_jobs;                                ///< "key: reason"
   /// Seconds per stage, in order. Not deterministic: written to report/timings.js only.
   std::vector<std::pair<std::string, double>> stage_seconds;
+  /// The job whose process reached the highest resident memory while it ran, and that peak in
+  /// MiB (timings.json's peak_rss_mib); empty when none was recorded. Not deterministic either.
+  std::string peak_job = {};
+  double peak_rss_mib = 0.0;
 };
 
 struct ReportFiles {

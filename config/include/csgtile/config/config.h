@@ -54,6 +54,9 @@ struct QueueConfig {
   /// libpq sslmode (disable … verify-full); empty keeps the DSN's (libpq default: prefer).
   std::string postgres_sslmode;
   std::string postgres_sslrootcert;  ///< CA file for verify-ca/verify-full; empty keeps the DSN's
+  /// 0..1048576 MiB, 0 for none: a job whose process's resident memory goes over it is asked
+  /// to stop (at its next cancellation point) and fails with resource_limit, not retried.
+  int job_memory_mib = 0;
   bool operator==(const QueueConfig&) const = default;
 };
 

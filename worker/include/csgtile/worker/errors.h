@@ -27,6 +27,7 @@ enum class ErrorCode {
   Network,          ///< a transfer failed in a way that may pass (timeout, reset, HTTP 5xx)
   FetchRefused,     ///< a fetch the policy or the server refuses (scheme, address, size, 4xx)
   Cancelled,        ///< stopped before it finished: a stop request (shutdown) or a time limit
+  ResourceLimit,    ///< a job went over a configured resource bound (queue.job_memory_mib)
 };
 
 struct ErrorInfo {

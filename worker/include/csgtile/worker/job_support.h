@@ -19,9 +19,10 @@ struct StageTimings {
   std::vector<std::pair<std::string, double>> seconds;
 };
 
-/// SHA-256 of the settings that shape a run's outputs, as manifests record it: the config
-/// without where outputs and the queue are (run.output, queue), how many threads work
-/// (outputs do not depend on it), logging, metrics, fetching and publishing.
+/// SHA-256 of the settings that shape a run's outputs, as manifests record it: the config's
+/// canonical JSON without where outputs and the queue are (run.output, queue), how many
+/// threads work (outputs do not depend on it), logging, metrics, fetching and publishing —
+/// those keys are not in the hashed text at all, so adding one changes no hash.
 std::string output_config_sha256(const config::Config& config);
 
 }  // namespace csgtile::worker

@@ -3,7 +3,8 @@
 // works opened from file://.
 //
 // - Stage timings: timings.js (written beside index.html, not deterministic) assigns
-//   window.csgtileTimings = {stages: [[name, seconds], ...]}; drawn here as a bar chart.
+//   window.csgtileTimings = {stages: [[name, seconds], ...], peak: {job, mib}}; the stages
+//   drawn here as a bar chart, the job of the highest peak memory named under it.
 // - 3D view: viewer.js defines window.csgtileViewer (absent when csgtile was built without
 //   it). A cell's GLB comes as base64 from cells/<id>.glb.js, loaded by a <script> element
 //   when the cell is chosen (Chromium refuses fetch() of file:// URLs).
@@ -44,6 +45,11 @@
         x: labelWidth + (stage[1] / longest) * barWidth + 6, y: y + 14}, stage[1].toFixed(3) + ' s'));
     });
     target.appendChild(svg);
+    var peak = window.csgtileTimings.peak;
+    if (peak) {
+      target.appendChild(element(null, 'p', {class: 'note'},
+          'Highest peak memory of a job: ' + peak.mib.toFixed(1) + ' MiB (' + peak.job + ')'));
+    }
   }
 
   var view = null;
