@@ -6,9 +6,11 @@
 // run the statistics of csgtile::assembly (pairs per stage, objects, seconds per phase),
 // peak RSS, and the time scaling exponent of the full runs.
 // Run: build/tests/bench/assemble_bench [--max N] [--all-pairs-max N] [--threads T]
+//      [--sizes N,N,...] (instead of 1k, 10k, 100k; tests/bench/memory_bench.py takes 5k)
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -73,6 +75,7 @@ Run run_child(int n, const std::string& mode, int threads) {
 
 int main(int argc, char** argv) {
   int max_n = 100000, all_pairs_max = 2000, threads = 0;
+  std::vector<int> sizes = {1000, 10000, 100000};
   for (int i = 1; i + 1 < argc; ++i) {
     if (!std::strcmp(argv[i], "--max"))
       max_n = std::atoi(argv[++i]);
@@ -80,9 +83,22 @@ int main(int argc, char** argv) {
       all_pairs_max = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--threads"))
       threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--sizes")) {
+      sizes.clear();
+      for (const char* p = argv[++i]; *p != '\0';) {
+        char* end = nullptr;
+        const long n = std::strtol(p, &end, 10);
+        if (end == p || n <= 0) {
+          std::fprintf(stderr, "--sizes: a comma-separated list of positive counts\n");
+          return 2;
+        }
+        sizes.push_back(static_cast<int>(n));
+        p = *end == ',' ? end + 1 : end;
+      }
+    }
   }
   std::vector<Run> runs;
-  for (int n : {1000, 10000, 100000}) {
+  for (int n : sizes) {
     if (n > max_n) break;
     runs.push_back(run_child(n, "full", threads));
     runs.push_back(run_child(n, "no_culling", threads));
