@@ -359,6 +359,13 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   std::map<std::string, double> stage_totals;
   std::vector<std::string> stage_order;
   for (const auto& t : records.timings) {
+    // The job of the highest peak memory, in the same pass.
+    if (const auto peak = t.find("peak_rss_mib");
+        peak != t.end() && peak->is_number() &&
+        (report.peak_job.empty() || peak->get<double>() > report.peak_rss_mib)) {
+      report.peak_job = t.value("key", std::string());
+      report.peak_rss_mib = peak->get<double>();
+    }
     if (!t.contains("stages")) continue;
     for (const auto& [stage, seconds] : t["stages"].items()) {
       if (!stage_totals.count(stage)) stage_order.push_back(stage);
@@ -367,14 +374,6 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   }
   for (const std::string& stage : stage_order)
     report.stage_seconds.emplace_back(stage, stage_totals[stage]);
-  for (const auto& t : records.timings) {
-    const auto peak = t.find("peak_rss_mib");
-    if (peak == t.end() || !peak->is_number()) continue;
-    if (report.peak_job.empty() || peak->get<double>() > report.peak_rss_mib) {
-      report.peak_job = t.value("key", std::string());
-      report.peak_rss_mib = peak->get<double>();
-    }
-  }
   ReportFiles report_files;
   if (Failure f = write_run_report(report, run_dir, report_files); !f.ok()) return f;
   ordered_json report_entries = ordered_json::array();
