@@ -68,6 +68,31 @@ foreach(f IN LISTS worker_rooms)
   endforeach()
 endforeach()
 
+# The job table (jobs/) runs the city jobs (city/): city/ never includes jobs/ (what both need,
+# the job context and the export settings, sits below them in worker/src). Fetching is below
+# publishing: fetch/ never includes the publisher (publish/, csgtile/worker/publish.h); what
+# both need about files (digests, atomic replacement) is csgtile/worker/files.h.
+file(GLOB_RECURSE city_room "${ROOT}/worker/src/city/*")
+foreach(f IN LISTS city_room)
+  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
+  foreach(line IN LISTS lines)
+    if(line MATCHES "#[ \t]*include[ \t]*\"jobs/")
+      file(RELATIVE_PATH rel "${ROOT}" "${f}")
+      list(APPEND violations "${rel}: includes the job table's room jobs/ (an include running back up)")
+    endif()
+  endforeach()
+endforeach()
+file(GLOB_RECURSE fetch_room "${ROOT}/worker/src/fetch/*")
+foreach(f IN LISTS fetch_room)
+  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
+  foreach(line IN LISTS lines)
+    if(line MATCHES "#[ \t]*include[ \t]*[<\"](publish/|csgtile/worker/publish\\.h)")
+      file(RELATIVE_PATH rel "${ROOT}" "${f}")
+      list(APPEND violations "${rel}: includes the publisher (fetch is below publishing)")
+    endif()
+  endforeach()
+endforeach()
+
 # Public headers show only the standard library, Eigen and our own headers: third-party
 # types stay out of other modules' interfaces.
 file(GLOB_RECURSE public_headers "${ROOT}/*/include/csgtile/*.h")

@@ -16,6 +16,7 @@
 #include "csgtile/geo/las.h"
 #include "csgtile/kernel/grid.h"
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/files.h"
 #include "fetch/fetch.h"
 
 namespace csgtile::worker::detail {
@@ -32,6 +33,7 @@ struct OpenTile {
   std::unique_ptr<geo::LasWriter> writer;
   std::filesystem::path temp, target;
   geo::PointBatch batch;
+  bool committed = false;  ///< renamed onto target
 };
 
 int run_tile(const TileCommand& c) {
@@ -41,7 +43,7 @@ int run_tile(const TileCommand& c) {
     for (auto& [id, t] : tiles) {
       t.writer.reset();
       std::error_code ec;
-      std::filesystem::remove(t.temp, ec);
+      std::filesystem::remove(t.committed ? t.target : t.temp, ec);
     }
     return detail::report_failure("tile", f, c.json, out);
   };
@@ -87,7 +89,7 @@ int run_tile(const TileCommand& c) {
       if (it == tiles.end()) {
         OpenTile t;
         t.target = std::filesystem::path(c.out) / (stem + "_" + id.name() + ".las");
-        t.temp = t.target.string() + ".tmp";
+        t.temp = temp_path_beside(t.target, "tmp");
         geo::LasWriteOptions o = options;
         o.offset = {grid.edge_x(id.column), grid.edge_y(id.row), h.offset[2]};
         if (batch.layout) o.extra = *batch.layout;
@@ -116,8 +118,8 @@ int run_tile(const TileCommand& c) {
     files.push_back({{"file", t.target.string()}, {"points", t.writer->points_written()}});
   }
   for (auto& [id, t] : tiles) {
-    std::filesystem::rename(t.temp, t.target, ec);
-    if (ec) return fail({ErrorCode::Io, t.target.string() + ": " + ec.message()});
+    if (Failure f = commit_temp_file(t.temp, t.target); !f.ok()) return fail(f);
+    t.committed = true;
   }
   out["points"] = points;
   out["tiles"] = files;

@@ -27,10 +27,10 @@
 #include "export/manifest.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
+#include "export_settings.h"
 #include "fetch/fetch.h"
 #include "fetch/input.h"
 #include "job_records.h"
-#include "jobs/export_settings.h"
 #include "jobs/job_table.h"
 #include "ops/memory.h"
 #include "ops/metrics.h"
@@ -396,7 +396,7 @@ bool already_published(const std::filesystem::path& manifest_path, const ordered
       return false;
     std::string hex;
     std::uint64_t size = 0;
-    if (!fetch::file_sha256(run_dir / entry[key].get<std::string>(), hex, size).ok()) return false;
+    if (!file_sha256(run_dir / entry[key].get<std::string>(), hex, size).ok()) return false;
     return hex == entry[sha].get<std::string>() && size == entry[bytes].get<std::uint64_t>();
   };
   try {

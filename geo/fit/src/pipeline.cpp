@@ -471,6 +471,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     }
     f.ransac = options.ransac;
     f.ransac.seed = options.ransac.seed * 0x9E3779B97F4A7C15ULL + r;
+    f.ransac.interrupt = options.interrupt;  // a stop also ends a long region's search
     auto detected = detect_shapes(f.p, f.n, f.ransac);
     if (!detected.ok()) {
       f.error = detected.error();

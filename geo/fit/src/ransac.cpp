@@ -60,6 +60,8 @@ class Detector {
       : points_(points), normals_(normals), o_(o), random_(o.seed) {}
 
   RansacResult run();
+  /// Whether run() stopped early because the options' interrupt fired.
+  bool cancelled() const { return cancelled_; }
 
  private:
   bool compatible(const Surface& s, std::uint32_t i) const {
@@ -170,8 +172,9 @@ class Detector {
   RansacOptions o_;
   geo::detail::Random random_;
   double cos_alpha_ = 0.0;
-  double noise_ = 0.0;  // estimated noise (derived epsilon), else 0
-  bool exact_ = false;  // epsilon derived and the noise under a twentieth of it
+  double noise_ = 0.0;      // estimated noise (derived epsilon), else 0
+  bool exact_ = false;      // epsilon derived and the noise under a twentieth of it
+  bool cancelled_ = false;  // the interrupt fired: run() returned early
   std::vector<char> has_normal_;
   std::vector<int> assignment_;
   std::vector<std::uint32_t> remaining_;  // may hold assigned points until compacted
@@ -824,6 +827,10 @@ RansacResult Detector::run() {
 
   constexpr int kBatch = 64;
   for (;;) {
+    if (o_.interrupt.fired()) {
+      cancelled_ = true;
+      return result;
+    }
     for (int b = 0; b < kBatch; ++b) draw();
     while (!heap_.empty()) {
       Candidate top = heap_.top();
@@ -900,7 +907,9 @@ kernel::Result<RansacResult> detect_shapes(std::span<const Vec3> points,
                          "fit option max_radius must be >= 0 (0: from the cloud)"};
   }
   Detector detector(points, normals, options);
-  return detector.run();
+  RansacResult result = detector.run();
+  if (detector.cancelled()) return options.interrupt.error("while detecting shapes");
+  return result;
 }
 
 }  // namespace csgtile::fit

@@ -249,15 +249,14 @@ kernel::Result<std::vector<detail::laz::Chunk>> copc_chunks(
   return out;
 }
 
-// Parses and checks everything before the points, in the order the fields are needed.
-kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std::string>& warnings,
-                               const PointReadOptions& options) {
-  detail::ByteSource& src = *s.source;
+// The header: signature and version first (they decide how to read the rest), then every
+// field of the version's header (fields a short header lacks read as zero). `count64` is LAS
+// 1.4's 64-bit point count (0 before 1.4), `format_id` the point format byte as stored (the
+// LASzip compression bits included).
+kernel::Status read_las_header(detail::ByteSource& src, LasHeader& h, std::uint64_t& count64,
+                               std::uint8_t& format_id, std::vector<std::string>& warnings) {
   const std::string& name = src.name();
   const std::uint64_t size = src.size();
-  LasHeader& h = s.header;
-
-  // Signature and version first: they decide how to read the rest.
   std::array<std::uint8_t, detail::kLasHeaderSize14> head{};
   const std::size_t head_read =
       static_cast<std::size_t>(std::min<std::uint64_t>(size, head.size()));
@@ -304,7 +303,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   h.creation_year = load_le<std::uint16_t>(&head[detail::kLasCreationYear]);
   h.offset_to_point_data = load_le<std::uint32_t>(&head[detail::kLasOffsetToPoints]);
   h.vlr_count = load_le<std::uint32_t>(&head[detail::kLasVlrCount]);
-  const std::uint8_t format_id = head[detail::kLasPointFormat];
+  format_id = head[detail::kLasPointFormat];
   h.point_format = format_id & 0x3F;
   h.record_length = load_le<std::uint16_t>(&head[detail::kLasRecordLength]);
   h.legacy_point_count = load_le<std::uint32_t>(&head[detail::kLasLegacyCount]);
@@ -321,7 +320,6 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   if (h.version_minor >= 3) {
     h.waveform_data_start = load_le<std::uint64_t>(&head[detail::kLasWaveformStart]);
   }
-  std::uint64_t count64 = 0;
   if (h.version_minor >= 4) {
     h.evlr_offset = load_le<std::uint64_t>(&head[detail::kLasEvlrOffset]);
     h.evlr_count = load_le<std::uint32_t>(&head[detail::kLasEvlrCount]);
@@ -332,12 +330,15 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   } else {
     for (int i = 0; i < 5; ++i) h.points_by_return[i] = h.legacy_points_by_return[i];
   }
+  return kernel::Status();
+}
 
-  // Compressed point data is recognised by the format id's top bits (LASzip convention) and
-  // the laszip VLR.
-  const bool compressed_bit = (format_id & 0xC0) != 0;
-
-  // Offsets and the VLR area.
+// The offset to the point data, then the VLRs between the header and it (payloads loaded up
+// to kMaxLoadedVlrBytes in total).
+kernel::Status read_las_vlrs(detail::ByteSource& src, const LasHeader& h,
+                             std::vector<LasRecord>& vlrs, std::vector<std::string>& warnings) {
+  const std::string& name = src.name();
+  const std::uint64_t size = src.size();
   if (h.offset_to_point_data < h.header_size) {
     return corrupt(name, "offset to point data " + num(h.offset_to_point_data) +
                              " lies inside the header (header size " + num(h.header_size) + ")");
@@ -356,7 +357,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   }
   std::uint64_t pos = h.header_size;
   // Reservations are capped: a count is only as good as the records that parse.
-  s.vlrs.reserve(std::min<std::uint32_t>(h.vlr_count, 1024));
+  vlrs.reserve(std::min<std::uint32_t>(h.vlr_count, 1024));
   std::uint64_t vlr_loaded = 0;
   for (std::uint32_t i = 0; i < h.vlr_count; ++i) {
     if (pos + detail::kLasVlrHeaderSize > h.offset_to_point_data) {
@@ -393,50 +394,21 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
                          " bytes in total are listed but not loaded");
       vlr_loaded = kMaxLoadedVlrBytes + 1;
     }
-    s.vlrs.push_back(std::move(r));
+    vlrs.push_back(std::move(r));
     pos = end;
   }
-  const LasRecord* laszip = nullptr;
-  const LasRecord* copc_vlr = nullptr;
-  for (const auto& r : s.vlrs) {
-    if (r.user_id == "laszip encoded" && r.record_id == 22204 && laszip == nullptr) laszip = &r;
-    if (r.user_id == "copc" && r.record_id == 1 && copc_vlr == nullptr) copc_vlr = &r;
-  }
-  const bool copc = copc_vlr != nullptr;
-  if (compressed_bit && laszip == nullptr) {
-    return corrupt(name, "LAZ-compressed (point format id " + num(format_id) +
-                             " has the compression bit set) but no laszip VLR (\"laszip "
-                             "encoded\", 22204) says how");
-  }
-  if (laszip != nullptr && !laszip->data) {
-    return corrupt(name, "the laszip VLR was not loaded (VLR area over its limit)");
-  }
-  const bool compressed = laszip != nullptr;
-  if (laszip != nullptr && !compressed_bit) {
-    warnings.push_back(name +
-                       ": a laszip VLR without the compression bit in the point format "
-                       "id; read as LAZ");
-  }
+  return kernel::Status();
+}
 
-  // Point format and record length.
-  if (h.point_format > 10) {
-    return Error{ErrorCode::Unsupported, name + ": point data format " + num(h.point_format) +
-                                             " is not defined by LAS 1.0-1.4 (formats 0-10)"};
-  }
-  const std::uint16_t base_length = las_point_format_length(h.point_format);
-  if (h.record_length < base_length) {
-    return corrupt(name, "point record length " + num(h.record_length) +
-                             " is smaller than point format " + num(h.point_format) +
-                             "'s minimum of " + num(base_length) + " bytes");
-  }
-  if (detail::las_first_version_of_format(h.point_format) > h.version_minor) {
-    warnings.push_back(name + ": point format " + num(h.point_format) +
-                       " is not defined in LAS 1." + num(h.version_minor) + " (it needs 1." +
-                       num(detail::las_first_version_of_format(h.point_format)) +
-                       "); read as the format says");
-  }
-
-  // Point count against the bytes actually present.
+// The point count against the bytes actually present: sets h.point_count, the records that
+// will be read (`readable`; a compressed file's are checked against its chunk table later)
+// and where the point data ends (`data_end`: the first EVLR or the end of the file).
+kernel::Status check_las_point_count(detail::ByteSource& src, LasHeader& h, std::uint64_t count64,
+                                     bool compressed, const PointReadOptions& options,
+                                     std::uint64_t& readable, std::uint64_t& data_end,
+                                     std::vector<std::string>& warnings) {
+  const std::string& name = src.name();
+  const std::uint64_t size = src.size();
   h.point_count = h.legacy_point_count;
   if (h.version_minor >= 4 && h.header_size >= detail::kLasHeaderSize14) {
     if (count64 != 0 && h.legacy_point_count != 0 && count64 != h.legacy_point_count) {
@@ -446,7 +418,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     }
     if (count64 != 0) h.point_count = count64;
   }
-  std::uint64_t data_end = size;
+  data_end = size;
   const char* data_end_what = "the end of the file";
   if (h.version_minor >= 4 && h.evlr_count > 0) {
     if (h.evlr_offset < h.offset_to_point_data) {
@@ -463,7 +435,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
   }
   const std::uint64_t data_bytes = data_end - h.offset_to_point_data;
   const std::uint64_t complete = data_bytes / h.record_length;
-  s.readable = h.point_count;
+  readable = h.point_count;
   if (compressed) {
     // Checked against the chunk table below.
   } else if (h.point_count > complete) {
@@ -475,15 +447,22 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
                              num(data_end) + "): " + num(complete) + " complete records";
     if (!options.accept_truncated) return corrupt(name, what);
     warnings.push_back(name + ": " + what + "; reading those");
-    s.readable = complete;
+    readable = complete;
   } else if (h.point_count < complete && h.evlr_count == 0 &&
              data_bytes - h.point_count * h.record_length >= h.record_length) {
     warnings.push_back(name + ": " + num(data_bytes - h.point_count * h.record_length) +
                        " bytes follow the " + num(h.point_count) +
                        " declared point records; they are ignored");
   }
+  return kernel::Status();
+}
 
-  // EVLRs.
+// The EVLRs of LAS 1.4 (payloads up to kMaxLoadedEvlr each and four times that in total
+// loaded), and the warnings about offsets that point past the file.
+kernel::Status read_las_evlrs(detail::ByteSource& src, const LasHeader& h,
+                              std::vector<LasRecord>& evlrs, std::vector<std::string>& warnings) {
+  const std::string& name = src.name();
+  const std::uint64_t size = src.size();
   if (h.version_minor >= 4 && h.evlr_count > 0) {
     const std::uint64_t area = size - h.evlr_offset;
     if (std::uint64_t{h.evlr_count} * detail::kLasEvlrHeaderSize > area) {
@@ -494,7 +473,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     }
     std::uint64_t at = h.evlr_offset;
     std::uint64_t loaded = 0;
-    s.evlrs.reserve(std::min<std::uint32_t>(h.evlr_count, 1024));
+    evlrs.reserve(std::min<std::uint32_t>(h.evlr_count, 1024));
     for (std::uint32_t i = 0; i < h.evlr_count; ++i) {
       if (at + detail::kLasEvlrHeaderSize > size) {
         return corrupt(name, "EVLR " + num(i + 1) + " of " + num(h.evlr_count) +
@@ -523,7 +502,7 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
         loaded += r.length;
       }
       at = r.payload_offset + r.length;
-      s.evlrs.push_back(std::move(r));
+      evlrs.push_back(std::move(r));
     }
   } else if (h.version_minor >= 4 && h.evlr_offset != 0 && h.evlr_count == 0 &&
              h.evlr_offset > size) {
@@ -535,35 +514,18 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
     warnings.push_back(name + ": start of waveform data " + num(h.waveform_data_start) +
                        " passes the end of the file; waveform packets are ignored anyway");
   }
+  return kernel::Status();
+}
 
-  if (compressed) {
-    auto spec = detail::laz::parse_laszip_vlr(*laszip->data, h.point_format, h.record_length, name);
-    if (!spec.ok()) return spec.error();
-    auto chunks = detail::laz::read_chunks(src, spec.value(), h.offset_to_point_data, data_end,
-                                           h.point_count);
-    if (!chunks.ok()) return chunks.error();
-    if (copc_vlr != nullptr && copc_vlr->data) {
-      auto parsed_info = parse_copc_info(*copc_vlr->data, size, name);
-      if (!parsed_info.ok()) return parsed_info.error();
-      s.copc = parsed_info.value();
-      if (options.region || options.copc_max_depth >= 0) {
-        auto selected = copc_chunks(src, *s.copc, s.evlrs, chunks.value(), options);
-        if (!selected.ok()) return selected.error();
-        s.copc_nodes_read = selected.value().size();
-        s.readable = 0;
-        for (const auto& c : selected.value()) s.readable += c.points;
-        chunks = std::move(selected);
-      }
-    }
-    s.laz = std::make_unique<detail::laz::LazRecords>(
-        src, std::move(spec).value(), std::move(chunks).value(), h.record_length,
-        options.all_attributes ? detail::laz::AllLayers : detail::laz::LayerZ);
-  }
-
-  // Extra bytes and their descriptors.
-  const std::size_t extra_length = h.record_length - base_length;
+// The layout of the extra bytes after each record's `extra_length` standard ones, from the
+// Extra Bytes descriptors (LASF_Spec 4) where present; null when there are none.
+std::shared_ptr<ExtraLayout> parse_extra_bytes(const std::string& name,
+                                               const std::vector<LasRecord>& vlrs,
+                                               const std::vector<LasRecord>& evlrs,
+                                               std::size_t extra_length,
+                                               std::vector<std::string>& warnings) {
   const LasRecord* descriptors = nullptr;
-  for (const auto* list : {&s.vlrs, &s.evlrs}) {
+  for (const auto* list : {&vlrs, &evlrs}) {
     for (const auto& r : *list) {
       if (r.user_id == "LASF_Spec" && r.record_id == 4 && r.data && descriptors == nullptr) {
         descriptors = &r;
@@ -620,15 +582,20 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
         layout->dimensions.push_back(std::move(dim));
       }
     }
-    info.extra = std::move(layout);
+    return layout;
   }
+  return nullptr;
+}
 
-  // CRS records.
+// The CRS records: GeoTIFF keys (LASF_Projection 34735-34737), OGC WKT (2112, in a VLR or an
+// EVLR), liblas's WKT; what is odd about them goes to crs.warnings.
+void parse_crs_records(const LasHeader& h, const std::vector<LasRecord>& vlrs,
+                       const std::vector<LasRecord>& evlrs, LasCrsRecords& crs) {
   const LasRecord* keys = nullptr;
   const LasRecord* doubles = nullptr;
   const LasRecord* ascii = nullptr;
   const LasRecord* wkt = nullptr;
-  for (const auto* list : {&s.vlrs, &s.evlrs}) {
+  for (const auto* list : {&vlrs, &evlrs}) {
     for (const auto& r : *list) {
       if (!r.data) continue;
       if (r.user_id == "LASF_Projection") {
@@ -639,51 +606,151 @@ kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std:
                                                         : nullptr;
         if (slot == nullptr) continue;
         if (*slot != nullptr && r.record_id != 2112) {
-          s.crs.warnings.push_back("LASF_Projection record " + num(r.record_id) +
-                                   " appears more than once; the first is used");
+          crs.warnings.push_back("LASF_Projection record " + num(r.record_id) +
+                                 " appears more than once; the first is used");
           continue;
         }
         if (*slot != nullptr && r.record_id == 2112 &&
             wkt_text(*(*slot)->data) != wkt_text(*r.data)) {
-          s.crs.warnings.push_back("two OGC WKT records differ; the " +
-                                   std::string(r.extended ? "EVLR" : "later VLR") + "'s is used");
+          crs.warnings.push_back("two OGC WKT records differ; the " +
+                                 std::string(r.extended ? "EVLR" : "later VLR") + "'s is used");
         }
         *slot = &r;
-      } else if (r.user_id == "liblas" && r.record_id == 2112 && !s.crs.liblas_wkt) {
-        s.crs.liblas_wkt = wkt_text(*r.data);
+      } else if (r.user_id == "liblas" && r.record_id == 2112 && !crs.liblas_wkt) {
+        crs.liblas_wkt = wkt_text(*r.data);
       }
     }
   }
   if (keys != nullptr) {
     static const std::vector<std::uint8_t> kNone;
     parse_geotiff_keys(*keys->data, doubles ? *doubles->data : kNone, ascii ? *ascii->data : kNone,
-                       s.crs);
+                       crs);
   } else if (doubles != nullptr || ascii != nullptr) {
-    s.crs.warnings.push_back("GeoTIFF parameter records without a GeoKeyDirectory (34735)");
+    crs.warnings.push_back("GeoTIFF parameter records without a GeoKeyDirectory (34735)");
   }
   if (wkt != nullptr) {
-    s.crs.wkt = wkt_text(*wkt->data);
-    s.crs.wkt_from_evlr = wkt->extended;
+    crs.wkt = wkt_text(*wkt->data);
+    crs.wkt_from_evlr = wkt->extended;
     // Some writers store an empty string or a pair of quotes: no WKT at all.
-    const bool blank = std::none_of(s.crs.wkt->begin(), s.crs.wkt->end(), [](char c) {
+    const bool blank = std::none_of(crs.wkt->begin(), crs.wkt->end(), [](char c) {
       return std::isalnum(static_cast<unsigned char>(c)) != 0;
     });
     if (blank) {
-      s.crs.warnings.push_back("the OGC WKT record (LASF_Projection 2112) is empty (\"" +
-                               printable(s.crs.wkt->substr(0, 16)) + "\")");
+      crs.warnings.push_back("the OGC WKT record (LASF_Projection 2112) is empty (\"" +
+                             printable(crs.wkt->substr(0, 16)) + "\")");
     }
   }
-  s.crs.wkt_flag = h.version_minor >= 4 && (h.global_encoding & 16) != 0;
+  crs.wkt_flag = h.version_minor >= 4 && (h.global_encoding & 16) != 0;
   // The WKT bit without a WKT record is a file without a CRS (LAS 1.4 sets the bit for every
   // file of formats 6-10): nothing to warn about. GeoTIFF keys with the bit set are.
-  if (s.crs.wkt_flag && wkt == nullptr && keys != nullptr) {
-    s.crs.warnings.push_back(
+  if (crs.wkt_flag && wkt == nullptr && keys != nullptr) {
+    crs.warnings.push_back(
         "global encoding says the CRS is WKT, but the file has GeoTIFF keys and no WKT record");
   }
   if (h.point_format >= 6 && keys != nullptr && wkt == nullptr) {
-    s.crs.warnings.push_back("point format " + num(h.point_format) +
-                             " requires a WKT CRS (LAS 1.4), but the file has GeoTIFF keys only");
+    crs.warnings.push_back("point format " + num(h.point_format) +
+                           " requires a WKT CRS (LAS 1.4), but the file has GeoTIFF keys only");
   }
+}
+
+// Parses and checks everything before the points, in the order the fields are needed.
+kernel::Result<bool> parse_las(Parsed& s, PointCloudInfo& info, std::vector<std::string>& warnings,
+                               const PointReadOptions& options) {
+  detail::ByteSource& src = *s.source;
+  const std::string& name = src.name();
+  const std::uint64_t size = src.size();
+  LasHeader& h = s.header;
+  std::uint64_t count64 = 0;
+  std::uint8_t format_id = 0;
+  if (auto st = read_las_header(src, h, count64, format_id, warnings); !st.ok()) {
+    return st.error();
+  }
+
+  // Compressed point data is recognised by the format id's top bits (LASzip convention) and
+  // the laszip VLR.
+  const bool compressed_bit = (format_id & 0xC0) != 0;
+
+  if (auto st = read_las_vlrs(src, h, s.vlrs, warnings); !st.ok()) return st.error();
+  const LasRecord* laszip = nullptr;
+  const LasRecord* copc_vlr = nullptr;
+  for (const auto& r : s.vlrs) {
+    if (r.user_id == "laszip encoded" && r.record_id == 22204 && laszip == nullptr) laszip = &r;
+    if (r.user_id == "copc" && r.record_id == 1 && copc_vlr == nullptr) copc_vlr = &r;
+  }
+  const bool copc = copc_vlr != nullptr;
+  if (compressed_bit && laszip == nullptr) {
+    return corrupt(name, "LAZ-compressed (point format id " + num(format_id) +
+                             " has the compression bit set) but no laszip VLR (\"laszip "
+                             "encoded\", 22204) says how");
+  }
+  if (laszip != nullptr && !laszip->data) {
+    return corrupt(name, "the laszip VLR was not loaded (VLR area over its limit)");
+  }
+  const bool compressed = laszip != nullptr;
+  if (laszip != nullptr && !compressed_bit) {
+    warnings.push_back(name +
+                       ": a laszip VLR without the compression bit in the point format "
+                       "id; read as LAZ");
+  }
+
+  // Point format and record length.
+  if (h.point_format > 10) {
+    return Error{ErrorCode::Unsupported, name + ": point data format " + num(h.point_format) +
+                                             " is not defined by LAS 1.0-1.4 (formats 0-10)"};
+  }
+  const std::uint16_t base_length = las_point_format_length(h.point_format);
+  if (h.record_length < base_length) {
+    return corrupt(name, "point record length " + num(h.record_length) +
+                             " is smaller than point format " + num(h.point_format) +
+                             "'s minimum of " + num(base_length) + " bytes");
+  }
+  if (detail::las_first_version_of_format(h.point_format) > h.version_minor) {
+    warnings.push_back(name + ": point format " + num(h.point_format) +
+                       " is not defined in LAS 1." + num(h.version_minor) + " (it needs 1." +
+                       num(detail::las_first_version_of_format(h.point_format)) +
+                       "); read as the format says");
+  }
+
+  std::uint64_t data_end = size;
+  if (auto st = check_las_point_count(src, h, count64, compressed, options, s.readable, data_end,
+                                      warnings);
+      !st.ok()) {
+    return st.error();
+  }
+  if (auto st = read_las_evlrs(src, h, s.evlrs, warnings); !st.ok()) return st.error();
+
+  if (compressed) {
+    auto spec = detail::laz::parse_laszip_vlr(*laszip->data, h.point_format, h.record_length, name);
+    if (!spec.ok()) return spec.error();
+    auto chunks = detail::laz::read_chunks(src, spec.value(), h.offset_to_point_data, data_end,
+                                           h.point_count);
+    if (!chunks.ok()) return chunks.error();
+    if (copc_vlr != nullptr && copc_vlr->data) {
+      auto parsed_info = parse_copc_info(*copc_vlr->data, size, name);
+      if (!parsed_info.ok()) return parsed_info.error();
+      s.copc = parsed_info.value();
+      if (options.region || options.copc_max_depth >= 0) {
+        auto selected = copc_chunks(src, *s.copc, s.evlrs, chunks.value(), options);
+        if (!selected.ok()) return selected.error();
+        s.copc_nodes_read = selected.value().size();
+        s.readable = 0;
+        for (const auto& c : selected.value()) s.readable += c.points;
+        chunks = std::move(selected);
+      }
+    }
+    s.laz = std::make_unique<detail::laz::LazRecords>(
+        src, std::move(spec).value(), std::move(chunks).value(), h.record_length,
+        options.all_attributes ? detail::laz::AllLayers : detail::laz::LayerZ);
+  }
+
+  // Extra bytes and their descriptors.
+  const std::size_t extra_length = h.record_length - base_length;
+  if (auto layout = parse_extra_bytes(name, s.vlrs, s.evlrs, extra_length, warnings)) {
+    info.extra = std::move(layout);
+  }
+
+  // CRS records.
+  parse_crs_records(h, s.vlrs, s.evlrs, s.crs);
   for (const auto& w : s.crs.warnings) warnings.push_back(name + ": " + w);
 
   // What the reader tells its users.

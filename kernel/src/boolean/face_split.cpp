@@ -6,6 +6,7 @@
 
 #include "boolean/tolerance.h"
 #include "boolean/uv_geometry.h"
+#include "csgtile/kernel/polygon2d.h"
 #include "predicates/predicates.h"
 
 namespace csgtile::kernel::detail {
@@ -50,16 +51,7 @@ std::vector<Vec2> loop_points(const BModel& m, const BLoop& loop) {
 
 }  // namespace
 
-double loop_area2(const BModel& m, const BLoop& loop) {
-  double a = 0;
-  const std::vector<Vec2> pts = loop_points(m, loop);
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    const Vec2& p = pts[i];
-    const Vec2& q = pts[(i + 1) % pts.size()];
-    a += p.x() * q.y() - q.x() * p.y();
-  }
-  return a;
-}
+double loop_area(const BModel& m, const BLoop& loop) { return ring_area(loop_points(m, loop)); }
 
 Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
   std::vector<HalfEdge> half;
@@ -151,8 +143,9 @@ Result<std::vector<Region>> split_face(const BModel& m, const BFace& face) {
       return Error{ErrorCode::InvalidShape, "face pieces' boundaries cross (open cycle)"};
     }
     // Outer or hole: the exact orientation of the sampled loop (its area for ordering).
-    const double area = loop_area2(m, cycle);
-    if (predicates::polygon_orientation(loop_points(m, cycle)) > 0) {
+    const std::vector<Vec2> points = loop_points(m, cycle);
+    const double area = ring_area(points);
+    if (predicates::polygon_orientation(points) > 0) {
       outers.push_back(std::move(cycle));
       outer_areas.push_back(area);
     } else {

@@ -17,7 +17,7 @@ struct Region {
 /// closed or a hole has no piece around it.
 Result<std::vector<Region>> split_face(const BModel& m, const BFace& face);
 
-/// Twice the signed area of a loop in (u, v) (sampled pcurves).
-double loop_area2(const BModel& m, const BLoop& loop);
+/// The signed area of a loop in (u, v): of the polygon of its sampled pcurves (ring_area).
+double loop_area(const BModel& m, const BLoop& loop);
 
 }  // namespace csgtile::kernel::detail

@@ -104,22 +104,9 @@ bool same_plane(const Surface& x, bool xr, const Surface& y, bool yr, const Tole
          d.negligible((fy.origin - fx.origin).dot(fx.z));
 }
 
-}  // namespace
-
-Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
-  const double tol = options_.tolerance;
-  std::vector<RFace> faces;
-  for (const Piece& p : pieces) {
-    if (!p.keep) continue;
-    const BFace& f = model_.faces[static_cast<std::size_t>(p.face)];
-    faces.push_back({p.face,
-                     f.surface,
-                     f.reversed != p.flip,
-                     p.region.loops,
-                     true,
-                     {FaceOrigin{f.operand, f.source}}});
-  }
-  // 1. Pieces of one periodic face that meet across its seam become one face.
+// 1. Pieces of one periodic face that meet across its seam become one face; a seam edge one
+// face then uses both ways at one place bounds nothing and is spliced out.
+void merge_across_seams(const BModel& model, std::vector<RFace>& faces) {
   for (std::size_t i = 0; i < faces.size(); ++i) {
     for (std::size_t j = 0; j < faces.size(); ++j) {
       if (i == j || !faces[i].alive || !faces[j].alive) continue;
@@ -131,7 +118,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       std::set<int> edges_i;
       for (const BLoop& loop : faces[i].loops) {
         for (const BUse& u : loop) {
-          if (!model_.edges[static_cast<std::size_t>(u.edge)].seam) edges_i.insert(u.edge);
+          if (!model.edges[static_cast<std::size_t>(u.edge)].seam) edges_i.insert(u.edge);
         }
       }
       for (const BLoop& loop : faces[j].loops) {
@@ -144,11 +131,11 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
         for (std::size_t l = 0; l < faces[i].loops.size() && !merged; ++l) {
           for (std::size_t k = 0; k < faces[i].loops[l].size() && !merged; ++k) {
             const BUse u = faces[i].loops[l][k];
-            if (!model_.edges[static_cast<std::size_t>(u.edge)].seam) continue;
+            if (!model.edges[static_cast<std::size_t>(u.edge)].seam) continue;
             auto other = find_use(faces[j], u.edge, !u.forward);
             if (!other) continue;
             // Shift j's pcurves by whole periods so the shared seam coincides.
-            const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+            const BEdge& e = model.edges[static_cast<std::size_t>(u.edge)];
             const double tm = 0.5 * (e.t0 + e.t1);
             const Vec2 offset =
                 u.pcurve->point(tm) - faces[j].loops[other->first][other->second].pcurve->point(tm);
@@ -184,7 +171,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       for (std::size_t l = 0; l < f.loops.size() && !spliced; ++l) {
         for (std::size_t k = 0; k < f.loops[l].size() && !spliced; ++k) {
           const BUse u = f.loops[l][k];
-          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          const BEdge& e = model.edges[static_cast<std::size_t>(u.edge)];
           if (!e.seam || e.degenerate()) continue;
           const auto other = find_use(f, u.edge, !u.forward);
           if (!other) continue;
@@ -198,15 +185,18 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       }
     }
   }
-  // 2. Faces on one plane meeting along an edge are one face (the edge bounds nothing).
+}
+
+// 2. Faces on one plane meeting along an edge are one face (the edge bounds nothing).
+void merge_coplanar_faces(const BModel& model, std::vector<RFace>& faces, double tol) {
   BoundingBox extent;
-  for (const BFace& f : model_.faces) extent.add(f.box);
+  for (const BFace& f : model.faces) extent.add(f.box);
   const ToleranceModel planes{tol, std::max(extent.empty() ? 0.0 : extent.size().norm(), tol)};
   // The uses of each edge by the live faces (face ascending, then loop order), as the scan
   // below reads them; after each pass only the lists of edges the changed faces used before or
   // use now are brought up to date (a full rebuild per merge made this step quadratic).
   using UseList = std::vector<std::pair<std::size_t, bool>>;
-  std::vector<UseList> uses(model_.edges.size());
+  std::vector<UseList> uses(model.edges.size());
   for (std::size_t i = 0; i < faces.size(); ++i) {
     if (!faces[i].alive) continue;
     for (const BLoop& loop : faces[i].loops) {
@@ -238,7 +228,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
         // Refit j's pcurves on i's plane, then join.
         for (BLoop& loop : faces[j].loops) {
           for (BUse& w : loop) {
-            const BEdge& e = model_.edges[static_cast<std::size_t>(w.edge)];
+            const BEdge& e = model.edges[static_cast<std::size_t>(w.edge)];
             if (e.degenerate()) continue;
             auto pc = fit_pcurve(*e.curve, e.t0, e.t1, *faces[i].surface, fit_tolerance(tol));
             if (pc) w.pcurve = pc;
@@ -285,8 +275,11 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       list = std::move(next);
     }
   }
-  // 3. Straight edges meeting end to end at a vertex nothing else uses become one edge.
-  changed = true;
+}
+
+// 3. Straight edges meeting end to end at a vertex nothing else uses become one edge.
+void merge_collinear_edges(BModel& model, std::vector<RFace>& faces, double tol) {
+  bool changed = true;
   while (changed) {
     changed = false;
     std::map<int, std::set<int>> vertex_edges;
@@ -294,7 +287,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       if (!f.alive) continue;
       for (const BLoop& loop : f.loops) {
         for (const BUse& u : loop) {
-          const BEdge& e = model_.edges[static_cast<std::size_t>(u.edge)];
+          const BEdge& e = model.edges[static_cast<std::size_t>(u.edge)];
           vertex_edges[e.v0].insert(u.edge);
           vertex_edges[e.v1].insert(u.edge);
         }
@@ -303,16 +296,16 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     for (const auto& [v, edges] : vertex_edges) {
       if (edges.size() != 2) continue;
       const int e1 = *edges.begin(), e2 = *edges.rbegin();
-      const BEdge& x = model_.edges[static_cast<std::size_t>(e1)];
-      const BEdge& y = model_.edges[static_cast<std::size_t>(e2)];
+      const BEdge& x = model.edges[static_cast<std::size_t>(e1)];
+      const BEdge& y = model.edges[static_cast<std::size_t>(e2)];
       if (x.degenerate() || y.degenerate() || x.curve->kind() != CurveKind::Line ||
           y.curve->kind() != CurveKind::Line)
         continue;
       const int xa = x.v0 == v ? x.v1 : x.v0, yb = y.v0 == v ? y.v1 : y.v0;
       if (xa == yb) continue;
-      const Vec3 pa = model_.vertices[static_cast<std::size_t>(xa)].point;
-      const Vec3 pb = model_.vertices[static_cast<std::size_t>(yb)].point;
-      const Vec3 pv = model_.vertices[static_cast<std::size_t>(v)].point;
+      const Vec3 pa = model.vertices[static_cast<std::size_t>(xa)].point;
+      const Vec3 pb = model.vertices[static_cast<std::size_t>(yb)].point;
+      const Vec3 pv = model.vertices[static_cast<std::size_t>(v)].point;
       const Vec3 d = pb - pa;
       if ((pv - pa).cross(d).norm() > tol * d.norm()) continue;
       BEdge merged;
@@ -322,7 +315,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       merged.v0 = xa;
       merged.v1 = yb;
       merged.tolerance = std::max(x.tolerance, y.tolerance);
-      const int id = model_.add_edge(std::move(merged));
+      const int id = model.add_edge(std::move(merged));
       // Replace "x then y" (or "y^-1 then x^-1") in every loop by the merged edge.
       for (RFace& f : faces) {
         if (!f.alive) continue;
@@ -334,11 +327,11 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
               out.push_back(u);
               continue;
             }
-            const bool starts_at_a = use_start(model_, u) == xa || use_start(model_, u) == yb;
+            const bool starts_at_a = use_start(model, u) == xa || use_start(model, u) == yb;
             if (!starts_at_a) continue;  // the second half: dropped, the first stands for both
-            const bool forward = use_start(model_, u) == xa;
-            const BEdge& m = model_.edges[static_cast<std::size_t>(id)];
-            const BEdge& old = model_.edges[static_cast<std::size_t>(u.edge)];
+            const bool forward = use_start(model, u) == xa;
+            const BEdge& m = model.edges[static_cast<std::size_t>(id)];
+            const BEdge& old = model.edges[static_cast<std::size_t>(u.edge)];
             const double old_mid = 0.5 * (old.t0 + old.t1);
             auto pc = aligned_fit(m, *f.surface, old.curve->point(old_mid),
                                   u.pcurve->point(old_mid), fit_tolerance(tol));
@@ -351,9 +344,18 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
       break;
     }
   }
+}
 
-  // 4. Shapes: vertices, edges and faces, shared by index.
-  std::vector<double> vertex_tol(model_.vertices.size(), tol);
+// The faces of the result as shapes, and the face of `faces` each one comes from.
+struct FaceShapes {
+  std::vector<Shape> shapes;
+  std::vector<std::size_t> face_of;
+};
+
+// 4. Shapes: vertices, edges and faces, shared by index.
+Result<FaceShapes> make_face_shapes(const BModel& model, const std::vector<RFace>& faces,
+                                    double tol) {
+  std::vector<double> vertex_tol(model.vertices.size(), tol);
   std::set<int> used_edges;
   for (const RFace& f : faces) {
     if (!f.alive) continue;
@@ -362,13 +364,13 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     }
   }
   for (int id : used_edges) {
-    const BEdge& e = model_.edges[static_cast<std::size_t>(id)];
+    const BEdge& e = model.edges[static_cast<std::size_t>(id)];
     for (int end = 0; end < 2; ++end) {
       const int v = end == 0 ? e.v0 : e.v1;
       double gap = 0;
       if (!e.degenerate())
         gap = (e.curve->point(end == 0 ? e.t0 : e.t1) -
-               model_.vertices[static_cast<std::size_t>(v)].point)
+               model.vertices[static_cast<std::size_t>(v)].point)
                   .norm();
       vertex_tol[static_cast<std::size_t>(v)] =
           std::max({vertex_tol[static_cast<std::size_t>(v)], gap * 1.01, e.tolerance});
@@ -377,14 +379,14 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   std::map<int, Shape> vertex_shapes, edge_shapes;
   auto vertex_shape = [&](int v) -> Result<Shape> {
     if (auto it = vertex_shapes.find(v); it != vertex_shapes.end()) return it->second;
-    auto s = ShapeFactory::vertex(model_.vertices[static_cast<std::size_t>(v)].point,
+    auto s = ShapeFactory::vertex(model.vertices[static_cast<std::size_t>(v)].point,
                                   vertex_tol[static_cast<std::size_t>(v)]);
     if (s.ok()) vertex_shapes.emplace(v, s.value());
     return s;
   };
   auto edge_shape = [&](int id) -> Result<Shape> {
     if (auto it = edge_shapes.find(id); it != edge_shapes.end()) return it->second;
-    const BEdge& e = model_.edges[static_cast<std::size_t>(id)];
+    const BEdge& e = model.edges[static_cast<std::size_t>(id)];
     auto v0 = vertex_shape(e.v0);
     auto v1 = vertex_shape(e.v1);
     if (!v0.ok()) return v0;
@@ -396,8 +398,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (s.ok()) edge_shapes.emplace(id, s.value());
     return s;
   };
-  std::vector<Shape> face_shapes;
-  std::vector<std::size_t> face_of_shape;
+  FaceShapes out;
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const RFace& f = faces[i];
     if (!f.alive || f.loops.empty()) continue;
@@ -406,7 +407,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     // Outer loop first.
     std::vector<BLoop> loops = f.loops;
     std::stable_sort(loops.begin(), loops.end(), [&](const BLoop& x, const BLoop& y) {
-      return loop_area2(model_, x) > loop_area2(model_, y);
+      return loop_area(model, x) > loop_area(model, y);
     });
     for (const BLoop& loop : loops) {
       std::vector<Shape> edges;
@@ -424,24 +425,30 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     }
     auto face = ShapeFactory::face(f.surface, std::move(wires), std::move(pcurves), tol);
     if (!face.ok()) return face.error();
-    face_shapes.push_back(
+    out.shapes.push_back(
         face.value().oriented(f.reversed ? Orientation::Reversed : Orientation::Forward));
-    face_of_shape.push_back(i);
+    out.face_of.push_back(i);
   }
+  return out;
+}
 
-  // 5. Shells: faces joined through edges that exactly two faces use (an edge shared by
-  // four faces is where two solids touch: it joins nothing).
-  std::vector<std::size_t> parent(face_shapes.size());
+// 5. Shells: faces joined through edges that exactly two faces use (an edge shared by four
+// faces is where two solids touch: it joins nothing); solids: each outer shell with the
+// cavities it holds. `known_volumes` receives the solids whose volume was measured.
+Result<Shape> make_solids(const BModel& model, const std::vector<RFace>& faces,
+                          const FaceShapes& made, double tol,
+                          std::vector<std::pair<Shape, double>>& known_volumes) {
+  std::vector<std::size_t> parent(made.shapes.size());
   std::iota(parent.begin(), parent.end(), 0);
   std::function<std::size_t(std::size_t)> root = [&](std::size_t x) {
     return parent[x] == x ? x : parent[x] = root(parent[x]);
   };
   std::map<int, std::vector<std::size_t>> edge_users;
-  for (std::size_t k = 0; k < face_shapes.size(); ++k) {
+  for (std::size_t k = 0; k < made.shapes.size(); ++k) {
     std::set<int> mine;
-    for (const BLoop& loop : faces[face_of_shape[k]].loops) {
+    for (const BLoop& loop : faces[made.face_of[k]].loops) {
       for (const BUse& u : loop) {
-        if (!model_.edges[static_cast<std::size_t>(u.edge)].degenerate()) mine.insert(u.edge);
+        if (!model.edges[static_cast<std::size_t>(u.edge)].degenerate()) mine.insert(u.edge);
       }
     }
     for (int e : mine) edge_users[e].push_back(k);
@@ -450,7 +457,7 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (users.size() == 2) parent[root(users[0])] = root(users[1]);
   }
   std::map<std::size_t, std::vector<Shape>> groups;
-  for (std::size_t k = 0; k < face_shapes.size(); ++k) groups[root(k)].push_back(face_shapes[k]);
+  for (std::size_t k = 0; k < made.shapes.size(); ++k) groups[root(k)].push_back(made.shapes[k]);
   struct ShellInfo {
     Shape shell;
     double volume;
@@ -468,7 +475,6 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
   }
   std::vector<std::vector<Shape>> solid_shells;
   for (const ShellInfo& o : outer) solid_shells.push_back({o.shell});
-  std::vector<std::pair<Shape, double>> known_volumes;  // solids whose volume is measured
   for (const ShellInfo& c : cavities) {
     // The smallest outer shell around the cavity.
     const Vec3 p = vertex_point(*Explorer(c.shell, ShapeKind::Vertex).begin());
@@ -495,14 +501,38 @@ Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
     if (!s.ok()) return s.error();
     solids.push_back(s.value());
   }
-  auto result = ShapeFactory::compound(std::move(solids));
+  return ShapeFactory::compound(std::move(solids));
+}
+
+}  // namespace
+
+Result<Shape> BooleanEngine::build(std::vector<Piece>& pieces) {
+  const double tol = options_.tolerance;
+  std::vector<RFace> faces;
+  for (const Piece& p : pieces) {
+    if (!p.keep) continue;
+    const BFace& f = model_.faces[static_cast<std::size_t>(p.face)];
+    faces.push_back({p.face,
+                     f.surface,
+                     f.reversed != p.flip,
+                     p.region.loops,
+                     true,
+                     {FaceOrigin{f.operand, f.source}}});
+  }
+  merge_across_seams(model_, faces);
+  merge_coplanar_faces(model_, faces, tol);
+  merge_collinear_edges(model_, faces, tol);
+  auto made = make_face_shapes(model_, faces, tol);
+  if (!made.ok()) return made.error();
+  std::vector<std::pair<Shape, double>> known_volumes;  // solids whose volume is measured
+  auto result = make_solids(model_, faces, made.value(), tol, known_volumes);
   if (!result.ok()) return result;
   // Face history: each face of the result (child-map order) with the input faces it holds.
   const ShapeIndex result_faces = map_child_shapes(result.value(), ShapeKind::Face);
   origins_.assign(result_faces.size(), {});
-  for (std::size_t k = 0; k < face_shapes.size(); ++k) {
-    const std::size_t at = result_faces.find(face_shapes[k]);
-    if (at != ShapeIndex::npos) origins_[at] = faces[face_of_shape[k]].origins;
+  for (std::size_t k = 0; k < made.value().shapes.size(); ++k) {
+    const std::size_t at = result_faces.find(made.value().shapes[k]);
+    if (at != ShapeIndex::npos) origins_[at] = faces[made.value().face_of[k]].origins;
   }
   if (options_.check_result) {
     const CheckReport report = check_shape_with_volumes(result.value(), known_volumes);

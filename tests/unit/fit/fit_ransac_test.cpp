@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stop_token>
 
 #include "csgtile/fit/fit.h"
 #include "csgtile/fit/segment.h"
@@ -52,6 +53,30 @@ TEST(FitRansac, CylinderSeenFromOneSideIsFoundWithItsAxisAndRadius) {
   EXPECT_LT(line_distance(s.surface.point, base, axis), 0.005);
   EXPECT_GT(s.inliers.size(), 5400U);
   EXPECT_LT(s.rms, 0.005);
+}
+
+// A stop request reaches inside one region's search: the detection returns Cancelled after
+// its first batch of samples, not after the whole search; an interrupt that never fires
+// changes nothing.
+TEST(FitRansac, AStopRequestEndsTheSearchWithCancelled) {
+  const Cloud c = testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.5, 2.0, 0.0,
+                                          2.0 * std::numbers::pi, 4000, 0.002, 3);
+  const auto normals = estimate_normals(c.points, {});
+  RansacOptions o = options_for(0.01);
+  std::stop_source source;
+  o.interrupt.stop = source.get_token();
+  const auto free = detect_shapes(c.points, normals, o);
+  ASSERT_TRUE(free.ok()) << free.error().message;
+  const auto plain = detect_shapes(c.points, normals, options_for(0.01));
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(free->assignment, plain->assignment);
+  EXPECT_EQ(free->candidates, plain->candidates);
+  source.request_stop();
+  const auto stopped = detect_shapes(c.points, normals, o);
+  ASSERT_FALSE(stopped.ok());
+  EXPECT_EQ(stopped.error().code, kernel::ErrorCode::Cancelled);
+  EXPECT_NE(stopped.error().message.find("while detecting shapes"), std::string::npos)
+      << stopped.error().message;
 }
 
 TEST(FitRansac, ConeIsFoundWithApexAxisAndAngle) {

@@ -61,8 +61,10 @@ TEST(SigV4, MatchesTheAwsDocumentedGetObjectExample) {
   r.amz_date = "20130524T000000Z";
   r.region = "us-east-1";
   r.extra_headers = {{"Range", "bytes=0-9"}};
-  const auto s =
+  const auto signed_request =
       fetch::sign_v4(r, "AKIAIOSFODNN7EXAMPLE", "wJalrXUtnFEMI/K7MDENG/bPxRfiCYEXAMPLEKEY");
+  ASSERT_TRUE(signed_request.ok()) << signed_request.error().message;
+  const fetch::SigV4Result& s = signed_request.value();
   EXPECT_EQ(s.signature, "f0e8bdb87c964420e857bd35b5d6ed310bd44f0170aba48dd91039c6036bdb41");
   EXPECT_NE(s.authorization.find("SignedHeaders=host;range;x-amz-content-sha256;x-amz-date"),
             std::string::npos);

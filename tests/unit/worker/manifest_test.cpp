@@ -2,7 +2,7 @@
 // manifest, jobs, dead jobs and timings last, timings outside the hashed bytes.
 
 #include "export/manifest.h"
-#include "jobs/export_settings.h"
+#include "export_settings.h"
 
 #include <gtest/gtest.h>
 

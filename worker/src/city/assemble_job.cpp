@@ -20,7 +20,7 @@
 #include "export/manifest.h"
 #include "export/run_index.h"
 #include "export/tileset.h"
-#include "jobs/export_settings.h"
+#include "export_settings.h"
 #include "ops/stage_clock.h"
 #include "snap_json.h"
 

@@ -37,7 +37,7 @@
 #include "csgtile/worker/job_support.h"
 #include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
-#include "jobs/job_table.h"
+#include "job_context.h"
 
 namespace csgtile::worker::city {
 

@@ -1,16 +1,9 @@
 // Rows of the topology index from objects: stable ids, the child and ancestor maps, the
 // objects layer's boundary polygons, CSG nodes, face sources, primitives and relations.
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -22,6 +15,7 @@
 #include "csgtile/kernel/face_rings.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/tessellation.h"
+#include "csgtile/worker/files.h"
 #include "export/index_rows.h"
 
 namespace csgtile::worker {
@@ -538,35 +532,15 @@ Failure write_topology_index(const std::filesystem::path& path,
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
   std::filesystem::create_directories(dir, ec);
   if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
-  // A temporary beside the target (same file system, so the rename is atomic); pid and a
-  // counter keep concurrent writers apart.
-  static std::atomic<unsigned> counter{0};
-  const std::filesystem::path tmp =
-      dir / ("." + path.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
-             std::to_string(counter++));
-  std::filesystem::remove(tmp, ec);
+  // A temporary beside the target (same file system, so the rename is atomic).
+  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
   Failure written = detail::write_gpkg(tmp.string(), r, options);
-  if (written.ok()) {
-    // The database is closed; flush its bytes before the rename makes them visible.
-    std::FILE* f = std::fopen(tmp.c_str(), "rb+");
-    if (f == nullptr || ::fsync(::fileno(f)) != 0) {
-      written = {ErrorCode::Io, "cannot flush " + tmp.string()};
-    }
-    if (f != nullptr) std::fclose(f);
-  }
-  if (written.ok() && std::rename(tmp.c_str(), path.c_str()) != 0) {
-    written = {ErrorCode::Io, "cannot rename into " + path.string() + ": " +
-                                  std::generic_category().message(errno)};
-  }
   if (!written.ok()) {
     std::filesystem::remove(tmp, ec);
     return written;
   }
-  // The rename itself is durable once the directory is.
-  if (const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
-  }
+  // The database is closed: commit flushes its bytes before the rename makes them visible.
+  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
   s.objects = r.objects.size();
   s.shapes = r.shapes.size();
   s.children = r.children.size();

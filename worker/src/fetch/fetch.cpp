@@ -3,12 +3,10 @@
 #include <arpa/inet.h>
 #include <curl/curl.h>
 #include <netinet/in.h>
-#include <openssl/evp.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
@@ -16,10 +14,9 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
-#include <random>
 #include <thread>
 
-#include "csgtile/worker/publish.h"
+#include "csgtile/worker/files.h"
 #include "fetch/sigv4.h"
 #include "fetch/transport.h"
 
@@ -148,7 +145,7 @@ bool address_refused(const curl_sockaddr* address) {
 
 struct Sink {
   std::FILE* file = nullptr;
-  EVP_MD_CTX* sha = nullptr;
+  Sha256* sha = nullptr;
   std::uint64_t bytes = 0;
   std::uint64_t cap = 0;
   bool over_cap = false;
@@ -158,7 +155,7 @@ struct Sink {
   void reset() {
     std::rewind(file);
     if (ftruncate(fileno(file), 0) != 0) write_failed = true;
-    EVP_DigestInit_ex(sha, EVP_sha256(), nullptr);
+    sha->reset();
     bytes = 0;
     over_cap = false;
   }
@@ -175,7 +172,7 @@ std::size_t on_write(char* data, std::size_t size, std::size_t count, void* user
     sink->write_failed = true;
     return 0;
   }
-  EVP_DigestUpdate(sink->sha, data, n);
+  sink->sha->update({data, n});
   sink->bytes += n;
   return n;
 }
@@ -388,12 +385,13 @@ Failure s3_target(const UrlParts& parts, const std::string& original, const Poli
   if (!credentials.session_token.empty()) {
     request.extra_headers.emplace_back("x-amz-security-token", credentials.session_token);
   }
-  const SigV4Result signature = sign_v4(request, credentials.access_key, credentials.secret_key);
-  if (!signature.error.empty()) {
-    return {ErrorCode::Internal, "cannot sign the request to " + host + ": " + signature.error};
+  auto signature = sign_v4(request, credentials.access_key, credentials.secret_key);
+  if (!signature.ok()) {
+    return {signature.error().code,
+            "cannot sign the request to " + host + ": " + signature.error().message};
   }
   target.url = ep.scheme + "://" + host + request.canonical_path;
-  target.headers = signature.headers;
+  target.headers = std::move(signature).value().headers;
   return {};
 }
 
@@ -405,19 +403,6 @@ std::string safe_file_name(const std::string& path) {
   }
   if (name.empty() || name == "." || name == "..") name = "download";
   return name;
-}
-
-std::string finish_hex(EVP_MD_CTX* ctx) {
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_DigestFinal_ex(ctx, digest, &length);
-  static const char digits[] = "0123456789abcdef";
-  std::string hex;
-  for (unsigned int i = 0; i < length; ++i) {
-    hex.push_back(digits[digest[i] >> 4]);
-    hex.push_back(digits[digest[i] & 15]);
-  }
-  return hex;
 }
 
 }  // namespace
@@ -497,23 +482,6 @@ Failure redirect_target(const std::string& where, const std::string& location, c
 }
 
 }  // namespace transport
-
-Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
-  std::array<char, 1 << 16> buffer{};
-  bytes = 0;
-  while (in) {
-    in.read(buffer.data(), buffer.size());
-    const auto n = static_cast<std::size_t>(in.gcount());
-    EVP_DigestUpdate(ctx.get(), buffer.data(), n);
-    bytes += n;
-  }
-  hex = finish_hex(ctx.get());
-  return {};
-}
 
 bool is_url(const std::string& text) {
   const std::size_t colon = text.find("://");
@@ -623,14 +591,12 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
     }
   }
 
-  std::random_device rd;
-  const std::filesystem::path tmp = dir / ("." + final_path.filename().string() + ".part." +
-                                           std::to_string(getpid()) + "." + std::to_string(rd()));
+  const std::filesystem::path tmp = temp_path_beside(final_path, "part");
   Sink sink;
   sink.file = std::fopen(tmp.c_str(), "w+b");
   if (sink.file == nullptr) return {ErrorCode::Io, "cannot create " + tmp.string()};
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> sha(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  sink.sha = sha.get();
+  Sha256 sha;
+  sink.sha = &sha;
   sink.cap = policy.max_bytes;
   auto discard = [&] {
     if (sink.file != nullptr) std::fclose(sink.file);
@@ -684,7 +650,7 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
     return failure;
   }
 
-  const std::string hex = finish_hex(sink.sha);
+  const std::string hex = sha.hex();
   if (request.size && *request.size != sink.bytes) {
     discard();
     return {ErrorCode::FetchRefused, where + ": got " + std::to_string(sink.bytes) +
@@ -695,17 +661,15 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
     return {ErrorCode::FetchRefused,
             where + ": SHA-256 " + hex + " does not match the expected " + *request.sha256};
   }
-  if (std::fflush(sink.file) != 0 || fsync(fileno(sink.file)) != 0) {
-    discard();
-    return {ErrorCode::Io, "cannot flush " + tmp.string()};
-  }
-  std::fclose(sink.file);
+  const bool closed = std::fclose(sink.file) == 0;
   sink.file = nullptr;
-  std::filesystem::rename(tmp, final_path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return {ErrorCode::Io,
-            "cannot move the download to " + final_path.string() + ": " + ec.message()};
+  if (!closed) {
+    discard();
+    return {ErrorCode::Io, "cannot write " + tmp.string()};
+  }
+  if (Failure f = commit_temp_file(tmp, final_path); !f.ok()) {
+    f.message = where + ": " + f.message;
+    return f;
   }
   const int attempts = result.attempts;
   result = {final_path, sink.bytes, hex, false, attempts};

@@ -75,9 +75,6 @@ struct Result {
 Failure fetch(const Request& request, const Policy& policy, const std::filesystem::path& cache_dir,
               Result& result);
 
-/// Streams `path` through SHA-256 (lower-case hex) and counts its bytes; Io when unreadable.
-Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes);
-
 /// Uploads `bytes` to `s3://bucket/key` with a signed PUT (the payload's SHA-256 signed
 /// too). Transient failures (resets, timeouts, 5xx, 429) are retried as fetch retries them
 /// (`policy.attempts`, doubling `policy.retry_delay_ms`) and end as Network; refusals (4xx,

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "csgtile/worker/files.h"
 #include "ops/metrics.h"
 
 namespace csgtile::worker::fetch {

@@ -1,39 +1,14 @@
 #include "fetch/sigv4.h"
 
-#include "csgtile/worker/publish.h"
-
-#include <openssl/evp.h>
-#include <openssl/hmac.h>
-
 #include <algorithm>
 #include <cctype>
 #include <ctime>
 #include <optional>
 
+#include "csgtile/worker/files.h"
+
 namespace csgtile::worker::fetch {
 namespace {
-
-std::string to_hex(const unsigned char* bytes, std::size_t n) {
-  static const char digits[] = "0123456789abcdef";
-  std::string out(2 * n, '0');
-  for (std::size_t i = 0; i < n; ++i) {
-    out[2 * i] = digits[bytes[i] >> 4];
-    out[2 * i + 1] = digits[bytes[i] & 15];
-  }
-  return out;
-}
-
-// HMAC-SHA256 of `data` under `key`; nullopt when OpenSSL fails.
-std::optional<std::string> hmac_sha256(const std::string& key, const std::string& data) {
-  unsigned char mac[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  if (HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
-           reinterpret_cast<const unsigned char*>(data.data()), data.size(), mac,
-           &length) == nullptr) {
-    return std::nullopt;
-  }
-  return std::string(reinterpret_cast<const char*>(mac), length);
-}
 
 std::string lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
@@ -76,8 +51,8 @@ std::string amz_date_now() {
   return text;
 }
 
-SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,
-                    const std::string& secret_key) {
+worker::Result<SigV4Result> sign_v4(const SigV4Request& request, const std::string& access_key,
+                                    const std::string& secret_key) {
   // Canonical headers: lower-case names, trimmed values, sorted by name.
   std::vector<std::pair<std::string, std::string>> headers = {
       {"host", trim(request.host)},
@@ -111,12 +86,9 @@ SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,
                                       &result.string_to_sign};
   for (const std::string* part : parts) {
     mac = hmac_sha256(*mac, *part);
-    if (!mac) {
-      result.error = "HMAC-SHA256 failed in OpenSSL";
-      return result;
-    }
+    if (!mac) return Failure{ErrorCode::Internal, "HMAC-SHA256 failed in OpenSSL"};
   }
-  result.signature = to_hex(reinterpret_cast<const unsigned char*>(mac->data()), mac->size());
+  result.signature = hex_encode(*mac);
   result.authorization = "AWS4-HMAC-SHA256 Credential=" + access_key + "/" + scope +
                          ", SignedHeaders=" + signed_headers + ", Signature=" + result.signature;
 

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "csgtile/worker/errors.h"
+
 namespace csgtile::worker::fetch {
 
 struct SigV4Request {
@@ -34,13 +36,11 @@ struct SigV4Result {
   /// Every header to send (besides Host, which libcurl sets from the URL): x-amz-date,
   /// x-amz-content-sha256, the extra headers and Authorization, as "name: value".
   std::vector<std::string> headers;
-  /// Non-empty when the request could not be signed (OpenSSL's HMAC failed); the rest is then
-  /// incomplete and must not be sent.
-  std::string error = {};
 };
 
-SigV4Result sign_v4(const SigV4Request& request, const std::string& access_key,
-                    const std::string& secret_key);
+/// Signs `request`. Error: Internal when OpenSSL's HMAC fails.
+worker::Result<SigV4Result> sign_v4(const SigV4Request& request, const std::string& access_key,
+                                    const std::string& secret_key);
 
 /// RFC 3986 percent-encoding as S3 wants it: unreserved characters kept, '/' kept when
 /// `keep_slash`, everything else %XX (upper-case hex).

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "jobs/job_table.h"
+#include "job_context.h"
 
 namespace csgtile::worker::jobs {
 

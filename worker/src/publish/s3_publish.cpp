@@ -122,7 +122,7 @@ Failure resolve_file(const fs::path& root, const std::string& path, LocalFile& f
   if (!fs::is_regular_file(file.resolved, ec)) {
     return {ErrorCode::InputInvalid, "'" + path + "' in the publish plan is not a regular file"};
   }
-  if (Failure f = fetch::file_sha256(file.resolved, file.sha256, file.size); !f.ok()) return f;
+  if (Failure f = file_sha256(file.resolved, file.sha256, file.size); !f.ok()) return f;
   file.object_key = "objects/" + file.sha256 + extension_of(path);
   return {};
 }

@@ -18,6 +18,7 @@
 
 #include "csgtile/geo/footprints.h"
 #include "csgtile/geo/scene.h"
+#include "csgtile/kernel/interrupt.h"
 #include "csgtile/kernel/location.h"
 
 namespace csgtile::fit {
@@ -87,6 +88,8 @@ struct RansacOptions {
   /// 90 % quantile of the distance to the 16th neighbour where larger): below 1, coplanar faces
   /// with a narrow gap between them stay two shapes.
   double cluster_scale = 1.0;
+  /// Looked at between batches of samples: once it fires, detect_shapes returns Cancelled.
+  kernel::Interrupt interrupt{};
   bool operator==(const RansacOptions&) const = default;
 };
 

@@ -1,6 +1,6 @@
 // The exporters' settings from a run's configuration (export_settings.h).
 
-#include "jobs/export_settings.h"
+#include "export_settings.h"
 
 #include "csgtile/worker/job_support.h"
 #include "fetch/input.h"

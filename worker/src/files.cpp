@@ -1,0 +1,180 @@
+#include "csgtile/worker/files.h"
+
+#include <fcntl.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <fstream>
+#include <random>
+#include <system_error>
+
+#include "ops/metrics.h"
+
+namespace csgtile::worker {
+
+// ---- digests ------------------------------------------------------------------------------
+
+struct Sha256::State {
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx{EVP_MD_CTX_new(), EVP_MD_CTX_free};
+};
+
+Sha256::Sha256() : state_(std::make_unique<State>()) { reset(); }
+Sha256::~Sha256() = default;
+
+void Sha256::reset() { EVP_DigestInit_ex(state_->ctx.get(), EVP_sha256(), nullptr); }
+
+void Sha256::update(std::string_view bytes) {
+  EVP_DigestUpdate(state_->ctx.get(), bytes.data(), bytes.size());
+}
+
+namespace {
+std::string hex_of(const unsigned char* digest, std::size_t length) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(2 * length);
+  for (std::size_t i = 0; i < length; ++i) {
+    out.push_back(kHex[digest[i] >> 4]);
+    out.push_back(kHex[digest[i] & 15]);
+  }
+  return out;
+}
+}  // namespace
+
+std::string Sha256::hex() {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+  unsigned int length = 0;
+  EVP_DigestFinal_ex(state_->ctx.get(), digest.data(), &length);
+  return hex_of(digest.data(), length);
+}
+
+std::string hex_encode(std::string_view bytes) {
+  return hex_of(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
+}
+
+std::optional<std::string> hmac_sha256(std::string_view key, std::string_view data) {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> mac{};
+  unsigned int length = 0;
+  if (HMAC(EVP_sha256(), key.data(), static_cast<int>(key.size()),
+           reinterpret_cast<const unsigned char*>(data.data()), data.size(), mac.data(),
+           &length) == nullptr) {
+    return std::nullopt;
+  }
+  return std::string(reinterpret_cast<const char*>(mac.data()), length);
+}
+
+std::string sha256_hex(std::string_view bytes) {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+  unsigned int length = 0;
+  EVP_Digest(bytes.data(), bytes.size(), digest.data(), &length, EVP_sha256(), nullptr);
+  return hex_of(digest.data(), length);
+}
+
+Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
+  Sha256 sha;
+  std::array<char, 1 << 16> buffer{};
+  bytes = 0;
+  while (in) {
+    in.read(buffer.data(), buffer.size());
+    const auto n = static_cast<std::size_t>(in.gcount());
+    sha.update({buffer.data(), n});
+    bytes += n;
+  }
+  if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
+  hex = sha.hex();
+  return {};
+}
+
+// ---- atomic replacement -------------------------------------------------------------------
+
+namespace {
+
+Failure io_error(const std::string& what, const std::filesystem::path& path, int err) {
+  return {ErrorCode::Io, what + " " + path.string() + ": " + std::generic_category().message(err)};
+}
+
+// The rename would replace whatever is at `target`: never a device, a pipe or a directory
+// (`--out /dev/null` must not turn the device node into a file).
+Failure refuse_special(const std::filesystem::path& target) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(target, ec);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) {
+    return {ErrorCode::Io, target.string() + ": not a regular file (it would be replaced)"};
+  }
+  return {};
+}
+
+std::filesystem::path directory_of(const std::filesystem::path& path) {
+  return path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+}
+
+}  // namespace
+
+std::filesystem::path temp_path_beside(const std::filesystem::path& target, std::string_view tag) {
+  std::random_device rd;
+  return directory_of(target) / ("." + target.filename().string() + "." + std::string(tag) + "." +
+                                 std::to_string(::getpid()) + "." + std::to_string(rd()));
+}
+
+Failure commit_temp_file(const std::filesystem::path& temp, const std::filesystem::path& target) {
+  auto fail = [&](Failure f) {
+    ::unlink(temp.c_str());
+    return f;
+  };
+  if (Failure f = refuse_special(target); !f.ok()) return fail(f);
+  const int fd = ::open(temp.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return fail(io_error("cannot open", temp, errno));
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    return fail(io_error("cannot flush", temp, err));
+  }
+  ::close(fd);
+  if (::rename(temp.c_str(), target.c_str()) != 0) {
+    return fail(io_error("cannot rename into", target, errno));
+  }
+  // The rename itself is durable once the directory is.
+  const std::filesystem::path dir = directory_of(target);
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  return {};
+}
+
+Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+  if (Failure f = refuse_special(path); !f.ok()) return f;
+  std::error_code ec;
+  const std::filesystem::path dir = directory_of(path);
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
+  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) return io_error("cannot create", tmp, errno);
+  std::size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return io_error("cannot write", tmp, err);
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    return io_error("cannot close", tmp, err);
+  }
+  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
+  ops::metrics().add_bytes_published(bytes.size());
+  return {};
+}
+
+}  // namespace csgtile::worker
