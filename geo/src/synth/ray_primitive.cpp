@@ -17,6 +17,7 @@
 #include <numbers>
 #include <vector>
 
+#include "csgtile/kernel/polygon2d.h"
 #include "csgtile/kernel/polynomial.h"
 
 #include "synth/ray_internal.h"
@@ -193,7 +194,7 @@ void hit_extrusion(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Nea
       const double s = (z - o.z()) / u.z();
       if (!best.admissible(s)) continue;
       const Vec3 q = o + s * u;
-      if (inside_rings(p.edges, Vec2(q.x(), q.y()))) best.offer(s, Vec3::UnitZ());
+      if (inside_rings(p.rings, Vec2(q.x(), q.y()))) best.offer(s, Vec3::UnitZ());
     }
   }
   // Walls: one vertical plane piece per ring edge.
@@ -244,27 +245,22 @@ void hit_revolution(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Ne
     const Vec3 q = o + s * u;
     const double rho = q.dot(radial);
     if (rho < -slack) continue;
-    if (inside_rings(p.edges, Vec2(std::max(rho, 0.0), q.z()))) best.offer(s, normal);
+    if (inside_rings(p.rings, Vec2(std::max(rho, 0.0), q.z()))) best.offer(s, normal);
   }
 }
 
-void add_ring(const std::vector<Vec2>& ring, std::vector<Segment2>& edges) {
+void add_ring(const std::vector<Vec2>& ring, PreparedPrimitive& p) {
   for (std::size_t i = 0; i < ring.size(); ++i) {
-    edges.push_back({ring[i], ring[(i + 1) % ring.size()]});
+    p.edges.push_back({ring[i], ring[(i + 1) % ring.size()]});
   }
+  p.rings.push_back(ring);
 }
 
 }  // namespace
 
-bool inside_rings(const std::vector<Segment2>& edges, const Vec2& q) {
+bool inside_rings(const std::vector<std::vector<Vec2>>& rings, const Vec2& q) {
   bool inside = false;
-  for (const Segment2& e : edges) {
-    const bool a_above = e.a.y() > q.y();
-    const bool b_above = e.b.y() > q.y();
-    if (a_above == b_above) continue;
-    const double x = e.a.x() + (q.y() - e.a.y()) * (e.b.x() - e.a.x()) / (e.b.y() - e.a.y());
-    if (x > q.x()) inside = !inside;
-  }
+  for (const std::vector<Vec2>& ring : rings) inside = inside != kernel::inside_ring(q, ring);
   return inside;
 }
 
@@ -305,8 +301,8 @@ PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec) {
         b.add(Vec3(q.x(), q.y(), 0.0));
         b.add(Vec3(q.x(), q.y(), spec.height));
       }
-      add_ring(spec.profile, p.edges);
-      for (const auto& hole : spec.holes) add_ring(hole, p.edges);
+      add_ring(spec.profile, p);
+      for (const auto& hole : spec.holes) add_ring(hole, p);
       break;
     case PrimitiveType::Revolution: {
       double rho_max = 0.0;
@@ -316,7 +312,7 @@ PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec) {
       }
       b.add(Vec3(-rho_max, -rho_max, b.min.z()));
       b.add(Vec3(rho_max, rho_max, b.max.z()));
-      add_ring(spec.profile, p.edges);
+      add_ring(spec.profile, p);
       p.partial_turn = spec.angle < kTwoPi * (1.0 - 1e-15);
       break;
     }
@@ -400,11 +396,11 @@ bool primitive_contains(const PreparedPrimitive& p, const Vec3& point) {
     case PrimitiveType::Torus:
       return torus_distance(q, s.radius, s.radius2, nullptr) <= 0.0;
     case PrimitiveType::Extrusion:
-      return q.z() >= 0.0 && q.z() <= s.height && inside_rings(p.edges, Vec2(q.x(), q.y()));
+      return q.z() >= 0.0 && q.z() <= s.height && inside_rings(p.rings, Vec2(q.x(), q.y()));
     case PrimitiveType::Revolution: {
       TurnLimit turn;
       turn.angle = p.partial_turn ? s.angle : kTwoPi;
-      return turn.contains(q) && inside_rings(p.edges, Vec2(std::hypot(q.x(), q.y()), q.z()));
+      return turn.contains(q) && inside_rings(p.rings, Vec2(std::hypot(q.x(), q.y()), q.z()));
     }
   }
   return false;
