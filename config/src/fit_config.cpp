@@ -58,6 +58,7 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "ransac", "by_evidence", fit.ransac.by_evidence);
   take(f, "ransac", "edges_to_smaller", fit.ransac.edges_to_smaller);
   take(f, "ransac", "cluster_scale", fit.ransac.cluster_scale);
+  take(f, "ransac", "merge_same_surface", fit.ransac.merge_same_surface);
   take(f, "primitives", "boxes", fit.primitives.boxes);
   take(f, "primitives", "max_box_depth", fit.primitives.max_box_depth);
   take(f, "primitives", "min_box_thickness", fit.primitives.min_box_thickness);
@@ -110,7 +111,8 @@ json fit_to_json(const FitConfig& fit) {
                    {"relabel", fit.ransac.relabel},
                    {"by_evidence", fit.ransac.by_evidence},
                    {"edges_to_smaller", fit.ransac.edges_to_smaller},
-                   {"cluster_scale", fit.ransac.cluster_scale}};
+                   {"cluster_scale", fit.ransac.cluster_scale},
+                   {"merge_same_surface", fit.ransac.merge_same_surface}};
   out["primitives"] = {{"boxes", fit.primitives.boxes},
                        {"max_box_depth", fit.primitives.max_box_depth},
                        {"min_box_thickness", fit.primitives.min_box_thickness},

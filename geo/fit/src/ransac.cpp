@@ -25,6 +25,7 @@
 
 #include "fit_internal.h"
 #include "plane2d.h"
+#include "shape_merge.h"
 #include "synth/random.h"
 
 namespace csgtile::fit {
@@ -856,6 +857,10 @@ RansacResult Detector::run() {
   }
   if (o_.relabel && !shapes_.empty()) relabel();
   if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
+  if (o_.merge_same_surface &&
+      detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon) > 0) {
+    for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
+  }
   result.candidates = draws_;
   result.assignment = assignment_;
   result.shapes = std::move(shapes_);

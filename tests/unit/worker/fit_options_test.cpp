@@ -27,7 +27,8 @@ fit:
   regions: {enabled: true, neighbours: 12, smoothness_deg: 8, curvature: 0.5, min_points: 20}
   ransac: {epsilon: 0.05, normal_deviation_deg: 20, cluster_epsilon: 0.3, min_points: 25,
            probability: 0.95, max_radius: 12, shapes: [plane, cone], max_candidates: 1000,
-           relabel: true, by_evidence: true, edges_to_smaller: true, cluster_scale: 0.6}
+           relabel: true, by_evidence: true, edges_to_smaller: true, cluster_scale: 0.6,
+           merge_same_surface: true}
   primitives: {boxes: false, max_box_depth: 20, min_box_thickness: 0.1, min_seed_coverage: 0.5,
                angle_tolerance_deg: 3, min_angular_span_deg: 120, min_building_height: 3,
                min_building_width: 2, extrusions: false, revolutions: false,
@@ -71,6 +72,7 @@ fit:
   EXPECT_TRUE(o.ransac.by_evidence);
   EXPECT_TRUE(o.ransac.edges_to_smaller);
   EXPECT_EQ(o.ransac.cluster_scale, 0.6);
+  EXPECT_TRUE(o.ransac.merge_same_surface);
   EXPECT_EQ(o.ransac.seed, 77u);  // run.seed, the one seed rule
   EXPECT_EQ(o.ransac.shapes,
             (std::array<bool, fit::kShapeTypeCount>{true, false, false, true, false}));

@@ -45,6 +45,7 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.ransac.by_evidence = c.ransac.by_evidence;
   o.ransac.edges_to_smaller = c.ransac.edges_to_smaller;
   o.ransac.cluster_scale = c.ransac.cluster_scale;
+  o.ransac.merge_same_surface = c.ransac.merge_same_surface;
   o.ransac.seed = config.run.seed;
   for (int t = 0; t < fit::kShapeTypeCount; ++t) {
     const std::string name = fit::shape_type_name(static_cast<fit::ShapeType>(t));

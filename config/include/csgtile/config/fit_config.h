@@ -82,6 +82,7 @@ struct FitRansacConfig {
   bool by_evidence = false;       ///< shape types chosen by an information criterion
   bool edges_to_smaller = false;  ///< a point on two shapes to the smaller (exact clouds)
   double cluster_scale = 1.0;     ///< times the derived connectivity (cluster_epsilon 0)
+  bool merge_same_surface = false;  ///< shapes on one surface with a narrow gap become one
   bool operator==(const FitRansacConfig&) const = default;
 };
 
