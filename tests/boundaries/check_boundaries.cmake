@@ -50,48 +50,40 @@ foreach(rule IN LISTS rules)
   endif()
 endforeach()
 
+# Files matching the globs must not have an include matching `pattern` (a regex on the
+# include line); each one that does is a violation named `why`.
+function(refuse_includes pattern why)
+  file(GLOB_RECURSE files ${ARGN})
+  foreach(f IN LISTS files)
+    file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
+    foreach(line IN LISTS lines)
+      if(line MATCHES "${pattern}")
+        file(RELATIVE_PATH rel "${ROOT}" "${f}")
+        set(violations ${violations} "${rel}: ${why}")
+      endif()
+    endforeach()
+  endforeach()
+  set(violations ${violations} PARENT_SCOPE)
+endfunction()
+
 # Inside the worker, includes run one way too (issue #23): the jobs and what they use (jobs,
 # city, export, ops, fetch, publish, queue rooms, the job records) never include the queue
 # loop's header (csgtile/worker/run.h); what every job shares is in csgtile/worker/job_support.h.
-file(GLOB_RECURSE worker_rooms
-     "${ROOT}/worker/src/jobs/*" "${ROOT}/worker/src/city/*" "${ROOT}/worker/src/export/*"
-     "${ROOT}/worker/src/ops/*" "${ROOT}/worker/src/fetch/*" "${ROOT}/worker/src/publish/*"
-     "${ROOT}/worker/src/queue/*"
-     "${ROOT}/worker/src/job_records.*")
-foreach(f IN LISTS worker_rooms)
-  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
-  foreach(line IN LISTS lines)
-    if(line MATCHES "#[ \t]*include[ \t]*[<\"](csgtile/worker/run\\.h|run\\.h)[>\"]")
-      file(RELATIVE_PATH rel "${ROOT}" "${f}")
-      list(APPEND violations "${rel}: includes the queue loop's run.h (an include running back up)")
-    endif()
-  endforeach()
-endforeach()
-
+refuse_includes("#[ \t]*include[ \t]*[<\"](csgtile/worker/run\\.h|run\\.h)[>\"]"
+                "includes the queue loop's run.h (an include running back up)"
+                "${ROOT}/worker/src/jobs/*" "${ROOT}/worker/src/city/*"
+                "${ROOT}/worker/src/export/*" "${ROOT}/worker/src/ops/*"
+                "${ROOT}/worker/src/fetch/*" "${ROOT}/worker/src/publish/*"
+                "${ROOT}/worker/src/queue/*" "${ROOT}/worker/src/job_records.*")
 # The job table (jobs/) runs the city jobs (city/): city/ never includes jobs/ (what both need,
 # the job context and the export settings, sits below them in worker/src). Fetching is below
 # publishing: fetch/ never includes the publisher (publish/, csgtile/worker/publish.h); what
 # both need about files (digests, atomic replacement) is csgtile/worker/files.h.
-file(GLOB_RECURSE city_room "${ROOT}/worker/src/city/*")
-foreach(f IN LISTS city_room)
-  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
-  foreach(line IN LISTS lines)
-    if(line MATCHES "#[ \t]*include[ \t]*\"jobs/")
-      file(RELATIVE_PATH rel "${ROOT}" "${f}")
-      list(APPEND violations "${rel}: includes the job table's room jobs/ (an include running back up)")
-    endif()
-  endforeach()
-endforeach()
-file(GLOB_RECURSE fetch_room "${ROOT}/worker/src/fetch/*")
-foreach(f IN LISTS fetch_room)
-  file(STRINGS "${f}" lines REGEX "^[ \t]*#[ \t]*include")
-  foreach(line IN LISTS lines)
-    if(line MATCHES "#[ \t]*include[ \t]*[<\"](publish/|csgtile/worker/publish\\.h)")
-      file(RELATIVE_PATH rel "${ROOT}" "${f}")
-      list(APPEND violations "${rel}: includes the publisher (fetch is below publishing)")
-    endif()
-  endforeach()
-endforeach()
+refuse_includes("#[ \t]*include[ \t]*\"jobs/"
+                "includes the job table's room jobs/ (an include running back up)"
+                "${ROOT}/worker/src/city/*")
+refuse_includes("#[ \t]*include[ \t]*[<\"](publish/|csgtile/worker/publish\\.h)"
+                "includes the publisher (fetch is below publishing)" "${ROOT}/worker/src/fetch/*")
 
 # Public headers show only the standard library, Eigen and our own headers: third-party
 # types stay out of other modules' interfaces.
