@@ -66,10 +66,9 @@ std::optional<std::string> hmac_sha256(std::string_view key, std::string_view da
 }
 
 std::string sha256_hex(std::string_view bytes) {
-  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
-  unsigned int length = 0;
-  EVP_Digest(bytes.data(), bytes.size(), digest.data(), &length, EVP_sha256(), nullptr);
-  return hex_of(digest.data(), length);
+  Sha256 sha;
+  sha.update(bytes);
+  return sha.hex();
 }
 
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {

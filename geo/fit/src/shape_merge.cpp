@@ -25,10 +25,10 @@ std::vector<std::uint32_t> by_x(std::span<const Vec3> points, std::span<const st
   return order;
 }
 
-// The 90 % quantile of the distances from each member to its nearest other member (a sweep
-// along x, stopping once the x-gap alone passes the best distance); 0 for fewer than 2.
-double nearest_quantile(std::span<const Vec3> points, std::span<const std::uint32_t> set) {
-  const std::vector<std::uint32_t> order = by_x(points, set);
+// The 90 % quantile of the distances from each member of `order` (sorted by by_x) to its nearest
+// other member (a sweep along x, stopping once the x-gap alone passes the best distance); 0 for
+// fewer than 2.
+double nearest_quantile(std::span<const Vec3> points, const std::vector<std::uint32_t>& order) {
   const std::size_t n = order.size();
   if (n < 2) return 0.0;
   std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
@@ -89,8 +89,8 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
   std::vector<double> quantile(m);
   std::vector<std::vector<std::uint32_t>> sorted(m);
   for (std::size_t s = 0; s < m; ++s) {
-    quantile[s] = nearest_quantile(points, shapes[s].inliers);
     sorted[s] = by_x(points, shapes[s].inliers);
+    quantile[s] = nearest_quantile(points, sorted[s]);
   }
   std::vector<std::size_t> parent(m);
   std::iota(parent.begin(), parent.end(), 0);

@@ -11,11 +11,6 @@
 
 namespace csgtile::geo::detail {
 
-/// A straight piece of a polygon ring.
-struct Segment2 {
-  kernel::Vec2 a, b;
-};
-
 struct PreparedPrimitive {
   kernel::PrimitiveSpec spec;
   Eigen::Matrix3d rotation_transposed;  ///< R^T: world directions to local
@@ -25,9 +20,7 @@ struct PreparedPrimitive {
   kernel::BoundingBox world_bounds;
   kernel::Vec3 local_center = kernel::Vec3::Zero();  ///< rays restart near it (see hit)
   double slack = 0.0;  ///< how far outside a face's limits a crossing still counts (local units)
-  std::vector<Segment2> edges;  ///< extrusion: every ring edge; revolution: profile segments
-  std::vector<std::vector<kernel::Vec2>> rings;  ///< the rings the edges come from
-  bool partial_turn = false;                     ///< revolution with angle < 2π (has end faces)
+  bool partial_turn = false;  ///< revolution with angle < 2π (has end faces)
 };
 
 PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec);
@@ -40,8 +33,8 @@ std::optional<RayHit> hit_primitive(const PreparedPrimitive& p, const kernel::Ve
 /// Whether `point` (world) lies in the solid, its clips honoured.
 bool primitive_contains(const PreparedPrimitive& p, const kernel::Vec3& point);
 
-/// Even-odd point-in-polygon over all rings (outer and holes): inside an odd number of them
-/// (kernel::inside_ring, polygon2d.h).
-bool inside_rings(const std::vector<std::vector<kernel::Vec2>>& rings, const kernel::Vec2& q);
+/// Even-odd point-in-polygon over the rings of an extrusion's section (profile and holes) or a
+/// revolution's profile: inside an odd number of them (kernel::inside_ring, polygon2d.h).
+bool inside_rings(const PreparedPrimitive& p, const kernel::Vec2& q);
 
 }  // namespace csgtile::geo::detail

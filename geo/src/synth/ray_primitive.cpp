@@ -185,6 +185,23 @@ void hit_torus(const Vec3& o, const Vec3& u, double major, double minor, Nearest
   }
 }
 
+// Calls `f(ring)` for each ring of the section: an extrusion's profile and holes, a
+// revolution's profile.
+template <typename F>
+void for_each_ring(const PreparedPrimitive& p, F&& f) {
+  f(p.spec.profile);
+  if (p.spec.type != PrimitiveType::Extrusion) return;
+  for (const std::vector<Vec2>& hole : p.spec.holes) f(hole);
+}
+
+// Calls `f(a, b)` for each edge a→b of the section's rings, ring by ring.
+template <typename F>
+void for_each_edge(const PreparedPrimitive& p, F&& f) {
+  for_each_ring(p, [&](const std::vector<Vec2>& ring) {
+    for (std::size_t i = 0; i < ring.size(); ++i) f(ring[i], ring[(i + 1) % ring.size()]);
+  });
+}
+
 void hit_extrusion(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Nearest& best) {
   const double h = p.spec.height;
   const double slack = p.slack;
@@ -194,26 +211,26 @@ void hit_extrusion(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Nea
       const double s = (z - o.z()) / u.z();
       if (!best.admissible(s)) continue;
       const Vec3 q = o + s * u;
-      if (inside_rings(p.rings, Vec2(q.x(), q.y()))) best.offer(s, Vec3::UnitZ());
+      if (inside_rings(p, Vec2(q.x(), q.y()))) best.offer(s, Vec3::UnitZ());
     }
   }
   // Walls: one vertical plane piece per ring edge.
   const Vec2 o2(o.x(), o.y());
   const Vec2 u2(u.x(), u.y());
-  for (const Segment2& edge : p.edges) {
-    const Vec2 e = edge.b - edge.a;
+  for_each_edge(p, [&](const Vec2& a, const Vec2& b) {
+    const Vec2 e = b - a;
     const double den = u2.x() * e.y() - u2.y() * e.x();
-    if (den == 0.0) continue;
-    const Vec2 ao = edge.a - o2;
+    if (den == 0.0) return;
+    const Vec2 ao = a - o2;
     const double s = (ao.x() * e.y() - ao.y() * e.x()) / den;
-    if (!best.admissible(s)) continue;
+    if (!best.admissible(s)) return;
     const double along = (ao.x() * u2.y() - ao.y() * u2.x()) / den;
     const double length = e.norm();
-    if (along * length < -slack || along * length > length + slack) continue;
+    if (along * length < -slack || along * length > length + slack) return;
     const double z = o.z() + s * u.z();
-    if (z < -slack || z > h + slack) continue;
+    if (z < -slack || z > h + slack) return;
     best.offer(s, Vec3(e.y(), -e.x(), 0.0));
-  }
+  });
 }
 
 void hit_revolution(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Nearest& best) {
@@ -221,10 +238,10 @@ void hit_revolution(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Ne
   TurnLimit turn;
   turn.angle = p.partial_turn ? p.spec.angle : kTwoPi;
   turn.slack = slack;
-  for (const Segment2& seg : p.edges) {
-    const double rho0 = seg.a.x(), z0 = seg.a.y();
-    const double rho1 = seg.b.x(), z1 = seg.b.y();
-    if (rho0 == 0.0 && rho1 == 0.0) continue;  // on the axis: bounds nothing
+  for_each_edge(p, [&](const Vec2& a, const Vec2& b) {
+    const double rho0 = a.x(), z0 = a.y();
+    const double rho1 = b.x(), z1 = b.y();
+    if (rho0 == 0.0 && rho1 == 0.0) return;  // on the axis: bounds nothing
     if (z0 == z1) {
       offer_annulus(o, u, z0, std::min(rho0, rho1), std::max(rho0, rho1), slack, turn, best);
     } else {
@@ -232,7 +249,7 @@ void hit_revolution(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Ne
       offer_quadric_side(o, u, rho0 - k * z0, k, std::min(z0, z1), std::max(z0, z1), slack, turn,
                          best);
     }
-  }
+  });
   if (!p.partial_turn) return;
   // End faces: the profile itself in the half-planes φ = 0 and φ = angle.
   for (double phi : {0.0, p.spec.angle}) {
@@ -245,22 +262,16 @@ void hit_revolution(const PreparedPrimitive& p, const Vec3& o, const Vec3& u, Ne
     const Vec3 q = o + s * u;
     const double rho = q.dot(radial);
     if (rho < -slack) continue;
-    if (inside_rings(p.rings, Vec2(std::max(rho, 0.0), q.z()))) best.offer(s, normal);
+    if (inside_rings(p, Vec2(std::max(rho, 0.0), q.z()))) best.offer(s, normal);
   }
-}
-
-void add_ring(const std::vector<Vec2>& ring, PreparedPrimitive& p) {
-  for (std::size_t i = 0; i < ring.size(); ++i) {
-    p.edges.push_back({ring[i], ring[(i + 1) % ring.size()]});
-  }
-  p.rings.push_back(ring);
 }
 
 }  // namespace
 
-bool inside_rings(const std::vector<std::vector<Vec2>>& rings, const Vec2& q) {
+bool inside_rings(const PreparedPrimitive& p, const Vec2& q) {
   bool inside = false;
-  for (const std::vector<Vec2>& ring : rings) inside = inside != kernel::inside_ring(q, ring);
+  for_each_ring(
+      p, [&](const std::vector<Vec2>& ring) { inside = inside != kernel::inside_ring(q, ring); });
   return inside;
 }
 
@@ -301,8 +312,6 @@ PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec) {
         b.add(Vec3(q.x(), q.y(), 0.0));
         b.add(Vec3(q.x(), q.y(), spec.height));
       }
-      add_ring(spec.profile, p);
-      for (const auto& hole : spec.holes) add_ring(hole, p);
       break;
     case PrimitiveType::Revolution: {
       double rho_max = 0.0;
@@ -312,7 +321,6 @@ PreparedPrimitive prepare_primitive(const kernel::PrimitiveSpec& spec) {
       }
       b.add(Vec3(-rho_max, -rho_max, b.min.z()));
       b.add(Vec3(rho_max, rho_max, b.max.z()));
-      add_ring(spec.profile, p);
       p.partial_turn = spec.angle < kTwoPi * (1.0 - 1e-15);
       break;
     }
@@ -396,11 +404,11 @@ bool primitive_contains(const PreparedPrimitive& p, const Vec3& point) {
     case PrimitiveType::Torus:
       return torus_distance(q, s.radius, s.radius2, nullptr) <= 0.0;
     case PrimitiveType::Extrusion:
-      return q.z() >= 0.0 && q.z() <= s.height && inside_rings(p.rings, Vec2(q.x(), q.y()));
+      return q.z() >= 0.0 && q.z() <= s.height && inside_rings(p, Vec2(q.x(), q.y()));
     case PrimitiveType::Revolution: {
       TurnLimit turn;
       turn.angle = p.partial_turn ? s.angle : kTwoPi;
-      return turn.contains(q) && inside_rings(p.rings, Vec2(std::hypot(q.x(), q.y()), q.z()));
+      return turn.contains(q) && inside_rings(p, Vec2(std::hypot(q.x(), q.y()), q.z()));
     }
   }
   return false;

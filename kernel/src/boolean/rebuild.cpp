@@ -404,12 +404,15 @@ Result<FaceShapes> make_face_shapes(const BModel& model, const std::vector<RFace
     if (!f.alive || f.loops.empty()) continue;
     std::vector<Shape> wires;
     std::vector<std::vector<Curve2dPtr>> pcurves;
-    // Outer loop first.
-    std::vector<BLoop> loops = f.loops;
-    std::stable_sort(loops.begin(), loops.end(), [&](const BLoop& x, const BLoop& y) {
-      return loop_area(model, x) > loop_area(model, y);
-    });
-    for (const BLoop& loop : loops) {
+    // Outer loop first: by area, each loop's taken once (it samples the loop's pcurves).
+    std::vector<double> area(f.loops.size());
+    for (std::size_t k = 0; k < f.loops.size(); ++k) area[k] = loop_area(model, f.loops[k]);
+    std::vector<std::size_t> order(f.loops.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t x, std::size_t y) { return area[x] > area[y]; });
+    for (const std::size_t k : order) {
+      const BLoop& loop = f.loops[k];
       std::vector<Shape> edges;
       std::vector<Curve2dPtr> curves;
       for (const BUse& u : loop) {

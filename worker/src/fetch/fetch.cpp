@@ -145,7 +145,7 @@ bool address_refused(const curl_sockaddr* address) {
 
 struct Sink {
   std::FILE* file = nullptr;
-  Sha256* sha = nullptr;
+  Sha256 sha;
   std::uint64_t bytes = 0;
   std::uint64_t cap = 0;
   bool over_cap = false;
@@ -155,7 +155,7 @@ struct Sink {
   void reset() {
     std::rewind(file);
     if (ftruncate(fileno(file), 0) != 0) write_failed = true;
-    sha->reset();
+    sha.reset();
     bytes = 0;
     over_cap = false;
   }
@@ -172,7 +172,7 @@ std::size_t on_write(char* data, std::size_t size, std::size_t count, void* user
     sink->write_failed = true;
     return 0;
   }
-  sink->sha->update({data, n});
+  sink->sha.update({data, n});
   sink->bytes += n;
   return n;
 }
@@ -595,8 +595,6 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
   Sink sink;
   sink.file = std::fopen(tmp.c_str(), "w+b");
   if (sink.file == nullptr) return {ErrorCode::Io, "cannot create " + tmp.string()};
-  Sha256 sha;
-  sink.sha = &sha;
   sink.cap = policy.max_bytes;
   auto discard = [&] {
     if (sink.file != nullptr) std::fclose(sink.file);
@@ -650,7 +648,7 @@ Failure fetch(const Request& request, const Policy& policy, const std::filesyste
     return failure;
   }
 
-  const std::string hex = sha.hex();
+  const std::string hex = sink.sha.hex();
   if (request.size && *request.size != sink.bytes) {
     discard();
     return {ErrorCode::FetchRefused, where + ": got " + std::to_string(sink.bytes) +
