@@ -1,5 +1,6 @@
 #include "boolean/model.h"
 
+#include <array>
 #include <cmath>
 
 #include "boolean/pcurve_fit.h"
@@ -11,14 +12,24 @@ namespace csgtile::kernel::detail {
 
 int BModel::vertex_at(const Vec3& p) {
   const double cell = std::max(tolerance_ * 4.0, 1e-12);
-  const long long cx = std::llround(std::floor(p.x() / cell));
-  const long long cy = std::llround(std::floor(p.y() / cell));
-  const long long cz = std::llround(std::floor(p.z() / cell));
+  const Vec3 q = p / cell;
+  const long long cx = std::llround(std::floor(q.x()));
+  const long long cy = std::llround(std::floor(q.y()));
+  const long long cz = std::llround(std::floor(q.z()));
+  // A vertex within the tolerance (a quarter cell) lies in a neighbouring cell only on the
+  // side where p is that close to the cell's wall. The margin covers the rounding of the
+  // cell coordinates: a few units in the last place of t (cells of 4e-6 m at 1e5 m: 2.5e10).
+  auto span = [&](double t, long long c) {
+    const double f = t - static_cast<double>(c);
+    const double near = 0.25 + 1e-3 + 1e-14 * std::abs(t);
+    return std::array<long long, 2>{f <= near ? -1 : 0, f >= 1.0 - near ? 1 : 0};
+  };
+  const auto sx = span(q.x(), cx), sy = span(q.y(), cy), sz = span(q.z(), cz);
   int best = -1;
   double best_d = tolerance_;
-  for (long long dx = -1; dx <= 1; ++dx) {
-    for (long long dy = -1; dy <= 1; ++dy) {
-      for (long long dz = -1; dz <= 1; ++dz) {
+  for (long long dx = sx[0]; dx <= sx[1]; ++dx) {
+    for (long long dy = sy[0]; dy <= sy[1]; ++dy) {
+      for (long long dz = sz[0]; dz <= sz[1]; ++dz) {
         auto it = grid_.find(cell_key(cx + dx, cy + dy, cz + dz));
         if (it == grid_.end()) continue;
         for (int v : it->second) {

@@ -17,6 +17,13 @@ class PolyhedronBuilder {
  public:
   explicit PolyhedronBuilder(double tolerance) : tolerance_(tolerance) {}
 
+  // Room for the vertices and faces to come (one allocation each instead of regrowth).
+  void reserve(std::size_t vertices, std::size_t faces) {
+    points_.reserve(vertices);
+    vertices_.reserve(vertices);
+    faces_.reserve(faces);
+  }
+
   Result<std::size_t> add_vertex(const Vec3& p) {
     auto v = ShapeFactory::vertex(p, tolerance_);
     if (!v.ok()) return v.error();
@@ -42,9 +49,13 @@ class PolyhedronBuilder {
 
     std::vector<Shape> wires;
     std::vector<std::vector<Curve2dPtr>> pcurves;
+    wires.reserve(rings.size());
+    pcurves.reserve(rings.size());
     for (const auto& ring : rings) {
       std::vector<Shape> edges;
       std::vector<Curve2dPtr> curves;
+      edges.reserve(ring.size());
+      curves.reserve(ring.size());
       for (std::size_t i = 0; i < ring.size(); ++i) {
         const std::size_t a = ring[i], b = ring[(i + 1) % ring.size()];
         auto edge = edge_between(a, b);
@@ -156,9 +167,16 @@ Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
   }
 
   PolyhedronBuilder builder(tolerance);
+  std::size_t corners = 0;
+  for (const auto& ring : rings) corners += ring.size();
+  builder.reserve(2 * corners, 2 + corners);
   std::vector<std::vector<std::size_t>> bottom, top;
+  bottom.reserve(rings.size());
+  top.reserve(rings.size());
   for (const auto& ring : rings) {
     std::vector<std::size_t> b, t;
+    b.reserve(ring.size());
+    t.reserve(ring.size());
     for (const Vec2& p : ring) {
       auto vb = builder.add_vertex(Vec3(p.x(), p.y(), 0.0));
       auto vt = builder.add_vertex(Vec3(p.x(), p.y(), h));
@@ -167,8 +185,8 @@ Result<Shape> make_extrusion(const std::vector<Vec2>& outer,
       b.push_back(vb.value());
       t.push_back(vt.value());
     }
-    bottom.push_back(b);
-    top.push_back(t);
+    bottom.push_back(std::move(b));
+    top.push_back(std::move(t));
   }
   if (auto s = builder.add_face(bottom, -Vec3::UnitZ()); !s.ok()) return s.error();
   if (auto s = builder.add_face(top, Vec3::UnitZ()); !s.ok()) return s.error();

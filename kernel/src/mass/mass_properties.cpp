@@ -528,8 +528,8 @@ void add_face_patch(BoundingBox& box, const Shape& f) {
 }
 
 // Every vertex and edge under `shape` (wires, edges, vertices, in any orientation), walked
-// without the index of distinct sub-shapes.
-void add_descendants(BoundingBox& box, const Shape& shape) {
+// without the index of distinct sub-shapes; with `patches`, every face's patch too.
+void add_descendants(BoundingBox& box, const Shape& shape, bool patches) {
   for (std::size_t i = 0; i < shape.child_count(); ++i) {
     const Shape child = shape.child(i);
     if (child.kind() == ShapeKind::Vertex) {
@@ -537,7 +537,8 @@ void add_descendants(BoundingBox& box, const Shape& shape) {
       continue;
     }
     if (child.kind() == ShapeKind::Edge) add_edge_bounds(box, child);
-    add_descendants(box, child);
+    if (patches && child.kind() == ShapeKind::Face) add_face_patch(box, child);
+    add_descendants(box, child, patches);
   }
 }
 
@@ -549,19 +550,18 @@ BoundingBox bounding_box(const Shape& shape) {
   if (shape.kind() == ShapeKind::Face) {
     // One face (the Booleans take every face's box): walked directly, without the index of
     // distinct edges (a box is a union: an edge seen twice, a seam, adds nothing).
-    add_descendants(box, shape);
+    add_descendants(box, shape, false);
     add_face_patch(box, shape);
     return box;
   }
-  // Walked directly too: an edge met again through its other face adds nothing to a union,
-  // and walking it twice costs less than the index of distinct edges.
+  // Walked directly too: an edge or a face met again (its other face, a shared face) adds
+  // nothing to a union, and walking it twice costs less than the index of distinct ones.
   if (shape.kind() == ShapeKind::Vertex) {
     box.add(vertex_point(shape));
     return box;
   }
   if (shape.kind() == ShapeKind::Edge) add_edge_bounds(box, shape);
-  add_descendants(box, shape);
-  for (const Shape& f : Explorer(shape, ShapeKind::Face)) add_face_patch(box, f);
+  add_descendants(box, shape, true);
   return box;
 }
 
