@@ -243,9 +243,14 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     kept_objects.push_back(*object);
   }
 
+  // The LoD1.2 / LoD1.3 block models are modelling (Booleans of the buildings' footprint
+  // extrusions) and the model's distance to its points is measuring: each its own stage, so
+  // that `publish` times writing the cell's outputs.
+  clock.enter("blocks");
   add_building_lods(objects.objects, config.kernel.chordal_tolerance,
                     config.kernel.linear_tolerance);
   // How far each object's points lie from its model (3DBAG's RMSE of a LoD2.2).
+  clock.enter("measure");
   long long points_over_none = 0;
   {
     std::vector<const kernel::Shape*> shapes;
@@ -262,6 +267,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     }
   }
   // The blocks go in the records: the index job reads them rather than computing them again.
+  clock.enter("publish");
   for (std::size_t i = 0; i < objects.objects.size(); ++i) {
     ordered_json blocks;
     if (Failure f = publish_blocks(run_dir, objects.objects[i], blocks); !f.ok()) return f;
