@@ -23,6 +23,7 @@
 
 #include <Eigen/Dense>
 
+#include "facets.h"
 #include "fit_internal.h"
 #include "plane2d.h"
 #include "shape_merge.h"
@@ -174,6 +175,7 @@ class Detector {
   geo::detail::Random random_;
   double cos_alpha_ = 0.0;
   double noise_ = 0.0;      // estimated noise (derived epsilon), else 0
+  double spacing_ = 0.0;    // the region's point spacing (RansacResult::spacing)
   bool exact_ = false;      // epsilon derived and the noise under a twentieth of it
   bool cancelled_ = false;  // the interrupt fired: run() returned early
   std::vector<char> has_normal_;
@@ -598,6 +600,19 @@ bool Detector::extract(const Candidate& c) {
       }
     }
   }
+  if (o_.by_evidence && exact_ && surface.type != ShapeType::Plane) {
+    // A curved candidate holding an exact planar facet its own surface does not fit (a face
+    // of a polygonal prism in the band of the cylinder around it) is facets: the largest is
+    // taken as a plane instead, grown from its points; the others come in later rounds.
+    const double floor = noise_floor();
+    const auto facet =
+        detail::largest_exact_facet(points_, normals_, has_normal_, inliers, floor, cos_alpha_,
+                                    static_cast<std::size_t>(o_.min_points), 0.5 * spacing_);
+    if (facet && rms_of(surface, facet->points) > 2.0 * floor) {
+      surface = facet->plane;
+      inliers = exact_inliers(surface, facet->points);
+    }
+  }
   if (static_cast<long long>(inliers.size()) < o_.min_points) return false;
   if ((surface.type == ShapeType::Cylinder || surface.type == ShapeType::Sphere) &&
       surface.radius >= o_.max_radius) {
@@ -766,6 +781,7 @@ void Detector::derive_scale(std::span<const std::uint32_t> members,
   }
   if (!(o_.max_radius > 0.0)) o_.max_radius = 10.0 * std::max((hi - lo).maxCoeff(), o_.epsilon);
   noise_ = result.noise;
+  spacing_ = result.spacing;
   exact_ = derived && noise_ <= kFloorShare * o_.epsilon;
   result.epsilon = o_.epsilon;
   result.min_points = o_.min_points;

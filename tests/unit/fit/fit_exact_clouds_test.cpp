@@ -2,7 +2,8 @@
 // is a cylinder when the cloud's own noise is nil; a cylinder taken for a wide torus is the
 // cylinder along the torus's tube; a flat cone taken for a wide sphere is a cone (by its
 // normals); a hole's wall seen as one ring of points is a cylinder; a flat face stays a plane;
-// the connectivity scale keeps coplanar faces with a narrow gap apart.
+// the connectivity scale keeps coplanar faces with a narrow gap apart; the faces of a
+// polygonal prism are planes, not the cylinder around them.
 
 #include <gtest/gtest.h>
 
@@ -201,6 +202,48 @@ TEST(FitExactClouds, ClusterScaleKeepsCoplanarFacesAcrossAGapApart) {
   for (const auto& s : apart->shapes) EXPECT_EQ(s.surface.type, ShapeType::Plane);
   o.cluster_scale = 0.0;
   EXPECT_FALSE(detect_shapes(c.points, normals, o).ok());
+}
+
+// The side of a prism over a regular 48-gon (circumradius 10, 3 high) in exact points 0.25
+// apart: each face (1.31 wide) bulges 0.021 from the circle through the corners, within the
+// epsilon derived from the spacing (0.025), and its normals turn at most 3.75° from the radial
+// ones, so a cylinder takes every face at once. Each face is a plane its points fit exactly and
+// the cylinder does not: the faces are planes.
+TEST(FitExactClouds, FacesOfAPolygonalPrismArePlanesNotACylinder) {
+  constexpr int kSides = 48;
+  const double r = 10.0, h = 3.0;
+  const double step = 2.0 * std::numbers::pi / kSides;
+  Cloud c;
+  for (int k = 0; k < kSides; ++k) {
+    const Vec3 p(r * std::cos(k * step), r * std::sin(k * step), 0.0);
+    const Vec3 q(r * std::cos((k + 1) * step), r * std::sin((k + 1) * step), 0.0);
+    c.append(testing::rectangle_cloud(p, q - p, Vec3(0, 0, h), 0.25, 0.0, 40 + k));
+  }
+  const auto result = detect_shapes(c.points, c.normals, derived_with_evidence(7));
+  ASSERT_TRUE(result.ok()) << result.error().message;
+  ASSERT_GT(result->epsilon, 0.0215);  // the faces lie within a cylinder's band
+  // Every shape is a plane, and each plane is a face's: the face under its points' centre, its
+  // normal within a hundredth of the faces' angular step of that face's (the plane is refitted
+  // to its inliers, which take the neighbours' points within epsilon of it along its edges),
+  // each face's at most once.
+  std::vector<int> taken(kSides, 0);
+  for (const auto& s : result->shapes) {
+    ASSERT_EQ(s.surface.type, ShapeType::Plane)
+        << shape_type_name(s.surface.type) << " of " << s.inliers.size() << " points";
+    Vec3 centre = Vec3::Zero();
+    for (auto i : s.inliers) centre += c.points[i];
+    const double at = std::atan2(centre.y(), centre.x());
+    const int face = (static_cast<int>(std::floor(at / step)) + kSides) % kSides;
+    const Vec3 normal(std::cos((face + 0.5) * step), std::sin((face + 0.5) * step), 0.0);
+    EXPECT_GT(std::abs(s.surface.axis.dot(normal)), std::cos(0.01 * step)) << "face " << face;
+    ++taken[static_cast<std::size_t>(face)];
+  }
+  int faces = 0;
+  for (const int t : taken) {
+    EXPECT_LE(t, 1);
+    faces += t > 0 ? 1 : 0;
+  }
+  EXPECT_GE(faces, kSides - 2);
 }
 
 }  // namespace
