@@ -2,7 +2,6 @@
 
 #include "facets.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -24,27 +23,6 @@ std::vector<std::uint32_t> on_plane(std::span<const Vec3> points, std::span<cons
     if (std::abs((points[i] - plane.point).dot(plane.axis)) <= floor) out.push_back(i);
   }
   return out;
-}
-
-// The smaller standard deviation of the points across the plane (their second principal
-// spread within it): 0 for a row of points.
-double spread_across(std::span<const Vec3> points, std::span<const std::uint32_t> subset,
-                     const Surface& plane) {
-  if (subset.size() < 3) return 0.0;
-  Vec3 centre = Vec3::Zero();
-  for (const auto i : subset) centre += points[i];
-  centre /= static_cast<double>(subset.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const auto i : subset) {
-    Vec3 d = points[i] - centre;
-    d -= d.dot(plane.axis) * plane.axis;
-    scatter += d * d.transpose();
-  }
-  scatter /= static_cast<double>(subset.size());
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-  if (eig.info() != Eigen::Success) return 0.0;
-  // Eigenvalues ascending: ~0 along the normal, then the smaller and larger spreads in-plane.
-  return std::sqrt(std::max(eig.eigenvalues()(1), 0.0));
 }
 
 }  // namespace
@@ -75,7 +53,13 @@ std::optional<Facet> largest_exact_facet(std::span<const Vec3> points,
     if (!refit) continue;
     auto again = on_plane(points, normals, has_normal, inliers, *refit, floor, cos_alpha);
     if (again.size() < min_points || (best && again.size() <= best->points.size())) continue;
-    if (spread_across(points, again, *refit) < min_spread) continue;
+    // A patch, not a row: the smaller of the points' two spreads within the plane (standard
+    // deviation; the smallest is across it).
+    const auto principal = principal_axes(points, again);
+    if (!principal || std::sqrt(std::max(principal->values(1), 0.0) /
+                                static_cast<double>(again.size())) < min_spread) {
+      continue;
+    }
     best = Facet{*refit, std::move(again)};
   }
   return best;

@@ -13,6 +13,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "csgtile/fit/fit.h"
 #include "csgtile/fit/segment.h"
 
@@ -121,6 +123,17 @@ std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<con
 
 /// Parameters of a surface of the type: plane 3, sphere 4, cylinder 5, cone 6, torus 7.
 int parameter_count(ShapeType type);
+
+/// Centroid and principal axes of the points of `subset`: the eigenvalues of their scatter
+/// (the sum of the outer products of their offsets from the centroid) ascending, and the unit
+/// eigenvectors as the columns of `axes`. nullopt for fewer than 3 points or a failed solve.
+struct PrincipalAxes {
+  Vec3 centroid = Vec3::Zero();
+  Vec3 values = Vec3::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+};
+std::optional<PrincipalAxes> principal_axes(std::span<const Vec3> points,
+                                            std::span<const std::uint32_t> subset);
 
 /// Least-squares plane through the points (centroid and smallest principal direction).
 std::optional<Surface> fit_plane(std::span<const Vec3> points,

@@ -291,25 +291,34 @@ std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<con
   return s;
 }
 
-std::optional<Surface> fit_plane(std::span<const Vec3> points,
-                                 std::span<const std::uint32_t> subset) {
+std::optional<PrincipalAxes> principal_axes(std::span<const Vec3> points,
+                                            std::span<const std::uint32_t> subset) {
   if (subset.size() < 3) return std::nullopt;
-  Vec3 centroid = Vec3::Zero();
-  for (auto i : subset) centroid += points[i];
-  centroid /= static_cast<double>(subset.size());
+  PrincipalAxes out;
+  for (auto i : subset) out.centroid += points[i];
+  out.centroid /= static_cast<double>(subset.size());
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (auto i : subset) {
-    const Vec3 d = points[i] - centroid;
+    const Vec3 d = points[i] - out.centroid;
     cov += d * d.transpose();
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
   if (eig.info() != Eigen::Success) return std::nullopt;
+  out.values = eig.eigenvalues();
+  out.axes = eig.eigenvectors();
+  return out;
+}
+
+std::optional<Surface> fit_plane(std::span<const Vec3> points,
+                                 std::span<const std::uint32_t> subset) {
+  const auto principal = principal_axes(points, subset);
+  if (!principal) return std::nullopt;
   // A plane needs two spread directions.
-  if (!(eig.eigenvalues()(1) > 1e-12 * std::max(1.0, eig.eigenvalues()(2)))) return std::nullopt;
+  if (!(principal->values(1) > 1e-12 * std::max(1.0, principal->values(2)))) return std::nullopt;
   Surface s;
   s.type = ShapeType::Plane;
-  s.point = centroid;
-  s.axis = canonical_axis(eig.eigenvectors().col(0).normalized());
+  s.point = principal->centroid;
+  s.axis = canonical_axis(principal->axes.col(0).normalized());
   if (!finite(s)) return std::nullopt;
   return s;
 }

@@ -19,12 +19,12 @@ int BModel::vertex_at(const Vec3& p) {
   // A vertex within the tolerance (a quarter cell) lies in a neighbouring cell only on the
   // side where p is that close to the cell's wall. The margin covers the rounding of the
   // cell coordinates: a few units in the last place of t (cells of 4e-6 m at 1e5 m: 2.5e10).
-  auto span = [&](double t, long long c) {
+  auto neighbours = [&](double t, long long c) {
     const double f = t - static_cast<double>(c);
     const double near = 0.25 + 1e-3 + 1e-14 * std::abs(t);
     return std::array<long long, 2>{f <= near ? -1 : 0, f >= 1.0 - near ? 1 : 0};
   };
-  const auto sx = span(q.x(), cx), sy = span(q.y(), cy), sz = span(q.z(), cz);
+  const auto sx = neighbours(q.x(), cx), sy = neighbours(q.y(), cy), sz = neighbours(q.z(), cz);
   int best = -1;
   double best_d = tolerance_;
   for (long long dx = sx[0]; dx <= sx[1]; ++dx) {
