@@ -29,9 +29,10 @@ from worker_jobs import write_jobs  # noqa: E402
 binary, work, backend = sys.argv[1], sys.argv[2], sys.argv[3]
 GRACE = 2
 shutil.rmtree(work, ignore_errors=True)
-# One row of 220 fused boxes and posts: about 5 s of Booleans here (optimised build), well
-# past the grace period. (72 posts took 1 s once the Booleans got faster: not enough.)
-slow = write_jobs(f"{work}/scenes", 1, posts=220)[0]
+# One row of 340 fused boxes and posts: about 6 s of Booleans here (optimised build), well
+# past the 0.5 s wait plus the grace period. (72 posts took 1 s once the Booleans got faster,
+# and 220 posts 2.6 s once shapes got smaller: too near the 2.5 s the test waits.)
+slow = write_jobs(f"{work}/scenes", 1, posts=340)[0]
 
 pg = None
 queue_yaml = "  lease_seconds: 30\n"

@@ -21,10 +21,27 @@ std::string format_double(double v) {
 }
 }  // namespace
 
-Location::Location() : rotation_(Eigen::Matrix3d::Identity()), scale_(1.0), translation_(0, 0, 0) {}
+Location::Location() = default;
 
-Location::Location(const Eigen::Matrix3d& r, double s, const Vec3& t)
-    : rotation_(r), scale_(s), translation_(t) {}
+// The identity is stored as nothing; any other transform has its signed zeros made +0
+// (x + 0.0), so that equal transforms have equal bits whichever way they were composed (the
+// native format deduplicates locations by their bits).
+Location::Location(const Eigen::Matrix3d& r, double s, const Vec3& t) {
+  if (s == 1.0 && t.isZero(0.0) && r == Eigen::Matrix3d::Identity()) return;
+  const Eigen::Matrix3d rotation = r.array() + 0.0;
+  const Vec3 translation = t.array() + 0.0;
+  t_ = std::make_shared<const Transform>(Transform{rotation, s, translation});
+}
+
+const Eigen::Matrix3d& Location::identity_rotation() {
+  static const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  return identity;
+}
+
+const Vec3& Location::zero_translation() {
+  static const Vec3 zero = Vec3::Zero();
+  return zero;
+}
 
 Result<Location> Location::from_matrix(const Matrix34& q) {
   if (!q.allFinite()) {
@@ -97,39 +114,43 @@ Location Location::scaling(double s, const Vec3& center) {
 
 Matrix34 Location::matrix() const {
   Matrix34 m;
-  m.leftCols<3>() = scale_ * rotation_;
-  m.col(3) = translation_;
+  m.leftCols<3>() = scale() * rotation();
+  m.col(3) = translation();
   return m;
 }
 
-bool Location::is_identity() const {
-  return scale_ == 1.0 && translation_.isZero(0.0) && rotation_ == Eigen::Matrix3d::Identity();
-}
-
+// Composing with the identity shares the other side's transform: no arithmetic, no copy.
 Location Location::operator*(const Location& other) const {
-  return Location(rotation_ * other.rotation_, scale_ * other.scale_,
-                  scale_ * (rotation_ * other.translation_) + translation_);
+  if (!other.t_) return *this;
+  if (!t_) return other;
+  const Transform& a = *t_;
+  const Transform& b = *other.t_;
+  return Location(a.rotation * b.rotation, a.scale * b.scale,
+                  a.scale * (a.rotation * b.translation) + a.translation);
 }
 
 Location Location::inverse() const {
-  const Eigen::Matrix3d rt = rotation_.transpose();
-  return Location(rt, 1.0 / scale_, -(rt * translation_) / scale_);
+  if (!t_) return *this;
+  const Eigen::Matrix3d rt = t_->rotation.transpose();
+  return Location(rt, 1.0 / t_->scale, -(rt * t_->translation) / t_->scale);
 }
 
 bool Location::operator==(const Location& other) const {
-  return scale_ == other.scale_ && translation_ == other.translation_ &&
-         rotation_ == other.rotation_;
+  if (t_ == other.t_) return true;
+  if (!t_ || !other.t_) return false;  // the identity is never stored
+  return t_->scale == other.t_->scale && t_->translation == other.t_->translation &&
+         t_->rotation == other.t_->rotation;
 }
 
 std::size_t Location::hash() const {
-  if (is_identity()) return 0;
-  std::size_t h = std::hash<double>{}(scale_);
+  if (!t_) return 0;
+  std::size_t h = std::hash<double>{}(t_->scale);
   auto mix = [&h](double v) {
     h ^= std::hash<double>{}(v) + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
   };
   for (int i = 0; i < 3; ++i) {
-    mix(translation_[i]);
-    for (int j = 0; j < 3; ++j) mix(rotation_(i, j));
+    mix(t_->translation[i]);
+    for (int j = 0; j < 3; ++j) mix(t_->rotation(i, j));
   }
   return h;
 }

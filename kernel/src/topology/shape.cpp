@@ -74,7 +74,7 @@ Result<Shape> ShapeFactory::vertex(const Vec3& point, double tolerance) {
   }
   auto body = std::make_shared<ShapeBody>();
   body->kind_ = ShapeKind::Vertex;
-  body->vertex_ = std::make_unique<VertexData>(VertexData{point, tolerance});
+  body->geometry_ = VertexData{point, tolerance};
   return Shape(std::move(body), Location(), Orientation::Forward);
 }
 
@@ -110,7 +110,7 @@ Result<Shape> ShapeFactory::edge(CurvePtr curve, double first, double last, cons
   auto body = std::make_shared<ShapeBody>();
   body->kind_ = ShapeKind::Edge;
   body->children_ = {start.oriented(Orientation::Forward), end.oriented(Orientation::Reversed)};
-  body->edge_ = std::make_unique<EdgeData>(EdgeData{std::move(curve), first, last, tolerance});
+  body->geometry_ = EdgeData{std::move(curve), first, last, tolerance};
   return Shape(std::move(body), Location(), Orientation::Forward);
 }
 
@@ -125,7 +125,7 @@ Result<Shape> ShapeFactory::degenerate_edge(const Shape& vertex, double first, d
   auto body = std::make_shared<ShapeBody>();
   body->kind_ = ShapeKind::Edge;
   body->children_ = {vertex.oriented(Orientation::Forward), vertex.oriented(Orientation::Reversed)};
-  body->edge_ = std::make_unique<EdgeData>(EdgeData{nullptr, first, last, tolerance});
+  body->geometry_ = EdgeData{nullptr, first, last, tolerance};
   return Shape(std::move(body), Location(), Orientation::Forward);
 }
 
@@ -177,8 +177,7 @@ Result<Shape> ShapeFactory::face(SurfacePtr surface, std::vector<Shape> wires,
   auto result = make(ShapeKind::Face, std::move(wires), ShapeKind::Wire);
   if (!result.ok()) return result;
   auto body = std::const_pointer_cast<ShapeBody>(result.value().body_);
-  body->face_ =
-      std::make_unique<FaceData>(FaceData{std::move(surface), tolerance, std::move(pcurves)});
+  body->geometry_ = FaceData{std::move(surface), tolerance, std::move(pcurves)};
   return result;
 }
 

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numbers>
 #include <set>
 
@@ -71,6 +72,34 @@ TEST(Location, AcceptsSimilaritiesAndComposesLikeEquation5) {
   auto ls = Location::from_matrix(s);
   ASSERT_TRUE(ls.ok());
   EXPECT_DOUBLE_EQ(ls->scale(), 2.0);
+}
+
+// The identity is stored as nothing, so that the many child references at the identity cost
+// a null pointer; composing with it is exact (the other side, bit for bit), and a stored
+// transform has no negative zeros (equal transforms, equal bits, however they were made).
+TEST(Location, IdentityIsExactAndCostsNothing) {
+  EXPECT_TRUE(Location().is_identity());
+  EXPECT_TRUE(Location::translation(Vec3(0.0, -0.0, 0.0)).is_identity());
+  EXPECT_TRUE(Location().inverse().is_identity());
+  auto from_identity = Location::from_matrix(Location().matrix());
+  ASSERT_TRUE(from_identity.ok());
+  EXPECT_TRUE(from_identity->is_identity());
+  EXPECT_EQ(from_identity->hash(), 0u);
+
+  const Location l = Location::rotation(Vec3(1, 2, 3), Vec3(0, 0, 1), 0.3) *
+                     Location::translation(Vec3(-0.0, 5.0, -2.0));
+  EXPECT_FALSE(l.is_identity());
+  for (const Location& c : {l * Location(), Location() * l}) {
+    EXPECT_EQ(c.matrix(), l.matrix());
+    EXPECT_EQ(c.hash(), l.hash());
+    EXPECT_TRUE(c == l);
+  }
+  const Location t = Location::translation(Vec3(-0.0, 1.0, 2.0));
+  EXPECT_FALSE(std::signbit(t.translation().x()));
+  EXPECT_FALSE(std::signbit(t.rotation()(0, 1)));
+  // A reference to a body is a pointer, a location handle and an orientation: no matrix.
+  EXPECT_LE(sizeof(Shape), 48u);
+  EXPECT_LE(sizeof(Location), 16u);
 }
 
 TEST(Location, RejectsSingularShearedAndMirroringMatrices) {

@@ -3,6 +3,7 @@
 /// Location (paper §2.2): a 3×4 similarity transform Q = [s·R | t] placing a shape.
 
 #include <cstddef>
+#include <memory>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>  // cross products, rotations (and LU for determinants)
@@ -20,6 +21,10 @@ using Matrix34 = Eigen::Matrix<double, 3, 4>;
 /// The paper's conditions (1)–(2): the 3×3 part Q2 is non-singular and Q2 / cbrt(det Q2) is
 /// orthogonal. We also require det Q2 > 0 (no mirroring: a mirror would turn solids inside
 /// out). Values are immutable; composition returns a new Location.
+///
+/// A Location is a shared handle to its transform (OpenCASCADE's TopLoc_Location is one too):
+/// the identity holds nothing, so the many child references at the identity inside a body
+/// cost a null pointer, and composing with the identity shares the other side's transform.
 class Location {
  public:
   /// The identity.
@@ -46,21 +51,24 @@ class Location {
 
   /// Q = [s·R | t].
   Matrix34 matrix() const;
-  const Eigen::Matrix3d& rotation() const { return rotation_; }
-  double scale() const { return scale_; }
-  const Vec3& translation() const { return translation_; }
-  bool is_identity() const;
+  const Eigen::Matrix3d& rotation() const { return t_ ? t_->rotation : identity_rotation(); }
+  double scale() const { return t_ ? t_->scale : 1.0; }
+  const Vec3& translation() const { return t_ ? t_->translation : zero_translation(); }
+  /// Exactly the identity (scale 1, no translation, R = I).
+  bool is_identity() const { return t_ == nullptr; }
 
   /// (*this * other)(p) = this(other(p)): `other` is applied first. This is how locations
   /// compose down the hierarchy (paper eq. 5): world = parent * child.
   Location operator*(const Location& other) const;
   Location inverse() const;
 
-  Vec3 apply_point(const Vec3& p) const { return scale_ * (rotation_ * p) + translation_; }
+  Vec3 apply_point(const Vec3& p) const {
+    return t_ ? Vec3(t_->scale * (t_->rotation * p) + t_->translation) : p;
+  }
   /// Applies s·R (no translation): for derivatives.
-  Vec3 apply_vector(const Vec3& v) const { return scale_ * (rotation_ * v); }
+  Vec3 apply_vector(const Vec3& v) const { return t_ ? Vec3(t_->scale * (t_->rotation * v)) : v; }
   /// Applies R only: for unit directions and normals.
-  Vec3 apply_direction(const Vec3& d) const { return rotation_ * d; }
+  Vec3 apply_direction(const Vec3& d) const { return t_ ? Vec3(t_->rotation * d) : d; }
 
   /// Exact equality of the stored values (used for shape equality levels and hashing).
   bool operator==(const Location& other) const;
@@ -69,10 +77,16 @@ class Location {
   std::size_t hash() const;
 
  private:
+  struct Transform {
+    Eigen::Matrix3d rotation;
+    double scale;
+    Vec3 translation;
+  };
+  /// Null when the values are exactly the identity's.
   Location(const Eigen::Matrix3d& r, double s, const Vec3& t);
-  Eigen::Matrix3d rotation_;
-  double scale_;
-  Vec3 translation_;
+  static const Eigen::Matrix3d& identity_rotation();
+  static const Vec3& zero_translation();
+  std::shared_ptr<const Transform> t_;  ///< null: the identity
 };
 
 }  // namespace csgtile::kernel

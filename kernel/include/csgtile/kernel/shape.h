@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <variant>
 #include <vector>
 
 #include "csgtile/kernel/curve.h"
@@ -133,17 +134,16 @@ class ShapeBody {
   ShapeKind kind() const { return kind_; }
   const std::vector<Shape>& children() const { return children_; }
   /// Non-null for vertices, edges and faces respectively.
-  const VertexData* vertex() const { return vertex_.get(); }
-  const EdgeData* edge() const { return edge_.get(); }
-  const FaceData* face() const { return face_.get(); }
+  const VertexData* vertex() const { return std::get_if<VertexData>(&geometry_); }
+  const EdgeData* edge() const { return std::get_if<EdgeData>(&geometry_); }
+  const FaceData* face() const { return std::get_if<FaceData>(&geometry_); }
 
  private:
   friend class ShapeFactory;
   ShapeKind kind_ = ShapeKind::Compound;
   std::vector<Shape> children_;
-  std::unique_ptr<VertexData> vertex_;
-  std::unique_ptr<EdgeData> edge_;
-  std::unique_ptr<FaceData> face_;
+  /// Held in the body (one allocation per body, not two).
+  std::variant<std::monostate, VertexData, EdgeData, FaceData> geometry_;
 };
 
 /// Creates bodies. Every function checks kinds and the tolerance order face ≤ edge ≤
