@@ -430,28 +430,26 @@ class FaceIntegrator {
 
 template <class M>
 M face_moments(const Shape& face) {
-  const FaceData& data = *face.body().face();
+  const ShapeBody& body = face.body();
+  const FaceData& data = *body.face();
   // Integrate over the face body (its own wires and edge orientations: the outer loop is
-  // counter-clockwise in (u, v)), then apply the face's orientation to the flux terms.
-  const Shape body_face = face.oriented(Orientation::Forward);
-  if (body_face.child_count() == 0) return M{};
+  // counter-clockwise in (u, v)), then apply the face's orientation to the flux terms. The
+  // walk is over bodies (no Shape made per wire and edge use).
+  const auto& wires = body.children();
+  if (wires.empty()) return M{};
   double u_ref = 0.0;
-  {
-    const Shape wire = body_face.child(0);
-    if (wire.child_count() > 0) {
-      const Shape edge = wire.child(0);
-      u_ref = data.pcurves[0][0]->point(edge.body().edge()->first).x();
-    }
+  if (!wires[0].body().children().empty()) {
+    u_ref = data.pcurves[0][0]->point(wires[0].body().children()[0].body().edge()->first).x();
   }
   FaceIntegrator<M> integrator(*data.surface, face.location(), u_ref);
   M total{};
-  for (std::size_t w = 0; w < body_face.child_count(); ++w) {
-    const Shape wire = body_face.child(w);
-    for (std::size_t e = 0; e < wire.child_count(); ++e) {
-      const Shape edge = wire.child(e);
-      const Orientation o = edge.orientation();
+  for (std::size_t w = 0; w < wires.size(); ++w) {
+    const Orientation wo = wires[w].orientation();
+    const auto& edges = wires[w].body().children();
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const Orientation o = compose(wo, edges[e].orientation());
       if (o != Orientation::Forward && o != Orientation::Reversed) continue;
-      const EdgeData& ed = *edge.body().edge();
+      const EdgeData& ed = *edges[e].body().edge();
       // A polyline with a tolerance samples a smooth curve (a traced section); one without is
       // exact (a polygon).
       double sampled_tolerance = 0.0;
@@ -476,10 +474,12 @@ M face_moments(const Shape& face) {
 
 namespace {
 
-void add_edge_bounds(BoundingBox& box, const Shape& e) {
-  const EdgeData& d = *e.body().edge();
+// The bounds below walk bodies with the location accumulated down to them, not Shapes: a
+// box's vertex is met six times and an edge twice, and each Shape made on the way would
+// count references to its body and location up and down again.
+
+void add_edge_bounds(BoundingBox& box, const EdgeData& d, const Location& loc) {
   if (d.degenerate()) return;
-  const Location& loc = e.location();
   // The edge's range on the moved curve (a line's arc length scales with the location).
   const double k = detail::moved_parameter_scale(*d.curve, loc);
   if (d.curve->kind() == CurveKind::Line) {
@@ -494,15 +494,14 @@ void add_edge_bounds(BoundingBox& box, const Shape& e) {
 
 // A plane's extremes lie on its boundary; a curved face can bulge between its edges, so the
 // patch over the (u, v) box of its boundary is added.
-void add_face_patch(BoundingBox& box, const Shape& f) {
-  const FaceData& d = *f.body().face();
+void add_face_patch(BoundingBox& box, const ShapeBody& face, const Location& loc) {
+  const FaceData& d = *face.face();
   if (d.surface->kind() == SurfaceKind::Plane) return;
   ParamBox pb{INFINITY, -INFINITY, INFINITY, -INFINITY};
-  const Shape body_face = f.oriented(Orientation::Forward);
-  for (std::size_t w = 0; w < body_face.child_count(); ++w) {
-    const Shape wire = body_face.child(w);
-    for (std::size_t e = 0; e < wire.child_count(); ++e) {
-      const EdgeData& ed = *wire.child(e).body().edge();
+  for (std::size_t w = 0; w < face.children().size(); ++w) {
+    const auto& edges = face.children()[w].body().children();
+    for (std::size_t e = 0; e < edges.size(); ++e) {
+      const EdgeData& ed = *edges[e].body().edge();
       const Curve2d& pc = *d.pcurves[w][e];
       const int samples = pc.kind() == Curve2dKind::Line ? 1 : 64;
       for (int k = 0; k <= samples; ++k) {
@@ -517,28 +516,33 @@ void add_face_patch(BoundingBox& box, const Shape& f) {
   if (pb.u0 <= pb.u1) {
     // The moved surface measures its length parameters in world units (scaled by the
     // location); angles are unchanged.
-    const double s = f.location().scale();
+    const double s = loc.scale();
     const SurfaceKind k = d.surface->kind();
     if (k == SurfaceKind::Cylinder || k == SurfaceKind::Cone || k == SurfaceKind::Extrusion) {
       pb.v0 *= s;
       pb.v1 *= s;
     }
-    box.add(d.surface->transformed(f.location())->bounds(pb));
+    box.add(d.surface->transformed(loc)->bounds(pb));
   }
 }
 
-// Every vertex and edge under `shape` (wires, edges, vertices, in any orientation), walked
-// without the index of distinct sub-shapes; with `patches`, every face's patch too.
-void add_descendants(BoundingBox& box, const Shape& shape, bool patches) {
-  for (std::size_t i = 0; i < shape.child_count(); ++i) {
-    const Shape child = shape.child(i);
-    if (child.kind() == ShapeKind::Vertex) {
-      box.add(vertex_point(child));
+// Every vertex and edge under the body placed at `loc` (wires, edges, vertices, in any
+// orientation: bounds do not depend on it), walked without the index of distinct
+// sub-shapes; with `patches`, every face's patch too.
+void add_descendants(BoundingBox& box, const ShapeBody& body, const Location& loc, bool patches) {
+  for (const Shape& child : body.children()) {
+    // Children at the identity (almost all) keep the parent's location as it is, uncopied.
+    Location composed;
+    const Location& moved =
+        child.location().is_identity() ? loc : (composed = loc * child.location());
+    const ShapeBody& b = child.body();
+    if (const VertexData* v = b.vertex()) {
+      box.add(moved.apply_point(v->point));
       continue;
     }
-    if (child.kind() == ShapeKind::Edge) add_edge_bounds(box, child);
-    if (patches && child.kind() == ShapeKind::Face) add_face_patch(box, child);
-    add_descendants(box, child, patches);
+    if (const EdgeData* e = b.edge()) add_edge_bounds(box, *e, moved);
+    if (patches && b.kind() == ShapeKind::Face) add_face_patch(box, b, moved);
+    add_descendants(box, b, moved, patches);
   }
 }
 
@@ -547,11 +551,13 @@ void add_descendants(BoundingBox& box, const Shape& shape, bool patches) {
 BoundingBox bounding_box(const Shape& shape) {
   BoundingBox box;
   if (shape.is_null()) return box;
+  const ShapeBody& body = shape.body();
+  const Location& loc = shape.location();
   if (shape.kind() == ShapeKind::Face) {
     // One face (the Booleans take every face's box): walked directly, without the index of
     // distinct edges (a box is a union: an edge seen twice, a seam, adds nothing).
-    add_descendants(box, shape, false);
-    add_face_patch(box, shape);
+    add_descendants(box, body, loc, false);
+    add_face_patch(box, body, loc);
     return box;
   }
   // Walked directly too: an edge or a face met again (its other face, a shared face) adds
@@ -560,8 +566,8 @@ BoundingBox bounding_box(const Shape& shape) {
     box.add(vertex_point(shape));
     return box;
   }
-  if (shape.kind() == ShapeKind::Edge) add_edge_bounds(box, shape);
-  add_descendants(box, shape, true);
+  if (shape.kind() == ShapeKind::Edge) add_edge_bounds(box, *body.edge(), loc);
+  add_descendants(box, body, loc, true);
   return box;
 }
 
