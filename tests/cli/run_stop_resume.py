@@ -10,6 +10,7 @@ import json
 import os
 import shutil
 import signal
+import sqlite3
 import subprocess
 import sys
 import time
@@ -34,7 +35,24 @@ with open(f"{work}/run.yaml", "w") as f:
 
 p = subprocess.Popen([binary, "run", f"{work}/run.yaml", "--json"], stdout=subprocess.PIPE,
                      stderr=subprocess.PIPE, text=True)
-time.sleep(1.0)  # inside the first job
+
+
+def running_jobs():
+    """Jobs the queue holds as running (0 before the queue exists)."""
+    try:
+        with sqlite3.connect(f"file:{work}/out/queue.sqlite?mode=ro", uri=True, timeout=5) as db:
+            return db.execute("SELECT COUNT(*) FROM jobs WHERE state = 'running'").fetchone()[0]
+    except sqlite3.Error:
+        return 0
+
+
+# Inside the first job: wait for the queue to say so (a fixed sleep raced the process's start
+# under sanitizers on a loaded machine, and SIGTERM then came before its handler).
+deadline = time.time() + 120
+while running_jobs() == 0:
+    assert p.poll() is None, (p.returncode, p.communicate())
+    assert time.time() < deadline, "the run never started a job"
+    time.sleep(0.05)
 p.send_signal(signal.SIGTERM)
 start = time.time()
 out, err = p.communicate(timeout=120)
