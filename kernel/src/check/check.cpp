@@ -138,6 +138,13 @@ class Checker {
     report_.issues.push_back({status, std::move(message)});
   }
 
+  static bool similarity(const Location& l) {
+    const double dev = (l.rotation().transpose() * l.rotation() - Eigen::Matrix3d::Identity())
+                           .cwiseAbs()
+                           .maxCoeff();
+    return !(!(l.scale() > 0) || dev > 1e-9 || l.rotation().determinant() < 0);
+  }
+
   void check_locations(const Shape& root) {
     std::vector<Shape> stack{root};
     std::size_t visited = 0;
@@ -146,10 +153,8 @@ class Checker {
       stack.pop_back();
       ++visited;
       const Location& l = s.location();
-      const double dev = (l.rotation().transpose() * l.rotation() - Eigen::Matrix3d::Identity())
-                             .cwiseAbs()
-                             .maxCoeff();
-      if (!(l.scale() > 0) || dev > 1e-9 || l.rotation().determinant() < 0) {
+      // The identity (almost every child reference) is a similarity by construction.
+      if (!l.is_identity() && !similarity(l)) {
         add(CheckStatus::InvalidLocation, std::string("a ") + shape_kind_name(s.kind()) +
                                               " has a location that is not a similarity");
         return;

@@ -41,12 +41,6 @@ LocationKey location_key(const Location& location) {
   return key;
 }
 
-/// Bitwise identity: a translation of -0.0 is not the identity here (it must round-trip).
-bool is_exact_identity(const Location& location) {
-  static const LocationKey identity = location_key(Location());
-  return location_key(location) == identity;
-}
-
 // ---- tables -----------------------------------------------------------------------------
 
 /// Everything a shape references, indexed. Bodies are in post-order (children first, in
@@ -67,7 +61,7 @@ struct ModelTables {
   std::unordered_map<const void*, Vec3> stored_direction;
 
   void add_location(const Location& location) {
-    if (is_exact_identity(location)) return;
+    if (location.is_identity()) return;  // exact: a Location stores no identity, no -0.0
     if (location_index.try_emplace(location_key(location), locations.size()).second) {
       locations.push_back(location);
     }
@@ -371,7 +365,7 @@ void encode_pcurves(const ModelTables& t, PayloadEncoder& e) {
 /// A reference from the body at `from` (or from the root, `from` = body count).
 void encode_ref(const ModelTables& t, std::size_t from, const Shape& ref, PayloadEncoder& e) {
   const std::size_t delta = from - t.body_index.at(&ref.body());
-  const bool has_location = !is_exact_identity(ref.location());
+  const bool has_location = !ref.location().is_identity();
   e.varint((static_cast<std::uint64_t>(delta) << detail::kRefShift) |
            (has_location ? detail::kRefHasLocation : 0) |
            static_cast<std::uint64_t>(ref.orientation()));
