@@ -199,6 +199,25 @@ void Builder::join_members() {
     }
     return false;
   };
+  // Whether the scan saw the member's faces over (t0, t1): points within its section (grown by
+  // the noise margin) near one of its faces, their normals across its line, in at least two
+  // cells along it. Behind a shadow, the member shows itself again before what it runs into.
+  auto seen_over = [&](const Member& m, double t0, double t1) {
+    std::vector<long long> cells;
+    for (std::size_t i = 0; i < points_.size(); ++i) {
+      if (normals_.empty() || !points_[i].allFinite() || !normals_[i].allFinite()) continue;
+      const Vec3 d = points_[i] - m.start;
+      const double t = d.dot(m.u);
+      if (t <= t0 || t >= t1) continue;
+      const double a = std::abs(d.dot(m.a)), b = std::abs(d.dot(m.b));
+      if (a > m.half_a + tight || b > m.half_b + tight) continue;
+      if (a < m.half_a - tight && b < m.half_b - tight) continue;  // inside, on no face
+      if (std::abs(normals_[i].dot(m.u)) >= 0.5) continue;
+      cells.push_back(static_cast<long long>(std::floor(t / cell_)));
+    }
+    std::sort(cells.begin(), cells.end());
+    return cells.size() >= 5 && std::unique(cells.begin(), cells.end()) - cells.begin() >= 2;
+  };
   for (std::size_t x = 0; x < members.size(); ++x) {
     if (!members[x] || group_of[x] >= 0) continue;
     Member m = *members[x];
@@ -282,7 +301,7 @@ void Builder::join_members() {
         if (s < 0.0) continue;
         if (s <= half + reach) {
           best = std::min(best, s);
-        } else if (s - half <= m.length && s < far) {
+        } else if (s < far) {
           far = s;
           far_target = k;
           far_half = half;
@@ -294,10 +313,15 @@ void Builder::join_members() {
         // nothing stands and no points face along it (a shadow, not an end).
         std::vector<std::size_t> skip = group;
         skip.push_back(far_target);
-        // Up to the target's near side (its own surface faces along the line).
+        // Up to the target's near side (its own surface faces along the line). Farther than
+        // its own length only where its faces are seen again over the last third of the way.
         const double open = std::max(0.0, far - far_half - reach);
         const double t0 = side > 0.0 ? m.length : -open, t1 = side > 0.0 ? m.length + open : 0.0;
-        if (!blocked(m, t0, t1, skip)) best = far;
+        const double last = open / 3.0;
+        const bool evidence =
+            far - far_half <= m.length ||
+            (side > 0.0 ? seen_over(m, t1 - last, t1) : seen_over(m, t0, t0 + last));
+        if (evidence && !blocked(m, t0, t1, skip)) best = far;
       }
       if (!std::isfinite(best)) continue;
       if (side > 0.0) {

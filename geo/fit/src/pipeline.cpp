@@ -155,9 +155,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   auto start = std::chrono::steady_clock::now();
 
   const auto ground = ground_mask(points, classes, options.ground);
-  std::vector<Vec3> above;
-  above.reserve(points.size());
-  std::vector<std::uint32_t> above_index;  // input index of each point of `above`
+  // The points above the ground, by input index (not copied: they are nearly all of them).
+  std::vector<std::uint32_t> above_index;
+  above_index.reserve(points.size());
   // Terrain heights (lowest ground point per cell) for roofs seen from the air.
   GroundGrid terrain;
   {
@@ -220,7 +220,6 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
         ++terrain_count[c];
       }
     } else {
-      above.push_back(points[i]);
       above_index.push_back(static_cast<std::uint32_t>(i));
     }
   }
@@ -239,18 +238,25 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   std::vector<Vec3> clean;
   std::vector<std::uint32_t> clean_index;  // input index of each point of `clean`
   {
-    const auto kept = remove_statistical_outliers(above, options.outliers);
+    const auto kept = remove_statistical_outliers(points, above_index, options.outliers);
     clean.reserve(kept.size());
-    for (auto i : kept) {
-      clean.push_back(above[i]);
-      clean_index.push_back(above_index[i]);
+    clean_index.reserve(kept.size());
+    for (auto k : kept) {
+      clean.push_back(points[above_index[k]]);
+      clean_index.push_back(above_index[k]);
     }
-    out.outlier_points = static_cast<long long>(above.size() - kept.size());
+    out.outlier_points = static_cast<long long>(above_index.size() - kept.size());
   }
+  std::vector<std::uint32_t>().swap(above_index);
   out.seconds.emplace_back("outliers", seconds_since(start));
 
   start = std::chrono::steady_clock::now();
-  const std::vector<Vec3> cloud = voxel_downsample(clean, options.voxel);
+  // Without downsampling the fitted cloud is the cleaned one itself (voxel_downsample would
+  // copy it: its points are finite and within PCL's range already), not a second copy of
+  // nearly the whole input.
+  std::vector<Vec3> downsampled;
+  if (options.voxel.size > 0.0) downsampled = voxel_downsample(clean, options.voxel);
+  const std::vector<Vec3>& cloud = options.voxel.size > 0.0 ? downsampled : clean;
   out.fitted_points = static_cast<long long>(cloud.size());
   // Each fitted point's input point: its own (no downsampling), else the nearest cleaned
   // point's (-1: none); found once, when first asked.

@@ -30,19 +30,24 @@ namespace {
 
 using kernel::Vec3;
 
-// The finite points as a PCL cloud, with their input indices.
+// The finite points (of `subset`, positions in it; all: indices) as a PCL cloud, with their
+// input indices.
 pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
-                                             std::vector<std::uint32_t>& index) {
+                                             std::vector<std::uint32_t>& index,
+                                             std::span<const std::uint32_t> subset = {},
+                                             bool all = true) {
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  cloud->reserve(points.size());
+  const std::size_t n = all ? points.size() : subset.size();
+  cloud->reserve(n);
   index.clear();
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  index.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& p = points[all ? k : subset[k]];
     // PCL works in float: coordinates beyond its range are as unusable as NaN.
-    if (!points[i].allFinite() || points[i].cwiseAbs().maxCoeff() > 1e30) continue;
-    cloud->push_back(pcl::PointXYZ(static_cast<float>(points[i].x()),
-                                   static_cast<float>(points[i].y()),
-                                   static_cast<float>(points[i].z())));
-    index.push_back(static_cast<std::uint32_t>(i));
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e30) continue;
+    cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                   static_cast<float>(p.z())));
+    index.push_back(static_cast<std::uint32_t>(k));
   }
   cloud->width = static_cast<std::uint32_t>(cloud->size());
   cloud->height = 1;
@@ -70,12 +75,12 @@ std::vector<std::vector<std::uint32_t>> to_groups(const std::vector<pcl::PointIn
   return out;
 }
 
-}  // namespace
-
-std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
-                                                       const OutlierOptions& options) {
+// Both remove_statistical_outliers: among all points (`all`) or those of `subset`.
+std::vector<std::uint32_t> statistical_outliers_kept(std::span<const Vec3> points,
+                                                     std::span<const std::uint32_t> subset,
+                                                     const OutlierOptions& options, bool all) {
   std::vector<std::uint32_t> index;
-  auto cloud = to_cloud(points, index);
+  auto cloud = to_cloud(points, index, subset, all);
   if (!options.enabled || cloud->size() <= static_cast<std::size_t>(options.neighbours) + 1) {
     return index;
   }
@@ -90,6 +95,19 @@ std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> poi
   for (auto k : kept) out.push_back(index[static_cast<std::size_t>(k)]);
   std::sort(out.begin(), out.end());
   return out;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
+                                                       const OutlierOptions& options) {
+  return statistical_outliers_kept(points, {}, options, true);
+}
+
+std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
+                                                       std::span<const std::uint32_t> subset,
+                                                       const OutlierOptions& options) {
+  return statistical_outliers_kept(points, subset, options, false);
 }
 
 std::vector<Vec3> voxel_downsample(std::span<const Vec3> points, const VoxelOptions& options) {

@@ -35,6 +35,26 @@ TEST(FitSegment, StatisticalOutliersAreRemoved) {
   EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
 }
 
+// Among a subset of the points (by index, no copy), the filter keeps what it keeps of a copy
+// of that subset, as positions in the subset; points outside the subset take no part.
+TEST(FitSegment, StatisticalOutliersOfASubsetAreThoseOfItsCopy) {
+  Cloud c = testing::rectangle_cloud(Vec3::Zero(), Vec3(2, 0, 0), Vec3(0, 2, 0), 0.02, 0.001, 3);
+  c.points.emplace_back(1.0, 1.0, 3.0);
+  c.points.emplace_back(std::nan(""), 0.0, 0.0);
+  c.points.emplace_back(-4.0, 1.0, 0.0);
+  std::vector<std::uint32_t> subset;
+  std::vector<Vec3> copy;
+  for (std::uint32_t i = 0; i < c.points.size(); ++i) {
+    if (i % 3 == 1 && i + 3 < c.points.size()) continue;  // left out, the outliers kept in
+    subset.push_back(i);
+    copy.push_back(c.points[i]);
+  }
+  const auto expected = remove_statistical_outliers(copy, {});
+  const auto kept = remove_statistical_outliers(c.points, subset, {});
+  EXPECT_EQ(kept, expected);
+  EXPECT_LT(kept.size(), subset.size() - 2);  // the three outliers (and maybe a few more) out
+}
+
 TEST(FitSegment, VoxelDownsamplingKeepsOnePointPerVoxel) {
   const Cloud c =
       testing::rectangle_cloud(Vec3::Zero(), Vec3(1, 0, 0), Vec3(0, 1, 0), 0.005, 0.0, 2);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <span>
 
@@ -131,6 +132,17 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   std::vector<kernel::Vec3> raw;
   std::vector<std::uint8_t> classes, returns;
   const bool has_classes = reader.info().fields.classification;
+  // The tile's records in one allocation when its header says how many: growing by doubling
+  // holds up to twice the points at the peak. Not for a region (fewer are read), and never
+  // more than one point per byte of the file (a header is not trusted further).
+  if (!read_options.region && !source.remote && reader.info().point_count) {
+    std::error_code ec;
+    const std::uintmax_t bytes = std::filesystem::file_size(source.path, ec);
+    const std::uint64_t n = ec ? 0 : std::min<std::uint64_t>(*reader.info().point_count, bytes);
+    raw.reserve(n);
+    returns.reserve(n);
+    if (has_classes) classes.reserve(n);
+  }
   if (Failure f = append_points(reader, kernel::Vec3::Zero(), has_classes, raw, classes, returns);
       !f.ok()) {
     return f;

@@ -32,6 +32,11 @@ struct OutlierOptions {
 /// Indices of the points kept (finite and not outliers), ascending.
 std::vector<std::uint32_t> remove_statistical_outliers(std::span<const kernel::Vec3> points,
                                                        const OutlierOptions& options);
+/// The same among the points `subset` names (indices into `points`), without a copy of them:
+/// the positions in `subset` of the points kept, ascending.
+std::vector<std::uint32_t> remove_statistical_outliers(std::span<const kernel::Vec3> points,
+                                                       std::span<const std::uint32_t> subset,
+                                                       const OutlierOptions& options);
 
 /// Voxel downsampling: one point (the centroid) per occupied cube of `size` metres; 0 keeps
 /// every point. Output order: by voxel (x, then y, then z).
