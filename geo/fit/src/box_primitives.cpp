@@ -59,6 +59,31 @@ std::vector<std::vector<std::uint32_t>> split_plane(std::span<const Vec3> points
   return pieces;
 }
 
+// The noise of the points about a plane patch: 1.4826 × the median |offset| of the points
+// over the middle 80% of its rectangle within 0.25 m of it, a robust σ that edge
+// points of walls and the points of anything standing on it barely move. 0 for fewer than
+// 8 points.
+double robust_noise(std::span<const Vec3> points, const PlanePatch& seed) {
+  const double du = 0.1 * (seed.umax - seed.umin), dv = 0.1 * (seed.vmax - seed.vmin);
+  std::vector<double> offsets;
+  for (const Vec3& p : points) {
+    if (!p.allFinite()) continue;
+    const Vec3 d = p - seed.origin;
+    const double a = d.dot(seed.u), b = d.dot(seed.v), c = std::abs(d.dot(seed.n));
+    if (a < seed.umin + du || a > seed.umax - du || b < seed.vmin + dv || b > seed.vmax - dv ||
+        c > 0.25) {
+      continue;
+    }
+    offsets.push_back(c);
+  }
+  if (offsets.size() < 8) return 0.0;
+  const auto mid = offsets.begin() + static_cast<std::ptrdiff_t>(offsets.size() / 2);
+  std::nth_element(offsets.begin(), mid, offsets.end());
+  return 1.4826 * *mid;
+}
+
+}  // namespace
+
 PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, int index,
                       std::vector<std::uint32_t> members, double cell) {
   PlanePatch patch;
@@ -125,31 +150,6 @@ PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, 
   }
   return patch;
 }
-
-// The noise of the points about a plane patch: 1.4826 × the median |offset| of the points
-// over the middle 80% of its rectangle within 0.25 m of it, a robust σ that edge
-// points of walls and the points of anything standing on it barely move. 0 for fewer than
-// 8 points.
-double robust_noise(std::span<const Vec3> points, const PlanePatch& seed) {
-  const double du = 0.1 * (seed.umax - seed.umin), dv = 0.1 * (seed.vmax - seed.vmin);
-  std::vector<double> offsets;
-  for (const Vec3& p : points) {
-    if (!p.allFinite()) continue;
-    const Vec3 d = p - seed.origin;
-    const double a = d.dot(seed.u), b = d.dot(seed.v), c = std::abs(d.dot(seed.n));
-    if (a < seed.umin + du || a > seed.umax - du || b < seed.vmin + dv || b > seed.vmax - dv ||
-        c > 0.25) {
-      continue;
-    }
-    offsets.push_back(c);
-  }
-  if (offsets.size() < 8) return 0.0;
-  const auto mid = offsets.begin() + static_cast<std::ptrdiff_t>(offsets.size() / 2);
-  std::nth_element(offsets.begin(), mid, offsets.end());
-  return 1.4826 * *mid;
-}
-
-}  // namespace
 
 std::vector<std::uint32_t> Builder::unused_in(const PlanePatch& seed, const SeedBox& box,
                                               double grow) const {

@@ -4,8 +4,11 @@
 // stopping at the surface where its points stop.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <optional>
 
 #include "primitive_builder.h"
 #include "synth/ray_internal.h"
@@ -89,18 +92,136 @@ Margins margins(double epsilon, double cell, double cos_tol) {
 // told by the columns: a frame's members run through their axes, so the side whose centre
 // line passes through the axis of a column (within twice epsilon or a quarter of the depth)
 // no farther beyond one of its ends than its own length is taken; when neither or both do, no
-// box is made. join_members then takes its ends to the columns.
+// box is made. A column's top may end below the members it carries (hidden among them): its
+// axis counts up to a member's depth above its fitted top. The face may be seen in pieces of
+// one plane (joined first) and its plane may hold strips of the columns it passes (trimmed to
+// the face's band); a face twice as long as it is wide is enough, the siblings confirming what
+// it is. join_members then takes its ends to the columns.
 void Builder::one_face_members() {
   const auto [tight, reach, sin_tol] = margins(ransac_.epsilon, cell_, cos_tol_);
   std::vector<Member> siblings;
   for (const auto& p : out_.primitives) {
     if (auto m = as_member(p.spec)) siblings.push_back(*m);
   }
-  for (PlanePatch& seed : patches_) {
-    if (seed.used || seed.coverage < o_.min_seed_coverage) continue;
-    if (seed.sagitta > 0.5 * ransac_.epsilon) continue;
+  // A face whose plane also took strips of the columns it passes (a column's surface crosses
+  // the plane of a beam's face along a vertical line, its points within epsilon there) covers
+  // too little of the rectangle around it: its band along one side of the patch where most
+  // of its points lie (bins of a cell holding at least half the fullest one's, around it),
+  // along the side whose band covers its rectangle better, is the face.
+  auto dominant_band = [&](const PlanePatch& patch) -> std::optional<PlanePatch> {
+    std::optional<PlanePatch> best;
+    for (const Vec3& axis : {patch.u, patch.v}) {
+      std::map<long long, int> bins;
+      for (auto i : patch.members) {
+        ++bins[static_cast<long long>(std::floor((points_[i] - patch.origin).dot(axis) / cell_))];
+      }
+      auto top = bins.begin();
+      for (auto it = bins.begin(); it != bins.end(); ++it) {
+        if (it->second > top->second) top = it;
+      }
+      long long lo = top->first, hi = top->first;
+      const auto full = [&](long long b) {
+        const auto it = bins.find(b);
+        return it != bins.end() && 2 * it->second >= top->second;
+      };
+      while (full(lo - 1)) --lo;
+      while (full(hi + 1)) ++hi;
+      std::vector<std::uint32_t> kept;
+      for (auto i : patch.members) {
+        const auto b =
+            static_cast<long long>(std::floor((points_[i] - patch.origin).dot(axis) / cell_));
+        if (b >= lo && b <= hi) kept.push_back(i);
+      }
+      if (kept.size() == patch.members.size() ||
+          static_cast<long long>(kept.size()) < std::max<long long>(3, ransac_.min_points / 4)) {
+        continue;
+      }
+      PlanePatch p = make_patch(points_, shapes_.shapes[static_cast<std::size_t>(patch.shape)],
+                                patch.shape, std::move(kept), cell_);
+      if (!best || p.coverage > best->coverage) best = std::move(p);
+    }
+    return best;
+  };
+  // Pieces of one plane (one RANSAC plane, or planes within the noise margin of each other) in
+  // one band across it, with nothing standing between them along it, are one face the scan
+  // saw in pieces (sparse rows, shadows): one patch. A column between
+  // two pieces (its axis across their line, within its radius and the band's width of the
+  // plane) keeps them apart: two members meeting there.
+  struct Work {
+    std::vector<std::size_t> parts;  // indices in patches_
+    PlanePatch patch;
+  };
+  std::vector<Work> work;
+  {
+    std::vector<char> grouped(patches_.size(), 0);
+    auto extent_in = [&](const PlanePatch& frame, const PlanePatch& p) {
+      std::array<double, 4> e{INFINITY, -INFINITY, INFINITY, -INFINITY};
+      for (auto i : p.members) {
+        const Vec3 d = points_[i] - frame.origin;
+        e[0] = std::min(e[0], d.dot(frame.u)), e[1] = std::max(e[1], d.dot(frame.u));
+        e[2] = std::min(e[2], d.dot(frame.v)), e[3] = std::max(e[3], d.dot(frame.v));
+      }
+      return e;
+    };
+    auto column_between = [&](const PlanePatch& frame, double u0, double u1) {
+      for (const auto& p : out_.primitives) {
+        if (p.spec.type != PrimitiveType::Cylinder) continue;
+        const Vec3 axis = p.spec.placement.rotation().col(2);
+        if (std::abs(axis.dot(frame.u)) > sin_tol) continue;
+        const double r = p.spec.placement.scale() * p.spec.radius;
+        const Vec3 d = p.spec.placement.translation() - frame.origin;
+        const double width = frame.vmax - frame.vmin;
+        if (std::abs(d.dot(frame.n)) > r + width) continue;
+        const double at = d.dot(frame.u);
+        if (at > u0 - r && at < u1 + r) return true;
+      }
+      return false;
+    };
+    for (std::size_t i = 0; i < patches_.size(); ++i) {
+      if (patches_[i].used || grouped[i]) continue;
+      grouped[i] = 1;
+      Work w{{i}, patches_[i]};
+      for (bool grew = true; grew;) {
+        grew = false;
+        for (std::size_t j = 0; j < patches_.size(); ++j) {
+          if (grouped[j] || patches_[j].used) continue;
+          // Of one plane: the same RANSAC plane, or another one on it (its connectivity split).
+          const PlanePatch& o = patches_[j];
+          if (o.shape != w.patch.shape &&
+              (std::abs(o.n.dot(w.patch.n)) < cos_tol_ ||
+               std::abs((o.origin - w.patch.origin).dot(w.patch.n)) > tight)) {
+            continue;
+          }
+          const auto e = extent_in(w.patch, patches_[j]);
+          const double overlap = std::min(e[3], w.patch.vmax) - std::max(e[2], w.patch.vmin);
+          if (overlap < 0.5 * std::min(e[3] - e[2], w.patch.vmax - w.patch.vmin)) continue;
+          const double g0 = e[0] > w.patch.umax ? w.patch.umax : e[1];
+          const double g1 = e[0] > w.patch.umax ? e[0] : w.patch.umin;
+          if (g1 > g0 && column_between(w.patch, g0, g1)) continue;
+          std::vector<std::uint32_t> both = w.patch.members;
+          both.insert(both.end(), patches_[j].members.begin(), patches_[j].members.end());
+          std::sort(both.begin(), both.end());
+          w.patch = make_patch(points_, shapes_.shapes[static_cast<std::size_t>(w.patch.shape)],
+                               w.patch.shape, std::move(both), cell_);
+          w.parts.push_back(j);
+          grouped[j] = 1;
+          grew = true;
+        }
+      }
+      work.push_back(std::move(w));
+    }
+  }
+  for (Work& item : work) {
+    PlanePatch& patch = item.patch;
+    std::optional<PlanePatch> band;
+    if (patch.coverage < o_.min_seed_coverage) {
+      band = dominant_band(patch);
+      if (!band || band->coverage < o_.min_seed_coverage) continue;
+    }
+    PlanePatch& seed = band ? *band : patch;
     const double length = seed.umax - seed.umin, width = seed.vmax - seed.vmin;
-    if (length < 3.0 * width || width < o_.min_box_thickness) continue;
+    if (seed.sagitta > 0.5 * ransac_.epsilon) continue;
+    if (length < 2.0 * width || width < o_.min_box_thickness) continue;
     std::vector<double> depths;
     for (const Member& m : siblings) {
       if (std::abs(m.u.dot(seed.u)) < cos_tol_) continue;
@@ -129,7 +250,7 @@ void Builder::one_face_members() {
             std::min(std::abs(pass->s - seed.umin), std::abs(pass->s - seed.umax));
         if (pass->distance <= std::max(2.0 * ransac_.epsilon, 0.25 * depth) &&
             at_end <= r + reach + length && pass->t >= -tight &&
-            pass->t <= p.spec.placement.scale() * p.spec.height + tight) {
+            pass->t <= p.spec.placement.scale() * p.spec.height + tight + depth) {
           through = true;
           break;
         }
@@ -140,7 +261,7 @@ void Builder::one_face_members() {
     const double c0 = chosen < 0 ? -depth : 0.0, c1 = chosen < 0 ? 0.0 : depth;
     const SeedBox extent{seed.umin, seed.umax, seed.vmin, seed.vmax, c0, c1};
     const std::vector<std::uint32_t> members = unused_in(seed, extent, tight);
-    seed.used = true;
+    for (std::size_t k : item.parts) patches_[k].used = true;
     auto spec = seed_box_spec(seed, extent);
     if (!spec) continue;
     const double area = box_area(spec->size);
@@ -295,7 +416,11 @@ void Builder::join_members() {
         // The target's axis line and the member's centre line: where they pass closest.
         const auto pass = closest_approach(end, out, origin, axis);
         if (!pass || pass->distance > across) continue;
-        if (pass->t < -tight || pass->t > extent + tight) continue;
+        // A column's top hidden among the members it carries (the scan sees no surface there)
+        // ends its fit up to a member's section below them.
+        const double hidden =
+            t.type == PrimitiveType::Cylinder ? 2.0 * std::max(m.half_a, m.half_b) : 0.0;
+        if (pass->t < -tight || pass->t > extent + tight + hidden) continue;
         const double s = pass->s;  // along `out` from the end
         // The end between the target's near surface (less the noise margin) and its axis.
         if (s < 0.0) continue;

@@ -32,6 +32,12 @@ struct PlanePatch {
   bool used = false;
 };
 
+// The patch of `members` (a connected piece of plane `shape`, number `index`): its frame (u
+// along the longer side of the smallest rectangle around them), extent, coverage of `cell`
+// cells and how far it bows across (box_primitives.cpp).
+PlanePatch make_patch(std::span<const Vec3> points, const DetectedShape& shape, int index,
+                      std::vector<std::uint32_t> members, double cell);
+
 // A rotation with columns x, y, x × y, made exactly orthonormal.
 Eigen::Matrix3d frame(const Vec3& x, const Vec3& y);
 
