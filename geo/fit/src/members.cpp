@@ -198,6 +198,14 @@ void Builder::one_face_members() {
           const double g0 = e[0] > w.patch.umax ? w.patch.umax : e[1];
           const double g1 = e[0] > w.patch.umax ? e[0] : w.patch.umin;
           if (g1 > g0 && column_between(w.patch, g0, g1)) continue;
+          // No longer than the longest member parallel to it (members of a frame repeat): a
+          // column the fit did not make between two members leaves nothing else to tell.
+          const double joined = std::max(e[1], w.patch.umax) - std::min(e[0], w.patch.umin);
+          double longest = 0.0;
+          for (const Member& m : siblings) {
+            if (std::abs(m.u.dot(w.patch.u)) >= cos_tol_) longest = std::max(longest, m.length);
+          }
+          if (joined > 1.1 * longest) continue;
           std::vector<std::uint32_t> both = w.patch.members;
           both.insert(both.end(), patches_[j].members.begin(), patches_[j].members.end());
           std::sort(both.begin(), both.end());
