@@ -98,7 +98,9 @@ Margins margins(double epsilon, double cell, double cos_tol) {
 // the face's band); a face twice as long as it is wide is enough, the siblings confirming what
 // it is. join_members then takes its ends to the columns.
 void Builder::one_face_members() {
-  const auto [tight, reach, sin_tol] = margins(ransac_.epsilon, cell_, cos_tol_);
+  // Plain variables, not a structured binding: the lambdas below capture them.
+  const Margins margin = margins(ransac_.epsilon, cell_, cos_tol_);
+  const double tight = margin.tight, reach = margin.reach, sin_tol = margin.sin_tol;
   std::vector<Member> siblings;
   for (const auto& p : out_.primitives) {
     if (auto m = as_member(p.spec)) siblings.push_back(*m);
