@@ -1,6 +1,6 @@
-// From detected shapes to scene primitives: a beam seen from three sides is one box with its
-// size and placement, curved shapes are bounded by their inliers, every primitive is a valid
-// kernel solid with its fit quality.
+// From detected shapes to scene primitives: a beam seen from three sides is one
+// box with its size and placement, curved shapes are bounded by their inliers,
+// every primitive is a valid kernel solid with its fit quality.
 
 #include <gtest/gtest.h>
 
@@ -58,15 +58,17 @@ std::string rejections(const FittedPrimitives& f) {
 }
 
 TEST(FitPrimitives, BeamSeenFromThreeSidesIsOneBox) {
-  // A 3 × 0.2 × 0.3 beam turned 30° about z, scanned on its two long sides and its bottom.
+  // A 3 × 0.2 × 0.3 beam turned 30° about z, scanned on its two long sides and
+  // its bottom.
   const double turn = 30.0 * std::numbers::pi / 180.0;
   const Vec3 ex(std::cos(turn), std::sin(turn), 0.0), ey(-std::sin(turn), std::cos(turn), 0.0);
   const Vec3 ez = Vec3::UnitZ();
   const Vec3 corner(2.0, -1.0, 3.7);
   const Vec3 lx = 3.0 * ex, ly = 0.2 * ey, lz = 0.3 * ez;
-  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 1);       // y = 0 side
-  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002, 2));  // y = 0.2 side
-  c.append(testing::rectangle_cloud(corner, lx, ly, 0.01, 0.002, 3));       // bottom
+  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 1);  // y = 0 side
+  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002,
+                                    2));                               // y = 0.2 side
+  c.append(testing::rectangle_cloud(corner, lx, ly, 0.01, 0.002, 3));  // bottom
   const Fitted f = fit(c);
   ASSERT_EQ(f.primitives.primitives.size(), 1U);
   const auto& p = f.primitives.primitives[0];
@@ -101,16 +103,19 @@ std::vector<double> sorted_size(const kernel::PrimitiveSpec& s) {
   return size;
 }
 
-// A beam's far side seen at a grazing angle: a few dozen points, too few for a plane of the
-// RANSAC's min_points (50 here). The box gets its width from those points all the same.
+// A beam's far side seen at a grazing angle: a few dozen points, too few for a
+// plane of the RANSAC's min_points (50 here). The box gets its width from those
+// points all the same.
 TEST(FitPrimitives, BeamWhoseFarSideIsTooSparseForAPlaneKeepsItsWidth) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 lx(3.0, 0.0, 0.0), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 1);       // y = 0 side
-  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.17, 0.002, 2));  // y = 0.2: ~30
+  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 1);  // y = 0 side
+  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.17, 0.002,
+                                    2));  // y = 0.2: ~30
   ASSERT_LT(c.points.size(), 9000U + 50U);
-  // Normals as the scan's geometry gives them: estimated ones on so sparse a face lean
-  // towards the dense side 0.2 m away, a matter for normal estimation, not for boxes.
+  // Normals as the scan's geometry gives them: estimated ones on so sparse a
+  // face lean towards the dense side 0.2 m away, a matter for normal
+  // estimation, not for boxes.
   RansacOptions o;
   o.epsilon = 0.01;
   o.min_points = 50;
@@ -128,13 +133,15 @@ TEST(FitPrimitives, BeamWhoseFarSideIsTooSparseForAPlaneKeepsItsWidth) {
   EXPECT_NEAR(sorted_size(p)[0], 0.2, 0.02);
 }
 
-// A beam seen on one long side and underneath only (the scanner below it on that side): the
-// underside bridges from the side to where the box ends, no opposite face is needed.
+// A beam seen on one long side and underneath only (the scanner below it on
+// that side): the underside bridges from the side to where the box ends, no
+// opposite face is needed.
 TEST(FitPrimitives, BeamSeenOnOneSideAndBelowIsOneBox) {
   const Vec3 corner(1.0, 2.0, 3.7);
   const Vec3 lx(0.0, 3.0, 0.0), ly(-0.2, 0.0, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 3);  // side
-  c.append(testing::rectangle_cloud(corner, lx, ly, 0.02, 0.002, 4));  // underside, sparser
+  c.append(testing::rectangle_cloud(corner, lx, ly, 0.02, 0.002,
+                                    4));  // underside, sparser
   const Fitted f = fit(c);
   ASSERT_EQ(f.primitives.primitives.size(), 1U);
   const auto& p = f.primitives.primitives[0].spec;
@@ -146,15 +153,16 @@ TEST(FitPrimitives, BeamSeenOnOneSideAndBelowIsOneBox) {
   EXPECT_NEAR(size[2], 3.0, 0.02);
 }
 
-// A post standing in front of a beam casts a shadow across its side: the side's plane comes
-// in two pieces, but the underside (seen from elsewhere) spans the shadow, so the beam is one
-// box over its whole length, not two half-beams.
+// A post standing in front of a beam casts a shadow across its side: the side's
+// plane comes in two pieces, but the underside (seen from elsewhere) spans the
+// shadow, so the beam is one box over its whole length, not two half-beams.
 TEST(FitPrimitives, BeamWithAShadowAcrossItsSideIsOneBox) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 5);
   c.append(testing::rectangle_cloud(corner + 1.7 * ex, lz, 1.3 * ex, 0.01, 0.002, 6));
-  c.append(testing::rectangle_cloud(corner, 3.0 * ex, ly, 0.015, 0.002, 7));  // underside
+  c.append(testing::rectangle_cloud(corner, 3.0 * ex, ly, 0.015, 0.002,
+                                    7));  // underside
   const Fitted f = fit(c);
   ASSERT_EQ(f.primitives.primitives.size(), 1U);
   const auto& p = f.primitives.primitives[0].spec;
@@ -176,15 +184,17 @@ Fitted fit_given_normals(const Cloud& c) {
   return f;
 }
 
-// A shadow 0.4 m wide across the only dense side of a beam, its far side too sparse to bridge
-// it point to point (0.17 m apart): the same section goes on beyond the shadow, so the two
-// pieces of the side are one box over the whole length, not a half-beam and a rejected piece.
+// A shadow 0.4 m wide across the only dense side of a beam, its far side too
+// sparse to bridge it point to point (0.17 m apart): the same section goes on
+// beyond the shadow, so the two pieces of the side are one box over the whole
+// length, not a half-beam and a rejected piece.
 TEST(FitPrimitives, BeamWhoseOnlyDenseSideIsShadowedIsOneBox) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 21);
   c.append(testing::rectangle_cloud(corner + 1.7 * ex, lz, 1.3 * ex, 0.01, 0.002, 22));
-  c.append(testing::rectangle_cloud(corner + ly, 3.0 * ex, lz, 0.17, 0.002, 23));  // far side
+  c.append(testing::rectangle_cloud(corner + ly, 3.0 * ex, lz, 0.17, 0.002,
+                                    23));  // far side
   const Fitted f = fit_given_normals(c);
   ASSERT_EQ(f.primitives.primitives.size(), 1U);
   const auto& p = f.primitives.primitives[0].spec;
@@ -194,15 +204,17 @@ TEST(FitPrimitives, BeamWhoseOnlyDenseSideIsShadowedIsOneBox) {
   EXPECT_NEAR(sorted_size(p)[0], 0.2, 0.02);
 }
 
-// A sparse face's estimated normals straddle its edges (the neighbourhood reaches the next
-// face): here the far side of a beam beyond the end of its dense side, normals halfway
-// between the side and the underside, in the section's plane. Points on the section's
-// outline still carry the box along: one box over the whole length.
+// A sparse face's estimated normals straddle its edges (the neighbourhood
+// reaches the next face): here the far side of a beam beyond the end of its
+// dense side, normals halfway between the side and the underside, in the
+// section's plane. Points on the section's outline still carry the box along:
+// one box over the whole length.
 TEST(FitPrimitives, BeamContinuedByFacePointsWithStraddlingNormalsIsOneBox) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 31);       // side
-  c.append(testing::rectangle_cloud(corner + ly, 1.3 * ex, lz, 0.04, 0.002, 32));  // far side
+  Cloud c = testing::rectangle_cloud(corner, lz, 1.3 * ex, 0.01, 0.002, 31);  // side
+  c.append(testing::rectangle_cloud(corner + ly, 1.3 * ex, lz, 0.04, 0.002,
+                                    32));  // far side
   Cloud straddling =
       testing::rectangle_cloud(corner + ly + 1.3 * ex, 1.7 * ex, lz, 0.02, 0.002, 33);
   for (auto& n : straddling.normals) n = Vec3(0.0, 0.6, -0.8);
@@ -215,16 +227,18 @@ TEST(FitPrimitives, BeamContinuedByFacePointsWithStraddlingNormalsIsOneBox) {
   EXPECT_NEAR(sorted_size(p)[2], 3.0, 0.02);
 }
 
-// Posts standing in a row beyond a beam's end, their surfaces 1.5 cm off the plane of its side:
-// their points lie on the box's outline with normals across its length, but they belong to
-// cylinders across the length, members the beam meets, not its faces. The box keeps its own
-// 2 m, whatever the shadow-gap rule would bridge between the posts.
+// Posts standing in a row beyond a beam's end, their surfaces 1.5 cm off the
+// plane of its side: their points lie on the box's outline with normals across
+// its length, but they belong to cylinders across the length, members the beam
+// meets, not its faces. The box keeps its own 2 m, whatever the shadow-gap rule
+// would bridge between the posts.
 TEST(FitPrimitives, PostsInARowBeyondABeamDoNotLengthenIt) {
   const Vec3 corner(0.0, 0.0, 3.7);
   const Vec3 lx(2.0, 0.0, 0.0), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 41);       // side y = 0
-  c.append(testing::rectangle_cloud(corner, lx, ly, 0.015, 0.002, 42));      // underside
-  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002, 43));  // side y = 0.2
+  Cloud c = testing::rectangle_cloud(corner, lz, lx, 0.01, 0.002, 41);   // side y = 0
+  c.append(testing::rectangle_cloud(corner, lx, ly, 0.015, 0.002, 42));  // underside
+  c.append(testing::rectangle_cloud(corner + ly, lx, lz, 0.01, 0.002,
+                                    43));  // side y = 0.2
   for (int k = 0; k < 4; ++k) {
     c.append(testing::cylinder_cloud(Vec3(2.3 + 0.45 * k, -0.165, 3.2), Vec3::UnitZ(), 0.15, 1.3,
                                      0.0, 2.0 * std::numbers::pi, 3000, 0.002,
@@ -244,16 +258,18 @@ TEST(FitPrimitives, PostsInARowBeyondABeamDoNotLengthenIt) {
   EXPECT_EQ(cylinders, 4);
 }
 
-// Two collinear beams abutting a crossing beam from either side (a node of a timber grid),
-// their sides and undersides coplanar across the node. The crossing beam, scanned densest, is
-// built first; its points in the node tell the others that a member crosses there, so the
-// shadow-gap rule does not carry either across it: three boxes, not a crossing beam and one
-// long beam through it. Each collinear beam's end then reaches the crossing member's middle
-// (the joint is hidden; members meet there), so each is 1.5 m long.
+// Two collinear beams abutting a crossing beam from either side (a node of a
+// timber grid), their sides and undersides coplanar across the node. The
+// crossing beam, scanned densest, is built first; its points in the node tell
+// the others that a member crosses there, so the shadow-gap rule does not carry
+// either across it: three boxes, not a crossing beam and one long beam through
+// it. Each collinear beam's end then reaches the crossing member's middle (the
+// joint is hidden; members meet there), so each is 1.5 m long.
 TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
   const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), lz(0.0, 0.0, 0.3);
   Cloud c;
-  // The crossing beam along y: x in [-0.1, 0.1], its sides hidden where the others abut.
+  // The crossing beam along y: x in [-0.1, 0.1], its sides hidden where the
+  // others abut.
   for (const double x : {-0.1, 0.1}) {
     c.append(testing::rectangle_cloud(Vec3(x, -1.5, 3.7), 1.4 * ey, lz, 0.007, 0.002, 51));
     c.append(testing::rectangle_cloud(Vec3(x, 0.1, 3.7), 1.4 * ey, lz, 0.007, 0.002, 52));
@@ -268,8 +284,8 @@ TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
     c.append(
         testing::rectangle_cloud(Vec3(x0, -0.1, 3.7), 1.4 * ex, 0.2 * ey, 0.015, 0.002, seed++));
   }
-  // Boxes only: the node's cross-shaped section would otherwise be one extrusion, which is
-  // not what this test is about.
+  // Boxes only: the node's cross-shaped section would otherwise be one
+  // extrusion, which is not what this test is about.
   RansacOptions o;
   o.epsilon = 0.01;
   o.min_points = 50;
@@ -296,11 +312,12 @@ TEST(FitPrimitives, TwoCollinearBeamsCrossingAThirdAreThreeBoxes) {
   EXPECT_NEAR(sorted_size(boxes[2])[2], 1.5, 0.03);
 }
 
-// Two beams meeting end to end at a post that stands wider than they are (the gate's
-// junctions): their sides are coplanar, their undersides one plane, but the post between
-// them ends each: two boxes, not one through the post. The post's top is hidden in them (its
-// fit ends at their undersides): each beam's end still reaches its axis, where the members
-// meet, so each box runs 2.888 m from its far end to x = 0.
+// Two beams meeting end to end at a post that stands wider than they are (the
+// gate's junctions): their sides are coplanar, their undersides one plane, but
+// the post between them ends each: two boxes, not one through the post. The
+// post's top is hidden in them (its fit ends at their undersides): each beam's
+// end still reaches its axis, where the members meet, so each box runs 2.888 m
+// from its far end to x = 0.
 TEST(FitPrimitives, TwoBeamsMeetingAtAPostAreTwoBoxes) {
   const Vec3 ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3), ex = Vec3::UnitX();
   Cloud c;
@@ -311,7 +328,8 @@ TEST(FitPrimitives, TwoBeamsMeetingAtAPostAreTwoBoxes) {
     c.append(testing::rectangle_cloud(corner + ly, 2.776 * ex, lz, 0.01, 0.002, seed++));
     c.append(testing::rectangle_cloud(corner, 2.776 * ex, ly, 0.015, 0.002, seed++));
   }
-  // The post below the beams (radius 0.15, up to their undersides), its top hidden in them.
+  // The post below the beams (radius 0.15, up to their undersides), its top
+  // hidden in them.
   c.append(testing::cylinder_cloud(Vec3(0, 0, 2.7), Vec3::UnitZ(), 0.15, 1.0, 0.0,
                                    2.0 * std::numbers::pi, 3000, 0.002, seed++));
   const Fitted f = fit(c);
@@ -328,9 +346,10 @@ TEST(FitPrimitives, TwoBeamsMeetingAtAPostAreTwoBoxes) {
   EXPECT_LT((centres[1] - Vec3(1.444, 0.0, 3.85)).norm(), 0.02);
 }
 
-// A beam 3 m long whose sides and underside the scan saw in two pieces, a shadow 0.8 m long
-// across all of them (longer than the gap a face's points are followed over): two boxes of
-// one section on one line with nothing between them are one member over the whole length.
+// A beam 3 m long whose sides and underside the scan saw in two pieces, a
+// shadow 0.8 m long across all of them (longer than the gap a face's points are
+// followed over): two boxes of one section on one line with nothing between
+// them are one member over the whole length.
 TEST(FitPrimitives, BeamSeenInTwoPiecesIsOneMember) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c;
@@ -350,8 +369,8 @@ TEST(FitPrimitives, BeamSeenInTwoPiecesIsOneMember) {
   EXPECT_EQ(f.primitives.primitives[0].id, "r0-0");
 }
 
-// The same two pieces with their end faces seen across the gap (two beams, not one in a
-// shadow): points facing along the line between them keep them apart.
+// The same two pieces with their end faces seen across the gap (two beams, not
+// one in a shadow): points facing along the line between them keep them apart.
 TEST(FitPrimitives, TwoBeamsWithTheirEndsSeenStayTwo) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c;
@@ -373,8 +392,8 @@ TEST(FitPrimitives, TwoBeamsWithTheirEndsSeenStayTwo) {
   for (const double l : lengths) EXPECT_NEAR(l, 1.1, 0.03);
 }
 
-// The cloud without its points inside the axis-aligned box [lo, hi] (a column's surface where
-// a beam covers it: the scan never sees it).
+// The cloud without its points inside the axis-aligned box [lo, hi] (a column's
+// surface where a beam covers it: the scan never sees it).
 Cloud without_box(const Cloud& c, const Vec3& lo, const Vec3& hi) {
   Cloud out;
   for (std::size_t i = 0; i < c.points.size(); ++i) {
@@ -386,9 +405,9 @@ Cloud without_box(const Cloud& c, const Vec3& lo, const Vec3& hi) {
   return out;
 }
 
-// A beam running into a column (radius 0.15), seen up to the column's surface: its end
-// reaches the column's axis, where the frame's members meet, so that the two overlap and
-// fuse into one solid instead of touching along a line.
+// A beam running into a column (radius 0.15), seen up to the column's surface:
+// its end reaches the column's axis, where the frame's members meet, so that
+// the two overlap and fuse into one solid instead of touching along a line.
 TEST(FitPrimitives, BeamEndingInAColumnReachesItsAxis) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c = without_box(testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
@@ -410,21 +429,40 @@ TEST(FitPrimitives, BeamEndingInAColumnReachesItsAxis) {
   EXPECT_LT((box_centre(boxes[0]) - Vec3(1.5, 0.0, 3.45)).norm(), 0.02);
 }
 
-// A beam (0.2 x 0.3) between two columns (radius 0.15, at x = 0 and 3 on y = 0) seen whole
-// over its first metre and, behind a shadow 1.4 m long, only as a sparse strip of one side
-// before the far column (too few points for a box of its own): the free end goes on to that
-// column's axis although the shadow is longer than the piece seen, because the beam's face
-// is seen again before the column. Without the strip it stops where its points stop.
+// Two columns (radius 0.15, 4 m, at x = 0 and 3 on y = 0) whose surface a beam
+// of 0.2 x 0.3 between them hides (y in [-0.1, 0.1], z in [3.3, 3.6]); seeds
+// from `seed` on.
+Cloud two_columns(std::uint64_t& seed) {
+  Cloud c;
+  for (const double x : {0.0, 3.0}) {
+    c.append(without_box(testing::cylinder_cloud(Vec3(x, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
+                                                 2.0 * std::numbers::pi, 6000, 0.002, seed++),
+                         Vec3(x - 1, -0.1, 3.3), Vec3(x + 1, 0.1, 3.6)));
+  }
+  return c;
+}
+
+// A sibling beam 3 m from the columns' line (y in [2.9, 3.1], z in [3.3, 3.6],
+// x in [0, 3]), seen on both sides and below.
+void add_sibling_beam(Cloud& c, std::uint64_t& seed) {
+  const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
+  const Vec3 sibling(0.0, 2.9, 3.3);
+  c.append(testing::rectangle_cloud(sibling, lz, 3.0 * ex, 0.01, 0.002, seed++));
+  c.append(testing::rectangle_cloud(sibling + ly, 3.0 * ex, lz, 0.01, 0.002, seed++));
+  c.append(testing::rectangle_cloud(sibling, 3.0 * ex, ly, 0.015, 0.002, seed++));
+}
+
+// A beam (0.2 x 0.3) between two columns (radius 0.15, at x = 0 and 3 on y = 0)
+// seen whole over its first metre and, behind a shadow 1.4 m long, only as a
+// sparse strip of one side before the far column (too few points for a box of
+// its own): the free end goes on to that column's axis although the shadow is
+// longer than the piece seen, because the beam's face is seen again before the
+// column. Without the strip it stops where its points stop.
 TEST(FitPrimitives, BeamSeenAgainBehindALongShadowReachesTheFarColumn) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   auto scene = [&](bool strip) {
-    Cloud c;
     std::uint64_t seed = 120;
-    for (const double x : {0.0, 3.0}) {
-      c.append(without_box(testing::cylinder_cloud(Vec3(x, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
-                                                   2.0 * std::numbers::pi, 6000, 0.002, seed++),
-                           Vec3(x - 1, -0.1, 3.3), Vec3(x + 1, 0.1, 3.6)));
-    }
+    Cloud c = two_columns(seed);
     const double x0 = std::sqrt(0.15 * 0.15 - 0.1 * 0.1);
     const Vec3 corner(x0, -0.1, 3.3);
     c.append(testing::rectangle_cloud(corner, lz, (1.0 - x0) * ex, 0.01, 0.002, seed++));
@@ -448,24 +486,17 @@ TEST(FitPrimitives, BeamSeenAgainBehindALongShadowReachesTheFarColumn) {
   }
 }
 
-// A beam (0.2 x 0.3) between two columns (radius 0.15, at x = 0 and 3 on y = 0) seen on one
-// side only, over its middle 1.4 m (shadows at both ends), and a parallel sibling beam 3 m
-// away seen on both sides and below. The first takes the section its sibling shows, on the
-// side of its face where its centre line runs through the columns' axes, and its free ends
-// go on to them: one box from axis to axis.
+// A beam (0.2 x 0.3) between two columns (radius 0.15, at x = 0 and 3 on y = 0)
+// seen on one side only, over its middle 1.4 m (shadows at both ends), and a
+// parallel sibling beam 3 m away seen on both sides and below. The first takes
+// the section its sibling shows, on the side of its face where its centre line
+// runs through the columns' axes, and its free ends go on to them: one box from
+// axis to axis.
 TEST(FitPrimitives, BeamSeenOnOneFaceTakesItsSiblingsSectionAndReachesTheColumns) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c;
   std::uint64_t seed = 110;
-  for (const double x : {0.0, 3.0}) {
-    c.append(without_box(testing::cylinder_cloud(Vec3(x, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
-                                                 2.0 * std::numbers::pi, 6000, 0.002, seed++),
-                         Vec3(x - 1, -0.1, 3.3), Vec3(x + 1, 0.1, 3.6)));
-  }
-  const Vec3 sibling(0.0, 2.9, 3.3);
-  c.append(testing::rectangle_cloud(sibling, lz, 3.0 * ex, 0.01, 0.002, seed++));
-  c.append(testing::rectangle_cloud(sibling + ly, 3.0 * ex, lz, 0.01, 0.002, seed++));
-  c.append(testing::rectangle_cloud(sibling, 3.0 * ex, ly, 0.015, 0.002, seed++));
+  Cloud c = two_columns(seed);
+  add_sibling_beam(c, seed);
   c.append(testing::rectangle_cloud(Vec3(0.8, -0.1, 3.3), lz, 1.4 * ex, 0.01, 0.002, seed++));
   const Fitted f = fit(c);
   std::vector<kernel::PrimitiveSpec> boxes = boxes_of(f.primitives);
@@ -482,22 +513,15 @@ TEST(FitPrimitives, BeamSeenOnOneFaceTakesItsSiblingsSectionAndReachesTheColumns
   }
 }
 
-// The same one-face beam, its face seen in three pieces of one plane (0.5, 0.5 and 0.4 m long:
-// each shorter than three times its 0.3 m width, shadows of 0.4 m between them): the pieces,
-// with no column between them, are one face, and the beam one box from axis to axis.
+// The same one-face beam, its face seen in three pieces of one plane (0.5, 0.5
+// and 0.4 m long: each shorter than three times its 0.3 m width, shadows of 0.4
+// m between them): the pieces, with no column between them, are one face, and
+// the beam one box from axis to axis.
 TEST(FitPrimitives, BeamFaceSeenInPiecesIsOneMember) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
-  Cloud c;
   std::uint64_t seed = 130;
-  for (const double x : {0.0, 3.0}) {
-    c.append(without_box(testing::cylinder_cloud(Vec3(x, 0, 0), Vec3::UnitZ(), 0.15, 4.0, 0.0,
-                                                 2.0 * std::numbers::pi, 6000, 0.002, seed++),
-                         Vec3(x - 1, -0.1, 3.3), Vec3(x + 1, 0.1, 3.6)));
-  }
-  const Vec3 sibling(0.0, 2.9, 3.3);
-  c.append(testing::rectangle_cloud(sibling, lz, 3.0 * ex, 0.01, 0.002, seed++));
-  c.append(testing::rectangle_cloud(sibling + ly, 3.0 * ex, lz, 0.01, 0.002, seed++));
-  c.append(testing::rectangle_cloud(sibling, 3.0 * ex, ly, 0.015, 0.002, seed++));
+  Cloud c = two_columns(seed);
+  add_sibling_beam(c, seed);
   for (const auto& [x0, length] : {std::pair{0.4, 0.5}, {1.3, 0.5}, {2.2, 0.4}}) {
     c.append(testing::rectangle_cloud(Vec3(x0, -0.1, 3.3), lz, length * ex, 0.01, 0.002, seed++));
   }
@@ -513,9 +537,10 @@ TEST(FitPrimitives, BeamFaceSeenInPiecesIsOneMember) {
   EXPECT_LT((box_centre(boxes[0]) - Vec3(1.5, 0.0, 3.45)).norm(), 0.02);
 }
 
-// Columns whose tops the beam they carry hides (the scan sees them up to 3.6 m, the beam lies
-// over 3.7-4.0 m between them): the columns are fitted 3.6 m high, below the beam's centre
-// line, and the beam's ends still reach their axes.
+// Columns whose tops the beam they carry hides (the scan sees them up to 3.6 m,
+// the beam lies over 3.7-4.0 m between them): the columns are fitted 3.6 m
+// high, below the beam's centre line, and the beam's ends still reach their
+// axes.
 TEST(FitPrimitives, BeamOverHiddenColumnTopsReachesTheirAxes) {
   const Vec3 ex = Vec3::UnitX(), ly(0.0, 0.2, 0.0), lz(0.0, 0.0, 0.3);
   Cloud c;
@@ -537,8 +562,9 @@ TEST(FitPrimitives, BeamOverHiddenColumnTopsReachesTheirAxes) {
   EXPECT_LT((box_centre(boxes[0]) - Vec3(1.5, 0.0, 3.85)).norm(), 0.02);
 }
 
-// A narrow strip of a column that the RANSAC took for a plane (a flat-enough piece of a
-// sparse cylinder) bows across its width: no box is built on it, the reason says why.
+// A narrow strip of a column that the RANSAC took for a plane (a flat-enough
+// piece of a sparse cylinder) bows across its width: no box is built on it, the
+// reason says why.
 TEST(FitPrimitives, StripOfAColumnIsNoBox) {
   const Cloud c =
       testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), 0.15, 3.5, -0.6, 0.6, 1500, 0.001, 12);
@@ -558,8 +584,9 @@ TEST(FitPrimitives, StripOfAColumnIsNoBox) {
   EXPECT_TRUE(said);
 }
 
-// A beam's underside seen from below with terrain under it: no box from the ground up to it
-// (only roofs wide enough to be buildings reach down to the terrain).
+// A beam's underside seen from below with terrain under it: no box from the
+// ground up to it (only roofs wide enough to be buildings reach down to the
+// terrain).
 TEST(FitPrimitives, BeamUndersideIsNoBuildingOverTheGround) {
   const Cloud c =
       testing::rectangle_cloud(Vec3(0, 0, 3.7), Vec3(3, 0, 0), Vec3(0, 0.2, 0), 0.01, 0.002, 13);
@@ -599,7 +626,8 @@ TEST(FitPrimitives, CylinderIsBoundedByItsInliers) {
 }
 
 TEST(FitPrimitives, ConeSphereAndTorusBecomeValidSolids) {
-  // Similar densities (the connectivity size follows the cloud's typical spacing).
+  // Similar densities (the connectivity size follows the cloud's typical
+  // spacing).
   Cloud c = testing::cone_cloud(Vec3(0, 0, 2), Vec3(0, 0, -1), std::atan(1.2 / 2.0), 0.3, 2.0, 8000,
                                 0.003, 5);
   c.append(testing::sphere_cloud(Vec3(20, 0, 8), 2.0, 0.0, 10000, 0.003, 6));
@@ -613,7 +641,8 @@ TEST(FitPrimitives, ConeSphereAndTorusBecomeValidSolids) {
     ASSERT_TRUE(solid.ok());
     EXPECT_TRUE(kernel::check_shape(solid.value()).valid());
     if (p.spec.type == PrimitiveType::Cone) {
-      // Radius 1.2 at the base (z = 0), apex at z = 2: the inliers reach from t = 0.3 to 2.
+      // Radius 1.2 at the base (z = 0), apex at z = 2: the inliers reach from t
+      // = 0.3 to 2.
       EXPECT_NEAR(std::max(p.spec.radius, p.spec.radius2), 1.2, 0.02);
       EXPECT_NEAR(p.spec.height, 1.7, 0.03);
     }
@@ -636,10 +665,11 @@ TEST(FitPrimitives, LonePlaneIsRejectedWithAReason) {
   EXPECT_NE(f.primitives.rejected[0].reason.find("no box"), std::string::npos);
 }
 
-// Rule 4 (issue #18): a primitive must be supported by its points. A 21.7 m sphere fitted to
-// the 49 points of a roof's gentle cap (as over the timber gate and over row houses) covers
-// a thousandth of its surface and reaches tens of metres past the region: rejected, with the
-// reason counted; a well-seen ball is kept.
+// Rule 4 (issue #18): a primitive must be supported by its points. A 21.7 m
+// sphere fitted to the 49 points of a roof's gentle cap (as over the timber
+// gate and over row houses) covers a thousandth of its surface and reaches tens
+// of metres past the region: rejected, with the reason counted; a well-seen
+// ball is kept.
 RansacResult one_shape(const Surface& surface, std::size_t n, double cell) {
   RansacResult r;
   DetectedShape shape;
@@ -668,8 +698,8 @@ TEST(FitPrimitives, GiantSphereOverAFewRoofPointsIsRejectedAsUnsupported) {
 }
 
 TEST(FitPrimitives, SphereReachingFarBelowItsPointsIsRejectedAsUnsupported) {
-  // Densely seen (coverage passes) but the cap is 0.3 m of a 6 m sphere over a 4 m patch:
-  // the full sphere hangs 11 m below every point of the region.
+  // Densely seen (coverage passes) but the cap is 0.3 m of a 6 m sphere over a
+  // 4 m patch: the full sphere hangs 11 m below every point of the region.
   const Vec3 centre(0.0, 0.0, -5.7);
   const Cloud c = testing::sphere_cloud(centre, 6.0, 5.7, 4000, 0.0, 12);
   Surface s;
