@@ -113,9 +113,13 @@ void Builder::one_face_members() {
   auto dominant_band = [&](const PlanePatch& patch) -> std::optional<PlanePatch> {
     std::optional<PlanePatch> best;
     for (const Vec3& axis : {patch.u, patch.v}) {
+      std::vector<long long> bin_of;  // per member
       std::map<long long, int> bins;
+      bin_of.reserve(patch.members.size());
       for (auto i : patch.members) {
-        ++bins[static_cast<long long>(std::floor((points_[i] - patch.origin).dot(axis) / cell_))];
+        bin_of.push_back(
+            static_cast<long long>(std::floor((points_[i] - patch.origin).dot(axis) / cell_)));
+        ++bins[bin_of.back()];
       }
       auto top = bins.begin();
       for (auto it = bins.begin(); it != bins.end(); ++it) {
@@ -129,10 +133,8 @@ void Builder::one_face_members() {
       while (full(lo - 1)) --lo;
       while (full(hi + 1)) ++hi;
       std::vector<std::uint32_t> kept;
-      for (auto i : patch.members) {
-        const auto b =
-            static_cast<long long>(std::floor((points_[i] - patch.origin).dot(axis) / cell_));
-        if (b >= lo && b <= hi) kept.push_back(i);
+      for (std::size_t k = 0; k < patch.members.size(); ++k) {
+        if (bin_of[k] >= lo && bin_of[k] <= hi) kept.push_back(patch.members[k]);
       }
       if (kept.size() == patch.members.size() ||
           static_cast<long long>(kept.size()) < std::max<long long>(3, ransac_.min_points / 4)) {

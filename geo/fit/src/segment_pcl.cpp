@@ -30,19 +30,16 @@ namespace {
 
 using kernel::Vec3;
 
-// The finite points (of `subset`, positions in it; all: indices) as a PCL cloud, with their
-// input indices.
-pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
-                                             std::vector<std::uint32_t>& index,
-                                             std::span<const std::uint32_t> subset = {},
-                                             bool all = true) {
+// The finite ones of `n` points, the k-th point_of(k), as a PCL cloud, with their positions k.
+template <class PointOf>
+pcl::PointCloud<pcl::PointXYZ>::Ptr cloud_of(std::size_t n, const PointOf& point_of,
+                                             std::vector<std::uint32_t>& index) {
   auto cloud = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  const std::size_t n = all ? points.size() : subset.size();
   cloud->reserve(n);
   index.clear();
   index.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const Vec3& p = points[all ? k : subset[k]];
+    const Vec3& p = point_of(k);
     // PCL works in float: coordinates beyond its range are as unusable as NaN.
     if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e30) continue;
     cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
@@ -53,6 +50,13 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
   cloud->height = 1;
   cloud->is_dense = true;
   return cloud;
+}
+
+// The finite points as a PCL cloud, with their input indices.
+pcl::PointCloud<pcl::PointXYZ>::Ptr to_cloud(std::span<const Vec3> points,
+                                             std::vector<std::uint32_t>& index) {
+  return cloud_of(
+      points.size(), [&](std::size_t k) -> const Vec3& { return points[k]; }, index);
 }
 
 // PCL's index lists (into the cloud) as lists of input indices, each ascending, empty ones
@@ -75,12 +79,11 @@ std::vector<std::vector<std::uint32_t>> to_groups(const std::vector<pcl::PointIn
   return out;
 }
 
-// Both remove_statistical_outliers: among all points (`all`) or those of `subset`.
-std::vector<std::uint32_t> statistical_outliers_kept(std::span<const Vec3> points,
-                                                     std::span<const std::uint32_t> subset,
-                                                     const OutlierOptions& options, bool all) {
-  std::vector<std::uint32_t> index;
-  auto cloud = to_cloud(points, index, subset, all);
+// The entries of `index` (one per point of `cloud`) of the points the statistical filter keeps,
+// ascending: both remove_statistical_outliers.
+std::vector<std::uint32_t> kept_by_filter(const pcl::PointCloud<pcl::PointXYZ>::Ptr& cloud,
+                                          std::vector<std::uint32_t> index,
+                                          const OutlierOptions& options) {
   if (!options.enabled || cloud->size() <= static_cast<std::size_t>(options.neighbours) + 1) {
     return index;
   }
@@ -101,13 +104,18 @@ std::vector<std::uint32_t> statistical_outliers_kept(std::span<const Vec3> point
 
 std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
                                                        const OutlierOptions& options) {
-  return statistical_outliers_kept(points, {}, options, true);
+  std::vector<std::uint32_t> index;
+  auto cloud = to_cloud(points, index);
+  return kept_by_filter(cloud, std::move(index), options);
 }
 
 std::vector<std::uint32_t> remove_statistical_outliers(std::span<const Vec3> points,
                                                        std::span<const std::uint32_t> subset,
                                                        const OutlierOptions& options) {
-  return statistical_outliers_kept(points, subset, options, false);
+  std::vector<std::uint32_t> index;
+  auto cloud = cloud_of(
+      subset.size(), [&](std::size_t k) -> const Vec3& { return points[subset[k]]; }, index);
+  return kept_by_filter(cloud, std::move(index), options);
 }
 
 std::vector<Vec3> voxel_downsample(std::span<const Vec3> points, const VoxelOptions& options) {
