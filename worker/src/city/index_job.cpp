@@ -2,6 +2,7 @@
 // tileset naming the cells' tilesets, and the run manifest, written last (city_jobs.h).
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 
@@ -19,6 +20,7 @@
 #include "export/run_index.h"
 #include "export_settings.h"
 #include "job_records.h"
+#include "ops/memory.h"
 #include "ops/stage_clock.h"
 #include "publish/publish_run.h"
 #include "snap_json.h"
@@ -126,6 +128,8 @@ std::vector<std::array<double, 2>> footprint_hull(const kernel::Shape& shape, do
 Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
                       const config::Config& config, JobQueue& queue, const Logger& log,
                       std::string& result, StageTimings* timings) {
+  StageTimings own;  // this job's stages go in timings.json too, however the caller keeps them
+  if (timings == nullptr) timings = &own;
   ops::StageClock clock(timings);
   clock.enter("read");
   const std::string& run = config.run.name;
@@ -306,6 +310,29 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   manifest["index"] = index_entry(index);
   manifest["tiles"] = root_tiles;
   manifest["problems"] = problems;
+
+  // This job's own line of timings.json (a job's record has its timings only once it is
+  // done): its stages up to here, before the report, the manifest and the upload.
+  clock.stop();
+  {
+    ordered_json stages = ordered_json::object();
+    double seconds = 0.0;
+    for (const auto& [stage, s] : timings->seconds) {
+      stages[stage] = s;
+      seconds += s;
+    }
+    ordered_json entry = {{"key", job.key},
+                          {"stages", stages},
+                          {"seconds", seconds},
+                          {"attempt", job.attempts},
+                          {"until", "report"}};
+    if (const auto peak = ops::peak_resident_bytes()) {
+      entry["peak_rss_mib"] =
+          std::round(static_cast<double>(*peak) / (1024.0 * 1024.0) * 10.0) / 10.0;
+    }
+    records.timings.push_back(std::move(entry));
+  }
+  clock.enter("publish");
 
   // The report (report.h): figures of the run, the cells' footprints and 3D views.
   ReportInput report;

@@ -1,0 +1,39 @@
+# GDAL is loaded on demand (geo/src/footprints/gdal_module.h): the csgtile binary does not
+# link it; a run's footprint check reads through the module (a missing layer is named with the
+# layers GDAL lists); without the module the check names it and where it was looked for.
+# Usage: cmake -DBIN=<csgtile> -DWORK=<dir> -P expect_gdal_module.cmake
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK}/no_module)
+file(WRITE ${WORK}/fp.geojson
+  "{\"type\":\"FeatureCollection\",\"crs\":{\"type\":\"name\",\"properties\":{\"name\":"
+  "\"urn:ogc:def:crs:EPSG::28992\"}},\"features\":[{\"type\":\"Feature\",\"properties\":"
+  "{\"id\":\"a\"},\"geometry\":{\"type\":\"Polygon\",\"coordinates\":[[[0,0],[10,0],[10,10],"
+  "[0,10],[0,0]]]}}]}\n")
+file(WRITE ${WORK}/run.yaml
+  "run:\n  name: gdal_module\n  inputs:\n    - ${WORK}/absent.las\n  output: ${WORK}/out\n"
+  "  crs: EPSG:28992\ncity:\n  footprints: ${WORK}/fp.geojson\n  footprints_layer: nope\n")
+
+execute_process(COMMAND ldd ${BIN} RESULT_VARIABLE rc OUTPUT_VARIABLE libs ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "ldd ${BIN} failed: ${err}")
+endif()
+if(libs MATCHES "libgdal")
+  message(FATAL_ERROR "the csgtile binary links GDAL itself (it should load the module):\n${libs}")
+endif()
+
+function(check_run env expected)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env ${env} ${BIN} run ${WORK}/run.yaml
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 78)
+    message(FATAL_ERROR "expected exit 78 (config), got ${rc}:\n${out}${err}")
+  endif()
+  string(FIND "${out}${err}" "${expected}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected '${expected}' in:\n${out}${err}")
+  endif()
+  message(STATUS "${env}: ${err}")
+endfunction()
+
+check_run("CSGTILE_MODULE_DIR=" "city.footprints: footprints ${WORK}/fp.geojson: no layer 'nope'; its layers: fp")
+check_run("CSGTILE_MODULE_DIR=${WORK}/no_module"
+          "the GDAL module libcsgtile_gdal.so is not installed (looked in ${WORK}/no_module;")
