@@ -466,17 +466,20 @@ std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
   if (s.type == ShapeType::Plane) {
-    // A plane stays a plane unless its points are clearly not flat and a cylinder through
-    // them is exact (a narrow strip of a wide cylinder): on exact clouds only, since on noisy
-    // ones the edge points it took from its neighbours would bend a cylinder towards them
-    // (and a bent plane is never exact).
+    // A plane stays a plane unless its points stray from it by more than the floor and a
+    // cylinder through them is exact, within the floor and within a tenth of the plane's error
+    // (a narrow strip of a wide cylinder, the root of a gear between two teeth, bends by as
+    // little as the floor; what marks it is the cylinder's far smaller error): on exact clouds
+    // only, since on noisy ones the edge points it took from its neighbours would bend a
+    // cylinder towards them (and a bent plane is never exact).
     if (!exact_) return std::nullopt;
     if (auto wall = wall_through_ring(s, inliers)) return wall;
     const double floor = noise_floor();
-    if (!(rms_of(s, inliers) > 2.0 * floor)) return std::nullopt;
+    const double flat = rms_of(s, inliers);
+    if (!(flat > floor)) return std::nullopt;
     auto cylinder = cylinder_across_plane(s, inliers);
     if (!cylinder || !keeps_most(*cylinder, inliers)) return std::nullopt;
-    if (!(rms_of(*cylinder, inliers) <= floor)) return std::nullopt;
+    if (!(rms_of(*cylinder, inliers) <= std::min(floor, 0.1 * flat))) return std::nullopt;
     if (criterion(*cylinder, inliers) < criterion(s, inliers) - evidence_margin(inliers)) {
       return cylinder;
     }

@@ -63,6 +63,32 @@ TEST(FitExactClouds, StripOfAWideCylinderIsACylinderOnExactPoints) {
   }
 }
 
+// A narrower strip (radius 22, 0.6 wide, as the root of a gear between its teeth): its points
+// stray from their plane by only 1–2 times the residual floor of exact points (a twentieth of
+// the derived epsilon), and the cylinder through them fits them to within rounding. The strip
+// is a cylinder: what tells it from a plane is that the cylinder's error is a small share of
+// the plane's, not that the plane's error is large.
+TEST(FitExactClouds, NarrowStripOfAWideCylinderIsACylinder) {
+  const double r = 22.0, half = 0.3 / r;
+  const Cloud c =
+      testing::cylinder_cloud(Vec3(0, 0, 0), Vec3::UnitZ(), r, 4.0, -half, half, 350, 0.0, 12);
+  NormalOptions n;
+  n.neighbours = 8;
+  const auto result =
+      detect_shapes(c.points, estimate_normals(c.points, n), derived_with_evidence(3));
+  ASSERT_TRUE(result.ok()) << result.error().message;
+  ASSERT_EQ(result->shapes.size(), 1U) << result->reason;
+  // The plane's error (0.149 a²/r for a strip of half-width a) against the floor.
+  const double plane_rms = 0.149 * 0.3 * 0.3 / r, floor = result->epsilon / 20.0;
+  EXPECT_GT(plane_rms, floor) << "epsilon " << result->epsilon;
+  EXPECT_LT(plane_rms, 2.0 * floor) << "epsilon " << result->epsilon;
+  const DetectedShape& s = result->shapes.front();
+  EXPECT_GT(s.inliers.size(), 345U);
+  ASSERT_EQ(s.surface.type, ShapeType::Cylinder);
+  EXPECT_NEAR(s.surface.radius, r, 0.01 * r);
+  EXPECT_GT(std::abs(s.surface.axis.z()), 0.9999);
+}
+
 // A cylinder's wall is also a torus whose tube runs along a large circle: when a torus is what
 // the RANSAC drew (here the only type it may draw), the cylinder along its tube (axis the
 // circle's tangent) keeps the points with fewer parameters and replaces it.
