@@ -504,6 +504,20 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
       chosen = alt;
     }
   }
+  if (chosen) return chosen;
+  // Below the floor the criterion cannot tell errors apart, so the surface of fewer parameters
+  // wins. But a surface whose points fit another to a tenth of the floor and of its own error
+  // has them exact on the other (the belt of a cylinder, taken for the sphere through its
+  // middle circle, fits that sphere within a cloud-wide noise estimate and the cylinder to
+  // rounding): the other, the one of fewest parameters when several are.
+  const double own = rms_of(s, inliers);
+  const double exact = 0.1 * std::min(noise_floor(), own);
+  for (const Surface& alt : options) {
+    if (!keeps_most(alt, inliers) || !(rms_of(alt, inliers) <= exact)) continue;
+    if (!chosen || detail::parameter_count(alt.type) < detail::parameter_count(chosen->type)) {
+      chosen = alt;
+    }
+  }
   return chosen;
 }
 
