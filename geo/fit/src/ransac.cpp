@@ -466,20 +466,24 @@ std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
   if (s.type == ShapeType::Plane) {
-    // A plane stays a plane unless its points stray from it by more than the floor and a
-    // cylinder through them is exact, within the floor and within a tenth of the plane's error
-    // (a narrow strip of a wide cylinder, the root of a gear between two teeth, bends by as
-    // little as the floor; what marks it is the cylinder's far smaller error): on exact clouds
+    // A plane stays a plane unless its points stray from it by more than a quarter of the floor
+    // and a cylinder through them is exact, within the floor and within a tenth of the plane's
+    // error (a narrow strip of a wide cylinder, the root of a gear between two teeth, bends by
+    // less than the floor; what marks it is the cylinder's far smaller error): on exact clouds
     // only, since on noisy ones the edge points it took from its neighbours would bend a
     // cylinder towards them (and a bent plane is never exact).
     if (!exact_) return std::nullopt;
     if (auto wall = wall_through_ring(s, inliers)) return wall;
     const double floor = noise_floor();
     const double flat = rms_of(s, inliers);
-    if (!(flat > floor)) return std::nullopt;
+    if (!(flat > 0.25 * floor)) return std::nullopt;
     auto cylinder = cylinder_across_plane(s, inliers);
     if (!cylinder || !keeps_most(*cylinder, inliers)) return std::nullopt;
-    if (!(rms_of(*cylinder, inliers) <= std::min(floor, 0.1 * flat))) return std::nullopt;
+    const double bent = rms_of(*cylinder, inliers);
+    if (!(bent <= std::min(floor, 0.1 * flat))) return std::nullopt;
+    // Within the floor the criterion sees no difference: a strip bending by less than the
+    // floor is a cylinder only when the cylinder fits it a hundred times better.
+    if (flat <= floor) return bent <= 0.01 * flat ? cylinder : std::nullopt;
     if (criterion(*cylinder, inliers) < criterion(s, inliers) - evidence_margin(inliers)) {
       return cylinder;
     }
