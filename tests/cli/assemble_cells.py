@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """`csgtile assemble` end to end: the truth scene of `csgtile synth city-block`, assembled
 whole and cut into cells with a halo, gives the same objects (ids, primitives, volumes) and
-total volume; the outputs exist; bad input exits non-zero with a named reason.
+total volume; the outputs exist; without the OpenVDB module the same objects, unculled, with
+the reason; bad input exits non-zero with a named reason.
 Usage: assemble_cells.py CSGTILE WORKDIR"""
 import json
 import os
@@ -35,6 +36,21 @@ assert all(o["error"] and any(o["id"] in p for p in body["problems"]) for o in f
 objects = {o["id"]: (o["primitives"], o["volume"]) for o in body["objects"]}
 assert len(objects) == stats["objects"]
 extent = max(max(o["bbox"][3] - o["bbox"][0], o["bbox"][4] - o["bbox"][1]) for o in body["objects"])
+
+# Without the OpenVDB module (libcsgtile_vdb.so) nothing is culled: every candidate pair is
+# tested exactly, the objects are the same, and the assembly says why it did not cull.
+assert stats["active_voxels"] > 0, stats  # the culler ran on this scene
+empty = os.path.join(work, "no_modules")
+os.makedirs(empty)
+p = subprocess.run([binary, "assemble", f"{work}/truth.json", "--out", f"{work}/unculled",
+                    "--json"], capture_output=True, text=True,
+                   env={**os.environ, "CSGTILE_MODULE_DIR": empty})
+assert p.returncode == 0, p.stdout + p.stderr
+unculled = json.load(open(f"{work}/unculled/assembly.json"))
+assert {o["id"]: (o["primitives"], o["volume"]) for o in unculled["objects"]} == objects
+assert json.loads(p.stdout)["statistics"]["culled_pairs"] == 0
+assert any(q.startswith("voxel culling skipped") and "libcsgtile_vdb.so is not installed" in q
+           for q in unculled["problems"]), unculled["problems"]
 
 cells = json.loads(run("assemble", f"{work}/truth.json", "--out", f"{work}/cells", "--json",
                        "--cell-size", "20", "--halo", str(extent + 1)).stdout)

@@ -5,9 +5,9 @@
 // them: footprints.cpp loads the module on the first footprint read, and a process that
 // reads no footprints never loads GDAL.
 //
-// The module and the binary are built from the same sources and flags; the entry points
-// pass csgtile's own types by reference, and the ABI number below, compiled into both, must
-// agree (change it when those types change shape).
+// The module and the binary are built from the same sources and flags; the entry point passes
+// csgtile's own types by reference, and the ABI number below, compiled into both, must agree
+// (change it when those types change shape). Loading: csgtile/kernel/module.h.
 
 #include "csgtile/geo/footprints.h"
 
@@ -15,15 +15,12 @@ namespace csgtile::geo {
 
 inline constexpr int kGdalModuleAbi = 1;
 
-/// The module's file name, found next to the binary, in ../lib/csgtile from it, in the
-/// build tree, or only in $CSGTILE_MODULE_DIR when that is set.
+/// The module's file name (kernel::load_module says where it is looked for).
 inline constexpr const char* kGdalModuleFile = "libcsgtile_gdal.so";
 
 }  // namespace csgtile::geo
 
 extern "C" {
-/// Returns kGdalModuleAbi as the module was built.
-using CsgtileGdalModuleAbi = int();
 /// read_footprints, done with GDAL: the result in `out`; nothing is thrown.
 using CsgtileGdalReadFootprints = void(const csgtile::geo::FootprintSource& source,
                                        const csgtile::geo::FootprintQuery& query,

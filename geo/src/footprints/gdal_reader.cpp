@@ -289,7 +289,7 @@ kernel::Result<FootprintSet> read_with_gdal(const FootprintSource& source,
 }  // namespace csgtile::geo
 
 // The module's entry points (gdal_module.h): C names, so that dlsym finds them.
-extern "C" __attribute__((visibility("default"))) int csgtile_gdal_module_abi() {
+extern "C" __attribute__((visibility("default"))) int csgtile_module_abi() {
   return csgtile::geo::kGdalModuleAbi;
 }
 

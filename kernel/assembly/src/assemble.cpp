@@ -204,6 +204,10 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       for (std::size_t k : costly) pairs.push_back(candidates[k]);
       VoxelCuller culler(options.voxel_size, options.tolerance);
       culler.build(shapes, pairs, &exact_boxes);
+      if (!culler.unavailable().empty()) {
+        out.problems.push_back("voxel culling skipped (every candidate pair tested exactly): " +
+                               culler.unavailable());
+      }
       for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
       tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t c) {
         keep[costly[c]] = culler.may_meet(static_cast<std::size_t>(pairs[c].first),

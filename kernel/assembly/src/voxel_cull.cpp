@@ -1,59 +1,51 @@
-// OpenVDB overlap culling (see csgtile/assembly/voxel_cull.h). The shells are sparse
-// OpenVDB masks filled by our own exact point–triangle distances (double precision: no
-// float rounding of city coordinates), which for small solids is about 100 times faster
-// than OpenVDB's mesh-to-volume and its fixed set-up. The only translation unit that
-// includes OpenVDB: its headers are heavy.
+// OpenVDB overlap culling (see csgtile/assembly/voxel_cull.h): each solid tessellated here, its
+// shell voxelised by the OpenVDB module (vdb_module.h), loaded when the first culler is made.
 
 #include "csgtile/assembly/voxel_cull.h"
 
-#include <openvdb/openvdb.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <mutex>
 
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/module.h"
 #include "csgtile/kernel/tessellation.h"
+#include "vdb_module.h"
 
 namespace csgtile::assembly {
 
 namespace {
 
-// Shells are small and many (one per solid in a candidate pair): a shallow tree (root →
-// 4³ internal → 8³ leaves holding only their active masks) instead of OpenVDB's default
-// 5-4-3 layout, whose two internal levels cost about 0.6 MB per grid however few voxels it
-// holds (3 000 shells took 2.6 GB that way).
-using ShellTree = openvdb::tree::Tree3<openvdb::ValueMask, 2, 3>::Type;
-using ShellGrid = openvdb::Grid<ShellTree>;
+// The module's entry points, or why there are none.
+struct VdbModule {
+  CsgtileVdbShellBuild* build = nullptr;
+  CsgtileVdbShellsMeet* meet = nullptr;
+  CsgtileVdbShellVoxels* voxels = nullptr;
+  CsgtileVdbShellFree* free = nullptr;
+  std::string error;
+};
 
-void initialise_openvdb() {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
-}
-
-// The point of triangle (a, b, c) closest to p (by the Voronoi regions of its vertices,
-// edges and face).
-kernel::Vec3 closest_on_triangle(const kernel::Vec3& p, const kernel::Vec3& a,
-                                 const kernel::Vec3& b, const kernel::Vec3& c) {
-  const kernel::Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const kernel::Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const kernel::Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
+const VdbModule& vdb_module() {
+  static const VdbModule module = [] {
+    VdbModule m;
+    const kernel::Module& loaded = kernel::load_module(kVdbModuleFile, kVdbModuleAbi);
+    m.build = reinterpret_cast<CsgtileVdbShellBuild*>(
+        kernel::module_symbol(loaded, "csgtile_vdb_shell_build"));
+    m.meet = reinterpret_cast<CsgtileVdbShellsMeet*>(
+        kernel::module_symbol(loaded, "csgtile_vdb_shells_meet"));
+    m.voxels = reinterpret_cast<CsgtileVdbShellVoxels*>(
+        kernel::module_symbol(loaded, "csgtile_vdb_shell_voxels"));
+    m.free = reinterpret_cast<CsgtileVdbShellFree*>(
+        kernel::module_symbol(loaded, "csgtile_vdb_shell_free"));
+    if (!loaded.error.empty()) {
+      m.error = loaded.error;
+    } else if (!m.build || !m.meet || !m.voxels || !m.free) {
+      m.error = "the module " + loaded.path + " lacks its entry points";
+    }
+    return m;
+  }();
+  return module;
 }
 
 bool contains(const kernel::BoundingBox& outer, const kernel::BoundingBox& inner) {
@@ -63,19 +55,30 @@ bool contains(const kernel::BoundingBox& outer, const kernel::BoundingBox& inner
 
 }  // namespace
 
+// A shell made by the module, freed by it.
+struct Shell {
+  void* tree = nullptr;
+  Shell() = default;
+  explicit Shell(void* t) : tree(t) {}
+  Shell(const Shell&) = delete;
+  Shell& operator=(const Shell&) = delete;
+  ~Shell() {
+    if (tree != nullptr) vdb_module().free(tree);
+  }
+};
+
 struct VoxelCuller::Impl {
   double voxel = 0.5;
   double tolerance = 1e-7;
   double chordal = 0.1;
   double margin = 0.0;
-  openvdb::math::Transform::Ptr transform;
-  std::vector<kernel::BoundingBox> boxes;  // exact boxes, enlarged by the tolerance
-  std::vector<ShellGrid::Ptr> masks;       // null: not voxelised
-  std::vector<char> whole;                 // could not be voxelised: may meet anything
+  std::vector<kernel::BoundingBox> boxes;     // exact boxes, enlarged by the tolerance
+  std::vector<std::unique_ptr<Shell>> masks;  // null: not voxelised
+  std::vector<char> whole;                    // could not be voxelised: may meet anything
+  std::string unavailable;                    // why the module could not be used
 };
 
 VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_unique<Impl>()) {
-  initialise_openvdb();
   impl_->voxel = voxel_size > 0 && std::isfinite(voxel_size) ? voxel_size : 0.5;
   impl_->tolerance = tolerance;
   impl_->chordal = impl_->voxel / 4;
@@ -83,7 +86,6 @@ VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_
   // the exact surface + the contact tolerance + 1% of a voxel for rounding.
   impl_->margin =
       std::sqrt(3.0) / 2 * impl_->voxel + impl_->chordal + tolerance + 0.01 * impl_->voxel;
-  impl_->transform = openvdb::math::Transform::createLinearTransform(impl_->voxel);
 }
 
 VoxelCuller::~VoxelCuller() = default;
@@ -95,7 +97,8 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
                         const std::vector<kernel::BoundingBox>* boxes) {
   Impl& d = *impl_;
   const std::size_t n = shapes.size();
-  d.masks.assign(n, nullptr);
+  d.masks.clear();
+  d.masks.resize(n);
   d.whole.assign(n, 0);
   d.boxes.assign(n, kernel::BoundingBox{});
   std::vector<char> used(n, 0);
@@ -121,6 +124,14 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
     regions[static_cast<std::size_t>(a)].push_back(common);
     regions[static_cast<std::size_t>(b)].push_back(common);
   }
+  const VdbModule& vdb = vdb_module();
+  if (!vdb.error.empty()) {
+    // Without the module nothing is voxelised: every shape may meet anything (the exact
+    // tests decide); the assembly reports why (unavailable()).
+    d.unavailable = vdb.error;
+    d.whole.assign(n, 1);
+    return;
+  }
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     if (regions[i].empty()) return;
     kernel::TessellationOptions options;
@@ -130,52 +141,28 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
       d.whole[i] = 1;
       return;
     }
-    // Voxels of the shell inside the regions, triangle by triangle: every voxel centre in
-    // the triangle's box (grown by the margin) clipped to a region, kept when within the
-    // margin of the triangle. Index coordinates are world / voxel (OpenVDB's linear
-    // transform: voxel centres at integer coordinates).
-    auto mask = ShellGrid::create();
-    mask->setTransform(d.transform);
-    auto access = mask->getAccessor();
-    const double h = d.voxel, m2 = d.margin * d.margin;
-    for (const auto& t : mesh->triangles) {
-      const kernel::Vec3 &p0 = mesh->vertices[t[0]], &p1 = mesh->vertices[t[1]],
-                         &p2 = mesh->vertices[t[2]];
-      kernel::BoundingBox tb;
-      tb.add(p0);
-      tb.add(p1);
-      tb.add(p2);
-      tb.enlarge(d.margin);
-      // Voxel centres farther than the margin from the triangle's plane are farther from the
-      // triangle: skipped before the closest-point test (most of a sloped triangle's box).
-      kernel::Vec3 normal = (p1 - p0).cross(p2 - p0);
-      const double length = normal.norm();
-      const bool flat = length > 0.0 && std::isfinite(length);
-      if (flat) normal /= length;
-      for (const kernel::BoundingBox& r : regions[i]) {
-        if (!r.intersects(tb)) continue;
-        const kernel::Vec3 lo = tb.min.cwiseMax(r.min), hi = tb.max.cwiseMin(r.max);
-        const openvdb::Coord c0(static_cast<int>(std::ceil(lo.x() / h)),
-                                static_cast<int>(std::ceil(lo.y() / h)),
-                                static_cast<int>(std::ceil(lo.z() / h)));
-        const openvdb::Coord c1(static_cast<int>(std::floor(hi.x() / h)),
-                                static_cast<int>(std::floor(hi.y() / h)),
-                                static_cast<int>(std::floor(hi.z() / h)));
-        for (int x = c0.x(); x <= c1.x(); ++x) {
-          for (int y = c0.y(); y <= c1.y(); ++y) {
-            for (int z = c0.z(); z <= c1.z(); ++z) {
-              const openvdb::Coord c(x, y, z);
-              if (access.isValueOn(c)) continue;
-              const kernel::Vec3 q(x * h, y * h, z * h);
-              if (flat && std::abs(normal.dot(q - p0)) > d.margin) continue;
-              if ((closest_on_triangle(q, p0, p1, p2) - q).squaredNorm() <= m2)
-                access.setValueOn(c);
-            }
-          }
-        }
-      }
+    // Voxels of the shell inside the regions, triangle by triangle (the module): every voxel
+    // centre in the triangle's box (grown by the margin) clipped to a region, kept when within
+    // the margin of the triangle.
+    std::vector<double> vertices, boxes_flat;
+    vertices.reserve(3 * mesh->vertices.size());
+    for (const kernel::Vec3& v : mesh->vertices)
+      vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+    std::vector<std::uint32_t> triangles;
+    triangles.reserve(3 * mesh->triangles.size());
+    for (const auto& t : mesh->triangles) triangles.insert(triangles.end(), t.begin(), t.end());
+    for (const kernel::BoundingBox& r : regions[i]) {
+      boxes_flat.insert(boxes_flat.end(),
+                        {r.min.x(), r.min.y(), r.min.z(), r.max.x(), r.max.y(), r.max.z()});
     }
-    d.masks[i] = mask;
+    void* tree =
+        vdb.build(vertices.data(), mesh->vertices.size(), triangles.data(), mesh->triangles.size(),
+                  boxes_flat.data(), regions[i].size(), d.voxel, d.margin);
+    if (tree == nullptr) {
+      d.whole[i] = 1;
+      return;
+    }
+    d.masks[i] = std::make_unique<Shell>(tree);
   });
 }
 
@@ -186,24 +173,19 @@ bool VoxelCuller::may_meet(std::size_t i, std::size_t j) const {
   if (!d.boxes[i].intersects(d.boxes[j])) return false;
   // Nested solids: their boundaries need not come near each other.
   if (contains(d.boxes[i], d.boxes[j]) || contains(d.boxes[j], d.boxes[i])) return true;
-  const ShellGrid* a = d.masks[i].get();
-  const ShellGrid* b = d.masks[j].get();
-  if (!a || !b) return true;  // not voxelised: nothing is known
-  if (a->tree().leafCount() > b->tree().leafCount()) std::swap(a, b);
-  for (auto leaf = a->tree().cbeginLeaf(); leaf; ++leaf) {
-    const auto* other = b->tree().probeConstLeaf(leaf->origin());
-    if (other && !(leaf->getValueMask() & other->getValueMask()).isOff()) return true;
-  }
-  return false;
+  if (!d.masks[i] || !d.masks[j]) return true;  // not voxelised: nothing is known
+  return vdb_module().meet(d.masks[i]->tree, d.masks[j]->tree) != 0;
 }
 
 long long VoxelCuller::active_voxels(std::size_t i) const {
   const Impl& d = *impl_;
   if (i >= d.masks.size() || !d.masks[i]) return 0;
-  return static_cast<long long>(d.masks[i]->activeVoxelCount());
+  return vdb_module().voxels(d.masks[i]->tree);
 }
 
 double VoxelCuller::margin() const { return impl_->margin; }
+
+const std::string& VoxelCuller::unavailable() const { return impl_->unavailable; }
 
 std::size_t VoxelCuller::unvoxelised() const {
   std::size_t n = 0;

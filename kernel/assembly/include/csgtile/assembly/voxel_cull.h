@@ -8,10 +8,12 @@
 /// tessellation error and the contact tolerance. A pair may meet when the shells share a voxel or
 /// one box holds the other. Culling is conservative by construction: a point common to both
 /// boundaries lies in a voxel whose centre is within half a diagonal of both, so both shells hold
-/// it.
+/// it. The shells are OpenVDB masks made by csgtile's OpenVDB module (libcsgtile_vdb.so),
+/// loaded when the first shells are built.
 
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -45,6 +47,9 @@ class VoxelCuller {
   double margin() const;
   /// Shapes kept whole because they could not be voxelised.
   std::size_t unvoxelised() const;
+  /// Why nothing was voxelised (the OpenVDB module could not be loaded: every pair may then
+  /// meet); empty when the culling ran.
+  const std::string& unavailable() const;
 
  private:
   struct Impl;

@@ -1,7 +1,8 @@
-# GDAL is loaded on demand (geo/src/footprints/gdal_module.h): the csgtile binary does not
-# link it; a run's footprint check reads through the module (a missing layer is named with the
-# layers GDAL lists); without the module the check names it and where it was looked for.
-# Usage: cmake -DBIN=<csgtile> -DWORK=<dir> -P expect_gdal_module.cmake
+# GDAL and OpenVDB are loaded on demand, as csgtile's modules (csgtile/kernel/module.h): the
+# csgtile binary links neither; a run's footprint check reads through the GDAL module (a missing
+# layer is named with the layers GDAL lists); without the module the check names it and where
+# it was looked for. (The OpenVDB module's absence: tests/cli/assemble_cells.py.)
+# Usage: cmake -DBIN=<csgtile> -DWORK=<dir> -P expect_modules.cmake
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK}/no_module)
 file(WRITE ${WORK}/fp.geojson
@@ -17,9 +18,11 @@ execute_process(COMMAND ldd ${BIN} RESULT_VARIABLE rc OUTPUT_VARIABLE libs ERROR
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "ldd ${BIN} failed: ${err}")
 endif()
-if(libs MATCHES "libgdal")
-  message(FATAL_ERROR "the csgtile binary links GDAL itself (it should load the module):\n${libs}")
-endif()
+foreach(lib libgdal libopenvdb)
+  if(libs MATCHES "${lib}")
+    message(FATAL_ERROR "the csgtile binary links ${lib} itself (it should load its module):\n${libs}")
+  endif()
+endforeach()
 
 function(check_run env expected)
   execute_process(COMMAND ${CMAKE_COMMAND} -E env ${env} ${BIN} run ${WORK}/run.yaml
@@ -36,4 +39,4 @@ endfunction()
 
 check_run("CSGTILE_MODULE_DIR=" "city.footprints: footprints ${WORK}/fp.geojson: no layer 'nope'; its layers: fp")
 check_run("CSGTILE_MODULE_DIR=${WORK}/no_module"
-          "the GDAL module libcsgtile_gdal.so is not installed (looked in ${WORK}/no_module;")
+          "GDAL, which reads them: the module libcsgtile_gdal.so is not installed (looked in ${WORK}/no_module;")

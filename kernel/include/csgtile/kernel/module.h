@@ -1,0 +1,31 @@
+#pragma once
+/// \file
+/// csgtile's own loadable modules: the parts that link heavy libraries (GDAL for footprints,
+/// OpenVDB for the assembly's culling) are shared objects of their own, loaded on first use,
+/// so that a process which never needs them does not pay for binding their symbols at start.
+/// Every module exports `int csgtile_module_abi()`; the loader accepts it only when that
+/// returns the number the caller was built with (both sides are built from the same sources).
+
+#include <string>
+
+namespace csgtile::kernel {
+
+/// A loaded module, or why it could not be loaded (`handle` null, `error` says).
+struct Module {
+  void* handle = nullptr;
+  std::string path;   ///< the file loaded
+  std::string error;  ///< empty when loaded
+};
+
+/// Loads the module file `file` (e.g. "libcsgtile_gdal.so") once per process: later calls
+/// return the same record. It is looked for only in $CSGTILE_MODULE_DIR when that is set, else
+/// in the running binary's directory, in ../lib/csgtile from it (an installed binary) and in
+/// the build tree (tests run from their own directories); the first directory holding the file
+/// decides (a module there that does not load, e.g. because a library it needs is missing, is
+/// an error, not skipped). Thread-safe.
+const Module& load_module(const std::string& file, int abi);
+
+/// The address of `name` in a loaded module; null when absent or the module is not loaded.
+void* module_symbol(const Module& module, const char* name);
+
+}  // namespace csgtile::kernel
