@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "city/city_jobs.h"
+#include "csgtile/assembly/voxel_cull.h"
 #include "csgtile/geo/scene.h"
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
@@ -187,6 +188,8 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
       options.worker_id.empty() ? "local-" + std::to_string(getpid()) : options.worker_id;
   // Looked at once: it lists input directories, and the loop polls every few milliseconds.
   const bool city_run = is_city_run(config);
+  // A city run's cells are assembled: the OpenVDB module the culling needs loads meanwhile.
+  const std::jthread culling = city_run ? assembly::load_culling_in_background() : std::jthread();
   Failure failure;
   while (true) {
     ops::metrics().mark_progress();  // liveness (/healthz): the loop turns

@@ -78,6 +78,10 @@ struct VoxelCuller::Impl {
   std::string unavailable;                    // why the module could not be used
 };
 
+std::jthread load_culling_in_background() {
+  return std::jthread([] { (void)vdb_module(); });
+}
+
 VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_unique<Impl>()) {
   impl_->voxel = voxel_size > 0 && std::isfinite(voxel_size) ? voxel_size : 0.5;
   impl_->tolerance = tolerance;

@@ -42,7 +42,7 @@ Module open_module(const std::string& file, int abi) {
     if (!fs::is_regular_file(path, ec)) continue;
     m.path = path.string();
     // Loaded for the life of the process; its symbols stay local to it.
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    void* handle = dlopen(path.c_str(), RTLD_LAZY | RTLD_LOCAL);
     if (handle == nullptr) {
       const char* why = dlerror();
       m.error = "the module " + m.path + " does not load: " + (why != nullptr ? why : "no reason");

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -21,6 +22,11 @@
 #include "csgtile/kernel/shape.h"
 
 namespace csgtile::assembly {
+
+/// Loads the OpenVDB module on a thread of its own, so that a process about to assemble (a city
+/// run, a worker) has it by its first assembly without waiting for it (binding its symbols takes
+/// about 0.1 s). Keep the thread until the scope ends: it joins then.
+std::jthread load_culling_in_background();
 
 class VoxelCuller {
  public:
