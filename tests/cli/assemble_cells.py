@@ -38,19 +38,30 @@ assert len(objects) == stats["objects"]
 extent = max(max(o["bbox"][3] - o["bbox"][0], o["bbox"][4] - o["bbox"][1]) for o in body["objects"])
 
 # Without the OpenVDB module (libcsgtile_vdb.so) nothing is culled: every candidate pair is
-# tested exactly, the objects are the same, and the assembly says why it did not cull.
-assert stats["active_voxels"] > 0, stats  # the culler ran on this scene
+# tested exactly, the objects are the same, and the assembly says why it did not cull. A ball in
+# a ring's hole: their boxes overlap, their shells do not, so the culling decides the pair.
+with open(f"{work}/ring.json", "w") as f:
+    json.dump({"name": "ring-and-ball",
+               "primitives": [{"id": "ring", "type": "torus", "R": 5.0, "r": 1.0},
+                              {"id": "ball", "type": "sphere", "r": 2.0}]}, f)
+culled = json.loads(run("assemble", f"{work}/ring.json", "--out", f"{work}/ring", "--json").stdout)
+assert culled["statistics"]["candidate_pairs"] == 1 and culled["statistics"]["culled_pairs"] == 1, \
+    culled["statistics"]
 empty = os.path.join(work, "no_modules")
 os.makedirs(empty)
-p = subprocess.run([binary, "assemble", f"{work}/truth.json", "--out", f"{work}/unculled",
-                    "--json"], capture_output=True, text=True,
-                   env={**os.environ, "CSGTILE_MODULE_DIR": empty})
-assert p.returncode == 0, p.stdout + p.stderr
-unculled = json.load(open(f"{work}/unculled/assembly.json"))
-assert {o["id"]: (o["primitives"], o["volume"]) for o in unculled["objects"]} == objects
-assert json.loads(p.stdout)["statistics"]["culled_pairs"] == 0
-assert any(q.startswith("voxel culling skipped") and "libcsgtile_vdb.so is not installed" in q
-           for q in unculled["problems"]), unculled["problems"]
+for scene, out in ((f"{work}/ring.json", "ring_unculled"), (f"{work}/truth.json", "unculled")):
+    p = subprocess.run([binary, "assemble", scene, "--out", f"{work}/{out}", "--json"],
+                       capture_output=True, text=True, env={**os.environ, "CSGTILE_MODULE_DIR": empty})
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert json.loads(p.stdout)["statistics"]["culled_pairs"] == 0, p.stdout
+    body_unculled = json.load(open(f"{work}/{out}/assembly.json"))
+    assert any(q.startswith("voxel culling skipped") and "libcsgtile_vdb.so is not installed" in q
+               for q in body_unculled["problems"]), body_unculled["problems"]
+    if out == "unculled":
+        assert {o["id"]: (o["primitives"], o["volume"])
+                for o in body_unculled["objects"]} == objects
+ring_objects = json.load(open(f"{work}/ring_unculled/assembly.json"))["objects"]
+assert len(ring_objects) == 2 and all(o["fused"] for o in ring_objects), ring_objects
 
 cells = json.loads(run("assemble", f"{work}/truth.json", "--out", f"{work}/cells", "--json",
                        "--cell-size", "20", "--halo", str(extent + 1)).stdout)

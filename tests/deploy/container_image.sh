@@ -43,22 +43,27 @@ echo "$summary" | grep -q '"done":3' && echo "$summary" | grep -q '"dead":0' \
   || { echo "FAIL: the demo published no manifest or index under the volume"; ls -R "$out"; exit 1; }
 echo "ok: demo in the container (read-only root, output on a volume): $summary"
 
-# Footprints are read by the GDAL module the image installs beside the binary: a run whose
-# footprint layer is misnamed stops at its check (exit 78) with the layers GDAL lists.
-if run --entrypoint test "$image" -e /usr/local/lib/csgtile/libcsgtile_gdal.so; then
-  printf '%s\n' '{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},' \
-    '"geometry":{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]]]}}]}' > "$out/fp.geojson"
-  printf 'run:\n  name: fp\n  inputs:\n    - /data/none.las\n  output: /data/fp\ncity:\n  footprints: /data/fp.geojson\n  footprints_layer: nope\n' \
-    > "$out/fp.yaml"
-  chown 10001:10001 "$out/fp.geojson" "$out/fp.yaml"
-  rc=0
-  checked="$(run --read-only --tmpfs /tmp -v "$out:/data" "$image" run /data/fp.yaml 2>&1)" || rc=$?
-  [ "$rc" = 78 ] && echo "$checked" | grep -q "no layer 'nope'; its layers: fp" \
-    || { echo "FAIL: footprints through the GDAL module (exit $rc): $checked"; exit 1; }
-  echo "ok: footprints read through the image's GDAL module"
-else
-  echo "note: this image has no GDAL module (its csgtile links GDAL); footprints not exercised"
-fi
+# The modules the image installs beside the binary (csgtile/kernel/module.h) load: footprints
+# are read by the GDAL one (a run whose footprint layer is misnamed stops at its check, exit 78,
+# with the layers GDAL lists), and the assembly culls with the OpenVDB one (a ball in a ring's
+# hole: the one candidate pair culled, no "voxel culling skipped" problem).
+printf '%s\n' '{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},' \
+  '"geometry":{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]]]}}]}' > "$out/fp.geojson"
+printf 'run:\n  name: fp\n  inputs:\n    - /data/none.las\n  output: /data/fp\ncity:\n  footprints: /data/fp.geojson\n  footprints_layer: nope\n' \
+  > "$out/fp.yaml"
+printf '%s\n' '{"name":"ring","primitives":[{"id":"ring","type":"torus","R":5.0,"r":1.0},' \
+  '{"id":"ball","type":"sphere","r":2.0}]}' > "$out/ring.json"
+chown 10001:10001 "$out/fp.geojson" "$out/fp.yaml" "$out/ring.json"
+rc=0
+checked="$(run --read-only --tmpfs /tmp -v "$out:/data" "$image" run /data/fp.yaml 2>&1)" || rc=$?
+[ "$rc" = 78 ] && echo "$checked" | grep -q "no layer 'nope'; its layers: fp" \
+  || { echo "FAIL: footprints through the GDAL module (exit $rc): $checked"; exit 1; }
+echo "ok: footprints read through the image's GDAL module"
+culled="$(run --read-only --tmpfs /tmp -v "$out:/data" "$image" assemble /data/ring.json \
+            --out /data/ring --json)" || { echo "FAIL: assemble in the image: $culled"; exit 1; }
+echo "$culled" | grep -q '"culled_pairs":1' && ! echo "$culled" | grep -q 'voxel culling skipped' \
+  || { echo "FAIL: the image's assembly did not cull with the OpenVDB module: $culled"; exit 1; }
+echo "ok: the assembly culls with the image's OpenVDB module"
 
 # The health check needs the worker's endpoint (metrics.listen); older binaries have none.
 schema="$(run "$image" config schema)"

@@ -461,8 +461,10 @@ std::optional<Surface> Detector::cone_from_normals(std::span<const std::uint32_t
 
 // Type selection by evidence: the plane and the cylinder (for a sphere also the cone) that fit
 // the same points are compared by the criterion above; another type replaces the shape when
-// it keeps nearly all of its points and scores clearly better. A plane is only questioned on
-// exact clouds: a ring of a hole's wall, a strip of a wide cylinder.
+// it keeps nearly all of its points and scores clearly better, or, where the errors lie below
+// the criterion's floor, when its error is a small share of the shape's (a tenth; a hundredth
+// for a plane within the floor). A plane is only questioned on exact clouds: a ring of a hole's
+// wall, a strip of a wide cylinder.
 std::optional<Surface> Detector::by_evidence(const Surface& s,
                                              std::span<const std::uint32_t> inliers) {
   if (s.type == ShapeType::Plane) {

@@ -19,7 +19,8 @@ kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
         "footprints " + source.source + ": GDAL, which reads them: " +
             (module.error.empty() ? "the module lacks its entry point" : module.error)};
   }
-  kernel::Result<FootprintSet> out = kernel::Error{kernel::ErrorCode::IoError, "not read"};
+  kernel::Result<FootprintSet> out = kernel::Error{
+      kernel::ErrorCode::IoError, "footprints " + source.source + ": GDAL failed with no reason"};
   read(source, query, out);
   return out;
 }

@@ -5,15 +5,16 @@
 // them: footprints.cpp loads the module on the first footprint read, and a process that
 // reads no footprints never loads GDAL.
 //
-// The module and the binary are built from the same sources and flags; the entry point passes
-// csgtile's own types by reference, and the ABI number below, compiled into both, must agree
-// (change it when those types change shape). Loading: csgtile/kernel/module.h.
+// The entry point passes csgtile's own types by reference: the module and the binary must be
+// built from the same headers. The ABI text below, a hash of those headers computed when CMake
+// configures (geo/CMakeLists.txt), is compiled into both, and the loader
+// (csgtile/kernel/module.h) refuses a module whose text differs.
 
 #include "csgtile/geo/footprints.h"
 
 namespace csgtile::geo {
 
-inline constexpr int kGdalModuleAbi = 1;
+inline constexpr const char* kGdalModuleAbi = CSGTILE_GDAL_MODULE_ABI;
 
 /// The module's file name (kernel::load_module says where it is looked for).
 inline constexpr const char* kGdalModuleFile = "libcsgtile_gdal.so";
@@ -21,7 +22,7 @@ inline constexpr const char* kGdalModuleFile = "libcsgtile_gdal.so";
 }  // namespace csgtile::geo
 
 extern "C" {
-/// read_footprints, done with GDAL: the result in `out`; nothing is thrown.
+/// read_footprints, done with GDAL: the result in `out`; nothing is thrown (noexcept).
 using CsgtileGdalReadFootprints = void(const csgtile::geo::FootprintSource& source,
                                        const csgtile::geo::FootprintQuery& query,
                                        csgtile::kernel::Result<csgtile::geo::FootprintSet>& out);

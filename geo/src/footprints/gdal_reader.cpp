@@ -289,19 +289,25 @@ kernel::Result<FootprintSet> read_with_gdal(const FootprintSource& source,
 }  // namespace csgtile::geo
 
 // The module's entry points (gdal_module.h): C names, so that dlsym finds them.
-extern "C" __attribute__((visibility("default"))) int csgtile_module_abi() {
+extern "C" __attribute__((visibility("default"))) const char* csgtile_module_abi() {
   return csgtile::geo::kGdalModuleAbi;
 }
 
 extern "C" __attribute__((visibility("default"))) void csgtile_gdal_read_footprints(
     const csgtile::geo::FootprintSource& source, const csgtile::geo::FootprintQuery& query,
-    csgtile::kernel::Result<csgtile::geo::FootprintSet>& out) {
+    csgtile::kernel::Result<csgtile::geo::FootprintSet>& out) noexcept {
   // Nothing thrown crosses the module's C boundary: an exception (memory exhausted in GDAL)
-  // is the read's error.
+  // is the read's error, and `out` keeps the caller's error when even that cannot be made.
   try {
     out = csgtile::geo::read_with_gdal(source, query);
   } catch (const std::exception& e) {
-    out = csgtile::kernel::Error{csgtile::kernel::ErrorCode::IoError,
-                                 "footprints " + source.source + ": GDAL threw: " + e.what()};
+    try {
+      out = csgtile::kernel::Error{csgtile::kernel::ErrorCode::IoError,
+                                   "footprints " + source.source + ": GDAL threw: " + e.what()};
+    } catch (...) {
+      // out keeps the caller's error
+    }
+  } catch (...) {
+    // out keeps the caller's error
   }
 }

@@ -2,17 +2,19 @@
 // The OpenVDB module (libcsgtile_vdb.so, built from vdb_shells.cpp): the voxel shells of the
 // assembly's culling (voxel_cull.h) as sparse OpenVDB masks. OpenVDB and the libraries it
 // brings cost about 60 ms of symbol binding at every process start, so the binary does not
-// link them: voxel_cull.cpp loads the module (csgtile/kernel/module.h) when a culler is made,
-// and a process that assembles nothing never loads OpenVDB.
+// link them: voxel_cull.cpp loads the module (csgtile/kernel/module.h) when it first builds
+// shells, or on a thread of its own when a city run starts (load_culling_in_background), and a
+// process that assembles nothing never loads OpenVDB.
 //
-// Plain arrays cross the boundary; the ABI number, compiled into both sides, must agree.
+// Plain arrays cross the boundary; the ABI text, a hash of this header computed when CMake
+// configures (kernel/assembly/CMakeLists.txt), is compiled into both sides and must agree.
 
 #include <cstddef>
 #include <cstdint>
 
 namespace csgtile::assembly {
 
-inline constexpr int kVdbModuleAbi = 1;
+inline constexpr const char* kVdbModuleAbi = CSGTILE_VDB_MODULE_ABI;
 inline constexpr const char* kVdbModuleFile = "libcsgtile_vdb.so";
 
 }  // namespace csgtile::assembly

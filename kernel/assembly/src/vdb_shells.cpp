@@ -7,7 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
+#include <memory>
 #include <mutex>
 
 #include "vdb_module.h"
@@ -74,7 +74,7 @@ void fill(ShellTree& tree, const double* vertices, const std::uint32_t* triangle
     V3 normal = (p1 - p0).cross(p2 - p0);
     const double length = std::sqrt(normal.dot(normal));
     const bool flat = length > 0.0 && std::isfinite(length);
-    if (flat) normal = normal * (1.0 / length);
+    if (flat) normal = V3{normal.x / length, normal.y / length, normal.z / length};
     for (std::size_t r = 0; r < region_count; ++r) {
       const double* box = regions + 6 * r;
       double a[3], b[3];
@@ -111,27 +111,27 @@ void fill(ShellTree& tree, const double* vertices, const std::uint32_t* triangle
 
 #define CSGTILE_MODULE_EXPORT extern "C" __attribute__((visibility("default")))
 
-CSGTILE_MODULE_EXPORT int csgtile_module_abi() { return csgtile::assembly::kVdbModuleAbi; }
+CSGTILE_MODULE_EXPORT const char* csgtile_module_abi() { return csgtile::assembly::kVdbModuleAbi; }
 
 CSGTILE_MODULE_EXPORT void* csgtile_vdb_shell_build(const double* vertices,
                                                     std::size_t /*vertex_count*/,
                                                     const std::uint32_t* triangles,
                                                     std::size_t triangle_count,
                                                     const double* regions, std::size_t region_count,
-                                                    double voxel, double margin) {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
+                                                    double voxel, double margin) noexcept {
   // Nothing thrown crosses the module's C boundary: a shell that cannot be made is null.
   try {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
     auto tree = std::make_unique<ShellTree>();
     fill(*tree, vertices, triangles, triangle_count, regions, region_count, voxel, margin);
     return tree.release();
-  } catch (const std::exception&) {
+  } catch (...) {
     return nullptr;
   }
 }
 
-CSGTILE_MODULE_EXPORT int csgtile_vdb_shells_meet(const void* a, const void* b) {
+CSGTILE_MODULE_EXPORT int csgtile_vdb_shells_meet(const void* a, const void* b) noexcept {
   const auto* ta = static_cast<const ShellTree*>(a);
   const auto* tb = static_cast<const ShellTree*>(b);
   if (ta->leafCount() > tb->leafCount()) std::swap(ta, tb);
@@ -142,10 +142,10 @@ CSGTILE_MODULE_EXPORT int csgtile_vdb_shells_meet(const void* a, const void* b) 
   return 0;
 }
 
-CSGTILE_MODULE_EXPORT long long csgtile_vdb_shell_voxels(const void* shell) {
+CSGTILE_MODULE_EXPORT long long csgtile_vdb_shell_voxels(const void* shell) noexcept {
   return static_cast<long long>(static_cast<const ShellTree*>(shell)->activeVoxelCount());
 }
 
-CSGTILE_MODULE_EXPORT void csgtile_vdb_shell_free(void* shell) {
+CSGTILE_MODULE_EXPORT void csgtile_vdb_shell_free(void* shell) noexcept {
   delete static_cast<ShellTree*>(shell);
 }

@@ -1,5 +1,6 @@
 // OpenVDB overlap culling (see csgtile/assembly/voxel_cull.h): each solid tessellated here, its
-// shell voxelised by the OpenVDB module (vdb_module.h), loaded when the first culler is made.
+// shell voxelised by the OpenVDB module (vdb_module.h), loaded when the first shells are built
+// (or ahead of them, load_culling_in_background).
 
 #include "csgtile/assembly/voxel_cull.h"
 
@@ -48,24 +49,23 @@ const VdbModule& vdb_module() {
   return module;
 }
 
-bool contains(const kernel::BoundingBox& outer, const kernel::BoundingBox& inner) {
-  return !outer.empty() && !inner.empty() && (outer.min.array() <= inner.min.array()).all() &&
-         (inner.max.array() <= outer.max.array()).all();
-}
-
-}  // namespace
-
 // A shell made by the module, freed by it.
 struct Shell {
   void* tree = nullptr;
   Shell() = default;
-  explicit Shell(void* t) : tree(t) {}
   Shell(const Shell&) = delete;
   Shell& operator=(const Shell&) = delete;
   ~Shell() {
     if (tree != nullptr) vdb_module().free(tree);
   }
 };
+
+bool contains(const kernel::BoundingBox& outer, const kernel::BoundingBox& inner) {
+  return !outer.empty() && !inner.empty() && (outer.min.array() <= inner.min.array()).all() &&
+         (inner.max.array() <= outer.max.array()).all();
+}
+
+}  // namespace
 
 struct VoxelCuller::Impl {
   double voxel = 0.5;
@@ -79,7 +79,19 @@ struct VoxelCuller::Impl {
 };
 
 std::jthread load_culling_in_background() {
-  return std::jthread([] { (void)vdb_module(); });
+  // A thread that cannot be started, or a load that throws (memory), leaves the loading to
+  // the first shells.
+  try {
+    return std::jthread([] {
+      try {
+        (void)vdb_module();
+      } catch (...) {
+        // vdb_module() is tried again when shells are built
+      }
+    });
+  } catch (...) {
+    return {};
+  }
 }
 
 VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_unique<Impl>()) {
@@ -133,7 +145,7 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
     // Without the module nothing is voxelised: every shape may meet anything (the exact
     // tests decide); the assembly reports why (unavailable()).
     d.unavailable = vdb.error;
-    d.whole.assign(n, 1);
+    for (std::size_t i = 0; i < n; ++i) d.whole[i] = regions[i].empty() ? 0 : 1;
     return;
   }
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
@@ -159,14 +171,15 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
       boxes_flat.insert(boxes_flat.end(),
                         {r.min.x(), r.min.y(), r.min.z(), r.max.x(), r.max.y(), r.max.z()});
     }
-    void* tree =
+    auto shell = std::make_unique<Shell>();
+    shell->tree =
         vdb.build(vertices.data(), mesh->vertices.size(), triangles.data(), mesh->triangles.size(),
                   boxes_flat.data(), regions[i].size(), d.voxel, d.margin);
-    if (tree == nullptr) {
+    if (shell->tree == nullptr) {
       d.whole[i] = 1;
       return;
     }
-    d.masks[i] = std::make_unique<Shell>(tree);
+    d.masks[i] = std::move(shell);
   });
 }
 

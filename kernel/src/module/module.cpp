@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <vector>
 
@@ -32,7 +33,7 @@ std::vector<fs::path> module_dirs() {
   return dirs;
 }
 
-Module open_module(const std::string& file, int abi) {
+Module open_module(const std::string& file, const std::string& abi) {
   Module m;
   std::string looked;
   for (const fs::path& dir : module_dirs()) {
@@ -41,22 +42,23 @@ Module open_module(const std::string& file, int abi) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) continue;
     m.path = path.string();
-    // Loaded for the life of the process; its symbols stay local to it.
-    void* handle = dlopen(path.c_str(), RTLD_LAZY | RTLD_LOCAL);
+    // Every symbol bound now: a library lacking one is this error, not a crash at its first
+    // call. Loaded for the life of the process; its symbols stay local to it.
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (handle == nullptr) {
       const char* why = dlerror();
       m.error = "the module " + m.path + " does not load: " + (why != nullptr ? why : "no reason");
       return m;
     }
-    using Abi = int();
+    using Abi = const char*();
     auto* built = reinterpret_cast<Abi*>(dlsym(handle, "csgtile_module_abi"));
-    if (built == nullptr) {
-      m.error = "the module " + m.path + " is not a csgtile module (no csgtile_module_abi)";
-      return m;
-    }
-    if (const int got = built(); got != abi) {
-      m.error = "the module " + m.path + " was built for another csgtile (ABI " +
-                std::to_string(got) + ", this binary " + std::to_string(abi) + ")";
+    const char* got = built != nullptr ? built() : nullptr;
+    if (got == nullptr || abi != got) {
+      m.error = got == nullptr ? "the module " + m.path + " is not a csgtile module"
+                               : "the module " + m.path +
+                                     " was built from other sources than this binary (ABI " + got +
+                                     ", this binary " + abi + ")";
+      dlclose(handle);
       return m;
     }
     m.handle = handle;
@@ -68,15 +70,26 @@ Module open_module(const std::string& file, int abi) {
   return m;
 }
 
+struct Entry {
+  std::once_flag once;
+  Module module;
+};
+
 }  // namespace
 
-const Module& load_module(const std::string& file, int abi) {
+const Module& load_module(const std::string& file, const std::string& abi) {
   static std::mutex mutex;
-  static std::map<std::string, Module> loaded;  // nodes are stable: references stay valid
-  const std::lock_guard<std::mutex> lock(mutex);
-  auto it = loaded.find(file);
-  if (it == loaded.end()) it = loaded.emplace(file, open_module(file, abi)).first;
-  return it->second;
+  static std::map<std::string, std::unique_ptr<Entry>> entries;  // entries never move or go
+  Entry* entry = nullptr;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = entries[file];
+    if (!slot) slot = std::make_unique<Entry>();
+    entry = slot.get();
+  }
+  // Each module once, outside the lock: two modules load concurrently.
+  std::call_once(entry->once, [&] { entry->module = open_module(file, abi); });
+  return entry->module;
 }
 
 void* module_symbol(const Module& module, const char* name) {

@@ -3,8 +3,8 @@
 /// csgtile's own loadable modules: the parts that link heavy libraries (GDAL for footprints,
 /// OpenVDB for the assembly's culling) are shared objects of their own, loaded on first use,
 /// so that a process which never needs them does not pay for binding their symbols at start.
-/// Every module exports `int csgtile_module_abi()`; the loader accepts it only when that
-/// returns the number the caller was built with (both sides are built from the same sources).
+/// Every module exports `const char* csgtile_module_abi()`; the loader accepts it only when that
+/// is the text the caller was built with (a hash of the headers both sides are built from).
 
 #include <string>
 
@@ -18,12 +18,14 @@ struct Module {
 };
 
 /// Loads the module file `file` (e.g. "libcsgtile_gdal.so") once per process: later calls
-/// return the same record. It is looked for only in $CSGTILE_MODULE_DIR when that is set, else
-/// in the running binary's directory, in ../lib/csgtile from it (an installed binary) and in
-/// the build tree (tests run from their own directories); the first directory holding the file
-/// decides (a module there that does not load, e.g. because a library it needs is missing, is
-/// an error, not skipped). Thread-safe.
-const Module& load_module(const std::string& file, int abi);
+/// return the same record (a module that could not be loaded is not tried again). It is looked
+/// for only in $CSGTILE_MODULE_DIR when that is set, else in the running binary's directory, in
+/// ../lib/csgtile from it (an installed binary) and, in builds with tests, in the build tree
+/// (tests run from their own directories); the first directory holding the file decides (a
+/// module there that does not load, e.g. because a library it needs is missing, or that was
+/// built from other headers, is an error, not skipped). Every symbol is bound at load time, so a
+/// module that loads has all it calls. Thread-safe; modules load concurrently.
+const Module& load_module(const std::string& file, const std::string& abi);
 
 /// The address of `name` in a loaded module; null when absent or the module is not loaded.
 void* module_symbol(const Module& module, const char* name);

@@ -24,8 +24,9 @@
 namespace csgtile::assembly {
 
 /// Loads the OpenVDB module on a thread of its own, so that a process about to assemble (a city
-/// run, a worker) has it by its first assembly without waiting for it (binding its symbols takes
-/// about 0.1 s). Keep the thread until the scope ends: it joins then.
+/// run, a worker) has it by its first assembly without waiting for it (binding its symbols in a
+/// process of csgtile's libraries takes about 0.1 s). Keep the thread until the scope ends: it
+/// joins then. An empty thread when none can be started (the first shells load it then).
 std::jthread load_culling_in_background();
 
 class VoxelCuller {
