@@ -11,16 +11,23 @@ using nlohmann::ordered_json;
 constexpr const char* kTimingsKey = "timings";
 }  // namespace
 
+ordered_json timings_json(const StageTimings& timings, double seconds, const std::string& worker_id,
+                          int attempt, std::optional<double> peak_rss_mib) {
+  ordered_json stages = ordered_json::object();
+  for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
+  ordered_json out = {{"stages", stages}, {"seconds", seconds}};
+  if (!worker_id.empty()) out["worker"] = worker_id;
+  out["attempt"] = attempt;
+  if (peak_rss_mib) out["peak_rss_mib"] = *peak_rss_mib;
+  return out;
+}
+
 std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,
                          const std::string& worker_id, int attempt,
                          std::optional<double> peak_rss_mib) {
   ordered_json record = ordered_json::parse(result, nullptr, false);
   if (!record.is_object()) return result;
-  ordered_json stages = ordered_json::object();
-  for (const auto& [stage, s] : timings.seconds) stages[stage] = s;
-  record[kTimingsKey] = {
-      {"stages", stages}, {"seconds", seconds}, {"worker", worker_id}, {"attempt", attempt}};
-  if (peak_rss_mib) record[kTimingsKey]["peak_rss_mib"] = *peak_rss_mib;
+  record[kTimingsKey] = timings_json(timings, seconds, worker_id, attempt, peak_rss_mib);
   return record.dump();
 }
 

@@ -16,6 +16,12 @@
 
 namespace csgtile::worker {
 
+/// A job's timings: {"stages", "seconds", "worker" (unless empty), "attempt", "peak_rss_mib"
+/// (when known)}.
+nlohmann::ordered_json timings_json(const StageTimings& timings, double seconds,
+                                    const std::string& worker_id, int attempt,
+                                    std::optional<double> peak_rss_mib);
+
 /// `result` (a JSON object) with "timings" added (and the job's peak resident memory in MiB
 /// when known); other text is returned unchanged.
 std::string with_timings(const std::string& result, const StageTimings& timings, double seconds,

@@ -291,10 +291,7 @@ Failure work_queue(const config::Config& config, JobQueue& queue, const Logger& 
     // keeps its result.
     if (memory.exceeded() && !ran->failure.ok()) ran->failure = memory.failure(job->key);
     const Failure& job_failure = ran->failure;
-    std::optional<double> peak_mib;
-    if (const auto peak = ops::peak_resident_bytes()) {
-      peak_mib = std::round(static_cast<double>(*peak) / (1024.0 * 1024.0) * 10.0) / 10.0;
-    }
+    const std::optional<double> peak_mib = ops::peak_resident_mib();
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ++work.jobs;

@@ -181,10 +181,20 @@ void Builder::one_face_members() {
       }
       return false;
     };
+    // The longest member parallel to a patch (members of a frame repeat): a join longer than
+    // it would reach across a column the fit did not make, which nothing else tells.
+    auto longest_parallel = [&](const PlanePatch& patch) {
+      double longest = 0.0;
+      for (const Member& m : siblings) {
+        if (std::abs(m.u.dot(patch.u)) >= cos_tol_) longest = std::max(longest, m.length);
+      }
+      return longest;
+    };
     for (std::size_t i = 0; i < patches_.size(); ++i) {
       if (patches_[i].used || grouped[i]) continue;
       grouped[i] = 1;
       Work w{{i}, patches_[i]};
+      double longest = longest_parallel(w.patch);
       for (bool grew = true; grew;) {
         grew = false;
         for (std::size_t j = 0; j < patches_.size(); ++j) {
@@ -202,13 +212,7 @@ void Builder::one_face_members() {
           const double g0 = e[0] > w.patch.umax ? w.patch.umax : e[1];
           const double g1 = e[0] > w.patch.umax ? e[0] : w.patch.umin;
           if (g1 > g0 && column_between(w.patch, g0, g1)) continue;
-          // No longer than the longest member parallel to it (members of a frame repeat): a
-          // column the fit did not make between two members leaves nothing else to tell.
           const double joined = std::max(e[1], w.patch.umax) - std::min(e[0], w.patch.umin);
-          double longest = 0.0;
-          for (const Member& m : siblings) {
-            if (std::abs(m.u.dot(w.patch.u)) >= cos_tol_) longest = std::max(longest, m.length);
-          }
           if (joined > 1.1 * longest) continue;
           std::vector<std::uint32_t> both = w.patch.members;
           both.insert(both.end(), patches_[j].members.begin(), patches_[j].members.end());
@@ -218,6 +222,7 @@ void Builder::one_face_members() {
           w.parts.push_back(j);
           grouped[j] = 1;
           grew = true;
+          longest = longest_parallel(w.patch);
         }
       }
       work.push_back(std::move(w));

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <numbers>
 #include <queue>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -500,10 +501,10 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
     // A wide cone's belt is nearly a sphere's: its normals tell them apart.
     if (auto cone = cone_from_normals(inliers, s.point)) options.push_back(*cone);
   }
+  std::erase_if(options, [&](const Surface& alt) { return !keeps_most(alt, inliers); });
   double best = criterion(s, inliers) - evidence_margin(inliers);
   std::optional<Surface> chosen;
   for (const Surface& alt : options) {
-    if (!keeps_most(alt, inliers)) continue;
     const double score = criterion(alt, inliers);
     if (score < best) {
       best = score;
@@ -519,7 +520,7 @@ std::optional<Surface> Detector::by_evidence(const Surface& s,
   const double own = rms_of(s, inliers);
   const double exact = 0.1 * std::min(noise_floor(), own);
   for (const Surface& alt : options) {
-    if (!keeps_most(alt, inliers) || !(rms_of(alt, inliers) <= exact)) continue;
+    if (!(rms_of(alt, inliers) <= exact)) continue;
     if (!chosen || detail::parameter_count(alt.type) < detail::parameter_count(chosen->type)) {
       chosen = alt;
     }

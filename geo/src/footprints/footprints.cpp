@@ -11,8 +11,8 @@ namespace csgtile::geo {
 kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,
                                              const FootprintQuery& query) {
   const kernel::Module& module = kernel::load_module(kGdalModuleFile, kGdalModuleAbi);
-  auto* read = reinterpret_cast<CsgtileGdalReadFootprints*>(
-      kernel::module_symbol(module, "csgtile_gdal_read_footprints"));
+  auto* read =
+      kernel::module_function<CsgtileGdalReadFootprints>(module, "csgtile_gdal_read_footprints");
   if (read == nullptr) {
     return kernel::Error{
         kernel::ErrorCode::Unsupported,

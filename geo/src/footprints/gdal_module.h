@@ -1,14 +1,8 @@
 #pragma once
-// The GDAL module: the one room of csgtile that links GDAL (gdal_reader.cpp, built as
-// libcsgtile_gdal.so). GDAL and the hundred libraries it brings (GEOS, Poppler, HDF5, ...)
-// cost about 75 ms of symbol binding at every process start, so the binary does not link
-// them: footprints.cpp loads the module on the first footprint read, and a process that
-// reads no footprints never loads GDAL.
-//
-// The entry point passes csgtile's own types by reference: the module and the binary must be
-// built from the same headers. The ABI text below, a hash of those headers computed when CMake
-// configures (geo/CMakeLists.txt), is compiled into both, and the loader
-// (csgtile/kernel/module.h) refuses a module whose text differs.
+// The GDAL module (libcsgtile_gdal.so, built from gdal_reader.cpp, the one file that sees GDAL),
+// which footprints.cpp loads on the first footprint read (why, and how: csgtile/kernel/module.h).
+// Its entry point passes csgtile's own types by reference; the ABI text hashes their headers
+// (geo/CMakeLists.txt).
 
 #include "csgtile/geo/footprints.h"
 

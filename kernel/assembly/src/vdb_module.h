@@ -1,13 +1,8 @@
 #pragma once
-// The OpenVDB module (libcsgtile_vdb.so, built from vdb_shells.cpp): the voxel shells of the
-// assembly's culling (voxel_cull.h) as sparse OpenVDB masks. OpenVDB and the libraries it
-// brings cost about 60 ms of symbol binding at every process start, so the binary does not
-// link them: voxel_cull.cpp loads the module (csgtile/kernel/module.h) when it first builds
-// shells, or on a thread of its own when a city run starts (load_culling_in_background), and a
-// process that assembles nothing never loads OpenVDB.
-//
-// Plain arrays cross the boundary; the ABI text, a hash of this header computed when CMake
-// configures (kernel/assembly/CMakeLists.txt), is compiled into both sides and must agree.
+// The OpenVDB module (libcsgtile_vdb.so, built from vdb_shells.cpp, the one file that sees
+// OpenVDB): the voxel shells of the assembly's culling (voxel_cull.h) as sparse OpenVDB masks,
+// loaded by voxel_cull.cpp (why, and how: csgtile/kernel/module.h). Plain arrays cross the
+// boundary; the ABI text hashes this header (kernel/assembly/CMakeLists.txt).
 
 #include <cstddef>
 #include <cstdint>

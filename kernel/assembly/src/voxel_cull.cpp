@@ -6,7 +6,9 @@
 
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 
 #include "csgtile/kernel/bounding_box.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -17,6 +19,12 @@
 namespace csgtile::assembly {
 
 namespace {
+
+// The module takes the mesh's vertices, its triangles and the regions' boxes as the arrays of
+// doubles and indices they are stored as.
+static_assert(sizeof(kernel::Vec3) == 3 * sizeof(double));
+static_assert(sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
+static_assert(sizeof(kernel::BoundingBox) == 6 * sizeof(double));
 
 // The module's entry points, or why there are none.
 struct VdbModule {
@@ -31,14 +39,10 @@ const VdbModule& vdb_module() {
   static const VdbModule module = [] {
     VdbModule m;
     const kernel::Module& loaded = kernel::load_module(kVdbModuleFile, kVdbModuleAbi);
-    m.build = reinterpret_cast<CsgtileVdbShellBuild*>(
-        kernel::module_symbol(loaded, "csgtile_vdb_shell_build"));
-    m.meet = reinterpret_cast<CsgtileVdbShellsMeet*>(
-        kernel::module_symbol(loaded, "csgtile_vdb_shells_meet"));
-    m.voxels = reinterpret_cast<CsgtileVdbShellVoxels*>(
-        kernel::module_symbol(loaded, "csgtile_vdb_shell_voxels"));
-    m.free = reinterpret_cast<CsgtileVdbShellFree*>(
-        kernel::module_symbol(loaded, "csgtile_vdb_shell_free"));
+    m.build = kernel::module_function<CsgtileVdbShellBuild>(loaded, "csgtile_vdb_shell_build");
+    m.meet = kernel::module_function<CsgtileVdbShellsMeet>(loaded, "csgtile_vdb_shells_meet");
+    m.voxels = kernel::module_function<CsgtileVdbShellVoxels>(loaded, "csgtile_vdb_shell_voxels");
+    m.free = kernel::module_function<CsgtileVdbShellFree>(loaded, "csgtile_vdb_shell_free");
     if (!loaded.error.empty()) {
       m.error = loaded.error;
     } else if (!m.build || !m.meet || !m.voxels || !m.free) {
@@ -159,22 +163,13 @@ void VoxelCuller::build(const std::vector<kernel::Shape>& shapes,
     }
     // Voxels of the shell inside the regions, triangle by triangle (the module): every voxel
     // centre in the triangle's box (grown by the margin) clipped to a region, kept when within
-    // the margin of the triangle.
-    std::vector<double> vertices, boxes_flat;
-    vertices.reserve(3 * mesh->vertices.size());
-    for (const kernel::Vec3& v : mesh->vertices)
-      vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
-    std::vector<std::uint32_t> triangles;
-    triangles.reserve(3 * mesh->triangles.size());
-    for (const auto& t : mesh->triangles) triangles.insert(triangles.end(), t.begin(), t.end());
-    for (const kernel::BoundingBox& r : regions[i]) {
-      boxes_flat.insert(boxes_flat.end(),
-                        {r.min.x(), r.min.y(), r.min.z(), r.max.x(), r.max.y(), r.max.z()});
-    }
+    // the margin of the triangle. The mesh and the regions are handed over as they are stored.
+    const double* vertices = mesh->vertices.front().data();
+    const std::uint32_t* triangles = mesh->triangles.front().data();
+    const double* boxes_flat = regions[i].front().min.data();
     auto shell = std::make_unique<Shell>();
-    shell->tree =
-        vdb.build(vertices.data(), mesh->vertices.size(), triangles.data(), mesh->triangles.size(),
-                  boxes_flat.data(), regions[i].size(), d.voxel, d.margin);
+    shell->tree = vdb.build(vertices, mesh->vertices.size(), triangles, mesh->triangles.size(),
+                            boxes_flat, regions[i].size(), d.voxel, d.margin);
     if (shell->tree == nullptr) {
       d.whole[i] = 1;
       return;

@@ -2,7 +2,6 @@
 // tileset naming the cells' tilesets, and the run manifest, written last (city_jobs.h).
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <set>
 
@@ -315,21 +314,11 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   // done): its stages up to here, before the report, the manifest and the upload.
   clock.stop();
   {
-    ordered_json stages = ordered_json::object();
     double seconds = 0.0;
-    for (const auto& [stage, s] : timings->seconds) {
-      stages[stage] = s;
-      seconds += s;
-    }
-    ordered_json entry = {{"key", job.key},
-                          {"stages", stages},
-                          {"seconds", seconds},
-                          {"attempt", job.attempts},
-                          {"until", "report"}};
-    if (const auto peak = ops::peak_resident_bytes()) {
-      entry["peak_rss_mib"] =
-          std::round(static_cast<double>(*peak) / (1024.0 * 1024.0) * 10.0) / 10.0;
-    }
+    for (const auto& stage : timings->seconds) seconds += stage.second;
+    ordered_json entry = {{"key", job.key}};
+    entry.update(timings_json(*timings, seconds, "", job.attempts, ops::peak_resident_mib()));
+    entry["until"] = "report";
     records.timings.push_back(std::move(entry));
   }
   clock.enter("publish");

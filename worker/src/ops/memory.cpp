@@ -1,5 +1,6 @@
 #include "ops/memory.h"
 
+#include <cmath>
 #include <fstream>
 #include <string>
 
@@ -28,6 +29,12 @@ std::optional<std::uint64_t> status_bytes(const std::string& key) {
 std::optional<std::uint64_t> resident_bytes() { return status_bytes("VmRSS"); }
 
 std::optional<std::uint64_t> peak_resident_bytes() { return status_bytes("VmHWM"); }
+
+std::optional<double> peak_resident_mib() {
+  const auto peak = peak_resident_bytes();
+  if (!peak) return std::nullopt;
+  return std::round(static_cast<double>(*peak) / (1024.0 * 1024.0) * 10.0) / 10.0;
+}
 
 bool reset_peak_resident() {
   std::ofstream out("/proc/self/clear_refs");

@@ -12,6 +12,8 @@ namespace csgtile::worker::ops {
 std::optional<std::uint64_t> resident_bytes();
 /// Highest resident set size since the process started or since reset_peak_resident (VmHWM).
 std::optional<std::uint64_t> peak_resident_bytes();
+/// The same in MiB, to a tenth (as timings.json records it).
+std::optional<double> peak_resident_mib();
 /// Starts a new peak at the current resident size (writes "5" to /proc/self/clear_refs), so
 /// that the next peak_resident_bytes is one job's. Returns false where refused.
 bool reset_peak_resident();

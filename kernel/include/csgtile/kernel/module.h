@@ -30,4 +30,10 @@ const Module& load_module(const std::string& file, const std::string& abi);
 /// The address of `name` in a loaded module; null when absent or the module is not loaded.
 void* module_symbol(const Module& module, const char* name);
 
+/// The function `name` of a loaded module, of type F (e.g. `int(const char*)`); null as above.
+template <class F>
+F* module_function(const Module& module, const char* name) {
+  return reinterpret_cast<F*>(module_symbol(module, name));
+}
+
 }  // namespace csgtile::kernel
