@@ -106,16 +106,17 @@ def wait_for(what, predicate, timeout=60.0, period=0.05):
 
 
 # 3. The cut: a heavy (gate) job on its first attempt, claimed since the previous poll (so
-# most of the job, and its first renewal, are still ahead of it).
-running_before = None
+# most of the job, and its first renewal, are still ahead of it). Before the first poll nothing
+# was running (the workers started just now): a worker starts in tens of milliseconds, and may
+# claim a gate job before the first poll.
+running_before = set()
 
 
 def just_claimed_heavy():
     global running_before
     rows = sql("SELECT key, worker, extract(epoch FROM lease_expires - now()) FROM csgtile_jobs "
                "WHERE state = 'running' AND attempts = 1 AND key LIKE '%/gate-%' ORDER BY id")
-    fresh = [r for r in rows if running_before is not None and r[0] not in running_before
-             and r[1] in host_of]
+    fresh = [r for r in rows if r[0] not in running_before and r[1] in host_of]
     running_before = {r[0] for r in rows}
     return fresh[0] if fresh else None
 
