@@ -131,6 +131,7 @@ class Detector {
   }
   void compact_remaining();
   void relabel();
+  bool retype();
   std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
   void derive_scale(std::span<const std::uint32_t> members, const detail::NeighbourSample& sample,
                     RansacResult& result);
@@ -735,6 +736,24 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
+// Types again on the final points: a curved shape found first may have held a neighbour's
+// edge points that relabel() gave back (the belt of a wide cylinder between two fillets, taken
+// with their rims for the sphere through it); on its own points another curved type can be
+// the better. Planes are left as extraction decided, in both directions: a curved shape that
+// gave its rims away may be left with points on one circle (a hole's wall seen as one ring),
+// which a plane fits as well. True when a shape changed type.
+bool Detector::retype() {
+  bool changed = false;
+  for (auto& shape : shapes_) {
+    if (shape.surface.type == ShapeType::Plane) continue;
+    auto alt = by_evidence(shape.surface, shape.inliers);
+    if (!alt || alt->type == ShapeType::Plane) continue;
+    shape.surface = *alt;
+    changed = true;
+  }
+  return changed;
+}
+
 // Edges: a point within epsilon of two neighbouring shapes lies on both (at their shared edge
 // its normal belongs to neither); it goes to the smallest of them that has at most half the
 // points of its present one — once, among the points next to that shape's inliers (growing
@@ -895,7 +914,10 @@ RansacResult Detector::run() {
       break;
     if (draws_ >= o_.max_candidates) break;
   }
-  if (o_.relabel && !shapes_.empty()) relabel();
+  if (o_.relabel && !shapes_.empty()) {
+    relabel();
+    if (o_.by_evidence && retype()) relabel();
+  }
   if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
   if (o_.merge_same_surface &&
       detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon) > 0) {
