@@ -91,9 +91,12 @@ class NeighbourSample {
   double spacing(double quantile = 0.5) const;  ///< as estimate_spacing
   double reach(double quantile) const;          ///< as neighbour_reach
   double noise(double quantile) const;          ///< as estimate_noise (0 without with_noise)
+  /// The noise left by a quadric over each neighbourhood's plane instead of the plane: nil for
+  /// exact points on a curved surface, about noise() for noisy ones (0 without with_noise).
+  double curved_noise(double quantile) const;
 
  private:
-  std::vector<double> distances_, residuals_;
+  std::vector<double> distances_, residuals_, curved_;
 };
 
 /// For each query point, the index of the nearest of `targets` (PCL kd-tree; ties as PCL

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 
 #include "fit_internal.h"
 
@@ -162,12 +164,40 @@ double sheet_residual(std::span<const Vec3> points, const std::array<std::uint32
   return s.gap > 4.0 * s.within && s.gap >= min_gap ? std::min(s.within, rms) : rms;
 }
 
+// The RMS distance of a neighbourhood from the quadric height field over its plane (w = a u² +
+// b uv + c v² + d u + e v + f in the plane's frame), scaled by √(N / (N - 6)) for the
+// parameters fitted: the noise of exact points on a curved surface is nil, where the plane's
+// residual is the surface's bending across the neighbourhood. NaN when the neighbourhood spans
+// too little of its plane to fit the quadric.
+template <std::size_t N>
+double quadric_residual(std::span<const Vec3> points, const std::array<std::uint32_t, N>& hood,
+                        const Vec3& centre, const Vec3& normal) {
+  static_assert(N > 6);
+  const Vec3 helper = std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 e1 = normal.cross(helper).normalized(), e2 = normal.cross(e1);
+  Eigen::Matrix<double, N, 6> a;
+  Eigen::Matrix<double, N, 1> w;
+  for (std::size_t h = 0; h < N; ++h) {
+    const Vec3 q = points[hood[h]] - centre;
+    const double u = q.dot(e1), v = q.dot(e2);
+    const auto r = static_cast<Eigen::Index>(h);
+    a.row(r) << u * u, u * v, v * v, u, v, 1.0;
+    w(r) = q.dot(normal);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, N, 6>> qr(a);
+  if (qr.rank() < 6) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Matrix<double, 6, 1> theta = qr.solve(w);
+  const double sum = (a * theta - w).squaredNorm();
+  return std::sqrt(sum / static_cast<double>(N - 6));
+}
+
 // With `residuals`: also, per sampled point found, the noise of its neighbourhood (the point
 // and its 16 nearest, sheet_residual) — the scan's noise where the surface is flat, more on
 // curved parts and edges.
 std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
                                             std::span<const std::uint32_t> members,
-                                            std::vector<double>* residuals = nullptr) {
+                                            std::vector<double>* residuals = nullptr,
+                                            std::vector<double>* curved = nullptr) {
   if (members.size() <= kNeighbours) return {};
   Vec3 lo = points[members[0]], hi = lo;
   for (auto i : members) {
@@ -182,6 +212,7 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
     const PointGrid grid(points, members, cell, 0);
     std::vector<double> found;
     if (residuals != nullptr) residuals->clear();
+    if (curved != nullptr) curved->clear();
     std::array<double, kNeighbours> best{};
     std::array<std::uint32_t, kNeighbours> who{};
     for (std::size_t k = 0; k < samples; ++k) {
@@ -221,6 +252,10 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
           if (const auto plane = fit_plane(points, hood)) {
             residuals->push_back(
                 sheet_residual(points, hood, plane->point, plane->axis, best.back() / 8.0));
+            if (curved != nullptr) {
+              const double r = quadric_residual(points, hood, plane->point, plane->axis);
+              if (std::isfinite(r)) curved->push_back(r);
+            }
           }
         }
       }
@@ -243,7 +278,8 @@ double quantile_of(std::vector<double> values, double quantile) {
 
 NeighbourSample::NeighbourSample(std::span<const Vec3> points,
                                  std::span<const std::uint32_t> members, bool with_noise) {
-  distances_ = kth_neighbour_distances(points, members, with_noise ? &residuals_ : nullptr);
+  distances_ = kth_neighbour_distances(points, members, with_noise ? &residuals_ : nullptr,
+                                       with_noise ? &curved_ : nullptr);
 }
 
 double NeighbourSample::spacing(double quantile) const {
@@ -255,6 +291,10 @@ double NeighbourSample::spacing(double quantile) const {
 double NeighbourSample::reach(double quantile) const { return quantile_of(distances_, quantile); }
 
 double NeighbourSample::noise(double quantile) const { return quantile_of(residuals_, quantile); }
+
+double NeighbourSample::curved_noise(double quantile) const {
+  return quantile_of(curved_, quantile);
+}
 
 double estimate_spacing(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                         double quantile) {

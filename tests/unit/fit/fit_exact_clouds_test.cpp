@@ -403,5 +403,67 @@ TEST(FitExactClouds, FilletedDiscWallIsACylinderOnItsOwnPoints) {
   EXPECT_GE(walls, 6);
 }
 
+// A tube's rounded end, as Fit4CAD's PC49: the outer wall (radius 9.525) and the bore (3.175)
+// meet the end face (a ring 1.27 wide) in fillets of radius 2.54, sampled coarsely and
+// exactly. Every point bends away from the plane through its neighbours, so the planes would
+// say the cloud is noisy (about 0.02); the quadrics over them say it is exact, so the rules for
+// exact points hold. The walls are cylinders fitted to their own points, exact, though their
+// inliers reach into the fillets' rims. (The fillets themselves, six points across, are not
+// yet found whole: see issue #24's note.)
+TEST(FitExactClouds, CoarseTubeEndIsExactAndItsWallsFitTheirOwnPoints) {
+  constexpr double kOuter = 9.525, kBore = 3.175, kFillet = 2.54, kTop = 19.05;
+  constexpr double kDensity = 2.0;  // points per unit of area
+  testing::Draw d(49);
+  Cloud c;
+  auto count = [&](double area) { return static_cast<int>(area * kDensity); };
+  const double length = 10.0;  // of the walls below the fillets
+  c.append(testing::cylinder_cloud(Vec3(0, 0, kTop - kFillet - length), Vec3::UnitZ(), kOuter,
+                                   length, 0.0, 2.0 * std::numbers::pi,
+                                   count(2.0 * std::numbers::pi * kOuter * length), 0.0, 50));
+  c.append(testing::cylinder_cloud(Vec3(0, 0, kTop - kFillet - length), Vec3::UnitZ(), kBore,
+                                   length, 0.0, 2.0 * std::numbers::pi,
+                                   count(2.0 * std::numbers::pi * kBore * length), 0.0, 51));
+  const double ring_in = kBore + kFillet, ring_out = kOuter - kFillet;
+  for (int k = 0; k < count(std::numbers::pi * (ring_out * ring_out - ring_in * ring_in)); ++k) {
+    const double t = d.uniform(0.0, 2.0 * std::numbers::pi);
+    const double rho = std::sqrt(d.uniform(ring_in * ring_in, ring_out * ring_out));
+    c.add(Vec3(rho * std::cos(t), rho * std::sin(t), kTop), Vec3::UnitZ(), 0.0, d);
+  }
+  // Quarter tori: the outer one's tube faces out and up, the bore's in and up.
+  for (const double side : {1.0, -1.0}) {
+    const double major = side > 0.0 ? ring_out : ring_in;
+    const int n = count(0.5 * std::numbers::pi * kFillet * 2.0 * std::numbers::pi * major);
+    for (int k = 0; k < n; ++k) {
+      const double u = d.uniform(0.0, 2.0 * std::numbers::pi);
+      const double v = d.uniform(0.0, 0.5 * std::numbers::pi);
+      const Vec3 radial(std::cos(u), std::sin(u), 0.0);
+      const Vec3 normal = side * std::cos(v) * radial + std::sin(v) * Vec3::UnitZ();
+      c.add(Vec3(0, 0, kTop - kFillet) + major * radial + kFillet * normal, normal, 0.0, d);
+    }
+  }
+  NormalOptions n;
+  n.neighbours = 8;
+  n.sharp = true;
+  const auto normals = estimate_normals(c.points, n);
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    RansacOptions o = derived_with_evidence(seed);
+    o.relabel = true;
+    o.probability = 0.9999;
+    const auto result = detect_shapes(c.points, normals, o);
+    ASSERT_TRUE(result.ok());
+    EXPECT_LT(result->noise, 1e-4 * result->spacing);
+    // The walls: cylinders of the drawn radii.
+    for (const double radius : {kOuter, kBore}) {
+      bool found = false;
+      for (const auto& s : result->shapes) {
+        found = found || (s.surface.type == ShapeType::Cylinder &&
+                          std::abs(s.surface.radius - radius) < 5e-4);
+      }
+      EXPECT_TRUE(found) << "no cylinder of radius " << radius;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace csgtile::fit
