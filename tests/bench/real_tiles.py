@@ -685,6 +685,10 @@ def measure_tile(name, spec, args, out_dir):
         and buildings else None
     grid = {}
     res["top_surface"] = top_surface.measure_top_surface(prims, pts, args.top_cell, inside, grid)
+    if inside is not None:
+        res["top_surface"]["inside_footprints"]["footprints_as_model"] = \
+            top_surface.footprints_as_model(inside, pts, args.top_cell, grid["x0"], grid["y0"],
+                                            grid["nx"], grid["ny"])
     residual_png = os.path.join(out_dir, name + "_residuals.png")
     write_residual_view(residual_png, grid, args.pixel)
     res["residual_image"] = residual_png
@@ -802,6 +806,16 @@ def self_test():
                 [c[1] for c in [to_world(box.frame, 1, 1.5, 4.1)]] + [30.0],
                 [11.1, 5.0], [6, 6]), 0.5)
     check("top-surface coverage", fig["whole_tile"]["coverage"], 0.5)
+    # The footprint [0, 1.1] x [0, 1] as the model on a 0.5 m grid from the origin. Of its
+    # points (0.1, 0.1), (0.9, 0.3) and (1.05, 0.2), the last lies in a cell whose centre
+    # (1.25) is outside it: uncovered. (1.2, 0.2) lies outside it, (0.4, 1.2) is ground. Its
+    # cells are the four of centres 0.25 and 0.75, of which two hold a building point.
+    ref = top_surface.footprints_as_model(
+        lambda x, y: 0.0 <= x <= 1.1 and 0.0 <= y <= 1.0,
+        ([0.1, 0.9, 1.05, 1.2, 0.4], [0.1, 0.3, 0.2, 0.2, 1.2], [0.0] * 5, [6, 6, 6, 6, 2]),
+        0.5, 0.0, 0.0, 4, 4)
+    check("footprints as the model: coverage", ref["coverage"], 2 / 3)
+    check("footprints as the model: false area", ref["false_area"], 2 / 4)
     check("top-surface within 0.3 m", fig["whole_tile"]["within_0.3m"], 0.5)
     check("top-surface rmse", fig["whole_tile"]["rmse_m"], 0.1, 1e-9)
     # A perfect model's share: one height per cell within 0.3 m of at most 3 of these 4

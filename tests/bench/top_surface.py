@@ -10,6 +10,12 @@ cell:
                  no model count as not within);
   rmse_m, median_m  of |z - top| over the covered points;
   false_area     model cells holding no building point, as a share of the model's cells;
+  footprints_as_model  (inside_footprints, with footprints) the coverage and false area the
+                 published footprints themselves reach as the model, on the same grid: a
+                 point whose cell centre lies outside its footprint is uncovered, a cell whose
+                 centre lies inside but holds no building point is false (cells within the
+                 scanned extent: 2 m blocks holding a point of any class). The grid's own
+                 floor: a model whose walls stand exactly on the footprints scores these;
   best_possible  within_<t>m that a perfect model would reach: one top per cell cannot be
                  within t of every point of a cell on a steep roof or a facade;
 each over the whole tile and over the points inside the published footprints (when given).
@@ -294,3 +300,32 @@ def measure_top_surface(prims, pts, cell=0.5, inside=None, cells=None):
     out["model_cells"] = len(tops)
     out["false_area"] = (sum(1 for k in tops if k not in occupied) / len(tops)) if tops else 0.0
     return out
+
+
+def footprints_as_model(inside, pts, cell, x0, y0, nx, ny):
+    """Coverage of the building points inside the footprints and false area, were the
+    footprints (inside(x, y)) the model, on the grid of measure_top_surface (origin x0, y0,
+    nx by ny cells of `cell`); false area over the scanned extent only (2 m blocks from the
+    grid's origin holding a point)."""
+    xs, ys, zs, cls = pts
+    occupied, scanned = set(), set()
+    points = covered = 0
+    for i in range(len(xs)):
+        scanned.add((int((xs[i] - x0) / 2.0), int((ys[i] - y0) / 2.0)))
+        if cls[i] != 6:
+            continue
+        key = (int((xs[i] - x0) / cell), int((ys[i] - y0) / cell))
+        occupied.add(key)
+        if not inside(xs[i], ys[i]):
+            continue
+        points += 1
+        covered += 1 if inside(x0 + (key[0] + 0.5) * cell, y0 + (key[1] + 0.5) * cell) else 0
+    cells = false = 0
+    for j in range(ny):
+        for i in range(nx):
+            x, y = x0 + (i + 0.5) * cell, y0 + (j + 0.5) * cell
+            if (int((x - x0) / 2.0), int((y - y0) / 2.0)) in scanned and inside(x, y):
+                cells += 1
+                false += 0 if (i, j) in occupied else 1
+    return {"coverage": covered / points if points else 0.0,
+            "false_area": false / cells if cells else 0.0}
