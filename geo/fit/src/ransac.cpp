@@ -299,6 +299,39 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
+// Frees the points of exact shapes (half of their points or more within the noise floor) that
+// lie more than three floors off them, where relabel() left them (no other shape fits them
+// better); the number freed.
+std::size_t Detector::free_inexact() {
+  const double floor = noise_floor();
+  std::size_t freed = 0;
+  for (auto& shape : shapes_) {
+    std::vector<double> residual;
+    residual.reserve(shape.inliers.size());
+    for (auto i : shape.inliers) {
+      residual.push_back(std::abs(surface_distance(shape.surface, points_[i])));
+    }
+    std::vector<double> sorted = residual;
+    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    if (sorted.empty() || *mid > floor) continue;
+    std::vector<std::uint32_t> kept;
+    for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
+      const std::uint32_t i = shape.inliers[k];
+      if (residual[k] > 3.0 * floor) {
+        assignment_[i] = -1;
+        if (has_normal_[i]) remaining_.push_back(i);
+        ++remaining_count_;
+        ++freed;
+      } else {
+        kept.push_back(i);
+      }
+    }
+    shape.inliers = std::move(kept);
+  }
+  return freed;
+}
+
 // Types again on the final points: a curved shape found first may have held a neighbour's
 // edge points that relabel() gave back (the belt of a wide cylinder between two fillets, taken
 // with their rims for the sphere through it); on its own points another curved type can be
@@ -400,6 +433,41 @@ void Detector::derive_scale(std::span<const std::uint32_t> members,
   result.max_radius = o_.max_radius;
 }
 
+// Draws candidates and extracts the best while one of min_points may still be missed (the
+// search of the module comment). False when the interrupt fired.
+bool Detector::search() {
+  constexpr int kBatch = 64;
+  for (;;) {
+    if (o_.interrupt.fired()) {
+      cancelled_ = true;
+      return false;
+    }
+    for (int b = 0; b < kBatch; ++b) draw();
+    while (!heap_.empty()) {
+      Candidate top = heap_.top();
+      if (top.stamp != extractions_) {
+        heap_.pop();
+        if (assignment_[top.seed] >= 0) continue;
+        const int starts[1] = {grid_->cell_of(top.seed)};
+        top.score = component(top.surface, starts, true, nullptr);
+        top.stamp = extractions_;
+        if (top.score >= 0.5 * static_cast<double>(o_.min_points)) heap_.push(top);
+        continue;
+      }
+      if (probability(top.score, draws_) < o_.probability) break;
+      heap_.pop();
+      extract(top);
+    }
+    if (remaining_count_ < static_cast<std::size_t>(o_.min_points)) break;
+    if (remaining_.size() > 2 * remaining_count_ + 64) compact_remaining();
+    const bool heap_done = heap_.empty() || heap_.top().score < static_cast<double>(o_.min_points);
+    if (heap_done && probability(static_cast<double>(o_.min_points), draws_) >= o_.probability)
+      break;
+    if (draws_ >= o_.max_candidates) break;
+  }
+  return true;
+}
+
 RansacResult Detector::run() {
   RansacResult result;
   const std::size_t n = points_.size();
@@ -454,37 +522,19 @@ RansacResult Detector::run() {
   }
   remaining_count_ = members.size();
 
-  constexpr int kBatch = 64;
-  for (;;) {
-    if (o_.interrupt.fired()) {
-      cancelled_ = true;
-      return result;
-    }
-    for (int b = 0; b < kBatch; ++b) draw();
-    while (!heap_.empty()) {
-      Candidate top = heap_.top();
-      if (top.stamp != extractions_) {
-        heap_.pop();
-        if (assignment_[top.seed] >= 0) continue;
-        const int starts[1] = {grid_->cell_of(top.seed)};
-        top.score = component(top.surface, starts, true, nullptr);
-        top.stamp = extractions_;
-        if (top.score >= 0.5 * static_cast<double>(o_.min_points)) heap_.push(top);
-        continue;
-      }
-      if (probability(top.score, draws_) < o_.probability) break;
-      heap_.pop();
-      extract(top);
-    }
-    if (remaining_count_ < static_cast<std::size_t>(o_.min_points)) break;
-    if (remaining_.size() > 2 * remaining_count_ + 64) compact_remaining();
-    const bool heap_done = heap_.empty() || heap_.top().score < static_cast<double>(o_.min_points);
-    if (heap_done && probability(static_cast<double>(o_.min_points), draws_) >= o_.probability)
-      break;
-    if (draws_ >= o_.max_candidates) break;
-  }
+  if (!search()) return result;
   if (o_.relabel && !shapes_.empty()) {
     relabel();
+    // On exact clouds, points that fit their shape only within epsilon belong to a surface not
+    // found yet (a bore's wall whose points the fillets beside it held): freed, searched
+    // again, labelled again.
+    if (exact_ && free_inexact() >= static_cast<std::size_t>(o_.min_points)) {
+      heap_ = {};
+      searched_ += draws_;
+      draws_ = 0;
+      if (!search()) return result;
+      relabel();
+    }
     if (o_.by_evidence && retype()) relabel();
   }
   if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
@@ -492,7 +542,7 @@ RansacResult Detector::run() {
       detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon) > 0) {
     for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
   }
-  result.candidates = draws_;
+  result.candidates = searched_ + draws_;
   result.assignment = assignment_;
   result.shapes = std::move(shapes_);
   if (result.shapes.empty()) {

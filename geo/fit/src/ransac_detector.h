@@ -115,7 +115,9 @@ class Detector {
     return 1.0 - std::exp(static_cast<double>(draws) * std::log1p(-p));
   }
   void compact_remaining();
+  bool search();
   void relabel();
+  std::size_t free_inexact();
   bool retype();
   std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
   void derive_scale(std::span<const std::uint32_t> members, const NeighbourSample& sample,
@@ -175,6 +177,7 @@ class Detector {
   std::uint32_t stamp_ = 0;
   std::priority_queue<Candidate, std::vector<Candidate>, CandidateLess> heap_;
   std::uint64_t draws_ = 0;
+  std::uint64_t searched_ = 0;  // draws of the searches before the present one
   std::uint64_t extractions_ = 0;
   std::vector<DetectedShape> shapes_;
 };
