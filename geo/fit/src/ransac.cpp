@@ -299,9 +299,13 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
-// Frees the points of exact shapes (half of their points or more within the noise floor) that
-// lie more than three floors off them, where relabel() left them (no other shape fits them
-// better); the number freed.
+// On an exact cloud every true surface fits its points to the noise floor. A shape that fits
+// most of its points so (median residual within the floor) but holds points more than three
+// floors off it holds a neighbour's points; a shape that fits most of its points worse is a
+// compromise between surfaces (a cone through a cylinder's end and the sphere of a rounded
+// corner, one torus over two fillets). Those points, and all of a compromise's, are freed for
+// a second search; the shape keeps the rest (a compromise nothing: relabel() drops it). The
+// number freed.
 std::size_t Detector::free_inexact() {
   const double floor = noise_floor();
   std::size_t freed = 0;
@@ -314,11 +318,12 @@ std::size_t Detector::free_inexact() {
     std::vector<double> sorted = residual;
     const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
     std::nth_element(sorted.begin(), mid, sorted.end());
-    if (sorted.empty() || *mid > floor) continue;
+    if (sorted.empty()) continue;
+    const bool dissolve = *mid > floor;
     std::vector<std::uint32_t> kept;
     for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
       const std::uint32_t i = shape.inliers[k];
-      if (residual[k] > 3.0 * floor) {
+      if (dissolve || (*mid <= floor && residual[k] > 3.0 * floor)) {
         assignment_[i] = -1;
         if (has_normal_[i]) remaining_.push_back(i);
         ++remaining_count_;
@@ -526,8 +531,8 @@ RansacResult Detector::run() {
   if (o_.relabel && !shapes_.empty()) {
     relabel();
     // On exact clouds, points that fit their shape only within epsilon belong to a surface not
-    // found yet (a bore's wall whose points the fillets beside it held): freed, searched
-    // again, labelled again.
+    // found yet (a bore's wall whose points the fillets beside it held), as do the points of a
+    // shape that fits none exactly: freed, searched again, labelled again.
     if (exact_ && free_inexact() >= static_cast<std::size_t>(o_.min_points)) {
       heap_ = {};
       searched_ += draws_;
