@@ -370,7 +370,16 @@ void Detector::give_edges_to_smaller() {
     for_points_near(shapes_[s].inliers, [&](std::uint32_t j) {
       const int now = assignment_[j];
       if (now < 0 || now == self || 2 * size_of(self) > size_of(now)) return;
-      if (std::abs(surface_distance(shapes_[s].surface, points_[j])) > o_.epsilon) return;
+      const double d = std::abs(surface_distance(shapes_[s].surface, points_[j]));
+      if (d > o_.epsilon) return;
+      // On exact clouds only a point on both surfaces: a band of a face tangent to a fillet lies
+      // within epsilon of the fillet but on the face.
+      if (exact_ &&
+          d > std::max(3.0 * noise_floor(),
+                       std::abs(surface_distance(shapes_[static_cast<std::size_t>(now)].surface,
+                                                 points_[j])))) {
+        return;
+      }
       // The smallest candidate wins; on equal sizes the shape found first.
       if (moved[j] != now && size_of(moved[j]) <= size_of(self)) return;
       moved[j] = self;

@@ -474,5 +474,47 @@ TEST(FitExactClouds, CoarseTubeEndIsExactAndItsWallsAndFilletFitTheirOwnPoints) 
   }
 }
 
+// A face continued by a fillet (a quarter cylinder of radius 2 tangent to it), exact points:
+// near the tangent line the face lies within epsilon of the fillet for a band a few spacings
+// wide, but on the face. A point on both goes to the smaller shape (the fillet keeps its rims);
+// a point of that band is no fillet's point and stays with the face.
+TEST(FitExactClouds, FaceBandTangentToAFilletStaysWithTheFace) {
+  constexpr double kRadius = 2.0, kStep = 0.1;
+  Cloud c;
+  testing::Draw d(66);
+  // The face z = 0 for x in [-12, 0], y in [0, 6] (more than twice the fillet's points); the
+  // fillet bends up from x = 0 around the axis x = 0, z = 2.
+  const std::size_t face = static_cast<std::size_t>(12.0 * 6.0 / (kStep * kStep));
+  for (std::size_t k = 0; k < face; ++k) {
+    c.add(Vec3(d.uniform(-12.0, 0.0), d.uniform(0.0, 6.0), 0.0), Vec3::UnitZ(), 0.0, d);
+  }
+  const auto arc = static_cast<int>(0.5 * std::numbers::pi * kRadius * 6.0 / (kStep * kStep));
+  for (int k = 0; k < arc; ++k) {
+    const double t = d.uniform(0.0, 0.5 * std::numbers::pi);
+    const Vec3 normal(-std::sin(t), 0.0, std::cos(t));
+    c.add(Vec3(kRadius * std::sin(t), d.uniform(0.0, 6.0), kRadius - kRadius * std::cos(t)), normal,
+          0.0, d);
+  }
+  NormalOptions n;
+  n.neighbours = 8;
+  n.sharp = true;
+  const auto normals = estimate_normals(c.points, n);
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    RansacOptions o = derived_with_evidence(seed);
+    o.relabel = true;
+    o.edges_to_smaller = true;
+    const auto result = detect_shapes(c.points, normals, o);
+    ASSERT_TRUE(result.ok());
+    std::size_t band = 0;  // face points a spacing or more from the tangent line, on the fillet
+    for (std::size_t i = 0; i < face; ++i) {
+      const int a = result->assignment[i];
+      if (a < 0 || c.points[i].x() > -result->spacing) continue;
+      band += result->shapes[static_cast<std::size_t>(a)].surface.type == ShapeType::Cylinder;
+    }
+    EXPECT_EQ(band, 0u);
+  }
+}
+
 }  // namespace
 }  // namespace csgtile::fit
