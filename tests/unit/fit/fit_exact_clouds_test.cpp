@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <vector>
 
 #include "csgtile/fit/fit.h"
 #include "csgtile/fit/segment.h"
@@ -34,6 +35,22 @@ RansacOptions derived_with_evidence(std::uint64_t seed) {
   o.by_evidence = true;
   o.seed = seed;
   return o;
+}
+
+// fit-cad.yaml's detection: derived scale, types by evidence, relabelling, probability 0.9999.
+RansacOptions cad_options(std::uint64_t seed) {
+  RansacOptions o = derived_with_evidence(seed);
+  o.relabel = true;
+  o.probability = 0.9999;
+  return o;
+}
+
+// fit-cad.yaml's normals: 8 neighbours, sharp.
+std::vector<Vec3> sharp_normals(const Cloud& c) {
+  NormalOptions n;
+  n.neighbours = 8;
+  n.sharp = true;
+  return estimate_normals(c.points, n);
 }
 
 // Exact points on a strip of a cylinder of radius 20, 2 wide and 4 long: 0.025 from flat at
@@ -366,19 +383,13 @@ TEST(FitExactClouds, FilletedDiscWallIsACylinderOnItsOwnPoints) {
   const std::size_t belt_begin = c.points.size();  // the wall between them
   for (int k = 1; k < 4; ++k) ring(kOuter, kFillet + k * (kHeight - 2.0 * kFillet) / 4.0, out);
   const std::size_t belt_end = c.points.size();
-  NormalOptions n;
-  n.neighbours = 8;
-  n.sharp = true;
-  const auto normals = estimate_normals(c.points, n);
+  const auto normals = sharp_normals(c);
   // Rings sampled this regularly also lie on other surfaces two at a time (any two circles of
   // a fillet lie on a cone), so a draw can break a fillet into such pieces, which then hold the
   // belt; most draws do not.
   int walls = 0;
   for (const std::uint64_t seed : {1, 2, 3, 4, 5, 6, 7, 8}) {
-    RansacOptions o = derived_with_evidence(seed);
-    o.relabel = true;
-    o.probability = 0.9999;
-    const auto result = detect_shapes(c.points, normals, o);
+    const auto result = detect_shapes(c.points, normals, cad_options(seed));
     ASSERT_TRUE(result.ok());
     // The shape holding most of the belt's points: a cylinder of the disc's radius, holding
     // all of them.
@@ -441,16 +452,10 @@ TEST(FitExactClouds, CoarseTubeEndIsExactAndItsWallsAndFilletFitTheirOwnPoints) 
       c.add(Vec3(0, 0, kTop - kFillet) + major * radial + kFillet * normal, normal, 0.0, d);
     }
   }
-  NormalOptions n;
-  n.neighbours = 8;
-  n.sharp = true;
-  const auto normals = estimate_normals(c.points, n);
+  const auto normals = sharp_normals(c);
   for (const std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    RansacOptions o = derived_with_evidence(seed);
-    o.relabel = true;
-    o.probability = 0.9999;
-    const auto result = detect_shapes(c.points, normals, o);
+    const auto result = detect_shapes(c.points, normals, cad_options(seed));
     ASSERT_TRUE(result.ok());
     EXPECT_LT(result->noise, 1e-4 * result->spacing);
     // The walls: cylinders of the drawn radii.
@@ -495,14 +500,10 @@ TEST(FitExactClouds, FaceBandTangentToAFilletStaysWithTheFace) {
     c.add(Vec3(kRadius * std::sin(t), d.uniform(0.0, 6.0), kRadius - kRadius * std::cos(t)), normal,
           0.0, d);
   }
-  NormalOptions n;
-  n.neighbours = 8;
-  n.sharp = true;
-  const auto normals = estimate_normals(c.points, n);
+  const auto normals = sharp_normals(c);
   for (const std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    RansacOptions o = derived_with_evidence(seed);
-    o.relabel = true;
+    RansacOptions o = cad_options(seed);
     o.edges_to_smaller = true;
     const auto result = detect_shapes(c.points, normals, o);
     ASSERT_TRUE(result.ok());
