@@ -19,7 +19,9 @@ largest |P ∩ G| (ties: the lower surface id; none: every score 0):
 Scores are averaged over a cloud's primitives, then over the clouds (the benchmark's
 `main_ClassificationMeasures.m`, with precision and recall in their right order). Prints one
 JSON object: per cloud and the means, seconds, surfaces. Exit 1 when a --min-* threshold is
-not met, 77 (skip) when the data folder is absent.
+not met or a cloud's segments break their contract (a label naming no surface, a surface
+holding no point or listing another count than its labels), 77 (skip) when the data folder
+is absent.
 """
 
 import argparse
@@ -110,8 +112,29 @@ def read_segments(prefix, count):
         raise ValueError("%s.i32: %d bytes for %d points" % (prefix, len(raw), count))
     labels = list(struct.unpack("<%di" % count, raw))
     doc = json.load(open(prefix + ".json"))
+    problems = segment_problems(labels, doc["surfaces"])
+    if problems:
+        raise ValueError("%s: %s" % (prefix, "; ".join(problems)))
     seg_types = {s["id"]: s["type"] for s in doc["surfaces"]}
     return labels, seg_types
+
+
+def segment_problems(labels, surfaces):
+    """What breaks the --segments contract: every label is -1 or a listed surface's id, and
+    every surface lists as `points` the number of points labelled with its id, at least one."""
+    held = {}
+    for label in labels:
+        held[label] = held.get(label, 0) + 1
+    ids = {s["id"] for s in surfaces}
+    problems = ["label %d names no surface" % k for k in sorted(held) if k != -1 and k not in ids]
+    for s in surfaces:
+        n = held.get(s["id"], 0)
+        if n == 0:
+            problems.append("surface %d holds no point" % s["id"])
+        elif n != s["points"]:
+            problems.append("surface %d lists %d points, %d are labelled with it"
+                            % (s["id"], s["points"], n))
+    return problems
 
 
 def self_test():
@@ -160,6 +183,13 @@ def self_test():
         if read_types(os.path.join(d, "t.txt")) != {1: "plane", 2: "cylinder"}:
             print("self-test failed: types", file=sys.stderr)
             return 1
+    if segment_problems([0, 0, -1, 2], [{"id": 0, "points": 2}, {"id": 1, "points": 0}]) != [
+            "label 2 names no surface", "surface 1 holds no point"]:
+        print("self-test failed: segment problems", file=sys.stderr)
+        return 1
+    if segment_problems([0, -1, 0], [{"id": 0, "points": 2}]):
+        print("self-test failed: a sound segmentation has problems", file=sys.stderr)
+        return 1
     print(json.dumps({"self_test": "passed"}))
     return 0
 
@@ -216,7 +246,11 @@ def main():
                                                            run.stdout, run.stderr),
                   file=sys.stderr)
             return 1
-        labels, seg_types = read_segments(prefix, len(pts))
+        try:
+            labels, seg_types = read_segments(prefix, len(pts))
+        except ValueError as e:
+            print("fit4cad_score: %s" % e, file=sys.stderr)
+            return 1
         s = score(truth, types, labels, seg_types)
         row = {"cloud": "train_PC%d" % n, "points": len(pts), "primitives": len(truth),
                "surfaces": len(seg_types), "seconds": round(seconds, 3),

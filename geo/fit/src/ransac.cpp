@@ -264,7 +264,8 @@ void Detector::relabel() {
       changed = changed || members[s] != shapes_[s].inliers;
       dissolved = dissolved || static_cast<long long>(members[s].size()) < o_.min_points;
     }
-    if (!changed) break;
+    // A shape free_inexact() emptied is dissolved though no point moved.
+    if (!changed && !dissolved) break;
     const bool refit = !dissolved && refits < 2;
     std::vector<DetectedShape> kept;
     std::vector<int> renumber(shapes_.size(), -1);
@@ -542,12 +543,14 @@ RansacResult Detector::run() {
     // On exact clouds, points that fit their shape only within epsilon belong to a surface not
     // found yet (a bore's wall whose points the fillets beside it held), as do the points of a
     // shape that fits none exactly: freed, searched again, labelled again.
-    if (exact_ && free_inexact() >= static_cast<std::size_t>(o_.min_points)) {
-      heap_ = {};
-      searched_ += draws_;
-      draws_ = 0;
-      if (!search()) return result;
-      relabel();
+    if (const std::size_t freed = exact_ ? free_inexact() : 0; freed > 0) {
+      if (freed >= static_cast<std::size_t>(o_.min_points)) {
+        heap_ = {};
+        searched_ += draws_;
+        draws_ = 0;
+        if (!search()) return result;
+      }
+      relabel();  // also the freed points no new shape took, back to the shape they fit best
     }
     if (o_.by_evidence && retype()) relabel();
   }
