@@ -308,6 +308,8 @@ def footprints_as_model(inside, pts, cell, x0, y0, nx, ny):
     nx by ny cells of `cell`); false area over the scanned extent only (2 m blocks from the
     grid's origin holding a point)."""
     xs, ys, zs, cls = pts
+    footprint = {(i, j) for j in range(ny) for i in range(nx)
+                 if inside(x0 + (i + 0.5) * cell, y0 + (j + 0.5) * cell)}
     occupied, scanned = set(), set()
     points = covered = 0
     for i in range(len(xs)):
@@ -316,16 +318,11 @@ def footprints_as_model(inside, pts, cell, x0, y0, nx, ny):
             continue
         key = (int((xs[i] - x0) / cell), int((ys[i] - y0) / cell))
         occupied.add(key)
-        if not inside(xs[i], ys[i]):
-            continue
-        points += 1
-        covered += 1 if inside(x0 + (key[0] + 0.5) * cell, y0 + (key[1] + 0.5) * cell) else 0
-    cells = false = 0
-    for j in range(ny):
-        for i in range(nx):
-            x, y = x0 + (i + 0.5) * cell, y0 + (j + 0.5) * cell
-            if (int((x - x0) / 2.0), int((y - y0) / 2.0)) in scanned and inside(x, y):
-                cells += 1
-                false += 0 if (i, j) in occupied else 1
+        if inside(xs[i], ys[i]):
+            points += 1
+            covered += 1 if key in footprint else 0
+    cells = [k for k in footprint
+             if (int((k[0] + 0.5) * cell / 2.0), int((k[1] + 0.5) * cell / 2.0)) in scanned]
+    false = sum(1 for k in cells if k not in occupied)
     return {"coverage": covered / points if points else 0.0,
-            "false_area": false / cells if cells else 0.0}
+            "false_area": false / len(cells) if cells else 0.0}

@@ -173,8 +173,8 @@ template <std::size_t N>
 double quadric_residual(std::span<const Vec3> points, const std::array<std::uint32_t, N>& hood,
                         const Vec3& centre, const Vec3& normal) {
   static_assert(N > 6);
-  const Vec3 helper = std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  const Vec3 e1 = normal.cross(helper).normalized(), e2 = normal.cross(e1);
+  Vec3 e1, e2;
+  orthonormal_basis(normal, e1, e2);
   Eigen::Matrix<double, N, 6> a;
   Eigen::Matrix<double, N, 1> w;
   for (std::size_t h = 0; h < N; ++h) {

@@ -36,6 +36,13 @@ using kernel::Vec3;
 
 namespace detail {
 
+// Passes of relabel() after its refits: each moves the points next to a shape's own, so a
+// shape takes back a region another holds in as many passes as the region is cells wide.
+constexpr int kRelabelPasses = 64;
+// On exact clouds, a point within this many noise floors of a surface lies on it (the second
+// search's freeing, edges_to_smaller's points on both surfaces).
+constexpr double kOnSurfaceFloors = 3.0;
+
 double Detector::component(const Surface& s, std::span<const int> starts, bool sampled,
                            std::vector<std::uint32_t>* out) {
   new_visit();
@@ -311,6 +318,7 @@ std::size_t Detector::free_inexact() {
   const double floor = noise_floor();
   std::size_t freed = 0;
   for (auto& shape : shapes_) {
+    if (shape.inliers.empty()) continue;
     std::vector<double> residual;
     residual.reserve(shape.inliers.size());
     for (auto i : shape.inliers) {
@@ -319,12 +327,11 @@ std::size_t Detector::free_inexact() {
     std::vector<double> sorted = residual;
     const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
     std::nth_element(sorted.begin(), mid, sorted.end());
-    if (sorted.empty()) continue;
     const bool dissolve = *mid > floor;
     std::vector<std::uint32_t> kept;
     for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
       const std::uint32_t i = shape.inliers[k];
-      if (dissolve || (*mid <= floor && residual[k] > 3.0 * floor)) {
+      if (dissolve || residual[k] > kOnSurfaceFloors * floor) {
         assignment_[i] = -1;
         if (has_normal_[i]) remaining_.push_back(i);
         ++remaining_count_;
@@ -376,7 +383,7 @@ void Detector::give_edges_to_smaller() {
       // On exact clouds only a point on both surfaces: a band of a face tangent to a fillet lies
       // within epsilon of the fillet but on the face.
       if (exact_ &&
-          d > std::max(3.0 * noise_floor(),
+          d > std::max(kOnSurfaceFloors * noise_floor(),
                        std::abs(surface_distance(shapes_[static_cast<std::size_t>(now)].surface,
                                                  points_[j])))) {
         return;

@@ -16,15 +16,10 @@
 
 namespace csgtile::fit::detail {
 
-using kernel::Vec3;
-
 constexpr int kSampledPerCell = 4;
 // A twentieth of epsilon: the residual floor of exact points (see Detector::noise_floor).
 constexpr double kFloorShare = 0.05;
 constexpr double kSampleFactor = 4.0;
-// Passes of relabel() after its refits: each moves the points next to a shape's own, so a
-// shape takes back a region another holds in as many passes as the region is cells wide.
-constexpr int kRelabelPasses = 64;
 
 struct Candidate {
   double score = 0.0;

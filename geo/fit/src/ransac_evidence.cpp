@@ -14,8 +14,6 @@
 
 namespace csgtile::fit::detail {
 
-using kernel::Vec3;
-
 // Bayesian information criterion of a surface on points: n·ln(RSS/n) + k·ln(n), k its
 // parameter count, the residual floored at the noise (or a twentieth of epsilon on exact
 // points), so that on noisy points the simpler surface wins at equal error and on exact ones
