@@ -13,9 +13,9 @@
 #include <memory>
 #include <numeric>
 
+#include "csgtile/assembly/broad_phase.h"
 #include "csgtile/assembly/voxel_cull.h"
 #include "csgtile/kernel/boolean.h"
-#include "csgtile/kernel/broad_phase.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "escalation.h"
@@ -159,7 +159,7 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     for (std::size_t i = 0; i < n; ++i) {
       if (read[i]) live[i] = boxes[i];
     }
-    for (const auto& [a, b] : kernel::overlapping_boxes(live)) {
+    for (const auto& [a, b] : assembly::parallel_overlapping_boxes(live)) {
       candidates.emplace_back(static_cast<int>(a), static_cast<int>(b));
     }
   } else {

@@ -201,17 +201,7 @@ class Sections {
   /// [t_min, t_max] ∩ the region; nothing when that is shorter than the tolerance.
   void add_line(const Vec3& origin, const Vec3& direction, double t_min, double t_max,
                 bool tangent) {
-    for (int i = 0; i < 3; ++i) {
-      if (direction[i] == 0.0) {
-        if (origin[i] < region_.min[i] || origin[i] > region_.max[i]) return;
-        continue;
-      }
-      double enter = (region_.min[i] - origin[i]) / direction[i];
-      double leave = (region_.max[i] - origin[i]) / direction[i];
-      if (enter > leave) std::swap(enter, leave);
-      t_min = std::max(t_min, enter);
-      t_max = std::min(t_max, leave);
-    }
+    if (!BoxRay(origin, direction).clip(region_, t_min, t_max)) return;
     if (!(t_max - t_min > decide_.length)) return;
     curves_.push_back({std::make_shared<LineCurve>(origin, direction),
                        t_min,

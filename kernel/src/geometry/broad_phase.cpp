@@ -6,29 +6,36 @@
 
 namespace csgtile::kernel {
 
-std::vector<std::pair<std::size_t, std::size_t>> overlapping_boxes(
-    std::span<const BoundingBox> boxes) {
-  std::vector<std::size_t> order;
-  order.reserve(boxes.size());
+BoxSweep::BoxSweep(std::span<const BoundingBox> boxes) : boxes_(boxes) {
+  order_.reserve(boxes.size());
   for (std::size_t i = 0; i < boxes.size(); ++i) {
-    if (!boxes[i].empty()) order.push_back(i);
+    if (!boxes[i].empty()) order_.push_back(i);
   }
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+  std::sort(order_.begin(), order_.end(), [&](std::size_t a, std::size_t b) {
     const double xa = boxes[a].min.x(), xb = boxes[b].min.x();
     return xa < xb || (xa == xb && a < b);
   });
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const BoundingBox& a = boxes[order[k]];
-    for (std::size_t m = k + 1; m < order.size(); ++m) {
-      const BoundingBox& b = boxes[order[m]];
+}
+
+void BoxSweep::pairs(std::size_t first, std::size_t last, std::vector<BoxPair>& out) const {
+  last = std::min(last, order_.size());
+  for (std::size_t k = first; k < last; ++k) {
+    const BoundingBox& a = boxes_[order_[k]];
+    for (std::size_t m = k + 1; m < order_.size(); ++m) {
+      const BoundingBox& b = boxes_[order_[m]];
       if (b.min.x() > a.max.x()) break;
       if (a.intersects(b))
-        pairs.emplace_back(std::min(order[k], order[m]), std::max(order[k], order[m]));
+        out.emplace_back(std::min(order_[k], order_[m]), std::max(order_[k], order_[m]));
     }
   }
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
+}
+
+std::vector<BoxPair> overlapping_boxes(std::span<const BoundingBox> boxes) {
+  const BoxSweep sweep(boxes);
+  std::vector<BoxPair> out;
+  sweep.pairs(0, sweep.size(), out);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace csgtile::kernel

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <exception>
 
+#include "csgtile/assembly/broad_phase.h"
 #include "csgtile/kernel/boolean.h"
-#include "csgtile/kernel/broad_phase.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "export/topology_index.h"
@@ -128,17 +128,23 @@ std::vector<ObjectRelation> compute_relations(
     measured[i] = {mp.volume, mp.area, mp.bounds};
     measured[i].box.enlarge(linear_tolerance);
   }
-  // Candidate pairs from the kernel's broad phase (boxes grown by the tolerance).
+  // `threads` bounds TBB's arena (0: TBB's default, one per core) for the broad phase and
+  // the pairs' classification.
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+
+  // Candidate pairs from the broad phase (boxes grown by the tolerance).
   std::vector<kernel::BoundingBox> boxes(measured.size());
   for (std::size_t i = 0; i < measured.size(); ++i) boxes[i] = measured[i].box;
+  std::vector<kernel::BoxPair> candidates;
+  arena.execute([&] { candidates = assembly::parallel_overlapping_boxes(boxes); });
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  for (const auto& pair : kernel::overlapping_boxes(boxes)) {
+  for (const auto& pair : candidates) {
     if (!skip || !skip(pair.first, pair.second)) pairs.push_back(pair);
   }
 
   // Pairs are independent (shapes are immutable and shared safely between threads): each
   // result lands in its pair's slot, so the output does not depend on the number of threads
-  // or on scheduling. `threads` bounds TBB's arena (0: TBB's default, one per core).
+  // or on scheduling.
   std::vector<ObjectRelation> slots(pairs.size());
   std::vector<char> related(pairs.size(), 0);
   const auto classify_pair = [&](std::size_t k) {
@@ -155,7 +161,6 @@ std::vector<ObjectRelation> compute_relations(
       related[k] = 1;
     }
   };
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   arena.execute([&] { tbb::parallel_for(std::size_t{0}, pairs.size(), classify_pair); });
 
   std::vector<ObjectRelation> out;

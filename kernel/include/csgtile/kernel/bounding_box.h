@@ -44,25 +44,28 @@ struct BoundingBox {
   Vec3 size() const { return empty() ? Vec3::Zero() : Vec3(max - min); }
 };
 
-/// A ray origin + t·direction prepared for slab tests against boxes: the one ray–box test of
-/// the solid classifier's rays, its box tree and the scan simulator's hierarchy.
+/// A ray origin + t·direction for slab tests against boxes: the one ray–box test of the
+/// solid classifier's rays, its box tree, the scan simulator's hierarchy and the Boolean's
+/// section lines (whose clipped parameters become curve bounds).
 struct BoxRay {
   Vec3 origin;
-  Vec3 inverse;  ///< 1 / direction per axis; ±inf where the direction is 0 (the ray is flat)
+  Vec3 direction;
 
-  BoxRay(const Vec3& o, const Vec3& direction) : origin(o), inverse(direction.cwiseInverse()) {}
+  BoxRay(const Vec3& o, const Vec3& d) : origin(o), direction(d) {}
 
   /// Narrows [t0, t1] to the parameters of the ray inside `box` (closed: touching counts);
-  /// false when none is left. On a flat axis the origin must lie within the box's slab.
+  /// false when none is left. On a flat axis (direction exactly 0) the origin must lie within
+  /// the box's slab. The slab ends are divided by the direction, not multiplied by its
+  /// reciprocal, so a parameter is the correctly rounded quotient.
   bool clip(const BoundingBox& box, double& t0, double& t1) const {
     if (box.empty()) return false;
     for (int i = 0; i < 3; ++i) {
-      if (std::isinf(inverse[i])) {
+      if (direction[i] == 0.0) {
         if (origin[i] < box.min[i] || origin[i] > box.max[i]) return false;
         continue;
       }
-      double a = (box.min[i] - origin[i]) * inverse[i];
-      double b = (box.max[i] - origin[i]) * inverse[i];
+      double a = (box.min[i] - origin[i]) / direction[i];
+      double b = (box.max[i] - origin[i]) / direction[i];
       if (a > b) std::swap(a, b);
       t0 = std::max(t0, a);
       t1 = std::min(t1, b);
