@@ -9,6 +9,7 @@
 
 #include "partition.h"
 
+#include "csgtile/kernel/polygon2d.h"
 #include "plane2d.h"
 
 #include <algorithm>
@@ -23,76 +24,16 @@ namespace csgtile::fit::detail {
 
 namespace {
 
-using P = std::array<long long, 2>;
-
-long long orient(const P& a, const P& b, const P& c) {
-  const long long v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-  return (v > 0) - (v < 0);
-}
-
-bool on_segment(const P& a, const P& b, const P& p) {
-  return std::min(a[0], b[0]) <= p[0] && p[0] <= std::max(a[0], b[0]) &&
-         std::min(a[1], b[1]) <= p[1] && p[1] <= std::max(a[1], b[1]);
-}
-
-// Whether the closed segments a–b and c–d meet anywhere but at one shared end.
-bool conflict(const P& a, const P& b, const P& c, const P& d) {
-  const long long o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a),
-                  o4 = orient(c, d, b);
-  const bool meet = (o1 * o2 < 0 && o3 * o4 < 0) || (o1 == 0 && on_segment(a, b, c)) ||
-                    (o2 == 0 && on_segment(a, b, d)) || (o3 == 0 && on_segment(c, d, a)) ||
-                    (o4 == 0 && on_segment(c, d, b));
-  if (!meet) return false;
-  // A shared end is allowed unless the segments also overlap along a line from it.
-  const P* shared = nullptr;
-  const P* other1 = nullptr;
-  const P* other2 = nullptr;
-  if (a == c) shared = &a, other1 = &b, other2 = &d;
-  if (a == d) shared = &a, other1 = &b, other2 = &c;
-  if (b == c) shared = &b, other1 = &a, other2 = &d;
-  if (b == d) shared = &b, other1 = &a, other2 = &c;
-  if (shared == nullptr) return true;
-  if ((a == c && b == d) || (a == d && b == c)) return true;  // the same segment twice
-  if (orient(*shared, *other1, *other2) != 0) return false;
-  const long long dot = ((*other1)[0] - (*shared)[0]) * ((*other2)[0] - (*shared)[0]) +
-                        ((*other1)[1] - (*shared)[1]) * ((*other2)[1] - (*shared)[1]);
-  return dot > 0;
-}
+using P = kernel::GridVertex;
 
 // The chain's vertices without those collinear with their neighbours (ends kept).
 std::vector<P> without_collinear(const std::vector<P>& v) {
   std::vector<P> out{v.front()};
   for (std::size_t k = 1; k + 1 < v.size(); ++k) {
-    if (orient(out.back(), v[k], v[k + 1]) != 0) out.push_back(v[k]);
+    if (kernel::grid_orientation(out.back(), v[k], v[k + 1]) != 0) out.push_back(v[k]);
   }
   out.push_back(v.back());
   return out;
-}
-
-long long ring_area2(const std::vector<P>& r) {
-  long long a = 0;
-  for (std::size_t k = 0; k < r.size(); ++k) {
-    const P& p = r[k];
-    const P& q = r[(k + 1) % r.size()];
-    a += p[0] * q[1] - q[0] * p[1];
-  }
-  return a;
-}
-
-// Even-odd test of the midpoint of a–b (given doubled, so it stays an integer) in `ring`.
-bool midpoint_inside(const P& a, const P& b, const std::vector<P>& ring) {
-  const long long px = a[0] + b[0], py = a[1] + b[1];
-  bool in = false;
-  for (std::size_t k = 0, l = ring.size() - 1; k < ring.size(); l = k++) {
-    const long long xk = 2 * ring[k][0], yk = 2 * ring[k][1], xl = 2 * ring[l][0],
-                    yl = 2 * ring[l][1];
-    if ((yk > py) != (yl > py)) {
-      // x of the edge at py, compared without division: px < xk + (py - yk)(xl - xk)/(yl - yk)
-      const long long lhs = (px - xk) * (yl - yk), rhs = (py - yk) * (xl - xk);
-      if (yl - yk > 0 ? lhs < rhs : lhs > rhs) in = !in;
-    }
-  }
-  return in;
 }
 
 struct Chain {
@@ -457,7 +398,7 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
           const Seg& t = segs[list[y]];
           if (raw_only[s.chain] && raw_only[t.chain]) continue;  // cell edges never cross
           if (!tested.insert({list[x], list[y]}).second) continue;
-          if (conflict(s.a, s.b, t.a, t.b)) {
+          if (kernel::grid_segments_conflict(s.a, s.b, t.a, t.b)) {
             if (!raw_only[s.chain]) bad.insert(s.chain);
             if (!raw_only[t.chain]) bad.insert(t.chain);
           }
@@ -477,8 +418,8 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
         long long outer_area = 0, raw_total = 0, total = 0;
         for (auto y : cycles_of[k]) {
           auto ring = ring_of(cycles[y]);
-          const long long raw_area = ring_area2(cycles[y].v);
-          const long long area = ring.size() >= 3 ? ring_area2(ring) : 0;
+          const long long raw_area = kernel::grid_ring_area2(cycles[y].v);
+          const long long area = ring.size() >= 3 ? kernel::grid_ring_area2(ring) : 0;
           ok = ok && area != 0 && (area > 0) == (raw_area > 0);
           raw_total += raw_area;
           total += area;
@@ -493,7 +434,7 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
         ok = ok && 4 * std::abs(total - raw_total) < raw_total;
         for (std::size_t r = 0; ok && r < rings.size(); ++r) {
           if (r == outer) continue;
-          ok = midpoint_inside(rings[r][0], rings[r][1], rings[outer]);
+          ok = kernel::grid_midpoint_inside(rings[r][0], rings[r][1], rings[outer]);
         }
         if (!ok) {
           for (auto y : cycles_of[k]) {
@@ -522,7 +463,7 @@ std::vector<PartPolygon> partition_polygons(const LabelGrid& grid, double tolera
     }
     auto& part = parts[static_cast<std::size_t>(cyc.comp)];
     // One counter-clockwise ring per 4-connected part: its outline; the others are holes.
-    if (ring_area2(ring) > 0 && part.outer.empty()) {
+    if (kernel::grid_ring_area2(ring) > 0 && part.outer.empty()) {
       part.outer = std::move(r);
     } else {
       part.holes.push_back(std::move(r));

@@ -65,5 +65,33 @@ TEST(BoxRay, ClipsToTheBoxAndTreatsFlatAxesAsSlabs) {
   EXPECT_FALSE(BoxRay(Vec3(0, 0, 0), Vec3(1, 1, 1)).clip(BoundingBox{}, t0, t1));
 }
 
+TEST(GridRings, AreaOrientationAndMidpointsAreExact) {
+  // An L of unit cells at coordinates near 1e8: doubles would round the products.
+  const long long o = 100'000'000;
+  const std::vector<GridVertex> l{{o, o},         {o + 3, o},     {o + 3, o + 1},
+                                  {o + 1, o + 1}, {o + 1, o + 3}, {o, o + 3}};
+  EXPECT_EQ(grid_ring_area2(l), 10);  // 5 cells, doubled
+  const std::vector<GridVertex> reversed(l.rbegin(), l.rend());
+  EXPECT_EQ(grid_ring_area2(reversed), -10);
+  EXPECT_EQ(grid_orientation(l[0], l[1], l[2]), 1);
+  EXPECT_EQ(grid_orientation(l[0], l[2], l[1]), -1);
+  EXPECT_EQ(grid_orientation(l[0], l[1], {o + 7, o}), 0);
+  // Midpoints of segments inside the L, in its notch, and on its boundary's far side.
+  EXPECT_TRUE(grid_midpoint_inside({o, o}, {o + 1, o + 1}, l));
+  EXPECT_FALSE(grid_midpoint_inside({o + 2, o + 2}, {o + 3, o + 3}, l));
+  EXPECT_TRUE(grid_midpoint_inside({o + 2, o}, {o + 3, o + 1}, reversed));
+}
+
+TEST(GridRings, SegmentsConflictUnlessTheyOnlyShareAnEnd) {
+  const GridVertex a{0, 0}, b{4, 0}, c{2, -2}, d{2, 2}, e{4, 4}, f{8, 0};
+  EXPECT_TRUE(grid_segments_conflict(a, b, c, d));       // crossing
+  EXPECT_FALSE(grid_segments_conflict(a, b, b, e));      // a shared end, turning
+  EXPECT_FALSE(grid_segments_conflict(a, b, b, f));      // a shared end, going straight on
+  EXPECT_TRUE(grid_segments_conflict(a, b, b, {2, 0}));  // folding back along a-b
+  EXPECT_TRUE(grid_segments_conflict(a, b, b, a));       // the same segment twice
+  EXPECT_TRUE(grid_segments_conflict(a, b, {2, 0}, e));  // touching inside a-b
+  EXPECT_FALSE(grid_segments_conflict(a, b, {5, 1}, e));
+}
+
 }  // namespace
 }  // namespace csgtile::kernel

@@ -7,6 +7,7 @@
 /// counter-clockwise rings have positive area. A polygon is an outer ring and its holes.
 /// Results depend on these to the last bit: keep the order of every sum and comparison.
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -56,5 +57,26 @@ bool ring_self_intersects(const std::vector<Vec2>& ring);
 
 /// True when segments of two rings touch or cross.
 bool rings_intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b);
+
+// ---- Exact rings on an integer grid (the roof partition's cell-edge rings) -----------------
+// Nothing is rounded: every product stays within 64 bits for coordinates below about 1e9.
+
+/// A vertex of an integer grid.
+using GridVertex = std::array<long long, 2>;
+
+/// Sign (-1, 0, 1) of the turn a -> b -> c: positive counter-clockwise.
+int grid_orientation(const GridVertex& a, const GridVertex& b, const GridVertex& c);
+
+/// Whether the closed segments a-b and c-d meet anywhere but at one shared end (the same
+/// segment twice, or two segments overlapping along a line from their shared end, conflict).
+bool grid_segments_conflict(const GridVertex& a, const GridVertex& b, const GridVertex& c,
+                            const GridVertex& d);
+
+/// Twice the signed area of a ring (shoelace): positive counter-clockwise.
+long long grid_ring_area2(const std::vector<GridVertex>& ring);
+
+/// Whether the midpoint of a-b lies inside the ring (even-odd rule).
+bool grid_midpoint_inside(const GridVertex& a, const GridVertex& b,
+                          const std::vector<GridVertex>& ring);
 
 }  // namespace csgtile::kernel
