@@ -8,7 +8,9 @@
 
 namespace csgtile::geo::detail {
 
-/// This thread's PROJ context (logging off), created on first use, destroyed at thread exit.
+/// This thread's PROJ context (logging off), taken on first use from the contexts of threads
+/// that ended (or created), given back at thread exit. Thread-locals holding PJ objects must
+/// call it before they are constructed, so they are destroyed before it is given back.
 PJ_CONTEXT* proj_thread_context();
 
 /// Owns a PJ (proj_destroy on destruction).

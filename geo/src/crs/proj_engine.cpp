@@ -45,6 +45,9 @@ class ThreadCache {
 };
 
 ThreadCache& thread_cache() {
+  // The thread's context first: thread-locals end in reverse order, so the cache's objects
+  // are destroyed before their context goes back to the pool for another thread.
+  (void)proj_thread_context();
   thread_local ThreadCache cache;
   return cache;
 }

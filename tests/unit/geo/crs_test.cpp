@@ -12,6 +12,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "csgtile/geo/crs.h"
@@ -165,6 +166,26 @@ TEST(CrsEpsg, TheCityCodesResolve) {
     ASSERT_TRUE(crs.ok()) << code << ": " << crs.error().message;
     EXPECT_TRUE(validate_crs(crs.value()).ok()) << code;
     EXPECT_EQ(crs.value().source, "EPSG:" + std::to_string(code));
+  }
+}
+
+// Each job runs on a thread of its own; a thread's PROJ context is handed on to the threads
+// after it. Threads one after another, and two at a time, read the same CRSs as this one.
+TEST(CrsEpsg, ThreadsAfterThreadsReadTheSameCrs) {
+  const auto read = [](int code) {
+    auto crs = crs_from_epsg(code);
+    return crs.ok() ? crs_to_wkt1(crs.value()) + "|" + crs.value().name : crs.error().message;
+  };
+  const std::string rd = read(28992), ny = read(2263);
+  ASSERT_NE(rd.find("Amersfoort"), std::string::npos) << rd;
+  for (int round = 0; round < 4; ++round) {
+    std::string a, b;
+    std::thread first([&] { a = read(28992); });
+    std::thread second([&] { b = read(2263); });
+    first.join();
+    second.join();
+    EXPECT_EQ(a, rd) << round;
+    EXPECT_EQ(b, ny) << round;
   }
 }
 

@@ -635,12 +635,12 @@ Failure register_contents(SqliteDb& db, const IndexRows& rows, const IndexOption
 }
 
 Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  // application_id 'GPKG' and user_version 10300 (GeoPackage 1.3). The file is a temporary
-  // that is deleted on failure and fsync'ed by the caller: no journal file, no syncs here.
-  CSGTILE_TRY(
-      db.exec("PRAGMA application_id = 1196444487; PRAGMA user_version = 10300;"
-              "PRAGMA journal_mode = MEMORY; PRAGMA synchronous = OFF;"));
+  // The file is a temporary that is deleted on failure and fsync'ed by the caller: no journal
+  // file, no syncs here. Set first: a header pragma before them wrote and synced a journal.
+  CSGTILE_TRY(db.exec("PRAGMA journal_mode = MEMORY; PRAGMA synchronous = OFF;"));
   CSGTILE_TRY(db.exec("BEGIN;"));
+  // application_id 'GPKG' and user_version 10300 (GeoPackage 1.3), in the one transaction.
+  CSGTILE_TRY(db.exec("PRAGMA application_id = 1196444487; PRAGMA user_version = 10300;"));
   CSGTILE_TRY(db.exec(kCoreSchema));
   CSGTILE_TRY(insert_srs(db, options.srs));
   CSGTILE_TRY(db.exec(kIndexSchema));
