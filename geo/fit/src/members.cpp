@@ -10,6 +10,9 @@
 #include <numbers>
 #include <optional>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
 #include "primitive_builder.h"
 #include "synth/ray_internal.h"
 
@@ -82,6 +85,58 @@ Margins margins(double epsilon, double cell, double cos_tol) {
   m.reach = std::max(m.tight, cell);
   m.sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol * cos_tol));
   return m;
+}
+
+// Members of a frame repeat: their axes are parallel (GlobFit's first relation). A member
+// fitted from a piece of one face takes that piece's direction, degrees off its siblings'
+// (a 4 degree tilt lifts the far end of a 3 m beam by 0.2 m, and its end then misses the
+// column it runs into). Directions within the angle tolerance of each other form a group,
+// heaviest member first (weight: length); a group of two or more has one direction, the
+// principal axis of its members' directions weighted by their lengths, and each member turns
+// onto it about its own centre (its section turned with it). Returns which members turned.
+std::vector<char> parallel_members(std::vector<std::optional<Member>>& members, double cos_tol) {
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < members.size(); ++k) {
+    if (members[k]) order.push_back(k);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+    return members[x]->length > members[y]->length;
+  });
+  std::vector<char> grouped(members.size(), 0), turned(members.size(), 0);
+  for (const std::size_t lead : order) {
+    if (grouped[lead]) continue;
+    const Vec3 d0 = members[lead]->u;
+    std::vector<std::size_t> group;
+    for (const std::size_t k : order) {
+      if (!grouped[k] && std::abs(members[k]->u.dot(d0)) >= cos_tol) {
+        grouped[k] = 1;
+        group.push_back(k);
+      }
+    }
+    if (group.size() < 2) continue;
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (const std::size_t k : group)
+      scatter += members[k]->length * members[k]->u * members[k]->u.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+    Vec3 d = eigen.eigenvectors().col(2).normalized();
+    if (d.dot(d0) < 0.0) d = -d;
+    for (const std::size_t k : group) {
+      Member& m = *members[k];
+      const Vec3 target = m.u.dot(d) < 0.0 ? Vec3(-d) : d;
+      if (target == m.u) continue;
+      const Eigen::Matrix3d turn =
+          Eigen::Quaterniond::FromTwoVectors(m.u, target).toRotationMatrix();
+      const Vec3 centre = m.start + 0.5 * m.length * m.u;
+      const Vec3 a = turn * m.a, b = turn * m.b;
+      m.u = target;
+      m.a = (a - a.dot(target) * target).normalized();
+      m.b = target.cross(m.a);
+      if (m.b.dot(b) < 0.0) m.b = -m.b;
+      m.start = centre - 0.5 * m.length * m.u;
+      turned[k] = 1;
+    }
+  }
+  return turned;
 }
 
 }  // namespace
@@ -306,11 +361,13 @@ void Builder::join_members() {
   for (const auto& p : out_.primitives) prepared.push_back(geo::detail::prepare_primitive(p.spec));
   std::vector<std::optional<Member>> members(out_.primitives.size());
   for (std::size_t k = 0; k < members.size(); ++k) members[k] = as_member(out_.primitives[k].spec);
+  const std::vector<char> turned = parallel_members(members, cos_tol_);
   std::vector<std::vector<std::size_t>> joined;  // groups of primitive indices, one member each
   std::vector<int> group_of(members.size(), -1);
   std::vector<Member> merged;
   // Whether anything stands on the centre line of `m` over (t0, t1).
-  auto blocked = [&](const Member& m, double t0, double t1, const std::vector<std::size_t>& skip) {
+  auto blocked = [&](const Member& m, double t0, double t1, const std::vector<std::size_t>& skip,
+                     bool to_target) {
     const double step = std::max(0.25 * cell_, 1e-3);
     for (double t = t0; t <= t1; t += step) {
       const Vec3 q = m.start + t * m.u;
@@ -324,7 +381,13 @@ void Builder::join_members() {
         if (geo::detail::primitive_contains(prepared[k], q)) return true;
       }
     }
+    // Points facing along the line within the section: three of them stop a join of two
+    // pieces (a node between them whose members the fit did not make). An end going on to the
+    // member it runs into stops only at a surface across the line: three facing points in one
+    // cell's length along it. Facing normals scattered along the way are the noise of the
+    // member's own edges (normals of a few neighbours across a corner), not a surface.
     int facing = 0;
+    std::map<long long, int> slabs;  // cell along the line: facing points
     for (std::size_t i = 0; i < points_.size(); ++i) {
       if (normals_.empty() || !points_[i].allFinite()) continue;
       const Vec3 d = points_[i] - m.start;
@@ -333,7 +396,9 @@ void Builder::join_members() {
       if (std::abs(d.dot(m.a)) > m.half_a + tight || std::abs(d.dot(m.b)) > m.half_b + tight) {
         continue;
       }
-      if (std::abs(normals_[i].dot(m.u)) >= 0.5 && ++facing >= 3) return true;
+      if (std::abs(normals_[i].dot(m.u)) < 0.5) continue;
+      const int in_slab = ++slabs[static_cast<long long>(std::floor(t / cell_))];
+      if (++facing >= 3 && (!to_target || in_slab >= 3)) return true;
     }
     return false;
   };
@@ -382,8 +447,8 @@ void Builder::join_members() {
         if (gap > std::min(m.length, hi - lo)) continue;
         std::vector<std::size_t> skip = group;
         skip.push_back(y);
-        if (gap > 0.0 &&
-            (lo > m.length ? blocked(m, m.length, lo, skip) : blocked(m, hi, 0.0, skip))) {
+        if (gap > 0.0 && (lo > m.length ? blocked(m, m.length, lo, skip, false)
+                                        : blocked(m, hi, 0.0, skip, false))) {
           continue;
         }
         // One member over both: the longer piece's frame, the union of the two extents.
@@ -463,7 +528,7 @@ void Builder::join_members() {
         const bool evidence =
             far - far_half <= m.length ||
             (side > 0.0 ? seen_over(m, t1 - last, t1) : seen_over(m, t0, t0 + last));
-        if (evidence && !blocked(m, t0, t1, skip)) best = far;
+        if (evidence && !blocked(m, t0, t1, skip, true)) best = far;
       }
       if (!std::isfinite(best)) continue;
       if (side > 0.0) {
@@ -484,7 +549,7 @@ void Builder::join_members() {
   for (std::size_t k = 0; k < originals.size(); ++k) {
     const int g = group_of[k];
     const bool changed =
-        g >= 0 && (joined[static_cast<std::size_t>(g)].size() > 1 ||
+        g >= 0 && (joined[static_cast<std::size_t>(g)].size() > 1 || turned[k] ||
                    merged[static_cast<std::size_t>(g)].length != members[k]->length);
     if (!changed) {
       out_.primitives.push_back(std::move(originals[k]));
