@@ -127,11 +127,10 @@ std::vector<char> parallel_members(std::vector<std::optional<Member>>& members, 
       const Eigen::Matrix3d turn =
           Eigen::Quaterniond::FromTwoVectors(m.u, target).toRotationMatrix();
       const Vec3 centre = m.start + 0.5 * m.length * m.u;
-      const Vec3 a = turn * m.a, b = turn * m.b;
+      const Vec3 a = turn * m.a;
       m.u = target;
       m.a = (a - a.dot(target) * target).normalized();
-      m.b = target.cross(m.a);
-      if (m.b.dot(b) < 0.0) m.b = -m.b;
+      m.b = target.cross(m.a);  // as as_member's frame: u, a, b right-handed
       m.start = centre - 0.5 * m.length * m.u;
       turned[k] = 1;
     }
@@ -397,8 +396,11 @@ void Builder::join_members() {
         continue;
       }
       if (std::abs(normals_[i].dot(m.u)) < 0.5) continue;
-      const int in_slab = ++slabs[static_cast<long long>(std::floor(t / cell_))];
-      if (++facing >= 3 && (!to_target || in_slab >= 3)) return true;
+      if (!to_target) {
+        if (++facing >= 3) return true;
+      } else if (++slabs[static_cast<long long>(std::floor(t / cell_))] >= 3) {
+        return true;
+      }
     }
     return false;
   };

@@ -2,6 +2,8 @@
 
 #include "csgtile/kernel/polygon2d.h"
 
+#include "predicates/predicates.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -171,43 +173,34 @@ bool rings_intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b) {
 }
 
 // ---- Exact rings on an integer grid ----------------------------------------------------------
-
-int grid_orientation(const GridVertex& a, const GridVertex& b, const GridVertex& c) {
-  const long long v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-  return (v > 0) - (v < 0);
-}
+// Grid vertices are exact as doubles, so the kernel's exact predicates decide for them.
 
 namespace {
 
-bool grid_on_segment(const GridVertex& a, const GridVertex& b, const GridVertex& p) {
-  return std::min(a[0], b[0]) <= p[0] && p[0] <= std::max(a[0], b[0]) &&
-         std::min(a[1], b[1]) <= p[1] && p[1] <= std::max(a[1], b[1]);
+Vec2 grid_point(const GridVertex& p) {
+  return {static_cast<double>(p[0]), static_cast<double>(p[1])};
 }
 
 }  // namespace
 
+int grid_orientation(const GridVertex& a, const GridVertex& b, const GridVertex& c) {
+  return predicates::orient2d(grid_point(a), grid_point(b), grid_point(c));
+}
+
 bool grid_segments_conflict(const GridVertex& a, const GridVertex& b, const GridVertex& c,
                             const GridVertex& d) {
-  const int o1 = grid_orientation(a, b, c), o2 = grid_orientation(a, b, d),
-            o3 = grid_orientation(c, d, a), o4 = grid_orientation(c, d, b);
-  const bool meet = (o1 * o2 < 0 && o3 * o4 < 0) || (o1 == 0 && grid_on_segment(a, b, c)) ||
-                    (o2 == 0 && grid_on_segment(a, b, d)) ||
-                    (o3 == 0 && grid_on_segment(c, d, a)) || (o4 == 0 && grid_on_segment(c, d, b));
-  if (!meet) return false;
-  // A shared end is allowed unless the segments also overlap along a line from it.
-  const GridVertex* shared = nullptr;
-  const GridVertex* other1 = nullptr;
-  const GridVertex* other2 = nullptr;
-  if (a == c) shared = &a, other1 = &b, other2 = &d;
-  if (a == d) shared = &a, other1 = &b, other2 = &c;
-  if (b == c) shared = &b, other1 = &a, other2 = &d;
-  if (b == d) shared = &b, other1 = &a, other2 = &c;
-  if (shared == nullptr) return true;
-  if ((a == c && b == d) || (a == d && b == c)) return true;  // the same segment twice
-  if (grid_orientation(*shared, *other1, *other2) != 0) return false;
-  const long long dot = ((*other1)[0] - (*shared)[0]) * ((*other2)[0] - (*shared)[0]) +
-                        ((*other1)[1] - (*shared)[1]) * ((*other2)[1] - (*shared)[1]);
-  return dot > 0;
+  switch (
+      predicates::classify_segments(grid_point(a), grid_point(b), grid_point(c), grid_point(d))) {
+    case predicates::SegmentRelation::Disjoint:
+      return false;
+    case predicates::SegmentRelation::Touch:
+      // One common point: allowed when it is an end of both.
+      return !(a == c || a == d || b == c || b == d);
+    case predicates::SegmentRelation::Cross:
+    case predicates::SegmentRelation::Overlap:
+      return true;
+  }
+  return true;
 }
 
 long long grid_ring_area2(const std::vector<GridVertex>& ring) {
@@ -222,17 +215,11 @@ long long grid_ring_area2(const std::vector<GridVertex>& ring) {
 
 bool grid_midpoint_inside(const GridVertex& a, const GridVertex& b,
                           const std::vector<GridVertex>& ring) {
-  // The midpoint and the ring doubled, so everything stays an integer.
-  const long long px = a[0] + b[0], py = a[1] + b[1];
+  // The half-integer midpoint is exact too; the crossing rule is the even-odd test's.
+  const Vec2 q = 0.5 * (grid_point(a) + grid_point(b));
   bool in = false;
   for (std::size_t k = 0, l = ring.size() - 1; k < ring.size(); l = k++) {
-    const long long xk = 2 * ring[k][0], yk = 2 * ring[k][1], xl = 2 * ring[l][0],
-                    yl = 2 * ring[l][1];
-    if ((yk > py) != (yl > py)) {
-      // x of the edge at py, compared without division: px < xk + (py - yk)(xl - xk)/(yl - yk)
-      const long long lhs = (px - xk) * (yl - yk), rhs = (py - yk) * (xl - xk);
-      if (yl - yk > 0 ? lhs < rhs : lhs > rhs) in = !in;
-    }
+    if (predicates::crosses_ray(grid_point(ring[l]), grid_point(ring[k]), q)) in = !in;
   }
   return in;
 }

@@ -59,7 +59,7 @@ bool ring_self_intersects(const std::vector<Vec2>& ring);
 bool rings_intersect(const std::vector<Vec2>& a, const std::vector<Vec2>& b);
 
 // ---- Exact rings on an integer grid (the roof partition's cell-edge rings) -----------------
-// Nothing is rounded: every product stays within 64 bits for coordinates below about 1e9.
+// Nothing is rounded (coordinates below about 1e9: the doubled area stays within 64 bits).
 
 /// A vertex of an integer grid.
 using GridVertex = std::array<long long, 2>;
