@@ -211,7 +211,7 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
       const double* extent = planar_extent(p, k);
       if (!extent) continue;
       const AxisUse& u = uses[i][static_cast<std::size_t>(k)];
-      const Vec3& dir = directions[static_cast<std::size_t>(u.cluster)].rep;
+      const Vec3 dir = u.sign * p.placement.rotation().col(k);
       const double low = dir.dot(p.placement.translation());
       const double high = low + u.sign * p.placement.scale() * *extent;
       faces.push_back({u.cluster, static_cast<int>(i), k, low, low});
@@ -258,7 +258,7 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     const double new_extent = u.sign * (high.to - low.to) / p.placement.scale();
     if (!(new_extent > 0.5 * *extent)) continue;  // a thin primitive keeps its faces
     *extent = new_extent;
-    shift[i] += (low.to - low.offset) * directions[static_cast<std::size_t>(u.cluster)].rep;
+    shift[i] += (low.to - low.offset) * u.sign * p.placement.rotation().col(low.axis);
     for (const Face* face : {&low, &high}) {
       if (face->to == face->offset) continue;
       ++counts.faces_snapped;

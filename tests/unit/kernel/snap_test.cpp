@@ -140,6 +140,75 @@ TEST(Snap, LeavesWhatIsNotNearlyCoincident) {
   EXPECT_FALSE(snap_primitives({a}, {0.0, std::nan("")}).ok());
 }
 
+// Five beams fitted from a terrestrial scan of the timber gate (seed 2, issue #20): two end to
+// end along x, two along y, one far away. Their directions do not orthogonalise consistently
+// (the x beams' axis is made orthogonal to two directions 2.2 degrees apart), so a box's x axis
+// lies 0.6 mrad off its direction's mean. The faces' offsets were measured along the mean and
+// their moves made along it, so moving the second x beam's end by 15 µm moved its top 9.7 nm
+// off its twin's: two faces within the tolerance of each other whose edges had no pcurve on
+// the other, and the fuse failed ("the section of a plane and a plane has no exact pcurve").
+// Offsets are now measured and moved along each box's own axes.
+TEST(Snap, FacesMoveAlongTheirOwnNormals) {
+  struct Beam {
+    Vec3 size;
+    Matrix34 placement;
+  };
+  const std::vector<Beam> beams = {
+      {{3.002442384241886, 0.3356203379960196, 0.19889996029213206},
+       (Matrix34() << 0.00041925383263461324, 0.04387416633757082, 0.9990369771707187,
+        -0.10576068941950476, -0.9999995428419282, 0.0008769517069444699, 0.00038114516740632366,
+        2.9997289160361067, -0.0008593847559569589, -0.9990366802494727, 0.04387451394550569,
+        4.005108621181909)
+           .finished()},
+      {{2.997236548598229, 0.3066128747038491, 0.20075667191216537},
+       (Matrix34() << 0.9999884560142889, -0.004794153444287578, -0.0003223831748000684,
+        0.0013143152348438093, -0.0002518103336072734, 0.014713929969157387, -0.9998917125651252,
+        3.0980220462507586, 0.004798377821165942, 0.9998802510088973, 0.014712552894381895,
+        3.6914215197412434)
+           .finished()},
+      {{2.9971863754472783, 0.32635550959796256, 0.20163542120979372},
+       (Matrix34() << 0.0004192538326346131, 0.04387416239036986, 0.9990369773440659,
+        -0.1076979637297317, -0.9999995428419277, 0.0008769517054385624, 0.00038114517087116503,
+        -0.002716910736082381, -0.0008593847559569586, -0.9990366804228212, 0.04387450999830593,
+        4.007011073083593)
+           .finished()},
+      {{3.0015281624587757, 0.29431668572232517, 0.2005671399926436},
+       (Matrix34() << 0.9999884560142891, -0.004794153744173491, -0.00032237871517195877,
+        2.9984916639912105, -0.00025181033360727564, 0.014712999847680793, -0.9998917262519169,
+        3.097757795582435, 0.004798377821165942, 0.9998802646944082, 0.014711622783567024,
+        3.695293945575491)
+           .finished()},
+      {{2.997743260712004, 0.306569442001463, 0.21555402543604918},
+       (Matrix34() << 0.0004192538326346132, 0.004922349156575578, 0.999987797278049,
+        -12.101160729736808, -0.999999542841928, 0.0008614381333479835, 0.0004150184060544253,
+        -9.000391183915454, -0.0008593847559569589, -0.9999875141236128, 0.004922708067522985,
+        4.00142945982584)
+           .finished()},
+  };
+  std::vector<PrimitiveSpec> fitted;
+  for (const Beam& b : beams) {
+    auto at = Location::from_matrix(b.placement);
+    ASSERT_TRUE(at.ok()) << at.error().message;
+    fitted.push_back(box(b.size, at.value()));
+  }
+  auto snapped = snap_primitives(fitted, {0.005, 0.5 * std::numbers::pi / 180});
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  const PrimitiveSpec& first = snapped.value()[1];
+  const PrimitiveSpec& second = snapped.value()[3];
+  // The two x beams: one rotation; their ends meet and their tops are one plane.
+  ASSERT_EQ(first.placement.rotation(), second.placement.rotation());
+  const Eigen::Matrix3d& r = first.placement.rotation();
+  const Vec3 d = second.placement.translation() - first.placement.translation();
+  EXPECT_NEAR(d.dot(r.col(0)), first.size.x(), 1e-12);
+  EXPECT_NEAR(d.dot(r.col(1)), 0.0, 1e-12);
+  EXPECT_NEAR(d.dot(r.col(2)), 0.0, 1e-12);
+  std::vector<Shape> solids;
+  for (const PrimitiveSpec& p : snapped.value()) solids.push_back(build_primitive(p).value());
+  auto fused = boolean_fuse_all({solids[0], solids[1], solids[2], solids[3]});
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+}
+
 // A clip plane (a roof) stays where it is in the world while its extrusion turns plumb and its
 // base and the ground's top meet.
 TEST(Snap, ClipPlanesStayInTheWorld) {
