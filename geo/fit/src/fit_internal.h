@@ -355,6 +355,14 @@ std::string unsupported(const kernel::PrimitiveSpec& spec, const kernel::Boundin
                         double coverage, const kernel::BoundingBox& region, double cell,
                         const PrimitiveOptions& o);
 
+/// Empty when a cylinder's or cone's points show its curvature, else the reason: its inliers,
+/// cut into pieces around its axis where they leave a gap of two connectivity `cell`s, are
+/// explained as well by one plane per piece (the information criterion, residuals floored at
+/// the noise `sigma`) — the faces of two beams meeting at a node lie on a 45° cone whose axis
+/// bisects them, and a narrow strip of a wide cylinder bends by less than the noise.
+std::string flat_strips(const kernel::PrimitiveSpec& spec, std::span<const Vec3> points,
+                        std::span<const std::uint32_t> members, double sigma, double cell);
+
 /// How far a primitive's points lie from its solid: their RMS distance ("the RMSE of its
 /// points to the model") and the share of them within `near` of it.
 struct BoundaryFit {

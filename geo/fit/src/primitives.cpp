@@ -97,6 +97,13 @@ void Builder::emit(PrimitiveSpec spec, const std::vector<std::uint32_t>& members
     out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
     return;
   }
+  if (!carried) {
+    if (std::string why = detail::flat_strips(spec, points_, members, region_sigma(), cell_);
+        !why.empty()) {
+      out_.rejected.push_back({what, std::move(why), static_cast<long long>(members.size())});
+      return;
+    }
+  }
   if (!carried && o_.footprint == nullptr &&
       (spec.type == PrimitiveType::Box || spec.type == PrimitiveType::Extrusion)) {
     // A solid's inside is never seen: a surface's worth of points (min_points) measured deep

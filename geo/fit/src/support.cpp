@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "fit_internal.h"
 
@@ -68,6 +72,92 @@ std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& bo
     return text;
   }
   return {};
+}
+
+namespace {
+
+// Bayesian information criterion n·ln(max(RSS/n, floor²)) + k·ln(N) of one fit (N: all points).
+double information(double rss, double n, double floor, double k, double all) {
+  return n * std::log(std::max(rss / n, floor * floor)) + k * std::log(all);
+}
+
+}  // namespace
+
+std::string flat_strips(const PrimitiveSpec& spec, std::span<const Vec3> points,
+                        std::span<const std::uint32_t> members, double sigma, double cell) {
+  const bool cone = spec.type == PrimitiveType::Cone;
+  if ((!cone && spec.type != PrimitiveType::Cylinder) || members.size() < 8 || !(spec.height > 0.0))
+    return {};
+  const kernel::Location& at = spec.placement;
+  const Eigen::Matrix3d& r = at.rotation();
+  const double scale = at.scale();
+  const double r1 = spec.radius, r2 = cone ? spec.radius2 : spec.radius, h = spec.height;
+  const double cos_half = std::cos(std::atan2(r2 - r1, h));
+  struct Local {
+    double angle;
+    std::uint32_t index;
+  };
+  std::vector<Local> around;
+  around.reserve(members.size());
+  double rss = 0.0, mean_radius = 0.0;
+  for (auto i : members) {
+    const Vec3 q = r.transpose() * (points[i] - at.translation()) / scale;
+    const double rz = r1 + (r2 - r1) * std::clamp(q.z() / h, 0.0, 1.0);
+    const double rho = std::hypot(q.x(), q.y());
+    const double d = (rho - rz) * cos_half * scale;
+    rss += d * d;
+    mean_radius += rz * scale;
+    around.push_back({std::atan2(q.y(), q.x()), i});
+  }
+  const auto n = static_cast<double>(members.size());
+  mean_radius /= n;
+  // Pieces of the surface around its axis: points further apart than two cells along the
+  // circle (at the mean radius) start a new piece; the first and last join across ±π.
+  std::sort(around.begin(), around.end(),
+            [](const Local& a, const Local& b) { return a.angle < b.angle; });
+  const double gap = 2.0 * cell / std::max(mean_radius, 1e-12);
+  std::vector<std::size_t> starts{0};
+  for (std::size_t k = 1; k < around.size(); ++k) {
+    if (around[k].angle - around[k - 1].angle > gap) starts.push_back(k);
+  }
+  const double wrap = around.front().angle + 2.0 * std::numbers::pi - around.back().angle;
+  if (starts.size() == 1 && wrap <= gap) return {};  // a whole ring: curved beyond doubt
+  // Each piece as a plane: its least principal variance is its residual.
+  double planes = 0.0;
+  const double floor = std::max(sigma, 1e-9 * mean_radius);
+  std::vector<std::vector<std::uint32_t>> piece_members(starts.size());
+  for (std::size_t c = 0; c < starts.size(); ++c) {
+    const std::size_t end = c + 1 < starts.size() ? starts[c + 1] : around.size();
+    for (std::size_t k = starts[c]; k < end; ++k) piece_members[c].push_back(around[k].index);
+  }
+  if (starts.size() > 1 && wrap <= gap) {
+    // The last piece goes on across ±π into the first.
+    piece_members.front().insert(piece_members.front().end(), piece_members.back().begin(),
+                                 piece_members.back().end());
+    piece_members.pop_back();
+  }
+  for (const auto& piece : piece_members) {
+    const auto m = static_cast<double>(piece.size());
+    Vec3 mean = Vec3::Zero();
+    for (auto i : piece) mean += points[i];
+    mean /= m;
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (auto i : piece) scatter += (points[i] - mean) * (points[i] - mean).transpose();
+    const double residual = piece.size() < 3
+                                ? 0.0
+                                : std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                                                    scatter, Eigen::EigenvaluesOnly)
+                                                    .eigenvalues()(0));
+    planes += information(residual, m, floor, 3.0, n);
+  }
+  const double curved = information(rss, n, floor, cone ? 6.0 : 5.0, n);
+  if (planes > curved) return {};
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "unsupported: its points are %d flat piece(s), planes explain them as well "
+                "(curvature unseen)",
+                static_cast<int>(piece_members.size()));
+  return text;
 }
 
 }  // namespace csgtile::fit::detail
