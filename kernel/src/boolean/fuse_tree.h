@@ -3,7 +3,8 @@
 // so that every argument takes part in about log2(n) operations instead of a growing
 // accumulator taking part in n − 1. Where the fuse of two partial results fails, the right
 // one is taken apart along its own tree and its halves are fused into the left one in turn,
-// down to single arguments; an error there is returned (Cancelled at once). Used for shapes
+// down to single arguments, and where that fails too, the left one is taken apart into the
+// right one alike; an error there is returned (the first one; Cancelled at once). Used for shapes
 // (boolean_fuse_all) and for shapes with their face history (csg_combine).
 
 #include <utility>
@@ -37,8 +38,17 @@ Result<T> fuse_tree(const std::vector<T>& items, const Fuse& fuse) {
   while (level.size() > 1) {
     std::vector<int> next;
     for (std::size_t i = 0; i + 1 < level.size(); i += 2) {
-      auto fused =
-          fuse_into(fuse_into, nodes[static_cast<std::size_t>(level[i])].value, level[i + 1]);
+      const auto left = static_cast<std::size_t>(level[i]);
+      auto fused = fuse_into(fuse_into, nodes[left].value, level[i + 1]);
+      if (!fused.ok() && fused.error().code != ErrorCode::Cancelled && nodes[left].left >= 0) {
+        // The other way round: the left one taken apart into the right one. Fuses of fitted
+        // solids can depend on the order (a cone fused with one of two end-to-end beams first
+        // meets the other's coincident end face along its own new edge; both beams first, it
+        // meets no end face).
+        auto swapped =
+            fuse_into(fuse_into, nodes[static_cast<std::size_t>(level[i + 1])].value, level[i]);
+        if (swapped.ok()) fused = std::move(swapped);
+      }
       if (!fused.ok()) return fused;
       nodes.push_back({std::move(fused).value(), level[i], level[i + 1]});
       next.push_back(static_cast<int>(nodes.size()) - 1);

@@ -209,6 +209,53 @@ TEST(Snap, FacesMoveAlongTheirOwnNormals) {
   EXPECT_TRUE(check_shape(fused.value()).valid());
 }
 
+// Two beams end to end and a beam fitted as a slender cone running into their node (the
+// fitted gate, seed 4): snapped, the beams' end faces are one plane. Fused with one beam
+// first, the cone then meets the other beam's coincident end face along the edge it has just
+// made, which the fuse does not yet survive ("face pieces' boundaries cross"); fused with both
+// beams first it meets no end face. The n-ary fuse takes the left partial result apart into
+// the right one where the other way round fails.
+TEST(Snap, ConeIntoTwoBeamsEndToEndFusesInSomeOrder) {
+  PrimitiveSpec cone;
+  cone.type = PrimitiveType::Cone;
+  cone.radius = 0.10017057544401194;
+  cone.radius2 = 0.2405488152928099;
+  cone.height = 2.0301267281829576;
+  cone.placement =
+      Location::from_matrix((Matrix34() << -0.9974979925731589, -0.0010528628091642836,
+                             0.0706869598470857, -9.003787101861061, -0.0706948004631064,
+                             0.014855810211168134, -0.9973873621068452, -9.879500322509044, 0.0,
+                             -0.9998890920411496, -0.014893072789896942, 3.8166311922937064)
+                                .finished())
+          .value();
+  const PrimitiveSpec first =
+      box(Vec3(2.99715097763713, 0.3813512881283503, 0.19837187206383017),
+          Location::from_matrix((Matrix34() << 0.9999988558607431, 0.0014566956497593746,
+                                 0.0004078173473007829, -12.002166481115653,
+                                 -0.00048654506860725373, 0.05446054933658837, 0.9985158045017881,
+                                 -12.106184513293204, 0.0014323236718707462, -0.9985148604821767,
+                                 0.05446119577422078, 3.9976078899442653)
+                                    .finished())
+              .value());
+  const PrimitiveSpec second =
+      box(Vec3(3.0065828244493904, 0.2931178585683478, 0.20392432507596028),
+          Location::from_matrix((Matrix34() << 0.999998855860743, -0.0014580483568770316,
+                                 -0.00040295433214636235, -9.004522833804597,
+                                 -0.0004865450686072534, -0.057792122946088376, -0.9983285199769066,
+                                 -11.886018099682834, 0.0014323236718707462, 0.9983275738054987,
+                                 -0.0577927662300896, 3.7161607597206148)
+                                    .finished())
+              .value());
+  auto snapped = snap_primitives({first, cone, second}, {0.005, 0.5 * std::numbers::pi / 180});
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  std::vector<Shape> solids;
+  for (const PrimitiveSpec& p : snapped.value()) solids.push_back(build_primitive(p).value());
+  auto fused = boolean_fuse_all(solids);  // (first ∪ cone) ∪ second fails; second ∪ first holds
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+  EXPECT_EQ(map_child_shapes(fused.value(), ShapeKind::Solid).size(), 1u);
+}
+
 // A clip plane (a roof) stays where it is in the world while its extrusion turns plumb and its
 // base and the ground's top meet.
 TEST(Snap, ClipPlanesStayInTheWorld) {
