@@ -127,6 +127,11 @@ std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<con
 /// Parameters of a surface of the type: plane 3, sphere 4, cylinder 5, cone 6, torus 7.
 int parameter_count(ShapeType type);
 
+/// Bayesian information criterion of a fit with `k` parameters to `n` points:
+/// n·ln(max(rss/n, floor²)) + k·ln(penalty_n), the residual floored at the noise (`penalty_n`:
+/// the points of the whole model when the fit is one part of it, else n).
+double information_criterion(double rss, double n, double floor, int k, double penalty_n);
+
 /// Centroid and principal axes of the points of `subset`: the eigenvalues of their scatter
 /// (the sum of the outer products of their offsets from the centroid) ascending, and the unit
 /// eigenvectors as the columns of `axes`. nullopt for fewer than 3 points or a failed solve.

@@ -25,9 +25,7 @@ double Detector::criterion(const Surface& s, std::span<const std::uint32_t> inli
     const double d = surface_distance(s, points_[i]);
     rss += d * d;
   }
-  const double floor = noise_floor();
-  return n * std::log(std::max(rss / n, floor * floor)) +
-         detail::parameter_count(s.type) * std::log(n);
+  return detail::information_criterion(rss, n, noise_floor(), detail::parameter_count(s.type), n);
 }
 
 // A cylinder through points with normals: its axis is the direction the normals avoid (the

@@ -6,8 +6,6 @@
 #include <numbers>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
-
 #include "fit_internal.h"
 
 namespace csgtile::fit::detail {
@@ -74,15 +72,6 @@ std::string unsupported(const PrimitiveSpec& spec, const kernel::BoundingBox& bo
   return {};
 }
 
-namespace {
-
-// Bayesian information criterion n·ln(max(RSS/n, floor²)) + k·ln(N) of one fit (N: all points).
-double information(double rss, double n, double floor, double k, double all) {
-  return n * std::log(std::max(rss / n, floor * floor)) + k * std::log(all);
-}
-
-}  // namespace
-
 std::string flat_strips(const PrimitiveSpec& spec, std::span<const Vec3> points,
                         std::span<const std::uint32_t> members, double sigma, double cell) {
   const bool cone = spec.type == PrimitiveType::Cone;
@@ -103,8 +92,7 @@ std::string flat_strips(const PrimitiveSpec& spec, std::span<const Vec3> points,
   for (auto i : members) {
     const Vec3 q = r.transpose() * (points[i] - at.translation()) / scale;
     const double rz = r1 + (r2 - r1) * std::clamp(q.z() / h, 0.0, 1.0);
-    const double rho = std::hypot(q.x(), q.y());
-    const double d = (rho - rz) * cos_half * scale;
+    const double d = (std::hypot(q.x(), q.y()) - rz) * cos_half * scale;
     rss += d * d;
     mean_radius += rz * scale;
     around.push_back({std::atan2(q.y(), q.x()), i});
@@ -116,47 +104,33 @@ std::string flat_strips(const PrimitiveSpec& spec, std::span<const Vec3> points,
   std::sort(around.begin(), around.end(),
             [](const Local& a, const Local& b) { return a.angle < b.angle; });
   const double gap = 2.0 * cell / std::max(mean_radius, 1e-12);
-  std::vector<std::size_t> starts{0};
-  for (std::size_t k = 1; k < around.size(); ++k) {
-    if (around[k].angle - around[k - 1].angle > gap) starts.push_back(k);
+  std::vector<std::vector<std::uint32_t>> pieces(1);
+  for (std::size_t k = 0; k < around.size(); ++k) {
+    if (k > 0 && around[k].angle - around[k - 1].angle > gap) pieces.emplace_back();
+    pieces.back().push_back(around[k].index);
   }
-  const double wrap = around.front().angle + 2.0 * std::numbers::pi - around.back().angle;
-  if (starts.size() == 1 && wrap <= gap) return {};  // a whole ring: curved beyond doubt
+  if (around.front().angle + 2.0 * std::numbers::pi - around.back().angle <= gap) {
+    if (pieces.size() == 1) return {};  // a whole ring: curved beyond doubt
+    pieces.front().insert(pieces.front().end(), pieces.back().begin(), pieces.back().end());
+    pieces.pop_back();
+  }
   // Each piece as a plane: its least principal variance is its residual.
-  double planes = 0.0;
   const double floor = std::max(sigma, 1e-9 * mean_radius);
-  std::vector<std::vector<std::uint32_t>> piece_members(starts.size());
-  for (std::size_t c = 0; c < starts.size(); ++c) {
-    const std::size_t end = c + 1 < starts.size() ? starts[c + 1] : around.size();
-    for (std::size_t k = starts[c]; k < end; ++k) piece_members[c].push_back(around[k].index);
+  const int plane = parameter_count(ShapeType::Plane);
+  double planes = 0.0;
+  for (const auto& piece : pieces) {
+    const auto principal = principal_axes(points, piece);
+    const double residual = principal ? std::max(0.0, principal->values(0)) : 0.0;
+    planes += information_criterion(residual, static_cast<double>(piece.size()), floor, plane, n);
   }
-  if (starts.size() > 1 && wrap <= gap) {
-    // The last piece goes on across ±π into the first.
-    piece_members.front().insert(piece_members.front().end(), piece_members.back().begin(),
-                                 piece_members.back().end());
-    piece_members.pop_back();
-  }
-  for (const auto& piece : piece_members) {
-    const auto m = static_cast<double>(piece.size());
-    Vec3 mean = Vec3::Zero();
-    for (auto i : piece) mean += points[i];
-    mean /= m;
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (auto i : piece) scatter += (points[i] - mean) * (points[i] - mean).transpose();
-    const double residual = piece.size() < 3
-                                ? 0.0
-                                : std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                                                    scatter, Eigen::EigenvaluesOnly)
-                                                    .eigenvalues()(0));
-    planes += information(residual, m, floor, 3.0, n);
-  }
-  const double curved = information(rss, n, floor, cone ? 6.0 : 5.0, n);
+  const double curved = information_criterion(
+      rss, n, floor, parameter_count(cone ? ShapeType::Cone : ShapeType::Cylinder), n);
   if (planes > curved) return {};
   char text[200];
   std::snprintf(text, sizeof text,
                 "unsupported: its points are %d flat piece(s), planes explain them as well "
                 "(curvature unseen)",
-                static_cast<int>(piece_members.size()));
+                static_cast<int>(pieces.size()));
   return text;
 }
 

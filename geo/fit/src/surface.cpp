@@ -339,6 +339,10 @@ int parameter_count(ShapeType type) {
   return 0;
 }
 
+double information_criterion(double rss, double n, double floor, int k, double penalty_n) {
+  return n * std::log(std::max(rss / n, floor * floor)) + k * std::log(penalty_n);
+}
+
 namespace {
 
 // The surface moved by a small parameter step. Axes turn in the tangent plane of the current

@@ -160,30 +160,26 @@ Status BooleanEngine::add_section(std::size_t fa, std::size_t fb, CurvePtr curve
     std::optional<Vec2> shift_b = Vec2::Zero();
     if (existing < 0)
       shift_b = polygons_[fb].shift_inside(pb->point(mid), uv_margin(fb) * kInsideUvSlacks);
-    if (existing < 0 && shift_a && shift_b) {
-      // The piece runs along a boundary edge of one face (the section of a plane coinciding
-      // with a face's edge an earlier fuse made there: a beam's end face snapped onto its
-      // neighbour's): that edge, or the part of it the piece covers, splits the other face,
-      // not a second edge beside it.
-      bool along = false;
-      for (auto [own, other] : {std::pair{fa, fb}, std::pair{fb, fa}}) {
-        const int e = boundary_edge_through(own, curve->point(mid));
-        if (e < 0 || boundary_edge_through(own, curve->point(c0 + 0.25 * (c1 - c0))) != e ||
-            boundary_edge_through(own, curve->point(c0 + 0.75 * (c1 - c0))) != e)
-          continue;
-        add_edge_part(other, e, curve->point(c0), curve->point(c1), curve->point(mid));
-        along = true;
-        break;
+    if (existing < 0) {
+      // The piece runs along a boundary edge of face `along`: that edge, or the part of it the
+      // piece covers, splits face `split`. Inside one face only, it lies in the other's
+      // boundary (an edge lying in a face). Inside both, it can still run along an edge an
+      // earlier fuse made (a plane through that edge: a beam's end face snapped onto its
+      // neighbour's), then found at its quarter points too, and is not a second edge beside it.
+      auto split_by_edge = [&](std::size_t along, std::size_t split, bool quarters) {
+        const int e = boundary_edge_through(along, curve->point(mid));
+        if (e < 0 ||
+            (quarters && (boundary_edge_through(along, curve->point(c0 + 0.25 * (c1 - c0))) != e ||
+                          boundary_edge_through(along, curve->point(c0 + 0.75 * (c1 - c0))) != e)))
+          return false;
+        add_edge_part(split, e, curve->point(c0), curve->point(c1), curve->point(mid));
+        return true;
+      };
+      if (shift_a.has_value() != shift_b.has_value()) {
+        split_by_edge(shift_a ? fb : fa, shift_a ? fa : fb, false);
+        continue;
       }
-      if (along) continue;
-    }
-    if (existing < 0 && shift_a.has_value() != shift_b.has_value()) {
-      // The piece runs inside one face along an edge of the other (an edge lying in a
-      // face): that edge, or the part of it the piece covers, splits the first face.
-      const std::size_t inside = shift_a ? fa : fb, along = shift_a ? fb : fa;
-      const int e = boundary_edge_through(along, curve->point(mid));
-      if (e >= 0) add_edge_part(inside, e, curve->point(c0), curve->point(c1), curve->point(mid));
-      continue;
+      if (shift_a && (split_by_edge(fa, fb, true) || split_by_edge(fb, fa, true))) continue;
     }
     if (!shift_a || !shift_b) continue;
     // Vertices at the piece's ends: split the boundary edges they fall on.

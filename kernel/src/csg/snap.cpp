@@ -81,10 +81,12 @@ struct AxisUse {
   double sign = 1.0;
 };
 
-// A plane face of primitive `primitive` across its axis `axis`: its offset along the
-// direction `cluster`, and the offset of the plane it snaps to (its own when none).
+// A plane face of primitive `primitive` across its axis `axis` (direction `cluster`): its
+// offset along `normal` (the primitive's own axis, turned the cluster's way), and the offset of
+// the plane it snaps to (its own when none).
 struct Face {
   int cluster, primitive, axis;
+  Vec3 normal;
   double offset, to;
 };
 
@@ -214,8 +216,8 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
       const Vec3 dir = u.sign * p.placement.rotation().col(k);
       const double low = dir.dot(p.placement.translation());
       const double high = low + u.sign * p.placement.scale() * *extent;
-      faces.push_back({u.cluster, static_cast<int>(i), k, low, low});
-      faces.push_back({u.cluster, static_cast<int>(i), k, high, high});
+      faces.push_back({u.cluster, static_cast<int>(i), k, dir, low, low});
+      faces.push_back({u.cluster, static_cast<int>(i), k, dir, high, high});
     }
   }
   std::vector<std::size_t> by_offset(faces.size());
@@ -258,7 +260,7 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     const double new_extent = u.sign * (high.to - low.to) / p.placement.scale();
     if (!(new_extent > 0.5 * *extent)) continue;  // a thin primitive keeps its faces
     *extent = new_extent;
-    shift[i] += (low.to - low.offset) * u.sign * p.placement.rotation().col(low.axis);
+    shift[i] += (low.to - low.offset) * low.normal;
     for (const Face* face : {&low, &high}) {
       if (face->to == face->offset) continue;
       ++counts.faces_snapped;
