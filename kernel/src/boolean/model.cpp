@@ -141,6 +141,9 @@ Status import_operand(BModel& model, const Shape& shape, int operand) {
           use.pcurve = std::make_shared<Line2d>(Vec2(old.origin().x(), at.y()), old.direction());
         } else {
           use.pcurve = fit_pcurve(*e.curve, e.t0, e.t1, *bf.surface, fit_tolerance);
+          // An edge lying in its face only within its own tolerance (a fuse made it an edge of
+          // a plane fitted 4e-8 off its twin's): the pcurve that stays within it.
+          if (!use.pcurve) use.pcurve = fit_pcurve(*e.curve, e.t0, e.t1, *bf.surface, e.tolerance);
           if (!use.pcurve) {
             // A traced section edge (polyline) keeps the face's own pcurve, carried into the
             // world frame and accepted within the edge's tolerance.

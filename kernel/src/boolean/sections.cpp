@@ -86,7 +86,9 @@ Status BooleanEngine::add_section(std::size_t fa, std::size_t fb, CurvePtr curve
     }
   }
   const double fit_tol = fit_tolerance(options_.tolerance);
-  Curve2dPtr pa = hint_a ? hint_a : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
+  Curve2dPtr pa = hint_a     ? hint_a
+                  : existing >= 0 ? lying_pcurve(existing, fa)
+                                  : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
   Curve2dPtr pb = existing >= 0 ? nullptr
                   : hint_b      ? hint_b
                                 : fit_pcurve(*curve, t0, t1, *model_.faces[fb].surface, fit_tol);
@@ -442,8 +444,7 @@ void BooleanEngine::add_edge_range(std::size_t f, int e_id, double a, double b) 
         model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
     }
   }
-  auto pc =
-      fit_pcurve(*e.curve, e.t0, e.t1, *model_.faces[f].surface, fit_tolerance(options_.tolerance));
+  auto pc = lying_pcurve(e_id, f);
   if (!pc) return;
   auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * kInsideUvSlacks);
   if (!shift) return;
@@ -453,6 +454,17 @@ void BooleanEngine::add_edge_range(std::size_t f, int e_id, double a, double b) 
   } else {
     pending_partials_.push_back({f, e_id, a, b, pc});
   }
+}
+
+Curve2dPtr BooleanEngine::lying_pcurve(int edge, std::size_t f) {
+  BEdge& e = model_.edges[static_cast<std::size_t>(edge)];
+  const Surface& surface = *model_.faces[f].surface;
+  if (auto exact = fit_pcurve(*e.curve, e.t0, e.t1, surface, fit_tolerance(options_.tolerance)))
+    return exact;
+  auto within = fit_pcurve(*e.curve, e.t0, e.t1, surface, std::max(options_.tolerance, e.tolerance));
+  if (within)
+    e.tolerance = std::max(e.tolerance, pcurve_deviation(*e.curve, *within, e.t0, e.t1, surface));
+  return within;
 }
 
 Curve2dPtr BooleanEngine::refit_for(int edge, std::size_t f, const Curve2dPtr& pc,

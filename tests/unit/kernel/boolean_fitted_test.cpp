@@ -3,7 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <numbers>
+#include <vector>
 
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/check.h"
@@ -13,6 +16,17 @@
 
 namespace csgtile::kernel {
 namespace {
+
+// A box fitted at a placement given as its 3 × 4 matrix, row by row.
+PrimitiveSpec fitted_box(const Vec3& size, const std::array<double, 12>& rows) {
+  PrimitiveSpec b;
+  b.type = PrimitiveType::Box;
+  b.size = size;
+  b.placement = Location::from_matrix(
+                    Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(rows.data()))
+                    .value();
+  return b;
+}
 
 // A building's block fitted upside down (its frame's z down, tilted by 5e-5 rad) and a dome's
 // drum standing on the terrain through it, its base disc a millimetre inside the block's
@@ -42,6 +56,95 @@ TEST(BooleanFitted, DrumThroughAFittedBlock) {
   ASSERT_TRUE(common.ok()) << common.error().message;
   EXPECT_NEAR(mass_properties(fused.value()).volume + mass_properties(common.value()).volume,
               va + vb, 1e-9 * (va + vb));
+}
+
+// Two beams of the fitted gate (seed 1) meeting end to end, their end faces one plane to
+// 3.9e-8 — within the tolerance (1e-7), but beyond the 1e-9 an exact pcurve is fitted to.
+// Each face's boundary edges lie in the other's plane only within the tolerance; they must
+// still become its edges (their tolerance grown to the gap), not fail with "no exact pcurve".
+TEST(BooleanFitted, BeamEndsOnPlanesWithinTolerance) {
+  const PrimitiveSpec first = fitted_box(
+      Vec3(3.00215112730199, 0.31024237415091027, 0.20189950595978284),
+      {-0.0006222205719990808, -0.000688022503381458, -0.9999995697332047, -2.8995689695165847,
+       0.9999994273475327, 0.0008702877539790623, -0.0006228192612205371, -3.0008723580285057,
+       0.0008707158931903986, -0.9999993846119407, 0.0006874805984394827, 4.005397435289576});
+  const PrimitiveSpec second = fitted_box(
+      Vec3(2.99860520568093, 0.30205997083123814, 0.2113915099121587),
+      {-0.0006222205719990806, -0.012335654568404741, 0.9999237193245935, -3.1087265251524694,
+       0.9999994273475326, -0.0008783253080911781, 0.0006114321385401271, -5.999339385965823,
+       0.0008707158931903984, 0.9999235271614635, 0.01233619401643743, 3.6952204913927633});
+  const Shape a = build_primitive(first).value(), b = build_primitive(second).value();
+  const double va = mass_properties(a).volume, vb = mass_properties(b).volume;
+  const auto fused = boolean_operation(a, b, BooleanOp::Fuse);
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+  EXPECT_EQ(count_shapes(fused.value())[static_cast<int>(ShapeKind::Solid)], 1u);
+  // They touch: no volume in common, the fuse holds both.
+  EXPECT_NEAR(mass_properties(fused.value()).volume, va + vb, 1e-6 * (va + vb));
+  const auto common = boolean_operation(a, b, BooleanOp::Common);
+  ASSERT_TRUE(common.ok()) << common.error().message;
+  EXPECT_NEAR(mass_properties(common.value()).volume, 0.0, 1e-6 * (va + vb));
+  const auto cut = boolean_operation(a, b, BooleanOp::Cut);
+  ASSERT_TRUE(cut.ok()) << cut.error().message;
+  EXPECT_TRUE(check_shape(cut.value()).valid());
+  EXPECT_NEAR(mass_properties(cut.value()).volume, va, 1e-6 * va);
+}
+
+// Five beams of the fitted gate (seed 3) about one node, fused without the snap: two of
+// them end on planes within the tolerance of each other (as above), so the first fuse makes
+// edges that lie in their faces only within their tolerance. The next fuse takes that result
+// as its argument and must accept those edges' pcurves within the edge's own tolerance ("an
+// edge of an argument has no exact pcurve on its face" before).
+TEST(BooleanFitted, FiveBeamsAtANodeFuseUnsnapped) {
+  const std::vector<PrimitiveSpec> beams{
+      fitted_box(Vec3(3.001341606709121, 0.29607766250677936, 0.20056854369391014),
+                 {-0.9999998699681596, 0.0005098326917627803, 1.1588386205292952e-05,
+                  0.0006217560852091889, 6.0097686603369055e-06, -0.0109406965017748,
+                  0.9999401487708844, 5.902077991409828, 0.0005099289626659524, 0.99994001881647,
+                  0.010940692015159362, 3.698974988835186}),
+      fitted_box(
+          Vec3(2.6842326314331997, 0.29395453602941507, 0.2004635662322157),
+          {0.9999998699681594, 0.0005097823983555873, 1.3622430464147616e-05, -5.684951266218582,
+           -6.009768660336905e-06, 0.038491135414666595, -0.999258941645444, 6.096663318073877,
+           -0.0005099289626659527, 0.9992588116280968, 0.038491133473267686, 3.7003947491953912}),
+      fitted_box(
+          Vec3(3.0034743487639917, 0.19205949022991708, 0.30001334294140664),
+          {0.00048487475890652285, -0.9999998824222007, 7.214730306626116e-06, 0.08400277709249726,
+           0.9999990350359796, 0.000484864955478048, -0.0013018575515922808, 2.9970968939593456,
+           0.001301853900352846, 7.845961211077167e-06, 0.9999991525570721, 3.698103843135248}),
+      fitted_box(
+          Vec3(2.999231868631635, 0.27960809992638735, 0.20798869853971208),
+          {0.9999998699681593, 0.0005099600535762249, -2.0995336288664914e-06, -2.9986462365233972,
+           -6.0097686603368945e-06, 0.007667847600029032, -0.9999706016063997, 9.10727277687936,
+           -0.0005099289626659523, 0.9999704715909996, 0.007667849667706672, 3.7093134212735035}),
+      fitted_box(
+          Vec3(2.994761288236525, 0.29668871619028747, 0.20620113341402116),
+          {0.0004848747589065238, -0.007856151261048328, 0.9999690224121104, -3.1046722424905027,
+           0.9999990350359796, -0.0012980046314518571, -0.0004950869483415093, 6.002587388050917,
+           0.0013018539003528467, 0.9999682975331469, 0.007855514310462386, 3.6978837465837366}),
+  };
+  std::vector<Shape> solids;
+  double largest = 0.0, sum = 0.0;
+  for (const PrimitiveSpec& b : beams) {
+    solids.push_back(build_primitive(b).value());
+    const double v = mass_properties(solids.back()).volume;
+    largest = std::max(largest, v);
+    sum += v;
+  }
+  const auto fused = boolean_fuse_all(solids);
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  EXPECT_TRUE(check_shape(fused.value()).valid());
+  EXPECT_EQ(count_shapes(fused.value())[static_cast<int>(ShapeKind::Solid)], 1u);
+  const double v = mass_properties(fused.value()).volume;
+  EXPECT_GT(v, largest);
+  EXPECT_LT(v, sum);
+  // The last beam against the fuse of the others: |A ∪ B| + |A ∩ B| = |A| + |B|.
+  const auto four = boolean_fuse_all({solids[0], solids[1], solids[2], solids[3]});
+  ASSERT_TRUE(four.ok()) << four.error().message;
+  const auto common = boolean_operation(four.value(), solids[4], BooleanOp::Common);
+  ASSERT_TRUE(common.ok()) << common.error().message;
+  EXPECT_NEAR(v + mass_properties(common.value()).volume,
+              mass_properties(four.value()).volume + mass_properties(solids[4]).volume, 1e-6 * sum);
 }
 
 }  // namespace
