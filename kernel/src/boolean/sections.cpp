@@ -86,7 +86,7 @@ Status BooleanEngine::add_section(std::size_t fa, std::size_t fb, CurvePtr curve
     }
   }
   const double fit_tol = fit_tolerance(options_.tolerance);
-  Curve2dPtr pa = hint_a     ? hint_a
+  Curve2dPtr pa = hint_a          ? hint_a
                   : existing >= 0 ? lying_pcurve(existing, fa)
                                   : fit_pcurve(*curve, t0, t1, *model_.faces[fa].surface, fit_tol);
   Curve2dPtr pb = existing >= 0 ? nullptr
@@ -461,7 +461,8 @@ Curve2dPtr BooleanEngine::lying_pcurve(int edge, std::size_t f) {
   const Surface& surface = *model_.faces[f].surface;
   if (auto exact = fit_pcurve(*e.curve, e.t0, e.t1, surface, fit_tolerance(options_.tolerance)))
     return exact;
-  auto within = fit_pcurve(*e.curve, e.t0, e.t1, surface, std::max(options_.tolerance, e.tolerance));
+  auto within =
+      fit_pcurve(*e.curve, e.t0, e.t1, surface, std::max(options_.tolerance, e.tolerance));
   if (within)
     e.tolerance = std::max(e.tolerance, pcurve_deviation(*e.curve, *within, e.t0, e.t1, surface));
   return within;
