@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -143,12 +144,15 @@ class BooleanEngine {
 
   void add_extra(std::size_t f, int edge, Curve2dPtr pcurve);
 
-  // The pcurve of an existing edge found lying in face f: exact (fitted within
-  // fit_tolerance), else — the edge lies in f only within the tolerance, as a boundary edge
-  // of a plane fitted 4e-8 off its twin does — the one that stays within the edge's own
-  // tolerance (at least the model's), the edge's tolerance grown to its deviation. Null when
-  // the edge leaves f by more than that.
-  Curve2dPtr lying_pcurve(int edge, std::size_t f);
+  // The pcurve of an existing edge found lying in face f over its parameters [a, b] (the
+  // whole edge by default; a part where the edge grazes f and leaves it beyond): exact
+  // (fitted within fit_tolerance), else — the edge lies in f only within the tolerance, as a
+  // boundary edge of a plane fitted 4e-8 off its twin does — the one that stays within the
+  // edge's own tolerance (at least the model's), the edge's tolerance grown to its deviation.
+  // Null when the edge leaves f by more than that over [a, b].
+  Curve2dPtr lying_pcurve(int edge, std::size_t f,
+                          double a = -std::numeric_limits<double>::infinity(),
+                          double b = std::numeric_limits<double>::infinity());
 
   // A closed boundary edge of face f that runs along the whole closed curve(t0..t1) (each
   // within tolerance of the other at 8 samples), or -1.

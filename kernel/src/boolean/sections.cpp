@@ -444,7 +444,7 @@ void BooleanEngine::add_edge_range(std::size_t f, int e_id, double a, double b) 
         model_.edges[static_cast<std::size_t>(e_id)].splits.emplace_back(t, v);
     }
   }
-  auto pc = lying_pcurve(e_id, f);
+  auto pc = lying_pcurve(e_id, f, a, b);
   if (!pc) return;
   auto shift = polygons_[f].shift_inside(pc->point(0.5 * (a + b)), uv_margin(f) * kInsideUvSlacks);
   if (!shift) return;
@@ -456,15 +456,15 @@ void BooleanEngine::add_edge_range(std::size_t f, int e_id, double a, double b) 
   }
 }
 
-Curve2dPtr BooleanEngine::lying_pcurve(int edge, std::size_t f) {
+Curve2dPtr BooleanEngine::lying_pcurve(int edge, std::size_t f, double a, double b) {
   BEdge& e = model_.edges[static_cast<std::size_t>(edge)];
   const Surface& surface = *model_.faces[f].surface;
-  if (auto exact = fit_pcurve(*e.curve, e.t0, e.t1, surface, fit_tolerance(options_.tolerance)))
+  const double t0 = std::max(a, e.t0), t1 = std::min(b, e.t1);
+  if (auto exact = fit_pcurve(*e.curve, t0, t1, surface, fit_tolerance(options_.tolerance)))
     return exact;
-  auto within =
-      fit_pcurve(*e.curve, e.t0, e.t1, surface, std::max(options_.tolerance, e.tolerance));
+  auto within = fit_pcurve(*e.curve, t0, t1, surface, std::max(options_.tolerance, e.tolerance));
   if (within)
-    e.tolerance = std::max(e.tolerance, pcurve_deviation(*e.curve, *within, e.t0, e.t1, surface));
+    e.tolerance = std::max(e.tolerance, pcurve_deviation(*e.curve, *within, t0, t1, surface));
   return within;
 }
 
