@@ -35,6 +35,8 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "ground", "cell", fit.ground.cell);
   take(f, "ground", "window", fit.ground.window);
   take(f, "ground", "height", fit.ground.height);
+  take(f, "ground", "slope", fit.ground.slope);
+  take(f, "ground", "max_height", fit.ground.max_height);
   take(f, "vegetation", "enabled", fit.vegetation.enabled);
   take(f, "vegetation", "curvature", fit.vegetation.curvature);
   take(f, "vegetation", "radius", fit.vegetation.radius);
@@ -88,7 +90,9 @@ json fit_to_json(const FitConfig& fit) {
                    {"use_classification", fit.ground.use_classification},
                    {"cell", fit.ground.cell},
                    {"window", fit.ground.window},
-                   {"height", fit.ground.height}};
+                   {"height", fit.ground.height},
+                   {"slope", fit.ground.slope},
+                   {"max_height", fit.ground.max_height}};
   out["vegetation"] = {{"enabled", fit.vegetation.enabled},
                        {"curvature", fit.vegetation.curvature},
                        {"radius", fit.vegetation.radius},

@@ -22,18 +22,38 @@ using kernel::Vec2;
 using kernel::Vec3;
 
 // Sliding minimum (or maximum) of a row of values over a window of 2·half + 1, ignoring
-// infinities that mark empty cells.
+// infinities that mark empty cells (an all-empty window gives the empty mark back), in O(n)
+// whatever the window (van Herk / Gil–Werman: the running extreme from each block's start
+// and from its end, blocks of the window's width).
 void sliding(std::vector<double>& row, int half, bool minimum) {
-  const std::vector<double> in = row;
-  const int n = static_cast<int>(in.size());
+  const int n = static_cast<int>(row.size());
+  if (n == 0) return;
+  const double none = minimum ? INFINITY : -INFINITY;
+  auto pick = [minimum](double a, double b) { return minimum ? std::min(a, b) : std::max(a, b); };
+  const int w = 2 * half + 1;
+  const int m = n + 2 * half;  // padded with `none` on both sides
+  const int padded = ((m + w - 1) / w) * w;
+  std::vector<double> v(static_cast<std::size_t>(padded), none), from_start(v.size()),
+      from_end(v.size());
   for (int i = 0; i < n; ++i) {
-    double best = minimum ? INFINITY : -INFINITY;
-    for (int k = std::max(0, i - half); k <= std::min(n - 1, i + half); ++k) {
-      if (!std::isfinite(in[static_cast<std::size_t>(k)])) continue;
-      best = minimum ? std::min(best, in[static_cast<std::size_t>(k)])
-                     : std::max(best, in[static_cast<std::size_t>(k)]);
-    }
-    row[static_cast<std::size_t>(i)] = best;
+    const double x = row[static_cast<std::size_t>(i)];
+    v[static_cast<std::size_t>(i + half)] = std::isfinite(x) ? x : none;
+  }
+  for (int b = 0; b < padded; b += w) {
+    from_start[static_cast<std::size_t>(b)] = v[static_cast<std::size_t>(b)];
+    for (int i = b + 1; i < b + w; ++i)
+      from_start[static_cast<std::size_t>(i)] =
+          pick(from_start[static_cast<std::size_t>(i - 1)], v[static_cast<std::size_t>(i)]);
+    from_end[static_cast<std::size_t>(b + w - 1)] = v[static_cast<std::size_t>(b + w - 1)];
+    for (int i = b + w - 2; i >= b; --i)
+      from_end[static_cast<std::size_t>(i)] =
+          pick(from_end[static_cast<std::size_t>(i + 1)], v[static_cast<std::size_t>(i)]);
+  }
+  for (int i = 0; i < n; ++i) {
+    // The window over padded [i, i + w - 1]: the end of one block and the start of the next.
+    const double x = pick(from_end[static_cast<std::size_t>(i)],
+                          from_start[static_cast<std::size_t>(i + w - 1)]);
+    row[static_cast<std::size_t>(i)] = std::isfinite(x) ? x : INFINITY;
   }
 }
 
@@ -77,8 +97,13 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
     }
     if (any) return mask;
   }
-  // Morphological opening of the lowest-point grid: structures narrower than the window
-  // disappear, what remains is the terrain.
+  // Progressive morphological filter (Zhang et al. 2003): the grid of the lowest ground
+  // points opened by squares of 3, 5, 9, 17 … cells up to `window`. At each step a point more
+  // than the step's threshold above the opened surface stops being ground: `height` at the
+  // first, then growing by `slope` times the window's growth (terrain rising no steeper than
+  // that keeps its points; an opening keeps planar slopes anyway, it cuts hilltops and
+  // structures) up to `max_height`. Small objects go at the small windows, a building at the
+  // first window wider than it, whatever its size below `window`.
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
@@ -98,18 +123,31 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
     const int y = std::min(ny - 1, static_cast<int>((p.y() - y0) / cell));
     return static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x);
   };
-  std::vector<double> lowest(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), INFINITY);
-  for (const auto& p : points) {
-    if (p.allFinite()) lowest[cell_of(p)] = std::min(lowest[cell_of(p)], p.z());
-  }
-  const int half = std::max(1, static_cast<int>(std::ceil(options.window / cell / 2.0)));
-  std::vector<double> opened = lowest;
-  filter2d(opened, nx, ny, half, true);
-  filter2d(opened, nx, ny, half, false);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite()) continue;
-    const double g = opened[cell_of(points[i])];
-    mask[i] = (std::isfinite(g) && points[i].z() - g <= options.height) ? 1 : 0;
+  for (std::size_t i = 0; i < points.size(); ++i) mask[i] = points[i].allFinite() ? 1 : 0;
+  const int widest = std::max(
+      3, static_cast<int>(std::min(std::ceil(options.window / cell), 2.0 * (nx + ny))) | 1);
+  std::vector<double> surface(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  int previous = 1;
+  for (int width = 3;; width = std::min(2 * width - 1, widest)) {
+    std::fill(surface.begin(), surface.end(), INFINITY);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (mask[i])
+        surface[cell_of(points[i])] = std::min(surface[cell_of(points[i])], points[i].z());
+    }
+    const int half = width / 2;
+    filter2d(surface, nx, ny, half, true);
+    filter2d(surface, nx, ny, half, false);
+    const double threshold =
+        previous == 1 ? options.height
+                      : std::min(options.height + options.slope * (width - previous) * cell,
+                                 std::max(options.height, options.max_height));
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!mask[i]) continue;
+      const double g = surface[cell_of(points[i])];
+      if (std::isfinite(g) && points[i].z() - g > threshold) mask[i] = 0;
+    }
+    if (width >= widest) break;
+    previous = width;
   }
   return mask;
 }
@@ -138,8 +176,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     return bad("voxel.size must be >= 0");
   if (options.normals.neighbours < 3) return bad("normals.neighbours must be >= 3");
   if (!(options.ground.cell > 0.0) || !(options.ground.window > 0.0) ||
-      !(options.ground.height >= 0.0)) {
-    return bad("ground.cell and ground.window must be > 0, ground.height >= 0");
+      !(options.ground.height >= 0.0) || !(options.ground.slope >= 0.0) ||
+      !(options.ground.max_height >= 0.0)) {
+    return bad(
+        "ground.cell and ground.window must be > 0, ground.height, ground.slope and "
+        "ground.max_height >= 0");
   }
   if (!(options.clusters.tolerance >= 0.0)) return bad("clusters.tolerance must be >= 0");
   if (options.regions.enabled) {

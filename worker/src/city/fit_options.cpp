@@ -23,6 +23,8 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.ground.cell = c.ground.cell;
   o.ground.window = c.ground.window;
   o.ground.height = c.ground.height;
+  o.ground.slope = c.ground.slope;
+  o.ground.max_height = c.ground.max_height;
   o.vegetation.enabled = c.vegetation.enabled;
   o.vegetation.curvature = c.vegetation.curvature;
   o.vegetation.radius = c.vegetation.radius;

@@ -39,8 +39,10 @@ struct FitGroundConfig {
   bool enabled = true;
   bool use_classification = true;
   double cell = 1.0;
-  double window = 30.0;
+  double window = 150.0;
   double height = 0.3;
+  double slope = 0.2;
+  double max_height = 3.0;
   bool operator==(const FitGroundConfig&) const = default;
 };
 

@@ -63,14 +63,18 @@ std::vector<kernel::Vec3> estimate_normals(std::span<const kernel::Vec3> points,
                                            const NormalOptions& options);
 
 /// Ground separation: LAS class 2 when the cloud has classes and any point carries it, else a
-/// morphological filter (the grid of lowest points opened by a `window`-wide square; a point
-/// within `height` of the opened surface is ground).
+/// progressive morphological filter: the grid (`cell`) of the lowest points opened by squares
+/// growing from 3 cells to `window` (wider than the widest building); at each step a point
+/// farther above the opened surface than `height` (the first step), then `height` + `slope` ×
+/// the window's growth, at most `max_height`, is not ground.
 struct GroundOptions {
   bool enabled = true;
   bool use_classification = true;
   double cell = 1.0;
-  double window = 30.0;
+  double window = 150.0;
   double height = 0.3;
+  double slope = 0.2;
+  double max_height = 3.0;
   bool operator==(const GroundOptions&) const = default;
 };
 /// Vegetation on unclassified inputs (issue #18 item 1): a laser pulse goes through a tree's
