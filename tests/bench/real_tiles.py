@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """`csgtile fit` on real LIDAR tiles, measured (issue #6, "Real data").
 
-Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c] [--use-footprints] [--unclassified]
+Usage: real_tiles.py CSGTILE OUT_DIR [--data DIR] [--tiles delft,ams,sample_c] [--use-footprints] [--unclassified | --ground-only]
                      [--config C] [--sigma S] [--cell 0.25] [--pixel 2]
                      [--min-share TILE=V ...] [--min-iou TILE=V ...]
                      [--min-top-within TILE=V ...] [--min-top-coverage TILE=V ...]
@@ -239,9 +239,10 @@ def median(v):
     return v[n // 2] if n % 2 else (v[n // 2 - 1] + v[n // 2]) / 2
 
 
-def write_unclassified(src, dst):
+def write_unclassified(src, dst, keep_ground=False):
     """A copy of a LAS file with every point's class set to 1 (never classified, as unclassified
-    tiles are): the fit then sees no classification; the measure still uses the original's."""
+    tiles are): the fit then sees no classification; the measure still uses the original's.
+    With keep_ground, ground (2) stays: a tile classified for its ground only."""
     b = bytearray(open(src, "rb").read())
     offset = struct.unpack_from("<I", b, 96)[0]
     fmt = b[104] & 0x3F
@@ -252,8 +253,9 @@ def write_unclassified(src, dst):
     for i in range(count):
         p = offset + i * length
         if fmt < 6:
-            b[p + 15] = (b[p + 15] & 0xE0) | 1
-        else:
+            if not (keep_ground and b[p + 15] & 0x1F == 2):
+                b[p + 15] = (b[p + 15] & 0xE0) | 1
+        elif not (keep_ground and b[p + 16] == 2):
             b[p + 16] = 1
     with open(dst, "wb") as f:
         f.write(b)
@@ -264,9 +266,9 @@ def run_fit(name, spec, args, out_dir):
     las_path = os.path.join(args.data, spec["las"])
     fit_path = os.path.join(out_dir, name + "_fit.json")
     fit_input = las_path
-    if args.unclassified:
+    if args.unclassified or args.ground_only:
         fit_input = os.path.join(out_dir, name + "_unclassified.las")
-        write_unclassified(las_path, fit_input)
+        write_unclassified(las_path, fit_input, keep_ground=args.ground_only)
     cmd = [args.csgtile, "fit", fit_input, "--out", fit_path, "--json"]
     if args.config:
         cmd += ["--config", args.config]
@@ -892,6 +894,10 @@ def main():
                     help="fit a copy of each tile with its classes cleared (an unclassified "
                          "tile: ground, vegetation and buildings from the geometry alone); the "
                          "measure keeps the original classes")
+    ap.add_argument("--ground-only", action="store_true",
+                    help="fit a copy of each tile with every class but ground (2) set to 1 (a "
+                         "tile classified for its ground only: vegetation and buildings from the "
+                         "geometry); the measure keeps the original classes")
     ap.add_argument("--use-footprints", action="store_true",
                     help="give csgtile fit the tile's published footprints (--footprints): one "
                          "building per footprint")

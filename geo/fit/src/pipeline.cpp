@@ -232,15 +232,20 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // Among neighbours, from this tile's own points (a neighbour classified otherwise does not
   // change how this tile's points are read).
   auto own = [&](std::size_t i) { return share == nullptr || share->foreign[i] == 0; };
-  bool classified = false, by_keep = false;
+  bool classified = false, by_keep = false, vegetation_classed = false;
   if (classes.size() == points.size()) {
     for (std::size_t i = 0; i < classes.size(); ++i) {
       if (!own(i)) continue;
       classified = classified || classes[i] > 1;
       by_keep = by_keep || listed(options.classes.keep, classes[i]);
+      vegetation_classed = vegetation_classed || (classes[i] >= 3 && classes[i] <= 5);
     }
     by_keep = by_keep && classified;
   }
+  // Vegetation is found from the points where the classes do not tell it: unclassified
+  // inputs, and tiles classified for their ground only (ground 2, the rest unclassified 1: no
+  // kept class such as buildings, no vegetation class 3-5).
+  const bool find_vegetation = !classified || (!by_keep && !vegetation_classed);
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite()) continue;
     if (!ground[i] && classified &&
@@ -336,9 +341,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
                                 options.normals.sharp);
   out.seconds.emplace_back("normals", seconds_since(start));
 
-  // Vegetation (unclassified inputs only): excluded from the regions.
+  // Vegetation (where the classes do not tell it): excluded from the regions.
   std::vector<char> excluded(cloud.size(), 0);
-  if (options.vegetation.enabled && !classified && !cloud.empty()) {
+  if (options.vegetation.enabled && find_vegetation && !cloud.empty()) {
     start = std::chrono::steady_clock::now();
     // Each fitted point's pulse: its input point's.
     std::vector<char> several(cloud.size(), 0);

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "csgtile/fit/segment.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -83,6 +85,35 @@ TEST(FitVegetation, ATreeBesideAHouseIsNotFitted) {
   ASSERT_TRUE(all.ok());
   EXPECT_EQ(all->vegetation_points, 0);
   EXPECT_GT(all->regions, out->regions);
+}
+
+// A tile classified for its ground only (class 2; the house and the tree unclassified, 1, as
+// many national deliveries are): the classes do not tell the vegetation, so it is found from
+// the points as on an unclassified tile — nothing over the tree.
+TEST(FitVegetation, ATileClassifiedForItsGroundOnlyStillLosesItsTree) {
+  const Scene s = tree_beside_house();
+  std::vector<std::uint8_t> classes(s.points.size(), 1);
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    if (std::abs(s.points[i].z()) < 0.1 && (s.points[i].x() < -0.5 || s.points[i].x() > 10.5 ||
+                                            s.points[i].y() < -0.5 || s.points[i].y() > 8.5))
+      classes[i] = 2;
+  }
+  FitPipelineOptions o;
+  o.outliers.enabled = false;
+  const auto out = fit_point_cloud(s.points, classes, o, {}, s.returns);
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_GT(out->vegetation_points, 1500);
+  EXPECT_GE(primitives_over(*out, -0.5, 10.5), 1);  // the house
+  EXPECT_EQ(primitives_over(*out, 18.0, 26.0), 0);  // nothing over the tree
+  // Had the tile classed its vegetation (class 5 for the crown), the classes would decide.
+  std::vector<std::uint8_t> with_trees = classes;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    if (s.returns[i] == 3) with_trees[i] = 5;
+  }
+  const auto classed = fit_point_cloud(s.points, with_trees, o, {}, s.returns);
+  ASSERT_TRUE(classed.ok());
+  EXPECT_EQ(classed->vegetation_points, 0);
+  EXPECT_EQ(primitives_over(*classed, 18.0, 26.0), 0);
 }
 
 // A street raised 1.2 m over the terrain beside it (a quay along a canal: wider than the
