@@ -24,8 +24,12 @@ using kernel::Vec3;
 // Sliding minimum (or maximum) of a row of values over a window of 2·half + 1, ignoring
 // infinities that mark empty cells (an all-empty window gives the empty mark back), in O(n)
 // whatever the window (van Herk / Gil–Werman: the running extreme from each block's start
-// and from its end, blocks of the window's width).
-void sliding(std::vector<double>& row, int half, bool minimum) {
+// and from its end, blocks of the window's width). `v`, `from_start`, `from_end`: scratch
+// rows, kept by the caller across rows.
+struct SlidingScratch {
+  std::vector<double> v, from_start, from_end;
+};
+void sliding(std::vector<double>& row, int half, bool minimum, SlidingScratch& scratch) {
   const int n = static_cast<int>(row.size());
   if (n == 0) return;
   const double none = minimum ? INFINITY : -INFINITY;
@@ -33,8 +37,12 @@ void sliding(std::vector<double>& row, int half, bool minimum) {
   const int w = 2 * half + 1;
   const int m = n + 2 * half;  // padded with `none` on both sides
   const int padded = ((m + w - 1) / w) * w;
-  std::vector<double> v(static_cast<std::size_t>(padded), none), from_start(v.size()),
-      from_end(v.size());
+  std::vector<double>& v = scratch.v;
+  std::vector<double>& from_start = scratch.from_start;
+  std::vector<double>& from_end = scratch.from_end;
+  v.assign(static_cast<std::size_t>(padded), none);
+  from_start.resize(v.size());
+  from_end.resize(v.size());
   for (int i = 0; i < n; ++i) {
     const double x = row[static_cast<std::size_t>(i)];
     v[static_cast<std::size_t>(i + half)] = std::isfinite(x) ? x : none;
@@ -60,10 +68,11 @@ void sliding(std::vector<double>& row, int half, bool minimum) {
 // Separable filter of a grid (nx × ny, row-major by y).
 void filter2d(std::vector<double>& grid, int nx, int ny, int half, bool minimum) {
   std::vector<double> row;
+  SlidingScratch scratch;
   for (int y = 0; y < ny; ++y) {
     row.assign(grid.begin() + static_cast<std::ptrdiff_t>(y) * nx,
                grid.begin() + static_cast<std::ptrdiff_t>(y + 1) * nx);
-    sliding(row, half, minimum);
+    sliding(row, half, minimum, scratch);
     std::copy(row.begin(), row.end(), grid.begin() + static_cast<std::ptrdiff_t>(y) * nx);
   }
   for (int x = 0; x < nx; ++x) {
@@ -72,7 +81,7 @@ void filter2d(std::vector<double>& grid, int nx, int ny, int half, bool minimum)
       row[static_cast<std::size_t>(y)] =
           grid[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) +
                static_cast<std::size_t>(x)];
-    sliding(row, half, minimum);
+    sliding(row, half, minimum, scratch);
     for (int y = 0; y < ny; ++y)
       grid[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) +
            static_cast<std::size_t>(x)] = row[static_cast<std::size_t>(y)];
@@ -118,12 +127,17 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
   const double cells_y = std::floor((y1 - y0) / cell) + 1;
   if (cells_x * cells_y > 5e7) return mask;  // a grid that large means a wrong cell size
   const int nx = static_cast<int>(cells_x), ny = static_cast<int>(cells_y);
-  auto cell_of = [&](const Vec3& p) {
+  // Each finite point's cell, once for every step.
+  std::vector<std::size_t> cell_of(points.size(), 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    if (!p.allFinite()) continue;
+    mask[i] = 1;
     const int x = std::min(nx - 1, static_cast<int>((p.x() - x0) / cell));
     const int y = std::min(ny - 1, static_cast<int>((p.y() - y0) / cell));
-    return static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x);
-  };
-  for (std::size_t i = 0; i < points.size(); ++i) mask[i] = points[i].allFinite() ? 1 : 0;
+    cell_of[i] =
+        static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x);
+  }
   const int widest = std::max(
       3, static_cast<int>(std::min(std::ceil(options.window / cell), 2.0 * (nx + ny))) | 1);
   std::vector<double> surface(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
@@ -131,8 +145,7 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
   for (int width = 3;; width = std::min(2 * width - 1, widest)) {
     std::fill(surface.begin(), surface.end(), INFINITY);
     for (std::size_t i = 0; i < points.size(); ++i) {
-      if (mask[i])
-        surface[cell_of(points[i])] = std::min(surface[cell_of(points[i])], points[i].z());
+      if (mask[i]) surface[cell_of[i]] = std::min(surface[cell_of[i]], points[i].z());
     }
     const int half = width / 2;
     filter2d(surface, nx, ny, half, true);
@@ -143,7 +156,7 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
                                  std::max(options.height, options.max_height));
     for (std::size_t i = 0; i < points.size(); ++i) {
       if (!mask[i]) continue;
-      const double g = surface[cell_of(points[i])];
+      const double g = surface[cell_of[i]];
       if (std::isfinite(g) && points[i].z() - g > threshold) mask[i] = 0;
     }
     if (width >= widest) break;

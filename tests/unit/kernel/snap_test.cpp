@@ -19,17 +19,10 @@ namespace {
 
 using test::box;
 using test::cylinder;
+using test::placement_rows;
 
 Location turned(const Vec3& t, const Vec3& axis, double angle) {
   return Location::translation(t) * Location::rotation(Vec3::Zero(), axis, angle);
-}
-
-// A placement as a fit writes it: the 3×4 matrix, row by row.
-Location fitted_at(const std::array<double, 12>& rows) {
-  auto at = Location::from_matrix(
-      Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(rows.data()));
-  EXPECT_TRUE(at.ok()) << at.error().message;
-  return at.value();
 }
 
 // A fitted column (0.7 mrad off vertical) and a fitted beam whose top lies 0.1 mm under the
@@ -185,7 +178,7 @@ TEST(Snap, FacesMoveAlongTheirOwnNormals) {
         -0.0008593847559569589, -0.9999875141236128, 0.004922708067522985, 4.00142945982584}},
   };
   std::vector<PrimitiveSpec> fitted;
-  for (const Beam& b : beams) fitted.push_back(box(b.size, fitted_at(b.placement)));
+  for (const Beam& b : beams) fitted.push_back(box(b.size, placement_rows(b.placement)));
   auto snapped = snap_primitives(fitted, {0.005, 0.5 * std::numbers::pi / 180});
   ASSERT_TRUE(snapped.ok()) << snapped.error().message;
   const PrimitiveSpec& first = snapped.value()[1];
@@ -217,22 +210,22 @@ TEST(Snap, ConeIntoTwoBeamsEndToEndFusesInEveryOrder) {
   cone.radius = 0.10017057544401194;
   cone.radius2 = 0.2405488152928099;
   cone.height = 2.0301267281829576;
-  cone.placement = fitted_at({-0.9974979925731589, -0.0010528628091642836, 0.0706869598470857,
-                              -9.003787101861061, -0.0706948004631064, 0.014855810211168134,
-                              -0.9973873621068452, -9.879500322509044, 0.0, -0.9998890920411496,
-                              -0.014893072789896942, 3.8166311922937064});
+  cone.placement = placement_rows({-0.9974979925731589, -0.0010528628091642836, 0.0706869598470857,
+                                   -9.003787101861061, -0.0706948004631064, 0.014855810211168134,
+                                   -0.9973873621068452, -9.879500322509044, 0.0,
+                                   -0.9998890920411496, -0.014893072789896942, 3.8166311922937064});
   const PrimitiveSpec first =
       box(Vec3(2.99715097763713, 0.3813512881283503, 0.19837187206383017),
-          fitted_at({0.9999988558607431, 0.0014566956497593746, 0.0004078173473007829,
-                     -12.002166481115653, -0.00048654506860725373, 0.05446054933658837,
-                     0.9985158045017881, -12.106184513293204, 0.0014323236718707462,
-                     -0.9985148604821767, 0.05446119577422078, 3.9976078899442653}));
+          placement_rows({0.9999988558607431, 0.0014566956497593746, 0.0004078173473007829,
+                          -12.002166481115653, -0.00048654506860725373, 0.05446054933658837,
+                          0.9985158045017881, -12.106184513293204, 0.0014323236718707462,
+                          -0.9985148604821767, 0.05446119577422078, 3.9976078899442653}));
   const PrimitiveSpec second =
       box(Vec3(3.0065828244493904, 0.2931178585683478, 0.20392432507596028),
-          fitted_at({0.999998855860743, -0.0014580483568770316, -0.00040295433214636235,
-                     -9.004522833804597, -0.0004865450686072534, -0.057792122946088376,
-                     -0.9983285199769066, -11.886018099682834, 0.0014323236718707462,
-                     0.9983275738054987, -0.0577927662300896, 3.7161607597206148}));
+          placement_rows({0.999998855860743, -0.0014580483568770316, -0.00040295433214636235,
+                          -9.004522833804597, -0.0004865450686072534, -0.057792122946088376,
+                          -0.9983285199769066, -11.886018099682834, 0.0014323236718707462,
+                          0.9983275738054987, -0.0577927662300896, 3.7161607597206148}));
   // In every order: the section along the edge is that edge (sections.cpp), and where a fuse
   // still fails, the other order is tried (fuse_tree.h).
   for (const auto& order : {std::vector{first, cone, second}, std::vector{cone, second, first},
