@@ -12,6 +12,7 @@
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/las.h"
 #include "csgtile/geo/point_reader.h"
+#include "csgtile/geo/scene_units.h"
 
 namespace csgtile::worker::city {
 
@@ -58,6 +59,55 @@ Failure append_points(geo::PointReader& reader, const kernel::Vec3& origin, bool
       returns.push_back(p.number_of_returns);
     }
   }
+}
+
+// The fit measures in metres (every fit option is a length in metres): the map from the
+// tile's CRS units to metres, diag(h, h, v). Metres for a tile without a CRS. A geographic
+// or geocentric CRS has no such map: an InputInvalid failure naming it.
+Failure units_to_metres(const std::optional<geo::Crs>& crs, geo::UnitScale& out) {
+  out = {};
+  if (!crs) return {};
+  if (!crs->is_projected()) {
+    const bool geographic = crs->kind == geo::CrsKind::Geographic;
+    return {ErrorCode::InputInvalid,
+            "the tile's CRS (" + geo::describe_crs(*crs) + ") is " +
+                (geographic ? "geographic: its x and y are angles"
+                            : "geocentric: its z is not the height") +
+                ", and the fit measures lengths and heights in a projected CRS; reproject the "
+                "tile to one (e.g. its UTM zone) first"};
+  }
+  out = {crs->linear_unit.metres, crs->z_unit_metres()};
+  return {};
+}
+
+// The fit's output, measured in metres, given back in the tile's units (`to_crs`): the
+// primitives, the segments' surfaces and the structure points. A primitive with no exact
+// form in those units (a sphere where heights count in another unit) is a rejection naming
+// why.
+void output_to_crs_units(fit::FitOutput& f, const geo::UnitScale& to_crs) {
+  if (to_crs.identity()) return;
+  std::vector<geo::ScenePrimitive> kept;
+  kept.reserve(f.primitives.size());
+  for (const geo::ScenePrimitive& p : f.primitives) {
+    auto scaled = geo::scaled_primitive(p, to_crs);
+    if (scaled.ok()) {
+      kept.push_back(std::move(scaled).value());
+      continue;
+    }
+    const long long points = p.quality ? p.quality->inliers : 0;
+    f.rejected.push_back({p.id, scaled.error().message, points});
+    --f.per_type[static_cast<std::size_t>(p.spec.type)];
+    f.assigned_points -= points;
+    f.unassigned_points += points;
+  }
+  f.primitives = std::move(kept);
+  for (fit::Segment& s : f.segments) {
+    s.surface.point = to_crs.apply(s.surface.point);
+    s.surface.radius *= to_crs.horizontal;
+    s.surface.radius2 *= to_crs.horizontal;
+    s.rms *= to_crs.horizontal;
+  }
+  for (kernel::Vec3& p : f.structure_points) p = to_crs.apply(p);
 }
 
 }  // namespace
@@ -115,9 +165,11 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     given = std::move(parsed).value();
     crs_text = crs_label(*given);
   }
+  std::optional<geo::Crs> used = given;
   if (las != nullptr) {
     origin = las->header().offset;
     auto own = geo::las_file_crs(las->crs(), "");
+    if (!given && own.ok()) used = own.value();
     if (given && own.ok()) {
       // The run's CRS is for tiles without one; a tile that says otherwise is an error.
       if (auto diff = geo::crs_difference(own.value(), *given)) {
@@ -129,6 +181,8 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
       crs_text = crs_label(own.value());
     }
   }
+  geo::UnitScale to_metres;
+  if (Failure f = units_to_metres(used, to_metres); !f.ok()) return f;
   std::vector<kernel::Vec3> raw;
   std::vector<std::uint8_t> classes, returns;
   const bool has_classes = reader.info().fields.classification;
@@ -219,6 +273,8 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
   // Footprints meeting the points' extent, cut to it, in the tile's frame; among neighbours,
   // those meeting the read region, each also cut to the tile's extent.
   std::vector<geo::Footprint> buildings;
+  // How far a footprint's points reach past it (kFootprintBuffer, metres), in the tile's units.
+  const double buffer = fit::kFootprintBuffer / to_metres.horizontal;
   if (!footprints.source.empty()) {
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
     for (const auto& p : std::span(raw).first(own_points)) {
@@ -237,10 +293,10 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
         // extents grown by the footprint buffer: no slit along the seams between them), and
         // each also cut to this tile's extent (for a building fitted in parts).
         // Footprints whose buffer (eaves) reaches into the read region hold some of its points.
-        query.bbox = grown(around->where.read_region(), fit::kFootprintBuffer);
-        query.clip = {grown(around->where.self.extent, fit::kFootprintBuffer)};
+        query.bbox = grown(around->where.read_region(), buffer);
+        query.clip = {grown(around->where.self.extent, buffer)};
         for (const TileExtent& t : around->where.neighbours) {
-          query.clip.push_back(grown(t.extent, fit::kFootprintBuffer));
+          query.clip.push_back(grown(t.extent, buffer));
         }
         query.cut = around->where.self.extent;
       }
@@ -273,9 +329,9 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     const kernel::Vec2 o2(o.x(), o.y());
     for (geo::Footprint& b : buildings) {
       // From the footprint as every tile reads it (its envelope before any cut).
-      const kernel::Vec2 buffer(fit::kFootprintBuffer, fit::kFootprintBuffer);
+      const kernel::Vec2 reach(buffer, buffer);
       const kernel::Vec2 lo(b.envelope[0], b.envelope[1]), hi(b.envelope[2], b.envelope[3]);
-      fit::ShareKind kind = footprint_share(around->where, lo - buffer, hi + buffer);
+      fit::ShareKind kind = footprint_share(around->where, lo - reach, hi + reach);
       if (kind == fit::ShareKind::own_points && b.cut.empty()) kind = fit::ShareKind::none;
       if (kind == fit::ShareKind::own_points) {
         b.polygons = b.cut;  // this tile's part
@@ -286,9 +342,26 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
     }
     share.foreign = foreign;
     share.footprints = kinds;
-    share.clusters = [around, o2](const kernel::Vec2& lo, const kernel::Vec2& hi, double tol) {
-      return cluster_share(around->where, lo + o2, hi + o2, tol);
+    // The fit measures in metres: back to the tile's units.
+    const double h = to_metres.horizontal;
+    share.clusters = [around, o2, h](const kernel::Vec2& lo, const kernel::Vec2& hi, double tol) {
+      return cluster_share(around->where, lo / h + o2, hi / h + o2, tol / h);
     };
+  }
+
+  // The points and footprints in metres (tile-local): the fit's lengths are metres.
+  if (!to_metres.identity()) {
+    for (auto& p : raw) p = to_metres.apply(p);
+    for (auto& b : buildings) {
+      for (auto* polygons : {&b.polygons, &b.cut}) {
+        for (auto& polygon : *polygons) {
+          for (auto& q : polygon.outer) q *= to_metres.horizontal;
+          for (auto& ring : polygon.holes) {
+            for (auto& q : ring) q *= to_metres.horizontal;
+          }
+        }
+      }
+    }
   }
 
   // Returns per pulse: only formats that record them (every LAS and LAZ).
@@ -297,6 +370,7 @@ Failure fit_tile(TileSource source, const std::string& name, const fit::FitPipel
                                      around != nullptr ? &share : nullptr);
   if (!fitted.ok()) return {ErrorCode::ConfigInvalid, fitted.error().message};
   out.output = std::move(fitted).value();
+  output_to_crs_units(out.output, to_metres.inverse());
   out.origin = origin;
   out.scene.name = name;
   out.scene.seed = options.ransac.seed;
