@@ -98,13 +98,19 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
                               const GroundOptions& options) {
   std::vector<char> mask(points.size(), 0);
   if (!options.enabled || points.empty()) return mask;
+  // A cloud classified for its ground alone (classes 0-2) may have left ground unclassified
+  // (a flight line or a stretch the classifier did not reach): its class 2 and what the
+  // filter below takes for ground among every point.
+  std::vector<char> classified_ground;
   if (options.use_classification && classes.size() == points.size()) {
-    bool any = false;
+    bool any = false, others = false;
     for (std::size_t i = 0; i < points.size(); ++i) {
       mask[i] = classes[i] == 2 ? 1 : 0;
       any = any || mask[i] != 0;
+      others = others || classes[i] > 2;
     }
-    if (any) return mask;
+    if (any && others) return mask;
+    if (any) classified_ground = mask;
   }
   // Progressive morphological filter (Zhang et al. 2003): the grid of the lowest ground
   // points opened by squares of 3, 5, 9, 17 … cells up to `window`. At each step a point more
@@ -161,6 +167,9 @@ std::vector<char> ground_mask(std::span<const Vec3> points, std::span<const std:
     }
     if (width >= widest) break;
     previous = width;
+  }
+  for (std::size_t i = 0; i < classified_ground.size(); ++i) {
+    mask[i] = static_cast<char>(mask[i] != 0 || classified_ground[i] != 0);
   }
   return mask;
 }

@@ -62,11 +62,13 @@ struct NormalOptions {
 std::vector<kernel::Vec3> estimate_normals(std::span<const kernel::Vec3> points,
                                            const NormalOptions& options);
 
-/// Ground separation: LAS class 2 when the cloud has classes and any point carries it, else a
-/// progressive morphological filter: the grid (`cell`) of the lowest points opened by squares
-/// growing from 3 cells to `window` (wider than the widest building); at each step a point
-/// farther above the opened surface than `height` (the first step), then `height` + `slope` ×
-/// the window's growth, at most `max_height`, is not ground.
+/// Ground separation: LAS class 2 when the cloud has classes, some point carries it and some
+/// a class above 2, else a progressive morphological filter: the grid (`cell`) of the lowest
+/// points opened by squares growing from 3 cells to `window` (wider than the widest
+/// building); at each step a point farther above the opened surface than `height` (the first
+/// step), then `height` + `slope` × the window's growth, at most `max_height`, is not ground.
+/// A cloud classified for its ground alone (classes 0-2) gets its class 2 and the filter's
+/// ground among all its points: such a classification may have left ground unclassified.
 struct GroundOptions {
   bool enabled = true;
   bool use_classification = true;
