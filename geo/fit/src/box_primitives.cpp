@@ -479,9 +479,9 @@ void Builder::boxes() {
       const double least = std::max(o_.min_box_thickness, 3.0 * ransac_.epsilon);
       return c1 - c0 < least || c1 - c0 < 4.0 * robust_noise(points_, seed);
     };
-    if (o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ &&
-        std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width &&
-        no_own_depth()) {
+    const bool roof_wide =
+        std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width;
+    if (o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ && roof_wide && no_own_depth()) {
       // A roof seen from above: down to the terrain under it. Only for roofs wide enough to
       // be a building: a beam's underside seen from below has no depth of its own either.
       const Vec3 centre = seed.origin + 0.5 * (seed.umin + seed.umax) * seed.u +
@@ -505,6 +505,35 @@ void Builder::boxes() {
       }
     }
     if (c1 - c0 < o_.min_box_thickness) continue;
+    // Over a terrain (an airborne scan), a plane as wide as a building whose only depth is its
+    // own noise, and that did not reach down to the terrain above, is a surface seen from one
+    // side — a pitched roof whose building no other step made, or raised ground — not a box a
+    // few centimetres thick floating over the terrain.
+    if (o_.ground != nullptr && roof_wide && no_own_depth()) {
+      // Named by its height over the terrain around it.
+      double top = -INFINITY;
+      Vec3 centre = Vec3::Zero();
+      for (const double a : {seed.umin, seed.umax}) {
+        for (const double b : {seed.vmin, seed.vmax}) {
+          const Vec3 w = seed.origin + a * seed.u + b * seed.v;
+          top = std::max(top, w.z());
+          centre += 0.25 * w;
+        }
+      }
+      const double reach =
+          0.5 * std::hypot(seed.umax - seed.umin, seed.vmax - seed.vmin) + 2.0 * o_.ground->cell;
+      const double terrain = o_.ground->lowest_near(centre.x(), centre.y(), reach);
+      const bool low = std::isfinite(terrain) && top - terrain < o_.min_building_height;
+      out_.rejected.push_back(
+          {"box from plane " + std::to_string(seed.shape),
+           low ? "no box: a surface with no depth of its own just over the terrain: raised "
+                 "ground, no building"
+               : "no box: a surface with no depth of its own over the terrain: a roof seen "
+                 "from one side, its building not made",
+           static_cast<long long>(seed.members.size())});
+      seed.used = true;
+      continue;
+    }
     // Extents: the seed's rectangle, widened across by the opposite face's points and along
     // its length over the points of the box's long faces (a face partly shadowed by an
     // obstacle in front of it, or cut by a column, is completed by the others).

@@ -609,6 +609,47 @@ TEST(FitPrimitives, BeamUndersideIsNoBuildingOverTheGround) {
   EXPECT_TRUE(fitted.primitives.empty());
 }
 
+// A pitched roof seen from the air twice, by two flight strips 6 cm apart in height (strips
+// are registered to a few centimetres), whose building no other step makes: a surface with no
+// depth of its own, not a box 6 cm thick floating 8 m over the terrain (as on the ISPRS
+// Stuttgart site, pcl/CSite3_orig-utm.pcd, where twelve such slabs stood on roofs and streets).
+TEST(FitPrimitives, RoofSeenTwiceIsNoSlabOverTheTerrain) {
+  const Vec3 corner(0, 0, 8), along(10, 0, 0), up_slope(0, 4, 2);
+  Cloud c = testing::rectangle_cloud(corner, along, up_slope, 0.3, 0.01, 21);
+  const Vec3 n = along.cross(up_slope).normalized();
+  const Cloud second = testing::rectangle_cloud(corner - 0.06 / n.z() * Vec3::UnitZ(), along,
+                                                up_slope, 0.3, 0.01, 22);
+  c.points.insert(c.points.end(), second.points.begin(), second.points.end());
+  RansacOptions o;
+  o.epsilon = 0.02;
+  o.min_points = 40;
+  o.seed = 3;
+  const auto normals = estimate_normals(c.points, {});
+  const auto shapes = detect_shapes(c.points, normals, o);
+  ASSERT_TRUE(shapes.ok());
+  GroundGrid ground;
+  ground.x0 = -5;
+  ground.y0 = -5;
+  ground.cell = 1.0;
+  ground.nx = ground.ny = 20;
+  ground.z.assign(400, 0.0);
+  PrimitiveOptions options;
+  options.ground = &ground;
+  options.roof_partition = false;  // no building step takes it
+  options.roof_parts = false;
+  options.extrusions = false;
+  options.blocks = false;
+  const auto fitted = primitives_from_shapes(c.points, normals, shapes.value(), options, o, 0);
+  EXPECT_TRUE(boxes_of(fitted).empty())
+      << boxes_of(fitted).size() << " boxes, thinnest "
+      << (boxes_of(fitted).empty() ? 0.0 : boxes_of(fitted)[0].size.minCoeff());
+  bool named = false;
+  for (const auto& r : fitted.rejected) {
+    named = named || r.reason.find("a roof seen from one side") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << rejections(fitted);
+}
+
 TEST(FitPrimitives, CylinderIsBoundedByItsInliers) {
   const Cloud c = testing::cylinder_cloud(Vec3(1, 1, 0), Vec3::UnitZ(), 0.15, 3.7, 0.0,
                                           2.0 * std::numbers::pi, 5000, 0.003, 4);
