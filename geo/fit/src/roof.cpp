@@ -27,6 +27,48 @@ namespace csgtile::fit::detail {
 
 namespace {
 
+// Whether segments ab and cd share a point (crossing, touching or overlapping).
+bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const double o1 = cross2(a, b, c), o2 = cross2(a, b, d), o3 = cross2(c, d, a),
+               o4 = cross2(c, d, b);
+  const auto opposite = [](double x, double y) { return (x > 0 && y < 0) || (x < 0 && y > 0); };
+  if (opposite(o1, o2) && opposite(o3, o4)) return true;
+  const auto on = [](const Vec2& p, const Vec2& q, const Vec2& r) {  // r on segment pq
+    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
+           std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
+  };
+  return (o1 == 0 && on(a, b, c)) || (o2 == 0 && on(a, b, d)) || (o3 == 0 && on(c, d, a)) ||
+         (o4 == 0 && on(c, d, b));
+}
+
+// Per edge of `ring` (edge k from vertex k): 1 when it meets an edge other than its
+// neighbours, or folds back onto one. Zero-length edges (a vertex repeated) are no edges: the
+// edges on either side of them are neighbours.
+std::vector<char> crossing_edges(const std::vector<Vec2>& ring) {
+  const std::size_t n = ring.size();
+  std::vector<char> out(n, 0);
+  std::vector<std::size_t> edge;  // the edges of non-zero length, in order
+  for (std::size_t k = 0; k < n; ++k) {
+    if ((ring[(k + 1) % n] - ring[k]).norm() > 1e-9) edge.push_back(k);
+  }
+  const std::size_t m = edge.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vec2 &a = ring[edge[i]], &b = ring[(edge[i] + 1) % n];
+    const std::size_t next = edge[(i + 1) % m];
+    const Vec2& c = ring[(next + 1) % n];
+    if (m > 2 && cross2(b, a, c) == 0.0 && (a - b).dot(c - b) > 0.0) {
+      out[edge[i]] = out[next] = 1;
+    }
+    for (std::size_t j = i + 2; j < m; ++j) {
+      if (i == 0 && j == m - 1) continue;
+      if (segments_meet(a, b, ring[edge[j]], ring[(edge[j] + 1) % n])) {
+        out[edge[i]] = out[edge[j]] = 1;
+      }
+    }
+  }
+  return out;
+}
+
 using kernel::PrimitiveType;
 using kernel::Vec2;
 
@@ -355,7 +397,39 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       offset.erase(offset.begin() + at);
       simple.erase(simple.begin() + at);
     }
-    rings.push_back(std::move(refined));
+    // A building's outline (with heights: the partition's bounds) must not cross itself:
+    // edges moved onto the outermost points or the facades can cross where the outline turns
+    // back on itself (the inner corner of an L whose arms' edges meet at a grazing angle), and
+    // a ring crossing itself winds around part of the building twice, which the partition
+    // inside it leaves out. The corners of the edges that cross go back to the simplified
+    // trace's (on the grid's lines) until none does; else the simplified trace; else no ring
+    // (the partition's cells are the outline). A candidate's outline (a roof part, a flat
+    // roof) stays as it is: one crossing itself is a ragged patch of points the kernel rejects.
+    if (heights == nullptr) {
+      rings.push_back(std::move(refined));
+      continue;
+    }
+    for (std::size_t pass = 0; pass < refined.size(); ++pass) {
+      const std::vector<char> crossing = crossing_edges(refined);
+      bool moved = false;
+      for (std::size_t k = 0; k < refined.size(); ++k) {
+        if (!crossing[k]) continue;
+        for (const std::size_t at : {k, (k + 1) % refined.size()}) {
+          moved = moved || refined[at] != simple[at];
+          refined[at] = simple[at];
+        }
+      }
+      if (!moved) break;
+    }
+    const auto crosses = [](const std::vector<Vec2>& candidate) {
+      const auto edges = crossing_edges(candidate);
+      return std::find(edges.begin(), edges.end(), 1) != edges.end();
+    };
+    if (!crosses(refined)) {
+      rings.push_back(std::move(refined));
+    } else if (!crosses(simple)) {
+      rings.push_back(std::move(simple));
+    }
   }
   if (rings.empty()) {
     why = "no outline from its points";
