@@ -529,6 +529,66 @@ TEST(CityJsonSeq, PolygonsWithFeaturesOfAFewUnitsArePublishedAsTriangles) {
   EXPECT_EQ(city_object(f)["geometry"][0]["type"], "Solid");
 }
 
+// A tilted disc drawn finer than the units hold is published as its triangles. A cone fitted
+// to a tree in a tile in feet: its base, 0.8 units in radius, drawn at the 2.4° steps its
+// 20-unit top needs, has ears under one unit high; as one polygon, val3dity's triangulation
+// kept them, the rounding turned their normals 30° apart (NON_PLANAR_POLYGON_NORMALS_DEVIATION)
+// and the building was invalid. Upright, the disc's points share one height and it stays one
+// polygon; so does the top, drawn by the chordal tolerance (ears of about ten units).
+TEST(CityJsonSeq, TiltedDiscsDrawnFinerThanTheUnitsArePublishedAsTriangles) {
+  const auto cone = [](const kernel::Location& at) {
+    kernel::PrimitiveSpec spec;
+    spec.type = kernel::PrimitiveType::Cone;
+    spec.radius = 0.8;
+    spec.radius2 = 20.0;
+    spec.height = 10.0;
+    spec.placement = at;
+    return spec;
+  };
+  const kernel::Location level = kernel::Location::translation({3.0, 2.0, 1.0});
+  const kernel::Location tilted =
+      level * kernel::Location::rotation(Vec3::Zero(), Vec3(1.0, 0.5, 0.0), 0.35);
+  CityJsonOptions options;
+  options.scale = 0.001;
+  // The polygons (more than three points) of the published cone, and their thinnest ear (a
+  // point's distance to the chord of its neighbours), in units.
+  const auto polygons_of = [&](const kernel::PrimitiveSpec& spec, std::size_t& polygons,
+                               double& thinnest_ear) {
+    const std::vector<IndexObject> objects = {object("c", leaf(spec, "c"))};
+    const auto text = cityjson_seq(objects, options, nullptr);
+    ASSERT_TRUE(text.ok()) << text.error().message;
+    const Sequence s = parse(text.value());
+    ASSERT_EQ(s.features.size(), 1u);
+    const auto vertices = s.features[0]["vertices"].get<std::vector<std::array<long long, 3>>>();
+    polygons = 0;
+    thinnest_ear = INFINITY;
+    for (const FileShell& shell : shells_of(s.features[0])) {
+      EXPECT_TRUE(shell_closed(shell));
+      for (const Json& surface : shell.surfaces) {
+        const auto ring = surface[0].get<std::vector<std::size_t>>();
+        if (ring.size() == 3) continue;
+        ++polygons;
+        const auto at = [&](std::size_t i) {
+          const auto& v = vertices[ring[i % ring.size()]];
+          return Vec3(static_cast<double>(v[0]), static_cast<double>(v[1]),
+                      static_cast<double>(v[2]));
+        };
+        for (std::size_t i = 0; i < ring.size(); ++i) {
+          const Vec3 a = at(i + ring.size() - 1), b = at(i), c = at(i + 1);
+          thinnest_ear = std::min(thinnest_ear, (b - a).cross(c - a).norm() / (c - a).norm());
+        }
+      }
+    }
+  };
+  std::size_t polygons = 0;
+  double ear = 0.0;
+  polygons_of(cone(tilted), polygons, ear);
+  EXPECT_EQ(polygons, 1u);  // the top
+  EXPECT_GE(ear, 5.0);
+  polygons_of(cone(level), polygons, ear);
+  EXPECT_EQ(polygons, 2u);  // level discs: one height, nothing to turn
+}
+
 // Where welding would open a shell (a thin pipe whose opposite sides are a unit apart), the
 // object is written unwelded, still a closed solid, and without triangles on a line.
 TEST(CityJsonSeq, WeldingNeverOpensAClosedShell) {

@@ -16,6 +16,7 @@
 #include <unordered_set>
 
 #include "csgtile/kernel/check.h"
+#include "csgtile/kernel/curve.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/face_rings.h"
 #include "csgtile/kernel/mass_properties.h"
@@ -193,6 +194,45 @@ bool fragile_polygon(const std::vector<Ring>& rings) {
         }
       }
     }
+  }
+  return false;
+}
+
+// Whether a planar face has a curved edge (a circle, an ellipse) drawn finer than the
+// quantisation holds: three consecutive points of it whose middle lies closer to the chord of
+// the other two than half kFragileUnits (the rounding of the three, up to a unit in space,
+// then turns that ear's normal by up to 10°, and two ears' by up to 20°; the chordal
+// tolerance alone draws ears of about ten units). Such a polygon's points are nearly cocircular, a
+// validator's Delaunay triangulation of it keeps those thin ears, and the rounding turns their
+// normals (a disc of 0.25 m radius drawn at 2.4° steps under millimetre units: ears under one
+// unit high, normals 30° apart under val3dity). It is published as triangles instead.
+bool finely_curved(const Shape& face, const kernel::EdgePoints& edge_points, double scale) {
+  const double limit = 0.5 * kFragileUnits * scale;
+  for (const Shape& edge : kernel::Explorer(face, ShapeKind::Edge)) {
+    const auto& data = edge.body().edge();
+    if (data == nullptr || data->degenerate() || data->curve->kind() == kernel::CurveKind::Line) {
+      continue;
+    }
+    const std::vector<Vec3> pts = edge_points(edge);
+    for (std::size_t i = 1; i + 1 < pts.size(); ++i) {
+      const Vec3 chord = pts[i + 1] - pts[i - 1];
+      const double len = chord.norm();
+      if (!(len > 0.0)) continue;
+      if ((pts[i] - pts[i - 1]).cross(chord).norm() / len < limit) return true;
+    }
+  }
+  return false;
+}
+
+// Whether every point of a quantised polygon has the same x, the same y or the same z: it
+// lies in one plane of the grid, and any triangulation of it does, whatever the rounding.
+bool in_grid_plane(const std::vector<Ring>& rings) {
+  for (int axis = 0; axis < 3; ++axis) {
+    bool same = true;
+    for (const Ring& ring : rings) {
+      for (const Point& p : ring) same = same && p[axis] == rings[0][0][axis];
+    }
+    if (same) return true;
   }
   return false;
 }
@@ -383,7 +423,8 @@ kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJson
           for (const Vec3& p : ring) q.push_back(weld(*quantise(p, options.scale)));
           s.rings.push_back(without_repeats(std::move(q)));
         }
-        if (clean_polygon(s.rings) && !fragile_polygon(s.rings)) {
+        if (clean_polygon(s.rings) && !fragile_polygon(s.rings) &&
+            (in_grid_plane(s.rings) || !finely_curved(face, edge_points, options.scale))) {
           shell.push_back(std::move(s));
           return;
         }
