@@ -307,7 +307,25 @@ class EarClipper {
 
 PolygonTriangulation triangulate_polygon(const std::vector<std::vector<Vec2>>& loops) {
   if (loops.empty()) return {{}, false};
-  return EarClipper(loops).run();
+  PolygonTriangulation first = EarClipper(loops).run();
+  if (first.complete) return first;
+  // Bridges are cast along +x: where holes' edges and an outer vertex lie on one horizontal
+  // line to within a few ulps (faces of buildings built on a grid), a bridge runs along a
+  // hole's edge and every ear left has a bridge end on its diagonal. The same loops in a
+  // turned frame have no such near-ties; a rotation keeps the points, their order and every
+  // triangle's orientation. Deterministic: the first frame that meshes wins.
+  for (const double angle : {0.3, 1.1}) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    std::vector<std::vector<Vec2>> turned(loops.size());
+    for (std::size_t l = 0; l < loops.size(); ++l) {
+      for (const Vec2& p : loops[l]) {
+        turned[l].emplace_back(c * p.x() - s * p.y(), s * p.x() + c * p.y());
+      }
+    }
+    PolygonTriangulation again = EarClipper(turned).run();
+    if (again.complete) return again;
+  }
+  return first;
 }
 
 }  // namespace csgtile::kernel::detail
