@@ -19,35 +19,16 @@
 #include <vector>
 
 #include "csgtile/fit/segment.h"
-#include "csgtile/geo/point_reader.h"
 #include "test_support.h"
+#include "tile_reader.h"
 
 namespace csgtile::fit {
 namespace {
 
 using kernel::Vec3;
 
-struct Tile {
-  std::vector<Vec3> points;
-  std::vector<std::uint8_t> classes;
-};
-
-std::optional<Tile> read_tile(const std::filesystem::path& path) {
-  auto reader = geo::open_point_file(path);
-  if (!reader.ok()) return std::nullopt;
-  Tile tile;
-  geo::PointBatch batch;
-  for (;;) {
-    auto n = reader.value()->read(batch, 65536);
-    if (!n.ok()) return std::nullopt;
-    if (n.value() == 0) break;
-    for (const geo::Point& p : batch.points) {
-      tile.points.emplace_back(p.x, p.y, p.z);
-      tile.classes.push_back(p.classification);
-    }
-  }
-  return tile;
-}
+using Tile = testing::TilePoints;
+using testing::read_tile;
 
 // Type I: ground points the filter rejects; type II: other points it takes for ground.
 struct Agreement {

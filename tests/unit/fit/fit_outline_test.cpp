@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "csgtile/fit/segment.h"
-#include "csgtile/geo/point_reader.h"
 #include "csgtile/kernel/polygon2d.h"
 #include "test_support.h"
+#include "tile_reader.h"
 
 namespace csgtile::fit {
 namespace {
@@ -25,30 +25,7 @@ namespace {
 using kernel::Vec2;
 using kernel::Vec3;
 
-struct Tile {
-  std::vector<Vec3> points;  // less the origin below
-  std::vector<std::uint8_t> classes, returns;
-};
-
 constexpr double kX0 = 85000.0, kY0 = 447412.0;
-
-std::optional<Tile> read_tile(const std::filesystem::path& path) {
-  auto reader = geo::open_point_file(path);
-  if (!reader.ok()) return std::nullopt;
-  Tile tile;
-  geo::PointBatch batch;
-  for (;;) {
-    auto n = reader.value()->read(batch, 65536);
-    if (!n.ok()) return std::nullopt;
-    if (n.value() == 0) break;
-    for (const geo::Point& p : batch.points) {
-      tile.points.emplace_back(p.x - kX0, p.y - kY0, p.z);
-      tile.classes.push_back(p.classification);
-      tile.returns.push_back(p.number_of_returns);
-    }
-  }
-  return tile;
-}
 
 // Whether some extrusion or box of `out` stands over (x, y).
 bool under_model(const FitOutput& out, const Vec2& q) {
@@ -72,7 +49,7 @@ bool under_model(const FitOutput& out, const Vec2& q) {
 TEST(FitOutline, TheInnerCornerOfAnLIsModelled) {
   const auto path = test::shared_dir() / "data" / "3dfier" / "ahn3_cropped_2.las";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent (../shared/data)";
-  const auto tile = read_tile(path);
+  const auto tile = testing::read_tile(path, Vec3(kX0, kY0, 0.0));
   ASSERT_TRUE(tile.has_value()) << path;
   // Unclassified: the classes are only the measure's.
   auto out = fit_point_cloud(tile->points, {}, FitPipelineOptions{}, {}, tile->returns);

@@ -584,29 +584,40 @@ TEST(FitPrimitives, StripOfAColumnIsNoBox) {
   EXPECT_TRUE(said);
 }
 
+// Level terrain at z = 0 over [-5, n - 5] in x and y, one-metre cells.
+GroundGrid level_ground(int n) {
+  GroundGrid ground;
+  ground.x0 = -5;
+  ground.y0 = -5;
+  ground.cell = 1.0;
+  ground.nx = ground.ny = n;
+  ground.z.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), 0.0);
+  return ground;
+}
+
+// The primitives made of the shapes the RANSAC finds in `c` (normals estimated), `options`
+// over `ground`.
+FittedPrimitives fit_over(const Cloud& c, double epsilon, long long min_points,
+                          PrimitiveOptions options, const GroundGrid& ground) {
+  RansacOptions o;
+  o.epsilon = epsilon;
+  o.min_points = min_points;
+  o.seed = 3;
+  const auto normals = estimate_normals(c.points, {});
+  const auto shapes = detect_shapes(c.points, normals, o);
+  EXPECT_TRUE(shapes.ok());
+  if (!shapes.ok()) return {};
+  options.ground = &ground;
+  return primitives_from_shapes(c.points, normals, shapes.value(), options, o, 0);
+}
+
 // A beam's underside seen from below with terrain under it: no box from the
 // ground up to it (only roofs wide enough to be buildings reach down to the
 // terrain).
 TEST(FitPrimitives, BeamUndersideIsNoBuildingOverTheGround) {
   const Cloud c =
       testing::rectangle_cloud(Vec3(0, 0, 3.7), Vec3(3, 0, 0), Vec3(0, 0.2, 0), 0.01, 0.002, 13);
-  RansacOptions o;
-  o.epsilon = 0.01;
-  o.min_points = 50;
-  o.seed = 3;
-  const auto normals = estimate_normals(c.points, {});
-  const auto shapes = detect_shapes(c.points, normals, o);
-  ASSERT_TRUE(shapes.ok());
-  GroundGrid ground;
-  ground.x0 = -5;
-  ground.y0 = -5;
-  ground.cell = 1.0;
-  ground.nx = ground.ny = 10;
-  ground.z.assign(100, 0.0);
-  PrimitiveOptions options;
-  options.ground = &ground;
-  const auto fitted = primitives_from_shapes(c.points, normals, shapes.value(), options, o, 0);
-  EXPECT_TRUE(fitted.primitives.empty());
+  EXPECT_TRUE(fit_over(c, 0.01, 50, PrimitiveOptions{}, level_ground(10)).primitives.empty());
 }
 
 // A pitched roof seen from the air twice, by two flight strips 6 cm apart in height (strips
@@ -620,26 +631,12 @@ TEST(FitPrimitives, RoofSeenTwiceIsNoSlabOverTheTerrain) {
   const Cloud second = testing::rectangle_cloud(corner - 0.06 / n.z() * Vec3::UnitZ(), along,
                                                 up_slope, 0.3, 0.01, 22);
   c.points.insert(c.points.end(), second.points.begin(), second.points.end());
-  RansacOptions o;
-  o.epsilon = 0.02;
-  o.min_points = 40;
-  o.seed = 3;
-  const auto normals = estimate_normals(c.points, {});
-  const auto shapes = detect_shapes(c.points, normals, o);
-  ASSERT_TRUE(shapes.ok());
-  GroundGrid ground;
-  ground.x0 = -5;
-  ground.y0 = -5;
-  ground.cell = 1.0;
-  ground.nx = ground.ny = 20;
-  ground.z.assign(400, 0.0);
   PrimitiveOptions options;
-  options.ground = &ground;
   options.roof_partition = false;  // no building step takes it
   options.roof_parts = false;
   options.extrusions = false;
   options.blocks = false;
-  const auto fitted = primitives_from_shapes(c.points, normals, shapes.value(), options, o, 0);
+  const auto fitted = fit_over(c, 0.02, 40, options, level_ground(20));
   EXPECT_TRUE(boxes_of(fitted).empty())
       << boxes_of(fitted).size() << " boxes, thinnest "
       << (boxes_of(fitted).empty() ? 0.0 : boxes_of(fitted)[0].size.minCoeff());
