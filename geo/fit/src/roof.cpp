@@ -47,6 +47,7 @@ bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
 std::vector<char> crossing_edges(const std::vector<Vec2>& ring) {
   const std::size_t n = ring.size();
   std::vector<char> out(n, 0);
+  if (n < 3) return out;
   std::vector<std::size_t> edge;  // the edges of non-zero length, in order
   for (std::size_t k = 0; k < n; ++k) {
     if ((ring[(k + 1) % n] - ring[k]).norm() > 1e-9) edge.push_back(k);
