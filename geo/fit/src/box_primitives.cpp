@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -472,32 +473,38 @@ void Builder::boxes() {
     const Depth depth = box_depth(seed, margin, cos_normal);
     double c0 = depth.c0, c1 = depth.c1;
     // A roof's own noise band (a few stray points below or above it) is no depth: judged
-    // against the plane's noise (robust σ of the points over it) and epsilon, not only the
-    // thinnest box. The noise (a pass over the region) is measured only for horizontal seeds
-    // wide enough to be a roof, with a terrain to reach.
+    // against the plane's noise (robust σ of the points over it, a pass over the region,
+    // measured once and only when needed) and epsilon, not only the thinnest box.
+    std::optional<double> noise;
     const auto no_own_depth = [&] {
       const double least = std::max(o_.min_box_thickness, 3.0 * ransac_.epsilon);
-      return c1 - c0 < least || c1 - c0 < 4.0 * robust_noise(points_, seed);
+      if (c1 - c0 < least) return true;
+      if (!noise) noise = robust_noise(points_, seed);
+      return c1 - c0 < 4.0 * *noise;
     };
     const bool roof_wide =
         std::min(seed.umax - seed.umin, seed.vmax - seed.vmin) >= o_.min_building_width;
+    // The seed's rectangle: its corners, its centre, and how far around it the terrain is
+    // looked for (half its diagonal and two terrain cells).
+    std::array<Vec3, 4> seed_corners;
+    for (int k = 0; k < 4; ++k) {
+      seed_corners[static_cast<std::size_t>(k)] = seed.origin +
+                                                  (k < 2 ? seed.umin : seed.umax) * seed.u +
+                                                  (k % 2 == 0 ? seed.vmin : seed.vmax) * seed.v;
+    }
+    const Vec3 centre = seed.origin + 0.5 * (seed.umin + seed.umax) * seed.u +
+                        0.5 * (seed.vmin + seed.vmax) * seed.v;
+    const auto terrain_reach = [&] {
+      return 0.5 * std::hypot(seed.umax - seed.umin, seed.vmax - seed.vmin) + 2.0 * o_.ground->cell;
+    };
     if (o_.ground != nullptr && std::abs(seed.n.z()) >= cos_tol_ && roof_wide && no_own_depth()) {
       // A roof seen from above: down to the terrain under it. Only for roofs wide enough to
       // be a building: a beam's underside seen from below has no depth of its own either.
-      const Vec3 centre = seed.origin + 0.5 * (seed.umin + seed.umax) * seed.u +
-                          0.5 * (seed.vmin + seed.vmax) * seed.v;
-      const double radius =
-          0.5 * std::hypot(seed.umax - seed.umin, seed.vmax - seed.vmin) + 2.0 * o_.ground->cell;
       // The lowest terrain around the roof's footprint (not farther off), else near it.
-      std::vector<Vec2> corners;
-      for (const double a : {seed.umin, seed.umax}) {
-        for (const double b : {seed.vmin, seed.vmax}) {
-          const Vec3 w = seed.origin + a * seed.u + b * seed.v;
-          corners.emplace_back(w.x(), w.y());
-        }
-      }
-      double g = detail::lowest_ground_under(*o_.ground, detail::convex_hull(corners));
-      if (!std::isfinite(g)) g = o_.ground->lowest_near(centre.x(), centre.y(), radius);
+      std::vector<Vec2> footprint;
+      for (const Vec3& w : seed_corners) footprint.emplace_back(w.x(), w.y());
+      double g = detail::lowest_ground_under(*o_.ground, detail::convex_hull(footprint));
+      if (!std::isfinite(g)) g = o_.ground->lowest_near(centre.x(), centre.y(), terrain_reach());
       if (std::isfinite(g) && centre.z() - g >= o_.min_building_height) {
         const double c = (g - seed.origin.z()) * seed.n.z();
         c0 = std::min(0.0, c);
@@ -508,21 +515,11 @@ void Builder::boxes() {
     // Over a terrain (an airborne scan), a plane as wide as a building whose only depth is its
     // own noise, and that did not reach down to the terrain above, is a surface seen from one
     // side — a pitched roof whose building no other step made, or raised ground — not a box a
-    // few centimetres thick floating over the terrain.
+    // few centimetres thick floating over the terrain. Named by its height over the terrain.
     if (o_.ground != nullptr && roof_wide && no_own_depth()) {
-      // Named by its height over the terrain around it.
       double top = -INFINITY;
-      Vec3 centre = Vec3::Zero();
-      for (const double a : {seed.umin, seed.umax}) {
-        for (const double b : {seed.vmin, seed.vmax}) {
-          const Vec3 w = seed.origin + a * seed.u + b * seed.v;
-          top = std::max(top, w.z());
-          centre += 0.25 * w;
-        }
-      }
-      const double reach =
-          0.5 * std::hypot(seed.umax - seed.umin, seed.vmax - seed.vmin) + 2.0 * o_.ground->cell;
-      const double terrain = o_.ground->lowest_near(centre.x(), centre.y(), reach);
+      for (const Vec3& w : seed_corners) top = std::max(top, w.z());
+      const double terrain = o_.ground->lowest_near(centre.x(), centre.y(), terrain_reach());
       const bool low = std::isfinite(terrain) && top - terrain < o_.min_building_height;
       out_.rejected.push_back(
           {"box from plane " + std::to_string(seed.shape),

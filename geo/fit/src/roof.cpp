@@ -410,8 +410,14 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       rings.push_back(std::move(refined));
       continue;
     }
-    for (std::size_t pass = 0; pass < refined.size(); ++pass) {
+    const auto any = [](const std::vector<char>& flags) {
+      return std::find(flags.begin(), flags.end(), 1) != flags.end();
+    };
+    bool crossed = false;
+    for (std::size_t pass = 0;; ++pass) {
       const std::vector<char> crossing = crossing_edges(refined);
+      crossed = any(crossing);
+      if (!crossed || pass == refined.size()) break;
       bool moved = false;
       for (std::size_t k = 0; k < refined.size(); ++k) {
         if (!crossing[k]) continue;
@@ -422,13 +428,9 @@ std::optional<RoofOutline> roof_outline(const ProposalInput& in, const std::vect
       }
       if (!moved) break;
     }
-    const auto crosses = [](const std::vector<Vec2>& candidate) {
-      const auto edges = crossing_edges(candidate);
-      return std::find(edges.begin(), edges.end(), 1) != edges.end();
-    };
-    if (!crosses(refined)) {
+    if (!crossed) {
       rings.push_back(std::move(refined));
-    } else if (!crosses(simple)) {
+    } else if (!any(crossing_edges(simple))) {
       rings.push_back(std::move(simple));
     }
   }

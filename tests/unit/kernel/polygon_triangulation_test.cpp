@@ -11,20 +11,11 @@
 #include <cmath>
 #include <vector>
 
+#include "csgtile/kernel/polygon2d.h"
 #include "mesh/polygon_triangulation.h"
 
 namespace csgtile::kernel::detail {
 namespace {
-
-double ring_area(const std::vector<Vec2>& ring) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < ring.size(); ++i) {
-    const Vec2& p = ring[i];
-    const Vec2& q = ring[(i + 1) % ring.size()];
-    a += p.x() * q.y() - q.x() * p.y();
-  }
-  return 0.5 * a;
-}
 
 TEST(PolygonTriangulation, HolesOnOneLineWithAnOuterVertexAreBridged) {
   // The face's loops in its parameter plane, as the mesher gave them (outer, then holes).
