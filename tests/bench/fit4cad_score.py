@@ -207,6 +207,9 @@ def main():
     ap.add_argument("--min-dice", type=float, default=None)
     ap.add_argument("--min-type", type=float, default=None)
     ap.add_argument("--rows", action="store_true", help="print every primitive's row")
+    ap.add_argument("--expect", action="append", default=[], metavar="N:K:TYPE:DICE",
+                    help="fail unless primitive K of cloud N is found as a segment of TYPE "
+                         "with Dice >= DICE (repeatable; a named failure case)")
     ap.add_argument("--self-test", action="store_true")
     a = ap.parse_args()
     if a.self_test:
@@ -224,8 +227,15 @@ def main():
     if not names:
         print("fit4cad_score: no cloud train_PCn.txt in %s" % a.data, file=sys.stderr)
         return 77
+    expects = []
+    for e in a.expect:
+        parts = e.split(":")
+        if len(parts) != 4:
+            ap.error("--expect %s: want CLOUD:PRIMITIVE:TYPE:DICE" % e)
+        expects.append((int(parts[0]), int(parts[1]), parts[2], float(parts[3])))
     os.makedirs(a.outdir, exist_ok=True)
     clouds = []
+    unmet = []
     for n in names:
         stem = os.path.join(a.data, "train_PC%d" % n)
         pts = read_points(stem + ".txt")
@@ -258,12 +268,22 @@ def main():
                "type": s["type"]}
         if a.rows:
             row["rows"] = s["rows"]
+        for cloud, k, want, dice in expects:
+            if cloud != n:
+                continue
+            got = next((r for r in s["rows"] if r["primitive"] == k), None)
+            if got is None or got.get("segment_type") != want or got["dice"] < dice:
+                unmet.append("train_PC%d primitive %d: want %s with Dice >= %.2f, got %s" % (
+                    n, k, want, dice, "nothing" if got is None else "%s with Dice %.3f" % (
+                        got["segment_type"], got["dice"])))
         clouds.append(row)
     mean = {k: sum(c[k] for c in clouds) / len(clouds)
             for k in ("dice", "precision", "recall", "type")}
     print(json.dumps({"config": os.path.relpath(a.config), "seed": a.seed, "clouds": clouds,
                       "mean": mean}, indent=1))
-    ok = True
+    ok = not unmet
+    for u in unmet:
+        print("fit4cad_score: %s" % u, file=sys.stderr)
     if a.min_dice is not None and mean["dice"] < a.min_dice:
         print("fit4cad_score: mean Dice %.4f < %.4f" % (mean["dice"], a.min_dice),
               file=sys.stderr)

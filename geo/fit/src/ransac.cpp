@@ -347,16 +347,23 @@ std::size_t Detector::free_inexact() {
 
 // Types again on the final points: a curved shape found first may have held a neighbour's
 // edge points that relabel() gave back (the belt of a wide cylinder between two fillets, taken
-// with their rims for the sphere through it); on its own points another curved type can be
-// the better. Planes are left as extraction decided, in both directions: a curved shape that
-// gave its rims away may be left with points on one circle (a hole's wall seen as one ring),
-// which a plane fits as well. True when a shape changed type.
+// with their rims for the sphere through it); on its own points another type can be the
+// better. Planes are left as extraction decided. A curved shape becomes a plane (a cone of
+// half-angle 89.97° left with one face's points) unless its points lie on one circle of that
+// plane (a hole's wall that gave its rims away, seen as one ring, which a plane fits as well)
+// or the curved surface fits them a hundred times better (by_evidence's rule for planes, which
+// would turn the plane back). True when a shape changed type.
 bool Detector::retype() {
   bool changed = false;
   for (auto& shape : shapes_) {
     if (shape.surface.type == ShapeType::Plane) continue;
     auto alt = by_evidence(shape.surface, shape.inliers);
-    if (!alt || alt->type == ShapeType::Plane) continue;
+    if (!alt) continue;
+    if (alt->type == ShapeType::Plane) {
+      const auto ring = circle_along(alt->axis, shape.inliers);
+      if (ring && rms_of(*ring, shape.inliers) <= noise_floor()) continue;
+      if (rms_of(shape.surface, shape.inliers) <= 0.01 * rms_of(*alt, shape.inliers)) continue;
+    }
     shape.surface = *alt;
     changed = true;
   }
@@ -365,17 +372,22 @@ bool Detector::retype() {
 
 // Edges: a point within epsilon of two neighbouring shapes lies on both (at their shared edge
 // its normal belongs to neither); it goes to the smallest of them that has at most half the
-// points of its present one — once, among the points next to that shape's inliers (growing
-// further would run along the line where the two unbounded surfaces meet, past the feature) —,
-// since a small feature (a hole's wall, a fillet, a boss) needs its rims while a large face loses
-// nothing to speak of. No shape is left under min_points: a shape that would be keeps its points.
+// points of its present one, since a small feature (a hole's wall, a fillet, a boss) needs its
+// rims while a large face loses nothing to speak of. On noisy clouds once, among the points next
+// to that shape's inliers (growing further would run along the line where the two unbounded
+// surfaces meet, past the feature). On exact clouds, where a point taken must lie on both
+// surfaces, it grows along the edge from each point taken: a face found in one sector of a
+// ring whose points are nearly all rims (the larger neighbours took the rest before it was
+// found) takes its rims around the whole ring. No shape is left under min_points: a shape that
+// would be keeps its points.
 void Detector::give_edges_to_smaller() {
   const std::size_t n = points_.size();
   std::vector<int> moved(assignment_);
   auto size_of = [&](int s) { return shapes_[static_cast<std::size_t>(s)].inliers.size(); };
+  std::vector<std::uint32_t> frontier, taken;
   for (std::size_t s = 0; s < shapes_.size(); ++s) {
     const int self = static_cast<int>(s);
-    for_points_near(shapes_[s].inliers, [&](std::uint32_t j) {
+    auto take = [&](std::uint32_t j) {
       const int now = assignment_[j];
       if (now < 0 || now == self || 2 * size_of(self) > size_of(now)) return;
       const double d = std::abs(surface_distance(shapes_[s].surface, points_[j]));
@@ -390,8 +402,15 @@ void Detector::give_edges_to_smaller() {
       }
       // The smallest candidate wins; on equal sizes the shape found first.
       if (moved[j] != now && size_of(moved[j]) <= size_of(self)) return;
+      if (moved[j] != self && exact_) taken.push_back(j);
       moved[j] = self;
-    });
+    };
+    frontier.assign(shapes_[s].inliers.begin(), shapes_[s].inliers.end());
+    while (!frontier.empty()) {
+      taken.clear();
+      for_points_near(frontier, take);
+      frontier.swap(taken);
+    }
   }
   std::vector<long long> left(shapes_.size(), 0);
   for (std::size_t i = 0; i < n; ++i) {
