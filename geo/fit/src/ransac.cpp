@@ -42,6 +42,9 @@ constexpr int kRelabelPasses = 64;
 // On exact clouds, a point within this many noise floors of a surface lies on it (the second
 // search's freeing, edges_to_smaller's points on both surfaces).
 constexpr double kOnSurfaceFloors = 3.0;
+// On exact clouds, the residual of a surface fitted to its own points (a plane's best half, a
+// merged pair) within which they are exact: a hundredth of the noise floor.
+constexpr double kExactShare = 0.01;
 
 double Detector::component(const Surface& s, std::span<const int> starts, bool sampled,
                            std::vector<std::uint32_t>* out) {
@@ -307,13 +310,35 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
+// The plane through the half of `inliers` it fits best (least trimmed squares, a few steps);
+// its points in core_points_. nullopt for too few points.
+std::optional<Surface> Detector::plane_core(std::span<const std::uint32_t> inliers) {
+  const std::size_t half = inliers.size() / 2;
+  if (half < 3) return std::nullopt;
+  auto current = detail::fit_plane(points_, inliers);
+  std::vector<std::pair<double, std::uint32_t>> by_fit;
+  for (int step = 0; current && step < 4; ++step) {
+    by_fit.clear();
+    for (auto i : inliers) by_fit.emplace_back(std::abs(surface_distance(*current, points_[i])), i);
+    std::nth_element(by_fit.begin(), by_fit.begin() + static_cast<std::ptrdiff_t>(half),
+                     by_fit.end());
+    core_points_.clear();
+    for (std::size_t k = 0; k < half; ++k) core_points_.push_back(by_fit[k].second);
+    std::sort(core_points_.begin(), core_points_.end());
+    current = detail::fit_plane(points_, core_points_);
+  }
+  return current;
+}
+
 // On an exact cloud every true surface fits its points to the noise floor. A shape that fits
 // most of its points so (median residual within the floor) but holds points more than three
 // floors off it holds a neighbour's points; a shape that fits most of its points worse is a
 // compromise between surfaces (a cone through a cylinder's end and the sphere of a rounded
-// corner, one torus over two fillets). Those points, and all of a compromise's, are freed for
-// a second search; the shape keeps the rest (a compromise nothing: relabel() drops it). The
-// number freed.
+// corner, one torus over two fillets). A plane whose best half fits a plane exactly (within
+// kExactShare floors) holds a neighbour's points wherever they are off that plane by ten times
+// its RMS, even within the floors (a spot face a few thousandths below the face around it).
+// Those points, and all of a compromise's, are freed for a second search; the shape keeps the
+// rest (a compromise nothing: relabel() drops it). The number freed.
 std::size_t Detector::free_inexact() {
   const double floor = noise_floor();
   std::size_t freed = 0;
@@ -328,10 +353,22 @@ std::size_t Detector::free_inexact() {
     const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
     std::nth_element(sorted.begin(), mid, sorted.end());
     const bool dissolve = *mid > floor;
+    double off = kOnSurfaceFloors * floor;
+    if (!dissolve && shape.surface.type == ShapeType::Plane) {
+      if (auto core = plane_core(shape.inliers)) {
+        const double core_rms = rms_of(*core, core_points_);
+        if (core_rms <= kExactShare * floor) {
+          for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
+            residual[k] = std::abs(surface_distance(*core, points_[shape.inliers[k]]));
+          }
+          off = std::max(10.0 * core_rms, kExactShare * floor);
+        }
+      }
+    }
     std::vector<std::uint32_t> kept;
     for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
       const std::uint32_t i = shape.inliers[k];
-      if (dissolve || residual[k] > kOnSurfaceFloors * floor) {
+      if (dissolve || residual[k] > off) {
         assignment_[i] = -1;
         if (has_normal_[i]) remaining_.push_back(i);
         ++remaining_count_;
@@ -376,9 +413,10 @@ bool Detector::retype() {
 // rims while a large face loses nothing to speak of. On noisy clouds once, among the points next
 // to that shape's inliers (growing further would run along the line where the two unbounded
 // surfaces meet, past the feature). On exact clouds, where a point taken must lie on both
-// surfaces, it grows along the edge from each point taken: a face found in one sector of a
-// ring whose points are nearly all rims (the larger neighbours took the rest before it was
-// found) takes its rims around the whole ring. No shape is left under min_points: a shape that
+// surfaces (within ten times the shape's RMS where it fits its own points exactly, else
+// kOnSurfaceFloors floors), it grows along the edge from each point taken: a face found in one
+// sector of a ring whose points are nearly all rims (the larger neighbours took the rest before it
+// was found) takes its rims around the whole ring. No shape is left under min_points: a shape that
 // would be keeps its points.
 void Detector::give_edges_to_smaller() {
   const std::size_t n = points_.size();
@@ -387,6 +425,11 @@ void Detector::give_edges_to_smaller() {
   std::vector<std::uint32_t> frontier, taken;
   for (std::size_t s = 0; s < shapes_.size(); ++s) {
     const int self = static_cast<int>(s);
+    // On exact clouds, on a shape fitting its own points exactly: within ten times its RMS.
+    double on = kOnSurfaceFloors * noise_floor();
+    if (const double own = shapes_[s].rms; exact_ && own <= kExactShare * noise_floor()) {
+      on = std::max(10.0 * own, kExactShare * noise_floor());
+    }
     auto take = [&](std::uint32_t j) {
       const int now = assignment_[j];
       if (now < 0 || now == self || 2 * size_of(self) > size_of(now)) return;
@@ -395,9 +438,8 @@ void Detector::give_edges_to_smaller() {
       // On exact clouds only a point on both surfaces: a band of a face tangent to a fillet lies
       // within epsilon of the fillet but on the face.
       if (exact_ &&
-          d > std::max(kOnSurfaceFloors * noise_floor(),
-                       std::abs(surface_distance(shapes_[static_cast<std::size_t>(now)].surface,
-                                                 points_[j])))) {
+          d > std::max(on, std::abs(surface_distance(shapes_[static_cast<std::size_t>(now)].surface,
+                                                     points_[j])))) {
         return;
       }
       // The smallest candidate wins; on equal sizes the shape found first.
@@ -582,7 +624,8 @@ RansacResult Detector::run() {
   }
   if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
   if (o_.merge_same_surface &&
-      detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon) > 0) {
+      detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon,
+                                 exact_ ? kExactShare * noise_floor() : 0.0) > 0) {
     for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
   }
   result.candidates = searched_ + draws_;

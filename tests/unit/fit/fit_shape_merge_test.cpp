@@ -1,5 +1,6 @@
 // merge_same_surface (geo/fit/src/shape_merge.h): shapes on one surface within a narrow gap
-// of each other become one; a wider gap, another surface or another type keeps them apart.
+// of each other become one; a wider gap, another surface or another type keeps them apart; on
+// exact points, so does a step far under epsilon that their own fits see.
 
 #include <gtest/gtest.h>
 
@@ -56,6 +57,26 @@ TEST(FitShapeMerge, ShapesOnOneSurfaceWithANarrowGapBecomeOne) {
   }
   // Once merged, nothing is left to merge.
   EXPECT_EQ(detail::merge_same_surface(points, shapes, assignment, epsilon), 0u);
+}
+
+// A spot face 0.006 below the face around it (within epsilon 0.01 of it): one surface for a
+// noisy cloud, two where the points are exact (each patch fits its own plane to rounding, one
+// plane through both leaves an RMS of about 0.003, far over `exact`).
+TEST(FitShapeMerge, ExactPatchesAStepApartStayTwo) {
+  for (const double exact : {0.0, 1e-4}) {
+    SCOPED_TRACE(exact > 0.0 ? "exact points" : "noisy points");
+    std::vector<Vec3> points;
+    std::vector<DetectedShape> shapes;
+    shapes.push_back(patch(points, 0.0, 4.0, 0.0));
+    shapes.push_back(patch(points, 4.4, 8.4, -0.006));
+    std::vector<int> assignment(points.size(), -1);
+    for (std::size_t s = 0; s < shapes.size(); ++s) {
+      for (auto i : shapes[s].inliers) assignment[i] = static_cast<int>(s);
+    }
+    const std::size_t merges = detail::merge_same_surface(points, shapes, assignment, 0.01, exact);
+    EXPECT_EQ(merges, exact > 0.0 ? 0u : 1u);
+    EXPECT_EQ(shapes.size(), exact > 0.0 ? 2u : 1u);
+  }
 }
 
 }  // namespace
