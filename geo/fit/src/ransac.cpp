@@ -475,6 +475,50 @@ void Detector::give_edges_to_smaller() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
+// Points no shape holds that lie on a shape's surface (within epsilon; on exact clouds within
+// kOnSurfaceFloors floors) and are reached from its points through points on that surface
+// (free ones, or another shape's: the rims a plate's faces hold along a sparse disc's edge)
+// join it, the nearest surface when several. After merge_same_surface: pieces of one surface
+// fitted each to its own short arc reached only their own points, and the points between them
+// stayed free; the merged surface reaches them.
+void Detector::adopt_free() {
+  const double on = exact_ ? std::min(o_.epsilon, kOnSurfaceFloors * noise_floor()) : o_.epsilon;
+  std::vector<double> best(points_.size(), INFINITY);
+  std::vector<int> label(points_.size(), -1);
+  std::vector<std::size_t> reached(points_.size(), 0);  // shape index + 1 that reached it
+  std::vector<std::uint32_t> frontier, next;
+  for (std::size_t s = 0; s < shapes_.size(); ++s) {
+    const Surface& surface = shapes_[s].surface;
+    for (auto i : shapes_[s].inliers) reached[i] = s + 1;
+    frontier.assign(shapes_[s].inliers.begin(), shapes_[s].inliers.end());
+    while (!frontier.empty()) {
+      next.clear();
+      for_points_near(frontier, [&](std::uint32_t j) {
+        if (reached[j] == s + 1) return;
+        const double d = std::abs(surface_distance(surface, points_[j]));
+        if (d > on) return;
+        reached[j] = s + 1;
+        next.push_back(j);
+        if (assignment_[j] < 0 && d < best[j]) {
+          best[j] = d;
+          label[j] = static_cast<int>(s);
+        }
+      });
+      frontier.swap(next);
+    }
+  }
+  bool joined = false;
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (label[i] < 0) continue;
+    assignment_[i] = label[i];
+    shapes_[static_cast<std::size_t>(label[i])].inliers.push_back(static_cast<std::uint32_t>(i));
+    joined = true;
+  }
+  if (joined) {
+    for (auto& shape : shapes_) std::sort(shape.inliers.begin(), shape.inliers.end());
+  }
+}
+
 std::pair<Vec3, Vec3> Detector::bounds(std::span<const std::uint32_t> members) const {
   if (members.empty()) return {Vec3::Zero(), Vec3::Zero()};
   Vec3 lo = points_[members[0]], hi = lo;
@@ -626,6 +670,10 @@ RansacResult Detector::run() {
   if (o_.merge_same_surface &&
       detail::merge_same_surface(points_, shapes_, assignment_, o_.epsilon,
                                  exact_ ? kExactShare * noise_floor() : 0.0) > 0) {
+    for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
+  }
+  if (o_.relabel && !shapes_.empty()) {
+    adopt_free();
     for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
   }
   result.candidates = searched_ + draws_;

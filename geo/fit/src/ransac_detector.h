@@ -119,6 +119,7 @@ class Detector {
   void derive_scale(std::span<const std::uint32_t> members, const NeighbourSample& sample,
                     RansacResult& result);
   void give_edges_to_smaller();
+  void adopt_free();
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
     if (++stamp_ == 0) {
