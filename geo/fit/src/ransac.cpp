@@ -206,6 +206,14 @@ bool Detector::extract(const Candidate& c) {
     }
   }
   if (static_cast<long long>(inliers.size()) < o_.min_points) return false;
+  // On exact clouds a curved candidate whose points do not fit it (median residual over the
+  // floor) is a compromise between surfaces (free_inexact's rule): it is not taken, so that it
+  // holds no points of the surfaces around it while they are searched (a torus of rms 0.04
+  // over the points of a small hole's wall and the plates' rims). Planes are taken: a plane
+  // holding a neighbour's band is mended by free_inexact's exact best half.
+  if (exact_ && surface.type != ShapeType::Plane && !fits_exactly(surface, inliers)) {
+    return false;
+  }
   if ((surface.type == ShapeType::Cylinder || surface.type == ShapeType::Sphere) &&
       surface.radius >= o_.max_radius) {
     return false;

@@ -3,6 +3,8 @@
 
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -78,6 +80,16 @@ class Detector {
       sum += d * d;
     }
     return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
+  }
+  // Whether the median of the inliers' residuals is within the noise floor.
+  bool fits_exactly(const Surface& s, std::span<const std::uint32_t> inliers) const {
+    if (inliers.empty()) return true;
+    std::vector<double> r;
+    r.reserve(inliers.size());
+    for (auto i : inliers) r.push_back(std::abs(surface_distance(s, points_[i])));
+    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+    std::nth_element(r.begin(), mid, r.end());
+    return *mid <= noise_floor();
   }
   // The residual below which points count as exact: the noise, at least a twentieth of epsilon.
   double noise_floor() const { return std::max(noise_, kFloorShare * o_.epsilon); }
