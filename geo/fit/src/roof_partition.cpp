@@ -16,6 +16,7 @@
 
 #include "fit_internal.h"
 #include "footprint_clip.h"
+#include "part_contacts.h"
 #include "partition.h"
 #include "plane2d.h"
 
@@ -738,6 +739,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       out.push_back(std::move(p));
     }
   }
+  // Parts meeting at one vertex only with another between them stand over the same heights
+  // there (a flat roof raised at most a fifth of the lowest building's height).
+  close_point_contacts(out, 0.2 * o.min_building_height);
   return out;
 }
 
