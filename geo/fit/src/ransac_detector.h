@@ -132,6 +132,7 @@ class Detector {
                     RansacResult& result);
   void give_edges_to_smaller();
   void adopt_free();
+  std::size_t fit_leftovers();
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
     if (++stamp_ == 0) {
