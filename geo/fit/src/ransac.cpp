@@ -486,9 +486,9 @@ void Detector::give_edges_to_smaller() {
 // Points no shape holds that lie on a shape's surface (within epsilon; on exact clouds within
 // kOnSurfaceFloors floors) and are reached from its points through points on that surface
 // (free ones, or another shape's: the rims a plate's faces hold along a sparse disc's edge)
-// join it, the nearest surface when several. After merge_same_surface: pieces of one surface
-// fitted each to its own short arc reached only their own points, and the points between them
-// stayed free; the merged surface reaches them.
+// join it, the nearest surface when several. The last step with `relabel` (after
+// merge_same_surface): pieces of one surface fitted each to its own short arc reached only
+// their own points, and the points between them stayed free; the merged surface reaches them.
 void Detector::adopt_free() {
   const double on = exact_ ? std::min(o_.epsilon, kOnSurfaceFloors * noise_floor()) : o_.epsilon;
   std::vector<double> best(points_.size(), INFINITY);
