@@ -318,12 +318,17 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
-// The plane through the half of `inliers` it fits best (least trimmed squares, a few steps);
-// its points in core_points_. nullopt for too few points.
-std::optional<Surface> Detector::plane_core(std::span<const std::uint32_t> inliers) {
+// The surface through the half of `inliers` it fits best (least trimmed squares, a few steps):
+// a plane, or `start`'s type refined from it; its points in core_points_. nullopt for too few
+// points or a refit that fails.
+std::optional<Surface> Detector::best_half(std::span<const std::uint32_t> inliers,
+                                           const Surface* start) {
   const std::size_t half = inliers.size() / 2;
   if (half < 3) return std::nullopt;
-  auto current = detail::fit_plane(points_, inliers);
+  auto fit = [&](std::span<const std::uint32_t> pts) {
+    return start ? detail::refine_surface(*start, points_, pts) : detail::fit_plane(points_, pts);
+  };
+  auto current = fit(inliers);
   std::vector<std::pair<double, std::uint32_t>> by_fit;
   for (int step = 0; current && step < 4; ++step) {
     by_fit.clear();
@@ -333,7 +338,7 @@ std::optional<Surface> Detector::plane_core(std::span<const std::uint32_t> inlie
     core_points_.clear();
     for (std::size_t k = 0; k < half; ++k) core_points_.push_back(by_fit[k].second);
     std::sort(core_points_.begin(), core_points_.end());
-    current = detail::fit_plane(points_, core_points_);
+    current = fit(core_points_);
   }
   return current;
 }
@@ -342,9 +347,10 @@ std::optional<Surface> Detector::plane_core(std::span<const std::uint32_t> inlie
 // most of its points so (median residual within the floor) but holds points more than three
 // floors off it holds a neighbour's points; a shape that fits most of its points worse is a
 // compromise between surfaces (a cone through a cylinder's end and the sphere of a rounded
-// corner, one torus over two fillets). A plane whose best half fits a plane exactly (within
-// kExactShare floors) holds a neighbour's points wherever they are off that plane by ten times
-// its RMS, even within the floors (a spot face a few thousandths below the face around it).
+// corner, one torus over two fillets). A shape whose best half fits its surface exactly (within
+// kExactShare floors) holds a neighbour's points wherever they are off that surface by ten times
+// its RMS, even within the floors (a spot face a few thousandths below the face around it; a
+// face's band tangent to a small ball).
 // Those points, and all of a compromise's, are freed for a second search; the shape keeps the
 // rest (a compromise nothing: relabel() drops it). The number freed.
 std::size_t Detector::free_inexact() {
@@ -362,8 +368,9 @@ std::size_t Detector::free_inexact() {
     std::nth_element(sorted.begin(), mid, sorted.end());
     const bool dissolve = *mid > floor;
     double off = kOnSurfaceFloors * floor;
-    if (!dissolve && shape.surface.type == ShapeType::Plane) {
-      if (auto core = plane_core(shape.inliers)) {
+    if (!dissolve) {
+      const Surface* start = shape.surface.type == ShapeType::Plane ? nullptr : &shape.surface;
+      if (auto core = best_half(shape.inliers, start)) {
         const double core_rms = rms_of(*core, core_points_);
         if (core_rms <= kExactShare * floor) {
           for (std::size_t k = 0; k < shape.inliers.size(); ++k) {

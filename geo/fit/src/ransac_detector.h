@@ -125,7 +125,8 @@ class Detector {
   bool search();
   void relabel();
   std::size_t free_inexact();
-  std::optional<Surface> plane_core(std::span<const std::uint32_t> inliers);
+  std::optional<Surface> best_half(std::span<const std::uint32_t> inliers,
+                                   const Surface* start = nullptr);
   bool retype();
   std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
   void derive_scale(std::span<const std::uint32_t> members, const NeighbourSample& sample,
@@ -190,7 +191,7 @@ class Detector {
   std::uint64_t searched_ = 0;  // draws of the searches before the present one
   std::uint64_t extractions_ = 0;
   std::vector<DetectedShape> shapes_;
-  std::vector<std::uint32_t> core_points_;  // plane_core()'s best half
+  std::vector<std::uint32_t> core_points_;  // best_half()'s points
 };
 
 }  // namespace csgtile::fit::detail
