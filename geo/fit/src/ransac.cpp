@@ -42,9 +42,6 @@ constexpr int kRelabelPasses = 64;
 // On exact clouds, a point within this many noise floors of a surface lies on it (the second
 // search's freeing, edges_to_smaller's points on both surfaces).
 constexpr double kOnSurfaceFloors = 3.0;
-// On exact clouds, the residual of a surface fitted to its own points (a plane's best half, a
-// merged pair) within which they are exact: a hundredth of the noise floor.
-constexpr double kExactShare = 0.01;
 
 double Detector::component(const Surface& s, std::span<const int> starts, bool sampled,
                            std::vector<std::uint32_t>* out) {
@@ -318,29 +315,37 @@ void Detector::relabel() {
   for (auto& shape : shapes_) shape.rms = rms_of(shape.surface, shape.inliers);
 }
 
+// The half of `inliers` that `s` fits best (ascending indices), in `half`.
+void Detector::best_fitting_half(const Surface& s, std::span<const std::uint32_t> inliers,
+                                 std::vector<std::uint32_t>& half) const {
+  const std::size_t count = inliers.size() / 2;
+  std::vector<std::pair<double, std::uint32_t>> by_fit;
+  by_fit.reserve(inliers.size());
+  for (auto i : inliers) by_fit.emplace_back(std::abs(surface_distance(s, points_[i])), i);
+  std::nth_element(by_fit.begin(), by_fit.begin() + static_cast<std::ptrdiff_t>(count),
+                   by_fit.end());
+  half.clear();
+  for (std::size_t k = 0; k < count; ++k) half.push_back(by_fit[k].second);
+  std::sort(half.begin(), half.end());
+}
+
 // The surface through the half of `inliers` it fits best (least trimmed squares, a few steps):
-// a plane, or `start`'s type refined from it; its points in core_points_. nullopt for too few
+// a plane, or `start`'s type refined from it; with its RMS on that half. nullopt for too few
 // points or a refit that fails.
-std::optional<Surface> Detector::best_half(std::span<const std::uint32_t> inliers,
-                                           const Surface* start) {
-  const std::size_t half = inliers.size() / 2;
-  if (half < 3) return std::nullopt;
+std::optional<Detector::Core> Detector::best_half(std::span<const std::uint32_t> inliers,
+                                                  const Surface* start) const {
+  if (inliers.size() / 2 < 3) return std::nullopt;
   auto fit = [&](std::span<const std::uint32_t> pts) {
     return start ? detail::refine_surface(*start, points_, pts) : detail::fit_plane(points_, pts);
   };
   auto current = fit(inliers);
-  std::vector<std::pair<double, std::uint32_t>> by_fit;
+  std::vector<std::uint32_t> half;
   for (int step = 0; current && step < 4; ++step) {
-    by_fit.clear();
-    for (auto i : inliers) by_fit.emplace_back(std::abs(surface_distance(*current, points_[i])), i);
-    std::nth_element(by_fit.begin(), by_fit.begin() + static_cast<std::ptrdiff_t>(half),
-                     by_fit.end());
-    core_points_.clear();
-    for (std::size_t k = 0; k < half; ++k) core_points_.push_back(by_fit[k].second);
-    std::sort(core_points_.begin(), core_points_.end());
-    current = fit(core_points_);
+    best_fitting_half(*current, inliers, half);
+    current = fit(half);
   }
-  return current;
+  if (!current) return std::nullopt;
+  return Core{*current, rms_of(*current, half)};
 }
 
 // On an exact cloud every true surface fits its points to the noise floor. A shape that fits
@@ -358,26 +363,14 @@ std::size_t Detector::free_inexact() {
   std::size_t freed = 0;
   for (auto& shape : shapes_) {
     if (shape.inliers.empty()) continue;
-    std::vector<double> residual;
-    residual.reserve(shape.inliers.size());
-    for (auto i : shape.inliers) {
-      residual.push_back(std::abs(surface_distance(shape.surface, points_[i])));
-    }
-    std::vector<double> sorted = residual;
-    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-    std::nth_element(sorted.begin(), mid, sorted.end());
-    const bool dissolve = *mid > floor;
+    std::vector<double> residual = residuals(shape.surface, shape.inliers);
+    const bool dissolve = detail::median_of(residual) > floor;
     double off = kOnSurfaceFloors * floor;
     if (!dissolve) {
       const Surface* start = shape.surface.type == ShapeType::Plane ? nullptr : &shape.surface;
-      if (auto core = best_half(shape.inliers, start)) {
-        const double core_rms = rms_of(*core, core_points_);
-        if (core_rms <= kExactShare * floor) {
-          for (std::size_t k = 0; k < shape.inliers.size(); ++k) {
-            residual[k] = std::abs(surface_distance(*core, points_[shape.inliers[k]]));
-          }
-          off = std::max(10.0 * core_rms, kExactShare * floor);
-        }
+      if (auto core = best_half(shape.inliers, start); core && exact_fit(core->rms)) {
+        residual = residuals(core->surface, shape.inliers);
+        off = exact_reach(core->rms);
       }
     }
     std::vector<std::uint32_t> kept;
@@ -412,8 +405,7 @@ bool Detector::retype() {
     auto alt = by_evidence(shape.surface, shape.inliers);
     if (!alt) continue;
     if (alt->type == ShapeType::Plane) {
-      const auto ring = circle_along(alt->axis, shape.inliers);
-      if (ring && rms_of(*ring, shape.inliers) <= noise_floor()) continue;
+      if (on_one_circle(alt->axis, shape.inliers)) continue;
       if (rms_of(shape.surface, shape.inliers) <= 0.01 * rms_of(*alt, shape.inliers)) continue;
     }
     shape.surface = *alt;
@@ -442,9 +434,7 @@ void Detector::give_edges_to_smaller() {
     const int self = static_cast<int>(s);
     // On exact clouds, on a shape fitting its own points exactly: within ten times its RMS.
     double on = kOnSurfaceFloors * noise_floor();
-    if (const double own = shapes_[s].rms; exact_ && own <= kExactShare * noise_floor()) {
-      on = std::max(10.0 * own, kExactShare * noise_floor());
-    }
+    if (exact_ && exact_fit(shapes_[s].rms)) on = exact_reach(shapes_[s].rms);
     auto take = [&](std::uint32_t j) {
       const int now = assignment_[j];
       if (now < 0 || now == self || 2 * size_of(self) > size_of(now)) return;

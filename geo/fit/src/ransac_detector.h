@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fit_internal.h"
+#include "residuals.h"
 #include "synth/random.h"
 
 namespace csgtile::fit::detail {
@@ -21,6 +22,9 @@ namespace csgtile::fit::detail {
 constexpr int kSampledPerCell = 4;
 // A twentieth of epsilon: the residual floor of exact points (see Detector::noise_floor).
 constexpr double kFloorShare = 0.05;
+// On exact clouds, the RMS of a surface fitted to its own points (a shape's best half, a
+// merged pair) within which they are exact: a hundredth of the noise floor.
+constexpr double kExactShare = 0.01;
 constexpr double kSampleFactor = 4.0;
 
 struct Candidate {
@@ -74,23 +78,23 @@ class Detector {
   }
   // RMS of the inliers' distances to the surface.
   double rms_of(const Surface& s, std::span<const std::uint32_t> inliers) const {
-    double sum = 0.0;
-    for (auto i : inliers) {
-      const double d = surface_distance(s, points_[i]);
-      sum += d * d;
-    }
-    return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
+    return detail::surface_rms(s, points_, inliers);
   }
-  // Whether the median of the inliers' residuals is within the noise floor.
-  bool fits_exactly(const Surface& s, std::span<const std::uint32_t> inliers) const {
-    if (inliers.empty()) return true;
+  // The inliers' absolute distances to the surface, in their order.
+  std::vector<double> residuals(const Surface& s, std::span<const std::uint32_t> inliers) const {
     std::vector<double> r;
     r.reserve(inliers.size());
     for (auto i : inliers) r.push_back(std::abs(surface_distance(s, points_[i])));
-    const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
-    std::nth_element(r.begin(), mid, r.end());
-    return *mid <= noise_floor();
+    return r;
   }
+  // Whether the median of the inliers' residuals is within the noise floor.
+  bool fits_exactly(const Surface& s, std::span<const std::uint32_t> inliers) const {
+    return inliers.empty() || detail::median_of(residuals(s, inliers)) <= noise_floor();
+  }
+  // On exact clouds, whether a surface fitting its own points with RMS `rms` fits them exactly,
+  // and how far from it a point still lies on it: ten times that RMS.
+  bool exact_fit(double rms) const { return rms <= kExactShare * noise_floor(); }
+  double exact_reach(double rms) const { return std::max(10.0 * rms, kExactShare * noise_floor()); }
   // The residual below which points count as exact: the noise, at least a twentieth of epsilon.
   double noise_floor() const { return std::max(noise_, kFloorShare * o_.epsilon); }
   // How much better (by the criterion) another type must score to replace a shape.
@@ -125,8 +129,17 @@ class Detector {
   bool search();
   void relabel();
   std::size_t free_inexact();
-  std::optional<Surface> best_half(std::span<const std::uint32_t> inliers,
-                                   const Surface* start = nullptr);
+  // A surface fitted to the half of some inliers it fits best, and its RMS on that half.
+  struct Core {
+    Surface surface;
+    double rms = 0.0;
+  };
+  std::optional<Core> best_half(std::span<const std::uint32_t> inliers,
+                                const Surface* start = nullptr) const;
+  void best_fitting_half(const Surface& s, std::span<const std::uint32_t> inliers,
+                         std::vector<std::uint32_t>& half) const;
+  std::optional<Surface> on_one_circle(const Vec3& axis,
+                                       std::span<const std::uint32_t> inliers) const;
   bool retype();
   std::pair<Vec3, Vec3> bounds(std::span<const std::uint32_t> members) const;
   void derive_scale(std::span<const std::uint32_t> members, const NeighbourSample& sample,
@@ -191,7 +204,6 @@ class Detector {
   std::uint64_t searched_ = 0;  // draws of the searches before the present one
   std::uint64_t extractions_ = 0;
   std::vector<DetectedShape> shapes_;
-  std::vector<std::uint32_t> core_points_;  // best_half()'s points
 };
 
 }  // namespace csgtile::fit::detail

@@ -109,15 +109,23 @@ std::optional<Surface> Detector::cylinder_across_plane(
   return detail::refine_surface(s, points_, inliers);
 }
 
+// The cylinder along `axis` through the points' circle when they lie on it (every point within
+// the noise floor of it on the whole), else nullopt.
+std::optional<Surface> Detector::on_one_circle(const Vec3& axis,
+                                               std::span<const std::uint32_t> inliers) const {
+  auto circle = circle_along(axis, inliers);
+  if (!circle || !(rms_of(*circle, inliers) <= noise_floor())) return std::nullopt;
+  return circle;
+}
+
 // A plane whose points lie on one circle of it is the ring where a cylinder's wall (a hole, a
 // pin) meets the plane: when points of other shapes or none lie on that cylinder next to the
 // ring but off its plane (the wall's rims and rows), the cylinder.
 std::optional<Surface> Detector::wall_through_ring(const Surface& plane,
                                                    std::span<const std::uint32_t> inliers) {
   if (inliers.size() < 6) return std::nullopt;
-  auto wall = circle_along(plane.axis, inliers);
-  // On the circle: every point within the noise floor of the cylinder.
-  if (!wall || !(rms_of(*wall, inliers) <= noise_floor())) return std::nullopt;
+  auto wall = on_one_circle(plane.axis, inliers);
+  if (!wall) return std::nullopt;
   std::size_t off = 0;
   for_points_near(inliers, [&](std::uint32_t j) {
     if (std::abs(surface_distance(*wall, points_[j])) <= o_.epsilon &&
@@ -326,16 +334,9 @@ std::optional<Surface> Detector::exact_core(const Surface& s,
     return std::nullopt;
   }
   Surface current = s;
-  std::vector<std::pair<double, std::uint32_t>> by_fit;
   std::vector<std::uint32_t> core;
   for (int step = 0; step < 10; ++step) {
-    by_fit.clear();
-    for (auto i : inliers) by_fit.emplace_back(std::abs(surface_distance(current, points_[i])), i);
-    std::nth_element(by_fit.begin(), by_fit.begin() + static_cast<std::ptrdiff_t>(half),
-                     by_fit.end());
-    core.clear();
-    for (std::size_t k = 0; k < half; ++k) core.push_back(by_fit[k].second);
-    std::sort(core.begin(), core.end());
+    best_fitting_half(current, inliers, core);
     auto refit = detail::refine_surface(current, points_, core);
     if (!refit) return std::nullopt;
     current = *refit;

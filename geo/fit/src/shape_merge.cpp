@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "fit_internal.h"
+#include "residuals.h"
 
 namespace csgtile::fit::detail {
 
@@ -80,33 +81,22 @@ bool mostly_on(std::span<const Vec3> points, const Surface& s,
   return on * 100 >= inliers.size() * 95;
 }
 
-// RMS of `inliers`' distances to `s`.
-double rms(std::span<const Vec3> points, const Surface& s, std::span<const std::uint32_t> inliers) {
-  double sum = 0.0;
-  for (const std::uint32_t i : inliers) {
-    const double d = surface_distance(s, points[i]);
-    sum += d * d;
-  }
-  return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(inliers.size(), 1)));
-}
-
 // RMS of `shape`'s points to its surface refitted to them (the surface a shape was found with
 // may lean towards points it has given away since).
 double own_rms(std::span<const Vec3> points, const DetectedShape& shape) {
   const auto own = refine_surface(shape.surface, points, shape.inliers);
-  return rms(points, own ? *own : shape.surface, shape.inliers);
+  return surface_rms(own ? *own : shape.surface, points, shape.inliers);
 }
 
 // Whether one surface refitted to the points of both `a` and `b` fits them within the larger
-// of `exact` and ten times the RMS each fits its own points with.
+// of `exact` and ten times `own`, the larger RMS each fits its own points with.
 bool fit_jointly(std::span<const Vec3> points, const DetectedShape& a, const DetectedShape& b,
-                 double exact) {
+                 double own, double exact) {
   std::vector<std::uint32_t> both(a.inliers.begin(), a.inliers.end());
   both.insert(both.end(), b.inliers.begin(), b.inliers.end());
   const auto joint = refine_surface(a.surface, points, both);
   if (!joint) return false;
-  const double own = std::max(own_rms(points, a), own_rms(points, b));
-  return rms(points, *joint, both) <= std::max(exact, 10.0 * own);
+  return surface_rms(*joint, points, both) <= std::max(exact, 10.0 * own);
 }
 
 }  // namespace
@@ -115,6 +105,13 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
                                std::vector<int>& assignment, double epsilon, double exact) {
   const std::size_t m = shapes.size();
   if (m < 2) return 0;
+  // Each shape's own RMS (exact clouds), once: the shapes' points do not change until the
+  // merges are made.
+  std::vector<double> own(m, -1.0);
+  auto own_of = [&](std::size_t s) {
+    if (own[s] < 0.0) own[s] = own_rms(points, shapes[s]);
+    return own[s];
+  };
   std::vector<double> quantile(m);
   std::vector<std::vector<std::uint32_t>> sorted(m);
   for (std::size_t s = 0; s < m; ++s) {
@@ -137,7 +134,10 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
           !mostly_on(points, shapes[b].surface, shapes[a].inliers, epsilon)) {
         continue;
       }
-      if (exact > 0.0 && !fit_jointly(points, shapes[a], shapes[b], exact)) continue;
+      if (exact > 0.0 &&
+          !fit_jointly(points, shapes[a], shapes[b], std::max(own_of(a), own_of(b)), exact)) {
+        continue;
+      }
       // The lower index stays the root: a merged shape keeps its first part's place.
       const std::size_t ra = root(a), rb = root(b);
       parent[std::max(ra, rb)] = std::min(ra, rb);
