@@ -73,6 +73,8 @@ void read_fit(const json& document, FitConfig& fit) {
   take(f, "primitives", "revolutions", fit.primitives.revolutions);
   take(f, "primitives", "roof_parts", fit.primitives.roof_parts);
   take(f, "primitives", "roof_partition", fit.primitives.roof_partition);
+  take(f, "primitives", "split_houses", fit.primitives.split_houses);
+  take(f, "primitives", "min_house_area", fit.primitives.min_house_area);
   take(f, "primitives", "blocks", fit.primitives.blocks);
   take(f, "primitives", "min_curved_coverage", fit.primitives.min_curved_coverage);
   take(f, "primitives", "max_overreach", fit.primitives.max_overreach);
@@ -129,6 +131,8 @@ json fit_to_json(const FitConfig& fit) {
                        {"revolutions", fit.primitives.revolutions},
                        {"roof_parts", fit.primitives.roof_parts},
                        {"roof_partition", fit.primitives.roof_partition},
+                       {"split_houses", fit.primitives.split_houses},
+                       {"min_house_area", fit.primitives.min_house_area},
                        {"blocks", fit.primitives.blocks},
                        {"min_curved_coverage", fit.primitives.min_curved_coverage},
                        {"max_overreach", fit.primitives.max_overreach}};

@@ -214,6 +214,10 @@ Result<ScenePrimitive> read_primitive(const json& j, std::size_t index) {
     if (!j["building"].is_string()) return r.fail("building", "must be a string");
     out.building = j["building"].get<std::string>();
   }
+  if (j.contains("house")) {
+    if (!j["house"].is_string()) return r.fail("house", "must be a string");
+    out.house = j["house"].get<std::string>();
+  }
   return out;
 }
 
@@ -372,10 +376,17 @@ OrderedJson primitive_json(const ScenePrimitive& p) {
   j["placement"] = std::move(rows);
   if (p.quality) j["quality"] = quality_json(*p.quality);
   if (!p.building.empty()) j["building"] = p.building;
+  if (!p.house.empty()) j["house"] = p.house;
   return j;
 }
 
 }  // namespace
+
+std::string assembly_group(const ScenePrimitive& p, std::string_view scope) {
+  if (!p.building.empty()) return "footprint " + p.building;
+  if (!p.house.empty()) return "house " + std::string(scope) + "/" + p.house;
+  return {};
+}
 
 std::string scene_to_json(const Scene& scene) {
   // Top-level keys one per line and one primitive per line: diffable, still compact.

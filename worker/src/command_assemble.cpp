@@ -134,7 +134,7 @@ Failure run_assemble(const AssembleArgs& args, ordered_json& report) {
     std::string label = p.id.empty() ? "p" + std::to_string(i) : p.id;
     if (seen.count(label)) label += "#" + std::to_string(i);  // ids must name one primitive
     seen[label] = 1;
-    prims.push_back({p.spec, label, p.building});
+    prims.push_back({p.spec, label, geo::assembly_group(p)});
   }
   assembly::AssemblyOptions options;
   options.voxel_size = args.voxel;

@@ -188,6 +188,9 @@ struct Proposal {
   /// Stands under the proposal before it (a dome's drum): supported by that one's points, not
   /// by its own coverage (walls a scan from the air does not see).
   bool carried = false;
+  /// The house of a roof partition's part, when the partition split its block into houses
+  /// (houses.h, PrimitiveOptions::split_houses); −1: none.
+  int house = -1;
 };
 
 /// Inputs shared by the proposers: the region's points and normals, its shapes, which points

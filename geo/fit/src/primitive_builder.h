@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -136,6 +137,10 @@ class Builder {
   // region has too few points to tell.
   double region_sigma();
   bool take(const detail::Proposal& proposal);
+  // When the roof partition split the region into houses (Proposal::house): every primitive's
+  // ScenePrimitive::house, those of no house given the house their footprint overlaps most
+  // (else the nearest); nothing when there is one house or none.
+  void name_houses();
   // A building in its footprint carrying a dome: when the dome takes (nearly) all its points,
   // the dome on the footprint's prism up to the dome's base, else domed_roof. False, changing
   // nothing but the rejections, otherwise.
@@ -165,7 +170,8 @@ class Builder {
   std::vector<PlanePatch> patches_;
   kernel::BoundingBox region_box_;  // of the region's finite points
   FittedPrimitives out_;
-  std::optional<double> sigma_;  // region_sigma()
+  std::optional<double> sigma_;          // region_sigma()
+  std::map<std::string, int> house_of_;  // primitive id -> its proposal's house (take)
   // The points of each primitive in out_.primitives (what emit was given), in its order.
   std::vector<std::vector<std::uint32_t>> emitted_members_;
 };

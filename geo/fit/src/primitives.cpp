@@ -344,7 +344,52 @@ bool Builder::take(const detail::Proposal& proposal) {
   emit(proposal.spec, proposal.members, proposal.area, proposal.what, proposal.carried);
   if (out_.primitives.size() == before) return false;
   for (int s : proposal.shapes) absorbed_[static_cast<std::size_t>(s)] = 1;
+  if (proposal.house >= 0) house_of_[out_.primitives.back().id] = proposal.house;
   return true;
+}
+
+void Builder::name_houses() {
+  auto& prims = out_.primitives;
+  std::map<int, int> number;  // proposal house -> house, in the order of their first primitive
+  std::vector<int> house(prims.size(), -1);
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    const auto it = house_of_.find(prims[k].id);
+    if (it == house_of_.end()) continue;
+    house[k] = number.emplace(it->second, static_cast<int>(number.size())).first->second;
+  }
+  if (number.size() < 2) return;
+  // Footprints as boxes in x, y: a primitive of no house (a block of leftover points, a dome)
+  // goes with the house whose primitives' boxes overlap its own most, else the nearest.
+  std::vector<kernel::BoundingBox> box(prims.size());
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    box[k] = geo::detail::prepare_primitive(prims[k].spec).world_bounds;
+  }
+  const std::vector<int> own = house;
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    if (own[k] >= 0 || box[k].empty()) continue;
+    double best = -INFINITY;
+    int chosen = -1;
+    for (std::size_t m = 0; m < prims.size(); ++m) {
+      if (own[m] < 0 || box[m].empty()) continue;
+      const double dx =
+          std::min(box[k].max.x(), box[m].max.x()) - std::max(box[k].min.x(), box[m].min.x());
+      const double dy =
+          std::min(box[k].max.y(), box[m].max.y()) - std::max(box[k].min.y(), box[m].min.y());
+      // Overlap area when both overlap, else minus the gap between the boxes.
+      const double score =
+          dx > 0.0 && dy > 0.0 ? dx * dy : -std::hypot(std::min(dx, 0.0), std::min(dy, 0.0));
+      if (score > best) {
+        best = score;
+        chosen = own[m];
+      }
+    }
+    house[k] = chosen;
+  }
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    if (house[k] >= 0) {
+      prims[k].house = "r" + std::to_string(region_) + "-h" + std::to_string(house[k]);
+    }
+  }
 }
 
 double Builder::region_sigma() {
@@ -434,6 +479,7 @@ FittedPrimitives Builder::run() {
     join_members();
   }
   if (o_.extrusions) blocks();
+  name_houses();
   return std::move(out_);
 }
 

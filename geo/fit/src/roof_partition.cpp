@@ -16,6 +16,7 @@
 
 #include "fit_internal.h"
 #include "footprint_clip.h"
+#include "houses.h"
 #include "part_contacts.h"
 #include "partition.h"
 #include "plane2d.h"
@@ -603,6 +604,68 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       std::fill(bases.begin(), bases.end(), std::max(*lo, *hi - 0.5));
     }
   }
+  // Without a footprint, the block's houses (houses.h): two parts are one house where their
+  // roofs meet along their shared cell edges — at each edge's middle, their heights within a
+  // step (as for flat pieces) plus the difference of their slopes over a cell (a ridge found
+  // up to a cell off its line). A house is at least min_house_area, 1.5 m (or the narrowest
+  // building) wide, with a tenth of its boundary outside (no parapet, no structure on a roof).
+  std::vector<int> house_of_part;
+  if (!footprinted && o.split_houses && parts.size() > 1) {
+    const double step = std::max(2.0 * tau, 0.25 * o.min_building_height);
+    std::vector<int> part_of(ncell, -1);
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      if (parts[k].label < 0) continue;
+      for (auto c : parts[k].cells) part_of[static_cast<std::size_t>(c)] = static_cast<int>(k);
+    }
+    std::vector<HousePart> house_parts(parts.size());
+    std::map<std::pair<int, int>, PartBoundary> boundary;
+    // The edge between cells c and d (d < 0: off the grid), its middle at (mi, mj) in cells.
+    auto edge = [&](std::ptrdiff_t c, std::ptrdiff_t d, double mi, double mj) {
+      const int a = c < 0 ? -1 : part_of[static_cast<std::size_t>(c)];
+      const int b = d < 0 ? -1 : part_of[static_cast<std::size_t>(d)];
+      if (a == b) return;
+      for (const int k : {a, b}) {
+        if (k < 0) continue;
+        house_parts[static_cast<std::size_t>(k)].perimeter += cell;
+        if (a < 0 || b < 0) house_parts[static_cast<std::size_t>(k)].outside += cell;
+      }
+      if (a < 0 || b < 0) return;
+      PartBoundary& e = boundary[{std::min(a, b), std::max(a, b)}];
+      e.a = std::min(a, b);
+      e.b = std::max(a, b);
+      e.length += cell;
+      ++e.edges;
+      const RoofPlane& pa =
+          planes[static_cast<std::size_t>(parts[static_cast<std::size_t>(a)].label)];
+      const RoofPlane& pb =
+          planes[static_cast<std::size_t>(parts[static_cast<std::size_t>(b)].label)];
+      const Vec2 w = world(ga + mi * cell, gb + mj * cell);
+      const Vec2 slope_a(-pa.n.x() / pa.n.z(), -pa.n.y() / pa.n.z());
+      const Vec2 slope_b(-pb.n.x() / pb.n.z(), -pb.n.y() / pb.n.z());
+      const double apart = std::abs(pa.z(w.x(), w.y()) - pb.z(w.x(), w.y()));
+      if (apart <= step + (slope_a - slope_b).norm() * cell) ++e.continuous;
+    };
+    for (int j = -1; j < ny; ++j) {
+      for (int i = -1; i < nx; ++i) {
+        const std::ptrdiff_t c = i < 0 || j < 0 ? -1 : static_cast<std::ptrdiff_t>(j) * nx + i;
+        const std::ptrdiff_t right =
+            i + 1 < nx && j >= 0 ? static_cast<std::ptrdiff_t>(j) * nx + i + 1 : -1;
+        const std::ptrdiff_t up =
+            j + 1 < ny && i >= 0 ? static_cast<std::ptrdiff_t>(j + 1) * nx + i : -1;
+        if (j >= 0) edge(c, right, i + 1.0, j + 0.5);
+        if (i >= 0) edge(c, up, i + 0.5, j + 1.0);
+      }
+    }
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      house_parts[k].area = static_cast<double>(parts[k].cells.size()) * cell * cell;
+    }
+    std::vector<PartBoundary> boundaries;
+    for (const auto& [pair, e] : boundary) boundaries.push_back(e);
+    HouseRules rules;
+    rules.min_area = o.min_house_area;
+    rules.min_width = std::max(1.5, o.min_building_width);
+    house_of_part = group_houses(house_parts, boundaries, rules);
+  }
   std::optional<VertexSnap> snap;
   if (clip) snap.emplace(std::min(0.05, 0.1 * cell));
   for (std::size_t k = 0; k < parts.size(); ++k) {
@@ -736,6 +799,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       p.area = area / (tilted ? plane.n.z() : 1.0) +
                polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
       p.what = piece_what;
+      if (!house_of_part.empty()) p.house = house_of_part[k];
       out.push_back(std::move(p));
     }
   }

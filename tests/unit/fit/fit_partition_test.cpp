@@ -203,6 +203,15 @@ double top_at(const Partitioned& p, double x, double y) {
   return best;
 }
 
+// The houses the partition's parts belong to (Proposal::house), distinct, ascending.
+std::vector<int> houses_of(const Partitioned& p) {
+  std::vector<int> out;
+  for (const auto& part : p.parts) out.push_back(part.house);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 TEST(FitRoofPartition, GableHouseIsTwoPartsMeetingAtTheRidge) {
   // 12 × 8 m, eaves at 6 m along y = 0 and y = 8, ridge at 9 m along y = 4.
   const GroundGrid ground = ground_around(0, 0, 12, 8);
@@ -211,6 +220,7 @@ TEST(FitRoofPartition, GableHouseIsTwoPartsMeetingAtTheRidge) {
   const auto p = partition(c, ground);
   ASSERT_EQ(p.parts.size(), 2U);
   for (const auto& part : p.parts) EXPECT_EQ(part.spec.clips.size(), 1U) << part.what;
+  EXPECT_EQ(houses_of(p), std::vector<int>{0});  // its slopes meet at the ridge: one house
   double volume = 0.0;
   for (const auto& s : p.solids) volume += kernel::mass_properties(s).volume;
   const double expected = 12.0 * 8.0 * 6.0 + 0.5 * 12.0 * 8.0 * 3.0;  // 720 m³
@@ -341,6 +351,20 @@ TEST(FitRoofPartition, RowOfHousesWithDifferentRidgesKeepsEachRidge) {
   }
   const auto p = partition(c, ground);
   EXPECT_EQ(p.parts.size(), 6U);
+  // Each gable a step against its neighbour's: three houses (issue #18 item 2), each the two
+  // slopes over its own 6 m.
+  EXPECT_EQ(houses_of(p), (std::vector<int>{0, 1, 2}));
+  for (const auto& part : p.parts) {
+    const kernel::BoundingBox box =
+        kernel::bounding_box(kernel::build_primitive(part.spec).value());
+    const int h = static_cast<int>(std::floor(0.5 * (box.min.x() + box.max.x()) / 6.0));
+    for (const auto& other : p.parts) {
+      const kernel::BoundingBox b =
+          kernel::bounding_box(kernel::build_primitive(other.spec).value());
+      const int g = static_cast<int>(std::floor(0.5 * (b.min.x() + b.max.x()) / 6.0));
+      EXPECT_EQ(part.house == other.house, h == g) << part.what << " / " << other.what;
+    }
+  }
   int within = 0, total = 0;
   for (int h = 0; h < 3; ++h) {
     for (double x = 6.0 * h + 0.75; x < 6.0 * h + 5.3; x += 0.5) {
@@ -383,6 +407,7 @@ TEST(FitRoofPartition, HipRoofOverAnLIsPartitionedAlongItsHipsAndValley) {
   }
   const auto p = partition(c, ground);
   EXPECT_GE(p.parts.size(), 6U);
+  EXPECT_EQ(houses_of(p), std::vector<int>{0});  // hips and valley: one roof, one house
   int within = 0, total = 0;
   for (double x = 0.25; x < 20.0; x += 0.5) {
     for (double y = 0.25; y < 20.0; y += 0.5) {
@@ -413,7 +438,8 @@ TEST(FitRoofPartition, AChimneyOnASlopeIsAPartTheSlopeIsNotCutAround) {
       EXPECT_TRUE(part.spec.holes.empty()) << part.what;
     }
   }
-  EXPECT_NEAR(top_at(p, 7.0, 5.0), 10.5, 0.2);  // the chimney
+  EXPECT_NEAR(top_at(p, 7.0, 5.0), 10.5, 0.2);   // the chimney
+  EXPECT_EQ(houses_of(p), std::vector<int>{0});  // of the house it stands on
   for (double x : {2.0, 12.0}) {
     for (double y : {2.0, 5.0, 8.0})
       EXPECT_NEAR(top_at(p, x, y), 6.0 + 0.3 * y, 0.3) << x << "," << y;
@@ -430,6 +456,7 @@ TEST(FitRoofPartition, FlatRoofWithAParapetKeepsTheRoofLevel) {
   c.append(roof(Vec3(15.6, 0.4, 11), Vec3(0.4, 0, 0), Vec3(0, 11.2, 0), 35));
   const auto p = partition(c, ground);
   ASSERT_FALSE(p.parts.empty());
+  EXPECT_EQ(houses_of(p), std::vector<int>{0});  // the parapet is the roof's
   for (double x = 2.0; x <= 14.0; x += 1.0) {
     for (double y = 2.0; y <= 10.0; y += 1.0) EXPECT_NEAR(top_at(p, x, y), 10.0, 0.1);
   }

@@ -34,6 +34,7 @@ struct CellPrimitive {
   assembly::AssemblyPrimitive primitive;
   std::optional<geo::FitQuality> quality;
   kernel::BoundingBox crs_box;
+  std::string building;  // its footprint's id; "" for a derived outline
 };
 
 // The structure points a fit job published (its record's "structure_points"; none for a
@@ -140,7 +141,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
       cp.primitive.spec.placement =
           kernel::Location::translation(tile_origin - cell_origin3) * p.spec.placement;
       cp.primitive.label = tile + "-" + (p.id.empty() ? "p" + std::to_string(i) : p.id);
-      cp.primitive.group = p.building;
+      cp.primitive.group = geo::assembly_group(p, tile);
+      cp.building = p.building;
       cp.quality = p.quality;
       cp.crs_box = box;
       prims.push_back(std::move(cp));
@@ -209,7 +211,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
     io.escalation = object->escalation;
-    io.footprint_id = object->group;
+    // Every primitive of an object has its building (assembly_group).
+    io.footprint_id = prims[static_cast<std::size_t>(object->primitives.front())].building;
     const ordered_json escalation = escalation_json(io.escalation);
     ordered_json prim_records = ordered_json::array();
     std::map<std::string, const CellPrimitive*> by_label;
@@ -236,7 +239,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
          {"fused", object->fused},
          {"error", object->fused ? ordered_json() : ordered_json(object->error)},
          {"escalation", escalation},
-         {"footprint_id", object->group.empty() ? ordered_json() : ordered_json(object->group)},
+         {"footprint_id", io.footprint_id.empty() ? ordered_json() : ordered_json(io.footprint_id)},
          {"volume", object->volume},
          {"primitives", prim_records}});
     objects.objects.push_back(std::move(io));

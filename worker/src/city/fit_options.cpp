@@ -67,6 +67,8 @@ fit::FitPipelineOptions fit_options(const config::Config& config) {
   o.primitives.revolutions = c.primitives.revolutions;
   o.primitives.roof_parts = c.primitives.roof_parts;
   o.primitives.roof_partition = c.primitives.roof_partition;
+  o.primitives.split_houses = c.primitives.split_houses;
+  o.primitives.min_house_area = c.primitives.min_house_area;
   o.primitives.blocks = c.primitives.blocks;
   o.primitives.min_curved_coverage = c.primitives.min_curved_coverage;
   o.primitives.max_overreach = c.primitives.max_overreach;

@@ -101,6 +101,8 @@ struct FitPrimitivesConfig {
   bool revolutions = true;
   bool roof_parts = true;
   bool roof_partition = true;
+  bool split_houses = true;
+  double min_house_area = 25.0;
   bool blocks = true;
   double min_curved_coverage = 0.05;
   double max_overreach = 0.25;

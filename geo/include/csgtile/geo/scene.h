@@ -38,7 +38,16 @@ struct ScenePrimitive {
   /// (geo/footprints.h). Primitives of different buildings are never fused into one object;
   /// "" (the key absent): no footprint.
   std::string building{};
+  /// Without a footprint, the house of its block it was fitted for (key "house", an
+  /// extension; fit: PrimitiveOptions::split_houses), unique within its scene: primitives of
+  /// different houses are never fused into one object either. "" (the key absent): none.
+  std::string house{};
 };
+
+/// The assembly group of a primitive (primitives of different groups are never one object):
+/// "footprint " + its building, else "house " + `scope` + "/" + its house (`scope`: what makes
+/// house names unique when several scenes are assembled together, e.g. the tile), else "".
+std::string assembly_group(const ScenePrimitive& p, std::string_view scope = {});
 
 /// Counts of distinct sub-shapes; -1 where the scene does not give one.
 struct TopologyCounts {
@@ -74,8 +83,8 @@ kernel::Result<Scene> parse_scene(std::string_view json);
 
 /// Scene JSON that parse_scene reads back to an equal scene: numbers in their shortest
 /// round-trip form, keys in a fixed order (name, op, crs, origin, seed, primitives, expected;
-/// per primitive: type, id, parameters, placement, quality, building), one primitive per line. Same
-/// scene, same bytes. Placements are written as 3×4 matrices [s·R | t]; parse_scene
+/// per primitive: type, id, parameters, placement, quality, building, house), one primitive per
+/// line. Same scene, same bytes. Placements are written as 3×4 matrices [s·R | t]; parse_scene
 /// re-orthonormalises R, so a general rotation may move in its last bits when read back.
 std::string scene_to_json(const Scene& scene);
 

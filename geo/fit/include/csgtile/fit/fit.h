@@ -183,6 +183,14 @@ struct PrimitiveOptions {
   /// sharing their walls exactly. Runs after the revolutions and before every other
   /// building step, which then see only the points it left (needs `ground`).
   bool roof_partition = true;
+  /// Without a footprint, a block's roof partition is split into houses where its roofs say
+  /// so (issue #18 item 2): parts whose roofs meet along their boundary (ridge, hip, valley)
+  /// are one house, a height step between them separates two; a house under min_house_area
+  /// (square metres) joins the neighbour it shares most boundary with. Each house is a
+  /// building of its own (geo::ScenePrimitive::house): never fused with its neighbours, its
+  /// contact with them a relation (a party wall).
+  bool split_houses = true;
+  double min_house_area = 25.0;
   /// A building's footprint (its polygons, in the points' frame; set per region by the fit
   /// pipeline): the roof partition covers exactly it — the grid's cells meeting it, its parts
   /// clipped to it, no outline derived from the points — and the region makes nothing else
