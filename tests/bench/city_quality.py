@@ -150,7 +150,8 @@ def measure(points, buildings, model_paths, picture):
                 for a in range(len(ring)):
                     grid.line(ring[a], ring[(a + 1) % len(ring)], outline)
     write_png(picture, nx, ny, rgb)
-    return {"features": features, "buildings": instances(pairs, in_footprint, of_object), "features_by_lod": lods, "surfaces": len(surfaces),
+    return {"features": features, "instances": instances(pairs, in_footprint, of_object),
+            "features_by_lod": lods, "surfaces": len(surfaces),
             "inside_footprints": model_distance.summarise(in_d, in_o),
             "whole_tile": model_distance.summarise(all_d, all_o), "picture": picture}
 

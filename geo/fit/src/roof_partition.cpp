@@ -607,7 +607,8 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
   // Without a footprint, the block's houses (houses.h): two parts are one house where their
   // roofs meet along their shared cell edges — at each edge's middle, their heights within a
   // step (as for flat pieces) plus the difference of their slopes over a cell (a ridge found
-  // up to a cell off its line). A house is at least min_house_area, 1.5 m (or the narrowest
+  // up to a cell off its line); an edge where the two share no wall (one's base above the
+  // other's roof) joins nothing. A house is at least min_house_area, 1.5 m (or the narrowest
   // building) wide, with a tenth of its boundary outside (no parapet, no structure on a roof).
   std::vector<int> house_of_part;
   if (!footprinted && o.split_houses && parts.size() > 1) {
@@ -630,19 +631,27 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         if (a < 0 || b < 0) house_parts[static_cast<std::size_t>(k)].outside += cell;
       }
       if (a < 0 || b < 0) return;
-      PartBoundary& e = boundary[{std::min(a, b), std::max(a, b)}];
-      e.a = std::min(a, b);
-      e.b = std::max(a, b);
-      e.length += cell;
-      ++e.edges;
       const RoofPlane& pa =
           planes[static_cast<std::size_t>(parts[static_cast<std::size_t>(a)].label)];
       const RoofPlane& pb =
           planes[static_cast<std::size_t>(parts[static_cast<std::size_t>(b)].label)];
       const Vec2 w = world(ga + mi * cell, gb + mj * cell);
+      const double za = pa.z(w.x(), w.y()), zb = pb.z(w.x(), w.y());
+      // No wall in common there (one stands wholly above the other's roof, on higher ground):
+      // no contact, for the houses as for the fuse.
+      if (!(std::min(za, zb) -
+                std::max(bases[static_cast<std::size_t>(a)], bases[static_cast<std::size_t>(b)]) >
+            0.1)) {
+        return;
+      }
+      PartBoundary& e = boundary[{std::min(a, b), std::max(a, b)}];
+      e.a = std::min(a, b);
+      e.b = std::max(a, b);
+      e.length += cell;
+      ++e.edges;
       const Vec2 slope_a(-pa.n.x() / pa.n.z(), -pa.n.y() / pa.n.z());
       const Vec2 slope_b(-pb.n.x() / pb.n.z(), -pb.n.y() / pb.n.z());
-      const double apart = std::abs(pa.z(w.x(), w.y()) - pb.z(w.x(), w.y()));
+      const double apart = std::abs(za - zb);
       if (apart <= step + (slope_a - slope_b).norm() * cell) ++e.continuous;
     };
     for (int j = -1; j < ny; ++j) {
