@@ -10,7 +10,9 @@ default settings (city_speed.py's configuration, one thread), without and with t
 reads what the cells published (model.city.jsonl: the highest LoD of each feature) and gives,
 for the class-6 points inside the BGT footprints and for all class-6 points of the tile:
 share within 0.1 / 0.3 / 1 m, RMSE, median, covered (a surface within 20 m) and the median of
-the published objects' RMSEs (points given to the object of their nearest surface). A top
+the published objects' RMSEs (points given to the object of their nearest surface); and the
+buildings as instances (`instances`: a footprint and an object match when their building
+points' IoU is at least 0.5; recall over the footprints, precision over the objects). A top
 view OUT/<run>_distance.png (0.5 m pixels, north up): the farthest building point of each
 pixel white within 0.3 m, orange within 1 m, red farther, black with no surface near; other
 points grey; footprints outlined blue.
