@@ -71,18 +71,16 @@ std::vector<int> group_houses(const std::vector<HousePart>& parts,
       return h.area < rules.min_area || 2.0 * h.area < rules.min_width * h.perimeter ||
              h.outside < rules.min_outside * h.perimeter;
     };
+    std::vector<char> has_neighbour(parts.size(), 0);
+    for (const auto& entry : between) {
+      has_neighbour[static_cast<std::size_t>(entry.first.first)] = 1;
+      has_neighbour[static_cast<std::size_t>(entry.first.second)] = 1;
+    }
     int worst = -1;
     for (int k = 0; k < n; ++k) {
       const auto ks = static_cast<std::size_t>(k);
-      if (find(parent, k) != k || !breaks_rules(house[ks])) continue;
-      bool has_neighbour = false;
-      for (const auto& entry : between) {
-        has_neighbour = has_neighbour || entry.first.first == k || entry.first.second == k;
-      }
-      if (has_neighbour &&
-          (worst < 0 || house[ks].area < house[static_cast<std::size_t>(worst)].area)) {
-        worst = k;
-      }
+      if (find(parent, k) != k || !has_neighbour[ks] || !breaks_rules(house[ks])) continue;
+      if (worst < 0 || house[ks].area < house[static_cast<std::size_t>(worst)].area) worst = k;
     }
     if (worst < 0) break;
     int best = -1;

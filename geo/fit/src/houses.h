@@ -12,15 +12,17 @@
 namespace csgtile::fit::detail {
 
 /// One part of a partition: its area, the length of its boundary, and of the part of that
-/// boundary on the outside (no other part beyond it: a facade, a courtyard's wall).
+/// boundary on the outside (a facade, a courtyard's wall, or a wall the neighbour beyond it
+/// does not share: one part's base above the other's roof).
 struct HousePart {
   double area = 0.0;
   double perimeter = 0.0;
   double outside = 0.0;
 };
 
-/// The boundary between parts `a` < `b`: its length, its number of cell edges and how many
-/// of those are continuous (the two roofs at one height there, within the step).
+/// The boundary between parts `a` < `b` where they share a wall: its length, its number of
+/// cell edges, and how many of those are continuous (the two roofs at one height there,
+/// within a step plus what the difference of their slopes allows over a cell).
 struct PartBoundary {
   int a = 0, b = 0;
   double length = 0.0;
@@ -36,13 +38,13 @@ struct HouseRules {
   double min_outside = 0.1;
 };
 
-/// Per part, its house: parts joined by boundaries at least four fifths continuous are one
-/// house (two slopes of different pitch meeting at the eaves differ along the rest of their
-/// boundary) when that is at least `min_width` long (not a corner);
-/// then a house that breaks a rule joins the neighbouring house with the longest boundary to
-/// it (the smallest such house first, ties by the lower index), until every house with a
-/// neighbour keeps the rules. Houses are numbered 0, 1, ... in the order of their first part.
-/// Deterministic.
+/// Per part, its house. Parts joined by a boundary at least four fifths continuous (two slopes
+/// of different pitch meeting at the eaves differ along the rest of their boundary), whose
+/// continuous edges are at least `min_width` long (not a corner), are one house. Then a house
+/// that breaks a rule joins the neighbouring house with the longest boundary to it, the
+/// smallest such house first (ties, of area or of length, to the lower index), until every
+/// house with a neighbour keeps the rules. Houses are numbered 0, 1, ... in the order of their
+/// first part. Deterministic.
 std::vector<int> group_houses(const std::vector<HousePart>& parts,
                               const std::vector<PartBoundary>& boundaries, const HouseRules& rules);
 

@@ -13,6 +13,7 @@
 
 #include "csgtile/fit/segment.h"
 #include "fit_internal.h"
+#include "house_overlaps.h"
 
 namespace csgtile::fit {
 
@@ -385,7 +386,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   start = std::chrono::steady_clock::now();
   // Footprints first: each one's points are a region; the points of none are clustered.
   std::vector<std::vector<std::uint32_t>> clusters;
-  std::vector<int> region_footprint;                // per region: its footprint, -1 for a cluster
+  std::vector<int> region_footprint;  // per region: its footprint, -1 for a cluster
+  // Per region: 1 when it is a building fitted in parts by neighbouring tiles (ShareKind::
+  // own_points): its parts fuse across the seam only as one building, so it is not split into
+  // houses.
+  std::vector<char> region_in_parts;
   std::vector<geo::Footprint> straight_footprints;  // the footprints used (outlives the fit)
   if (!footprints.empty()) {
     // Walls digitised with nearly collinear vertices are made straight (within 1 cm).
@@ -460,6 +465,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
           std::erase_if(c, [&](std::uint32_t i) { return foreign[i] != 0; });
           out.points_left_to_neighbours += static_cast<long long>(size - c.size());
           if (c.empty()) continue;
+          region_in_parts.resize(clusters.size(), 0);
+          region_in_parts.push_back(1);
         }
       }
       clusters.push_back(std::move(c));
@@ -478,9 +485,12 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     // Regions are numbered in cluster order, then in that order within a cluster.
     start = std::chrono::steady_clock::now();
     std::vector<std::vector<std::uint32_t>> split;
+    std::vector<char> split_in_parts;
     std::vector<Vec3> p, n;
     std::vector<double> k;
-    for (const auto& cluster : clusters) {
+    region_in_parts.resize(clusters.size(), 0);
+    for (std::size_t ci = 0; ci < clusters.size(); ++ci) {
+      const auto& cluster = clusters[ci];
       p.clear();
       n.clear();
       k.clear();
@@ -499,14 +509,19 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
           taken[local] = 1;
         }
         split.push_back(std::move(members));
+        split_in_parts.push_back(region_in_parts[ci]);
       }
       std::vector<std::uint32_t> rest;
       for (std::size_t local = 0; local < cluster.size(); ++local) {
         if (!taken[local]) rest.push_back(cluster[local]);
       }
-      if (!rest.empty()) split.push_back(std::move(rest));
+      if (!rest.empty()) {
+        split.push_back(std::move(rest));
+        split_in_parts.push_back(region_in_parts[ci]);
+      }
     }
     clusters = std::move(split);
+    region_in_parts = std::move(split_in_parts);
     region_footprint.assign(clusters.size(), -1);  // grown regions: never with footprints
     out.seconds.emplace_back("regions", seconds_since(start));
   }
@@ -565,6 +580,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (f.with_primitives) {
       const auto t1 = std::chrono::steady_clock::now();
       PrimitiveOptions region_options = primitive_options;
+      if (r < region_in_parts.size() && region_in_parts[r]) region_options.split_houses = false;
       if (footprint >= 0) {
         region_options.footprint = &footprints[static_cast<std::size_t>(footprint)].polygons;
       }
@@ -590,6 +606,7 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     });
   }
   double ransac_seconds = 0.0, primitives_seconds = 0.0;
+  std::vector<int> primitive_region;  // per primitive of out.primitives
   for (std::size_t r = 0; r < clusters.size(); ++r) {
     RegionFit& f = fits[r];
     if (f.error) return *f.error;
@@ -626,7 +643,10 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (f.with_primitives) {
       FittedPrimitives& fitted = f.fitted;
       out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
-      for (auto& prim : fitted.primitives) out.primitives.push_back(std::move(prim));
+      for (auto& prim : fitted.primitives) {
+        out.primitives.push_back(std::move(prim));
+        primitive_region.push_back(static_cast<int>(r));
+      }
       for (auto& rej : fitted.rejected) {
         rej.what = "region " + std::to_string(r) + " " + rej.what;
         out.rejected.push_back(std::move(rej));
@@ -641,6 +661,9 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
   // One ground per building: parts standing within the ground filter's height tolerance of
   // each other stand on one base (no sliver steps when they are fused).
   if (options.ground.enabled) detail::snap_extrusion_bases(out.primitives, options.ground.height);
+  // Houses of different regions whose solids overlap (a storey clustered apart from the roof
+  // beside it) are one house: two buildings never overlap (5 cm: more than touching).
+  detail::join_overlapping_houses(out.primitives, primitive_region, 0.05);
   out.unassigned_points = out.fitted_points - out.assigned_points;
   if (options.keep_segments) {
     // Input point → fitted-cloud point: the same point when nothing was downsampled (or

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <array>
-#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -137,9 +136,10 @@ class Builder {
   // region has too few points to tell.
   double region_sigma();
   bool take(const detail::Proposal& proposal);
-  // When the roof partition split the region into houses (Proposal::house): every primitive's
-  // ScenePrimitive::house, those of no house given the house their footprint overlaps most
-  // (else the nearest); nothing when there is one house or none.
+  // When the roof partition split the region into houses (Proposal::house, which take()
+  // leaves in ScenePrimitive::house as its number): every primitive's house named, those of
+  // no house given the houses their boxes overlap (joined into one when several), else the
+  // nearest; no house at all when one is left.
   void name_houses();
   // A building in its footprint carrying a dome: when the dome takes (nearly) all its points,
   // the dome on the footprint's prism up to the dome's base, else domed_roof. False, changing
@@ -170,8 +170,7 @@ class Builder {
   std::vector<PlanePatch> patches_;
   kernel::BoundingBox region_box_;  // of the region's finite points
   FittedPrimitives out_;
-  std::optional<double> sigma_;          // region_sigma()
-  std::map<std::string, int> house_of_;  // primitive id -> its proposal's house (take)
+  std::optional<double> sigma_;  // region_sigma()
   // The points of each primitive in out_.primitives (what emit was given), in its order.
   std::vector<std::vector<std::uint32_t>> emitted_members_;
 };

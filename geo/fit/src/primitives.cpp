@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <set>
 #include <tuple>
 
@@ -344,47 +345,83 @@ bool Builder::take(const detail::Proposal& proposal) {
   emit(proposal.spec, proposal.members, proposal.area, proposal.what, proposal.carried);
   if (out_.primitives.size() == before) return false;
   for (int s : proposal.shapes) absorbed_[static_cast<std::size_t>(s)] = 1;
-  if (proposal.house >= 0) house_of_[out_.primitives.back().id] = proposal.house;
+  // Its house's number until name_houses names the region's houses.
+  if (proposal.house >= 0) out_.primitives.back().house = std::to_string(proposal.house);
   return true;
 }
 
 void Builder::name_houses() {
   auto& prims = out_.primitives;
-  std::map<int, int> number;  // proposal house -> house, in the order of their first primitive
+  // take() left each partition part's house as its number; renumbered in the order of their
+  // first primitive.
+  std::map<int, int> number;
   std::vector<int> house(prims.size(), -1);
   for (std::size_t k = 0; k < prims.size(); ++k) {
-    const auto it = house_of_.find(prims[k].id);
-    if (it == house_of_.end()) continue;
-    house[k] = number.emplace(it->second, static_cast<int>(number.size())).first->second;
+    if (prims[k].house.empty()) continue;
+    house[k] =
+        number.emplace(std::stoi(prims[k].house), static_cast<int>(number.size())).first->second;
+    prims[k].house.clear();
   }
   if (number.size() < 2) return;
-  // Footprints as boxes in x, y: a primitive of no house (a block of leftover points, a dome)
-  // goes with the house whose primitives' boxes overlap its own most, else the nearest.
+  // A primitive of no house (a block of leftover points, a dome, a roof part) goes with the
+  // houses whose primitives' boxes (in x, y) overlap its own by a tenth of its box or more —
+  // those houses become one, so that no two buildings overlap — else with the house it
+  // overlaps most, else the nearest.
   std::vector<kernel::BoundingBox> box(prims.size());
   for (std::size_t k = 0; k < prims.size(); ++k) {
     box[k] = geo::detail::prepare_primitive(prims[k].spec).world_bounds;
   }
+  std::vector<int> parent(number.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&parent](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
+    return x;
+  };
   const std::vector<int> own = house;
   for (std::size_t k = 0; k < prims.size(); ++k) {
     if (own[k] >= 0 || box[k].empty()) continue;
-    double best = -INFINITY;
-    int chosen = -1;
+    const double area =
+        std::max((box[k].max.x() - box[k].min.x()) * (box[k].max.y() - box[k].min.y()), 1e-12);
+    std::map<int, double> overlap;  // house -> overlap of its primitives' boxes with box[k]
+    double nearest = INFINITY;
+    int near = -1;
     for (std::size_t m = 0; m < prims.size(); ++m) {
       if (own[m] < 0 || box[m].empty()) continue;
       const double dx =
           std::min(box[k].max.x(), box[m].max.x()) - std::max(box[k].min.x(), box[m].min.x());
       const double dy =
           std::min(box[k].max.y(), box[m].max.y()) - std::max(box[k].min.y(), box[m].min.y());
-      // Overlap area when both overlap, else minus the gap between the boxes.
-      const double score =
-          dx > 0.0 && dy > 0.0 ? dx * dy : -std::hypot(std::min(dx, 0.0), std::min(dy, 0.0));
-      if (score > best) {
-        best = score;
-        chosen = own[m];
+      if (dx > 0.0 && dy > 0.0) {
+        overlap[own[m]] += dx * dy;
+      } else if (const double gap = std::hypot(std::min(dx, 0.0), std::min(dy, 0.0));
+                 gap < nearest) {
+        nearest = gap;
+        near = own[m];
       }
     }
-    house[k] = chosen;
+    int chosen = -1;
+    double most = 0.0;
+    for (const auto& [h, a] : overlap) {
+      if (a > most) {
+        most = a;
+        chosen = h;
+      }
+    }
+    for (const auto& [h, a] : overlap) {
+      if (h != chosen && a >= 0.1 * area) {
+        const int x = root(h), y = root(chosen);
+        parent[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
+      }
+    }
+    house[k] = chosen >= 0 ? chosen : near;
   }
+  // The houses left after the joins, numbered again in the order of their first primitive.
+  std::map<int, int> renumber;
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    if (house[k] < 0) continue;
+    house[k] = renumber.emplace(root(house[k]), static_cast<int>(renumber.size())).first->second;
+  }
+  if (renumber.size() < 2) return;
   for (std::size_t k = 0; k < prims.size(); ++k) {
     if (house[k] >= 0) {
       prims[k].house = "r" + std::to_string(region_) + "-h" + std::to_string(house[k]);

@@ -625,12 +625,19 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       const int a = c < 0 ? -1 : part_of[static_cast<std::size_t>(c)];
       const int b = d < 0 ? -1 : part_of[static_cast<std::size_t>(d)];
       if (a == b) return;
+      // Its length is on the outside of either part unless they share a wall there.
+      auto outside = [&] {
+        for (const int k : {a, b}) {
+          if (k >= 0) house_parts[static_cast<std::size_t>(k)].outside += cell;
+        }
+      };
       for (const int k : {a, b}) {
-        if (k < 0) continue;
-        house_parts[static_cast<std::size_t>(k)].perimeter += cell;
-        if (a < 0 || b < 0) house_parts[static_cast<std::size_t>(k)].outside += cell;
+        if (k >= 0) house_parts[static_cast<std::size_t>(k)].perimeter += cell;
       }
-      if (a < 0 || b < 0) return;
+      if (a < 0 || b < 0) {
+        outside();
+        return;
+      }
       const RoofPlane& pa =
           planes[static_cast<std::size_t>(parts[static_cast<std::size_t>(a)].label)];
       const RoofPlane& pb =
@@ -642,6 +649,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       if (!(std::min(za, zb) -
                 std::max(bases[static_cast<std::size_t>(a)], bases[static_cast<std::size_t>(b)]) >
             0.1)) {
+        outside();
         return;
       }
       PartBoundary& e = boundary[{std::min(a, b), std::max(a, b)}];
@@ -674,6 +682,24 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     rules.min_area = o.min_house_area;
     rules.min_width = std::max(1.5, o.min_building_width);
     house_of_part = group_houses(house_parts, boundaries, rules);
+    // A part inside another's hole (a tower, a roof structure) is that part's house: a tilted
+    // roof is not cut around it (below), the two overlap, and two houses never overlap.
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      for (const auto& h : parts[k].holes) {
+        if (h.size() < 3) continue;
+        const Eigen::Vector2d d = h[1] - h[0];
+        const Eigen::Vector2d inside =
+            0.5 * (h[0] + h[1]) + 1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized();
+        for (std::size_t m = 0; m < parts.size(); ++m) {
+          const int from = house_of_part[m], to = house_of_part[k];
+          if (m == k || from == to || parts[m].outer.size() < 3 ||
+              !inside_ring(inside, parts[m].outer)) {
+            continue;
+          }
+          for (int& x : house_of_part) x = x == from ? to : x;
+        }
+      }
+    }
   }
   std::optional<VertexSnap> snap;
   if (clip) snap.emplace(std::min(0.05, 0.1 * cell));
@@ -731,12 +757,15 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
       whole.holes.push_back(std::move(hole));
     }
-    // With a footprint, the part's pieces inside it (slivers under a hundredth of a cell
-    // left out), their vertices snapped across the parts; each point goes with the piece it
-    // lies in, else with the largest.
+    // With a footprint (or a derived outline), the part's pieces inside it, their vertices
+    // snapped across the parts; each point goes with the piece it lies in, else with the
+    // largest. Slivers are left out: under a hundredth of a cell in a footprint (which the
+    // building covers exactly), under a cell in a derived outline (a corner the outline cuts
+    // off a part: a speck touching the part at a point, whose footprint is then in pieces).
     std::vector<FramePolygon> pieces;
     if (clip) {
-      for (const FramePolygon& piece : clip->clip(whole, 0.01 * cell * cell)) {
+      const double least = (footprinted ? 0.01 : 1.0) * cell * cell;
+      for (const FramePolygon& piece : clip->clip(whole, least)) {
         if (auto snapped = snap->snap(piece)) pieces.push_back(std::move(*snapped));
       }
     } else {

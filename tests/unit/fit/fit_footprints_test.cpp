@@ -233,7 +233,15 @@ TEST(FitFootprints, WithoutFootprintsTheRowIsSplitIntoItsHouses) {
   o.primitives.split_houses = false;
   const auto whole = fit_point_cloud(row.points, row.classes, o, {});
   ASSERT_TRUE(whole.ok()) << whole.error().message;
-  for (const auto& p : whole->primitives) EXPECT_EQ(p.house, "") << p.id;
+  ASSERT_FALSE(whole->primitives.empty());
+  input.clear();
+  for (const auto& p : whole->primitives) {
+    EXPECT_EQ(p.house, "") << p.id;
+    input.push_back({p.spec, p.id, geo::assembly_group(p)});
+  }
+  const auto one = assembly::assemble(input, ao);
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  EXPECT_EQ(one->objects.size(), 1U);
 }
 
 // A flat roof (20 × 12 m at 8 m, 10 points per m²) with its walls seen at about two points per

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "house_overlaps.h"
 #include "houses.h"
 
 namespace csgtile::fit::detail {
@@ -64,9 +65,62 @@ TEST(FitHouses, SmallThinAndEnclosedPartsJoinTheHouseTheyShareMostWith) {
 
 TEST(FitHouses, HousesAreNumberedByTheirFirstPart) {
   std::vector<HousePart> parts{rect(8, 8, 16), rect(8, 8, 16), rect(8, 8, 16)};
-  // Part 1 and 2 are one house, part 0 another: 0 is house 0.
-  const std::vector<PartBoundary> b{meet(0, 1, 8, 16, 0), meet(1, 2, 8, 16, 16)};
+  // Parts 0 and 2 are one house (their roofs meet), part 1 another.
+  const std::vector<PartBoundary> b{meet(0, 1, 8, 16, 0), meet(1, 2, 8, 16, 0),
+                                    meet(0, 2, 8, 16, 16)};
+  EXPECT_EQ(group_houses(parts, b, HouseRules{}), (std::vector<int>{0, 1, 0}));
+}
+
+TEST(FitHouses, RoofsMeetingAtACornerOnlyAreTwoHouses) {
+  // Two 8 × 8 m roofs whose continuous boundary is one metre long (a corner): shorter than a
+  // house is wide, no joint.
+  std::vector<HousePart> parts{rect(8, 8, 24), rect(8, 8, 24)};
+  EXPECT_EQ(group_houses(parts, {meet(0, 1, 1.0, 2, 2)}, HouseRules{}), (std::vector<int>{0, 1}));
+  EXPECT_EQ(group_houses(parts, {meet(0, 1, 2.0, 4, 4)}, HouseRules{}), (std::vector<int>{0, 0}));
+}
+
+TEST(FitHouses, ASmallHouseJoinsTheNeighbourItSharesMostWithTiesToTheFirst) {
+  // A 4 × 4 m shed between two houses: 4 m with house 0, 4 m with house 2 (a tie: the first).
+  std::vector<HousePart> parts{rect(8, 8, 24), rect(4, 4, 8), rect(8, 8, 24)};
+  std::vector<PartBoundary> b{meet(0, 1, 4, 8, 0), meet(1, 2, 4, 8, 0)};
+  EXPECT_EQ(group_houses(parts, b, HouseRules{}), (std::vector<int>{0, 0, 1}));
+  b[1].length = 5;  // now longer with house 2
   EXPECT_EQ(group_houses(parts, b, HouseRules{}), (std::vector<int>{0, 1, 1}));
+}
+
+// A box of `size` with its minimum corner at `corner`, of `house` (derived).
+geo::ScenePrimitive box(const kernel::Vec3& corner, const kernel::Vec3& size,
+                        const std::string& house) {
+  geo::ScenePrimitive p;
+  p.spec.type = kernel::PrimitiveType::Box;
+  p.spec.size = size;
+  p.spec.placement = kernel::Location::translation(corner);
+  p.house = house;
+  return p;
+}
+
+TEST(FitHouses, HousesWhoseSolidsOverlapAreOne) {
+  // Region 0: houses h0 and h1 touching along x = 8 (a party wall). Region 1: house h0, a
+  // storey that overlaps region 0's h1 by 1 m; region 2 (no houses) overlaps region 1's; a
+  // footprint building overlapping h0 takes no part.
+  std::vector<geo::ScenePrimitive> prims{
+      box({0, 0, 0}, {8, 10, 6}, "r0-h0"),  box({8, 0, 0}, {8, 10, 9}, "r0-h1"),
+      box({15, 0, 3}, {6, 10, 6}, "r1-h0"), box({20, 2, 0}, {3, 3, 4}, ""),
+      box({2, 2, 0}, {3, 3, 7}, ""),
+  };
+  prims.back().building = "F";
+  const std::vector<int> region{0, 0, 1, 2, 3};
+  join_overlapping_houses(prims, region, 0.05);
+  EXPECT_EQ(prims[0].house, "r0-h0");  // touches h1 only
+  EXPECT_EQ(prims[1].house, "r0-h1");
+  EXPECT_EQ(prims[2].house, "r0-h1");  // overlaps it
+  EXPECT_EQ(prims[3].house, "r0-h1");  // the region without houses overlapping it
+  EXPECT_EQ(prims[4].house, "");       // a footprint's
+  // Touching only (a face in common): nothing joins.
+  std::vector<geo::ScenePrimitive> row{box({0, 0, 0}, {8, 10, 6}, "r0-h0"),
+                                       box({8, 0, 0}, {8, 10, 9}, "r1-h0")};
+  join_overlapping_houses(row, {0, 1}, 0.05);
+  EXPECT_EQ(row[1].house, "r1-h0");
 }
 
 }  // namespace

@@ -530,6 +530,32 @@ TEST(SceneJson, RoundTripsThroughTheParser) {
   }
 }
 
+// A primitive's building (footprint id) and house (derived) are read back, and name its
+// assembly group: footprints and houses never share a group, houses of different scenes
+// neither.
+TEST(SceneJson, BuildingAndHouseRoundTripAndNameTheGroup) {
+  auto made = make_synth_scene("city-block", 3);
+  ASSERT_TRUE(made.ok());
+  Scene scene = made->scene;
+  ASSERT_GE(scene.primitives.size(), 3U);
+  scene.primitives[0].building = "r1-h0";
+  scene.primitives[1].house = "r1-h0";
+  auto back = parse_scene(scene_to_json(scene));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->primitives[0].building, "r1-h0");
+  EXPECT_EQ(back->primitives[0].house, "");
+  EXPECT_EQ(back->primitives[1].building, "");
+  EXPECT_EQ(back->primitives[1].house, "r1-h0");
+  EXPECT_EQ(back->primitives[2].house, "");
+  EXPECT_EQ(assembly_group(back->primitives[0], "t0"), "footprint r1-h0");
+  EXPECT_EQ(assembly_group(back->primitives[1], "t0"), "house t0/r1-h0");
+  EXPECT_NE(assembly_group(back->primitives[1], "t0"), assembly_group(back->primitives[1], "t1"));
+  EXPECT_EQ(assembly_group(back->primitives[2], "t0"), "");
+  EXPECT_FALSE(parse_scene(R"({"primitives": [{"type": "box", "size": [1, 1, 1],
+                          "placement": [[1,0,0,0],[0,1,0,0],[0,0,1,0]], "house": 3}]})")
+                   .ok());
+}
+
 TEST(SceneJson, RejectsABadOrigin) {
   auto scene = parse_scene(R"({"origin": [1, 2], "primitives": []})");
   ASSERT_FALSE(scene.ok());

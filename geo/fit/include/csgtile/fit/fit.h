@@ -186,7 +186,8 @@ struct PrimitiveOptions {
   /// Without a footprint, a block's roof partition is split into houses where its roofs say
   /// so (issue #18 item 2): parts whose roofs meet along their boundary (ridge, hip, valley)
   /// are one house, a height step between them separates two; a house under min_house_area
-  /// (square metres) joins the neighbour it shares most boundary with. Each house is a
+  /// (square metres), narrower than 1.5 m or with a tenth of its boundary outside joins the
+  /// neighbour it shares most boundary with; houses whose solids overlap are one. Each house is a
   /// building of its own (geo::ScenePrimitive::house): never fused with its neighbours, its
   /// contact with them a relation (a party wall).
   bool split_houses = true;
