@@ -23,37 +23,15 @@ import math
 import os
 import random
 import shutil
-import struct
 import subprocess
 import sys
+
+from city_las import val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
 R, H, CX, CY = 6.0, 8.0, 85030.0, 447530.0
-
-
-def write_las(path, points):
-    """LAS 1.2, point format 0, scale 1 mm."""
-    scale = 0.001
-    xs, ys, zs = ([p[k] for p in points] for k in range(3))
-    offset = (math.floor(min(xs)), math.floor(min(ys)), 0.0)
-    header = bytearray(227)
-    header[0:4] = b"LASF"
-    struct.pack_into("<BB", header, 24, 1, 2)
-    header[26:58] = b"csgtile city_run_dome".ljust(32, b"\0")
-    struct.pack_into("<HHH", header, 90, 1, 2026, 227)
-    struct.pack_into("<IIBHI", header, 96, 227, 0, 0, 20, len(points))
-    struct.pack_into("<5I", header, 111, len(points), 0, 0, 0, 0)
-    struct.pack_into("<3d", header, 131, scale, scale, scale)
-    struct.pack_into("<3d", header, 155, *offset)
-    struct.pack_into("<6d", header, 179, max(xs), min(xs), max(ys), min(ys), max(zs), min(zs))
-    with open(path, "wb") as f:
-        f.write(header)
-        for x, y, z, c in points:
-            f.write(struct.pack("<3iHBBbBH", round((x - offset[0]) / scale),
-                                round((y - offset[1]) / scale), round((z - offset[2]) / scale),
-                                0, 0x09, c, 0, 0, 0))
 
 
 rnd = random.Random(7)
@@ -94,7 +72,7 @@ for _ in range(int(2 * math.pi * R * H)):
     a, z, rr = rnd.random() * 2 * math.pi, rnd.random() * H, R + rnd.gauss(0, 0.02)
     points.append((CX + rr * math.cos(a), CY + rr * math.sin(a), z, 6))
 tile = os.path.join(work, "dome.las")
-write_las(tile, points)
+write_las(tile, points, "csgtile city_run_dome")
 
 footprint = os.path.join(work, "footprint.geojson")
 ring = [[CX + R * math.cos(2 * math.pi * k / 48), CY + R * math.sin(2 * math.pi * k / 48)]
@@ -125,7 +103,7 @@ for _ in range(int(2 * (RW + RD) * RH)):
         x, y = CX - RW / 2, CY + RD / 2 - (t - 2 * RW - RD)
     roof_points.append((x, y, z, 6))
 roof_tile = os.path.join(work, "domed_roof.las")
-write_las(roof_tile, roof_points)
+write_las(roof_tile, roof_points, "csgtile city_run_dome")
 roof_footprint = os.path.join(work, "roof_footprint.geojson")
 box = [[CX - RW / 2, CY - RD / 2], [CX + RW / 2, CY - RD / 2], [CX + RW / 2, CY + RD / 2],
        [CX - RW / 2, CY + RD / 2], [CX - RW / 2, CY - RD / 2]]
@@ -176,18 +154,8 @@ for name, tile, extra, under, footprint_id, truth in cases:
                     assert o["type"] == "Building" and o.get("geometry"), (name, oid, o["type"])
                     features += 1
     assert features == 1, (name, features)
-    valid = None
-    if os.path.exists(val3dity):
-        valid = 0
-        for seq in seqs:
-            report = seq + ".val3dity.json"
-            v = subprocess.run([val3dity, seq, "--report", report], capture_output=True,
-                               text=True)
-            assert os.path.exists(report), (v.stdout, v.stderr)
-            for feature in json.load(open(report))["features"]:
-                assert feature["validity"], (name, feature)
-                valid += 1
-        assert valid == features, (name, valid, features)
+    valid = val3dity_valid(val3dity, seqs, name)
+    assert valid in (None, features), (name, valid, features)
     figures[name] = {"volume": round(dome["volume"], 2), "truth": round(truth, 2),
                      "model_rmse": round(rmse, 4), "features_valid": valid}
 print(json.dumps(figures))

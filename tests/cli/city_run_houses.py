@@ -22,9 +22,10 @@ import os
 import random
 import shutil
 import sqlite3
-import struct
 import subprocess
 import sys
+
+from city_las import val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
@@ -35,29 +36,6 @@ RIDGES = (9.0, 11.0, 9.5)
 CHIMNEY = (X0 + 1.5 * W - 1.0, Y0 + 2.5, X0 + 1.5 * W + 1.0, Y0 + 4.5, 10.8)
 # The hipped L: wings 8 m wide (x from LX, y from LY), eaves at 5 m, slopes of 0.6.
 LX, LY = X0 + 32.0, Y0 - 4.0
-
-
-def write_las(path, points):
-    """LAS 1.2, point format 0, scale 1 mm."""
-    scale = 0.001
-    xs, ys, zs = ([p[k] for p in points] for k in range(3))
-    offset = (math.floor(min(xs)), math.floor(min(ys)), 0.0)
-    header = bytearray(227)
-    header[0:4] = b"LASF"
-    struct.pack_into("<BB", header, 24, 1, 2)
-    header[26:58] = b"csgtile city_run_houses".ljust(32, b"\0")
-    struct.pack_into("<HHH", header, 90, 1, 2026, 227)
-    struct.pack_into("<IIBHI", header, 96, 227, 0, 0, 20, len(points))
-    struct.pack_into("<5I", header, 111, len(points), 0, 0, 0, 0)
-    struct.pack_into("<3d", header, 131, scale, scale, scale)
-    struct.pack_into("<3d", header, 155, *offset)
-    struct.pack_into("<6d", header, 179, max(xs), min(xs), max(ys), min(ys), max(zs), min(zs))
-    with open(path, "wb") as f:
-        f.write(header)
-        for x, y, z, c in points:
-            f.write(struct.pack("<3iHBBbBH", round((x - offset[0]) / scale),
-                                round((y - offset[1]) / scale), round((z - offset[2]) / scale),
-                                0, 0x09, c, 0, 0, 0))
 
 
 def gable(x, y):
@@ -98,7 +76,7 @@ for i in range(nx):
         points.append((x, y, (z if z is not None else 0.0) + rnd.gauss(0, 0.02),
                        6 if z is not None else 2))
 tile = os.path.join(work, "houses.las")
-write_las(tile, points)
+write_las(tile, points, "csgtile city_run_houses")
 
 
 def volume_of_house(k):
@@ -145,17 +123,8 @@ for name, extra in (("split", ""), ("whole", "fit:\n  primitives:\n    split_hou
                     if o["type"] == "Building":
                         assert o.get("geometry"), (name, oid)
                         features += 1
-    valid = None
-    if os.path.exists(val3dity):
-        valid = 0
-        for seq in seqs:
-            report = seq + ".val3dity.json"
-            v = subprocess.run([val3dity, seq, "--report", report], capture_output=True,
-                               text=True)
-            assert os.path.exists(report), (v.stdout, v.stderr)
-            for feature in json.load(open(report))["features"]:
-                assert feature["validity"], (name, feature)
-                valid += 1
+    valid = val3dity_valid(val3dity, seqs, name)
+    assert valid in (None, features), (name, valid, features)
     volumes = sorted(round(o["volume"], 1) for o in objects)
     row_truth = [volume_of_house(k) for k in range(3)]
     if name == "whole":

@@ -78,6 +78,15 @@ Row row_of_two() {
   return r;
 }
 
+// Assembled as city runs do, fitted primitives snapped within 1 cm and 0.5°.
+kernel::Result<assembly::Assembly> assemble_snapped(
+    const std::vector<assembly::AssemblyPrimitive>& input) {
+  assembly::AssemblyOptions ao;
+  ao.snap.distance = 0.01;
+  ao.snap.angle = 0.5 * 3.14159265358979 / 180.0;
+  return assembly::assemble(input, ao);
+}
+
 TEST(FitFootprints, EachFootprintIsOneBuildingStandingExactlyOnIt) {
   const Row row = row_of_two();
   const std::vector<geo::Footprint> footprints{rectangle_footprint("A", 0, 0, 8, 10),
@@ -116,10 +125,7 @@ TEST(FitFootprints, EachFootprintIsOneBuildingStandingExactlyOnIt) {
   // house's volume, touching along the party wall x = 8.
   std::vector<assembly::AssemblyPrimitive> input;
   for (const auto& p : out->primitives) input.push_back({p.spec, p.id, p.building});
-  assembly::AssemblyOptions ao;
-  ao.snap.distance = 0.01;
-  ao.snap.angle = 0.5 * 3.14159265358979 / 180.0;
-  const auto assembled = assembly::assemble(input, ao);
+  const auto assembled = assemble_snapped(input);
   ASSERT_TRUE(assembled.ok()) << assembled.error().message;
   ASSERT_EQ(assembled->objects.size(), 2u);
   std::map<std::string, double> volume{{"A", 8 * 10 * 6 + 0.5 * 80 * 3},
@@ -215,10 +221,7 @@ TEST(FitFootprints, WithoutFootprintsTheRowIsSplitIntoItsHouses) {
 
   std::vector<assembly::AssemblyPrimitive> input;
   for (const auto& p : out->primitives) input.push_back({p.spec, p.id, geo::assembly_group(p)});
-  assembly::AssemblyOptions ao;
-  ao.snap.distance = 0.01;
-  ao.snap.angle = 0.5 * 3.14159265358979 / 180.0;
-  const auto assembled = assembly::assemble(input, ao);
+  const auto assembled = assemble_snapped(input);
   ASSERT_TRUE(assembled.ok()) << assembled.error().message;
   ASSERT_EQ(assembled->objects.size(), 2U);
   for (const auto& object : assembled->objects) EXPECT_TRUE(object.fused) << object.error;
@@ -239,7 +242,7 @@ TEST(FitFootprints, WithoutFootprintsTheRowIsSplitIntoItsHouses) {
     EXPECT_EQ(p.house, "") << p.id;
     input.push_back({p.spec, p.id, geo::assembly_group(p)});
   }
-  const auto one = assembly::assemble(input, ao);
+  const auto one = assemble_snapped(input);
   ASSERT_TRUE(one.ok()) << one.error().message;
   EXPECT_EQ(one->objects.size(), 1U);
 }

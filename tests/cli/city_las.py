@@ -1,0 +1,48 @@
+"""Shared by the city-run tests that write their own LAS (city_run_dome.py,
+city_run_houses.py): a classified LAS writer and the val3dity check of a run's CityJSONSeq.
+Standard library only."""
+import json
+import math
+import os
+import struct
+import subprocess
+
+
+def write_las(path, points, tag):
+    """LAS 1.2, point format 0, scale 1 mm; `points` as (x, y, z, class); `tag` names the
+    generating software."""
+    scale = 0.001
+    xs, ys, zs = ([p[k] for p in points] for k in range(3))
+    offset = (math.floor(min(xs)), math.floor(min(ys)), 0.0)
+    header = bytearray(227)
+    header[0:4] = b"LASF"
+    struct.pack_into("<BB", header, 24, 1, 2)
+    header[26:58] = tag.encode()[:32].ljust(32, b"\0")
+    struct.pack_into("<HHH", header, 90, 1, 2026, 227)
+    struct.pack_into("<IIBHI", header, 96, 227, 0, 0, 20, len(points))
+    struct.pack_into("<5I", header, 111, len(points), 0, 0, 0, 0)
+    struct.pack_into("<3d", header, 131, scale, scale, scale)
+    struct.pack_into("<3d", header, 155, *offset)
+    struct.pack_into("<6d", header, 179, max(xs), min(xs), max(ys), min(ys), max(zs), min(zs))
+    with open(path, "wb") as f:
+        f.write(header)
+        for x, y, z, c in points:
+            f.write(struct.pack("<3iHBBbBH", round((x - offset[0]) / scale),
+                                round((y - offset[1]) / scale), round((z - offset[2]) / scale),
+                                0, 0x09, c, 0, 0, 0))
+
+
+def val3dity_valid(val3dity, seqs, name):
+    """The features val3dity finds valid in the CityJSONSeq files `seqs` (asserting every one
+    is); None when the validator is absent."""
+    if not os.path.exists(val3dity):
+        return None
+    valid = 0
+    for seq in seqs:
+        report = seq + ".val3dity.json"
+        v = subprocess.run([val3dity, seq, "--report", report], capture_output=True, text=True)
+        assert os.path.exists(report), (v.stdout, v.stderr)
+        for feature in json.load(open(report))["features"]:
+            assert feature["validity"], (name, feature)
+            valid += 1
+    return valid
