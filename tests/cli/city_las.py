@@ -1,6 +1,7 @@
 """Shared by the city-run tests that write their own LAS (city_run_dome.py,
-city_run_houses.py): a classified LAS writer and the val3dity check of a run's CityJSONSeq.
-Standard library only."""
+city_run_houses.py): a classified LAS writer, a city run of it, and the val3dity check of a
+run's CityJSONSeq. Standard library only."""
+import glob
 import json
 import math
 import os
@@ -46,3 +47,22 @@ def val3dity_valid(val3dity, seqs, name):
             assert feature["validity"], (name, feature)
             valid += 1
     return valid
+
+
+def run_city(binary, work, name, tile, extra):
+    """`csgtile run` of `tile` (RD New + NAP) with `extra` YAML appended to its config, into
+    WORK/NAME; asserts it succeeds and that no cell names a problem. Returns the run's
+    directory and the objects of its cells' manifests."""
+    config = os.path.join(work, f"{name}.yaml")
+    with open(config, "w") as f:
+        f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {work}/{name}\n"
+                f"  crs: EPSG:28992+5709\n{extra}log:\n  level: warn\n")
+    p = subprocess.run([binary, "run", config, "--json"], capture_output=True, text=True)
+    assert p.returncode == 0, (name, p.returncode, p.stdout, p.stderr)
+    rundir = f"{work}/{name}/runs/{name}"
+    objects = []
+    for m in glob.glob(f"{rundir}/cells/*/manifest.json"):
+        cell = json.load(open(m))
+        assert not cell["problems"], (name, cell["problems"])
+        objects += cell["objects"]
+    return rundir, objects

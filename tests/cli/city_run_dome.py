@@ -23,10 +23,9 @@ import math
 import os
 import random
 import shutil
-import subprocess
 import sys
 
-from city_las import val3dity_valid, write_las
+from city_las import run_city, val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
@@ -121,18 +120,7 @@ cases = (
     ("roof", roof_tile, f"city:\n  footprints: {roof_footprint}\n  footprints_id: id\n",
      "extrusion", "roof-1", RW * RD * RH + 2.0 / 3.0 * math.pi * RR ** 3))
 for name, tile, extra, under, footprint_id, truth in cases:
-    config = os.path.join(work, f"{name}.yaml")
-    with open(config, "w") as f:
-        f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {work}/{name}\n"
-                f"  crs: EPSG:28992+5709\n{extra}log:\n  level: warn\n")
-    p = subprocess.run([binary, "run", config, "--json"], capture_output=True, text=True)
-    assert p.returncode == 0, (name, p.returncode, p.stdout, p.stderr)
-    rundir = f"{work}/{name}/runs/{name}"
-    objects = []
-    for m in glob.glob(f"{rundir}/cells/*/manifest.json"):
-        cell = json.load(open(m))
-        assert not cell["problems"], (name, cell["problems"])
-        objects += cell["objects"]
+    rundir, objects = run_city(binary, work, name, tile, extra)
     assert len(objects) == 1, (name, [(o["id"], [q["type"] for q in o["primitives"]])
                                       for o in objects])
     dome = objects[0]

@@ -22,10 +22,9 @@ import os
 import random
 import shutil
 import sqlite3
-import subprocess
 import sys
 
-from city_las import val3dity_valid, write_las
+from city_las import run_city, val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
@@ -98,18 +97,7 @@ if not os.path.exists(val3dity):
     print(f"val3dity absent ({val3dity}): validity not checked", file=sys.stderr)
 figures = {}
 for name, extra in (("split", ""), ("whole", "fit:\n  primitives:\n    split_houses: false\n")):
-    config = os.path.join(work, f"{name}.yaml")
-    with open(config, "w") as f:
-        f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {work}/{name}\n"
-                f"  crs: EPSG:28992+5709\n{extra}log:\n  level: warn\n")
-    p = subprocess.run([binary, "run", config, "--json"], capture_output=True, text=True)
-    assert p.returncode == 0, (name, p.returncode, p.stdout, p.stderr)
-    rundir = f"{work}/{name}/runs/{name}"
-    objects = []
-    for m in glob.glob(f"{rundir}/cells/*/manifest.json"):
-        cell = json.load(open(m))
-        assert not cell["problems"], (name, cell["problems"])
-        objects += cell["objects"]
+    rundir, objects = run_city(binary, work, name, tile, extra)
     for o in objects:
         assert o["fused"], (name, o["id"], o["error"])
         assert o.get("footprint_id") is None, (name, o["id"], o.get("footprint_id"))
