@@ -1,12 +1,28 @@
 """Shared by the city-run tests that write their own LAS (city_run_dome.py,
-city_run_houses.py): a classified LAS writer, a city run of it, and the val3dity check of a
-run's CityJSONSeq. Standard library only."""
+city_run_houses.py): a classified scan seen from the air, a LAS writer, a city run of it, its
+CityJSONSeq's objects and their val3dity check. Standard library only."""
 import glob
 import json
 import math
 import os
 import struct
 import subprocess
+
+
+def seen_from_above(rnd, x0, y0, width, depth, roof, density=10.0, sigma=0.02):
+    """Points over [x0, x0 + width] x [y0, y0 + depth] at `density` per m² (a jittered grid,
+    noise `sigma`, drawn from `rnd`) as (x, y, z, class): a building point (class 6) at
+    roof(x, y) where it is not None, else the ground (class 2) at z = 0."""
+    step = 1 / math.sqrt(density)
+    out = []
+    for i in range(int(width / step)):
+        for j in range(int(depth / step)):
+            x = x0 + (i + rnd.random()) * step
+            y = y0 + (j + rnd.random()) * step
+            z = roof(x, y)
+            out.append((x, y, (z if z is not None else 0.0) + rnd.gauss(0, sigma),
+                        6 if z is not None else 2))
+    return out
 
 
 def write_las(path, points, tag):
@@ -66,3 +82,14 @@ def run_city(binary, work, name, tile, extra):
         assert not cell["problems"], (name, cell["problems"])
         objects += cell["objects"]
     return rundir, objects
+
+
+def city_objects(rundir):
+    """The run's CityJSONSeq files and every (id, CityObject) in their features."""
+    seqs = glob.glob(f"{rundir}/cells/*/model.city.jsonl")
+    objects = []
+    for seq in seqs:
+        with open(seq) as f:
+            for line in f.readlines()[1:]:
+                objects += json.loads(line)["CityObjects"].items()
+    return seqs, objects

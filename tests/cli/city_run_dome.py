@@ -17,7 +17,6 @@ one Building of the dome standing on its roof parts, volume within 1 %, RMSE bel
 valid.
 Prints one JSON line of figures. Usage: city_run_dome.py CSGTILE SOURCE_DIR WORK_DIR
 """
-import glob
 import json
 import math
 import os
@@ -25,7 +24,7 @@ import random
 import shutil
 import sys
 
-from city_las import run_city, val3dity_valid, write_las
+from city_las import city_objects, run_city, seen_from_above, val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
@@ -34,22 +33,6 @@ R, H, CX, CY = 6.0, 8.0, 85030.0, 447530.0
 
 
 rnd = random.Random(7)
-step = 1 / math.sqrt(10)
-n = int(60 / step)
-
-
-def seen_from_above(roof):
-    """60 x 60 m around (CX, CY) at 10 points per m² (jittered grid, σ 2 cm): a building point
-    (class 6) at roof(x, y) where it is not None, else the ground (class 2) at z = 0."""
-    out = []
-    for i in range(n):
-        for j in range(n):
-            x = CX - 30 + (i + rnd.random()) * step
-            y = CY - 30 + (j + rnd.random()) * step
-            z = roof(x, y)
-            out.append((x, y, (z if z is not None else 0.0) + rnd.gauss(0, 0.02),
-                        6 if z is not None else 2))
-    return out
 
 
 def write_footprint(path, fid, ring):
@@ -66,7 +49,7 @@ def dome_roof(x, y):
     return H + math.sqrt(R * R - r * r) if r < R else None
 
 
-points = seen_from_above(dome_roof)
+points = seen_from_above(rnd, CX - 30, CY - 30, 60, 60, dome_roof)
 for _ in range(int(2 * math.pi * R * H)):
     a, z, rr = rnd.random() * 2 * math.pi, rnd.random() * H, R + rnd.gauss(0, 0.02)
     points.append((CX + rr * math.cos(a), CY + rr * math.sin(a), z, 6))
@@ -89,7 +72,7 @@ def domed_flat_roof(x, y):
     return RH + (math.sqrt(RR * RR - r * r) if r < RR else 0.0)
 
 
-roof_points = seen_from_above(domed_flat_roof)
+roof_points = seen_from_above(rnd, CX - 30, CY - 30, 60, 60, domed_flat_roof)
 for _ in range(int(2 * (RW + RD) * RH)):
     t, z = rnd.random() * 2 * (RW + RD), rnd.random() * RH
     if t < RW:
@@ -134,13 +117,10 @@ for name, tile, extra, under, footprint_id, truth in cases:
     rmse = dome["model_fit"]["rmse"]
     assert rmse < 0.05, (name, dome["model_fit"])
     features = 0
-    seqs = glob.glob(f"{rundir}/cells/*/model.city.jsonl")
-    for seq in seqs:
-        with open(seq) as f:
-            for line in f.readlines()[1:]:
-                for oid, o in json.loads(line)["CityObjects"].items():
-                    assert o["type"] == "Building" and o.get("geometry"), (name, oid, o["type"])
-                    features += 1
+    seqs, city_objects_ = city_objects(rundir)
+    for oid, o in city_objects_:
+        assert o["type"] == "Building" and o.get("geometry"), (name, oid, o["type"])
+        features += 1
     assert features == 1, (name, features)
     valid = val3dity_valid(val3dity, seqs, name)
     assert valid in (None, features), (name, valid, features)

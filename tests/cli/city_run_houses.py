@@ -15,7 +15,6 @@ whose hips and valley are one roof — ground class 2 and buildings class 6 at 1
   * with fit.primitives.split_houses false, the row is one Building.
 Prints one JSON line of figures. Usage: city_run_houses.py CSGTILE SOURCE_DIR WORK_DIR
 """
-import glob
 import json
 import math
 import os
@@ -24,7 +23,7 @@ import shutil
 import sqlite3
 import sys
 
-from city_las import run_city, val3dity_valid, write_las
+from city_las import city_objects, run_city, seen_from_above, val3dity_valid, write_las
 
 binary, source, work = sys.argv[1:4]
 shutil.rmtree(work, ignore_errors=True)
@@ -63,17 +62,7 @@ def roof(x, y):
     return z if z is not None else hipped(x, y)
 
 
-rnd = random.Random(11)
-step = 1 / math.sqrt(10)
-points = []
-nx, ny = int(70 / step), int(40 / step)
-for i in range(nx):
-    for j in range(ny):
-        x = X0 - 15 + (i + rnd.random()) * step
-        y = Y0 - 15 + (j + rnd.random()) * step
-        z = roof(x, y)
-        points.append((x, y, (z if z is not None else 0.0) + rnd.gauss(0, 0.02),
-                       6 if z is not None else 2))
+points = seen_from_above(random.Random(11), X0 - 15, Y0 - 15, 70, 40, roof)
 tile = os.path.join(work, "houses.las")
 write_las(tile, points, "csgtile city_run_houses")
 
@@ -103,14 +92,11 @@ for name, extra in (("split", ""), ("whole", "fit:\n  primitives:\n    split_hou
         assert o.get("footprint_id") is None, (name, o["id"], o.get("footprint_id"))
 
     features = 0
-    seqs = glob.glob(f"{rundir}/cells/*/model.city.jsonl")
-    for seq in seqs:
-        with open(seq) as f:
-            for line in f.readlines()[1:]:
-                for oid, o in json.loads(line)["CityObjects"].items():
-                    if o["type"] == "Building":
-                        assert o.get("geometry"), (name, oid)
-                        features += 1
+    seqs, city_objects_ = city_objects(rundir)
+    for oid, o in city_objects_:
+        if o["type"] == "Building":
+            assert o.get("geometry"), (name, oid)
+            features += 1
     valid = val3dity_valid(val3dity, seqs, name)
     assert valid in (None, features), (name, valid, features)
     volumes = sorted(round(o["volume"], 1) for o in objects)

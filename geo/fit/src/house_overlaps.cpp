@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <map>
-#include <numeric>
 #include <string>
 
 #include "csgtile/kernel/broad_phase.h"
+#include "disjoint_sets.h"
 #include "synth/ray_internal.h"
 
 namespace csgtile::fit::detail {
@@ -62,34 +62,29 @@ void join_overlapping_houses(std::vector<geo::ScenePrimitive>& primitives,
     prepared[k] = geo::detail::prepare_primitive(primitives[k].spec);
     boxes[k] = prepared[k].world_bounds;
   }
-  std::vector<int> parent(house_of_key.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&parent](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
-    return x;
-  };
+  DisjointSets sets(house_of_key.size());
+  auto root = [&sets](int x) { return sets.root(static_cast<std::size_t>(x)); };
   // Per set (by its root): whether a house is in it.
   std::vector<char> housed(house_of_key.size(), 0);
   for (std::size_t x = 0; x < house_of_key.size(); ++x) housed[x] = house_of_key[x].empty() ? 0 : 1;
   for (const auto& [i, j] : kernel::overlapping_boxes(boxes)) {
     if (key[i] < 0 || key[j] < 0) continue;
-    const int a = root(key[i]), b = root(key[j]);
-    const auto as = static_cast<std::size_t>(a), bs = static_cast<std::size_t>(b);
+    const std::size_t a = root(key[i]), b = root(key[j]);
     // One house; or two regions without houses, which fuse as they touch anyway.
-    if (a == b || (!housed[as] && !housed[bs])) continue;
+    if (a == b || (!housed[a] && !housed[b])) continue;
     if (!overlap(prepared[i], prepared[j], margin)) continue;
-    parent[std::max(as, bs)] = std::min(a, b);
-    housed[std::min(as, bs)] = 1;
+    sets.join(a, b);
+    housed[std::min(a, b)] = 1;
   }
   // Each joined set takes the name of its first house (keys are in the order of their first
   // primitive).
   std::vector<std::string> name(house_of_key.size());
   for (std::size_t x = 0; x < house_of_key.size(); ++x) {
-    std::string& n = name[static_cast<std::size_t>(root(static_cast<int>(x)))];
+    std::string& n = name[sets.root(x)];
     if (n.empty()) n = house_of_key[x];
   }
   for (std::size_t k = 0; k < primitives.size(); ++k) {
-    if (key[k] >= 0) primitives[k].house = name[static_cast<std::size_t>(root(key[k]))];
+    if (key[k] >= 0) primitives[k].house = name[root(key[k])];
   }
 }
 

@@ -9,12 +9,12 @@
 #include <cmath>
 #include <map>
 #include <numbers>
-#include <numeric>
 #include <set>
 #include <tuple>
 
 #include "csgtile/kernel/check.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "disjoint_sets.h"
 #include "fit_internal.h"
 #include "plane2d.h"
 #include "primitive_builder.h"
@@ -371,12 +371,8 @@ void Builder::name_houses() {
   for (std::size_t k = 0; k < prims.size(); ++k) {
     box[k] = geo::detail::prepare_primitive(prims[k].spec).world_bounds;
   }
-  std::vector<int> parent(number.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&parent](int x) {
-    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
-    return x;
-  };
+  DisjointSets sets(number.size());
+  auto root = [&sets](int x) { return static_cast<int>(sets.root(static_cast<std::size_t>(x))); };
   const std::vector<int> own = house;
   for (std::size_t k = 0; k < prims.size(); ++k) {
     if (own[k] >= 0 || box[k].empty()) continue;
@@ -409,8 +405,7 @@ void Builder::name_houses() {
     }
     for (const auto& [h, a] : overlap) {
       if (h != chosen && a >= 0.1 * area) {
-        const int x = root(h), y = root(chosen);
-        parent[static_cast<std::size_t>(std::max(x, y))] = std::min(x, y);
+        sets.join(static_cast<std::size_t>(h), static_cast<std::size_t>(chosen));
       }
     }
     house[k] = chosen >= 0 ? chosen : near;

@@ -604,6 +604,13 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       std::fill(bases.begin(), bases.end(), std::max(*lo, *hi - 0.5));
     }
   }
+  // A point just inside a part's hole (a clockwise ring, grid units): beside its first edge,
+  // on its right.
+  auto inside_hole = [](const std::vector<Eigen::Vector2d>& h) {
+    const Eigen::Vector2d d = h[1] - h[0];
+    return Eigen::Vector2d(0.5 * (h[0] + h[1]) +
+                           1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized());
+  };
   // Without a footprint, the block's houses (houses.h): two parts are one house where their
   // roofs meet along their shared cell edges — at each edge's middle, their heights within a
   // step (as for flat pieces) plus the difference of their slopes over a cell (a ridge found
@@ -687,9 +694,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     for (std::size_t k = 0; k < parts.size(); ++k) {
       for (const auto& h : parts[k].holes) {
         if (h.size() < 3) continue;
-        const Eigen::Vector2d d = h[1] - h[0];
-        const Eigen::Vector2d inside =
-            0.5 * (h[0] + h[1]) + 1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized();
+        const Eigen::Vector2d inside = inside_hole(h);
         for (std::size_t m = 0; m < parts.size(); ++m) {
           const int from = house_of_part[m], to = house_of_part[k];
           if (m == k || from == to || parts[m].outer.size() < 3 ||
@@ -738,9 +743,7 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         // tower) is not cut around it: the two overlap and the fuse joins them. Its face then
         // has no inner ring lying on the lines of its outer one (grid lines), which the
         // mesher's hole bridging cannot always tell apart in the roof's tilted parameter plane.
-        const Eigen::Vector2d d = h[1] - h[0];
-        const Eigen::Vector2d inside =
-            0.5 * (h[0] + h[1]) + 1e-3 * Eigen::Vector2d(d.y(), -d.x()).normalized();
+        const Eigen::Vector2d inside = inside_hole(h);
         bool filled_higher = false;
         for (std::size_t m = 0; m < parts.size() && !filled_higher; ++m) {
           if (m == k || parts[m].label < 0 || parts[m].outer.size() < 3 ||

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
+#include "disjoint_sets.h"
 #include "fit_internal.h"
 #include "residuals.h"
 
@@ -118,16 +118,12 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
     sorted[s] = by_x(points, shapes[s].inliers);
     quantile[s] = nearest_quantile(points, sorted[s]);
   }
-  std::vector<std::size_t> parent(m);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets sets(m);
   std::size_t merges = 0;
   for (std::size_t a = 0; a < m; ++a) {
     for (std::size_t b = a + 1; b < m; ++b) {
-      if (shapes[a].surface.type != shapes[b].surface.type || root(a) == root(b)) continue;
+      if (shapes[a].surface.type != shapes[b].surface.type || sets.root(a) == sets.root(b))
+        continue;
       const double reach = kMergeGapFactor * std::max(quantile[a], quantile[b]);
       if (!(reach > 0.0) || !within_reach(points, sorted[a], sorted[b], reach)) continue;
       if (!mostly_on(points, shapes[a].surface, shapes[b].inliers, epsilon) ||
@@ -139,8 +135,7 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
         continue;
       }
       // The lower index stays the root: a merged shape keeps its first part's place.
-      const std::size_t ra = root(a), rb = root(b);
-      parent[std::max(ra, rb)] = std::min(ra, rb);
+      sets.join(a, b);
       ++merges;
     }
   }
@@ -149,7 +144,7 @@ std::size_t merge_same_surface(std::span<const Vec3> points, std::vector<Detecte
   std::vector<char> grown;  // per kept shape: whether another joined it
   std::vector<int> renumber(m, -1);
   for (std::size_t s = 0; s < m; ++s) {
-    const std::size_t r = root(s);
+    const std::size_t r = sets.root(s);
     if (r == s) {
       renumber[s] = static_cast<int>(kept.size());
       kept.push_back(std::move(shapes[s]));
