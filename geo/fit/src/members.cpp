@@ -13,6 +13,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "column_ends.h"
 #include "primitive_builder.h"
 #include "synth/ray_internal.h"
 
@@ -588,6 +589,92 @@ void Builder::join_members() {
   for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
     out_.primitives[k].id = "r" + std::to_string(region_) + "-" + std::to_string(k);
   }
+}
+
+}  // namespace csgtile::fit::detail
+
+namespace csgtile::fit::detail {
+
+int columns_into_members(std::vector<geo::ScenePrimitive>& primitives,
+                         std::span<const double> reach, double cos_tol) {
+  const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol * cos_tol));
+  // An elongated cylinder in world terms: its axis from `base` over [0, length], its radius.
+  struct Column {
+    Vec3 base, axis;
+    double length = 0.0, radius = 0.0;
+  };
+  auto as_column = [](const PrimitiveSpec& spec) -> std::optional<Column> {
+    if (spec.type != PrimitiveType::Cylinder || !spec.clips.empty()) return std::nullopt;
+    const double scale = spec.placement.scale();
+    Column c;
+    c.base = spec.placement.translation();
+    c.axis = spec.placement.rotation().col(2);
+    c.length = scale * spec.height;
+    c.radius = scale * spec.radius;
+    if (!(c.radius > 0.0) || c.length < 4.0 * c.radius) return std::nullopt;
+    return c;
+  };
+  std::vector<std::optional<Member>> members(primitives.size());
+  std::vector<std::optional<Column>> columns(primitives.size());
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    members[k] = as_member(primitives[k].spec);
+    columns[k] = as_column(primitives[k].spec);
+  }
+  int moved = 0;
+  for (std::size_t c = 0; c < primitives.size(); ++c) {
+    if (!columns[c]) continue;
+    const Column& col = *columns[c];
+    const double margin = c < reach.size() ? reach[c] : 0.0;
+    double grow_low = 0.0, grow_high = 0.0;
+    for (const double side : {-1.0, 1.0}) {
+      const Vec3 end = col.base + (side > 0.0 ? col.length : 0.0) * col.axis;
+      const Vec3 out = side * col.axis;
+      double best = INFINITY;  // past the end to the member's middle
+      for (std::size_t k = 0; k < primitives.size(); ++k) {
+        if (k == c) continue;
+        Vec3 axis, origin;
+        double half = 0.0, across = 0.0, extent = 0.0;  // along `out`, beside the line, axial
+        if (const auto& t = columns[k]) {
+          axis = t->axis;
+          origin = t->base;
+          extent = t->length;
+          half = across = t->radius;
+        } else if (const auto& m = members[k]) {
+          axis = m->u;
+          origin = m->start;
+          extent = m->length;
+          const bool a_along = std::abs(m->a.dot(out)) >= std::abs(m->b.dot(out));
+          half = a_along ? m->half_a : m->half_b;
+          across = a_along ? m->half_b : m->half_a;
+        } else {
+          continue;
+        }
+        if (std::abs(axis.dot(out)) > sin_tol) continue;
+        const auto pass = closest_approach(end, out, origin, axis);
+        if (!pass || pass->distance > across) continue;
+        // A member that stops at the column's side (its end where its points stop) is still
+        // the one it carries.
+        const double beside = col.radius + margin;
+        if (pass->t < -beside || pass->t > extent + beside) continue;
+        if (pass->s > 0.0 && pass->s <= half + margin) best = std::min(best, pass->s);
+      }
+      if (!std::isfinite(best)) continue;
+      (side > 0.0 ? grow_high : grow_low) = best;
+    }
+    if (grow_low == 0.0 && grow_high == 0.0) continue;
+    geo::ScenePrimitive& p = primitives[c];
+    const double scale = p.spec.placement.scale();
+    auto loc =
+        Location::from_parts(p.spec.placement.rotation(), scale, col.base - grow_low * col.axis);
+    if (!loc.ok()) continue;
+    moved += (grow_low > 0.0 ? 1 : 0) + (grow_high > 0.0 ? 1 : 0);
+    const double length = col.length + grow_low + grow_high;
+    p.spec.placement = loc.value();
+    p.spec.height = length / scale;
+    // The points cover what they covered: the share of a longer side is smaller.
+    if (p.quality) p.quality->coverage *= col.length / length;
+  }
+  return moved;
 }
 
 }  // namespace csgtile::fit::detail

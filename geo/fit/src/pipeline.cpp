@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include <tbb/info.h>
@@ -11,6 +12,7 @@
 #include <tbb/partitioner.h>
 #include <tbb/task_arena.h>
 
+#include "column_ends.h"
 #include "csgtile/fit/segment.h"
 #include "fit_internal.h"
 #include "house_overlaps.h"
@@ -606,7 +608,8 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     });
   }
   double ransac_seconds = 0.0, primitives_seconds = 0.0;
-  std::vector<int> primitive_region;  // per primitive of out.primitives
+  std::vector<int> primitive_region;    // per primitive of out.primitives
+  std::vector<double> primitive_reach;  // per primitive: its region's noise margin (members)
   for (std::size_t r = 0; r < clusters.size(); ++r) {
     RegionFit& f = fits[r];
     if (f.error) return *f.error;
@@ -643,9 +646,13 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (f.with_primitives) {
       FittedPrimitives& fitted = f.fitted;
       out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
+      // As the builder's: the connectivity cell, and a face's noise margin.
+      const double cell =
+          detected.cluster_epsilon > 0.0 ? detected.cluster_epsilon : 3.0 * f.ransac.epsilon;
       for (auto& prim : fitted.primitives) {
         out.primitives.push_back(std::move(prim));
         primitive_region.push_back(static_cast<int>(r));
+        primitive_reach.push_back(std::max(2.0 * f.ransac.epsilon, cell));
       }
       for (auto& rej : fitted.rejected) {
         rej.what = "region " + std::to_string(r) + " " + rej.what;
@@ -657,6 +664,13 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (options.keep_detections) {
       out.detections.push_back({std::move(f.p), std::move(f.n), std::move(f.detected)});
     }
+  }
+  // A column fitted apart from the members it carries (its top hidden among them, its points
+  // a region of their own) meets them.
+  if (primitive_options.boxes) {
+    detail::columns_into_members(
+        out.primitives, primitive_reach,
+        std::cos(primitive_options.angle_tolerance_deg * std::numbers::pi / 180.0));
   }
   // One ground per building: parts standing within the ground filter's height tolerance of
   // each other stand on one base (no sliver steps when they are fused).
