@@ -39,9 +39,6 @@ namespace detail {
 // Passes of relabel() after its refits: each moves the points next to a shape's own, so a
 // shape takes back a region another holds in as many passes as the region is cells wide.
 constexpr int kRelabelPasses = 64;
-// On exact clouds, a point within this many noise floors of a surface lies on it (the second
-// search's freeing, edges_to_smaller's points on both surfaces).
-constexpr double kOnSurfaceFloors = 3.0;
 
 double Detector::component(const Surface& s, std::span<const int> starts, bool sampled,
                            std::vector<std::uint32_t>* out) {
@@ -524,73 +521,6 @@ void Detector::adopt_free() {
   }
 }
 
-// On exact clouds, connected points no shape holds (min_points or more) whose normals the
-// search could not use (a small hole's wall sampled between the plates' rims: each point's
-// neighbours are mostly rim points, its normal the plates') may still lie on one surface: the
-// plane through them, or the cylinder across one of their neighbours' planes (a hole runs
-// across the plate it pierces) or along a neighbouring cylinder's axis, when it fits them to
-// the noise floor, becomes a shape of the points within kOnSurfaceFloors floors of it. The
-// number of shapes added.
-std::size_t Detector::fit_leftovers() {
-  const double floor = noise_floor();
-  std::size_t added = 0;
-  std::vector<char> seen(points_.size(), 0);
-  for (std::uint32_t start = 0; start < points_.size(); ++start) {
-    if (assignment_[start] >= 0 || seen[start] || grid_->cell_of(start) < 0) continue;
-    // The free points connected to `start` (through the connectivity grid's neighbourhoods).
-    std::vector<std::uint32_t> group{start};
-    seen[start] = 1;
-    std::vector<Vec3> axes;
-    for (std::size_t h = 0; h < group.size(); ++h) {
-      const std::uint32_t one[1] = {group[h]};
-      for_points_near(one, [&](std::uint32_t j) {
-        const int a = assignment_[j];
-        if (a >= 0) {
-          const Surface& s = shapes_[static_cast<std::size_t>(a)].surface;
-          if (s.type == ShapeType::Plane || s.type == ShapeType::Cylinder) {
-            const bool known = std::any_of(axes.begin(), axes.end(), [&](const Vec3& x) {
-              return std::abs(x.dot(s.axis)) > 0.9999;
-            });
-            if (!known) axes.push_back(s.axis);
-          }
-          return;
-        }
-        if (seen[j]) return;
-        seen[j] = 1;
-        group.push_back(j);
-      });
-    }
-    if (static_cast<long long>(group.size()) < o_.min_points) continue;
-    std::sort(group.begin(), group.end());
-    std::optional<Surface> best;
-    if (auto plane = detail::fit_plane(points_, group); plane && rms_of(*plane, group) <= floor) {
-      best = plane;
-    }
-    for (const Vec3& axis : axes) {
-      if (best) break;
-      auto cylinder = circle_along(axis, group);
-      if (cylinder) cylinder = detail::refine_surface(*cylinder, points_, group);
-      if (cylinder && cylinder->radius < o_.max_radius && rms_of(*cylinder, group) <= floor) {
-        best = cylinder;
-      }
-    }
-    if (!best) continue;
-    DetectedShape shape;
-    shape.surface = *best;
-    for (auto i : group) {
-      if (std::abs(surface_distance(*best, points_[i])) <= kOnSurfaceFloors * floor) {
-        shape.inliers.push_back(i);
-      }
-    }
-    if (static_cast<long long>(shape.inliers.size()) < o_.min_points) continue;
-    for (auto i : shape.inliers) assignment_[i] = static_cast<int>(shapes_.size());
-    shape.rms = rms_of(shape.surface, shape.inliers);
-    shapes_.push_back(std::move(shape));
-    ++added;
-  }
-  return added;
-}
-
 std::pair<Vec3, Vec3> Detector::bounds(std::span<const std::uint32_t> members) const {
   if (members.empty()) return {Vec3::Zero(), Vec3::Zero()};
   Vec3 lo = points_[members[0]], hi = lo;
@@ -738,7 +668,10 @@ RansacResult Detector::run() {
     }
     if (o_.by_evidence && retype()) relabel();
     // Exact points no shape took, on one surface the search could not see by their normals.
-    if (exact_) fit_leftovers();
+    if (exact_) {
+      trim_to_exact_cores();
+      fit_leftovers();
+    }
   }
   if (o_.edges_to_smaller && !shapes_.empty()) give_edges_to_smaller();
   if (o_.merge_same_surface &&

@@ -26,6 +26,9 @@ constexpr double kFloorShare = 0.05;
 // merged pair) within which they are exact: a hundredth of the noise floor.
 constexpr double kExactShare = 0.01;
 constexpr double kSampleFactor = 4.0;
+// On exact clouds, a point within this many noise floors of a surface lies on it (the second
+// search's freeing, edges_to_smaller's points on both surfaces, the leftovers' shapes).
+constexpr double kOnSurfaceFloors = 3.0;
 
 struct Candidate {
   double score = 0.0;
@@ -146,7 +149,11 @@ class Detector {
                     RansacResult& result);
   void give_edges_to_smaller();
   void adopt_free();
+  // ransac_leftovers.cpp
+  std::size_t trim_to_exact_cores();
   std::size_t fit_leftovers();
+  std::size_t small_exact_shapes(std::span<const std::uint32_t> group,
+                                 const std::vector<Vec3>& axes);
   // Starts a new visit of the connectivity grid (no cell visited yet).
   void new_visit() {
     if (++stamp_ == 0) {

@@ -5,7 +5,8 @@
 // a hole's wall seen as one ring of points is a cylinder; a flat face stays a plane; the
 // connectivity scale keeps coplanar faces with a narrow gap apart; the faces of a polygonal
 // prism are planes, not the cylinder around them; a filleted disc's wall, taken with the
-// fillets' rims for a sphere, is a cylinder once the rims went back to the fillets.
+// fillets' rims for a sphere, is a cylinder once the rims went back to the fillets; a box's
+// rounded corner and edges, a few points each, are a sphere and three cylinders.
 
 #include <gtest/gtest.h>
 
@@ -514,6 +515,98 @@ TEST(FitExactClouds, FaceBandTangentToAFilletStaysWithTheFace) {
       band += result->shapes[static_cast<std::size_t>(a)].surface.type == ShapeType::Cylinder;
     }
     EXPECT_EQ(band, 0u);
+  }
+}
+
+// A box's corner rounded as a CAD object is (as Fit4CAD's PC18): three faces, three edges
+// rounded by quarter cylinders of radius 1 and the corner by an eighth of a sphere of radius 1,
+// sampled exactly, the faces finely, the rounds coarsely (`along` staggered rows of two points
+// across each edge's round, seven points inside the corner's). With the fewest points of a shape
+// above a round's, the search cannot see the rounds, and their free points are one connected group
+// of three cylinders and a sphere; with rounds as large as a shape, the search's cylinders
+// take the corner's points within epsilon and are refitted through them. Either way each round
+// is found as its own exact surface: a cylinder of radius 1 along its edge, the sphere at the
+// corner's centre.
+TEST(FitExactClouds, ACornersRoundsAreACylinderEachAndASphere) {
+  constexpr double kLength = 2.0, kStep = 0.25;
+  for (const int along : {3, 8}) {
+    SCOPED_TRACE(std::to_string(along) + " rows along each edge's round");
+    Cloud c;
+    testing::Draw d(181);
+    // Points of (a, b) over [1, kLength]² of a face, (u, v, w) the axes it spans and its normal.
+    auto face = [&](int u, int v, int w) {
+      for (double a = 1.0; a <= kLength + 1e-9; a += kStep) {
+        for (double b = 1.0; b <= kLength + 1e-9; b += kStep) {
+          Vec3 p = Vec3::Zero();
+          p[u] = a;
+          p[v] = b;
+          Vec3 n = Vec3::Zero();
+          n[w] = -1.0;
+          c.add(p, n, 0.0, d);
+        }
+      }
+    };
+    face(0, 1, 2);
+    face(0, 2, 1);
+    face(1, 2, 0);
+    const std::size_t rounds_begin = c.points.size();
+    // Each edge's round along axis k, from 1 to kLength.
+    for (int k = 0; k < 3; ++k) {
+      const int i = (k + 1) % 3, j = (k + 2) % 3;
+      for (int row = 0; row < along; ++row) {
+        const double t = 1.0 + (kLength - 1.0) * (row + 0.3 + 0.1 * k) / along;
+        // Rows alternate their angles (a staggered sampling), two points each.
+        const double first = (row + k) % 2 == 0 ? 0.35 : 0.6;
+        for (const double phi : {first, first + 0.6}) {
+          Vec3 p, n = Vec3::Zero();
+          p[k] = t;
+          p[i] = 1.0 - std::sin(phi);
+          p[j] = 1.0 - std::cos(phi);
+          n[i] = -std::sin(phi);
+          n[j] = -std::cos(phi);
+          c.add(p, n, 0.0, d);
+        }
+      }
+    }
+    const std::size_t corner_begin = c.points.size();
+    for (const auto& [theta, phi] :
+         {std::pair{0.6, 0.5}, std::pair{0.9, 1.1}, std::pair{1.2, 0.3}, std::pair{0.4, 1.3},
+          std::pair{1.1, 0.8}, std::pair{0.3, 0.2}, std::pair{1.4, 1.0}}) {
+      const Vec3 n(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                   std::cos(theta));
+      c.add(Vec3(1, 1, 1) - n, -n, 0.0, d);
+    }
+    const std::size_t corner_end = c.points.size();
+    RansacOptions o = cad_options(3);
+    o.min_points = 8;
+    const auto result = detect_shapes(c.points, sharp_normals(c), o);
+    ASSERT_TRUE(result.ok()) << result.error().message;
+    // The shape holding most of each round's points, and what it is.
+    auto holder = [&](std::size_t begin, std::size_t end) -> const DetectedShape* {
+      std::vector<std::size_t> held(result->shapes.size(), 0);
+      for (std::size_t p = begin; p < end; ++p) {
+        if (result->assignment[p] >= 0) ++held[static_cast<std::size_t>(result->assignment[p])];
+      }
+      if (held.empty()) return nullptr;
+      const auto most = std::max_element(held.begin(), held.end()) - held.begin();
+      return held[static_cast<std::size_t>(most)] * 2 > end - begin
+                 ? &result->shapes[static_cast<std::size_t>(most)]
+                 : nullptr;
+    };
+    for (int k = 0; k < 3; ++k) {
+      SCOPED_TRACE("the round along axis " + std::to_string(k));
+      const std::size_t begin = rounds_begin + static_cast<std::size_t>(2 * along * k);
+      const DetectedShape* round = holder(begin, begin + static_cast<std::size_t>(2 * along));
+      ASSERT_NE(round, nullptr);
+      ASSERT_EQ(round->surface.type, ShapeType::Cylinder);
+      EXPECT_NEAR(round->surface.radius, 1.0, 1e-6);
+      EXPECT_GT(std::abs(round->surface.axis[k]), 1.0 - 1e-9);
+    }
+    const DetectedShape* corner = holder(corner_begin, corner_end);
+    ASSERT_NE(corner, nullptr);
+    ASSERT_EQ(corner->surface.type, ShapeType::Sphere);
+    EXPECT_NEAR(corner->surface.radius, 1.0, 1e-6);
+    EXPECT_LT((corner->surface.point - Vec3(1, 1, 1)).norm(), 1e-6);
   }
 }
 
