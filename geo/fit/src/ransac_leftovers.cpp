@@ -156,34 +156,61 @@ std::size_t Detector::fit_leftovers() {
 }
 
 // Exact points too few for min_points, or of several surfaces (a rounded edge's free points
-// and the rounded corners at its two ends, all connected), still lie on their surfaces: the
-// cylinder along a neighbouring shape's axis through three of them, or the sphere through
-// four, that most of them lie on (within an exact fit's reach), where more lie on it than
-// fix it (across the axis, four positions more than epsilon apart for the circle's three
-// parameters; six for the sphere's four, not all on one plane), is a shape. Found one after
-// another, the most supported first (a cylinder before a sphere as well supported); a point on
-// two of them (where a corner's sphere meets the edge's cylinder) counts for both and stays
-// with the first. Each new shape keeps at least three points of its own. Groups of more than
-// kSmallGroup points are left as they are (the search is exhaustive). The number of shapes
-// added.
+// and the rounded corners at its two ends, all connected; a flat strip between two arcs whose
+// one free column lies between the rims the arcs hold), still lie on their surfaces. With the
+// shapes' points next to them (rims lie on both surfaces), the plane through three of these
+// points, the cylinder along a neighbouring shape's axis through three, or the sphere through
+// four, that most of them lie on (within an exact fit's reach) is a shape of the free points on
+// it, where more lie on it than fix it: for the plane, four positions more than epsilon apart
+// not all on two lines (any two parallel lines are coplanar: two columns of a cylinder's wall);
+// for the circle across the axis four positions; for the sphere six, not all on one plane.
+// At least three free points not on an existing shape's surface must be on it. Found one after
+// another, the most supported first (a plane, then a cylinder, then a sphere, as well
+// supported); a point on two of them (where a corner's sphere meets the edge's cylinder)
+// counts for both and stays with the first; edges_to_smaller later gives the new shapes their
+// rims. Groups with more than kSmallGroup points with their neighbours are left as they are
+// (the search is exhaustive). The number of shapes added.
 std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
                                          const std::vector<Vec3>& axes) {
-  constexpr std::size_t kSmallGroup = 32;
+  constexpr std::size_t kSmallGroup = 48;
   const std::size_t m = group.size();
-  if (m < 5 || m > kSmallGroup) return 0;
+  if (m < 3 || m > kSmallGroup) return 0;
+  // The pool: the free points, then the shapes' points next to them (each free point's
+  // kHeldNear nearest), when there are not too many.
+  constexpr std::size_t kHeldNear = 4;
+  std::vector<std::uint32_t> pool(group.begin(), group.end());
+  {
+    std::vector<std::uint32_t> near;
+    for_points_near(group, [&](std::uint32_t j) {
+      if (assignment_[j] >= 0) near.push_back(j);
+    });
+    std::vector<std::uint32_t> held;
+    std::vector<std::pair<double, std::uint32_t>> by_distance;
+    for (const std::uint32_t i : group) {
+      by_distance.clear();
+      for (const std::uint32_t j : near)
+        by_distance.emplace_back((points_[j] - points_[i]).norm(), j);
+      const std::size_t keep = std::min(kHeldNear, by_distance.size());
+      std::partial_sort(by_distance.begin(),
+                        by_distance.begin() + static_cast<std::ptrdiff_t>(keep), by_distance.end());
+      for (std::size_t k = 0; k < keep; ++k) held.push_back(by_distance[k].second);
+    }
+    std::sort(held.begin(), held.end());
+    held.erase(std::unique(held.begin(), held.end()), held.end());
+    if (m + held.size() <= kSmallGroup) pool.insert(pool.end(), held.begin(), held.end());
+  }
+  const std::size_t n = pool.size();
   // Exact: through points that fix it, the others within the reach of an exact fit.
   const double tol = exact_reach(0.0);
   const double apart = o_.epsilon;
-  std::vector<char> taken(m, 0);
+  std::vector<char> taken(n, 0);
+  for (std::size_t k = m; k < n; ++k) taken[k] = 1;  // held by their shapes
   auto support = [&](const Surface& s) {
     std::vector<std::size_t> on;
-    for (std::size_t k = 0; k < m; ++k) {
-      if (std::abs(surface_distance(s, points_[group[k]])) <= tol) on.push_back(k);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (std::abs(surface_distance(s, points_[pool[k]])) <= tol) on.push_back(k);
     }
     return on;
-  };
-  auto untaken = [&](const std::vector<std::size_t>& on) {
-    return std::count_if(on.begin(), on.end(), [&](std::size_t k) { return !taken[k]; });
   };
   // How many of `pos` lie more than `apart` from each other (greedy, in order).
   auto distinct = [&](const auto& pos) {
@@ -196,35 +223,76 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
     }
     return kept.size();
   };
+  // Whether the points all lie on at most two lines (within `apart`).
+  auto on_two_lines = [&](const std::vector<Vec3>& at) {
+    auto on_line = [&](const Vec3& a, const Vec3& b, const Vec3& q) {
+      const Vec3 u = (b - a).normalized();
+      const Vec3 d = q - a;
+      return (d - d.dot(u) * u).norm() <= apart;
+    };
+    for (std::size_t i = 0; i < at.size(); ++i) {
+      for (std::size_t j = i + 1; j < at.size(); ++j) {
+        if ((at[j] - at[i]).norm() <= apart) continue;
+        std::vector<Vec3> rest;
+        for (const Vec3& q : at) {
+          if (!on_line(at[i], at[j], q)) rest.push_back(q);
+        }
+        if (rest.size() <= 1) return true;
+        std::size_t far = 1;
+        while (far < rest.size() && (rest[far] - rest[0]).norm() <= apart) ++far;
+        if (far == rest.size()) return true;
+        if (std::all_of(rest.begin(), rest.end(),
+                        [&](const Vec3& q) { return on_line(rest[0], rest[far], q); })) {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
   std::size_t added = 0;
   for (;;) {
     std::optional<Surface> best;
     std::vector<std::size_t> best_on;
-    std::size_t best_rank = 0;
-    auto consider = [&](const Surface& s, std::size_t rank) {
-      if (!(s.radius > 0.0 && s.radius < o_.max_radius)) return;
+    int best_rank = 0;
+    auto consider = [&](const Surface& s, int rank) {
+      if (s.type != ShapeType::Plane && !(s.radius > 0.0 && s.radius < o_.max_radius)) return;
       std::vector<std::size_t> on = support(s);
-      if (untaken(on) < 3) return;
-      // Ranked by support, then the cylinder (rank 0) before the sphere, then found first.
+      // Ranked by support, then the plane, cylinder, sphere, then found first.
       if (best &&
           (on.size() < best_on.size() || (on.size() == best_on.size() && rank >= best_rank))) {
         return;
       }
-      if (s.type == ShapeType::Cylinder) {
+      // Its own points: free, and not on the surface of a shape it shares points with (that
+      // shape is the surface they lie on; adopt_free gives them to it).
+      std::vector<std::size_t> own;
+      std::vector<int> neighbours;
+      for (std::size_t k : on) {
+        if (!taken[k]) own.push_back(k);
+        if (k >= m) neighbours.push_back(assignment_[pool[k]]);
+      }
+      std::sort(neighbours.begin(), neighbours.end());
+      neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+      std::erase_if(own, [&](std::size_t k) {
+        return std::any_of(neighbours.begin(), neighbours.end(), [&](int a) {
+          return std::abs(surface_distance(shapes_[static_cast<std::size_t>(a)].surface,
+                                           points_[pool[k]])) <= tol;
+        });
+      });
+      if (own.size() < 3) return;
+      std::vector<Vec3> at;
+      for (std::size_t k : on) at.push_back(points_[pool[k]]);
+      if (s.type == ShapeType::Plane) {
+        if (distinct(at) < 4 || on_two_lines(at)) return;
+      } else if (s.type == ShapeType::Cylinder) {
         Vec3 e1, e2;
         detail::orthonormal_basis(s.axis, e1, e2);
         std::vector<kernel::Vec2> across;
-        for (std::size_t k : on)
-          across.emplace_back(points_[group[k]].dot(e1), points_[group[k]].dot(e2));
+        for (const Vec3& q : at) across.emplace_back(q.dot(e1), q.dot(e2));
         if (distinct(across) < 4) return;
       } else {
-        std::vector<Vec3> at;
-        std::vector<std::uint32_t> idx;
-        for (std::size_t k : on) {
-          at.push_back(points_[group[k]]);
-          idx.push_back(group[k]);
-        }
         if (distinct(at) < 6) return;
+        std::vector<std::uint32_t> idx;
+        for (std::size_t k : on) idx.push_back(pool[k]);
         const auto plane = detail::fit_plane(points_, idx);
         if (plane && rms_of(*plane, idx) <= tol) return;  // one plane: no sphere told apart
       }
@@ -232,16 +300,34 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
       best_on = std::move(on);
       best_rank = rank;
     };
+    // Each surface is drawn through at least one free point not yet taken.
+    auto fresh = [&](std::size_t i) { return i < m && !taken[i]; };
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i + 1; j < n; ++j) {
+        for (std::size_t k = j + 1; k < n; ++k) {
+          if (!fresh(i) && !fresh(j) && !fresh(k)) continue;
+          const Vec3 &a = points_[pool[i]], &b = points_[pool[j]], &c = points_[pool[k]];
+          const Vec3 normal = (b - a).cross(c - a);
+          if (!(normal.norm() > apart * apart)) continue;  // on one line
+          Surface s;
+          s.type = ShapeType::Plane;
+          s.point = a;
+          s.axis = detail::canonical_axis(normal.normalized());
+          consider(s, 0);
+        }
+      }
+    }
     for (const Vec3& axis : axes) {
       Vec3 e1, e2;
       detail::orthonormal_basis(axis, e1, e2);
       std::vector<kernel::Vec2> across;
-      for (std::size_t k = 0; k < m; ++k)
-        across.emplace_back(points_[group[k]].dot(e1), points_[group[k]].dot(e2));
-      for (std::size_t i = 0; i < m; ++i) {
-        for (std::size_t j = i + 1; j < m; ++j) {
+      for (std::size_t k = 0; k < n; ++k)
+        across.emplace_back(points_[pool[k]].dot(e1), points_[pool[k]].dot(e2));
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t j = i + 1; j < n; ++j) {
           if ((across[j] - across[i]).norm() <= apart) continue;
-          for (std::size_t k = j + 1; k < m; ++k) {
+          for (std::size_t k = j + 1; k < n; ++k) {
+            if (!fresh(i) && !fresh(j) && !fresh(k)) continue;
             const auto circle = circle_through(across[i], across[j], across[k]);
             if (!circle) continue;
             Surface s;
@@ -249,23 +335,24 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
             s.axis = detail::canonical_axis(axis);
             s.point = circle->first.x() * e1 + circle->first.y() * e2;
             s.radius = circle->second;
-            consider(s, 0);
+            consider(s, 1);
           }
         }
       }
     }
-    for (std::size_t i = 0; i < m; ++i) {
-      for (std::size_t j = i + 1; j < m; ++j) {
-        for (std::size_t k = j + 1; k < m; ++k) {
-          for (std::size_t l = k + 1; l < m; ++l) {
-            const auto sphere = sphere_through(points_[group[i]], points_[group[j]],
-                                               points_[group[k]], points_[group[l]]);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = i + 1; j < n; ++j) {
+        for (std::size_t k = j + 1; k < n; ++k) {
+          for (std::size_t l = k + 1; l < n; ++l) {
+            if (!fresh(i) && !fresh(j) && !fresh(k) && !fresh(l)) continue;
+            const auto sphere = sphere_through(points_[pool[i]], points_[pool[j]], points_[pool[k]],
+                                               points_[pool[l]]);
             if (!sphere) continue;
             Surface s;
             s.type = ShapeType::Sphere;
             s.point = sphere->first;
             s.radius = sphere->second;
-            consider(s, 1);
+            consider(s, 2);
           }
         }
       }
@@ -273,10 +360,12 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
     if (!best) break;
     // Refined on all the points it holds, when that keeps them on it.
     std::vector<std::uint32_t> on_points;
-    for (std::size_t k : best_on) on_points.push_back(group[k]);
-    if (auto refined = detail::refine_surface(*best, points_, on_points);
-        refined && refined->radius < o_.max_radius && exact_fit(rms_of(*refined, on_points)) &&
-        support(*refined).size() >= best_on.size()) {
+    for (std::size_t k : best_on) on_points.push_back(pool[k]);
+    if (auto refined = best->type == ShapeType::Plane
+                           ? detail::fit_plane(points_, on_points)
+                           : detail::refine_surface(*best, points_, on_points);
+        refined && (refined->type == ShapeType::Plane || refined->radius < o_.max_radius) &&
+        exact_fit(rms_of(*refined, on_points)) && support(*refined).size() >= best_on.size()) {
       best = *refined;
       best_on = support(*best);
     }
@@ -285,8 +374,8 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
     for (std::size_t k : best_on) {
       if (taken[k]) continue;
       taken[k] = 1;
-      shape.inliers.push_back(group[k]);
-      assignment_[group[k]] = static_cast<int>(shapes_.size());
+      shape.inliers.push_back(pool[k]);
+      assignment_[pool[k]] = static_cast<int>(shapes_.size());
     }
     shape.rms = rms_of(shape.surface, shape.inliers);
     shapes_.push_back(std::move(shape));
