@@ -6,7 +6,8 @@
 // connectivity scale keeps coplanar faces with a narrow gap apart; the faces of a polygonal
 // prism are planes, not the cylinder around them; a filleted disc's wall, taken with the
 // fillets' rims for a sphere, is a cylinder once the rims went back to the fillets; a box's
-// rounded corner and edges, a few points each, are a sphere and three cylinders.
+// rounded corner and edges, a few points each, are a sphere and three cylinders; a flat strip
+// between two arcs, one free column between their rims, is a plane.
 
 #include <gtest/gtest.h>
 
@@ -608,6 +609,40 @@ TEST(FitExactClouds, ACornersRoundsAreACylinderEachAndASphere) {
     EXPECT_NEAR(corner->surface.radius, 1.0, 1e-6);
     EXPECT_LT((corner->surface.point - Vec3(1, 1, 1)).norm(), 1e-6);
   }
+}
+
+// A flat strip between two arcs of radius 5 (as Fit4CAD's PC109), sampled exactly in columns
+// half a unit apart: its two edge columns are the arcs' last, its one inner column is free (too
+// few points for a shape, 0.025 off the arcs, on one line). The plane through it and the rims
+// beside it (three columns: not two lines, which any plane through two columns would be) is a
+// shape holding the inner column.
+TEST(FitExactClouds, AFlatStripBetweenTwoArcsIsAPlaneThroughItsRims) {
+  Cloud c;
+  testing::Draw d(109);
+  auto column = [&](const Vec3& at, const Vec3& normal) {
+    for (int row = 0; row <= 8; ++row) c.add(at + Vec3(0, 0, 0.5 * row), normal, 0.0, d);
+  };
+  const double r = 5.0, step = 0.1;  // 0.5 along the arc
+  for (int k = 15; k >= 0; --k) {    // arc A about (0, 0), up to 90 degrees
+    const double a = std::numbers::pi / 2.0 - k * step;
+    column(Vec3(r * std::cos(a), r * std::sin(a), 0), Vec3(std::cos(a), std::sin(a), 0));
+  }
+  const std::size_t inner = c.points.size();
+  column(Vec3(-0.5, r, 0), Vec3::UnitY());  // the strip's inner column
+  for (int k = 0; k <= 15; ++k) {           // arc B about (-1, 0), from 90 to 180 degrees
+    const double a = std::numbers::pi / 2.0 + k * step;
+    column(Vec3(-1.0 + r * std::cos(a), r * std::sin(a), 0), Vec3(std::cos(a), std::sin(a), 0));
+  }
+  RansacOptions o = cad_options(5);
+  o.min_points = 30;
+  const auto result = detect_shapes(c.points, sharp_normals(c), o);
+  ASSERT_TRUE(result.ok()) << result.error().message;
+  const int s = result->assignment[inner];
+  ASSERT_GE(s, 0);
+  const DetectedShape& strip = result->shapes[static_cast<std::size_t>(s)];
+  EXPECT_EQ(strip.surface.type, ShapeType::Plane);
+  EXPECT_GT(std::abs(strip.surface.axis.y()), 1.0 - 1e-9);
+  for (std::size_t k = inner; k < inner + 9; ++k) EXPECT_EQ(result->assignment[k], s);
 }
 
 }  // namespace
