@@ -246,12 +246,13 @@ std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<con
   if (p.size() < 6) return std::nullopt;
   // A line (d, m) in Plücker coordinates meets the normal line (n_i, p_i × n_i) when
   // d·(p_i × n_i) + m·n_i = 0: the axis of a surface of revolution is the null vector.
-  Eigen::MatrixXd a(static_cast<Eigen::Index>(p.size()), 6);
+  // Six columns known at compile time: the decomposition runs on fixed-size blocks.
+  Eigen::Matrix<double, Eigen::Dynamic, 6> a(static_cast<Eigen::Index>(p.size()), 6);
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec3 moment = p[i].cross(n[i]);
     a.row(static_cast<Eigen::Index>(i)) << moment.transpose(), n[i].transpose();
   }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 6>> svd(a, Eigen::ComputeFullV);
   const Eigen::VectorXd x = svd.matrixV().col(5);
   Vec3 d = x.head<3>();
   Vec3 m = x.tail<3>();
