@@ -227,7 +227,8 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
             if (cc < 0) continue;
             for (auto j : grid.points(cc)) {
               if (j == i) continue;
-              const double d = (points[j] - points[i]).norm();
+              // Squared: the square root only for the neighbours kept (the same order).
+              const double d = (points[j] - points[i]).squaredNorm();
               if (!(d > 0.0) || d >= best.back()) continue;
               // Insertion keeps the distances sorted and the indices beside them.
               std::size_t at = kNeighbours - 1;
@@ -242,6 +243,7 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
           }
         }
       }
+      for (double& b : best) b = std::sqrt(b);
       if (best.back() <= cell) {
         found.push_back(best.back());
         if (residuals != nullptr) {
