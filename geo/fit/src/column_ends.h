@@ -23,4 +23,9 @@ namespace csgtile::fit::detail {
 int columns_into_members(std::vector<geo::ScenePrimitive>& primitives,
                          std::span<const double> reach, double cos_tol);
 
+/// The noise margin of a region's members (how far short of another member an end may stop and
+/// still meet it), from the region's RANSAC epsilon and cluster epsilon, as the region's own
+/// join of members takes it.
+double member_reach(double epsilon, double cluster_epsilon);
+
 }  // namespace csgtile::fit::detail

@@ -74,6 +74,36 @@ std::optional<Closest> closest_approach(const Vec3& p, const Vec3& u, const Vec3
   return c;
 }
 
+// What an end along `out` runs into: the target's axis line from `origin` over [0, extent],
+// its half-size along `out` and beside the end's line.
+struct Target {
+  Vec3 axis, origin;
+  double extent = 0.0, half = 0.0, across = 0.0;
+};
+
+// A cylinder as a target, in world terms (its radius both ways).
+Target cylinder_target(const PrimitiveSpec& spec) {
+  Target t;
+  t.axis = spec.placement.rotation().col(2);
+  t.origin = spec.placement.translation();
+  t.half = t.across = spec.placement.scale() * spec.radius;
+  t.extent = spec.placement.scale() * spec.height;
+  return t;
+}
+
+// A member as a target for an end along `out`: the side of its section facing the end is
+// `half`, the other `across`.
+Target member_target(const Member& m, const Vec3& out) {
+  Target t;
+  t.axis = m.u;
+  t.origin = m.start;
+  t.extent = m.length;
+  const bool a_along = std::abs(m.a.dot(out)) >= std::abs(m.b.dot(out));
+  t.half = a_along ? m.half_a : m.half_b;
+  t.across = a_along ? m.half_b : m.half_a;
+  return t;
+}
+
 // The margins of a frame's members: `tight` the noise margin of a face, `reach` how far short
 // of another member an end may stop and still meet it, `sin_tol` the sine of the fit's angle
 // tolerance (how far from across a crossing axis may turn).
@@ -480,27 +510,19 @@ void Builder::join_members() {
       for (std::size_t k = 0; k < out_.primitives.size(); ++k) {
         if (std::find(group.begin(), group.end(), k) != group.end()) continue;
         const PrimitiveSpec& t = out_.primitives[k].spec;
-        Vec3 axis, origin;
-        double half = 0.0, across = 0.0, extent = 0.0;  // along `out`, beside the line, axial
+        Target target;
         if (t.type == PrimitiveType::Cylinder) {
-          axis = t.placement.rotation().col(2);
-          origin = t.placement.translation();
-          half = across = t.placement.scale() * t.radius;
-          extent = t.placement.scale() * t.height;
+          target = cylinder_target(t);
         } else if (const auto& c = members[k]) {
-          axis = c->u;
-          origin = c->start;
-          extent = c->length;
-          const bool a_along = std::abs(c->a.dot(out)) >= std::abs(c->b.dot(out));
-          half = a_along ? c->half_a : c->half_b;
-          across = a_along ? c->half_b : c->half_a;
+          target = member_target(*c, out);
         } else {
           continue;
         }
-        if (std::abs(axis.dot(out)) > sin_tol) continue;
+        const double half = target.half, extent = target.extent;
+        if (std::abs(target.axis.dot(out)) > sin_tol) continue;
         // The target's axis line and the member's centre line: where they pass closest.
-        const auto pass = closest_approach(end, out, origin, axis);
-        if (!pass || pass->distance > across) continue;
+        const auto pass = closest_approach(end, out, target.origin, target.axis);
+        if (!pass || pass->distance > target.across) continue;
         // A column's top hidden among the members it carries (the scan sees no surface there)
         // ends its fit up to a member's section below them.
         const double hidden =
@@ -595,27 +617,22 @@ void Builder::join_members() {
 
 namespace csgtile::fit::detail {
 
+double member_reach(double epsilon, double cluster_epsilon) {
+  return margins(epsilon, connectivity_cell(cluster_epsilon, epsilon), 1.0).reach;
+}
+
 int columns_into_members(std::vector<geo::ScenePrimitive>& primitives,
                          std::span<const double> reach, double cos_tol) {
   const double sin_tol = std::sqrt(std::max(0.0, 1.0 - cos_tol * cos_tol));
-  // An elongated cylinder in world terms: its axis from `base` over [0, length], its radius.
-  struct Column {
-    Vec3 base, axis;
-    double length = 0.0, radius = 0.0;
-  };
-  auto as_column = [](const PrimitiveSpec& spec) -> std::optional<Column> {
+  // A column: an elongated cylinder without clips, as a target (`half` its radius).
+  auto as_column = [](const PrimitiveSpec& spec) -> std::optional<Target> {
     if (spec.type != PrimitiveType::Cylinder || !spec.clips.empty()) return std::nullopt;
-    const double scale = spec.placement.scale();
-    Column c;
-    c.base = spec.placement.translation();
-    c.axis = spec.placement.rotation().col(2);
-    c.length = scale * spec.height;
-    c.radius = scale * spec.radius;
-    if (!(c.radius > 0.0) || c.length < 4.0 * c.radius) return std::nullopt;
+    const Target c = cylinder_target(spec);
+    if (!(c.half > 0.0) || c.extent < 4.0 * c.half) return std::nullopt;
     return c;
   };
   std::vector<std::optional<Member>> members(primitives.size());
-  std::vector<std::optional<Column>> columns(primitives.size());
+  std::vector<std::optional<Target>> columns(primitives.size());
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     members[k] = as_member(primitives[k].spec);
     columns[k] = as_column(primitives[k].spec);
@@ -623,40 +640,31 @@ int columns_into_members(std::vector<geo::ScenePrimitive>& primitives,
   int moved = 0;
   for (std::size_t c = 0; c < primitives.size(); ++c) {
     if (!columns[c]) continue;
-    const Column& col = *columns[c];
+    const Target& col = *columns[c];
     const double margin = c < reach.size() ? reach[c] : 0.0;
     double grow_low = 0.0, grow_high = 0.0;
     for (const double side : {-1.0, 1.0}) {
-      const Vec3 end = col.base + (side > 0.0 ? col.length : 0.0) * col.axis;
+      const Vec3 end = col.origin + (side > 0.0 ? col.extent : 0.0) * col.axis;
       const Vec3 out = side * col.axis;
       double best = INFINITY;  // past the end to the member's middle
       for (std::size_t k = 0; k < primitives.size(); ++k) {
         if (k == c) continue;
-        Vec3 axis, origin;
-        double half = 0.0, across = 0.0, extent = 0.0;  // along `out`, beside the line, axial
-        if (const auto& t = columns[k]) {
-          axis = t->axis;
-          origin = t->base;
-          extent = t->length;
-          half = across = t->radius;
-        } else if (const auto& m = members[k]) {
-          axis = m->u;
-          origin = m->start;
-          extent = m->length;
-          const bool a_along = std::abs(m->a.dot(out)) >= std::abs(m->b.dot(out));
-          half = a_along ? m->half_a : m->half_b;
-          across = a_along ? m->half_b : m->half_a;
+        Target t;
+        if (columns[k]) {
+          t = *columns[k];
+        } else if (members[k]) {
+          t = member_target(*members[k], out);
         } else {
           continue;
         }
-        if (std::abs(axis.dot(out)) > sin_tol) continue;
-        const auto pass = closest_approach(end, out, origin, axis);
-        if (!pass || pass->distance > across) continue;
+        if (std::abs(t.axis.dot(out)) > sin_tol) continue;
+        const auto pass = closest_approach(end, out, t.origin, t.axis);
+        if (!pass || pass->distance > t.across) continue;
         // A member that stops at the column's side (its end where its points stop) is still
         // the one it carries.
-        const double beside = col.radius + margin;
-        if (pass->t < -beside || pass->t > extent + beside) continue;
-        if (pass->s > 0.0 && pass->s <= half + margin) best = std::min(best, pass->s);
+        const double beside = col.half + margin;
+        if (pass->t < -beside || pass->t > t.extent + beside) continue;
+        if (pass->s > 0.0 && pass->s <= t.half + margin) best = std::min(best, pass->s);
       }
       if (!std::isfinite(best)) continue;
       (side > 0.0 ? grow_high : grow_low) = best;
@@ -665,14 +673,14 @@ int columns_into_members(std::vector<geo::ScenePrimitive>& primitives,
     geo::ScenePrimitive& p = primitives[c];
     const double scale = p.spec.placement.scale();
     auto loc =
-        Location::from_parts(p.spec.placement.rotation(), scale, col.base - grow_low * col.axis);
+        Location::from_parts(p.spec.placement.rotation(), scale, col.origin - grow_low * col.axis);
     if (!loc.ok()) continue;
     moved += (grow_low > 0.0 ? 1 : 0) + (grow_high > 0.0 ? 1 : 0);
-    const double length = col.length + grow_low + grow_high;
+    const double length = col.extent + grow_low + grow_high;
     p.spec.placement = loc.value();
     p.spec.height = length / scale;
     // The points cover what they covered: the share of a longer side is smaller.
-    if (p.quality) p.quality->coverage *= col.length / length;
+    if (p.quality) p.quality->coverage *= col.extent / length;
   }
   return moved;
 }

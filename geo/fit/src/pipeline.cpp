@@ -646,13 +646,11 @@ kernel::Result<FitOutput> fit_point_cloud(std::span<const Vec3> points,
     if (f.with_primitives) {
       FittedPrimitives& fitted = f.fitted;
       out.region_stats.back().primitives = static_cast<int>(fitted.primitives.size());
-      // As the builder's: the connectivity cell, and a face's noise margin.
-      const double cell =
-          detected.cluster_epsilon > 0.0 ? detected.cluster_epsilon : 3.0 * f.ransac.epsilon;
+      const double reach = detail::member_reach(f.ransac.epsilon, detected.cluster_epsilon);
       for (auto& prim : fitted.primitives) {
         out.primitives.push_back(std::move(prim));
         primitive_region.push_back(static_cast<int>(r));
-        primitive_reach.push_back(std::max(2.0 * f.ransac.epsilon, cell));
+        primitive_reach.push_back(reach);
       }
       for (auto& rej : fitted.rejected) {
         rej.what = "region " + std::to_string(r) + " " + rej.what;

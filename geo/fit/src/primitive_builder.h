@@ -59,6 +59,12 @@ struct SeedBox {
 // The box `box` in the seed's frame (corner at (u0, v0, c0)), or nullopt as placement.
 std::optional<PrimitiveSpec> seed_box_spec(const PlanePatch& seed, const SeedBox& box);
 
+// The connectivity cell of a region's primitives: the RANSAC's cluster epsilon, else three
+// times its epsilon.
+inline double connectivity_cell(double cluster_epsilon, double epsilon) {
+  return cluster_epsilon > 0.0 ? cluster_epsilon : 3.0 * epsilon;
+}
+
 class Builder {
  public:
   Builder(std::span<const Vec3> points, std::span<const Vec3> normals, const RansacResult& shapes,
@@ -71,7 +77,7 @@ class Builder {
         region_(region),
         used_(points.size(), 0) {
     cos_tol_ = std::cos(o.angle_tolerance_deg * std::numbers::pi / 180.0);
-    cell_ = shapes.cluster_epsilon > 0.0 ? shapes.cluster_epsilon : 3.0 * ransac.epsilon;
+    cell_ = connectivity_cell(shapes.cluster_epsilon, ransac.epsilon);
     for (const Vec3& p : points) {
       if (p.allFinite()) region_box_.add(p);
     }

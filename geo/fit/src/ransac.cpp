@@ -345,6 +345,13 @@ std::optional<Detector::Core> Detector::best_half(std::span<const std::uint32_t>
   return Core{*current, rms_of(*current, half)};
 }
 
+std::optional<Detector::Core> Detector::exact_half(const DetectedShape& shape) const {
+  const Surface* start = shape.surface.type == ShapeType::Plane ? nullptr : &shape.surface;
+  auto core = best_half(shape.inliers, start);
+  if (!core || !exact_fit(core->rms)) return std::nullopt;
+  return core;
+}
+
 // On an exact cloud every true surface fits its points to the noise floor. A shape that fits
 // most of its points so (median residual within the floor) but holds points more than three
 // floors off it holds a neighbour's points; a shape that fits most of its points worse is a
@@ -364,8 +371,7 @@ std::size_t Detector::free_inexact() {
     const bool dissolve = detail::median_of(residual) > floor;
     double off = kOnSurfaceFloors * floor;
     if (!dissolve) {
-      const Surface* start = shape.surface.type == ShapeType::Plane ? nullptr : &shape.surface;
-      if (auto core = best_half(shape.inliers, start); core && exact_fit(core->rms)) {
+      if (const auto core = exact_half(shape)) {
         residual = residuals(core->surface, shape.inliers);
         off = exact_reach(core->rms);
       }

@@ -139,6 +139,9 @@ class Detector {
   };
   std::optional<Core> best_half(std::span<const std::uint32_t> inliers,
                                 const Surface* start = nullptr) const;
+  // The best half of a shape's inliers (a plane's a plane, a curved shape its own type refined)
+  // when it fits its surface exactly (exact_fit), else nullopt.
+  std::optional<Core> exact_half(const DetectedShape& shape) const;
   void best_fitting_half(const Surface& s, std::span<const std::uint32_t> inliers,
                          std::vector<std::uint32_t>& half) const;
   std::optional<Surface> on_one_circle(const Vec3& axis,

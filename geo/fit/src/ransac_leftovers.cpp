@@ -58,24 +58,16 @@ std::size_t Detector::trim_to_exact_cores() {
   std::size_t freed = 0;
   for (auto& shape : shapes_) {
     if (shape.inliers.empty() || exact_fit(rms_of(shape.surface, shape.inliers))) continue;
-    const Surface* start = shape.surface.type == ShapeType::Plane ? nullptr : &shape.surface;
-    const auto core = best_half(shape.inliers, start);
-    if (!core || !exact_fit(core->rms) || core->surface.type != shape.surface.type) continue;
+    const auto core = exact_half(shape);
+    if (!core || core->surface.type != shape.surface.type) continue;
     const double reach = exact_reach(core->rms);
-    std::vector<std::uint32_t> kept;
+    std::vector<std::uint32_t> kept, off;
     for (auto i : shape.inliers) {
-      if (std::abs(surface_distance(core->surface, points_[i])) <= reach) {
-        kept.push_back(i);
-      } else {
-        assignment_[i] = -1;
-        ++freed;
-      }
+      (std::abs(surface_distance(core->surface, points_[i])) <= reach ? kept : off).push_back(i);
     }
-    if (static_cast<long long>(kept.size()) < o_.min_points) {  // no shape: as it was
-      for (auto i : shape.inliers) assignment_[i] = static_cast<int>(&shape - shapes_.data());
-      freed -= shape.inliers.size() - kept.size();
-      continue;
-    }
+    if (static_cast<long long>(kept.size()) < o_.min_points) continue;  // no shape: as it was
+    for (auto i : off) assignment_[i] = -1;
+    freed += off.size();
     shape.surface = core->surface;
     shape.inliers = std::move(kept);
   }
@@ -365,9 +357,11 @@ std::size_t Detector::small_exact_shapes(std::span<const std::uint32_t> group,
                            ? detail::fit_plane(points_, on_points)
                            : detail::refine_surface(*best, points_, on_points);
         refined && (refined->type == ShapeType::Plane || refined->radius < o_.max_radius) &&
-        exact_fit(rms_of(*refined, on_points)) && support(*refined).size() >= best_on.size()) {
-      best = *refined;
-      best_on = support(*best);
+        exact_fit(rms_of(*refined, on_points))) {
+      if (std::vector<std::size_t> on = support(*refined); on.size() >= best_on.size()) {
+        best = *refined;
+        best_on = std::move(on);
+      }
     }
     DetectedShape shape;
     shape.surface = *best;
