@@ -50,7 +50,11 @@ struct Components {
   std::vector<int> parent;
 };
 
-kernel::Status check_options(const AssemblyOptions& o) {
+kernel::Status check_options(const AssemblyOptions& o, std::size_t n) {
+  if (!o.anchor.empty() && o.anchor.size() != n) {
+    return kernel::Status(ErrorCode::InvalidArgument,
+                          "assembly: the anchor rule must mark every primitive");
+  }
   if (!(o.voxel_size > 0) || !std::isfinite(o.voxel_size)) {
     return kernel::Status(ErrorCode::InvalidArgument,
                           "assembly: voxel size must be finite and > 0");
@@ -76,6 +80,13 @@ bool is_curved(const kernel::PrimitiveSpec& spec) {
   return spec.type != kernel::PrimitiveType::Box && spec.type != kernel::PrimitiveType::Extrusion;
 }
 
+// A candidate pair given the exact test: its verdict, or why the test failed.
+struct Tested {
+  int a = 0, b = 0;
+  std::optional<kernel::Interference> verdict;
+  std::string error;
+};
+
 bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& outer) {
   return inner.min.x() >= outer.min.x() && inner.min.y() >= outer.min.y() &&
          inner.max.x() <= outer.max.x() && inner.max.y() <= outer.max.y();
@@ -85,7 +96,7 @@ bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& oute
 
 kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitives,
                                   const AssemblyOptions& options) {
-  if (auto s = check_options(options); !s.ok()) return s.error();
+  if (auto s = check_options(options, primitives.size()); !s.ok()) return s.error();
   const auto t_start = Clock::now();
   std::unique_ptr<tbb::global_control> threads;
   if (options.threads > 0) {
@@ -172,100 +183,158 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
   st.candidate_pairs = static_cast<long long>(candidates.size());
   st.seconds_broad = seconds_since(t0);
 
-  // 3. OpenVDB culling of the candidates.
-  t0 = Clock::now();
+  // 3. OpenVDB culling of candidate pairs, then 4. the exact test of the survivors; a batch
+  // at a time (every candidate at once, or rounds outward from the anchored primitives).
   std::vector<kernel::Shape> shapes(n);
   for (std::size_t i = 0; i < n; ++i) {
     if (read[i]) shapes[i] = leaves[i].shape;
   }
-  std::vector<std::pair<int, int>> survivors;
-  if (options.voxel_culling && !candidates.empty()) {
-    // Voxels pay where the exact test costs more than the two shells: pairs with a curved
-    // solid, or whose face counts multiply to voxel_min_face_product or more. Other pairs
-    // (two boxes, a box and an L-shaped prism) go straight to the exact test; pairs whose
-    // boxes do not meet (without the broad phase) are dropped here.
-    std::vector<char> keep(candidates.size(), 0);
-    std::vector<std::size_t> costly;  // into candidates
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-      const auto a = static_cast<std::size_t>(candidates[k].first),
-                 b = static_cast<std::size_t>(candidates[k].second);
-      if (!boxes[a].intersects(boxes[b])) continue;
-      const bool curved = is_curved(primitives[a].spec) || is_curved(primitives[b].spec);
-      const double faces = static_cast<double>(leaves[a].face_sources.size()) *
-                           static_cast<double>(leaves[b].face_sources.size());
-      if (curved || faces >= options.voxel_min_face_product) {
-        costly.push_back(k);
-      } else {
-        keep[k] = 1;
+  std::vector<Tested> tested;
+  bool culling_skipped = false;
+  const auto test_pairs = [&](const std::vector<std::pair<int, int>>& batch) -> kernel::Status {
+    auto t_batch = Clock::now();
+    std::vector<std::pair<int, int>> survivors;
+    if (options.voxel_culling && !batch.empty()) {
+      // Voxels pay where the exact test costs more than the two shells: pairs with a curved
+      // solid, or whose face counts multiply to voxel_min_face_product or more. Other pairs
+      // (two boxes, a box and an L-shaped prism) go straight to the exact test; pairs whose
+      // boxes do not meet (without the broad phase) are dropped here.
+      std::vector<char> keep(batch.size(), 0);
+      std::vector<std::size_t> costly;  // into batch
+      for (std::size_t k = 0; k < batch.size(); ++k) {
+        const auto a = static_cast<std::size_t>(batch[k].first),
+                   b = static_cast<std::size_t>(batch[k].second);
+        if (!boxes[a].intersects(boxes[b])) continue;
+        const bool curved = is_curved(primitives[a].spec) || is_curved(primitives[b].spec);
+        const double faces = static_cast<double>(leaves[a].face_sources.size()) *
+                             static_cast<double>(leaves[b].face_sources.size());
+        if (curved || faces >= options.voxel_min_face_product) {
+          costly.push_back(k);
+        } else {
+          keep[k] = 1;
+        }
       }
-    }
-    if (!costly.empty()) {
-      std::vector<std::pair<int, int>> pairs;
-      for (std::size_t k : costly) pairs.push_back(candidates[k]);
-      VoxelCuller culler(options.voxel_size, options.tolerance);
-      culler.build(shapes, pairs, &exact_boxes);
-      if (!culler.unavailable().empty()) {
-        out.problems.push_back("voxel culling skipped (every candidate pair tested exactly): " +
-                               culler.unavailable());
+      if (!costly.empty()) {
+        std::vector<std::pair<int, int>> pairs;
+        for (std::size_t k : costly) pairs.push_back(batch[k]);
+        VoxelCuller culler(options.voxel_size, options.tolerance);
+        culler.build(shapes, pairs, &exact_boxes);
+        if (!culler.unavailable().empty() && !culling_skipped) {
+          culling_skipped = true;
+          out.problems.push_back("voxel culling skipped (every candidate pair tested exactly): " +
+                                 culler.unavailable());
+        }
+        for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
+        tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t c) {
+          keep[costly[c]] = culler.may_meet(static_cast<std::size_t>(pairs[c].first),
+                                            static_cast<std::size_t>(pairs[c].second));
+        });
       }
-      for (std::size_t i = 0; i < n; ++i) st.active_voxels += culler.active_voxels(i);
-      tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t c) {
-        keep[costly[c]] = culler.may_meet(static_cast<std::size_t>(pairs[c].first),
-                                          static_cast<std::size_t>(pairs[c].second));
-      });
-    }
-    for (std::size_t k = 0; k < candidates.size(); ++k) {
-      if (keep[k]) survivors.push_back(candidates[k]);
-    }
-  } else {
-    survivors = candidates;
-  }
-  if (auto s = stopped("culling pairs"); !s.ok()) return s.error();
-  st.culled_pairs = st.candidate_pairs - static_cast<long long>(survivors.size());
-  st.seconds_voxel = seconds_since(t0);
-
-  // 4. Exact test of the survivors; components of the contact graph are the objects.
-  t0 = Clock::now();
-  st.exact_tests = static_cast<long long>(survivors.size());
-  std::vector<std::optional<kernel::Interference>> verdict(survivors.size());
-  std::vector<std::string> verdict_error(survivors.size());
-  tbb::parallel_for(std::size_t{0}, survivors.size(), [&](std::size_t k) {
-    const auto [a, b] = survivors[k];
-    auto r = kernel::solid_interference(shapes[static_cast<std::size_t>(a)],
-                                        shapes[static_cast<std::size_t>(b)], bopt);
-    if (r.ok()) {
-      verdict[k] = r.value();
+      for (std::size_t k = 0; k < batch.size(); ++k) {
+        if (keep[k]) survivors.push_back(batch[k]);
+      }
     } else {
-      verdict_error[k] = r.error().message;
+      survivors = batch;
     }
-  });
-  // A test the interrupt cut short decided nothing: the assembly stops as a whole.
-  if (auto s = stopped("testing pairs"); !s.ok()) return s.error();
+    if (auto s = stopped("culling pairs"); !s.ok()) return s;
+    st.culled_pairs += static_cast<long long>(batch.size() - survivors.size());
+    st.seconds_voxel += seconds_since(t_batch);
+
+    t_batch = Clock::now();
+    st.exact_tests += static_cast<long long>(survivors.size());
+    const std::size_t first = tested.size();
+    tested.resize(first + survivors.size());
+    tbb::parallel_for(std::size_t{0}, survivors.size(), [&](std::size_t k) {
+      Tested& t = tested[first + k];
+      std::tie(t.a, t.b) = survivors[k];
+      auto r = kernel::solid_interference(shapes[static_cast<std::size_t>(t.a)],
+                                          shapes[static_cast<std::size_t>(t.b)], bopt);
+      if (r.ok()) {
+        t.verdict = r.value();
+      } else {
+        t.error = r.error().message;
+      }
+    });
+    st.seconds_exact += seconds_since(t_batch);
+    // A test the interrupt cut short decided nothing: the assembly stops as a whole.
+    return stopped("testing pairs");
+  };
+  const auto same_object = [&](const Tested& t) {
+    return !(t.verdict && *t.verdict == kernel::Interference::Disjoint) &&
+           primitives[static_cast<std::size_t>(t.a)].group ==
+               primitives[static_cast<std::size_t>(t.b)].group;
+  };
+  std::vector<char> reached(read);
+  if (options.anchor.empty()) {
+    if (auto s = test_pairs(candidates); !s.ok()) return s.error();
+  } else {
+    // Rounds outward from the primitives anchored in the cell along contacts within a group.
+    // A primitive anchored before the cell ends its round: its object is another cell's, and
+    // every path from the cell's primitives to it reaches it.
+    std::vector<std::vector<std::size_t>> incident(n);
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      incident[static_cast<std::size_t>(candidates[k].first)].push_back(k);
+      incident[static_cast<std::size_t>(candidates[k].second)].push_back(k);
+    }
+    std::fill(reached.begin(), reached.end(), 0);
+    std::vector<char> done(candidates.size(), 0);
+    std::vector<int> frontier;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (read[i] && options.anchor[i] == 0) {
+        reached[i] = 1;
+        frontier.push_back(static_cast<int>(i));
+      }
+    }
+    while (!frontier.empty()) {
+      std::vector<std::pair<int, int>> batch;
+      for (int v : frontier) {
+        for (std::size_t k : incident[static_cast<std::size_t>(v)]) {
+          if (!done[k]) {
+            done[k] = 1;
+            batch.push_back(candidates[k]);
+          }
+        }
+      }
+      std::sort(batch.begin(), batch.end());
+      const std::size_t first = tested.size();
+      if (auto s = test_pairs(batch); !s.ok()) return s.error();
+      frontier.clear();
+      for (std::size_t k = first; k < tested.size(); ++k) {
+        if (!same_object(tested[k])) continue;
+        for (int v : {tested[k].a, tested[k].b}) {
+          if (reached[static_cast<std::size_t>(v)]) continue;
+          reached[static_cast<std::size_t>(v)] = 1;
+          if (options.anchor[static_cast<std::size_t>(v)] >= 0) frontier.push_back(v);
+        }
+      }
+      std::sort(frontier.begin(), frontier.end());
+    }
+  }
+
+  // Components of the contact graph are the objects.
+  auto t0c = Clock::now();
   Components comps(n);
   std::vector<Contact> contacts;
-  for (std::size_t k = 0; k < survivors.size(); ++k) {
-    const auto [a, b] = survivors[k];
-    if (verdict[k] && *verdict[k] == kernel::Interference::Disjoint) continue;
+  for (const Tested& t : tested) {
+    if (t.verdict && *t.verdict == kernel::Interference::Disjoint) continue;
     // A pair the exact test could not decide is kept together (the fuse decides or fails with
     // a reason) rather than published as two objects that may overlap.
-    contacts.push_back({a, b, verdict[k].value_or(kernel::Interference::BoundariesMeet)});
-    if (!verdict[k]) {
-      out.problems.push_back("pair " + primitives[static_cast<std::size_t>(a)].label + " / " +
-                             primitives[static_cast<std::size_t>(b)].label +
-                             ": exact test failed, assumed in contact: " + verdict_error[k]);
+    contacts.push_back({t.a, t.b, t.verdict.value_or(kernel::Interference::BoundariesMeet)});
+    if (!t.verdict) {
+      out.problems.push_back("pair " + primitives[static_cast<std::size_t>(t.a)].label + " / " +
+                             primitives[static_cast<std::size_t>(t.b)].label +
+                             ": exact test failed, assumed in contact: " + t.error);
     }
     // Two groups' contact is a relation between objects, never one object.
-    if (primitives[static_cast<std::size_t>(a)].group ==
-        primitives[static_cast<std::size_t>(b)].group) {
-      comps.join(a, b);
-    }
+    if (same_object(t)) comps.join(t.a, t.b);
   }
   st.interacting_pairs = static_cast<long long>(contacts.size());
   std::map<int, std::vector<int>> members;
   for (std::size_t i = 0; i < n; ++i) {
-    if (read[i]) members[comps.root(static_cast<int>(i))].push_back(static_cast<int>(i));
+    if (reached[i]) members[comps.root(static_cast<int>(i))].push_back(static_cast<int>(i));
   }
-  st.seconds_exact = seconds_since(t0);
+  st.components = static_cast<long long>(members.size());
+  st.seconds_exact += seconds_since(t0c);
 
   // 5. Anchor rule, then one n-ary fuse per kept object (in parallel).
   t0 = Clock::now();
@@ -277,6 +346,11 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
     for (int i : list) box.add(exact_boxes[static_cast<std::size_t>(i)]);
     if (options.cell) {
       if (options.cell->grid.cell_of(box.min.x(), box.min.y()) != options.cell->cell) continue;
+    }
+    if (!options.anchor.empty()) {
+      int least = 1;
+      for (int i : list) least = std::min(least, options.anchor[static_cast<std::size_t>(i)]);
+      if (least != 0) continue;
     }
     groups.push_back(list);
     group_boxes.push_back(box);

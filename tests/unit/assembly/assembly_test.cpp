@@ -328,6 +328,57 @@ TEST(Assembly, CellsWithHalosGiveTheWholeAssembly) {
   }
 }
 
+// A city cell's own anchor rule (each primitive marked by the cell of its minimum corner, an
+// object kept where the least of its primitives' cells is the cell): the cells together give
+// the whole assembly, object for object and byte for byte, and no cell tests more pairs than
+// the whole does, since it looks only at pairs of its own objects. Primitives come in groups
+// (adjoining buildings) so that contacts across groups are relations, not fusions.
+TEST(Assembly, AnAnchorRuleTestsAndFusesOnlyTheCellsObjects) {
+  auto prims = labelled(test::random_city(200, 78));
+  for (std::size_t i = 0; i < prims.size(); ++i) prims[i].group = "g" + std::to_string(i % 3);
+  auto whole = assemble(prims);
+  ASSERT_TRUE(whole.ok());
+  std::vector<BoundingBox> boxes;
+  for (const auto& p : prims) {
+    auto m = kernel::csg_primitive(p.spec, p.label, kernel::kDefaultTolerance);
+    ASSERT_TRUE(m.ok());
+    boxes.push_back(kernel::bounding_box(m->shape));
+  }
+  for (double size : {25.0, 40.0}) {
+    kernel::Grid grid;
+    grid.size = size;
+    std::set<kernel::GridCell> cells;
+    for (const BoundingBox& b : boxes) cells.insert(grid.cell_of(b.min.x(), b.min.y()));
+    std::vector<AssembledObject> got;
+    long long fewest_tests = whole->stats.exact_tests;
+    for (const kernel::GridCell& cell : cells) {
+      AssemblyOptions options;
+      for (const BoundingBox& b : boxes) {
+        const kernel::GridCell c = grid.cell_of(b.min.x(), b.min.y());
+        options.anchor.push_back(c < cell ? -1 : c == cell ? 0 : 1);
+      }
+      auto part = assemble(prims, options);
+      ASSERT_TRUE(part.ok());
+      EXPECT_LE(part->stats.exact_tests, whole->stats.exact_tests);
+      fewest_tests = std::min(fewest_tests, part->stats.exact_tests);
+      EXPECT_LE(part->stats.objects, part->stats.components);
+      for (auto& o : part->objects) got.push_back(std::move(o));
+    }
+    EXPECT_LT(cells.size(), whole->objects.size()) << "too few objects per cell to mean much";
+    EXPECT_LT(2 * fewest_tests, whole->stats.exact_tests) << "cell size " << size;
+    std::sort(got.begin(), got.end(), [](const AssembledObject& a, const AssembledObject& b) {
+      return a.primitives.front() < b.primitives.front();
+    });
+    EXPECT_EQ(by_id(got), by_id(whole->objects)) << "cell size " << size;
+    EXPECT_EQ(model_bytes(got), model_bytes(whole->objects)) << "cell size " << size;
+  }
+  AssemblyOptions wrong;
+  wrong.anchor = {0};
+  auto refused = assemble(prims, wrong);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().message.find("anchor rule"), std::string::npos);
+}
+
 TEST(Assembly, ObjectPastTheHaloIsReported) {
   // A 60 m wall of three overlapping boxes across cells of 10 m with a 5 m halo.
   std::vector<PrimitiveSpec> specs;

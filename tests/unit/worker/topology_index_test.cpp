@@ -358,7 +358,7 @@ TEST(Relations, FailingBooleanGivesUnknownWithTheReason) {
   const auto rows = compute_relations({solid, face}, 1e-7);
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].kind, RelationKind::Unknown);
-  EXPECT_EQ(rows[0].reason.rfind("common: invalid_argument: ", 0), 0u) << rows[0].reason;
+  EXPECT_EQ(rows[0].reason.rfind("fuse: invalid_argument: ", 0), 0u) << rows[0].reason;
 }
 
 // ---- recipes, objects layer --------------------------------------------------------------------

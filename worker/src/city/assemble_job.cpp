@@ -161,15 +161,21 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   options.escalate_to = config.city.snap_escalate_to;
   options.interrupt.stop = std::move(stop);
   options.object_time_limit = config.city.building_timeout_seconds;
+  // Only the objects anchored in this cell are fused: the least of their primitives' anchor
+  // cells (each the cell of a primitive's minimum corner, computed as the fit job computed
+  // it), so the object's cell is one the fits named and that has an assemble job. The
+  // halo's other objects are their own cells' work.
+  options.anchor.reserve(prims.size());
+  for (const CellPrimitive& p : prims) {
+    const kernel::GridCell c = grid.cell_of(p.crs_box.min.x(), p.crs_box.min.y());
+    options.anchor.push_back(c < cell ? -1 : c == cell ? 0 : 1);
+  }
   auto assembled = assembly::assemble(input, options);
   if (!assembled.ok()) {
     return failure_of(assembled.error(), name);
   }
   const assembly::Assembly& a = assembled.value();
 
-  // Keep the objects anchored in this cell: the least of their primitives' anchor cells (each
-  // the cell of a primitive's minimum corner, computed as the fit job computed it), so the
-  // object's cell is one the fits named and that has an assemble job.
   clock.enter("publish");
   // Problems of the objects this cell keeps (the assembly also names objects of the halo,
   // which their own cells report) and of primitives that could not be built.
@@ -180,14 +186,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<const assembly::AssembledObject*> kept;
   for (const assembly::AssembledObject& object : a.objects) {
     kernel::BoundingBox box;
-    std::optional<kernel::GridCell> anchor;
-    for (int i : object.primitives) {
-      const kernel::BoundingBox& b = prims[static_cast<std::size_t>(i)].crs_box;
-      box.add(b);
-      const kernel::GridCell c = grid.cell_of(b.min.x(), b.min.y());
-      if (!anchor || c < *anchor) anchor = c;
-    }
-    if (!anchor || *anchor != cell) continue;
+    for (int i : object.primitives) box.add(prims[static_cast<std::size_t>(i)].crs_box);
     if (!grid.within_halo(box, cell)) {
       problems.push_back("object " + object.id + " reaches past the halo of cell " + name +
                          " (city.halo " + ordered_json(halo).dump() +
@@ -323,7 +322,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   }
   const assembly::AssemblyStats& s = a.stats;
   ordered_json stats = assembly_counts_json(s);
-  stats["objects_in_halo"] = s.objects;
+  stats["objects_reached"] = s.components;
   stats["objects"] = kept.size();
   stats["objects_unfused"] = invalid;
   stats["structure_points_in_halo"] = points.size();

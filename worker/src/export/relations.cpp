@@ -1,6 +1,6 @@
 // Relations between objects: candidate pairs from bounding boxes, then exact classification
-// with the kernel's Booleans (a ∩ b for overlap and containment, a ∪ b for the shared area of
-// touching objects).
+// with the kernel's Booleans: a ∪ b gives both the common volume (overlap and containment)
+// and the shared area of touching objects.
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -72,14 +72,18 @@ bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma
       contact.ok() && contact.value() == kernel::Interference::Disjoint) {
     return false;
   }
-  auto common = kernel::boolean_operation(a, b, kernel::BooleanOp::Common, options);
-  if (!common.ok()) {
+  // One union decides both: the volume the two share is what their union lacks of the sum of
+  // theirs, and the faces in contact disappear from the union, once from each side.
+  auto fused = kernel::boolean_operation(a, b, kernel::BooleanOp::Fuse, options);
+  if (!fused.ok()) {
     out.kind = RelationKind::Unknown;
-    out.reason = boolean_error("common", common.error());
+    out.reason = boolean_error("fuse", fused.error());
     return true;
   }
-  const double vc = kernel::mass_properties(common.value()).volume;
+  const kernel::MassProperties union_mass = kernel::mass_properties(fused.value());
   const double scale = std::max(ma.volume, mb.volume);
+  const double vc =
+      std::min(ma.volume + mb.volume - union_mass.volume, std::min(ma.volume, mb.volume));
   if (vc > kRelative * scale) {
     const bool a_inside = std::abs(ma.volume - vc) <= kRelative * scale;
     const bool b_inside = std::abs(mb.volume - vc) <= kRelative * scale;
@@ -90,14 +94,7 @@ bool classify(const kernel::Shape& a, const kernel::Shape& b, const Measured& ma
     out.common_volume = vc;
     return true;
   }
-  auto fused = kernel::boolean_operation(a, b, kernel::BooleanOp::Fuse, options);
-  if (!fused.ok()) {
-    out.kind = RelationKind::Unknown;
-    out.reason = boolean_error("fuse", fused.error());
-    return true;
-  }
-  // Faces in contact disappear from the union, once from each side.
-  const double shared = (ma.area + mb.area - kernel::mass_properties(fused.value()).area) / 2.0;
+  const double shared = (ma.area + mb.area - union_mass.area) / 2.0;
   if (shared > kRelative * (ma.area + mb.area)) {
     out.kind = RelationKind::Touches;
     out.shared_area = shared;

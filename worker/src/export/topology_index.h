@@ -184,14 +184,14 @@ Failure write_topology_index(const std::filesystem::path& path,
 // ---- relations ------------------------------------------------------------------------------
 
 /// Relations between solids (or compounds of solids) in one frame. Candidate pairs are those
-/// whose bounding boxes, grown by `linear_tolerance`, meet; each is classified exactly:
-/// vol(a ∩ b) > 0 → overlaps, or contains / within / equals when a ∩ b is one of them (equal
-/// volumes, relative 1e-8); otherwise touches when the shared boundary area
-/// (area(a) + area(b) − area(a ∪ b)) / 2 is positive. Disjoint pairs and pairs that meet only
-/// along edges or at points give no row. A Boolean error gives kind Unknown with the error as
-/// the reason. Rows are sorted by (a, b). Pairs are classified on `threads` threads (0: one per
-/// core); the result does not depend on it. Deterministic; never throws.
-/// `skip` (optional): candidate pairs (i < j) for which it returns true are not classified.
+/// whose bounding boxes, grown by `linear_tolerance`, meet; each is classified exactly by one
+/// union: vol(a ∩ b) = vol(a) + vol(b) − vol(a ∪ b) > 0 → overlaps, or contains / within /
+/// equals when a ∩ b is one of them (equal volumes, relative 1e-8); otherwise touches when the
+/// shared boundary area (area(a) + area(b) − area(a ∪ b)) / 2 is positive. Disjoint pairs and pairs
+/// that meet only along edges or at points give no row. A Boolean error gives kind Unknown with the
+/// error as the reason. Rows are sorted by (a, b). Pairs are classified on `threads` threads (0:
+/// one per core); the result does not depend on it. Deterministic; never throws. `skip` (optional):
+/// candidate pairs (i < j) for which it returns true are not classified.
 std::vector<ObjectRelation> compute_relations(
     const std::vector<kernel::Shape>& solids, double linear_tolerance, int threads = 0,
     const std::function<bool(std::size_t, std::size_t)>& skip = {});

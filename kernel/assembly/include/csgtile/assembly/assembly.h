@@ -69,6 +69,13 @@ struct AssemblyOptions {
   /// a city of boxes assembles faster without culling). Same objects either way. 0: every
   /// pair is culled by its voxels.
   double voxel_min_face_product = 100.0;
+  /// A caller's own anchor rule (a city cell's, by its primitives' anchor cells), instead of
+  /// `cell`'s: per input primitive, < 0 when it anchors its object in an earlier cell, 0 in
+  /// this one, > 0 in a later one. An object is kept when the least mark of its primitives is
+  /// 0. Only the pairs of kept objects' primitives are culled and tested (outward from the
+  /// primitives marked 0), so a cell neither tests nor fuses its halo's other objects.
+  /// Empty: no such rule; else one mark per primitive.
+  std::vector<int> anchor;
 };
 
 struct AssemblyStats {
@@ -77,9 +84,11 @@ struct AssemblyStats {
   long long primitives_failed = 0;  ///< that could not be built (see Assembly::problems)
   long long candidate_pairs = 0;    ///< from the broad phase (all pairs without it)
   long long culled_pairs = 0;       ///< of those, dropped by the OpenVDB masks
-  long long exact_tests = 0;        ///< pairs given the exact test
+  long long exact_tests = 0;        ///< pairs given the exact test (with `anchor`, the
+                                    ///< candidates of other cells' objects get neither)
   long long interacting_pairs = 0;  ///< of those, overlapping or touching
-  long long objects = 0;            ///< published (anchored in the cell)
+  long long components = 0;         ///< objects found (with `anchor`: those reached)
+  long long objects = 0;            ///< fused and returned (anchored in the cell, kept)
   long long objects_failed = 0;     ///< whose fuse failed (kept unfused, with the reason)
   long long objects_escalated = 0;  ///< fused only after escalation
   long long objects_timed_out = 0;  ///< whose fuse reached AssemblyOptions::object_time_limit
