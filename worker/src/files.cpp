@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <fstream>
 #include <random>
+#include <set>
 #include <system_error>
 
 #include "ops/metrics.h"
@@ -145,34 +146,92 @@ Failure commit_temp_file(const std::filesystem::path& temp, const std::filesyste
   return {};
 }
 
-Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+namespace {
+
+// Writes `bytes` to a new temporary beside `path` (parent directories created) and flushes
+// it; `tmp` names it, removed again on failure.
+Failure write_temp(const std::filesystem::path& path, std::string_view bytes,
+                   std::filesystem::path& tmp) {
   if (Failure f = refuse_special(path); !f.ok()) return f;
   std::error_code ec;
   const std::filesystem::path dir = directory_of(path);
   std::filesystem::create_directories(dir, ec);
   if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
-  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
+  tmp = temp_path_beside(path, "tmp");
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return io_error("cannot create", tmp, errno);
+  const auto fail = [&](const char* what, int err) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    return io_error(what, tmp, err);
+  };
   std::size_t written = 0;
   while (written < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
     if (n < 0) {
       if (errno == EINTR) continue;
-      const int err = errno;
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return io_error("cannot write", tmp, err);
+      return fail("cannot write", errno);
     }
     written += static_cast<std::size_t>(n);
   }
+  if (::fsync(fd) != 0) return fail("cannot flush", errno);
   if (::close(fd) != 0) {
     const int err = errno;
     ::unlink(tmp.c_str());
     return io_error("cannot close", tmp, err);
   }
-  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
+  return {};
+}
+
+void sync_directory(const std::filesystem::path& dir) {
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+}  // namespace
+
+Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+  std::filesystem::path tmp;
+  if (Failure f = write_temp(path, bytes, tmp); !f.ok()) return f;
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    return io_error("cannot rename into", path, err);
+  }
+  // The rename itself is durable once the directory is.
+  sync_directory(directory_of(path));
   ops::metrics().add_bytes_published(bytes.size());
+  return {};
+}
+
+Failure write_files_atomic(
+    const std::vector<std::pair<std::filesystem::path, std::string>>& files) {
+  std::vector<std::filesystem::path> temps;
+  const auto remove_temps = [&temps](std::size_t from) {
+    for (std::size_t i = from; i < temps.size(); ++i) ::unlink(temps[i].c_str());
+  };
+  for (const auto& [path, bytes] : files) {
+    std::filesystem::path tmp;
+    if (Failure f = write_temp(path, bytes, tmp); !f.ok()) {
+      remove_temps(0);
+      return f;
+    }
+    temps.push_back(std::move(tmp));
+  }
+  std::set<std::filesystem::path> dirs;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (::rename(temps[i].c_str(), files[i].first.c_str()) != 0) {
+      const int err = errno;
+      remove_temps(i);
+      return io_error("cannot rename into", files[i].first, err);
+    }
+    dirs.insert(directory_of(files[i].first));
+  }
+  // The renames are durable once their directories are.
+  for (const std::filesystem::path& dir : dirs) sync_directory(dir);
+  for (const auto& file : files) ops::metrics().add_bytes_published(file.second.size());
   return {};
 }
 

@@ -236,7 +236,11 @@ TEST(BlockRecords, TheBlocksOfACellComeBackInTheRunsFrame) {
   const IndexObject& cell = objects[0];
   ASSERT_TRUE(cell.lod12 && cell.lod13 && cell.heights);
   city::detail::ordered_json record;
-  ASSERT_TRUE(city::detail::publish_blocks(dir, cell, record).ok());
+  city::detail::ObjectBatch batch(dir);
+  ASSERT_TRUE(city::detail::publish_blocks(cell, batch, record).ok());
+  // Nothing is written before the batch is committed.
+  EXPECT_FALSE(std::filesystem::exists(dir / record.at("lod12").get<std::string>()));
+  ASSERT_TRUE(batch.commit().ok());
   city::detail::ordered_json entry = {{"blocks", record}};
   entry = city::detail::ordered_json::parse(entry.dump());  // as the queue stores it
   const Vec3 offset(250.0, -125.0, 0.0);

@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace csgtile::worker {
 namespace {
@@ -101,6 +103,30 @@ TEST(Files, ACommitOntoADirectoryOrAPipeIsRefusedAndTheTemporaryRemoved) {
   const Failure gone = commit_temp_file(dir / ".gone.tmp", dir / "out.txt");
   EXPECT_EQ(gone.code, ErrorCode::Io);
   EXPECT_NE(gone.message.find(".gone.tmp"), std::string::npos) << gone.message;
+  fs::remove_all(dir);
+}
+
+TEST(Files, ABatchWritesEveryFileOrRefusesBeforeRenamingAny) {
+  const fs::path dir = fresh_dir("batch");
+  const std::vector<std::pair<fs::path, std::string>> files = {
+      {dir / "a.txt", "first"}, {dir / "sub" / "b.txt", "second"}, {dir / "c.txt", ""}};
+  ASSERT_TRUE(write_files_atomic(files).ok());
+  for (const auto& [path, bytes] : files) {
+    std::ifstream in(path);
+    const std::string got((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(got, bytes) << path;
+  }
+  EXPECT_EQ(entries_in(dir), 3);  // a.txt, c.txt, sub: no temporary left
+  EXPECT_EQ(entries_in(dir / "sub"), 1);
+  // A path taken by a directory is refused before anything is renamed: no file of the batch
+  // appears and no temporary stays.
+  fs::create_directories(dir / "taken");
+  const Failure f = write_files_atomic({{dir / "new.txt", "x"}, {dir / "taken", "y"}});
+  EXPECT_EQ(f.code, ErrorCode::Io);
+  EXPECT_NE(f.message.find("taken"), std::string::npos) << f.message;
+  EXPECT_FALSE(fs::exists(dir / "new.txt"));
+  EXPECT_EQ(entries_in(dir), 4);
+  EXPECT_TRUE(write_files_atomic({}).ok());
   fs::remove_all(dir);
 }
 

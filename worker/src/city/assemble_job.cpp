@@ -200,6 +200,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   }
 
   RunObjects objects;
+  ObjectBatch objects_out(run_dir);  // the objects' and their blocks' models, flushed together
   ordered_json object_records = ordered_json::array();
   std::vector<assembly::AssembledObject> kept_objects;
   long long invalid = 0;
@@ -228,7 +229,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
           return it == by_label.end() ? std::nullopt : it->second->quality;
         });
     PublishedModel published;
-    if (Failure f = publish_model(run_dir, object->model, published); !f.ok()) return f;
+    if (Failure f = publish_model(object->model, objects_out, published); !f.ok()) return f;
     if (!object->fused) ++invalid;
     object_records.push_back(
         {{"id", object->id},
@@ -272,9 +273,10 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   clock.enter("publish");
   for (std::size_t i = 0; i < objects.objects.size(); ++i) {
     ordered_json blocks;
-    if (Failure f = publish_blocks(run_dir, objects.objects[i], blocks); !f.ok()) return f;
+    if (Failure f = publish_blocks(objects.objects[i], objects_out, blocks); !f.ok()) return f;
     object_records[i]["blocks"] = std::move(blocks);
   }
+  if (Failure f = objects_out.commit(); !f.ok()) return f;
 
   // The cell's files, in the cell frame (origin: the cell's corner).
   const std::string crs_text = payload.value("crs", "");

@@ -30,8 +30,7 @@ Failure read_model(const std::filesystem::path& run_dir, const ordered_json& key
 
 }  // namespace
 
-Failure publish_blocks(const std::filesystem::path& run_dir, const IndexObject& object,
-                       ordered_json& record) {
+Failure publish_blocks(const IndexObject& object, ObjectBatch& batch, ordered_json& record) {
   record = ordered_json::object();
   if (const auto& h = object.heights) {
     record["heights"] = {{"ground", h->ground},        {"roof_min", h->roof_min},
@@ -46,7 +45,7 @@ Failure publish_blocks(const std::filesystem::path& run_dir, const IndexObject& 
     key = nullptr;
     if (!model) return {};
     PublishedModel published;
-    if (Failure f = publish_model(run_dir, *model, published); !f.ok()) return f;
+    if (Failure f = publish_model(*model, batch, published); !f.ok()) return f;
     key = published.key;
     return {};
   };

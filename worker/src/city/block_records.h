@@ -14,10 +14,9 @@
 
 namespace csgtile::worker::city::detail {
 
-/// Publishes `object`'s blocks and returns their record: {"heights": {...} | null,
-/// "lod12": key | null, "lod12_error", "lod13": key | null, "lod13_error"}. Error: Io.
-Failure publish_blocks(const std::filesystem::path& run_dir, const IndexObject& object,
-                       ordered_json& record);
+/// Adds `object`'s blocks to `batch` and returns their record: {"heights": {...} | null,
+/// "lod12": key | null, "lod12_error", "lod13": key | null, "lod13_error"}.
+Failure publish_blocks(const IndexObject& object, ObjectBatch& batch, ordered_json& record);
 
 /// The keys of the block files an object record names (none when it has no blocks).
 std::vector<std::string> block_keys(const ordered_json& entry);

@@ -4,8 +4,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <stop_token>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "csgtile/config/config.h"
 #include "csgtile/kernel/bounding_box.h"
@@ -40,14 +43,29 @@ Failure read_file(const std::filesystem::path& path, std::string& bytes);
 /// file holds these bytes). Error: Io.
 Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
                        const std::string& bytes);
+/// Content-addressed files of one job, written together by commit() (write_files_atomic:
+/// one directory flush for all of them). A key already published, or already in the batch,
+/// is skipped: its name is its hash, so it holds these bytes.
+class ObjectBatch {
+ public:
+  explicit ObjectBatch(std::filesystem::path run_dir) : run_dir_(std::move(run_dir)) {}
+  /// Error: Internal for an unsafe key.
+  Failure add(const std::string& key, std::string bytes);
+  /// Error: Io, naming the file.
+  Failure commit();
+
+ private:
+  std::filesystem::path run_dir_;
+  std::set<std::string> keys_;
+  std::vector<std::pair<std::filesystem::path, std::string>> files_;
+};
 /// A native model published under objects/ by its content: its key, hash and size.
 struct PublishedModel {
   std::string key, sha256;
   std::size_t bytes = 0;
 };
-/// Writes `model` in the native format to objects/<sha256>.csgt unless it is there. Error: Io.
-Failure publish_model(const std::filesystem::path& run_dir, const kernel::CsgModel& model,
-                      PublishedModel& out);
+/// Adds `model` in the native format as objects/<sha256>.csgt to `batch`.
+Failure publish_model(const kernel::CsgModel& model, ObjectBatch& batch, PublishedModel& out);
 /// {"key", "sha256", "bytes"} of a file written under `dir` (read back and hashed).
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out);
 

@@ -57,13 +57,27 @@ Failure publish_object(const std::filesystem::path& run_dir, const std::string& 
   return write_file_atomic(run_dir / key, bytes);
 }
 
-Failure publish_model(const std::filesystem::path& run_dir, const kernel::CsgModel& model,
-                      PublishedModel& out) {
-  const std::string bytes = kernel::write_native_model(model);
+Failure ObjectBatch::add(const std::string& key, std::string bytes) {
+  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
+  if (!keys_.insert(key).second) return {};
+  std::error_code ec;
+  if (std::filesystem::exists(run_dir_ / key, ec)) return {};
+  files_.emplace_back(run_dir_ / key, std::move(bytes));
+  return {};
+}
+
+Failure ObjectBatch::commit() {
+  Failure f = write_files_atomic(files_);
+  files_.clear();
+  return f;
+}
+
+Failure publish_model(const kernel::CsgModel& model, ObjectBatch& batch, PublishedModel& out) {
+  std::string bytes = kernel::write_native_model(model);
   out.sha256 = sha256_hex(bytes);
   out.key = "objects/" + out.sha256 + ".csgt";
   out.bytes = bytes.size();
-  return publish_object(run_dir, out.key, bytes);
+  return batch.add(out.key, std::move(bytes));
 }
 
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out) {

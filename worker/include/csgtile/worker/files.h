@@ -11,6 +11,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "csgtile/worker/errors.h"
 
@@ -61,5 +63,11 @@ Failure commit_temp_file(const std::filesystem::path& temp, const std::filesyste
 /// Writes `bytes` to `path` atomically: a temporary beside it, then commit_temp_file().
 /// Creates parent directories. Error: Io, naming the path.
 Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes);
+
+/// Writes several files atomically as one batch: each to a temporary beside it, flushed;
+/// then each renamed onto its path, and each directory flushed once for the batch (not once
+/// per file). A file appears whole or not at all; on failure the temporaries not yet renamed
+/// are removed and the error (Io) names the path. Creates parent directories.
+Failure write_files_atomic(const std::vector<std::pair<std::filesystem::path, std::string>>& files);
 
 }  // namespace csgtile::worker
