@@ -13,6 +13,10 @@ namespace csgtile::worker::detail {
 std::vector<config::Problem> check_run_config(const config::LoadResult& loaded, RunChecks what) {
   std::vector<config::Problem> problems;
   const config::Config& config = *loaded.config;
+  // GDAL loads while PROJ reads the CRS.
+  const std::jthread gdal = what != RunChecks::CrsOnly && !config.city.footprints.empty()
+                                ? geo::load_footprints_in_background()
+                                : std::jthread();
   if (!config.run.crs.empty()) {
     auto crs = geo::crs_from_config(config.run.crs);
     if (!crs.ok()) {

@@ -7,6 +7,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "csgtile/kernel/location.h"
@@ -64,6 +65,12 @@ struct FootprintSet {
   std::string layer;       ///< the layer read
   std::string source_crs;  ///< the layer's CRS as WKT, "" when it has none
 };
+
+/// Loads the GDAL module read_footprints needs on a thread of its own, so that a process
+/// about to read footprints does other work (a CRS from PROJ's database) meanwhile instead of
+/// waiting for it (binding GDAL and its libraries takes about 0.08 s). The thread joins when
+/// it goes out of scope; an empty thread when none can be started (the first read loads it).
+std::jthread load_footprints_in_background();
 
 /// Reads the footprints. A source without a CRS is taken to be in the target CRS. Errors
 /// (IoError for sources that cannot be opened, InvalidArgument otherwise) name the source and
