@@ -362,7 +362,7 @@ TEST(Assembly, AnAnchorRuleTestsAndFusesOnlyTheCellsObjects) {
       EXPECT_LE(part->stats.exact_tests, whole->stats.exact_tests);
       fewest_tests = std::min(fewest_tests, part->stats.exact_tests);
       EXPECT_LE(part->stats.objects, part->stats.components);
-      for (auto& o : part->objects) got.push_back(std::move(o));
+      got.insert(got.end(), part->objects.begin(), part->objects.end());
     }
     EXPECT_LT(cells.size(), whole->objects.size()) << "too few objects per cell to mean much";
     EXPECT_LT(2 * fewest_tests, whole->stats.exact_tests) << "cell size " << size;
