@@ -10,6 +10,7 @@
 #include <fstream>
 #include <random>
 #include <set>
+#include <span>
 #include <system_error>
 
 #include "ops/metrics.h"
@@ -112,6 +113,14 @@ std::filesystem::path directory_of(const std::filesystem::path& path) {
   return path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
 }
 
+// Flushes a directory: the renames into it are durable once it is.
+void sync_directory(const std::filesystem::path& dir) {
+  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
 }  // namespace
 
 std::filesystem::path temp_path_beside(const std::filesystem::path& target, std::string_view tag) {
@@ -137,12 +146,7 @@ Failure commit_temp_file(const std::filesystem::path& temp, const std::filesyste
   if (::rename(temp.c_str(), target.c_str()) != 0) {
     return fail(io_error("cannot rename into", target, errno));
   }
-  // The rename itself is durable once the directory is.
-  const std::filesystem::path dir = directory_of(target);
-  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
+  sync_directory(directory_of(target));
   return {};
 }
 
@@ -183,38 +187,21 @@ Failure write_temp(const std::filesystem::path& path, std::string_view bytes,
   return {};
 }
 
-void sync_directory(const std::filesystem::path& dir) {
-  if (const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
-}
+// One file of an atomic write.
+struct Pending {
+  const std::filesystem::path* path;
+  std::string_view bytes;
+};
 
-}  // namespace
-
-Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
-  std::filesystem::path tmp;
-  if (Failure f = write_temp(path, bytes, tmp); !f.ok()) return f;
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    return io_error("cannot rename into", path, err);
-  }
-  // The rename itself is durable once the directory is.
-  sync_directory(directory_of(path));
-  ops::metrics().add_bytes_published(bytes.size());
-  return {};
-}
-
-Failure write_files_atomic(
-    const std::vector<std::pair<std::filesystem::path, std::string>>& files) {
+// Every file to a flushed temporary, then every rename, then each directory flushed once.
+Failure write_atomic(std::span<const Pending> files) {
   std::vector<std::filesystem::path> temps;
   const auto remove_temps = [&temps](std::size_t from) {
     for (std::size_t i = from; i < temps.size(); ++i) ::unlink(temps[i].c_str());
   };
-  for (const auto& [path, bytes] : files) {
+  for (const Pending& file : files) {
     std::filesystem::path tmp;
-    if (Failure f = write_temp(path, bytes, tmp); !f.ok()) {
+    if (Failure f = write_temp(*file.path, file.bytes, tmp); !f.ok()) {
       remove_temps(0);
       return f;
     }
@@ -222,17 +209,31 @@ Failure write_files_atomic(
   }
   std::set<std::filesystem::path> dirs;
   for (std::size_t i = 0; i < files.size(); ++i) {
-    if (::rename(temps[i].c_str(), files[i].first.c_str()) != 0) {
+    if (::rename(temps[i].c_str(), files[i].path->c_str()) != 0) {
       const int err = errno;
       remove_temps(i);
-      return io_error("cannot rename into", files[i].first, err);
+      return io_error("cannot rename into", *files[i].path, err);
     }
-    dirs.insert(directory_of(files[i].first));
+    dirs.insert(directory_of(*files[i].path));
   }
-  // The renames are durable once their directories are.
   for (const std::filesystem::path& dir : dirs) sync_directory(dir);
-  for (const auto& file : files) ops::metrics().add_bytes_published(file.second.size());
+  for (const Pending& file : files) ops::metrics().add_bytes_published(file.bytes.size());
   return {};
+}
+
+}  // namespace
+
+Failure write_file_atomic(const std::filesystem::path& path, std::string_view bytes) {
+  const Pending file{&path, bytes};
+  return write_atomic({&file, 1});
+}
+
+Failure write_files_atomic(
+    const std::vector<std::pair<std::filesystem::path, std::string>>& files) {
+  std::vector<Pending> pending;
+  pending.reserve(files.size());
+  for (const auto& [path, bytes] : files) pending.push_back({&path, bytes});
+  return write_atomic(pending);
 }
 
 }  // namespace csgtile::worker

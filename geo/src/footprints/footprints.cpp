@@ -9,19 +9,7 @@
 namespace csgtile::geo {
 
 std::jthread load_footprints_in_background() {
-  // A thread that cannot be started, or a load that throws (memory), leaves the loading to
-  // the first read.
-  try {
-    return std::jthread([] {
-      try {
-        (void)kernel::load_module(kGdalModuleFile, kGdalModuleAbi);
-      } catch (...) {
-        // read_footprints tries again
-      }
-    });
-  } catch (...) {
-    return {};
-  }
+  return kernel::load_module_in_background(kGdalModuleFile, kGdalModuleAbi);
 }
 
 kernel::Result<FootprintSet> read_footprints(const FootprintSource& source,

@@ -264,7 +264,8 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
            primitives[static_cast<std::size_t>(t.a)].group ==
                primitives[static_cast<std::size_t>(t.b)].group;
   };
-  std::vector<char> reached(read);
+  // The primitives whose objects are found: all read ones, or those the rounds reach.
+  std::vector<char> reached = options.anchor.empty() ? read : std::vector<char>(n, 0);
   if (options.anchor.empty()) {
     if (auto s = test_pairs(candidates); !s.ok()) return s.error();
   } else {
@@ -276,7 +277,6 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       incident[static_cast<std::size_t>(candidates[k].first)].push_back(k);
       incident[static_cast<std::size_t>(candidates[k].second)].push_back(k);
     }
-    std::fill(reached.begin(), reached.end(), 0);
     std::vector<char> done(candidates.size(), 0);
     std::vector<int> frontier;
     for (std::size_t i = 0; i < n; ++i) {

@@ -83,19 +83,7 @@ struct VoxelCuller::Impl {
 };
 
 std::jthread load_culling_in_background() {
-  // A thread that cannot be started, or a load that throws (memory), leaves the loading to
-  // the first shells.
-  try {
-    return std::jthread([] {
-      try {
-        (void)vdb_module();
-      } catch (...) {
-        // vdb_module() is tried again when shells are built
-      }
-    });
-  } catch (...) {
-    return {};
-  }
+  return kernel::load_module_in_background(kVdbModuleFile, kVdbModuleAbi);
 }
 
 VoxelCuller::VoxelCuller(double voxel_size, double tolerance) : impl_(std::make_unique<Impl>()) {

@@ -92,6 +92,22 @@ const Module& load_module(const std::string& file, const std::string& abi) {
   return entry->module;
 }
 
+std::jthread load_module_in_background(const std::string& file, const std::string& abi) {
+  // A thread that cannot be started, or a load that throws (memory), leaves the loading to
+  // the first load_module.
+  try {
+    return std::jthread([file, abi] {
+      try {
+        (void)load_module(file, abi);
+      } catch (...) {
+        // load_module is called again where the module is used
+      }
+    });
+  } catch (...) {
+    return {};
+  }
+}
+
 void* module_symbol(const Module& module, const char* name) {
   return module.handle != nullptr ? dlsym(module.handle, name) : nullptr;
 }

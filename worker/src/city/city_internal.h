@@ -39,10 +39,6 @@ kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const k
 
 /// Reads a whole file. Error: Io naming the path.
 Failure read_file(const std::filesystem::path& path, std::string& bytes);
-/// Writes a content-addressed file unless it exists (its name is its hash, so an existing
-/// file holds these bytes). Error: Io.
-Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
-                       const std::string& bytes);
 /// Content-addressed files of one job, written together by commit() (write_files_atomic:
 /// one directory flush for all of them). A key already published, or already in the batch,
 /// is skipped: its name is its hash, so it holds these bytes.
@@ -59,6 +55,10 @@ class ObjectBatch {
   std::set<std::string> keys_;
   std::vector<std::pair<std::filesystem::path, std::string>> files_;
 };
+/// Writes one content-addressed file unless it exists (a batch of one). Error: Internal for
+/// an unsafe key, Io.
+Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
+                       const std::string& bytes);
 /// A native model published under objects/ by its content: its key, hash and size.
 struct PublishedModel {
   std::string key, sha256;

@@ -49,14 +49,6 @@ Failure read_file(const std::filesystem::path& path, std::string& bytes) {
   return {};
 }
 
-Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
-                       const std::string& bytes) {
-  if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
-  std::error_code ec;
-  if (std::filesystem::exists(run_dir / key, ec)) return {};
-  return write_file_atomic(run_dir / key, bytes);
-}
-
 Failure ObjectBatch::add(const std::string& key, std::string bytes) {
   if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
   if (!keys_.insert(key).second) return {};
@@ -70,6 +62,13 @@ Failure ObjectBatch::commit() {
   Failure f = write_files_atomic(files_);
   files_.clear();
   return f;
+}
+
+Failure publish_object(const std::filesystem::path& run_dir, const std::string& key,
+                       const std::string& bytes) {
+  ObjectBatch batch(run_dir);
+  if (Failure f = batch.add(key, bytes); !f.ok()) return f;
+  return batch.commit();
 }
 
 Failure publish_model(const kernel::CsgModel& model, ObjectBatch& batch, PublishedModel& out) {

@@ -7,6 +7,7 @@
 /// is the text the caller was built with (a hash of the headers both sides are built from).
 
 #include <string>
+#include <thread>
 
 namespace csgtile::kernel {
 
@@ -26,6 +27,12 @@ struct Module {
 /// built from other headers, is an error, not skipped). Every symbol is bound at load time, so a
 /// module that loads has all it calls. Thread-safe; modules load concurrently.
 const Module& load_module(const std::string& file, const std::string& abi);
+
+/// Loads a module as load_module does, on a thread of its own, so that a process about to need it
+/// does other work meanwhile instead of waiting (binding a module's libraries takes about
+/// 0.1 s). The thread joins when it goes out of scope; an empty thread when none can be started
+/// (the first load_module then loads it).
+std::jthread load_module_in_background(const std::string& file, const std::string& abi);
 
 /// The address of `name` in a loaded module; null when absent or the module is not loaded.
 void* module_symbol(const Module& module, const char* name);
