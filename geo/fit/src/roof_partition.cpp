@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 
@@ -521,23 +522,48 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         ++border[static_cast<std::size_t>(k)][m];
       });
     }
-    // A small part joins a neighbour larger than itself (ties: the lower component), so that
-    // two small neighbours never swap labels; a piece without points joins any neighbour.
+    // A small part joins the neighbour larger than itself (ties: the lower component, so that
+    // two small neighbours never swap labels) whose plane explains its roof points best (the
+    // sum of their capped vertical residuals; ties: the longest shared boundary): by boundary
+    // alone, a strip of a steep roof edge took the flat roof above it. A piece without points
+    // joins the neighbour it shares most boundary with.
     std::vector<int> target(static_cast<std::size_t>(comp.count), -2);  // -2: stays
     std::vector<int> comp_label(static_cast<std::size_t>(comp.count), -1);
+    std::vector<std::vector<std::size_t>> cells_of(static_cast<std::size_t>(comp.count));
     for (std::size_t c = 0; c < ncell; ++c) {
-      if (comp.of[c] >= 0) comp_label[static_cast<std::size_t>(comp.of[c])] = grid.label[c];
+      if (comp.of[c] < 0) continue;
+      comp_label[static_cast<std::size_t>(comp.of[c])] = grid.label[c];
+      cells_of[static_cast<std::size_t>(comp.of[c])].push_back(c);
     }
+    auto residual = [&](std::size_t k, int l) {
+      double sum = 0.0;
+      for (auto c : cells_of[k]) {
+        for (auto i : roof_in_cell[c]) {
+          const Vec3& q = in.points[i];
+          sum +=
+              std::min(std::abs(q.z() - planes[static_cast<std::size_t>(l)].z(q.x(), q.y())), cap);
+        }
+      }
+      return sum;
+    };
     for (int k = 0; k < comp.count; ++k) {
       const auto ks = static_cast<std::size_t>(k);
       const bool empty = pointless(comp_label[ks]);
       if (!empty && size[ks] >= min_cells) continue;
       long long most = 0;
+      double least = std::numeric_limits<double>::infinity();
       int best = -1;
       for (const auto& [m, n] : border[ks]) {
         const auto ms = static_cast<std::size_t>(m);
+        if (empty) {
+          if (n > most) most = n, best = m;
+          continue;
+        }
         const bool larger = size[ms] > size[ks] || (size[ms] == size[ks] && m < k);
-        if ((empty || larger) && n > most) {
+        if (!larger) continue;
+        const double r = residual(ks, comp_label[ms]);
+        if (r < least - 1e-9 || (r <= least + 1e-9 && n > most)) {
+          least = r;
           most = n;
           best = m;
         }

@@ -241,22 +241,45 @@ std::int64_t dot(const std::array<std::int64_t, 3>& a, const std::array<std::int
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-// A triangle whose three points lie on one line (a sliver that quantisation flattened)
-// bounds nothing, and validators reject it (a ring collapsed to a line). It is removed and
+// Whether a triangle's point farthest from the others lies within one unit of the line
+// through them: a sliver validators read as a line (val3dity snaps at its 1 mm tolerance, the
+// default unit), whose neighbours then cross each other at its thin end (three roof planes
+// meeting within a millimetre: SHELL_SELF_INTERSECTION). Collinear ones are thin.
+bool thin_triangle(const Ring& t) {
+  if (t.size() != 3) return false;
+  const auto d = minus(t[1], t[0]);
+  const auto e = minus(t[2], t[0]);
+  const auto f = minus(t[2], t[1]);
+  const auto len2 = [](const std::array<std::int64_t, 3>& v) {
+    return static_cast<double>(v[0]) * static_cast<double>(v[0]) +
+           static_cast<double>(v[1]) * static_cast<double>(v[1]) +
+           static_cast<double>(v[2]) * static_cast<double>(v[2]);
+  };
+  const std::array<std::int64_t, 3> c{d[1] * e[2] - d[2] * e[1], d[2] * e[0] - d[0] * e[2],
+                                      d[0] * e[1] - d[1] * e[0]};
+  // Twice the area over the longest edge is the height on it.
+  const double longest2 = std::max({len2(d), len2(e), len2(f)});
+  return len2(c) <= longest2;
+}
+
+// A triangle whose three points lie on one line (a sliver that quantisation flattened), or
+// within a unit of one (thin_triangle), bounds nothing, and validators reject it (a ring
+// collapsed to a line). It is removed and
 // its middle point inserted into the surface across its long edge: that surface's two new
 // edges are the reverses of the ones the triangle shared with its other neighbours, so the
 // shell stays closed (a triangle across it is cut in two instead, so that no ring holds three
 // points on a line). A flat triangle and its twin (the same points reversed: a fin) both go.
-// Returns how many were removed.
+// Returns how many collinear ones were removed (thin ones were never counted flat).
 std::size_t absorb_flat_triangles(ShellSurfaces& shell) {
   std::size_t absorbed = 0;
-  // Every change removes a surface, so the scans end; each starts after the last change.
+  // The scans end (see the split below); each starts after the last change.
   std::size_t from = 0;
   for (;;) {
     bool changed = false;
     for (std::size_t si = from; si < shell.size(); ++si) {
       const Surface& s = shell[si];
-      if (s.rings.size() != 1 || s.rings[0].size() != 3 || !collinear(s.rings[0])) continue;
+      if (s.rings.size() != 1 || s.rings[0].size() != 3 || !thin_triangle(s.rings[0])) continue;
+      const std::size_t flat = collinear(s.rings[0]) ? 1 : 0;
       from = si;  // where the next scan starts when this one changes the shell
       const Ring t = s.rings[0];
       int mid = -1;  // the point lying between the other two
@@ -284,7 +307,7 @@ std::size_t absorb_flat_triangles(ShellSurfaces& shell) {
         shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(std::max(si, twin)));
         shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(std::min(si, twin)));
         from = std::min(si, twin);
-        absorbed += 2;
+        absorbed += 2 * flat;
         changed = true;
         break;  // indices moved: scan again
       }
@@ -300,7 +323,11 @@ std::size_t absorb_flat_triangles(ShellSurfaces& shell) {
               continue;
             }
             if (n == 3 && shell[sj].rings.size() == 1) {
+              // A thin triangle that is not flat splits its neighbour only into two triangles
+              // that are not thin themselves. Every change then leaves fewer flat triangles, or
+              // as many and fewer thin ones, and the scans end.
               const Point d = ring[(i + 2) % 3];
+              if (flat == 0 && (thin_triangle({b, m, d}) || thin_triangle({m, a, d}))) continue;
               ring = {b, m, d};
               split = Surface{{{m, a, d}}, shell[sj].semantic};
             } else {
@@ -314,7 +341,7 @@ std::size_t absorb_flat_triangles(ShellSurfaces& shell) {
       if (!inserted) continue;
       shell.erase(shell.begin() + static_cast<std::ptrdiff_t>(si));
       if (split) shell.push_back(std::move(*split));
-      ++absorbed;
+      absorbed += flat;
       changed = true;
       break;  // indices moved: scan again
     }
