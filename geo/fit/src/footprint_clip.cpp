@@ -181,6 +181,71 @@ std::optional<FramePolygon> VertexSnap::snap(const FramePolygon& polygon) {
   return out;
 }
 
+void share_vertices(std::vector<std::vector<FramePolygon>>& polygons, double distance) {
+  if (!(distance > 0.0)) return;
+  // Every vertex once, hashed on cells of a metre (or the distance, when larger).
+  const double size = std::max(1.0, distance);
+  auto key = [&](double x, double y) {
+    return std::pair<long long, long long>(static_cast<long long>(std::floor(x / size)),
+                                           static_cast<long long>(std::floor(y / size)));
+  };
+  std::map<std::pair<long long, long long>, std::vector<Vec2>> cells;
+  auto add = [&](const std::vector<Vec2>& ring) {
+    for (const Vec2& q : ring) {
+      auto& list = cells[key(q.x(), q.y())];
+      if (std::find(list.begin(), list.end(), q) == list.end()) list.push_back(q);
+    }
+  };
+  for (const auto& pieces : polygons) {
+    for (const FramePolygon& p : pieces) {
+      add(p.outer);
+      for (const auto& h : p.holes) add(h);
+    }
+  }
+  auto share = [&](std::vector<Vec2>& ring) {
+    std::vector<Vec2> out;
+    const std::size_t n = ring.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 a = ring[i], b = ring[(i + 1) % n];
+      out.push_back(a);
+      const Vec2 d = b - a;
+      const double len2 = d.squaredNorm();
+      if (!(len2 > 0.0)) continue;
+      std::vector<std::pair<double, Vec2>> on;  // (position along the edge, vertex)
+      const auto lo = key(std::min(a.x(), b.x()) - distance, std::min(a.y(), b.y()) - distance);
+      const auto hi = key(std::max(a.x(), b.x()) + distance, std::max(a.y(), b.y()) + distance);
+      for (long long cx = lo.first; cx <= hi.first; ++cx) {
+        for (long long cy = lo.second; cy <= hi.second; ++cy) {
+          const auto it = cells.find({cx, cy});
+          if (it == cells.end()) continue;
+          for (const Vec2& q : it->second) {
+            const double t = (q - a).dot(d) / len2;
+            if (!(t > 0.0 && t < 1.0) || q == a || q == b) continue;
+            if ((a + t * d - q).norm() > distance) continue;
+            if (std::find(ring.begin(), ring.end(), q) != ring.end()) continue;
+            on.emplace_back(t, q);
+          }
+        }
+      }
+      std::sort(on.begin(), on.end(), [](const auto& x, const auto& y) {
+        if (x.first != y.first) return x.first < y.first;
+        return x.second.x() != y.second.x() ? x.second.x() < y.second.x()
+                                            : x.second.y() < y.second.y();
+      });
+      for (const auto& [t, q] : on) {
+        if (out.back() != q) out.push_back(q);
+      }
+    }
+    ring = std::move(out);
+  };
+  for (auto& pieces : polygons) {
+    for (FramePolygon& p : pieces) {
+      share(p.outer);
+      for (auto& h : p.holes) share(h);
+    }
+  }
+}
+
 std::optional<PrincipalFrame> footprint_frame(const std::vector<geo::FootprintPolygon>& polygons) {
   // Each edge's direction modulo 90°, weighted by its length; the direction whose ±1.5°
   // holds the most length wins (ties: the first edge), refined to those edges' weighted

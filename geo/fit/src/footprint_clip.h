@@ -63,6 +63,15 @@ class VertexSnap {
   std::map<std::pair<long long, long long>, std::vector<Vec2>> seen_;
 };
 
+/// Vertices of the polygons lying within `distance` of an edge of another ring (or of their
+/// own ring's other edges), between its ends, inserted into that edge in order along it.
+/// VertexSnap moves a vertex by up to its distance, onto a vertex seen before; a neighbouring
+/// polygon whose straight edge ran through the vertex's old place then no longer shares the
+/// boundary (a roof part's wall 7 mm off the corner of the two flat pieces beside it: their
+/// fuse failed, its faces' boundary loops crossing). A vertex already in a ring is not
+/// inserted into it again. Deterministic.
+void share_vertices(std::vector<std::vector<FramePolygon>>& polygons, double distance);
+
 /// The frame of a footprint: u along its main walls (the direction, modulo 90°, along which
 /// most of its outer rings' length runs), v = u turned left, and its extent in it; nullopt
 /// when it has no edge.

@@ -16,6 +16,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "fit_clouds.h"
 #include "fit_internal.h"
+#include "footprint_clip.h"
 #include "partition.h"
 #include "plane2d.h"
 #include "proposal_input.h"
@@ -25,7 +26,6 @@ namespace {
 
 using detail::LabelGrid;
 using detail::PartPolygon;
-using kernel::PrimitiveType;
 using kernel::Vec2;
 using kernel::Vec3;
 using testing::Cloud;
@@ -128,6 +128,34 @@ TEST(FitPartition, PinchesAreJoined) {
   // Without simplification the polygons are exactly the cells of each part.
   const auto parts = detail::partition_polygons(g, 0.0);
   expect_tiles(g, parts);
+}
+
+// Three parts clipped to a footprint: a large one whose straight wall runs along two small
+// ones, and the small ones' shared corner on that wall. The vertex snap moves the corner 7 mm
+// onto a vertex seen before (here: given), off the large part's wall; share_vertices puts it
+// into that wall, so that all three share their boundaries again (a T-junction 7 mm off the
+// wall made the real Delft parts' fuse fail). Vertices farther than the distance stay out,
+// and a vertex already in a ring is not inserted twice.
+TEST(FitPartition, VerticesTheSnapMovedAreSharedByTheWallsTheyLeft) {
+  detail::VertexSnap snap(0.05);
+  detail::FramePolygon seen;  // the vertex the corner snaps to: 7 mm off the wall x = 4
+  seen.outer = {{4.007, 2.0}, {6.0, 2.0}, {6.0, 3.0}};
+  ASSERT_TRUE(snap.snap(seen));
+  std::vector<std::vector<detail::FramePolygon>> parts(3);
+  parts[0].push_back(*snap.snap({{{0, 0}, {4, 0}, {4, 4}, {0, 4}}, {}}));  // wall x = 4
+  parts[1].push_back(*snap.snap({{{4, 0}, {6, 0}, {6, 2}, {4, 2}}, {}}));  // corner (4, 2)
+  parts[2].push_back(*snap.snap({{{4, 2}, {6, 2}, {6, 4}, {4, 4}}, {}}));
+  ASSERT_EQ(parts[1][0].outer[3], Vec2(4.007, 2.0));  // moved by the snap
+  // A vertex 0.2 m off the wall, beyond the distance: not shared.
+  parts.push_back({{{{5.0, 5.0}, {4.2, 6.0}, {5.0, 7.0}}, {}}});
+  detail::share_vertices(parts, 0.05);
+  const std::vector<Vec2> wall = {{0, 0}, {4, 0}, {4.007, 2.0}, {4, 4}, {0, 4}};
+  EXPECT_EQ(parts[0][0].outer, wall);
+  EXPECT_EQ(parts[1][0].outer.size(), 4U);  // its own corner is not inserted again
+  EXPECT_EQ(parts[2][0].outer.size(), 4U);
+  EXPECT_EQ(parts[3][0].outer.size(), 3U);
+  detail::share_vertices(parts, 0.05);  // a second call changes nothing
+  EXPECT_EQ(parts[0][0].outer, wall);
 }
 
 // ---- Roof partition of buildings ----
