@@ -535,15 +535,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       comp_label[static_cast<std::size_t>(comp.of[c])] = grid.label[c];
       cells_of[static_cast<std::size_t>(comp.of[c])].push_back(c);
     }
-    auto residual = [&](std::size_t k, int l) {
+    auto residual = [&](std::size_t k, int l) {  // the labelling's cost, summed over points
       double sum = 0.0;
-      for (auto c : cells_of[k]) {
-        for (auto i : roof_in_cell[c]) {
-          const Vec3& q = in.points[i];
-          sum +=
-              std::min(std::abs(q.z() - planes[static_cast<std::size_t>(l)].z(q.x(), q.y())), cap);
-        }
-      }
+      for (auto c : cells_of[k]) sum += cost(c, l) * static_cast<double>(roof_in_cell[c].size());
       return sum;
     };
     for (int k = 0; k < comp.count; ++k) {
@@ -732,153 +726,155 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
       }
     }
   }
-  // Two passes over the parts: the first clips and snaps each part's pieces, which then share
-  // the vertices the snap moved (share_vertices); the second builds them.
+  // Whether a plane stands high enough over a part (on `base`) to be its roof, and the lowest
+  // and highest it reaches over a polygon's corners.
+  auto reach = [&](const RoofPlane& plane, double base, const std::vector<Vec2>& ring, double& low,
+                   double& high) {
+    low = INFINITY, high = -INFINITY;
+    for (const auto& q : ring) {
+      const Vec2 w = world(q.x(), q.y());
+      low = std::min(low, plane.z(w.x(), w.y()));
+      high = std::max(high, plane.z(w.x(), w.y()));
+    }
+    return plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
+  };
+  auto skipped = [&](const PartPolygon& part) { return part.outer.size() < 3 || part.label < 0; };
+  // Each part's polygon in the frame. With a footprint (or a derived outline), its pieces
+  // inside it, their vertices snapped across the parts, then shared by the walls the snap
+  // moved them off (share_vertices). Slivers are left out: under a hundredth of a cell in a
+  // footprint (which the building covers exactly), under a cell in a derived outline (a corner
+  // the outline cuts off a part: a speck touching the part at a point, whose footprint is then
+  // in pieces).
   const double snap_distance = std::min(0.05, 0.1 * cell);
   std::optional<VertexSnap> snap;
   if (clip) snap.emplace(snap_distance);
   std::vector<std::vector<FramePolygon>> part_pieces(parts.size());
-  for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1 && clip) share_vertices(part_pieces, snap_distance);
-    for (std::size_t k = 0; k < parts.size(); ++k) {
-      const PartPolygon& part = parts[k];
-      if (part.outer.size() < 3 || part.label < 0) continue;
-      const RoofPlane& plane = planes[static_cast<std::size_t>(part.label)];
-      const std::string what = "roof partition part " + std::to_string(k) +
-                               (plane.shape >= 0 ? " of plane " + std::to_string(plane.shape)
-                                                 : std::string(" (flat, LoD1.2)"));
-      std::vector<std::uint32_t> members;
-      for (auto c : part.cells) {
-        members.insert(members.end(), in_cell[static_cast<std::size_t>(c)].begin(),
-                       in_cell[static_cast<std::size_t>(c)].end());
-      }
-      std::sort(members.begin(), members.end());
-      FramePolygon whole;
-      for (const auto& q : part.outer)
-        whole.outer.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
-      const double base = bases[k];
-      // Whether the plane stands high enough over the part to be its roof, and the lowest and
-      // highest the plane reaches over a polygon's corners.
-      auto reach = [&](const std::vector<Vec2>& ring, double& low, double& high) {
-        low = INFINITY, high = -INFINITY;
-        for (const auto& q : ring) {
-          const Vec2 w = world(q.x(), q.y());
-          low = std::min(low, plane.z(w.x(), w.y()));
-          high = std::max(high, plane.z(w.x(), w.y()));
-        }
-        return plane.shape >= 0 && low - base >= 0.5 * o.min_building_height;
-      };
-      double low = 0.0, high = 0.0;
-      const bool tilted_whole = reach(whole.outer, low, high);
-      for (const auto& h : part.holes) {
-        if (tilted_whole) {
-          // A tilted roof around an inner part that stands higher (a chimney, a dormer, a
-          // tower) is not cut around it: the two overlap and the fuse joins them. Its face then
-          // has no inner ring lying on the lines of its outer one (grid lines), which the
-          // mesher's hole bridging cannot always tell apart in the roof's tilted parameter plane.
-          const Eigen::Vector2d inside = inside_hole(h);
-          bool filled_higher = false;
-          for (std::size_t m = 0; m < parts.size() && !filled_higher; ++m) {
-            if (m == k || parts[m].label < 0 || parts[m].outer.size() < 3 ||
-                !inside_ring(inside, parts[m].outer)) {
-              continue;
-            }
-            const Vec2 w = world(ga + inside.x() * cell, gb + inside.y() * cell);
-            const RoofPlane& other = planes[static_cast<std::size_t>(parts[m].label)];
-            filled_higher = !std::isnan(other.d) && other.z(w.x(), w.y()) >= plane.z(w.x(), w.y());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const PartPolygon& part = parts[k];
+    if (skipped(part)) continue;
+    const RoofPlane& plane = planes[static_cast<std::size_t>(part.label)];
+    FramePolygon whole;
+    for (const auto& q : part.outer) whole.outer.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+    double low = 0.0, high = 0.0;
+    const bool tilted_whole = reach(plane, bases[k], whole.outer, low, high);
+    for (const auto& h : part.holes) {
+      if (tilted_whole) {
+        // A tilted roof around an inner part that stands higher (a chimney, a dormer, a
+        // tower) is not cut around it: the two overlap and the fuse joins them. Its face then
+        // has no inner ring lying on the lines of its outer one (grid lines), which the
+        // mesher's hole bridging cannot always tell apart in the roof's tilted parameter plane.
+        const Eigen::Vector2d inside = inside_hole(h);
+        bool filled_higher = false;
+        for (std::size_t m = 0; m < parts.size() && !filled_higher; ++m) {
+          if (m == k || parts[m].label < 0 || parts[m].outer.size() < 3 ||
+              !inside_ring(inside, parts[m].outer)) {
+            continue;
           }
-          if (filled_higher) continue;
+          const Vec2 w = world(ga + inside.x() * cell, gb + inside.y() * cell);
+          const RoofPlane& other = planes[static_cast<std::size_t>(parts[m].label)];
+          filled_higher = !std::isnan(other.d) && other.z(w.x(), w.y()) >= plane.z(w.x(), w.y());
         }
-        std::vector<Vec2> hole;
-        for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
-        whole.holes.push_back(std::move(hole));
+        if (filled_higher) continue;
       }
-      // With a footprint (or a derived outline), the part's pieces inside it, their vertices
-      // snapped across the parts; each point goes with the piece it lies in, else with the
-      // largest. Slivers are left out: under a hundredth of a cell in a footprint (which the
-      // building covers exactly), under a cell in a derived outline (a corner the outline cuts
-      // off a part: a speck touching the part at a point, whose footprint is then in pieces).
-      if (pass == 0) {
-        if (clip) {
-          const double least = (footprinted ? 0.01 : 1.0) * cell * cell;
-          for (const FramePolygon& piece : clip->clip(whole, least)) {
-            if (auto snapped = snap->snap(piece)) part_pieces[k].push_back(std::move(*snapped));
-          }
-        } else {
-          part_pieces[k].push_back(whole);
+      std::vector<Vec2> hole;
+      for (const auto& q : h) hole.emplace_back(ga + q.x() * cell, gb + q.y() * cell);
+      whole.holes.push_back(std::move(hole));
+    }
+    if (clip) {
+      const double least = (footprinted ? 0.01 : 1.0) * cell * cell;
+      for (const FramePolygon& piece : clip->clip(whole, least)) {
+        if (auto snapped = snap->snap(piece)) part_pieces[k].push_back(std::move(*snapped));
+      }
+    } else {
+      part_pieces[k].push_back(std::move(whole));
+    }
+  }
+  if (clip) share_vertices(part_pieces, snap_distance);
+  // Each piece a proposal; each point goes with the piece it lies in, else with the largest.
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const PartPolygon& part = parts[k];
+    if (skipped(part)) continue;
+    const RoofPlane& plane = planes[static_cast<std::size_t>(part.label)];
+    const std::string what = "roof partition part " + std::to_string(k) +
+                             (plane.shape >= 0 ? " of plane " + std::to_string(plane.shape)
+                                               : std::string(" (flat, LoD1.2)"));
+    std::vector<std::uint32_t> members;
+    for (auto c : part.cells) {
+      members.insert(members.end(), in_cell[static_cast<std::size_t>(c)].begin(),
+                     in_cell[static_cast<std::size_t>(c)].end());
+    }
+    std::sort(members.begin(), members.end());
+    const double base = bases[k];
+    double low = 0.0, high = 0.0;
+    const std::vector<FramePolygon>& pieces = part_pieces[k];
+    std::vector<std::vector<std::uint32_t>> piece_members(pieces.size());
+    for (auto i : members) {
+      const Vec2 ab(in.points[i].x() * u.x() + in.points[i].y() * u.y(),
+                    in.points[i].x() * v.x() + in.points[i].y() * v.y());
+      std::size_t at = 0;
+      for (std::size_t m = 0; m < pieces.size(); ++m) {
+        if (inside_ring(ab, pieces[m].outer)) {
+          at = m;
+          break;
         }
+      }
+      if (!pieces.empty()) piece_members[at].push_back(i);
+    }
+    for (std::size_t m = 0; m < pieces.size(); ++m) {
+      const FramePolygon& piece = pieces[m];
+      const std::string piece_what =
+          pieces.size() > 1 ? what + " piece " + std::to_string(m) : what;
+      Proposal p;
+      p.members = std::move(piece_members[m]);
+      RoofOutline outline;
+      outline.u = u;
+      outline.v = v;
+      outline.cell = cell;
+      outline.seen_cells = part.cells.size();
+      outline.profile = piece.outer;
+      outline.holes = piece.holes;
+      OutlineGround under;
+      for (const auto& q : outline.profile) {
+        under.footprint.push_back(world(q.x(), q.y()));
+        under.centre += q / static_cast<double>(outline.profile.size());
+      }
+      under.world_centre = world(under.centre.x(), under.centre.y());
+      under.ground = base;
+      const bool tilted = reach(plane, base, outline.profile, low, high);
+      double roof = high;
+      if (!tilted) {
+        // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th
+        // percentile of the part's points.
+        std::vector<double> z;
+        for (auto i : members) {
+          if (!wall[i]) z.push_back(in.points[i].z());
+        }
+        if (z.empty()) continue;
+        std::sort(z.begin(), z.end());
+        roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
+      }
+      if (roof - base < 0.5 * o.min_building_height) {
+        rejected.push_back({piece_what, "not a building's height above the terrain",
+                            static_cast<long long>(p.members.size())});
         continue;
       }
-      const std::vector<FramePolygon>& pieces = part_pieces[k];
-      std::vector<std::vector<std::uint32_t>> piece_members(pieces.size());
-      for (auto i : members) {
-        const Vec2 ab(in.points[i].x() * u.x() + in.points[i].y() * u.y(),
-                      in.points[i].x() * v.x() + in.points[i].y() * v.y());
-        std::size_t at = 0;
-        for (std::size_t m = 0; m < pieces.size(); ++m) {
-          if (inside_ring(ab, pieces[m].outer)) {
-            at = m;
-            break;
-          }
-        }
-        if (!pieces.empty()) piece_members[at].push_back(i);
+      auto spec = outline_extrusion(outline, under, tilted ? high - base + 1.0 : roof - base);
+      if (!spec) continue;
+      p.spec = std::move(*spec);
+      if (tilted) {
+        const kernel::Location loc = p.spec.placement;
+        const Vec3 nl = loc.rotation().transpose() * plane.n;
+        p.spec.clips.push_back(
+            Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
+        p.shapes = plane.merged;
+        std::sort(p.shapes.begin(), p.shapes.end());
       }
-      for (std::size_t m = 0; m < pieces.size(); ++m) {
-        const FramePolygon& piece = pieces[m];
-        const std::string piece_what =
-            pieces.size() > 1 ? what + " piece " + std::to_string(m) : what;
-        Proposal p;
-        p.members = std::move(piece_members[m]);
-        RoofOutline outline;
-        outline.u = u;
-        outline.v = v;
-        outline.cell = cell;
-        outline.seen_cells = part.cells.size();
-        outline.profile = piece.outer;
-        outline.holes = piece.holes;
-        OutlineGround under;
-        for (const auto& q : outline.profile) {
-          under.footprint.push_back(world(q.x(), q.y()));
-          under.centre += q / static_cast<double>(outline.profile.size());
-        }
-        under.world_centre = world(under.centre.x(), under.centre.y());
-        under.ground = base;
-        const bool tilted = reach(outline.profile, low, high);
-        double roof = high;
-        if (!tilted) {
-          // Flat, or a plane that would reach down to the terrain: LoD1.2 at the 70th
-          // percentile of the part's points.
-          std::vector<double> z;
-          for (auto i : members) {
-            if (!wall[i]) z.push_back(in.points[i].z());
-          }
-          if (z.empty()) continue;
-          std::sort(z.begin(), z.end());
-          roof = z[static_cast<std::size_t>(0.7 * static_cast<double>(z.size() - 1))];
-        }
-        if (roof - base < 0.5 * o.min_building_height) {
-          rejected.push_back({piece_what, "not a building's height above the terrain",
-                              static_cast<long long>(p.members.size())});
-          continue;
-        }
-        auto spec = outline_extrusion(outline, under, tilted ? high - base + 1.0 : roof - base);
-        if (!spec) continue;
-        p.spec = std::move(*spec);
-        if (tilted) {
-          const kernel::Location loc = p.spec.placement;
-          const Vec3 nl = loc.rotation().transpose() * plane.n;
-          p.spec.clips.push_back(
-              Eigen::Vector4d(nl.x(), nl.y(), nl.z(), plane.d - plane.n.dot(loc.translation())));
-          p.shapes = plane.merged;
-          std::sort(p.shapes.begin(), p.shapes.end());
-        }
-        const double area = polygon_area(outline.profile, outline.holes);
-        p.area = area / (tilted ? plane.n.z() : 1.0) +
-                 polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
-        p.what = piece_what;
-        if (!house_of_part.empty()) p.house = house_of_part[k];
-        out.push_back(std::move(p));
-      }
+      const double area = polygon_area(outline.profile, outline.holes);
+      p.area = area / (tilted ? plane.n.z() : 1.0) +
+               polygon_perimeter(outline.profile, outline.holes) * (0.5 * (low + high) - base);
+      p.what = piece_what;
+      if (!house_of_part.empty()) p.house = house_of_part[k];
+      out.push_back(std::move(p));
     }
   }
   // Parts meeting at one vertex only with another between them stand over the same heights
