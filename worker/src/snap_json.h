@@ -18,13 +18,14 @@ inline kernel::SnapOptions snap_options(double distance, double degrees) {
   return {distance, degrees * M_PI / 180.0};
 }
 
-/// What the snap moved: directions, axes_snapped, planes, faces_snapped, max_turn_degrees,
-/// max_move.
+/// What the snap moved: directions, axes_snapped, planes, faces_snapped, walls_shared,
+/// max_turn_degrees, max_move.
 inline nlohmann::ordered_json snap_report_json(const kernel::SnapReport& r) {
   return {{"directions", r.directions},
           {"axes_snapped", r.axes_snapped},
           {"planes", r.planes},
           {"faces_snapped", r.faces_snapped},
+          {"walls_shared", r.walls_shared},
           {"max_turn_degrees", r.max_turn * 180.0 / M_PI},
           {"max_move", r.max_move}};
 }

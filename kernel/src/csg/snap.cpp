@@ -1,5 +1,7 @@
 #include "csgtile/kernel/snap.h"
 
+#include "snap_walls.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -347,6 +349,8 @@ Result<std::vector<PrimitiveSpec>> snap_primitives(const std::vector<PrimitiveSp
     if (!moved.ok()) return moved.error();
     p.placement = moved.value();
   }
+  // 6. Side walls of parallel extrusions share their vertices (snap_walls.h).
+  detail::share_extrusion_walls(out, options.distance, counts);
   return out;
 }
 

@@ -273,5 +273,83 @@ TEST(Snap, ClipPlanesStayInTheWorld) {
   EXPECT_NEAR(d0, d1, 1e-12);
 }
 
+// Three roof parts of a building fitted from points: a tall L-shaped part whose wall runs
+// straight from its outer corner to its inner one, and two lower parts beside it whose shared
+// corner lies 3 mm outside that wall. Together they leave a slot 3 mm wide through the lower
+// parts' height, open to the outside only at the slot's pinched end: the exact union's faces
+// touch themselves there. Snapped, the corner is inserted into the tall part's wall, the slot
+// closes and the union is one valid solid holding the three parts' volumes.
+TEST(Snap, ExtrusionWallsShareTheCornerBesideThem) {
+  auto part = [](std::vector<Vec2> profile, double h) {
+    PrimitiveSpec p;
+    p.type = PrimitiveType::Extrusion;
+    p.profile = std::move(profile);
+    p.height = h;
+    // Turned and moved, so that the parts' corners meet only through their placements.
+    p.placement = turned(Vec3(85012.5, 447461.25, 1.38), Vec3::UnitZ(), 0.7224);
+    return p;
+  };
+  const std::vector<PrimitiveSpec> parts{
+      part({{0, 0}, {10, 0}, {10, 10}, {14, 10}, {14, 14}, {0, 14}}, 10.0),
+      part({{10, 0}, {20, 0}, {20, 5}, {10.003, 5}}, 8.0),
+      part({{10.003, 5}, {20, 5}, {20, 10}, {10, 10}}, 9.0)};
+  auto fuse = [](const std::vector<PrimitiveSpec>& specs) {
+    std::vector<Shape> shapes;
+    for (const PrimitiveSpec& p : specs) shapes.push_back(build_primitive(p).value());
+    return boolean_fuse_all(shapes);
+  };
+  auto exact = fuse(parts);
+  EXPECT_TRUE(!exact.ok() || !check_shape(exact.value()).valid())
+      << "the slot's pinched end makes the exact union's faces touch themselves";
+
+  SnapReport report;
+  auto snapped = snap_primitives(parts, {0.005, 0.5 * std::numbers::pi / 180}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  EXPECT_EQ(snapped.value()[0].profile.size(), 7u);  // the corner inserted into its wall
+  EXPECT_EQ(snapped.value()[1].profile, parts[1].profile);
+  // The tall part's inner corner, on the third part's edge, is inserted there too.
+  EXPECT_EQ(snapped.value()[2].profile.size(), 5u);
+  EXPECT_EQ(report.walls_shared, 2);
+  EXPECT_NEAR(report.max_move, 0.003, 1e-9);  // the corner's distance to the straight wall
+  auto fused = fuse(snapped.value());
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  const auto check = check_shape(fused.value());
+  EXPECT_TRUE(check.valid()) << (check.valid() ? "" : check.issues[0].message);
+  // The parts now only touch: the union holds their volumes (the tall one grown by the slot,
+  // half of 3 mm by 10 m, 10 m high).
+  double parts_volume = 0.0;
+  for (const PrimitiveSpec& p : snapped.value()) {
+    parts_volume += mass_properties(build_primitive(p).value()).volume;
+  }
+  EXPECT_NEAR(parts_volume, 1560.15 + 8 * (50 - 0.0075) + 9 * (50 - 0.0075), 1e-6);
+  // (Walls placed within the Booleans' tolerance, 1e-7, of 400 m² of walls: 1e-4.)
+  EXPECT_NEAR(mass_properties(fused.value()).volume, parts_volume, 1e-4);
+}
+
+// A vertex near another extrusion's vertex becomes it; extrusions at other heights
+// or farther than the distance keep their profiles bit for bit.
+TEST(Snap, ExtrusionWallsLeaveWhatDoesNotMeet) {
+  auto part = [](std::vector<Vec2> profile, double z, double h) {
+    PrimitiveSpec p;
+    p.type = PrimitiveType::Extrusion;
+    p.profile = std::move(profile);
+    p.height = h;
+    p.placement = Location::translation(Vec3(0, 0, z));
+    return p;
+  };
+  const PrimitiveSpec a = part({{0, 0}, {4, 0}, {4, 4}, {0, 4}}, 0, 3);
+  const PrimitiveSpec near = part({{4.002, 0.001}, {8, 0}, {8, 4}, {4, 4}}, 0, 3);
+  const PrimitiveSpec above = part({{4.002, 0}, {8, 0}, {8, 4}, {4, 4}}, 3.5, 3);
+  const PrimitiveSpec far = part({{-4, 0}, {-0.02, 0}, {-0.02, 4}, {-4, 4}}, 0, 3);
+  SnapReport report;
+  auto snapped = snap_primitives({a, near, above, far}, {0.005, 0.0}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  EXPECT_EQ(snapped.value()[0].profile, a.profile);
+  EXPECT_EQ(snapped.value()[1].profile[0], Vec2(4, 0));  // onto a's corner
+  EXPECT_EQ(snapped.value()[2].profile, above.profile);
+  EXPECT_EQ(snapped.value()[3].profile, far.profile);
+  EXPECT_EQ(report.walls_shared, 1);
+}
+
 }  // namespace
 }  // namespace csgtile::kernel

@@ -14,7 +14,10 @@
 /// extrusions) whose planes lie within `distance` of each other become one plane; parallel
 /// axes of surfaces of revolution (cylinders, cones, tori, revolutions) within `distance` of
 /// each other become one axis line, and cylinders on one line whose radii differ by at most
-/// `distance` one radius. Each
+/// `distance` one radius; last, the side walls of parallel extrusions share their vertices: a
+/// profile vertex within `distance` of another extrusion's vertex becomes it, one within
+/// `distance` of its edge is inserted into it (a wall 5 mm off its neighbour's corner leaves
+/// a slot the Booleans would keep, pinched to a non-manifold edge at its end). Each
 /// primitive turns about its own centre; a face moves along its normal by at most `distance`
 /// (its primitive's size changes accordingly); clip planes stay where they are in the world.
 /// The two faces of one primitive never merge. Deterministic (input order).
@@ -40,6 +43,7 @@ struct SnapReport {
   int lines = 0;          ///< axis lines shared by two or more surfaces of revolution
   int axes_moved = 0;     ///< surfaces of revolution moved onto a shared axis line
   int radii_snapped = 0;  ///< cylinder radii changed to a shared radius
+  int walls_shared = 0;   ///< extrusion profile vertices moved or inserted to share a wall
 };
 
 /// The primitives with their near-coincidences snapped (see the file comment). Errors:
