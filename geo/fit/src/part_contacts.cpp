@@ -8,6 +8,8 @@
 #include <set>
 #include <utility>
 
+#include "csgtile/kernel/polygon2d.h"
+
 namespace csgtile::fit::detail {
 
 namespace {
@@ -23,6 +25,8 @@ Key key_of(const Vec3& w) { return {std::llround(w.x() * 1e6), std::llround(w.y(
 struct Incidence {
   std::size_t part = 0;
   Key prev, next;
+  int ring = -1;          // -1: the outer ring, else the hole's index
+  std::size_t index = 0;  // the vertex's index in that ring
 };
 
 // An extrusion standing upright: its placement turns about z only.
@@ -55,16 +59,40 @@ void lower_base(kernel::PrimitiveSpec& s, double drop) {
   s.height += drop;
 }
 
+// The part's corner at the incidence's vertex cut off `size` along both its edges (at most a
+// quarter of either), when the polygon's inside turns less than half a turn there: the vertex
+// becomes two. Returns whether it was cut.
+bool cut_corner(kernel::PrimitiveSpec& s, const Incidence& at, double size) {
+  std::vector<Vec2>& ring = at.ring < 0 ? s.profile : s.holes[static_cast<std::size_t>(at.ring)];
+  const std::size_t n = ring.size();
+  const Vec2 v = ring[at.index], prev = ring[(at.index + n - 1) % n],
+             next = ring[(at.index + 1) % n];
+  const double to_prev = (prev - v).norm(), to_next = (next - v).norm();
+  const double e = std::min(size, 0.25 * std::min(to_prev, to_next));
+  if (!(e > 0.0)) return false;
+  const Vec2 in = v - prev, out = next - v;
+  const double turn = in.x() * out.y() - in.y() * out.x();
+  // Which side of the ring's edges its polygon lies on: the left of a counter-clockwise outer
+  // ring, of a clockwise hole.
+  const double left = (at.ring < 0) == (kernel::ring_area(ring) > 0.0) ? 1.0 : -1.0;
+  if (!(turn * left > 0.0)) return false;
+  ring[at.index] = v + (e / to_prev) * (prev - v);
+  ring.insert(ring.begin() + static_cast<std::ptrdiff_t>(at.index) + 1,
+              v + (e / to_next) * (next - v));
+  return true;
+}
+
 }  // namespace
 
-int close_point_contacts(std::vector<Proposal>& parts, double max_raise) {
+int close_point_contacts(std::vector<Proposal>& parts, double max_raise, double corner) {
   std::set<std::size_t> changed;
-  for (int round = 0; round < 4; ++round) {
+  for (int round = 0; round < 8; ++round) {
+    std::set<std::size_t> cut;  // parts whose rings changed this round (their incidences stale)
     std::map<Key, std::vector<Incidence>> at;
     for (std::size_t k = 0; k < parts.size(); ++k) {
       const kernel::PrimitiveSpec& s = parts[k].spec;
       if (!upright_extrusion(s)) continue;
-      auto add_ring = [&](const std::vector<Vec2>& ring) {
+      auto add_ring = [&](const std::vector<Vec2>& ring, int which) {
         const std::size_t n = ring.size();
         if (n < 3) return;
         std::vector<Key> keys(n);
@@ -72,11 +100,11 @@ int close_point_contacts(std::vector<Proposal>& parts, double max_raise) {
           keys[i] = key_of(s.placement.apply_point(Vec3(ring[i].x(), ring[i].y(), 0.0)));
         }
         for (std::size_t i = 0; i < n; ++i) {
-          at[keys[i]].push_back({k, keys[(i + n - 1) % n], keys[(i + 1) % n]});
+          at[keys[i]].push_back({k, keys[(i + n - 1) % n], keys[(i + 1) % n], which, i});
         }
       };
-      add_ring(s.profile);
-      for (const auto& h : s.holes) add_ring(h);
+      add_ring(s.profile, -1);
+      for (std::size_t h = 0; h < s.holes.size(); ++h) add_ring(s.holes[h], static_cast<int>(h));
     }
     bool any = false;
     for (const auto& [place, list] : at) {
@@ -98,12 +126,13 @@ int close_point_contacts(std::vector<Proposal>& parts, double max_raise) {
                       p.next == q.next;
             }
           }
-          if (share) continue;
+          if (share || cut.count(a.part) || cut.count(b.part)) continue;
           const kernel::PrimitiveSpec& sa = parts[a.part].spec;
           const kernel::PrimitiveSpec& sb = parts[b.part].spec;
           const double low = std::max(base_of(sa), base_of(sb));
           const double high = std::min(roof_at(sa, x, y), roof_at(sb, x, y));
           if (!(high > low)) continue;
+          bool below = false;  // a part between them standing lower than both, after all
           for (const Incidence& c : list) {
             if (c.part == a.part || c.part == b.part) continue;
             kernel::PrimitiveSpec& sc = parts[c.part].spec;
@@ -117,6 +146,20 @@ int close_point_contacts(std::vector<Proposal>& parts, double max_raise) {
               sc.height += high - roof;
               changed.insert(c.part);
               any = true;
+            }
+            below = below || roof_at(sc, x, y) < high;
+          }
+          if (!below) continue;
+          // A storey lower, or a tilted roof: the corner of one of the two is cut off instead
+          // (the lower one at the vertex; a notch of `corner` by `corner`), so that they no
+          // longer meet.
+          const bool a_first = roof_at(sa, x, y) <= roof_at(sb, x, y);
+          for (const Incidence* p : {a_first ? &a : &b, a_first ? &b : &a}) {
+            if (cut_corner(parts[p->part].spec, *p, corner)) {
+              cut.insert(p->part);
+              changed.insert(p->part);
+              any = true;
+              break;
             }
           }
         }

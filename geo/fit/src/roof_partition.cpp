@@ -463,17 +463,32 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
         top[c] = std::isnan(top[c]) ? in.points[i].z() : std::max(top[c], in.points[i].z());
       }
     }
+    // Pieces grow from their highest cell down to a step below it: grown cell to cell alone,
+    // a sloping strip (a mansard's steep edge, a curved roof no plane fits) drifted up or down
+    // by less than a step per cell into one piece metres high, at a height explaining none of it.
+    std::vector<std::size_t> order;
+    for (std::size_t c = 0; c < ncell; ++c) {
+      if (mask[c] && label[c] == kFree) order.push_back(c);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+      if (std::isnan(top[y])) return !std::isnan(top[x]);
+      return !std::isnan(top[x]) && top[x] > top[y];
+    });
     std::vector<char> seen(ncell, 0);
-    for (std::size_t start = 0; start < ncell; ++start) {
-      if (!mask[start] || label[start] != kFree || seen[start]) continue;
+    for (const std::size_t start : order) {
+      if (seen[start]) continue;
       std::vector<std::size_t> piece{start};
       seen[start] = 1;
+      const double highest = top[start];
       for (std::size_t h = 0; h < piece.size(); ++h) {
         const std::size_t c = piece[h];
         if (std::isnan(top[c])) continue;  // an empty cell joins a piece but bridges none
         for_each_neighbour(c, [&](std::size_t k) {
           if (!mask[k] || label[k] != kFree || seen[k]) return;
-          if (!std::isnan(top[k]) && std::abs(top[c] - top[k]) >= step) return;
+          if (!std::isnan(top[k]) &&
+              (std::abs(top[c] - top[k]) >= step || !(highest - top[k] < step))) {
+            return;
+          }
           seen[k] = 1;
           piece.push_back(k);
         });
@@ -878,8 +893,9 @@ std::vector<Proposal> propose_roof_partition(const ProposalInput& in,
     }
   }
   // Parts meeting at one vertex only with another between them stand over the same heights
-  // there (a flat roof raised at most a fifth of the lowest building's height).
-  close_point_contacts(out, 0.2 * o.min_building_height);
+  // there (a flat roof raised at most a fifth of the lowest building's height), or no longer
+  // meet (a corner cut by a fifth of a cell).
+  close_point_contacts(out, 0.2 * o.min_building_height, 0.2 * cell);
   return out;
 }
 

@@ -58,24 +58,46 @@ TEST(FitPartContacts, APartBetweenTwoMeetingAtAPointReachesDownToTheirBases) {
   // C's base 0.4 above A's and B's: between 0 and 0.4 only A and B stand by the origin.
   auto parts = wedge(0.0, 0.4, 5.0);
   EXPECT_FALSE(fuse_valid(parts));
-  EXPECT_EQ(detail::close_point_contacts(parts, 0.4), 1);
+  EXPECT_EQ(detail::close_point_contacts(parts, 0.4, 0.1), 1);
   EXPECT_NEAR(parts[1].spec.placement.translation().z(), 0.0, 1e-12);
   EXPECT_NEAR(parts[1].spec.height, 5.0, 1e-12);
   EXPECT_TRUE(fuse_valid(parts));
   // Already closed: nothing more to do.
-  EXPECT_EQ(detail::close_point_contacts(parts, 0.4), 0);
+  EXPECT_EQ(detail::close_point_contacts(parts, 0.4, 0.1), 0);
 }
 
 TEST(FitPartContacts, AFlatRoofAStepBelowTwoMeetingAtAPointIsRaisedToThem) {
-  // C's flat roof 3 cm under theirs: raised. 2 m under: a storey, kept (and the fuse fails).
+  // C's flat roof 3 cm under theirs: raised.
   auto close = wedge(0.0, 0.0, 4.97);
   EXPECT_FALSE(fuse_valid(close));
-  EXPECT_EQ(detail::close_point_contacts(close, 0.4), 1);
+  EXPECT_EQ(detail::close_point_contacts(close, 0.4, 0.1), 1);
   EXPECT_NEAR(close[1].spec.height, 5.0, 1e-12);
   EXPECT_TRUE(fuse_valid(close));
+  EXPECT_EQ(close[0].spec.profile.size(), 4U);  // no corner cut
+}
+
+TEST(FitPartContacts, TwoMeetingAtAPointOverAStoreyBetweenThemNoLongerMeet) {
+  // C's flat roof 2 m under theirs: a storey, kept; A's corner at the origin (A and B tie,
+  // A comes first) is cut off by 10 cm, and the fuse is one valid solid.
   auto storey = wedge(0.0, 0.0, 3.0);
-  EXPECT_EQ(detail::close_point_contacts(storey, 0.4), 0);
+  EXPECT_FALSE(fuse_valid(storey));
+  EXPECT_EQ(detail::close_point_contacts(storey, 0.4, 0.1), 1);
   EXPECT_NEAR(storey[1].spec.height, 3.0, 1e-12);
+  const std::vector<Vec2> cut{{0, 0.1}, {0.1, 0}, {1, 0}, {1, 1}, {0, 1}};
+  ASSERT_EQ(storey[0].spec.profile.size(), cut.size());
+  for (std::size_t i = 0; i < cut.size(); ++i) {
+    EXPECT_LT((storey[0].spec.profile[i] - cut[i]).norm(), 1e-15) << i;
+  }
+  EXPECT_EQ(storey[2].spec.profile.size(), 4U);
+  EXPECT_TRUE(fuse_valid(storey));
+  EXPECT_EQ(detail::close_point_contacts(storey, 0.4, 0.1), 0);
+  // B lower than A at the origin: B's corner is cut instead.
+  auto lower_b = wedge(0.0, 0.0, 3.0);
+  lower_b[2].spec.height = 4.0;
+  EXPECT_EQ(detail::close_point_contacts(lower_b, 0.4, 0.1), 1);
+  EXPECT_EQ(lower_b[0].spec.profile.size(), 4U);
+  EXPECT_EQ(lower_b[2].spec.profile.size(), 5U);
+  EXPECT_TRUE(fuse_valid(lower_b));
 }
 
 TEST(FitPartContacts, ClipPlanesStayInPlaceWhenABaseIsLowered) {
@@ -96,7 +118,7 @@ TEST(FitPartContacts, ClipPlanesStayInPlaceWhenABaseIsLowered) {
   };
   const Vec3 probe(9.5, 20.5, 0.0);
   const double before = roof_at(c, probe);
-  EXPECT_EQ(detail::close_point_contacts(parts, 0.4), 1);
+  EXPECT_EQ(detail::close_point_contacts(parts, 0.4, 0.1), 1);
   EXPECT_NEAR(c.placement.translation().z(), 0.0, 1e-12);
   EXPECT_NEAR(roof_at(c, probe), before, 1e-9);
 }
