@@ -182,7 +182,11 @@ double projected_width(const kernel::PrimitiveSpec& spec) {
 // extrusion from `ground` to `top`, appended to `pieces`. A face whose projection is a strip
 // narrower than `min_width` (a wall leaning out by a few millimetres) is left out: it adds
 // nothing a block model shows, and slivers that thin do not survive the coordinates'
-// quantisation in the published files (the shell then crosses itself).
+// quantisation in the published files (the shell then crosses itself). The mean width
+// (projected_width) of a strip tapering to a point is half its widest: the gable wall of a
+// pitched-roof extrusion 0.13° off level, 15 mm wide under its ridge and 7.7 mm on average,
+// left an 8 mm chamfer on its LoD1.3 block that val3dity found crossing itself; a face is left
+// out under twice `min_width` on average.
 kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
                                     double ground, double top, double tolerance, double min_width,
                                     const std::string& label,
@@ -214,7 +218,7 @@ kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Me
         spec.holes.push_back(std::move(ring));
       }
     }
-    if (projected_width(spec) < min_width) continue;
+    if (projected_width(spec) < 2.0 * min_width) continue;
     const std::string name = label + "footprint face " + std::to_string(f);
     auto piece = kernel::csg_primitive(spec, name, tolerance);
     if (!piece.ok()) {

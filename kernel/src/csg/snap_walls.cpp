@@ -17,6 +17,12 @@ using Key = std::pair<long long, long long>;
 // Vertices closer than this are one already (their frames' rounding): none moves.
 constexpr double kSame = 1e-9;
 
+// A vertex is inserted into an edge only this many snap distances from its ends and from the
+// vertices inserted before it: the edges it leaves are no shorter (an 8 mm edge left at a
+// corner became a sliver triangle of a LoD1.3 block, crossing its neighbours once the
+// published coordinates were rounded to millimetres).
+constexpr double kClearance = 4.0;
+
 // A profile vertex seen along its group's direction: its plane coordinates, and its local
 // coordinates while it has not moved (an unmoved vertex is written back bit for bit).
 struct Corner {
@@ -149,7 +155,9 @@ void share_group(std::vector<PrimitiveSpec>& out, const std::vector<std::size_t>
     }
   }
 
-  // Vertices inserted into the other extrusions' edges they lie near, away from the edges' ends.
+  // Vertices inserted into the other extrusions' edges they lie near, away from the edges' ends
+  // (kClearance).
+  const double clear = kClearance * distance;
   Hash all(distance);
   for (std::size_t g = 0; g < group.size(); ++g) {
     for (const auto& ring : group[g].rings) {
@@ -172,7 +180,7 @@ void share_group(std::vector<PrimitiveSpec>& out, const std::vector<std::size_t>
           if (m.owner == g || !heights_meet(walls, group[m.owner], distance)) return;
           const double t = (m.at - a).dot(d) / len2;
           if (!(t > 0.0 && t < 1.0)) return;
-          if ((m.at - a).norm() <= distance || (m.at - b).norm() <= distance) return;
+          if ((m.at - a).norm() <= clear || (m.at - b).norm() <= clear) return;
           if ((a + t * d - m.at).norm() > distance) return;
           on.emplace_back(t, m.at);
         });
@@ -183,7 +191,7 @@ void share_group(std::vector<PrimitiveSpec>& out, const std::vector<std::size_t>
         });
         Vec2 last = a;
         for (const auto& [t, q] : on) {
-          if ((q - last).norm() <= distance) continue;
+          if ((q - last).norm() <= clear || (q - b).norm() <= clear) continue;
           grown.push_back({q, std::nullopt});
           ++walls.moved;
           walls.max_move = std::max(walls.max_move, segment_distance(q, a, b));

@@ -326,8 +326,8 @@ TEST(Snap, ExtrusionWallsShareTheCornerBesideThem) {
   EXPECT_NEAR(mass_properties(fused.value()).volume, parts_volume, 1e-4);
 }
 
-// A vertex near another extrusion's vertex becomes it; extrusions at other heights
-// or farther than the distance keep their profiles bit for bit.
+// A vertex near another extrusion's vertex becomes it; extrusions at other heights, farther
+// than the distance, or near a wall only close to its corner keep their profiles bit for bit.
 TEST(Snap, ExtrusionWallsLeaveWhatDoesNotMeet) {
   auto part = [](std::vector<Vec2> profile, double z, double h) {
     PrimitiveSpec p;
@@ -341,13 +341,17 @@ TEST(Snap, ExtrusionWallsLeaveWhatDoesNotMeet) {
   const PrimitiveSpec near = part({{4.002, 0.001}, {8, 0}, {8, 4}, {4, 4}}, 0, 3);
   const PrimitiveSpec above = part({{4.002, 0}, {8, 0}, {8, 4}, {4, 4}}, 3.5, 3);
   const PrimitiveSpec far = part({{-4, 0}, {-0.02, 0}, {-0.02, 4}, {-4, 4}}, 0, 3);
+  // 3 mm off a's wall but 15 mm from its corner: inserted there, it would leave a 15 mm edge
+  // (four snap distances at least are kept).
+  const PrimitiveSpec by_corner = part({{4.003, 0.015}, {5, -1}, {5, 1}}, 0, 3);
   SnapReport report;
-  auto snapped = snap_primitives({a, near, above, far}, {0.005, 0.0}, &report);
+  auto snapped = snap_primitives({a, near, above, far, by_corner}, {0.005, 0.0}, &report);
   ASSERT_TRUE(snapped.ok()) << snapped.error().message;
   EXPECT_EQ(snapped.value()[0].profile, a.profile);
   EXPECT_EQ(snapped.value()[1].profile[0], Vec2(4, 0));  // onto a's corner
   EXPECT_EQ(snapped.value()[2].profile, above.profile);
   EXPECT_EQ(snapped.value()[3].profile, far.profile);
+  EXPECT_EQ(snapped.value()[4].profile, by_corner.profile);
   EXPECT_EQ(report.walls_shared, 1);
 }
 
