@@ -13,6 +13,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/primitives.h"
+#include "csgtile/kernel/snap.h"
 #include "model_builders.h"
 
 namespace csgtile::kernel {
@@ -172,6 +173,76 @@ TEST(BooleanFitted, CrossingBeamsWithTiltedTops) {
   ASSERT_TRUE(common.ok()) << common.error().message;
   EXPECT_NEAR(mass_properties(fused.value()).volume + mass_properties(common.value()).volume,
               va + vb, 1e-9 * (va + vb));
+}
+
+// Three roof parts of one Delft building (the fit's frame of the 50 m tile c1700_r8949): two
+// lower parts share a corner 4.7 mm outside the taller part's straight wall, so together they
+// leave a slot that wide, pinched to a line where it reaches the outside. The exact union is
+// not a manifold ("face 0: its boundary loops cross"), and no snap distance mended it while
+// the snap left extrusion walls alone; snapped at 5 mm, the corner becomes a vertex of the
+// wall and the parts fuse into one valid solid.
+TEST(BooleanFitted, RoofPartsWithACornerOffTheirNeighboursWall) {
+  auto part = [](std::vector<Vec2> profile, double h, const std::array<double, 12>& rows) {
+    PrimitiveSpec p;
+    p.type = PrimitiveType::Extrusion;
+    p.profile = std::move(profile);
+    p.height = h;
+    p.placement = placement_rows(rows);
+    return p;
+  };
+  PrimitiveSpec tall =
+      part({{-1.9543971593655733, -1.6915632204583986}, {-1.3771924619440874, -1.6932749314159423},
+            {-1.3776449130810384, -1.8136900272007281}, {-0.8414946954091533, -1.8152354955973315},
+            {-0.8414946954091533, -1.181393862850257},  {0.27140776854726667, -1.181393862850257},
+            {0.27140776854726667, -1.8184434689037907}, {1.2176582957256024, -1.8211710632175127},
+            {1.3748568698216381, -1.7425717761694948},  {1.3843102325036902, -0.6249426308720487},
+            {4.166566392394742, -0.6249426308720487},   {4.166566392394742, 2.1573135290190066},
+            {4.723017624372954, 2.1573135290190066},    {4.723017624372954, 3.270215992975423},
+            {3.6101151604165302, 3.8266672249536384},   {-2.510848391343785, 4.383118456931847},
+            {-3.067299623321997, 2.1573135290190066},   {-5.293104551234839, 0.48795983308437485},
+            {-5.293104551234839, -0.6249426308720487},  {-1.3979459273873651, -0.6249426308720487},
+            {-1.9543971593655733, -1.181393862850257}},
+           12.684054196008436,
+           {0.7499003248968752, 0.6615508315462693, 0.0, 36.693944513569505, -0.6615508315462693,
+            0.7499003248968752, 0.0, 12.008704602833467, 0.0, 0.0, 1.0, 1.3800000000000001});
+  tall.clips.push_back(Eigen::Vector4d(-0.008223370849768815, -0.06521804535045386,
+                                       0.997837152411421, 11.379528295173174));
+  PrimitiveSpec low_a =
+      part({{-1.6764437179461709, -0.28833788401629334},
+            {1.6717170366051448, -0.25734217458959563},
+            {1.6717170366051448, 0.2728400293029445},
+            {-1.6669903552641188, 0.2728400293029445}},
+           10.484000000000002,
+           {0.7499003248968752, 0.6615508315462693, 0.0, 38.02006617507789, -0.6615508315462693,
+            0.7499003248968752, 0.0, 8.89958369349632, 0.0, 0.0, 1.0, 1.3800000000000001});
+  PrimitiveSpec low_b =
+      part({{-1.5302408879400815, -0.27822561598910767},
+            {1.808466503929182, -0.27822561598910767},
+            {1.2520152719509703, 0.27822561598910056},
+            {-1.5302408879400815, 0.27822561598910056}},
+           11.024000000000001,
+           {0.7499003248968752, 0.6615508315462693, 0.0, 38.28207564098166, -0.6615508315462693,
+            0.7499003248968752, 0.0, 9.40329472376206, 0.0, 0.0, 1.0, 1.3800000000000001});
+  const std::vector<PrimitiveSpec> parts{tall, low_a, low_b};
+  auto fuse = [](const std::vector<PrimitiveSpec>& specs) {
+    std::vector<Shape> shapes;
+    for (const PrimitiveSpec& p : specs) shapes.push_back(build_primitive(p).value());
+    return boolean_fuse_all(shapes);
+  };
+  auto exact = fuse(parts);
+  EXPECT_TRUE(!exact.ok() || !check_shape(exact.value()).valid());
+  SnapReport report;
+  auto snapped = snap_primitives(parts, {0.005, 0.5 * std::numbers::pi / 180}, &report);
+  ASSERT_TRUE(snapped.ok()) << snapped.error().message;
+  EXPECT_GE(report.walls_shared, 1);
+  EXPECT_LE(report.max_move, 0.005);
+  auto fused = fuse(snapped.value());
+  ASSERT_TRUE(fused.ok()) << fused.error().message;
+  const CheckReport check = check_shape(fused.value());
+  EXPECT_TRUE(check.valid()) << (check.valid() ? "" : check.issues.front().message);
+  EXPECT_EQ(map_child_shapes(fused.value(), ShapeKind::Solid).size(), 1u);
+  // The slot's volume (a few litres) is all the snap added.
+  EXPECT_NEAR(mass_properties(fused.value()).volume, 515.9466, 1e-3);
 }
 
 }  // namespace
