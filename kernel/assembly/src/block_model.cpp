@@ -184,7 +184,7 @@ double projected_width(const kernel::PrimitiveSpec& spec) {
 // nothing a block model shows, and slivers that thin do not survive the coordinates'
 // quantisation in the published files (the shell then crosses itself). The mean width
 // (projected_width) of a strip tapering to a point is half its widest: the gable wall of a
-// pitched-roof extrusion 0.13° off level, 15 mm wide under its ridge and 7.7 mm on average,
+// pitched-roof extrusion 0.13° off level, 15 mm wide under its ridge and 11 mm on average,
 // left an 8 mm chamfer on its LoD1.3 block that val3dity found crossing itself; a face is left
 // out under twice `min_width` on average.
 kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
