@@ -75,18 +75,22 @@ bool heights_meet(const Walls& a, const Walls& b, double distance) {
   return a.low <= b.high + distance && b.low <= a.high + distance;
 }
 
-// Whether the rings, their repeated neighbours removed (in place), are still a polygon: each
-// simple, keeping its area's sign, and no two meeting.
+// The ring without repeated neighbours (two vertices merged onto one point).
+std::vector<Vec2> without_repeats(const std::vector<Vec2>& ring) {
+  std::vector<Vec2> kept;
+  for (const Vec2& q : ring) {
+    if (kept.empty() || kept.back() != q) kept.push_back(q);
+  }
+  while (kept.size() > 1 && kept.back() == kept.front()) kept.pop_back();
+  return kept;
+}
+
+// Whether the rings are still a polygon: each simple and keeping its area's sign (`before`),
+// no two meeting.
 bool still_valid(const std::vector<std::vector<Vec2>>& before,
-                 std::vector<std::vector<Vec2>>& after) {
+                 const std::vector<std::vector<Vec2>>& after) {
   for (std::size_t r = 0; r < after.size(); ++r) {
-    std::vector<Vec2>& ring = after[r];
-    std::vector<Vec2> kept;
-    for (const Vec2& q : ring) {
-      if (kept.empty() || kept.back() != q) kept.push_back(q);
-    }
-    while (kept.size() > 1 && kept.back() == kept.front()) kept.pop_back();
-    ring = std::move(kept);
+    const std::vector<Vec2>& ring = after[r];
     if (ring.size() < 3 || ring_self_intersects(ring)) return false;
     const double a0 = ring_area(before[r]), a1 = ring_area(ring);
     if (!(a1 != 0.0) || (a0 > 0.0) != (a1 > 0.0)) return false;
@@ -223,7 +227,7 @@ void share_group(std::vector<PrimitiveSpec>& out, const std::vector<std::size_t>
         const Vec3 q = r.transpose() * (world - at.translation()) / at.scale();
         local.emplace_back(q.x(), q.y());
       }
-      after.push_back(std::move(local));
+      after.push_back(without_repeats(local));
     }
     if (!still_valid(before, after)) continue;
     p.profile = std::move(after.front());
