@@ -310,7 +310,10 @@ double neighbour_reach(std::span<const Vec3> points, std::span<const std::uint32
 
 double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_t> members,
                       double quantile) {
-  return NeighbourSample(points, members, true).noise(quantile);
+  // The plane residuals only: the quadric fits behind curved_noise are a RANSAC's question.
+  std::vector<double> residuals;
+  kth_neighbour_distances(points, members, &residuals, nullptr);
+  return quantile_of(std::move(residuals), quantile);
 }
 
 }  // namespace csgtile::fit::detail

@@ -241,19 +241,32 @@ std::optional<Surface> cone_from_samples(std::span<const Vec3> p, std::span<cons
   return s;
 }
 
-std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
-                                          double max_radius) {
-  if (p.size() < 6) return std::nullopt;
-  // A line (d, m) in Plücker coordinates meets the normal line (n_i, p_i × n_i) when
-  // d·(p_i × n_i) + m·n_i = 0: the axis of a surface of revolution is the null vector.
-  // Six columns known at compile time: the decomposition runs on fixed-size blocks.
-  Eigen::Matrix<double, Eigen::Dynamic, 6> a(static_cast<Eigen::Index>(p.size()), 6);
+namespace {
+
+// A line (d, m) in Plücker coordinates meets the normal line (n_i, p_i × n_i) when
+// d·(p_i × n_i) + m·n_i = 0: the axis of a surface of revolution is the null vector, the right
+// singular vector of the least singular value. `Rows`: a matrix of six columns (known at
+// compile time: the decomposition runs on fixed-size blocks), on the stack for a RANSAC's few
+// samples.
+template <class Rows>
+Eigen::Matrix<double, 6, 1> revolution_axis(std::span<const Vec3> p, std::span<const Vec3> n) {
+  Rows a(static_cast<Eigen::Index>(p.size()), 6);
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec3 moment = p[i].cross(n[i]);
     a.row(static_cast<Eigen::Index>(i)) << moment.transpose(), n[i].transpose();
   }
-  Eigen::JacobiSVD<Eigen::Matrix<double, Eigen::Dynamic, 6>> svd(a, Eigen::ComputeFullV);
-  const Eigen::VectorXd x = svd.matrixV().col(5);
+  const Eigen::JacobiSVD<Rows> svd(a, Eigen::ComputeFullV);
+  return svd.matrixV().col(5);
+}
+
+}  // namespace
+
+std::optional<Surface> torus_from_samples(std::span<const Vec3> p, std::span<const Vec3> n,
+                                          double max_radius) {
+  if (p.size() < 6) return std::nullopt;
+  const Eigen::Matrix<double, 6, 1> x =
+      p.size() <= 8 ? revolution_axis<Eigen::Matrix<double, Eigen::Dynamic, 6, 0, 8, 6>>(p, n)
+                    : revolution_axis<Eigen::Matrix<double, Eigen::Dynamic, 6>>(p, n);
   Vec3 d = x.head<3>();
   Vec3 m = x.tail<3>();
   const double dl = d.norm();
