@@ -215,7 +215,11 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
     if (curved != nullptr) curved->clear();
     std::array<double, kNeighbours> best{};
     std::array<std::uint32_t, kNeighbours> who{};
+    std::size_t missed = 0;  // samples whose k-th neighbour lies beyond the cell
     for (std::size_t k = 0; k < samples; ++k) {
+      // An attempt that can no longer find half of its samples is given up at once: the
+      // next cell, twice as wide, is tried as it would be after the last sample.
+      if (2 * missed > samples) break;
       const std::uint32_t i = members[k * stride];
       const auto& c = grid.coords(grid.cell_of(i));
       best.fill(INFINITY);
@@ -244,6 +248,7 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
         }
       }
       for (double& b : best) b = std::sqrt(b);
+      if (!(best.back() <= cell)) ++missed;
       if (best.back() <= cell) {
         found.push_back(best.back());
         if (residuals != nullptr) {
