@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/face_rings.h"
 #include "csgtile/kernel/tessellation.h"
+#include "footprint_union.h"
 
 namespace csgtile::assembly {
 
@@ -187,13 +189,13 @@ double projected_width(const kernel::PrimitiveSpec& spec) {
 // pitched-roof extrusion 0.13° off level, 15 mm wide under its ridge and 11 mm on average,
 // left an 8 mm chamfer on its LoD1.3 block that val3dity found crossing itself; a face is left
 // out under twice `min_width` on average.
-kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
-                                    double ground, double top, double tolerance, double min_width,
-                                    const std::string& label,
-                                    std::vector<kernel::CsgModel>& pieces) {
+// The pieces as specs (with their faces' numbers), not yet built: see add_footprint_pieces.
+kernel::Status footprint_specs(const kernel::Shape& shape, const kernel::Mesh& mesh, double ground,
+                               double top, double min_width, const std::string& label,
+                               std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>& specs) {
   const kernel::EdgePoints edge_points = kernel::mesh_edge_points(shape, mesh);
   const kernel::ShapeIndex faces = kernel::map_child_shapes(shape, kernel::ShapeKind::Face);
-  const std::size_t before = pieces.size();
+  const std::size_t before = specs.size();
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const kernel::Shape& face = faces[f];
     if (face.orientation() != kernel::Orientation::Forward &&
@@ -219,19 +221,41 @@ kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Me
       }
     }
     if (projected_width(spec) < 2.0 * min_width) continue;
-    const std::string name = label + "footprint face " + std::to_string(f);
+    specs.emplace_back(f, std::move(spec));
+  }
+  if (specs.size() == before) {
+    return kernel::Status(
+        ErrorCode::DegenerateGeometry,
+        label + (label.empty() ? "the solid" : "") + " has no face seen from below");
+  }
+  return kernel::Status();
+}
+
+// Each spec built as a piece named `label` and its number.
+kernel::Status add_pieces(const std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>& specs,
+                          double tolerance, const std::string& label,
+                          std::vector<kernel::CsgModel>& pieces) {
+  for (const auto& [f, spec] : specs) {
+    const std::string name = label + std::to_string(f);
     auto piece = kernel::csg_primitive(spec, name, tolerance);
     if (!piece.ok()) {
       return kernel::Status(piece.error().code, name + ": " + piece.error().message);
     }
     pieces.push_back(std::move(piece).value());
   }
-  if (pieces.size() == before) {
-    return kernel::Status(
-        ErrorCode::DegenerateGeometry,
-        label + (label.empty() ? "the solid" : "") + " has no face seen from below");
-  }
   return kernel::Status();
+}
+
+kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
+                                    double ground, double top, double tolerance, double min_width,
+                                    const std::string& label,
+                                    std::vector<kernel::CsgModel>& pieces) {
+  std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>> specs;
+  if (kernel::Status st = footprint_specs(shape, mesh, ground, top, min_width, label, specs);
+      !st.ok()) {
+    return st;
+  }
+  return add_pieces(specs, tolerance, label + "footprint face ", pieces);
 }
 
 // The pieces fused into one valid solid.
@@ -342,7 +366,12 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
   }
   // Each part's footprint (its leaf without the roof planes that cut its top: those do not
   // reach its bottom) from the building's ground to its level.
-  std::vector<kernel::CsgModel> pieces;
+  // The pieces of one level tile its footprint edge to edge (the parts share their walls):
+  // their union is found in the plane (footprint_union.h), and the fuse takes one prism per
+  // level and connected piece rather than one per part. Where they do not tile so, the level's
+  // pieces go to the fuse as they are.
+  std::map<double, std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>> levels;
+  std::map<double, std::vector<std::string>> level_labels;
   kernel::TessellationOptions tessellation;
   tessellation.chordal_tolerance = options.chordal_tolerance;
   for (const Part& p : parts) {
@@ -357,12 +386,44 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
     if (!solid.ok()) return kernel::Error{solid.error().code, label + solid.error().message};
     auto mesh = kernel::tessellate(solid.value().shape, tessellation);
     if (!mesh.ok()) return kernel::Error{mesh.error().code, label + mesh.error().message};
-    if (kernel::Status st =
-            add_footprint_pieces(solid.value().shape, mesh.value(), ground, p.level,
-                                 options.tolerance, options.chordal_tolerance, label, pieces);
+    auto& specs = levels[p.level];
+    if (kernel::Status st = footprint_specs(solid.value().shape, mesh.value(), ground, p.level,
+                                            options.chordal_tolerance, label, specs);
         !st.ok()) {
       return st.error();
     }
+    level_labels[p.level].resize(specs.size(), label);
+  }
+  std::vector<kernel::CsgModel> pieces;
+  std::size_t level_number = 0;
+  for (const auto& [level, specs] : levels) {
+    std::vector<detail::FootprintPolygon> tiles;
+    for (const auto& [f, spec] : specs) tiles.push_back({spec.profile, spec.holes});
+    auto merged =
+        specs.size() > 1 ? detail::union_of_tiles(tiles, options.tolerance) : std::nullopt;
+    if (merged) {
+      std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>> joined;
+      for (detail::FootprintPolygon& polygon : *merged) {
+        kernel::PrimitiveSpec spec = specs.front().second;  // the level's height and placement
+        spec.profile = std::move(polygon.outer);
+        spec.holes = std::move(polygon.holes);
+        joined.emplace_back(joined.size(), std::move(spec));
+      }
+      const std::string label = "level " + std::to_string(level_number) + " footprint piece ";
+      if (kernel::Status st = add_pieces(joined, options.tolerance, label, pieces); !st.ok()) {
+        return st.error();
+      }
+    } else {
+      const auto& labels = level_labels[level];
+      for (std::size_t k = 0; k < specs.size(); ++k) {
+        if (kernel::Status st =
+                add_pieces({specs[k]}, options.tolerance, labels[k] + "footprint face ", pieces);
+            !st.ok()) {
+          return st.error();
+        }
+      }
+    }
+    ++level_number;
   }
   return fuse_block(std::move(pieces), options.tolerance);
 }

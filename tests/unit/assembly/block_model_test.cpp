@@ -98,6 +98,31 @@ TEST(BlockModel, MultiHeightBlockMergesPartsWithinALevelStep) {
   EXPECT_TRUE(kernel::check_shape(apart->model.shape).valid());
 }
 
+// A row of six houses, three at 5 m and three at 8 m in turn except for two neighbours at 8 m:
+// LoD1.3 fuses one prism per level and connected piece (their walls joined in the plane), not
+// one per house: five prisms, the exact volume, one valid solid.
+TEST(BlockModel, MultiHeightBlockFusesOnePrismPerLevelPiece) {
+  const double heights[] = {5.0, 8.0, 8.0, 5.0, 8.0, 5.0};
+  std::vector<kernel::CsgModel> houses;
+  double volume = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    houses.push_back(leaf(extrusion_at(rectangle(6.0 * k, 0, 6.0 * (k + 1), 9), 0.0, heights[k])));
+    volume += 54.0 * heights[k];
+  }
+  auto building = kernel::csg_combine(houses, kernel::BooleanOp::Fuse);
+  ASSERT_TRUE(building.ok()) << building.error().message;
+  auto levels = multi_height_block_model(building.value());
+  ASSERT_TRUE(levels.ok()) << levels.error().message;
+  EXPECT_TRUE(kernel::check_shape(levels->model.shape).valid());
+  EXPECT_EQ(kernel::map_child_shapes(levels->model.shape, kernel::ShapeKind::Solid).size(), 1u);
+  EXPECT_NEAR(kernel::mass_properties(levels->model.shape).volume, volume, 1e-6);
+  std::size_t prisms = 0;
+  for (const auto& node : levels->model.nodes) {
+    prisms += node.kind == kernel::CsgNodeKind::Primitive ? 1 : 0;
+  }
+  EXPECT_EQ(prisms, 5u);  // 5 m: houses 0, 3, 5; 8 m: houses 1-2 (one piece), 4
+}
+
 // One roof part: LoD1.3 is LoD1.2's block.
 TEST(BlockModel, MultiHeightBlockOfOnePartIsTheBlock) {
   const kernel::CsgModel house = leaf(test::gable_house());
