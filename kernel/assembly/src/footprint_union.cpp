@@ -125,7 +125,8 @@ std::optional<std::vector<FootprintPolygon>> union_of_tiles(
   // A vertex lying on an edge (a neighbour's corner on a longer wall) splits it there.
   std::vector<std::pair<int, int>> split;
   for (const auto& [a, b] : edges) {
-    const Vec2 pa = vertices.at(a), pb = vertices.at(b);
+    const Vec2& pa = vertices.at(a);
+    const Vec2& pb = vertices.at(b);
     const Vec2 d = pb - pa;
     const double length2 = d.squaredNorm();
     std::vector<std::pair<double, int>> on;  // (parameter along the edge, vertex)
