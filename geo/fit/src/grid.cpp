@@ -248,8 +248,9 @@ std::vector<double> kth_neighbour_distances(std::span<const Vec3> points,
         }
       }
       for (double& b : best) b = std::sqrt(b);
-      if (!(best.back() <= cell)) ++missed;
-      if (best.back() <= cell) {
+      if (!(best.back() <= cell)) {
+        ++missed;
+      } else {
         found.push_back(best.back());
         if (residuals != nullptr) {
           std::array<std::uint32_t, kNeighbours + 1> hood{};

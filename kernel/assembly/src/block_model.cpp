@@ -180,8 +180,15 @@ double projected_width(const kernel::PrimitiveSpec& spec) {
   return perimeter > 0.0 ? 2.0 * a / perimeter : 0.0;
 }
 
+// A piece of a block not yet built: its name in the block's CSG tree and its extrusion.
+struct PieceSpec {
+  std::string name;
+  kernel::PrimitiveSpec spec;
+};
+
 // The footprint of `shape` (meshed as `mesh`): every face seen from below, each as an
-// extrusion from `ground` to `top`, appended to `pieces`. A face whose projection is a strip
+// extrusion from `ground` to `top` named `label` + "footprint face " + its number, appended
+// to `specs`. A face whose projection is a strip
 // narrower than `min_width` (a wall leaning out by a few millimetres) is left out: it adds
 // nothing a block model shows, and slivers that thin do not survive the coordinates'
 // quantisation in the published files (the shell then crosses itself). The mean width
@@ -189,10 +196,9 @@ double projected_width(const kernel::PrimitiveSpec& spec) {
 // pitched-roof extrusion 0.13° off level, 15 mm wide under its ridge and 11 mm on average,
 // left an 8 mm chamfer on its LoD1.3 block that val3dity found crossing itself; a face is left
 // out under twice `min_width` on average.
-// The pieces as specs (with their faces' numbers), not yet built: see add_footprint_pieces.
 kernel::Status footprint_specs(const kernel::Shape& shape, const kernel::Mesh& mesh, double ground,
                                double top, double min_width, const std::string& label,
-                               std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>& specs) {
+                               std::vector<PieceSpec>& specs) {
   const kernel::EdgePoints edge_points = kernel::mesh_edge_points(shape, mesh);
   const kernel::ShapeIndex faces = kernel::map_child_shapes(shape, kernel::ShapeKind::Face);
   const std::size_t before = specs.size();
@@ -221,7 +227,7 @@ kernel::Status footprint_specs(const kernel::Shape& shape, const kernel::Mesh& m
       }
     }
     if (projected_width(spec) < 2.0 * min_width) continue;
-    specs.emplace_back(f, std::move(spec));
+    specs.push_back({label + "footprint face " + std::to_string(f), std::move(spec)});
   }
   if (specs.size() == before) {
     return kernel::Status(
@@ -231,12 +237,10 @@ kernel::Status footprint_specs(const kernel::Shape& shape, const kernel::Mesh& m
   return kernel::Status();
 }
 
-// Each spec built as a piece named `label` and its number.
-kernel::Status add_pieces(const std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>& specs,
-                          double tolerance, const std::string& label,
+// Each spec built as a piece of the block.
+kernel::Status add_pieces(const std::vector<PieceSpec>& specs, double tolerance,
                           std::vector<kernel::CsgModel>& pieces) {
-  for (const auto& [f, spec] : specs) {
-    const std::string name = label + std::to_string(f);
+  for (const auto& [name, spec] : specs) {
     auto piece = kernel::csg_primitive(spec, name, tolerance);
     if (!piece.ok()) {
       return kernel::Status(piece.error().code, name + ": " + piece.error().message);
@@ -246,16 +250,17 @@ kernel::Status add_pieces(const std::vector<std::pair<std::size_t, kernel::Primi
   return kernel::Status();
 }
 
+// footprint_specs, built.
 kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Mesh& mesh,
                                     double ground, double top, double tolerance, double min_width,
                                     const std::string& label,
                                     std::vector<kernel::CsgModel>& pieces) {
-  std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>> specs;
+  std::vector<PieceSpec> specs;
   if (kernel::Status st = footprint_specs(shape, mesh, ground, top, min_width, label, specs);
       !st.ok()) {
     return st;
   }
-  return add_pieces(specs, tolerance, label + "footprint face ", pieces);
+  return add_pieces(specs, tolerance, pieces);
 }
 
 // The pieces fused into one valid solid.
@@ -370,8 +375,7 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
   // their union is found in the plane (footprint_union.h), and the fuse takes one prism per
   // level and connected piece rather than one per part. Where they do not tile so, the level's
   // pieces go to the fuse as they are.
-  std::map<double, std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>>> levels;
-  std::map<double, std::vector<std::string>> level_labels;
+  std::map<double, std::vector<PieceSpec>> levels;
   kernel::TessellationOptions tessellation;
   tessellation.chordal_tolerance = options.chordal_tolerance;
   for (const Part& p : parts) {
@@ -386,42 +390,33 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
     if (!solid.ok()) return kernel::Error{solid.error().code, label + solid.error().message};
     auto mesh = kernel::tessellate(solid.value().shape, tessellation);
     if (!mesh.ok()) return kernel::Error{mesh.error().code, label + mesh.error().message};
-    auto& specs = levels[p.level];
     if (kernel::Status st = footprint_specs(solid.value().shape, mesh.value(), ground, p.level,
-                                            options.chordal_tolerance, label, specs);
+                                            options.chordal_tolerance, label, levels[p.level]);
         !st.ok()) {
       return st.error();
     }
-    level_labels[p.level].resize(specs.size(), label);
   }
   std::vector<kernel::CsgModel> pieces;
   std::size_t level_number = 0;
   for (const auto& [level, specs] : levels) {
     std::vector<detail::FootprintPolygon> tiles;
-    for (const auto& [f, spec] : specs) tiles.push_back({spec.profile, spec.holes});
+    for (const auto& [name, spec] : specs) tiles.push_back({spec.profile, spec.holes});
     auto merged =
         specs.size() > 1 ? detail::union_of_tiles(tiles, options.tolerance) : std::nullopt;
+    std::vector<PieceSpec> joined;
     if (merged) {
-      std::vector<std::pair<std::size_t, kernel::PrimitiveSpec>> joined;
       for (detail::FootprintPolygon& polygon : *merged) {
-        kernel::PrimitiveSpec spec = specs.front().second;  // the level's height and placement
+        kernel::PrimitiveSpec spec = specs.front().spec;  // the level's height and placement
         spec.profile = std::move(polygon.outer);
         spec.holes = std::move(polygon.holes);
-        joined.emplace_back(joined.size(), std::move(spec));
+        joined.push_back({"level " + std::to_string(level_number) + " footprint piece " +
+                              std::to_string(joined.size()),
+                          std::move(spec)});
       }
-      const std::string label = "level " + std::to_string(level_number) + " footprint piece ";
-      if (kernel::Status st = add_pieces(joined, options.tolerance, label, pieces); !st.ok()) {
-        return st.error();
-      }
-    } else {
-      const auto& labels = level_labels[level];
-      for (std::size_t k = 0; k < specs.size(); ++k) {
-        if (kernel::Status st =
-                add_pieces({specs[k]}, options.tolerance, labels[k] + "footprint face ", pieces);
-            !st.ok()) {
-          return st.error();
-        }
-      }
+    }
+    if (kernel::Status st = add_pieces(merged ? joined : specs, options.tolerance, pieces);
+        !st.ok()) {
+      return st.error();
     }
     ++level_number;
   }

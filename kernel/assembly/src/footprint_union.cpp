@@ -98,7 +98,7 @@ std::optional<std::vector<FootprintPolygon>> union_of_tiles(
   // Directed edges, each ring turned so that the region lies on its left.
   Vertices vertices(tolerance);
   std::vector<std::pair<int, int>> edges;
-  double area = 0.0, scale = 0.0;
+  double area = 0.0;  // of the polygons, holes taken out
   const auto add_ring = [&](const std::vector<Vec2>& ring) {
     for (std::size_t k = 0; k < ring.size(); ++k) {
       const int a = vertices.id(ring[k]), b = vertices.id(ring[(k + 1) % ring.size()]);
@@ -109,9 +109,7 @@ std::optional<std::vector<FootprintPolygon>> union_of_tiles(
     const std::vector<Vec2> outer = oriented(polygon.outer, true);
     if (outer.size() < 3) return std::nullopt;
     add_ring(outer);
-    const double a = kernel::polygon_area(polygon.outer, polygon.holes);
-    area += a;
-    scale += std::abs(a);
+    area += kernel::polygon_area(polygon.outer, polygon.holes);
     for (const auto& hole : polygon.holes) {
       const std::vector<Vec2> h = oriented(hole, false);
       if (h.size() < 3) return std::nullopt;
@@ -218,7 +216,7 @@ std::optional<std::vector<FootprintPolygon>> union_of_tiles(
   }
   double kept = 0.0;
   for (const FootprintPolygon& p : out) kept += kernel::polygon_area(p.outer, p.holes);
-  if (!(std::abs(kept - area) <= 1e-9 * scale)) return std::nullopt;
+  if (!(std::abs(kept - area) <= 1e-9 * area)) return std::nullopt;
   return out;
 }
 
