@@ -50,8 +50,10 @@ constexpr const char* kObjectsTouching =
 
 // ---- objects ---------------------------------------------------------------------------------
 
-kernel::PrimitiveSpec box(Vec3 at, Vec3 size) { return test::box_at(at, size); }
-kernel::PrimitiveSpec cylinder(Vec3 at, double r, double h) { return test::cylinder_at(at, r, h); }
+kernel::PrimitiveSpec box(const Vec3& at, const Vec3& size) { return test::box_at(at, size); }
+kernel::PrimitiveSpec cylinder(const Vec3& at, double r, double h) {
+  return test::cylinder_at(at, r, h);
+}
 using test::leaf;
 
 kernel::CsgModel combine(const kernel::CsgModel& a, const kernel::CsgModel& b,
@@ -348,6 +350,57 @@ TEST(Relations, ThreadCountDoesNotChangeTheResult) {
   }
 }
 
+// Skipped pairs (a run's index skips the pairs inside a cell, classified by the cell) leave
+// the other pairs exactly as the classification of every pair gives them, and objects that
+// take part in no unskipped pair are not measured: here a row of houses across two cells,
+// one of them a set of two overlapping solids, and a shed far from the border.
+TEST(Relations, SkippedPairsLeaveTheOthersAsTheFullClassification) {
+  std::vector<kernel::Shape> solids;
+  std::vector<int> cell;
+  for (int i = 0; i < 6; ++i) {  // party walls at x = 2, 4, ...; the cell border at x = 6
+    solids.push_back(leaf(box({2.0 * i, 0, 0}, {2, 3, 4 + 0.5 * i}), "house").shape);
+    cell.push_back(i < 3 ? 0 : 1);
+  }
+  const auto left = leaf(box({12, 0, 0}, {2, 3, 4}), "l").shape;
+  const auto right = leaf(box({13, 0, 0}, {2, 3, 5}), "r").shape;
+  solids.push_back(kernel::ShapeFactory::compound({left, right}).value());  // touches house 5
+  cell.push_back(1);
+  solids.push_back(leaf(box({5, 1, 0}, {2, 1, 2}), "overlapping").shape);  // across the border
+  cell.push_back(1);
+  solids.push_back(leaf(box({40, 40, 0}, {2, 2, 2}), "shed").shape);
+  cell.push_back(1);
+
+  const auto all = compute_relations(solids, 1e-7, 1);
+  const auto across = compute_relations(
+      solids, 1e-7, 1, [&cell](std::size_t i, std::size_t j) { return cell[i] == cell[j]; });
+  std::vector<ObjectRelation> expected;
+  for (const ObjectRelation& r : all) {
+    if (cell[r.a] != cell[r.b]) expected.push_back(r);
+  }
+  ASSERT_EQ(across.size(), expected.size());
+  ASSERT_EQ(across.size(), 2u);  // the wall at x = 6, the overlapping box with house 2
+  for (std::size_t i = 0; i < across.size(); ++i) {
+    EXPECT_EQ(across[i].a, expected[i].a);
+    EXPECT_EQ(across[i].b, expected[i].b);
+    EXPECT_EQ(across[i].kind, expected[i].kind);
+    EXPECT_EQ(across[i].shared_area, expected[i].shared_area);
+    EXPECT_EQ(across[i].common_volume, expected[i].common_volume);
+  }
+  // The full classification: six party walls (houses 0..5 and the set), each the depth
+  // times the lower of the two heights (the set's wall: its left solid's, 4).
+  int walls = 0;
+  for (const ObjectRelation& r : all) {
+    if (r.kind != RelationKind::Touches || r.b > 6 || r.b != r.a + 1) continue;
+    ++walls;
+    const double height = r.a == 5 ? 4.0 : 4.0 + 0.5 * static_cast<double>(r.a);
+    EXPECT_NEAR(r.shared_area, 3.0 * height, 1e-9) << r.a;
+  }
+  EXPECT_EQ(walls, 6);
+  const auto none =
+      compute_relations(solids, 1e-7, 1, [](std::size_t, std::size_t) { return true; });
+  EXPECT_TRUE(none.empty());
+}
+
 // A pair whose Boolean fails (here: one operand is a face, not a solid; in runs, surface pairs
 // the kernel cannot intersect yet or results its checker refuses) is reported as "unknown"
 // with the kernel's error, not dropped, and nothing crashes.
@@ -457,6 +510,20 @@ double polygons_volume(const std::vector<detail::Polygon3>& polygons) {
     }
   }
   return v;
+}
+
+// The exporters take the validity the job checked once (IndexObject::valid) rather than
+// checking the model again; without it they check it.
+TEST(TopologyIndexRows, ValidityCheckedOnceIsTheOneWritten) {
+  std::vector<IndexObject> objects = sample_objects();
+  ASSERT_GE(objects.size(), 2u);
+  for (const IndexObject& o : objects) EXPECT_TRUE(model_valid(o)) << o.id;
+  objects[1].valid = false;  // as if the job's checker had refused it
+  IndexStats stats;
+  const auto rows = detail::build_index_rows(objects, {}, stats);
+  ASSERT_TRUE(rows.ok());
+  EXPECT_TRUE(rows->objects[0].valid);
+  EXPECT_FALSE(rows->objects[1].valid);
 }
 
 TEST(TopologyIndexRows, BoundaryPolygonsAreClosedAndOutward) {

@@ -12,6 +12,7 @@
 #include "csgtile/assembly/assembly.h"
 #include "csgtile/geo/crs.h"
 #include "csgtile/geo/scene.h"
+#include "csgtile/kernel/check.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/primitives.h"
@@ -211,6 +212,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
     io.escalation = object->escalation;
+    io.valid = kernel::check_shape(io.model.shape).valid();  // once, for every export
     // Every primitive of an object has its building (assembly_group).
     io.footprint_id = prims[static_cast<std::size_t>(object->primitives.front())].building;
     const ordered_json escalation = escalation_json(io.escalation);
@@ -268,6 +270,16 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
       objects.objects[i].model_fit = fits[i];
       object_records[i]["model_fit"] = model_fit_json(fits[i]);
     }
+  }
+  // The relations of the cell's objects (party walls, overlaps) are modelling too: the exact
+  // Booleans of every pair whose boxes meet. The cell's index and its record take them.
+  clock.enter("relations");
+  {
+    std::vector<kernel::Shape> solids;
+    solids.reserve(objects.objects.size());
+    for (const IndexObject& o : objects.objects) solids.push_back(o.model.shape);
+    objects.cell_relations =
+        compute_relations(solids, config.kernel.linear_tolerance, config.run.threads);
   }
   // The blocks go in the records: the index job reads them rather than computing them again.
   clock.enter("publish");

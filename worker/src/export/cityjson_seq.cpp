@@ -612,7 +612,7 @@ Json attributes_json(const IndexObject& object, const std::optional<ObjectGeomet
   a["csg_nodes"] = object.model.nodes.size();
   a["volume"] = mp.volume;
   a["area"] = mp.area;
-  a["valid"] = kernel::check_shape(object.model.shape).valid();
+  a["valid"] = model_valid(object);
   const FitSummary fit = fit_summary(object.primitives);
   if (fit.rms) a["fit_rms"] = *fit.rms;
   if (fit.coverage) a["fit_coverage"] = *fit.coverage;

@@ -110,33 +110,64 @@ std::vector<ObjectRelation> compute_relations(
     const std::function<bool(std::size_t, std::size_t)>& skip) {
   kernel::BooleanOptions options;
   options.tolerance = linear_tolerance;
+  // `threads` bounds TBB's arena (0: TBB's default, one per core) for the broad phases and
+  // the pairs' classification.
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+
+  // The objects that take part in a pair to classify. Only they need their union and their
+  // measures: with `skip`, a first broad phase on the solids' own boxes, grown by twice the
+  // tolerance (a superset of the measured boxes below, which are grown by once the
+  // tolerance), keeps the objects of an unskipped pair — the index of a run made of cells
+  // measures only the objects near a cell's border.
+  std::vector<std::size_t> involved;
+  if (skip) {
+    std::vector<kernel::BoundingBox> first(solids.size());
+    for (std::size_t i = 0; i < solids.size(); ++i) {
+      first[i] = kernel::bounding_box(solids[i]);
+      first[i].enlarge(2.0 * linear_tolerance);
+    }
+    std::vector<kernel::BoxPair> near;
+    arena.execute([&] { near = assembly::parallel_overlapping_boxes(first); });
+    std::vector<char> takes_part(solids.size(), 0);
+    for (const auto& [i, j] : near) {
+      if (!skip(i, j)) takes_part[i] = takes_part[j] = 1;
+    }
+    for (std::size_t i = 0; i < solids.size(); ++i) {
+      if (takes_part[i]) involved.push_back(i);
+    }
+  } else {
+    involved.resize(solids.size());
+    for (std::size_t i = 0; i < solids.size(); ++i) involved[i] = i;
+  }
+
   // An object made of several solids that overlap (a plain set of primitives) is measured and
   // compared as the union of its solids, which is what the Booleans take it for; where that
   // union fails, the object is kept as given and its pairs end Unknown with the reason.
-  std::vector<kernel::Shape> shapes(solids.begin(), solids.end());
+  // shapes[k], measured[k]: of solids[involved[k]].
+  std::vector<kernel::Shape> shapes;
+  shapes.reserve(involved.size());
+  for (std::size_t i : involved) shapes.push_back(solids[i]);
   for (kernel::Shape& s : shapes) {
     if (kernel::map_child_shapes(s, kernel::ShapeKind::Solid).size() < 2) continue;
     auto united = kernel::boolean_fuse_all({s}, options);
     if (united.ok()) s = united.value();
   }
   std::vector<Measured> measured(shapes.size());
-  for (std::size_t i = 0; i < shapes.size(); ++i) {
-    const kernel::MassProperties mp = kernel::mass_properties(shapes[i]);
-    measured[i] = {mp.volume, mp.area, mp.bounds};
-    measured[i].box.enlarge(linear_tolerance);
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    const kernel::MassProperties mp = kernel::mass_properties(shapes[k]);
+    measured[k] = {mp.volume, mp.area, mp.bounds};
+    measured[k].box.enlarge(linear_tolerance);
   }
-  // `threads` bounds TBB's arena (0: TBB's default, one per core) for the broad phase and
-  // the pairs' classification.
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
 
-  // Candidate pairs from the broad phase (boxes grown by the tolerance).
+  // Candidate pairs from the broad phase (boxes grown by the tolerance), as indices into
+  // `shapes`; sorted, and so in (a, b) order of the solids too (`involved` is increasing).
   std::vector<kernel::BoundingBox> boxes(measured.size());
-  for (std::size_t i = 0; i < measured.size(); ++i) boxes[i] = measured[i].box;
+  for (std::size_t k = 0; k < measured.size(); ++k) boxes[k] = measured[k].box;
   std::vector<kernel::BoxPair> candidates;
   arena.execute([&] { candidates = assembly::parallel_overlapping_boxes(boxes); });
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (const auto& pair : candidates) {
-    if (!skip || !skip(pair.first, pair.second)) pairs.push_back(pair);
+    if (!skip || !skip(involved[pair.first], involved[pair.second])) pairs.push_back(pair);
   }
 
   // Pairs are independent (shapes are immutable and shared safely between threads): each
@@ -147,8 +178,8 @@ std::vector<ObjectRelation> compute_relations(
   const auto classify_pair = [&](std::size_t k) {
     const auto [i, j] = pairs[k];
     ObjectRelation& r = slots[k];
-    r.a = i;
-    r.b = j;
+    r.a = involved[i];
+    r.b = involved[j];
     try {
       related[k] = classify(shapes[i], shapes[j], measured[i], measured[j], options, r) ? 1 : 0;
     } catch (const std::exception& e) {

@@ -134,7 +134,7 @@ Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
     primitive_counts.push_back(static_cast<std::uint32_t>(object.primitives.size()));
     volumes.push_back(mp.volume);
     areas.push_back(mp.area);
-    valid.push_back(kernel::check_shape(object.model.shape).valid());
+    valid.push_back(model_valid(object));
   }
   if (ids.empty()) {
     std::string why = "3D Tiles: no object has triangles";

@@ -420,7 +420,7 @@ Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
     o.volume = mp.volume;
     o.area = mp.area;
     o.bounds = map_box(mp.bounds, options);
-    o.valid = kernel::check_shape(root).valid();
+    o.valid = model_valid(object);
     const FitSummary fit = fit_summary(object.primitives);
     o.fit_rms = fit.rms;
     o.fit_coverage = fit.coverage;
@@ -490,6 +490,10 @@ Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
 }
 
 }  // namespace detail
+
+bool model_valid(const IndexObject& object) {
+  return object.valid ? *object.valid : kernel::check_shape(object.model.shape).valid();
+}
 
 // Weights: inlier counts when any fitted primitive has them, else equal.
 FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {

@@ -79,7 +79,13 @@ struct IndexObject {
   std::string lod13_error = {};
   /// Its points' distances to its model, when the run kept the points (city runs).
   std::optional<ModelFit> model_fit = {};
+  /// check_shape(model.shape).valid(), when its job checked it once for all its exporters
+  /// (model_valid); unset, each exporter checks the model itself.
+  std::optional<bool> valid = {};
 };
+
+/// Whether the object's model passes the checker: `valid` when set, else checked now.
+bool model_valid(const IndexObject& object);
 
 /// Moves an object's model by `by`: its shape and, so that its history stays in the shape's
 /// frame, every primitive leaf's placement.
