@@ -13,6 +13,7 @@
 #include "csgtile/kernel/location.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/tessellation.h"
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/publish.h"
 #include "export/manifest.h"
 #include "export/report.h"
@@ -247,6 +248,54 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       all_found = all_found && found;
     }
     if (all_found) objects.cell_relations = std::move(known);
+  }
+  // The cells' indexes already hold every object's rows, in the CRS: the run's index merges
+  // them (ids offset, primitives' placements moved into the run frame) rather than building
+  // them again. A cell whose index is not as its manifest says, a run without an EPSG CRS
+  // (the cells' files are then in cell coordinates) or older records: built again.
+  if (objects.crs && all_blocks && objects.cell_relations) {
+    std::string why;
+    for (const auto& [key, record] : cells) {
+      const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
+      std::string text;
+      if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) {
+        why = f.message;
+        break;
+      }
+      const ordered_json cm = ordered_json::parse(text, nullptr, false);
+      if (!cm.is_object() || !cm.contains("index") || !cm["index"].is_object() ||
+          !cm["index"].contains("key") || !cm["index"].contains("sha256")) {
+        why = cell_manifest + " names no index";
+        break;
+      }
+      const std::string index_key = cm["index"]["key"].get<std::string>();
+      if (!is_safe_key(index_key)) {
+        why = cell_manifest + ": unsafe index key " + index_key;
+        break;
+      }
+      const std::filesystem::path index_path =
+          run_dir / std::filesystem::path(cell_manifest).parent_path() / index_key;
+      std::string sha;
+      std::uint64_t bytes = 0;
+      if (Failure f = file_sha256(index_path, sha, bytes);
+          !f.ok() || sha != cm["index"]["sha256"]) {
+        why = index_path.string() + " is not the index its manifest names";
+        break;
+      }
+      const auto& o = record.at("origin");
+      objects.cell_indexes.push_back(
+          {index_path, kernel::Vec3(o[0].get<double>(), o[1].get<double>(), 0.0) - objects.origin});
+      if (cm["index"].contains("warnings")) {
+        for (const auto& w : cm["index"]["warnings"]) {
+          objects.cell_index_warnings.push_back(w.get<std::string>());
+        }
+      }
+    }
+    if (!why.empty()) {
+      log.info("index", "the cells' indexes are built again", {{"reason", why}});
+      objects.cell_indexes.clear();
+      objects.cell_index_warnings.clear();
+    }
   }
   RunIndexReport index;
   if (Failure f = write_run_index(settings, objects, run_dir, index); !f.ok()) return f;

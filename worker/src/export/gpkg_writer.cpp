@@ -5,9 +5,11 @@
 // Determinism: SQLite writes the same bytes for the same statements in the same order, so
 // everything is inserted in row order and gpkg_contents.last_change comes from the options.
 
+#include <array>
 #include <bit>
 #include <cstdio>
 #include <cstring>
+#include <nlohmann/json.hpp>
 
 #include "export/index_rows.h"
 #include "export/sqlite_util.h"
@@ -487,7 +489,18 @@ Failure insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows,
   return {};
 }
 
-Failure insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+Failure insert_relations(SqliteDb& db, const std::vector<RelationRecord>& relations) {
+  return insert_each(
+      db,
+      "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
+      "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)",
+      relations, [](SqliteStatement& st, const RelationRecord& r) {
+        st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
+        st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
+      });
+}
+
+Failure insert_rows(SqliteDb& db, const IndexRows& rows) {
   CSGTILE_TRY(insert_each(
       db,
       "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
@@ -518,14 +531,7 @@ Failure insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& opt
       rows.ancestors, [](SqliteStatement& st, const AncestorRecord& r) {
         st.bind(1, r.shape_id).bind(2, r.ancestor_kind).bind(3, r.ancestor_id).bind(4, r.position);
       }));
-  CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
-      "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)",
-      rows.relations, [](SqliteStatement& st, const RelationRecord& r) {
-        st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
-        st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
-      }));
+  CSGTILE_TRY(insert_relations(db, rows.relations));
   CSGTILE_TRY(insert_each(
       db,
       "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
@@ -552,6 +558,10 @@ Failure insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& opt
                                 .bind(4, r.type);
                             st.bind(5, r.inliers).bind(6, r.fit_rms).bind(7, r.fit_coverage);
                           }));
+  return {};
+}
+
+Failure insert_metadata(SqliteDb& db, const IndexOptions& options) {
   {
     SqliteStatement st(db, "INSERT INTO index_metadata (key, value) VALUES (?1, ?2)");
     CSGTILE_TRY(st.status());
@@ -580,13 +590,21 @@ Failure insert_rows(SqliteDb& db, const IndexRows& rows, const IndexOptions& opt
   return {};
 }
 
-Failure register_contents(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  kernel::BoundingBox all, blocks, levels;
+// The extents of the feature tables (kFeatureTables order) for gpkg_contents.
+using FeatureExtents = std::array<kernel::BoundingBox, 3>;
+
+FeatureExtents feature_extents(const IndexRows& rows) {
+  FeatureExtents e;
   for (const ObjectRecord& o : rows.objects) {
-    if (o.has_geometry) all.add(boundary_box(o.boundary));
-    if (o.has_lod12) blocks.add(boundary_box(o.lod12_boundary));
-    if (o.has_lod13) levels.add(boundary_box(o.lod13_boundary));
+    if (o.has_geometry) e[0].add(boundary_box(o.boundary));
+    if (o.has_lod12) e[1].add(boundary_box(o.lod12_boundary));
+    if (o.has_lod13) e[2].add(boundary_box(o.lod13_boundary));
   }
+  return e;
+}
+
+Failure register_contents(SqliteDb& db, const FeatureExtents& extents,
+                          const IndexOptions& options) {
   SqliteStatement st(
       db,
       "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, "
@@ -594,7 +612,7 @@ Failure register_contents(SqliteDb& db, const IndexRows& rows, const IndexOption
       "?8,?9,?10)");
   CSGTILE_TRY(st.status());
   for (const auto& [table, description, box] : kFeatureTables) {
-    const kernel::BoundingBox& b = box == 0 ? all : box == 1 ? blocks : levels;
+    const kernel::BoundingBox& b = extents[static_cast<std::size_t>(box)];
     st.bind(1, std::string_view(table)).bind(2, std::string_view("features"));
     st.bind(3, std::string_view(table)).bind(4, std::string_view(description));
     st.bind(5, options.last_change);
@@ -634,7 +652,8 @@ Failure register_contents(SqliteDb& db, const IndexRows& rows, const IndexOption
   return {};
 }
 
-Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+// The schema, in the transaction begun here.
+Failure begin_gpkg(SqliteDb& db, const IndexOptions& options) {
   // The file is a temporary that is deleted on failure and fsync'ed by the caller: no journal
   // file, no syncs here. Set first: a header pragma before them wrote and synced a journal.
   CSGTILE_TRY(db.exec("PRAGMA journal_mode = MEMORY; PRAGMA synchronous = OFF;"));
@@ -647,19 +666,222 @@ Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& optio
   for (const auto& feature_table : kFeatureTables) {
     CSGTILE_TRY(db.exec(for_table(kRtree, feature_table.table)));
   }
-  CSGTILE_TRY(insert_objects(db, rows, options.srs.srs_id));
-  CSGTILE_TRY(insert_rows(db, rows, options));
+  return {};
+}
+
+// After the rows: the metadata, the indexes, the R-trees' triggers and the contents; commits.
+Failure finish_gpkg(SqliteDb& db, const FeatureExtents& extents, const IndexOptions& options) {
+  CSGTILE_TRY(insert_metadata(db, options));
   CSGTILE_TRY(db.exec(kIndexIndexes));
   for (const auto& feature_table : kFeatureTables) {
     CSGTILE_TRY(db.exec(for_table(kRtreeTriggers, feature_table.table)));
   }
-  CSGTILE_TRY(register_contents(db, rows, options));
+  CSGTILE_TRY(register_contents(db, extents, options));
   return db.exec("COMMIT;");
+}
+
+Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
+  CSGTILE_TRY(begin_gpkg(db, options));
+  CSGTILE_TRY(insert_objects(db, rows, options.srs.srs_id));
+  CSGTILE_TRY(insert_rows(db, rows));
+  return finish_gpkg(db, feature_extents(rows), options);
+}
+
+// ---- merging indexes ----------------------------------------------------------------------------
+
+// A primitive's parameters (topology_index.cpp, primitive_parameters) moved by `by`: the
+// translation column of its placement.
+std::string moved_parameters(const std::string& text, const kernel::Vec3& by) {
+  if (text.empty() || by.isZero(0.0)) return text;
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(text, nullptr, false);
+  if (!j.is_object() || !j.contains("placement")) return text;
+  nlohmann::ordered_json& m = j["placement"];
+  for (int r = 0; r < 3; ++r) m[r][3] = m[r][3].get<double>() + by[r];
+  return j.dump();
+}
+
+// Row count of `table` in the database `schema`.
+Failure count_rows(SqliteDb& db, const std::string& schema, const char* table, std::int64_t& n) {
+  SqliteStatement st(db, "SELECT COUNT(*) FROM " + schema + "." + table);
+  CSGTILE_TRY(st.status());
+  if (st.step() != SQLITE_ROW) return db.failure("cannot count the rows of");
+  n = st.integer(0);
+  return {};
+}
+
+// `sql` with ?1 bound to `offset`, run once.
+Failure run_offset(SqliteDb& db, const std::string& sql, std::int64_t offset) {
+  SqliteStatement st(db, sql);
+  CSGTILE_TRY(st.status());
+  st.bind(1, offset);
+  return st.run();
+}
+
+// Appends the rows of the attached database "part" (an index of the same schema and SRS),
+// ids after those already in: objects and blocks by `fids`, shapes by `shapes`.
+Failure append_part(SqliteDb& db, const kernel::Vec3& offset, std::array<std::int64_t, 3>& fids,
+                    std::int64_t& shapes, FeatureExtents& extents) {
+  // The extents of its feature tables.
+  {
+    SqliteStatement st(db,
+                       "SELECT table_name, min_x, min_y, max_x, max_y FROM part.gpkg_contents "
+                       "WHERE min_x IS NOT NULL");
+    CSGTILE_TRY(st.status());
+    int rc;
+    while ((rc = st.step()) == SQLITE_ROW) {
+      const std::string table = st.text(0);
+      for (std::size_t t = 0; t < std::size(kFeatureTables); ++t) {
+        if (table != kFeatureTables[t].table) continue;
+        extents[t].add(kernel::Vec3(st.real(1), st.real(2), 0.0));
+        extents[t].add(kernel::Vec3(st.real(3), st.real(4), 0.0));
+      }
+    }
+    if (rc != SQLITE_DONE) return db.failure("cannot read gpkg_contents of a part of");
+  }
+  const std::string columns =
+      "primitive_count, primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, "
+      "valid, fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, "
+      "h_roof_max, roof_surfaces, fuse_error, lod12_error, footprint_id, outline, "
+      "fit_within_2sigma, lod13_error, model_rmse, model_points, model_within_2sigma";
+  // An INSERT … SELECT of no rows would still give an AUTOINCREMENT table its
+  // sqlite_sequence row, which write_gpkg gives only tables with rows.
+  std::array<std::int64_t, 3> added{};
+  for (std::size_t t = 0; t < std::size(kFeatureTables); ++t) {
+    const std::string table = kFeatureTables[t].table;
+    CSGTILE_TRY(count_rows(db, "part", kFeatureTables[t].table, added[t]));
+    if (added[t] == 0) continue;
+    if (t == 0) {
+      SqliteStatement st(db, "INSERT INTO main.objects (fid, geom, object_id, cell, shape_id, " +
+                                 columns +
+                                 ") SELECT fid + ?1, geom, object_id, cell, shape_id + ?2, " +
+                                 columns + " FROM part.objects ORDER BY fid");
+      CSGTILE_TRY(st.status());
+      st.bind(1, fids[0]).bind(2, shapes);
+      CSGTILE_TRY(st.run());
+    } else {
+      CSGTILE_TRY(run_offset(db,
+                             "INSERT INTO main." + table +
+                                 " (fid, geom, object_id, cell, h_ground, h_top) SELECT fid + ?1, "
+                                 "geom, object_id, cell, h_ground, h_top FROM part." +
+                                 table + " ORDER BY fid",
+                             fids[t]));
+    }
+    CSGTILE_TRY(run_offset(db,
+                           "INSERT INTO main.rtree_" + table +
+                               "_geom SELECT id + ?1, minx, maxx, miny, maxy FROM part.rtree_" +
+                               table + "_geom ORDER BY id",
+                           fids[t]));
+  }
+  // Shape ids: a reference to no shape (0) stays 0.
+  CSGTILE_TRY(run_offset(db,
+                         "INSERT INTO main.shapes (id, key, object_id, kind, kind_index, "
+                         "orientation, tolerance, geometry, x, y, z) SELECT id + ?1, key, "
+                         "object_id, kind, kind_index, orientation, tolerance, geometry, x, y, z "
+                         "FROM part.shapes ORDER BY id",
+                         shapes));
+  CSGTILE_TRY(run_offset(db,
+                         "INSERT INTO main.shape_children (parent_id, child_id, position, "
+                         "orientation, location) SELECT parent_id + ?1, CASE child_id WHEN 0 "
+                         "THEN 0 ELSE child_id + ?1 END, position, orientation, location FROM "
+                         "part.shape_children ORDER BY id",
+                         shapes));
+  CSGTILE_TRY(run_offset(db,
+                         "INSERT INTO main.shape_ancestors (shape_id, ancestor_kind, ancestor_id, "
+                         "position) SELECT CASE shape_id WHEN 0 THEN 0 ELSE shape_id + ?1 END, "
+                         "ancestor_kind, CASE ancestor_id WHEN 0 THEN 0 ELSE ancestor_id + ?1 "
+                         "END, position FROM part.shape_ancestors ORDER BY id",
+                         shapes));
+  {
+    // The primitives' placements are in the part's frame: moved into the merged index's.
+    SqliteStatement read(db,
+                         "SELECT object_id, node, kind, label, parent, children, primitive_type, "
+                         "parameters FROM part.csg_nodes ORDER BY id");
+    SqliteStatement write(db,
+                          "INSERT INTO main.csg_nodes (object_id, node, kind, label, parent, "
+                          "children, primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)");
+    CSGTILE_TRY(read.status());
+    CSGTILE_TRY(write.status());
+    int rc;
+    while ((rc = read.step()) == SQLITE_ROW) {
+      write.bind(1, read.text(0)).bind(2, read.integer(1)).bind(3, read.text(2));
+      write.bind_text_or_null(4, read.text(3));
+      if (read.is_null(4)) {
+        write.bind_null(5);
+      } else {
+        write.bind(5, read.integer(4));
+      }
+      write.bind(6, read.text(5)).bind_text_or_null(7, read.text(6));
+      write.bind_text_or_null(8, moved_parameters(read.text(7), offset));
+      CSGTILE_TRY(write.run());
+    }
+    if (rc != SQLITE_DONE) return db.failure("cannot read csg_nodes of a part of");
+  }
+  CSGTILE_TRY(run_offset(db,
+                         "INSERT INTO main.face_sources (face_id, object_id, node, primitive_face) "
+                         "SELECT face_id + ?1, object_id, node, primitive_face FROM "
+                         "part.face_sources ORDER BY id",
+                         shapes));
+  CSGTILE_TRY(db.exec(
+      "INSERT INTO main.primitives (object_id, node, primitive_id, type, inliers, fit_rms, "
+      "fit_coverage) SELECT object_id, node, primitive_id, type, inliers, fit_rms, fit_coverage "
+      "FROM part.primitives ORDER BY id"));
+  std::int64_t part_shapes = 0;
+  CSGTILE_TRY(count_rows(db, "part", "shapes", part_shapes));
+  for (std::size_t t = 0; t < 3; ++t) fids[t] += added[t];
+  shapes += part_shapes;
+  return {};
+}
+
+Failure merge_all(SqliteDb& db, const std::vector<GpkgPart>& parts,
+                  const std::vector<RelationRecord>& relations, const IndexOptions& options,
+                  GpkgCounts& counts) {
+  CSGTILE_TRY(begin_gpkg(db, options));
+  // A database is attached between transactions.
+  CSGTILE_TRY(db.exec("COMMIT;"));
+  std::array<std::int64_t, 3> fids{};
+  std::int64_t shapes = 0;
+  FeatureExtents extents;
+  for (const GpkgPart& part : parts) {
+    {
+      SqliteStatement attach(db, "ATTACH DATABASE ?1 AS part");
+      CSGTILE_TRY(attach.status());
+      attach.bind(1, part.path);
+      CSGTILE_TRY(attach.run());
+    }
+    CSGTILE_TRY(db.exec("BEGIN;"));
+    CSGTILE_TRY(append_part(db, part.offset, fids, shapes, extents));
+    CSGTILE_TRY(db.exec("COMMIT;"));
+    CSGTILE_TRY(db.exec("DETACH DATABASE part;"));
+  }
+  CSGTILE_TRY(db.exec("BEGIN;"));
+  CSGTILE_TRY(insert_relations(db, relations));
+  CSGTILE_TRY(finish_gpkg(db, extents, options));
+  for (auto [table, n] : {std::pair("objects", &counts.objects),
+                          {"shapes", &counts.shapes},
+                          {"shape_children", &counts.children},
+                          {"shape_ancestors", &counts.ancestors},
+                          {"csg_nodes", &counts.csg_nodes},
+                          {"primitives", &counts.primitives}}) {
+    std::int64_t v = 0;
+    CSGTILE_TRY(count_rows(db, "main", table, v));
+    *n = static_cast<std::size_t>(v);
+  }
+  return {};
 }
 
 #undef CSGTILE_TRY
 
 }  // namespace
+
+Failure merge_gpkgs(const std::string& path, const std::vector<GpkgPart>& parts,
+                    const std::vector<RelationRecord>& relations, const IndexOptions& options,
+                    GpkgCounts& counts) {
+  SqliteDb db;
+  if (Failure st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok()) return st;
+  Failure st = merge_all(db, parts, relations, options, counts);
+  if (!db.close() && st.ok()) st = db.failure("cannot close");
+  return st;
+}
 
 Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options) {
   SqliteDb db;

@@ -122,8 +122,33 @@ inline constexpr std::pair<kernel::ShapeKind, kernel::ShapeKind> kAncestorPairs[
 Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
                                    const IndexOptions& options, IndexStats& stats);
 
+/// The object_relations rows of `objects` (both directions of each related pair, in (a, b)
+/// order): options.cell_relations for pairs inside a cell, the others classified
+/// (compute_relations). Fills stats.relation_pairs and stats.unknown_relations.
+std::vector<RelationRecord> relation_records(const std::vector<IndexObject>& objects,
+                                             const IndexOptions& options, IndexStats& stats);
+
 /// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it).
 /// Error: Io naming the path and SQLite's message.
 Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options);
+
+/// A GeoPackage write_gpkg wrote, and where its model frame lies in the merged one's: its
+/// primitives' placements are moved by `offset` (coordinates in the SRS need no move).
+struct GpkgPart {
+  std::string path;
+  kernel::Vec3 offset = kernel::Vec3::Zero();
+};
+struct GpkgCounts {
+  std::size_t objects = 0, shapes = 0, children = 0, ancestors = 0, csg_nodes = 0, primitives = 0;
+};
+
+/// Writes at `path` (which must not exist) the GeoPackage of the parts' objects one after
+/// another, as write_gpkg would write them all: ids offset by the rows before, placements
+/// moved, the feature tables' extents joined; object_relations is `relations` (the parts'
+/// own are not read). The parts must have the options' SRS and chordal tolerance. Error: Io
+/// naming the path and SQLite's message (a duplicate object id among the parts too).
+Failure merge_gpkgs(const std::string& path, const std::vector<GpkgPart>& parts,
+                    const std::vector<RelationRecord>& relations, const IndexOptions& options,
+                    GpkgCounts& counts);
 
 }  // namespace csgtile::worker::detail

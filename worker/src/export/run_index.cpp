@@ -218,8 +218,17 @@ Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
   }
 
   const std::filesystem::path path = run_dir / report.key;
-  if (Failure f = write_topology_index(path, run.objects, options, &report.stats); !f.ok()) {
-    return {f.code, path.string() + ": " + f.message};
+  if (run.cell_indexes.empty()) {
+    if (Failure f = write_topology_index(path, run.objects, options, &report.stats); !f.ok()) {
+      return {f.code, path.string() + ": " + f.message};
+    }
+  } else {
+    if (Failure f =
+            merge_topology_indexes(path, run.cell_indexes, run.objects, options, &report.stats);
+        !f.ok()) {
+      return {f.code, path.string() + ": " + f.message};
+    }
+    report.stats.warnings = run.cell_index_warnings;
   }
   for (const std::string& w : run.warnings) report.stats.warnings.push_back(w);
   std::ifstream in(path, std::ios::binary);

@@ -57,6 +57,10 @@ struct RunObjects {
   /// `objects`, a < b), when every cell gave them: the index classifies only pairs across
   /// cells (IndexOptions::cell_relations).
   std::optional<std::vector<ObjectRelation>> cell_relations = {};
+  /// The cells' own indexes, holding `objects` in order (merge_topology_indexes), and their
+  /// warnings: when given, the run's index is merged from them instead of built again.
+  std::vector<IndexPart> cell_indexes = {};
+  std::vector<std::string> cell_index_warnings = {};
 };
 
 /// What the run's exporters (index, CityJSON, 3D Tiles) take from the configuration; the

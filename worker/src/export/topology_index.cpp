@@ -17,6 +17,7 @@
 #include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/files.h"
 #include "export/index_rows.h"
+#include "export/sqlite_util.h"
 
 namespace csgtile::worker {
 
@@ -293,6 +294,50 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
 
 }  // namespace
 
+std::vector<RelationRecord> relation_records(const std::vector<IndexObject>& objects,
+                                             const IndexOptions& options, IndexStats& stats) {
+  std::vector<RelationRecord> out;
+  std::vector<Shape> solids;
+  for (const IndexObject& o : objects) solids.push_back(o.model.shape);
+  // Pairs within a cell come classified from the cell's job when it says so; the others are
+  // classified here. One list in (a, b) order either way.
+  std::function<bool(std::size_t, std::size_t)> skip;
+  if (options.cell_relations) {
+    skip = [&objects](std::size_t i, std::size_t j) { return objects[i].cell == objects[j].cell; };
+  }
+  std::vector<ObjectRelation> related =
+      compute_relations(solids, options.linear_tolerance, options.threads, skip);
+  if (options.cell_relations) {
+    for (const ObjectRelation& r : *options.cell_relations) {
+      if (r.a < r.b && r.b < objects.size() && objects[r.a].cell == objects[r.b].cell) {
+        related.push_back(r);
+      }
+    }
+    std::stable_sort(related.begin(), related.end(),
+                     [](const ObjectRelation& x, const ObjectRelation& y) {
+                       return std::pair(x.a, x.b) < std::pair(y.a, y.b);
+                     });
+  }
+  stats.relation_pairs = related;
+  for (const ObjectRelation& r : related) {
+    // Both directions, so that "relations of O" is one index lookup.
+    for (int side = 0; side < 2; ++side) {
+      RelationRecord rec;
+      rec.object_id = objects[side == 0 ? r.a : r.b].id;
+      rec.other_id = objects[side == 0 ? r.b : r.a].id;
+      rec.relation = relation_kind_name(side == 0 ? r.kind : converse(r.kind));
+      if (r.kind == RelationKind::Touches) rec.shared_area = r.shared_area;
+      if (r.kind != RelationKind::Touches && r.kind != RelationKind::Unknown) {
+        rec.common_volume = r.common_volume;
+      }
+      rec.reason = r.reason;
+      out.push_back(std::move(rec));
+    }
+    if (r.kind == RelationKind::Unknown) ++stats.unknown_relations;
+  }
+  return out;
+}
+
 Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
                                    const IndexOptions& options, IndexStats& stats) {
   if (Failure st = check_objects(objects, options); !st.ok()) return st;
@@ -444,48 +489,7 @@ Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
     rows.objects.push_back(std::move(o));
   }
 
-  if (options.relations) {
-    std::vector<Shape> solids;
-    for (const IndexObject& o : objects) solids.push_back(o.model.shape);
-    // Pairs within a cell come classified from the cell's job when it says so; the others are
-    // classified here. One list in (a, b) order either way.
-    std::function<bool(std::size_t, std::size_t)> skip;
-    if (options.cell_relations) {
-      skip = [&objects](std::size_t i, std::size_t j) {
-        return objects[i].cell == objects[j].cell;
-      };
-    }
-    std::vector<ObjectRelation> related =
-        compute_relations(solids, options.linear_tolerance, options.threads, skip);
-    if (options.cell_relations) {
-      for (const ObjectRelation& r : *options.cell_relations) {
-        if (r.a < r.b && r.b < objects.size() && objects[r.a].cell == objects[r.b].cell) {
-          related.push_back(r);
-        }
-      }
-      std::stable_sort(related.begin(), related.end(),
-                       [](const ObjectRelation& x, const ObjectRelation& y) {
-                         return std::pair(x.a, x.b) < std::pair(y.a, y.b);
-                       });
-    }
-    stats.relation_pairs = related;
-    for (const ObjectRelation& r : related) {
-      // Both directions, so that "relations of O" is one index lookup.
-      for (int side = 0; side < 2; ++side) {
-        RelationRecord rec;
-        rec.object_id = objects[side == 0 ? r.a : r.b].id;
-        rec.other_id = objects[side == 0 ? r.b : r.a].id;
-        rec.relation = relation_kind_name(side == 0 ? r.kind : converse(r.kind));
-        if (r.kind == RelationKind::Touches) rec.shared_area = r.shared_area;
-        if (r.kind != RelationKind::Touches && r.kind != RelationKind::Unknown) {
-          rec.common_volume = r.common_volume;
-        }
-        rec.reason = r.reason;
-        rows.relations.push_back(std::move(rec));
-      }
-      if (r.kind == RelationKind::Unknown) ++stats.unknown_relations;
-    }
-  }
+  if (options.relations) rows.relations = relation_records(objects, options, stats);
   return rows;
 }
 
@@ -552,6 +556,64 @@ Failure write_topology_index(const std::filesystem::path& path,
   s.relations = r.relations.size() / 2;  // rows come in both directions
   s.csg_nodes = r.csg_nodes.size();
   s.primitives = r.primitives.size();
+  s.bytes = std::filesystem::file_size(path, ec);
+  return {};
+}
+
+Failure merge_topology_indexes(const std::filesystem::path& path,
+                               const std::vector<IndexPart>& parts,
+                               const std::vector<IndexObject>& objects, const IndexOptions& options,
+                               IndexStats* stats) {
+  IndexStats local;
+  IndexStats& s = stats != nullptr ? *stats : local;
+  s = IndexStats{};
+  std::vector<detail::RelationRecord> relations;
+  if (options.relations) relations = detail::relation_records(objects, options, s);
+  std::vector<detail::GpkgPart> gpkg_parts;
+  for (const IndexPart& part : parts) gpkg_parts.push_back({part.path.string(), part.offset});
+
+  std::error_code ec;
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
+  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
+  detail::GpkgCounts counts;
+  Failure written = detail::merge_gpkgs(tmp.string(), gpkg_parts, relations, options, counts);
+  // The parts hold exactly the objects, in their order.
+  if (written.ok()) {
+    detail::SqliteDb db;
+    written = db.open(tmp.string(), SQLITE_OPEN_READONLY);
+    if (written.ok()) {
+      detail::SqliteStatement st(db, "SELECT object_id FROM objects ORDER BY fid");
+      written = st.status();
+      std::size_t i = 0;
+      while (written.ok() && st.step() == SQLITE_ROW) {
+        if (i >= objects.size() || st.text(0) != objects[i].id) {
+          written = {ErrorCode::InputInvalid,
+                     "the indexes to merge hold object " + st.text(0) + " where the run has " +
+                         (i < objects.size() ? objects[i].id : std::string("no more objects"))};
+        }
+        ++i;
+      }
+      if (written.ok() && i != objects.size()) {
+        written = {ErrorCode::InputInvalid, "the indexes to merge hold " + std::to_string(i) +
+                                                " objects, the run " +
+                                                std::to_string(objects.size())};
+      }
+    }
+  }
+  if (!written.ok()) {
+    std::filesystem::remove(tmp, ec);
+    return written;
+  }
+  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
+  s.objects = counts.objects;
+  s.shapes = counts.shapes;
+  s.children = counts.children;
+  s.ancestors = counts.ancestors;
+  s.relations = relations.size() / 2;  // rows come in both directions
+  s.csg_nodes = counts.csg_nodes;
+  s.primitives = counts.primitives;
   s.bytes = std::filesystem::file_size(path, ec);
   return {};
 }

@@ -187,6 +187,27 @@ Failure write_topology_index(const std::filesystem::path& path,
                              const std::vector<IndexObject>& objects,
                              const IndexOptions& options = {}, IndexStats* stats = nullptr);
 
+/// A GeoPackage write_topology_index wrote for some of the objects (a cell's), and where its
+/// model frame lies in the frame of the objects given to merge_topology_indexes.
+struct IndexPart {
+  std::filesystem::path path;
+  kernel::Vec3 offset = kernel::Vec3::Zero();
+};
+
+/// The index write_topology_index writes for `objects`, made from the parts' GeoPackages
+/// (each written with these options and SRS, their objects in `objects`' order, one part after
+/// the other): their rows are copied with ids offset and placements moved instead of being
+/// built again from the models. Only the relations are computed (as write_topology_index
+/// does: options.cell_relations inside a part's cell, the other pairs classified), so
+/// `objects` are the parts' objects in one frame. Coordinates in the SRS are the parts' (equal
+/// to a rebuild's to rounding). stats.warnings stays empty: the parts' warnings are theirs.
+/// Errors as write_topology_index; InputInvalid when the parts do not hold exactly the objects'
+/// ids in their order (nothing is written then).
+Failure merge_topology_indexes(const std::filesystem::path& path,
+                               const std::vector<IndexPart>& parts,
+                               const std::vector<IndexObject>& objects, const IndexOptions& options,
+                               IndexStats* stats = nullptr);
+
 // ---- relations ------------------------------------------------------------------------------
 
 /// Relations between solids (or compounds of solids) in one frame. Candidate pairs are those
