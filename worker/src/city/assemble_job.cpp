@@ -306,11 +306,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   const std::filesystem::path cell_dir = run_dir / dir_key;
   auto city = assembly::city_model(kept_objects);
   if (!city.ok()) return failure_of(city.error(), name);
-  if (Failure f =
-          write_file_atomic(cell_dir / "model.csgt", kernel::write_native_model(city.value()));
-      !f.ok()) {
-    return f;
-  }
+  const std::string model_bytes = kernel::write_native_model(city.value());
+  if (Failure f = write_file_atomic(cell_dir / "model.csgt", model_bytes); !f.ok()) return f;
   const RunExportOptions settings = jobs::export_options(config);
   RunIndexReport index;
   if (Failure f = write_run_index(settings, objects, cell_dir, index); !f.ok()) return f;
@@ -322,17 +319,19 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   for (const std::string& w : cityjson.stats.warnings) problems.push_back("cityjson: " + w);
   for (const std::string& w : tiles.warnings) problems.push_back("tiles: " + w);
 
-  // The cell manifest names every file of the cell with its hash; written last.
+  // The cell manifest names every file of the cell with its hash (as its writer hashed the
+  // bytes it wrote and flushed); written last.
   ordered_json files = ordered_json::array();
-  std::vector<std::string> keys = {"model.csgt", index.key, cityjson.key};
+  const auto file_entry = [&files](const std::string& key, const std::string& sha256,
+                                   std::uint64_t bytes) {
+    files.push_back({{"key", key}, {"sha256", sha256}, {"bytes", bytes}});
+  };
+  file_entry("model.csgt", sha256_hex(model_bytes), model_bytes.size());
+  file_entry(index.key, index.sha256, index.bytes);
+  file_entry(cityjson.key, cityjson.sha256, cityjson.bytes);
   if (tiles.written) {
-    keys.push_back(tiles.content);
-    keys.push_back(tiles.key);
-  }
-  for (const std::string& key : keys) {
-    ordered_json entry;
-    if (Failure f = describe_file(cell_dir, key, entry); !f.ok()) return f;
-    files.push_back(std::move(entry));
+    file_entry(tiles.content, tiles.content_sha256, tiles.content_bytes);
+    file_entry(tiles.key, tiles.sha256, tiles.bytes);
   }
   const assembly::AssemblyStats& s = a.stats;
   ordered_json stats = assembly_counts_json(s);
