@@ -86,8 +86,10 @@ double estimate_noise(std::span<const Vec3> points, std::span<const std::uint32_
 /// figures as the functions above. `with_noise`: also the neighbourhoods' plane residuals.
 class NeighbourSample {
  public:
+  /// `with_noise`: the plane residuals behind noise(); `with_curved`: also the quadric
+  /// residuals behind curved_noise() (a QR per neighbourhood; only with `with_noise`).
   NeighbourSample(std::span<const Vec3> points, std::span<const std::uint32_t> members,
-                  bool with_noise);
+                  bool with_noise, bool with_curved = true);
   double spacing(double quantile = 0.5) const;  ///< as estimate_spacing
   double reach(double quantile) const;          ///< as neighbour_reach
   double noise(double quantile) const;          ///< as estimate_noise (0 without with_noise)

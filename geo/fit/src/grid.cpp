@@ -285,9 +285,10 @@ double quantile_of(std::vector<double> values, double quantile) {
 }  // namespace
 
 NeighbourSample::NeighbourSample(std::span<const Vec3> points,
-                                 std::span<const std::uint32_t> members, bool with_noise) {
+                                 std::span<const std::uint32_t> members, bool with_noise,
+                                 bool with_curved) {
   distances_ = kth_neighbour_distances(points, members, with_noise ? &residuals_ : nullptr,
-                                       with_noise ? &curved_ : nullptr);
+                                       with_noise && with_curved ? &curved_ : nullptr);
 }
 
 double NeighbourSample::spacing(double quantile) const {

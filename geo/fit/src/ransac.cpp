@@ -632,10 +632,13 @@ RansacResult Detector::run() {
     derive_scale(members, sample, result);
     return result;
   }
-  // One neighbour search for the spacing, the noise and the reach.
-  const detail::NeighbourSample sample(points_, members, !(o_.epsilon > 0.0));
+  // One neighbour search for the spacing, the noise and the reach; the plane residuals also
+  // when epsilon is given, for the primitives' quality (RansacResult::plane_noise).
+  const detail::NeighbourSample sample(points_, members, true, !(o_.epsilon > 0.0));
   result.spacing = sample.spacing();
   derive_scale(members, sample, result);
+  // What estimate_noise gives over every point of the region, when the sample holds them all.
+  if (members.size() == points_.size()) result.plane_noise = sample.noise(0.05);
   const auto [lo, hi] = bounds(members);
   // Connectivity: three typical spacings, but enough for the sparser parts of the cloud too
   // (terrestrial scans mix dense near surfaces with sparse far ones).

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -119,7 +120,10 @@ struct RansacResult {
   long long min_points = 0;           ///< smallest shape used
   double max_radius = 0.0;            ///< largest radius used
   double noise = 0.0;                 ///< estimated when epsilon was derived, else 0
-  std::string reason;                 ///< why nothing was found (empty when shapes were)
+  /// The 5 % quantile of the region's neighbourhood plane residuals, over all its points
+  /// (the primitives' quality reads it); unset when some points are not finite.
+  std::optional<double> plane_noise = {};
+  std::string reason;  ///< why nothing was found (empty when shapes were)
 };
 
 /// Detects shapes in `points` with unit `normals` (same size; a zero normal marks a point
