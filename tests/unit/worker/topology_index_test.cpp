@@ -309,6 +309,19 @@ TEST_F(TopologyIndexTest, RelationsTouchContainAndSkipDisjointPairs) {
   EXPECT_EQ(stats_.relations, 2u);
 }
 
+// The same pairs with the same kinds and measures, bit for bit.
+void expect_same_relations(const std::vector<ObjectRelation>& a,
+                           const std::vector<ObjectRelation>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].a, b[i].a);
+    EXPECT_EQ(a[i].b, b[i].b);
+    EXPECT_EQ(a[i].kind, b[i].kind);
+    EXPECT_EQ(a[i].shared_area, b[i].shared_area);
+    EXPECT_EQ(a[i].common_volume, b[i].common_volume);
+  }
+}
+
 TEST(Relations, OverlapAndEqualityAreExact) {
   const auto a = leaf(box({0, 0, 0}, {2, 2, 2}), "a").shape;
   const auto b = leaf(box({1, 1, 1}, {2, 2, 2}), "b").shape;
@@ -338,16 +351,7 @@ TEST(Relations, ObjectOfOverlappingSolidsIsTheirUnion) {
 TEST(Relations, ThreadCountDoesNotChangeTheResult) {
   std::vector<kernel::Shape> solids;
   for (const IndexObject& o : sample_objects()) solids.push_back(o.model.shape);
-  const auto one = compute_relations(solids, 1e-7, 1);
-  const auto many = compute_relations(solids, 1e-7, 4);
-  ASSERT_EQ(one.size(), many.size());
-  for (std::size_t i = 0; i < one.size(); ++i) {
-    EXPECT_EQ(one[i].a, many[i].a);
-    EXPECT_EQ(one[i].b, many[i].b);
-    EXPECT_EQ(one[i].kind, many[i].kind);
-    EXPECT_EQ(one[i].shared_area, many[i].shared_area);
-    EXPECT_EQ(one[i].common_volume, many[i].common_volume);
-  }
+  expect_same_relations(compute_relations(solids, 1e-7, 1), compute_relations(solids, 1e-7, 4));
 }
 
 // Skipped pairs (a run's index skips the pairs inside a cell, classified by the cell) leave
@@ -377,15 +381,8 @@ TEST(Relations, SkippedPairsLeaveTheOthersAsTheFullClassification) {
   for (const ObjectRelation& r : all) {
     if (cell[r.a] != cell[r.b]) expected.push_back(r);
   }
-  ASSERT_EQ(across.size(), expected.size());
-  ASSERT_EQ(across.size(), 2u);  // the wall at x = 6, the overlapping box with house 2
-  for (std::size_t i = 0; i < across.size(); ++i) {
-    EXPECT_EQ(across[i].a, expected[i].a);
-    EXPECT_EQ(across[i].b, expected[i].b);
-    EXPECT_EQ(across[i].kind, expected[i].kind);
-    EXPECT_EQ(across[i].shared_area, expected[i].shared_area);
-    EXPECT_EQ(across[i].common_volume, expected[i].common_volume);
-  }
+  EXPECT_EQ(across.size(), 2u);  // the wall at x = 6, the overlapping box with house 2
+  expect_same_relations(across, expected);
   // The full classification: six party walls (houses 0..5 and the set), each the depth
   // times the lower of the two heights (the set's wall: its left solid's, 4).
   int walls = 0;
