@@ -427,10 +427,12 @@ void Builder::name_houses() {
 double Builder::region_sigma() {
   if (!sigma_) {
     // The RANSAC's own estimate when it derived its epsilon, else the same estimate (the 5 %
-    // quantile of the neighbourhoods' RMS distance to their plane) over the region's points.
+    // quantile of the neighbourhoods' RMS distance to their plane) over the region's points:
+    // from the RANSAC's neighbour sample when it held them all, else measured here.
     double sigma = shapes_.noise;
-    if (!(sigma > 0.0) && shapes_.plane_noise) sigma = *shapes_.plane_noise;
-    if (!(sigma > 0.0) && !shapes_.plane_noise) {
+    if (!(sigma > 0.0) && shapes_.plane_noise) {
+      sigma = *shapes_.plane_noise;
+    } else if (!(sigma > 0.0)) {
       std::vector<std::uint32_t> all(points_.size());
       for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i);
       sigma = detail::estimate_noise(points_, all, 0.05);

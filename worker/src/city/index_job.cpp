@@ -143,6 +143,17 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   if (!failure.ok()) return failure;
   const auto fits = done_records(results, "fit", run);
   const auto cells = done_records(results, "assemble", run);
+  // Each cell's manifest, read once: its index (merged below) and its files (published).
+  std::vector<ordered_json> cell_manifests;
+  for (const auto& [key, record] : cells) {
+    const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
+    std::string text;
+    if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) return f;
+    cell_manifests.push_back(ordered_json::parse(text, nullptr, false));
+    if (cell_manifests.back().is_discarded()) {
+      return {ErrorCode::Internal, cell_manifest + ": not JSON"};
+    }
+  }
 
   // One frame for the run: its origin is the smallest cell corner.
   kernel::Vec3 origin = kernel::Vec3::Zero();
@@ -255,14 +266,10 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   // (the cells' files are then in cell coordinates) or older records: built again.
   if (objects.crs && all_blocks && objects.cell_relations) {
     std::string why;
-    for (const auto& [key, record] : cells) {
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const ordered_json& record = cells[c].second;
+      const ordered_json& cm = cell_manifests[c];
       const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
-      std::string text;
-      if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) {
-        why = f.message;
-        break;
-      }
-      const ordered_json cm = ordered_json::parse(text, nullptr, false);
       if (!cm.is_object() || !cm.contains("index") || !cm["index"].is_object() ||
           !cm["index"].contains("key") || !cm["index"].contains("sha256")) {
         why = cell_manifest + " names no index";
@@ -469,12 +476,11 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
       listed.insert(record.at("structure_points").at("key").get<std::string>());
     }
   }
-  for (const auto& [key, record] : cells) {
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const ordered_json& record = cells[c].second;
+    const ordered_json& cm = cell_manifests[c];
     const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
     listed.insert(cell_manifest);
-    std::string text;
-    if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) return f;
-    const ordered_json cm = ordered_json::parse(text);
     const std::string dir = std::filesystem::path(cell_manifest).parent_path().string();
     for (const auto& file : cm.at("files"))
       listed.insert(dir + "/" + file.at("key").get<std::string>());

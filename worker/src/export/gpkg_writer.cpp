@@ -832,7 +832,29 @@ Failure append_part(SqliteDb& db, const kernel::Vec3& offset, std::array<std::in
   return {};
 }
 
+// Whether the merged objects are exactly `ids`, in order (InputInvalid naming the first that
+// is not).
+Failure expect_objects(SqliteDb& db, const std::vector<std::string>& ids) {
+  SqliteStatement st(db, "SELECT object_id FROM main.objects ORDER BY fid");
+  CSGTILE_TRY(st.status());
+  std::size_t i = 0;
+  for (int rc; (rc = st.step()) != SQLITE_DONE; ++i) {
+    if (rc != SQLITE_ROW) return db.failure("cannot read the objects of");
+    if (i >= ids.size() || st.text(0) != ids[i]) {
+      return {ErrorCode::InputInvalid,
+              "the indexes to merge hold object " + st.text(0) + " where the run has " +
+                  (i < ids.size() ? ids[i] : std::string("no more objects"))};
+    }
+  }
+  if (i != ids.size()) {
+    return {ErrorCode::InputInvalid, "the indexes to merge hold " + std::to_string(i) +
+                                         " objects, the run " + std::to_string(ids.size())};
+  }
+  return {};
+}
+
 Failure merge_all(SqliteDb& db, const std::vector<GpkgPart>& parts,
+                  const std::vector<std::string>& object_ids,
                   const std::vector<RelationRecord>& relations, const IndexOptions& options,
                   GpkgCounts& counts) {
   CSGTILE_TRY(begin_gpkg(db, options));
@@ -853,6 +875,7 @@ Failure merge_all(SqliteDb& db, const std::vector<GpkgPart>& parts,
     CSGTILE_TRY(db.exec("COMMIT;"));
     CSGTILE_TRY(db.exec("DETACH DATABASE part;"));
   }
+  CSGTILE_TRY(expect_objects(db, object_ids));
   CSGTILE_TRY(db.exec("BEGIN;"));
   CSGTILE_TRY(insert_relations(db, relations));
   CSGTILE_TRY(finish_gpkg(db, extents, options));
@@ -874,11 +897,12 @@ Failure merge_all(SqliteDb& db, const std::vector<GpkgPart>& parts,
 }  // namespace
 
 Failure merge_gpkgs(const std::string& path, const std::vector<GpkgPart>& parts,
+                    const std::vector<std::string>& object_ids,
                     const std::vector<RelationRecord>& relations, const IndexOptions& options,
                     GpkgCounts& counts) {
   SqliteDb db;
   if (Failure st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok()) return st;
-  Failure st = merge_all(db, parts, relations, options, counts);
+  Failure st = merge_all(db, parts, object_ids, relations, options, counts);
   if (!db.close() && st.ok()) st = db.failure("cannot close");
   return st;
 }

@@ -145,9 +145,11 @@ struct GpkgCounts {
 /// Writes at `path` (which must not exist) the GeoPackage of the parts' objects one after
 /// another, as write_gpkg would write them all: ids offset by the rows before, placements
 /// moved, the feature tables' extents joined; object_relations is `relations` (the parts'
-/// own are not read). The parts must have the options' SRS and chordal tolerance. Error: Io
+/// own are not read). The parts must have the options' SRS and chordal tolerance and hold
+/// exactly the objects `object_ids`, in that order. Errors: InputInvalid when they do not; Io
 /// naming the path and SQLite's message (a duplicate object id among the parts too).
 Failure merge_gpkgs(const std::string& path, const std::vector<GpkgPart>& parts,
+                    const std::vector<std::string>& object_ids,
                     const std::vector<RelationRecord>& relations, const IndexOptions& options,
                     GpkgCounts& counts);
 

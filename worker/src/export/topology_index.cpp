@@ -17,7 +17,6 @@
 #include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/files.h"
 #include "export/index_rows.h"
-#include "export/sqlite_util.h"
 
 namespace csgtile::worker {
 
@@ -526,6 +525,27 @@ FitSummary fit_summary(const std::vector<PrimitiveInfo>& primitives) {
   return out;
 }
 
+namespace {
+
+// The GeoPackage `write` makes at a temporary beside `path` (same file system, so the rename is
+// atomic), renamed over `path` once closed and flushed; the temporary removed on failure.
+Failure write_atomically(const std::filesystem::path& path,
+                         const std::function<Failure(const std::string&)>& write) {
+  std::error_code ec;
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
+  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
+  if (Failure written = write(tmp.string()); !written.ok()) {
+    std::filesystem::remove(tmp, ec);
+    return written;
+  }
+  // The database is closed: commit flushes its bytes before the rename makes them visible.
+  return commit_temp_file(tmp, path);
+}
+
+}  // namespace
+
 Failure write_topology_index(const std::filesystem::path& path,
                              const std::vector<IndexObject>& objects, const IndexOptions& options,
                              IndexStats* stats) {
@@ -535,20 +555,11 @@ Failure write_topology_index(const std::filesystem::path& path,
   auto rows = detail::build_index_rows(objects, options, s);
   if (!rows.ok()) return rows.error();
   const detail::IndexRows& r = rows.value();
-
-  std::error_code ec;
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
-  // A temporary beside the target (same file system, so the rename is atomic).
-  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
-  Failure written = detail::write_gpkg(tmp.string(), r, options);
-  if (!written.ok()) {
-    std::filesystem::remove(tmp, ec);
-    return written;
+  if (Failure f = write_atomically(
+          path, [&](const std::string& tmp) { return detail::write_gpkg(tmp, r, options); });
+      !f.ok()) {
+    return f;
   }
-  // The database is closed: commit flushes its bytes before the rename makes them visible.
-  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
   s.objects = r.objects.size();
   s.shapes = r.shapes.size();
   s.children = r.children.size();
@@ -556,6 +567,7 @@ Failure write_topology_index(const std::filesystem::path& path,
   s.relations = r.relations.size() / 2;  // rows come in both directions
   s.csg_nodes = r.csg_nodes.size();
   s.primitives = r.primitives.size();
+  std::error_code ec;
   s.bytes = std::filesystem::file_size(path, ec);
   return {};
 }
@@ -571,42 +583,17 @@ Failure merge_topology_indexes(const std::filesystem::path& path,
   if (options.relations) relations = detail::relation_records(objects, options, s);
   std::vector<detail::GpkgPart> gpkg_parts;
   for (const IndexPart& part : parts) gpkg_parts.push_back({part.path.string(), part.offset});
-
-  std::error_code ec;
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
-  const std::filesystem::path tmp = temp_path_beside(path, "tmp");
+  std::vector<std::string> ids;
+  for (const IndexObject& o : objects) ids.push_back(o.id);
   detail::GpkgCounts counts;
-  Failure written = detail::merge_gpkgs(tmp.string(), gpkg_parts, relations, options, counts);
-  // The parts hold exactly the objects, in their order.
-  if (written.ok()) {
-    detail::SqliteDb db;
-    written = db.open(tmp.string(), SQLITE_OPEN_READONLY);
-    if (written.ok()) {
-      detail::SqliteStatement st(db, "SELECT object_id FROM objects ORDER BY fid");
-      written = st.status();
-      std::size_t i = 0;
-      while (written.ok() && st.step() == SQLITE_ROW) {
-        if (i >= objects.size() || st.text(0) != objects[i].id) {
-          written = {ErrorCode::InputInvalid,
-                     "the indexes to merge hold object " + st.text(0) + " where the run has " +
-                         (i < objects.size() ? objects[i].id : std::string("no more objects"))};
-        }
-        ++i;
-      }
-      if (written.ok() && i != objects.size()) {
-        written = {ErrorCode::InputInvalid, "the indexes to merge hold " + std::to_string(i) +
-                                                " objects, the run " +
-                                                std::to_string(objects.size())};
-      }
-    }
+  if (Failure f = write_atomically(path,
+                                   [&](const std::string& tmp) {
+                                     return detail::merge_gpkgs(tmp, gpkg_parts, ids, relations,
+                                                                options, counts);
+                                   });
+      !f.ok()) {
+    return f;
   }
-  if (!written.ok()) {
-    std::filesystem::remove(tmp, ec);
-    return written;
-  }
-  if (Failure f = commit_temp_file(tmp, path); !f.ok()) return f;
   s.objects = counts.objects;
   s.shapes = counts.shapes;
   s.children = counts.children;
@@ -614,6 +601,7 @@ Failure merge_topology_indexes(const std::filesystem::path& path,
   s.relations = relations.size() / 2;  // rows come in both directions
   s.csg_nodes = counts.csg_nodes;
   s.primitives = counts.primitives;
+  std::error_code ec;
   s.bytes = std::filesystem::file_size(path, ec);
   return {};
 }
