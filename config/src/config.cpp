@@ -84,6 +84,7 @@ Config from_document(const json& document) {
   read(document, "fetch", "s3_region", config.fetch.s3_region);
   read(document, "city", "cell_size", config.city.cell_size);
   read(document, "city", "halo", config.city.halo);
+  read(document, "city", "split_points", config.city.split_points);
   read(document, "city", "voxel_size", config.city.voxel_size);
   read(document, "city", "snap_distance", config.city.snap_distance);
   read(document, "city", "snap_angle_degrees", config.city.snap_angle_degrees);
@@ -221,6 +222,7 @@ std::string to_json(const Config& config) {
                   {"s3_region", config.fetch.s3_region}};
   out["city"] = {{"cell_size", config.city.cell_size},
                  {"halo", config.city.halo},
+                 {"split_points", config.city.split_points},
                  {"voxel_size", config.city.voxel_size},
                  {"snap_distance", config.city.snap_distance},
                  {"snap_angle_degrees", config.city.snap_angle_degrees},

@@ -19,10 +19,14 @@ points grey; footprints outlined blue.
 
 With --split SIZE the tile is first cut by `csgtile tile` into LAS tiles of SIZE metres and
 the run reads their directory (a run of several tiles: buildings across tile edges must come
-out as from the whole tile); the runs are named <tile>_<mode>_split<SIZE>.
+out as from the whole tile); the runs are named <tile>_<mode>_split<SIZE>. With
+--split-points N (and --cell-size S, --halo H) the run fits the tile in blocks of cells of
+about N points (city.split_points), each fit job streaming the file for its block and halo;
+the runs are named <tile>_<mode>_points<N>.
 
 Usage: city_quality.py CSGTILE WORK_DIR [--data DIR] [--tiles delft,ams] [--runs derived,footprints]
-                       [--split SIZE] [--min-within RUN=V ...] [--max-rmse RUN=V ...]
+                       [--split SIZE] [--split-points N --cell-size S --halo H]
+                       [--min-within RUN=V ...] [--max-rmse RUN=V ...]
 Prints one JSON object. With --min-within / --max-rmse (RUN e.g. delft_footprints: the share
 within 0.3 m and the RMSE inside the footprints), exit 1 when a run misses its bound (a CLI
 test). Exit 77 when no tile is present. Standard library only.
@@ -166,6 +170,9 @@ def main():
     ap.add_argument("--tiles", default="delft,ams")
     ap.add_argument("--runs", default="derived,footprints")
     ap.add_argument("--split", type=float, default=0.0)
+    ap.add_argument("--split-points", type=int, default=0)
+    ap.add_argument("--cell-size", type=float, default=0.0)
+    ap.add_argument("--halo", type=float, default=0.0)
     ap.add_argument("--min-within", action="append", default=[])
     ap.add_argument("--max-rmse", action="append", default=[])
     args = ap.parse_args()
@@ -189,10 +196,19 @@ def main():
             shutil.rmtree(run_input, ignore_errors=True)
             subprocess.run([args.csgtile, "tile", las, "--size", f"{args.split:g}",
                             "--out", run_input], check=True, capture_output=True)
+        city = {}
+        if args.cell_size > 0:
+            city["cell_size"] = f"{args.cell_size:g}"
+        if args.halo > 0:
+            city["halo"] = f"{args.halo:g}"
+        if args.split_points > 0:
+            city["split_points"] = args.split_points
+            suffix += f"_points{args.split_points}"
         for mode in args.runs.split(","):
             name = f"{tile}_{mode}{suffix}"
             source = city_speed.footprints_source(fp, args.work) if mode == "footprints" else ""
-            timing = city_speed.one_run(args.csgtile, args.work, name, run_input, source, layer)
+            timing = city_speed.one_run(args.csgtile, args.work, name, run_input, source, layer,
+                                        city)
             start = time.monotonic()
             rundir = os.path.join(args.work, name, "runs", name)
             res = measure(points, buildings, model_distance.run_model(rundir),

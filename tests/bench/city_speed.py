@@ -52,15 +52,20 @@ def footprints_source(path, work):
     return out
 
 
-def one_run(binary, work, name, tile, footprints, layer):
+def one_run(binary, work, name, tile, footprints, layer, city=None):
+    """`city`: further city: keys (name -> value) of the run's configuration."""
     config = os.path.join(work, name + ".yaml")
     out = os.path.join(work, name)
     shutil.rmtree(out, ignore_errors=True)
     with open(config, "w") as f:
         f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {out}\n"
                 "  crs: EPSG:28992+5709\n  threads: 1\n")
+        if footprints or city:
+            f.write("city:\n")
         if footprints:
-            f.write(f"city:\n  footprints: {footprints}\n  footprints_layer: \"{layer}\"\n")
+            f.write(f"  footprints: {footprints}\n  footprints_layer: \"{layer}\"\n")
+        for key, value in (city or {}).items():
+            f.write(f"  {key}: {value}\n")
         f.write("log:\n  level: warn\n")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()

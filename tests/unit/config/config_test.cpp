@@ -68,7 +68,7 @@ TEST(ConfigLoad, ExampleFileLoadsWithEveryValue) {
   expected.metrics = {"127.0.0.1:9464"};
   expected.fetch = {{"https", "s3"},      10, 900,        1024, 30, 4294967296ull, 3, 3, "",
                     "/var/cache/csgtile", "", "eu-west-1"};
-  expected.city = {250.0, 50.0, 0.5};
+  expected.city = {250.0, 50.0, 10000000, 0.5};
   expected.fit.classes.keep = {6, 26};  // the example's only fit value that is not a default
   expected.publish = {""};
   EXPECT_EQ(*result.config, expected);
@@ -541,7 +541,7 @@ TEST(ConfigJson, DefaultsAsCanonicalText) {
   EXPECT_EQ(
       to_json(Config{}),
       R"({"city":{"building_timeout_seconds":60.0,"cell_size":250.0,"footprints":"","footprints_id":"","footprints_layer":"","halo":50.0,"snap_angle_degrees":0.5,"snap_distance":0.005,)"
-      R"("snap_escalate_to":0.02,)"
+      R"("snap_escalate_to":0.02,"split_points":10000000,)"
       R"("voxel_size":0.5},)"
       R"("fetch":{"attempts":3,"ca_bundle":"","cache_dir":"","connect_timeout_seconds":10,)"
       R"("low_speed_bytes_per_second":1024,"low_speed_seconds":30,"max_bytes":8589934592,)"

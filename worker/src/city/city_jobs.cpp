@@ -133,18 +133,28 @@ std::string index_key(const std::string& run) { return "index:" + run + ":run"; 
 
 namespace {
 
-/// One fit job's tile: an input file, or one cell of a COPC input (`cell` set: the job reads
+/// Cells first.column..last.column × first.row..last.row of the run's grid.
+struct CellBlock {
+  kernel::GridCell first;
+  kernel::GridCell last;
+  std::string name() const { return first.name() + "-" + last.name(); }
+};
+
+/// One fit job's tile: an input file; one cell of a COPC input (`cell` set: the job reads
 /// the octree nodes meeting the cell grown by city.halo and shares the buildings across its
-/// edges with the neighbouring cells, tile_share.h). `id` names it in queue keys and labels:
-/// the input, with " @<cell>" for cells.
+/// edges with the neighbouring cells, tile_share.h); or one block of cells of a LAS/LAZ input
+/// of more than city.split_points points (`block` set: the job streams the file and keeps the
+/// block grown by the halo, sharing as a cell does). `id` names it in queue keys and labels:
+/// the input, with " @<cell>" or " @<first cell>-<last cell>".
 struct Tile {
   std::string id;
   std::string input;
   std::optional<kernel::GridCell> cell;
   std::size_t index = 0;
   /// Of a LAS/LAZ tile in a run of several: its header's xy bounds (its fit reads the points
-  /// of the tiles around it, tile_share.h).
+  /// of the tiles around it, tile_share.h); of a block, the block's cells' square.
   std::optional<Extent> extent = {};
+  std::optional<CellBlock> block = {};
 };
 
 // Whether the input's path (its query and fragment aside) ends, in any case, with `suffix`
@@ -162,6 +172,61 @@ bool is_las_name(const std::string& input) {
 
 bool is_copc_name(const std::string& input) { return name_ends_with(input, ".copc.laz"); }
 
+// The cells of the run's grid between the xy bounds of a header; fails past 10^6 cells.
+Failure cells_between(const std::string& input, const kernel::Grid& grid, const geo::LasHeader& h,
+                      kernel::GridCell& low, kernel::GridCell& high, bool& empty) {
+  empty = !(h.min[0] <= h.max[0]) || !(h.min[1] <= h.max[1]);  // no points
+  if (empty) return {};
+  low = grid.cell_of(h.min[0], h.min[1]);
+  high = grid.cell_of(h.max[0], h.max[1]);
+  const double count = static_cast<double>(high.column - low.column + 1) *
+                       static_cast<double>(high.row - low.row + 1);
+  if (count > 1e6) {
+    return {ErrorCode::InputInvalid, input + ": its extent covers " + std::to_string(count) +
+                                         " cells of city.cell_size (more than 10^6)"};
+  }
+  return {};
+}
+
+// The blocks of cells a LAS/LAZ input is fitted in (city.split_points): square blocks of as
+// many cells as hold about split_points points at the density its header declares (its count
+// over the cells its bounds cover), from the first cell of its bounds. Empty (one fit job for
+// the file) when it declares no more points than that, when one block would cover it, or when
+// its header cannot be read locally (its fit job then fails with the reader's reason); a URL
+// whose header cannot be fetched in transit fails the enqueue (Network), so that a run's
+// tiles never depend on a passing failure.
+Failure split_blocks(const std::string& input, const config::Config& config,
+                     std::vector<CellBlock>& blocks) {
+  blocks.clear();
+  if (config.city.split_points == 0 || !is_las_name(input) || is_copc_name(input)) return {};
+  std::unique_ptr<geo::LasReader> reader;
+  if (Failure f = fetch::open_las(input, fetch::policy_of(config.fetch), reader); !f.ok()) {
+    return f.code == ErrorCode::Network ? f : Failure{};
+  }
+  const geo::LasHeader& h = reader->header();
+  if (h.point_count <= config.city.split_points) return {};
+  kernel::GridCell low, high;
+  bool empty = false;
+  if (Failure f = cells_between(input, detail::run_grid(config), h, low, high, empty); !f.ok()) {
+    return f;
+  }
+  if (empty) return {};
+  const std::int64_t columns = high.column - low.column + 1;
+  const std::int64_t rows = high.row - low.row + 1;
+  const double per_cell = static_cast<double>(h.point_count) / static_cast<double>(columns * rows);
+  const auto side = std::max<std::int64_t>(
+      1, static_cast<std::int64_t>(
+             std::floor(std::sqrt(static_cast<double>(config.city.split_points) / per_cell))));
+  if (side >= columns && side >= rows) return {};
+  for (std::int64_t c = low.column; c <= high.column; c += side) {
+    for (std::int64_t r = low.row; r <= high.row; r += side) {
+      blocks.push_back(
+          {{c, r}, {std::min(c + side - 1, high.column), std::min(r + side - 1, high.row)}});
+    }
+  }
+  return {};
+}
+
 // The cells a COPC input's header bounds cover (its header read locally, or by range
 // requests for a URL). Errors: as the readers and the fetcher.
 Failure copc_cells(const std::string& input, const config::Config& config,
@@ -171,16 +236,12 @@ Failure copc_cells(const std::string& input, const config::Config& config,
   if (Failure f = fetch::open_las(input, fetch::policy_of(config.fetch), reader); !f.ok()) {
     return f;
   }
-  const geo::LasHeader& h = reader->header();
-  const kernel::Grid grid = detail::run_grid(config);
-  if (!(h.min[0] <= h.max[0]) || !(h.min[1] <= h.max[1])) return {};  // no points
-  const kernel::GridCell low = grid.cell_of(h.min[0], h.min[1]);
-  const kernel::GridCell high = grid.cell_of(h.max[0], h.max[1]);
-  const double count = static_cast<double>(high.column - low.column + 1) *
-                       static_cast<double>(high.row - low.row + 1);
-  if (count > 1e6) {
-    return {ErrorCode::InputInvalid, input + ": its extent covers " + std::to_string(count) +
-                                         " cells of city.cell_size (more than 10^6)"};
+  kernel::GridCell low, high;
+  bool empty = false;
+  if (Failure f =
+          cells_between(input, detail::run_grid(config), reader->header(), low, high, empty);
+      !f.ok() || empty) {
+    return f;
   }
   for (std::int64_t c = low.column; c <= high.column; ++c) {
     for (std::int64_t r = low.row; r <= high.row; ++r) cells.push_back({c, r});
@@ -216,7 +277,15 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
   for (const std::string& input : expanded) {
     if (!is_tile_input(input) || !seen.insert(input).second) continue;
     if (!is_copc_name(input)) {
-      out.push_back({input, input, std::nullopt, out.size()});
+      std::vector<CellBlock> blocks;
+      if (Failure f = split_blocks(input, config, blocks); !f.ok()) return f;
+      if (blocks.empty()) out.push_back({input, input, std::nullopt, out.size()});
+      const kernel::Grid grid = detail::run_grid(config);
+      for (const CellBlock& b : blocks) {
+        const Extent e{grid.edge_x(b.first.column), grid.edge_y(b.first.row),
+                       grid.edge_x(b.last.column + 1), grid.edge_y(b.last.row + 1)};
+        out.push_back({input + " @" + b.name(), input, std::nullopt, out.size(), e, b});
+      }
       continue;
     }
     std::vector<kernel::GridCell> cells;
@@ -225,14 +294,14 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
       out.push_back({input + " @" + cell.name(), input, cell, out.size()});
     }
   }
-  // Several LAS/LAZ tiles: each one's extent from its header, so that each fit reads its
-  // neighbours' points near its edges. A header that cannot be read leaves its tile without
-  // (its fit job fails with the reader's reason).
+  // Several LAS/LAZ tiles (blocks of a split input among them): each one's extent from its
+  // header, so that each fit reads its neighbours' points near its edges. A header that cannot be
+  // read leaves its tile without (its fit job fails with the reader's reason).
   const auto plain = std::count_if(out.begin(), out.end(),
                                    [](const Tile& t) { return !t.cell && is_las_name(t.input); });
   if (plain < 2) return {};
   for (Tile& t : out) {
-    if (t.cell || !is_las_name(t.input)) continue;
+    if (t.cell || t.block || !is_las_name(t.input)) continue;
     std::unique_ptr<geo::LasReader> reader;
     if (!fetch::open_las(t.input, fetch::policy_of(config.fetch), reader).ok()) continue;
     const geo::LasHeader& h = reader->header();
@@ -269,6 +338,18 @@ std::vector<Tile> tile_inputs(const config::Config& config) {
       const std::string input = t["input"].get<std::string>();
       out.push_back({input, input, std::nullopt, out.size(), e});
     } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
+               t.contains("block") && t["block"].is_array() && t["block"].size() == 4 &&
+               std::all_of(t["block"].begin(), t["block"].end(),
+                           [](const nlohmann::json& v) { return v.is_number_integer(); })) {
+      const auto& c = t["block"];
+      const CellBlock b{{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()},
+                        {c[2].get<std::int64_t>(), c[3].get<std::int64_t>()}};
+      const kernel::Grid grid = detail::run_grid(config);
+      const Extent e{grid.edge_x(b.first.column), grid.edge_y(b.first.row),
+                     grid.edge_x(b.last.column + 1), grid.edge_y(b.last.row + 1)};
+      const std::string input = t["input"].get<std::string>();
+      out.push_back({input + " @" + b.name(), input, std::nullopt, out.size(), e, b});
+    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
                t.contains("cell") && t["cell"].is_array() && t["cell"].size() == 2 &&
                t["cell"][0].is_number_integer() && t["cell"][1].is_number_integer()) {
       const kernel::GridCell cell{t["cell"][0].get<std::int64_t>(),
@@ -295,6 +376,11 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
     for (const Tile& t : expanded) {
       if (t.cell) {
         doc["tiles"].push_back({{"input", t.input}, {"cell", {t.cell->column, t.cell->row}}});
+      } else if (t.block) {
+        doc["tiles"].push_back({{"input", t.input},
+                                {"block",
+                                 {t.block->first.column, t.block->first.row, t.block->last.column,
+                                  t.block->last.row}}});
       } else if (t.extent) {
         doc["tiles"].push_back({{"input", t.input}, {"extent", *t.extent}});
       } else {
@@ -324,6 +410,10 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   for (const Tile& t : tiles) {
     nlohmann::json payload = {{"input", t.input}, {"tile", t.index}};
     if (t.cell) payload["cell"] = {t.cell->column, t.cell->row};
+    if (t.block) {
+      payload["block"] = {t.block->first.column, t.block->first.row, t.block->last.column,
+                          t.block->last.row};
+    }
     if (of_tile[t.index] != SIZE_MAX) {
       payload["extent"] = extents[of_tile[t.index]].extent;
       payload["neighbours"] = nlohmann::json::array();

@@ -65,6 +65,20 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
       local.fetched = true;
     }
   }
+  // A block of cells of a large LAS/LAZ input (city.split_points): the job streams the file
+  // and keeps the block grown by the halo, sharing the buildings across its edges as a COPC
+  // cell does.
+  std::optional<std::string> block_name;
+  if (payload.contains("block")) {
+    const auto& b = payload["block"];
+    if (!b.is_array() || b.size() != 4 ||
+        !std::all_of(b.begin(), b.end(), [](const auto& v) { return v.is_number_integer(); }) ||
+        !payload.contains("extent") || !payload.contains("neighbours")) {
+      return {ErrorCode::Internal, "job " + job.key + " has a malformed block"};
+    }
+    block_name = kernel::GridCell{b[0].get<std::int64_t>(), b[1].get<std::int64_t>()}.name() + "-" +
+                 kernel::GridCell{b[2].get<std::int64_t>(), b[3].get<std::int64_t>()}.name();
+  }
   if (!source.remote) {
     if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;
     source.path = local.path;
@@ -83,9 +97,14 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     around->where.self = {payload.value("tile", std::size_t{0}), input,
                           extent_of(payload["extent"])};
     around->where.halo = config.city.halo;
-    // A COPC cell's read holds its halo: the neighbouring cells' points come with it.
-    around->own_read_is_shared = only_cell.has_value();
+    // A COPC cell's or a block's read holds its halo: the neighbouring cells' points come
+    // with it.
+    around->own_read_is_shared = only_cell.has_value() || block_name.has_value();
     const Extent region = around->where.read_region();
+    if (block_name) {
+      source.region =
+          geo::Bounds3{{region[0], region[1], -INFINITY}, {region[2], region[3], INFINITY}};
+    }
     std::set<std::string> read_inputs;
     for (const auto& n : payload["neighbours"]) {
       TileExtent t{n.at("tile").get<std::size_t>(), n.at("input").get<std::string>(),
@@ -116,6 +135,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   std::string name =
       std::filesystem::path(input.substr(0, input.find_first_of("?#"))).stem().string();
   if (only_cell) name += "_" + only_cell->name();
+  if (block_name) name += "_" + *block_name;
   const geo::FootprintSource footprints{config.city.footprints, config.city.footprints_layer,
                                         config.city.footprints_id};
   if (Failure f = fit_tile(std::move(source), name, options, config.run.crs, tile, footprints,
@@ -209,6 +229,7 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
     record["cell"] = only_cell->name();
     if (!around) record["primitives_of_other_cells"] = other_cells;
   }
+  if (block_name) record["block"] = *block_name;
   if (range_stats) {
     record["range_reads"] = {{"requests", range_stats->requests}, {"bytes", range_stats->bytes}};
     ops::metrics().add_bytes_fetched(range_stats->bytes);

@@ -103,6 +103,12 @@ struct CityConfig {
   /// Band around a cell whose primitives are read with it; an object reaching past it is
   /// reported. [0, cell_size)
   double halo = 50.0;
+  /// A LAS/LAZ tile whose header declares more points than this is fitted in parts: one fit
+  /// job per block of cells (as many cells as hold about this many points by the header's
+  /// density), each streaming the file and keeping its block grown by the halo, so that a
+  /// fit's memory follows this bound rather than the tile's size; 0: never. COPC inputs are
+  /// always fitted per cell. [0, 1e12]
+  std::uint64_t split_points = 10'000'000;
   double voxel_size = 0.5;  ///< OpenVDB culling voxel edge (m); (0, 100]
   /// Fuzzy mode of the assembly for fitted primitives (kernel/snap.h): plane faces this close
   /// (m) become one plane, axes this close (degrees) one direction; 0: off. [0, 1], [0, 10]
