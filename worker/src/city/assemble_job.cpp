@@ -2,7 +2,12 @@
 // (kernel/assembly) anchored in the cell → the cell's native model, topology index,
 // CityJSONSeq, 3D Tiles and manifest (city_jobs.h).
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <array>
 #include <map>
 
 #include "city/block_records.h"
@@ -200,19 +205,30 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     kept.push_back(&object);
   }
 
+  // Each object's check (once, for every export) and its native bytes, on the run's threads.
+  tbb::task_arena arena(config.run.threads > 0 ? config.run.threads : tbb::task_arena::automatic);
+  std::vector<char> valid(kept.size(), 0);
+  std::vector<std::string> native(kept.size());
+  arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, kept.size(), [&](std::size_t i) {
+      valid[i] = kernel::check_shape(kept[i]->model.shape).valid() ? 1 : 0;
+      native[i] = kernel::write_native_model(kept[i]->model);
+    });
+  });
   RunObjects objects;
   ObjectBatch objects_out(run_dir);  // the objects' and their blocks' models, flushed together
   ordered_json object_records = ordered_json::array();
   std::vector<assembly::AssembledObject> kept_objects;
   long long invalid = 0;
-  for (const assembly::AssembledObject* object : kept) {
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const assembly::AssembledObject* object = kept[k];
     IndexObject io;
     io.id = object->id;
     io.cell = name;
     io.model = object->model;
     if (!object->fused) io.fuse_error = object->error;
     io.escalation = object->escalation;
-    io.valid = kernel::check_shape(io.model.shape).valid();  // once, for every export
+    io.valid = valid[k] != 0;
     // Every primitive of an object has its building (assembly_group).
     io.footprint_id = prims[static_cast<std::size_t>(object->primitives.front())].building;
     const ordered_json escalation = escalation_json(io.escalation);
@@ -231,7 +247,9 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
           return it == by_label.end() ? std::nullopt : it->second->quality;
         });
     PublishedModel published;
-    if (Failure f = publish_model(object->model, objects_out, published); !f.ok()) return f;
+    if (Failure f = publish_native(std::move(native[k]), objects_out, published); !f.ok()) {
+      return f;
+    }
     if (!object->fused) ++invalid;
     object_records.push_back(
         {{"id", object->id},
@@ -306,15 +324,28 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   const std::filesystem::path cell_dir = run_dir / dir_key;
   auto city = assembly::city_model(kept_objects);
   if (!city.ok()) return failure_of(city.error(), name);
-  const std::string model_bytes = kernel::write_native_model(city.value());
-  if (Failure f = write_file_atomic(cell_dir / "model.csgt", model_bytes); !f.ok()) return f;
+  // The four files read the same objects and write nothing the others read: written at once
+  // on the run's threads (each one's bytes are the same whatever runs beside it), failures
+  // reported in a fixed order.
   const RunExportOptions settings = jobs::export_options(config);
+  std::string model_bytes;
   RunIndexReport index;
-  if (Failure f = write_run_index(settings, objects, cell_dir, index); !f.ok()) return f;
   CityJsonReport cityjson;
-  if (Failure f = write_run_cityjson(settings, objects, cell_dir, cityjson); !f.ok()) return f;
   TilesReport tiles;
-  if (Failure f = write_run_tiles(settings, objects, cell_dir, tiles); !f.ok()) return f;
+  std::array<Failure, 4> written;
+  arena.execute([&] {
+    tbb::parallel_invoke(
+        [&] { written[0] = write_run_index(settings, objects, cell_dir, index); },
+        [&] { written[1] = write_run_cityjson(settings, objects, cell_dir, cityjson); },
+        [&] {
+          model_bytes = kernel::write_native_model(city.value());
+          written[2] = write_file_atomic(cell_dir / "model.csgt", model_bytes);
+        },
+        [&] { written[3] = write_run_tiles(settings, objects, cell_dir, tiles); });
+  });
+  for (const Failure& f : written) {
+    if (!f.ok()) return f;
+  }
   for (const std::string& w : index.stats.warnings) problems.push_back("index: " + w);
   for (const std::string& w : cityjson.stats.warnings) problems.push_back("cityjson: " + w);
   for (const std::string& w : tiles.warnings) problems.push_back("tiles: " + w);

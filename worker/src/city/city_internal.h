@@ -66,6 +66,8 @@ struct PublishedModel {
 };
 /// Adds `model` in the native format as objects/<sha256>.csgt to `batch`.
 Failure publish_model(const kernel::CsgModel& model, ObjectBatch& batch, PublishedModel& out);
+/// The same for a model already written in the native format (`bytes`).
+Failure publish_native(std::string bytes, ObjectBatch& batch, PublishedModel& out);
 /// {"key", "sha256", "bytes"} of a file written under `dir` (read back and hashed).
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out);
 

@@ -72,7 +72,10 @@ Failure publish_object(const std::filesystem::path& run_dir, const std::string& 
 }
 
 Failure publish_model(const kernel::CsgModel& model, ObjectBatch& batch, PublishedModel& out) {
-  std::string bytes = kernel::write_native_model(model);
+  return publish_native(kernel::write_native_model(model), batch, out);
+}
+
+Failure publish_native(std::string bytes, ObjectBatch& batch, PublishedModel& out) {
   out.sha256 = sha256_hex(bytes);
   out.key = "objects/" + out.sha256 + ".csgt";
   out.bytes = bytes.size();
