@@ -15,6 +15,7 @@
 
 #include "csgtile/kernel/boolean.h"
 #include "csgtile/kernel/csg.h"
+#include "export/index_rows.h"
 #include "export/topology_index.h"
 #include "index_object_builder.h"
 #include "model_builders.h"
@@ -176,6 +177,36 @@ TEST(IndexMerge, CellsMergedHoldWhatTheRunsIndexBuiltAgainHolds) {
   } else if (const char* require = std::getenv("CSGTILE_REQUIRE_GDAL");
              require != nullptr && std::string(require) == "1") {
     ADD_FAILURE() << validator << " not installed; run deploy/setup.sh";
+  }
+}
+
+// write_topology_index streams: each object's rows built on the threads and written in
+// order as they come. The file holds what all the rows written at once hold, and its bytes
+// do not depend on the thread count.
+TEST(IndexStream, StreamedIndexHoldsTheRowsWrittenAtOnceForAnyThreadCount) {
+  const test::TempDir dir("csgtile-index-stream-");
+  const std::vector<IndexObject> objects = run_objects();
+  IndexOptions options = options_with_origin(kOrigin);
+  IndexStats all_stats;
+  const auto rows = detail::build_index_rows(objects, options, all_stats);
+  ASSERT_TRUE(rows.ok()) << rows.error().message;
+  ASSERT_TRUE(detail::write_gpkg((dir / "at_once.gpkg").string(), rows.value(), options).ok());
+  std::string first;
+  for (int threads : {1, 2, 4}) {
+    options.threads = threads;
+    const fs::path streamed = dir / ("streamed_" + std::to_string(threads) + ".gpkg");
+    IndexStats stats;
+    ASSERT_TRUE(write_topology_index(streamed, objects, options, &stats).ok());
+    std::size_t compared = 0;
+    expect_same_tables(dir / "at_once.gpkg", streamed, compared);
+    EXPECT_GT(compared, 500u);
+    EXPECT_EQ(stats.shapes, rows.value().shapes.size());
+    EXPECT_EQ(stats.children, rows.value().children.size());
+    EXPECT_EQ(stats.ancestors, rows.value().ancestors.size());
+    EXPECT_EQ(stats.relations, rows.value().relations.size() / 2);
+    const std::string bytes = test::read_file(streamed);
+    if (first.empty()) first = bytes;
+    EXPECT_EQ(bytes, first) << threads << " threads";
   }
 }
 

@@ -397,35 +397,70 @@ Failure insert_srs(SqliteDb& db, const IndexSrs& srs) {
   return {};
 }
 
-Failure insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
-  SqliteStatement st(
-      db,
-      "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
-      "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
-      "fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, h_roof_max, "
-      "roof_surfaces, fuse_error, lod12_error, footprint_id, outline, fit_within_2sigma, "
-      "lod13_error, model_rmse, model_points, model_within_2sigma) "
-      "VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,?21,?22,"
-      "?23,?24,?25,?26,?27,?28,?29,?30,?31,?32,?33,?34)");
-  SqliteStatement rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)");
-  SqliteStatement block(db,
-                        "INSERT INTO lod12 (fid, geom, object_id, cell, h_ground, h_top) "
-                        "VALUES (?1,?2,?3,?4,?5,?6)");
-  SqliteStatement block_rtree(db, "INSERT INTO rtree_lod12_geom VALUES (?1,?2,?3,?4,?5)");
-  SqliteStatement levels(db,
-                         "INSERT INTO lod13 (fid, geom, object_id, cell, h_ground, h_top) "
-                         "VALUES (?1,?2,?3,?4,?5,?6)");
-  SqliteStatement levels_rtree(db, "INSERT INTO rtree_lod13_geom VALUES (?1,?2,?3,?4,?5)");
-  CSGTILE_TRY(levels.status());
-  CSGTILE_TRY(levels_rtree.status());
-  CSGTILE_TRY(st.status());
-  CSGTILE_TRY(rtree.status());
-  CSGTILE_TRY(block.status());
-  CSGTILE_TRY(block_rtree.status());
-  std::int64_t block_fid = 0, levels_fid = 0;
-  for (std::size_t i = 0; i < rows.objects.size(); ++i) {
-    const ObjectRecord& o = rows.objects[i];
-    const auto fid = static_cast<std::int64_t>(i + 1);
+// The statements of the rows of objects (write_gpkg and GpkgRowWriter), prepared once.
+struct RowStatements {
+  explicit RowStatements(const SqliteDb& db)
+      : objects(db,
+                "INSERT INTO objects (fid, geom, object_id, cell, shape_id, primitive_count, "
+                "primitive_types, volume, area, min_x, min_y, min_z, max_x, max_y, max_z, valid, "
+                "fit_rms, fit_coverage, lod, h_ground, h_roof_min, h_roof_50p, h_roof_70p, "
+                "h_roof_max, roof_surfaces, fuse_error, lod12_error, footprint_id, outline, "
+                "fit_within_2sigma, lod13_error, model_rmse, model_points, model_within_2sigma) "
+                "VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11,?12,?13,?14,?15,?16,?17,?18,?19,?20,"
+                "?21,?22,?23,?24,?25,?26,?27,?28,?29,?30,?31,?32,?33,?34)"),
+        rtree(db, "INSERT INTO rtree_objects_geom VALUES (?1,?2,?3,?4,?5)"),
+        block(db,
+              "INSERT INTO lod12 (fid, geom, object_id, cell, h_ground, h_top) "
+              "VALUES (?1,?2,?3,?4,?5,?6)"),
+        block_rtree(db, "INSERT INTO rtree_lod12_geom VALUES (?1,?2,?3,?4,?5)"),
+        levels(db,
+               "INSERT INTO lod13 (fid, geom, object_id, cell, h_ground, h_top) "
+               "VALUES (?1,?2,?3,?4,?5,?6)"),
+        levels_rtree(db, "INSERT INTO rtree_lod13_geom VALUES (?1,?2,?3,?4,?5)"),
+        shapes(db,
+               "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
+               "tolerance, geometry, x, y, z) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)"),
+        children(db,
+                 "INSERT INTO shape_children (parent_id, child_id, position, orientation, "
+                 "location) VALUES (?1,?2,?3,?4,?5)"),
+        ancestors(db,
+                  "INSERT INTO shape_ancestors (shape_id, ancestor_kind, ancestor_id, position) "
+                  "VALUES (?1,?2,?3,?4)"),
+        csg_nodes(db,
+                  "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
+                  "primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)"),
+        face_sources(db,
+                     "INSERT INTO face_sources (face_id, object_id, node, primitive_face) "
+                     "VALUES (?1,?2,?3,?4)"),
+        primitives(db,
+                   "INSERT INTO primitives (object_id, node, primitive_id, type, inliers, "
+                   "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7)") {}
+  Failure status() const {
+    for (const SqliteStatement* st :
+         {&objects, &rtree, &block, &block_rtree, &levels, &levels_rtree, &shapes, &children,
+          &ancestors, &csg_nodes, &face_sources, &primitives}) {
+      CSGTILE_TRY(st->status());
+    }
+    return {};
+  }
+  SqliteStatement objects, rtree, block, block_rtree, levels, levels_rtree, shapes, children,
+      ancestors, csg_nodes, face_sources, primitives;
+};
+
+// The last feature ids written to the objects, lod12 and lod13 layers.
+using FeatureIds = std::array<std::int64_t, 3>;
+
+Failure insert_objects(RowStatements& sts, const IndexRows& rows, int srs_id, FeatureIds& fids) {
+  SqliteStatement& st = sts.objects;
+  SqliteStatement& rtree = sts.rtree;
+  SqliteStatement& block = sts.block;
+  SqliteStatement& block_rtree = sts.block_rtree;
+  SqliteStatement& levels = sts.levels;
+  SqliteStatement& levels_rtree = sts.levels_rtree;
+  std::int64_t& block_fid = fids[1];
+  std::int64_t& levels_fid = fids[2];
+  for (const ObjectRecord& o : rows.objects) {
+    const std::int64_t fid = ++fids[0];
     st.bind(1, fid);
     if (o.has_geometry) {
       st.bind_blob(2, geopackage_multipolygon_z(o.boundary, srs_id));
@@ -479,9 +514,7 @@ Failure insert_objects(SqliteDb& db, const IndexRows& rows, int srs_id) {
 
 // Inserts every row of `rows` with one prepared statement; `bind` binds one row.
 template <class Row, class Bind>
-Failure insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows, const Bind& bind) {
-  SqliteStatement st(db, sql);
-  CSGTILE_TRY(st.status());
+Failure insert_each(SqliteStatement& st, const std::vector<Row>& rows, const Bind& bind) {
   for (const Row& r : rows) {
     bind(st, r);
     CSGTILE_TRY(st.run());
@@ -490,68 +523,50 @@ Failure insert_each(SqliteDb& db, const char* sql, const std::vector<Row>& rows,
 }
 
 Failure insert_relations(SqliteDb& db, const std::vector<RelationRecord>& relations) {
-  return insert_each(
-      db,
-      "INSERT INTO object_relations (object_id, other_id, relation, shared_area, "
-      "common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)",
-      relations, [](SqliteStatement& st, const RelationRecord& r) {
-        st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
-        st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
-      });
+  SqliteStatement insert(db,
+                         "INSERT INTO object_relations (object_id, other_id, relation, "
+                         "shared_area, common_volume, reason) VALUES (?1,?2,?3,?4,?5,?6)");
+  CSGTILE_TRY(insert.status());
+  return insert_each(insert, relations, [](SqliteStatement& st, const RelationRecord& r) {
+    st.bind(1, r.object_id).bind(2, r.other_id).bind(3, r.relation).bind(4, r.shared_area);
+    st.bind(5, r.common_volume).bind_text_or_null(6, r.reason);
+  });
 }
 
-Failure insert_rows(SqliteDb& db, const IndexRows& rows) {
-  CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO shapes (id, key, object_id, kind, kind_index, orientation, "
-      "tolerance, geometry, x, y, z) VALUES (?1,?2,?3,?4,?5,?6,?7,?8,?9,?10,?11)",
-      rows.shapes, [](SqliteStatement& st, const ShapeRecord& r) {
-        st.bind(1, r.id).bind(2, r.key).bind(3, r.object_id).bind(4, r.kind).bind(5, r.kind_index);
-        st.bind(6, r.orientation).bind(7, r.tolerance).bind_text_or_null(8, r.geometry);
-        for (int a = 0; a < 3; ++a) {
-          if (r.point) {
-            st.bind(9 + a, (*r.point)[a]);
-          } else {
-            st.bind_null(9 + a);
-          }
-        }
-      }));
-  CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO shape_children (parent_id, child_id, position, orientation, "
-      "location) VALUES (?1,?2,?3,?4,?5)",
-      rows.children, [](SqliteStatement& st, const ChildRecord& r) {
+// Every row of `rows` but the relations.
+Failure insert_rows(RowStatements& sts, const IndexRows& rows) {
+  CSGTILE_TRY(insert_each(sts.shapes, rows.shapes, [](SqliteStatement& st, const ShapeRecord& r) {
+    st.bind(1, r.id).bind(2, r.key).bind(3, r.object_id).bind(4, r.kind).bind(5, r.kind_index);
+    st.bind(6, r.orientation).bind(7, r.tolerance).bind_text_or_null(8, r.geometry);
+    for (int a = 0; a < 3; ++a) {
+      if (r.point) {
+        st.bind(9 + a, (*r.point)[a]);
+      } else {
+        st.bind_null(9 + a);
+      }
+    }
+  }));
+  CSGTILE_TRY(
+      insert_each(sts.children, rows.children, [](SqliteStatement& st, const ChildRecord& r) {
         st.bind(1, r.parent_id).bind(2, r.child_id).bind(3, r.position).bind(4, r.orientation);
         st.bind_text_or_null(5, r.location);
       }));
-  CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO shape_ancestors (shape_id, ancestor_kind, ancestor_id, position) "
-      "VALUES (?1,?2,?3,?4)",
-      rows.ancestors, [](SqliteStatement& st, const AncestorRecord& r) {
+  CSGTILE_TRY(
+      insert_each(sts.ancestors, rows.ancestors, [](SqliteStatement& st, const AncestorRecord& r) {
         st.bind(1, r.shape_id).bind(2, r.ancestor_kind).bind(3, r.ancestor_id).bind(4, r.position);
       }));
-  CSGTILE_TRY(insert_relations(db, rows.relations));
-  CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO csg_nodes (object_id, node, kind, label, parent, children, "
-      "primitive_type, parameters) VALUES (?1,?2,?3,?4,?5,?6,?7,?8)",
-      rows.csg_nodes, [](SqliteStatement& st, const CsgNodeRecord& r) {
+  CSGTILE_TRY(
+      insert_each(sts.csg_nodes, rows.csg_nodes, [](SqliteStatement& st, const CsgNodeRecord& r) {
         st.bind(1, r.object_id).bind(2, r.node).bind(3, r.kind).bind_text_or_null(4, r.label);
         st.bind(5, r.parent).bind(6, r.children).bind_text_or_null(7, r.primitive_type);
         st.bind_text_or_null(8, r.parameters);
       }));
   CSGTILE_TRY(insert_each(
-      db,
-      "INSERT INTO face_sources (face_id, object_id, node, primitive_face) "
-      "VALUES (?1,?2,?3,?4)",
-      rows.face_sources, [](SqliteStatement& st, const FaceSourceRecord& r) {
+      sts.face_sources, rows.face_sources, [](SqliteStatement& st, const FaceSourceRecord& r) {
         st.bind(1, r.face_id).bind(2, r.object_id).bind(3, r.node).bind(4, r.primitive_face);
       }));
-  CSGTILE_TRY(insert_each(db,
-                          "INSERT INTO primitives (object_id, node, primitive_id, type, inliers, "
-                          "fit_rms, fit_coverage) VALUES (?1,?2,?3,?4,?5,?6,?7)",
-                          rows.primitives, [](SqliteStatement& st, const PrimitiveRecord& r) {
+  CSGTILE_TRY(insert_each(sts.primitives, rows.primitives,
+                          [](SqliteStatement& st, const PrimitiveRecord& r) {
                             st.bind(1, r.object_id)
                                 .bind(2, r.node)
                                 .bind_text_or_null(3, r.primitive_id)
@@ -593,14 +608,12 @@ Failure insert_metadata(SqliteDb& db, const IndexOptions& options) {
 // The extents of the feature tables (kFeatureTables order) for gpkg_contents.
 using FeatureExtents = std::array<kernel::BoundingBox, 3>;
 
-FeatureExtents feature_extents(const IndexRows& rows) {
-  FeatureExtents e;
+void add_extents(const IndexRows& rows, FeatureExtents& e) {
   for (const ObjectRecord& o : rows.objects) {
     if (o.has_geometry) e[0].add(boundary_box(o.boundary));
     if (o.has_lod12) e[1].add(boundary_box(o.lod12_boundary));
     if (o.has_lod13) e[2].add(boundary_box(o.lod13_boundary));
   }
-  return e;
 }
 
 Failure register_contents(SqliteDb& db, const FeatureExtents& extents,
@@ -678,13 +691,6 @@ Failure finish_gpkg(SqliteDb& db, const FeatureExtents& extents, const IndexOpti
   }
   CSGTILE_TRY(register_contents(db, extents, options));
   return db.exec("COMMIT;");
-}
-
-Failure write_all(SqliteDb& db, const IndexRows& rows, const IndexOptions& options) {
-  CSGTILE_TRY(begin_gpkg(db, options));
-  CSGTILE_TRY(insert_objects(db, rows, options.srs.srs_id));
-  CSGTILE_TRY(insert_rows(db, rows));
-  return finish_gpkg(db, feature_extents(rows), options);
 }
 
 // ---- merging indexes ----------------------------------------------------------------------------
@@ -907,12 +913,59 @@ Failure merge_gpkgs(const std::string& path, const std::vector<GpkgPart>& parts,
   return st;
 }
 
-Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options) {
+struct GpkgRowWriter::State {
   SqliteDb db;
-  if (Failure st = db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE); !st.ok()) return st;
-  Failure st = write_all(db, rows, options);
-  if (!db.close() && st.ok()) st = db.failure("cannot close");
-  return st;
+  IndexOptions options;
+  std::optional<RowStatements> statements;
+  FeatureIds fids{};
+  FeatureExtents extents;
+  Failure failed;
+};
+
+GpkgRowWriter::GpkgRowWriter() : state_(std::make_unique<State>()) {}
+GpkgRowWriter::~GpkgRowWriter() = default;
+
+Failure GpkgRowWriter::open(const std::string& path, const IndexOptions& options) {
+  State& s = *state_;
+  s.options = options;
+  s.failed = s.db.open(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  if (s.failed.ok()) s.failed = begin_gpkg(s.db, options);
+  if (s.failed.ok()) {
+    s.statements.emplace(s.db);
+    s.failed = s.statements->status();
+  }
+  return s.failed;
+}
+
+Failure GpkgRowWriter::add(const IndexRows& rows) {
+  State& s = *state_;
+  if (!s.failed.ok()) return s.failed;
+  if (!s.statements) return s.failed = {ErrorCode::Internal, "GpkgRowWriter::add before open"};
+  s.failed = insert_objects(*s.statements, rows, s.options.srs.srs_id, s.fids);
+  if (s.failed.ok()) s.failed = insert_rows(*s.statements, rows);
+  add_extents(rows, s.extents);
+  return s.failed;
+}
+
+Failure GpkgRowWriter::finish(const std::vector<RelationRecord>& relations) {
+  State& s = *state_;
+  if (s.failed.ok() && !s.statements)
+    s.failed = {ErrorCode::Internal, "GpkgRowWriter::finish before open"};
+  s.statements.reset();  // finalised before the commit and the close
+  if (s.failed.ok()) s.failed = insert_relations(s.db, relations);
+  if (s.failed.ok()) s.failed = finish_gpkg(s.db, s.extents, s.options);
+  if (!s.db.close() && s.failed.ok()) s.failed = s.db.failure("cannot close");
+  return s.failed;
+}
+
+Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options) {
+  GpkgRowWriter writer;
+  if (Failure f = writer.open(path, options); !f.ok()) {
+    writer.finish({});
+    return f;
+  }
+  writer.add(rows);
+  return writer.finish(rows.relations);
 }
 
 }  // namespace csgtile::worker::detail

@@ -4,6 +4,7 @@
 // container side (SQLite, GeoPackage binary geometry) can be read and tested apart.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -131,6 +132,36 @@ std::vector<RelationRecord> relation_records(const std::vector<IndexObject>& obj
 /// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it).
 /// Error: Io naming the path and SQLite's message.
 Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options);
+
+/// The same file written object by object, so that only a few objects' rows are ever held:
+/// open, add each object's rows in order (ids final, relations aside), finish with the
+/// relations. The file is what write_gpkg writes for all the rows at once, row for row. After a
+/// failure the later calls return it; finish closes the file in every case.
+class GpkgRowWriter {
+ public:
+  GpkgRowWriter();
+  ~GpkgRowWriter();
+  GpkgRowWriter(const GpkgRowWriter&) = delete;
+  GpkgRowWriter& operator=(const GpkgRowWriter&) = delete;
+  Failure open(const std::string& path, const IndexOptions& options);
+  Failure add(const IndexRows& rows);
+  Failure finish(const std::vector<RelationRecord>& relations);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+/// One object's rows with its shape ids numbered from 1 (`ids`: how many it took; the writer
+/// moves them after the objects before it) and its warnings. No relations.
+struct ObjectRows {
+  IndexRows rows;
+  std::int64_t ids = 0;
+  std::vector<std::string> warnings;
+};
+ObjectRows object_rows(const IndexObject& object, const IndexOptions& options);
+/// Moves the shape ids of `rows` (numbered from 1) by `offset`; 0, no shape, stays 0.
+void offset_ids(IndexRows& rows, std::int64_t offset);
 
 /// A GeoPackage write_gpkg wrote, and where its model frame lies in the merged one's: its
 /// primitives' placements are moved by `offset` (coordinates in the SRS need no move).

@@ -1,10 +1,16 @@
 // Rows of the topology index from objects: stable ids, the child and ancestor maps, the
 // objects layer's boundary polygons, CSG nodes, face sources, primitives and relations.
 
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <functional>
+#include <iterator>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -253,7 +259,8 @@ Failure check_objects(const std::vector<IndexObject>& objects, const IndexOption
 // A building's columns and its LoD1.2 and LoD1.3 blocks' boundaries: heights mapped to the SRS at
 // the centre of the object's bounds (a translation in z for the SRSs of city models).
 void add_building_columns(const IndexObject& object, const IndexOptions& options,
-                          const kernel::BoundingBox& b, ObjectRecord& o, IndexStats& stats) {
+                          const kernel::BoundingBox& b, ObjectRecord& o,
+                          std::vector<std::string>& warnings) {
   const bool building = is_building(object);
   if (!object.fuse_error.empty()) o.fuse_error = object.fuse_error;
   if (!object.lod12_error.empty()) o.lod12_error = object.lod12_error;
@@ -278,9 +285,9 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
     auto boundary = boundary_polygons(block, kernel::map_child_shapes(block, ShapeKind::Face),
                                       kernel::map_child_shapes(block, ShapeKind::Edge), options);
     if (!boundary.ok()) {
-      stats.warnings.push_back("object " + object.id + ": no " + lod +
-                               " geometry: " + kernel::error_code_name(boundary.error().code) +
-                               ": " + boundary.error().message);
+      warnings.push_back("object " + object.id + ": no " + lod +
+                         " geometry: " + kernel::error_code_name(boundary.error().code) + ": " +
+                         boundary.error().message);
       return false;
     }
     out = std::move(boundary).value();
@@ -289,6 +296,22 @@ void add_building_columns(const IndexObject& object, const IndexOptions& options
   o.has_lod12 = block_boundary(object.lod12, "LoD1.2", o.lod12_boundary);
   o.has_lod13 = block_boundary(object.lod13, "LoD1.3", o.lod13_boundary);
   if (std::string lod = lod_reached(object); !lod.empty()) o.lod = std::move(lod);
+}
+
+template <typename T>
+void append(std::vector<T>& to, std::vector<T>& from) {
+  to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
+}
+
+// Moves every row of `from` but the relations to the end of `to`.
+void append_rows(IndexRows& to, IndexRows& from) {
+  append(to.objects, from.objects);
+  append(to.shapes, from.shapes);
+  append(to.children, from.children);
+  append(to.ancestors, from.ancestors);
+  append(to.csg_nodes, from.csg_nodes);
+  append(to.face_sources, from.face_sources);
+  append(to.primitives, from.primitives);
 }
 
 }  // namespace
@@ -337,155 +360,185 @@ std::vector<RelationRecord> relation_records(const std::vector<IndexObject>& obj
   return out;
 }
 
+ObjectRows object_rows(const IndexObject& object, const IndexOptions& options) {
+  ObjectRows out;
+  IndexRows& rows = out.rows;
+  std::int64_t next_id = 1;
+  const Shape& root = object.model.shape;
+  // Ids: every distinct sub-shape of each kind, kinds from compound to vertex, each in
+  // map_child_shapes order. base[k] is the id of the first shape of kind k.
+  std::array<kernel::ShapeIndex, kernel::kShapeKindCount> maps;
+  std::array<std::int64_t, kernel::kShapeKindCount> base{};
+  for (int k = 0; k < kernel::kShapeKindCount; ++k) {
+    maps[k] = kernel::map_child_shapes(root, static_cast<ShapeKind>(k));
+    base[k] = next_id;
+    next_id += static_cast<std::int64_t>(maps[k].size());
+  }
+  auto id_of = [&](const Shape& s) -> std::int64_t {
+    const int k = static_cast<int>(s.kind());
+    const std::size_t i = maps[k].find(s);
+    return i == kernel::ShapeIndex::npos ? 0 : base[k] + static_cast<std::int64_t>(i);
+  };
+
+  for (int k = 0; k < kernel::kShapeKindCount; ++k) {
+    const auto kind = static_cast<ShapeKind>(k);
+    for (std::size_t i = 0; i < maps[k].size(); ++i) {
+      const Shape& s = maps[k][i];
+      ShapeRecord r;
+      r.id = base[k] + static_cast<std::int64_t>(i);
+      r.object_id = object.id;
+      r.kind = kernel::shape_kind_name(kind);
+      r.kind_index = static_cast<std::int64_t>(i);
+      r.key = object.id + "/" + r.kind + "/" + std::to_string(i);
+      r.orientation = kernel::orientation_name(s.orientation());
+      if (kind == ShapeKind::Vertex) {
+        r.tolerance = kernel::tolerance(s);
+        r.point = map_point(options, kernel::vertex_point(s));
+      } else if (kind == ShapeKind::Edge) {
+        r.tolerance = kernel::tolerance(s);
+        const kernel::EdgeData* e = s.body().edge();
+        r.geometry = e->degenerate() ? "degenerate" : curve_kind_name(e->curve->kind());
+      } else if (kind == ShapeKind::Face) {
+        r.tolerance = kernel::tolerance(s);
+        r.geometry = surface_kind_name(s.body().face()->surface->kind());
+      }
+      rows.shapes.push_back(std::move(r));
+      // Sub-shape references: the parent's body children, with their own location and
+      // orientation; the child id is the child as seen through this (located) parent.
+      const auto& refs = s.body().children();
+      for (std::size_t c = 0; c < refs.size(); ++c) {
+        ChildRecord ref;
+        ref.parent_id = base[k] + static_cast<std::int64_t>(i);
+        ref.child_id = id_of(s.child(c));
+        ref.position = static_cast<std::int64_t>(c);
+        ref.orientation = kernel::orientation_name(refs[c].orientation());
+        if (!refs[c].location().is_identity())
+          ref.location = matrix_json(refs[c].location()).dump();
+        rows.children.push_back(std::move(ref));
+      }
+    }
+  }
+
+  for (const auto& [child_kind, ancestor_kind] : kAncestorPairs) {
+    const kernel::AncestorIndex index(root, child_kind, ancestor_kind);
+    for (std::size_t i = 0; i < index.size(); ++i) {
+      const std::int64_t key_id = id_of(index.keys()[i]);
+      const auto& ancestors = index.ancestors(i);
+      for (std::size_t a = 0; a < ancestors.size(); ++a) {
+        rows.ancestors.push_back({key_id, kernel::shape_kind_name(ancestor_kind),
+                                  id_of(ancestors[a]), static_cast<std::int64_t>(a)});
+      }
+    }
+  }
+
+  const auto& nodes = object.model.nodes;
+  std::vector<std::optional<std::int64_t>> parent(nodes.size());
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    for (int c : nodes[n].children) {
+      if (c >= 0 && static_cast<std::size_t>(c) < nodes.size())
+        parent[c] = static_cast<std::int64_t>(n);
+    }
+  }
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    CsgNodeRecord r;
+    r.object_id = object.id;
+    r.node = static_cast<std::int64_t>(n);
+    r.kind = kernel::csg_node_kind_name(nodes[n].kind);
+    r.label = nodes[n].label;
+    r.parent = parent[n];
+    r.children = Json(nodes[n].children).dump();
+    if (nodes[n].kind == kernel::CsgNodeKind::Primitive) {
+      r.primitive_type = kernel::primitive_type_name(nodes[n].primitive.type);
+      r.parameters = primitive_parameters(nodes[n].primitive);
+    }
+    rows.csg_nodes.push_back(std::move(r));
+  }
+  const std::int64_t face_base = base[static_cast<int>(ShapeKind::Face)];
+  for (std::size_t f = 0; f < object.model.face_sources.size(); ++f) {
+    for (const kernel::FaceSource& s : object.model.face_sources[f]) {
+      rows.face_sources.push_back(
+          {face_base + static_cast<std::int64_t>(f), object.id, s.node, s.face});
+    }
+  }
+  std::set<std::string> types;
+  for (const PrimitiveInfo& p : object.primitives) {
+    PrimitiveRecord r;
+    r.object_id = object.id;
+    if (p.node >= 0) r.node = p.node;
+    r.primitive_id = p.id;
+    r.type = p.type;
+    r.inliers = p.inliers;
+    r.fit_rms = p.rms;
+    r.fit_coverage = p.coverage;
+    rows.primitives.push_back(std::move(r));
+    types.insert(p.type);
+  }
+
+  ObjectRecord o;
+  o.object_id = object.id;
+  o.cell = object.cell;
+  o.shape_id = base[static_cast<int>(root.kind())];
+  o.primitive_count = static_cast<std::int64_t>(object.primitives.size());
+  for (const std::string& t : types)
+    o.primitive_types += (o.primitive_types.empty() ? "" : ",") + t;
+  const kernel::MassProperties mp = kernel::mass_properties(root);
+  o.volume = mp.volume;
+  o.area = mp.area;
+  o.bounds = map_box(mp.bounds, options);
+  o.valid = model_valid(object);
+  const FitSummary fit = fit_summary(object.primitives);
+  o.fit_rms = fit.rms;
+  o.fit_coverage = fit.coverage;
+  o.fit_within_2sigma = fit.within_2sigma;
+  if (const auto& m = object.model_fit) {
+    o.model_rmse = m->rmse;
+    o.model_points = m->points;
+    o.model_within_2sigma = m->within_2sigma;
+  }
+  auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
+                                    maps[static_cast<int>(ShapeKind::Edge)], options);
+  if (boundary.ok()) {
+    o.boundary = std::move(boundary).value();
+    o.has_geometry = !o.boundary.empty();
+  } else {
+    out.warnings.push_back("object " + object.id + ": no boundary geometry: " +
+                           kernel::error_code_name(boundary.error().code) + ": " +
+                           boundary.error().message);
+  }
+  add_building_columns(object, options, mp.bounds, o, out.warnings);
+  rows.objects.push_back(std::move(o));
+  out.ids = next_id - 1;
+  return out;
+}
+
+void offset_ids(IndexRows& rows, std::int64_t offset) {
+  auto move = [offset](std::int64_t& id) {
+    if (id != 0) id += offset;
+  };
+  for (ShapeRecord& r : rows.shapes) move(r.id);
+  for (ChildRecord& r : rows.children) {
+    move(r.parent_id);
+    move(r.child_id);
+  }
+  for (AncestorRecord& r : rows.ancestors) {
+    move(r.shape_id);
+    move(r.ancestor_id);
+  }
+  for (FaceSourceRecord& r : rows.face_sources) move(r.face_id);
+  for (ObjectRecord& r : rows.objects) move(r.shape_id);
+}
+
 Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
                                    const IndexOptions& options, IndexStats& stats) {
   if (Failure st = check_objects(objects, options); !st.ok()) return st;
   IndexRows rows;
   std::int64_t next_id = 1;
   for (const IndexObject& object : objects) {
-    const Shape& root = object.model.shape;
-    // Ids: every distinct sub-shape of each kind, kinds from compound to vertex, each in
-    // map_child_shapes order. base[k] is the id of the first shape of kind k.
-    std::array<kernel::ShapeIndex, kernel::kShapeKindCount> maps;
-    std::array<std::int64_t, kernel::kShapeKindCount> base{};
-    for (int k = 0; k < kernel::kShapeKindCount; ++k) {
-      maps[k] = kernel::map_child_shapes(root, static_cast<ShapeKind>(k));
-      base[k] = next_id;
-      next_id += static_cast<std::int64_t>(maps[k].size());
-    }
-    auto id_of = [&](const Shape& s) -> std::int64_t {
-      const int k = static_cast<int>(s.kind());
-      const std::size_t i = maps[k].find(s);
-      return i == kernel::ShapeIndex::npos ? 0 : base[k] + static_cast<std::int64_t>(i);
-    };
-
-    for (int k = 0; k < kernel::kShapeKindCount; ++k) {
-      const auto kind = static_cast<ShapeKind>(k);
-      for (std::size_t i = 0; i < maps[k].size(); ++i) {
-        const Shape& s = maps[k][i];
-        ShapeRecord r;
-        r.id = base[k] + static_cast<std::int64_t>(i);
-        r.object_id = object.id;
-        r.kind = kernel::shape_kind_name(kind);
-        r.kind_index = static_cast<std::int64_t>(i);
-        r.key = object.id + "/" + r.kind + "/" + std::to_string(i);
-        r.orientation = kernel::orientation_name(s.orientation());
-        if (kind == ShapeKind::Vertex) {
-          r.tolerance = kernel::tolerance(s);
-          r.point = map_point(options, kernel::vertex_point(s));
-        } else if (kind == ShapeKind::Edge) {
-          r.tolerance = kernel::tolerance(s);
-          const kernel::EdgeData* e = s.body().edge();
-          r.geometry = e->degenerate() ? "degenerate" : curve_kind_name(e->curve->kind());
-        } else if (kind == ShapeKind::Face) {
-          r.tolerance = kernel::tolerance(s);
-          r.geometry = surface_kind_name(s.body().face()->surface->kind());
-        }
-        rows.shapes.push_back(std::move(r));
-        // Sub-shape references: the parent's body children, with their own location and
-        // orientation; the child id is the child as seen through this (located) parent.
-        const auto& refs = s.body().children();
-        for (std::size_t c = 0; c < refs.size(); ++c) {
-          ChildRecord ref;
-          ref.parent_id = base[k] + static_cast<std::int64_t>(i);
-          ref.child_id = id_of(s.child(c));
-          ref.position = static_cast<std::int64_t>(c);
-          ref.orientation = kernel::orientation_name(refs[c].orientation());
-          if (!refs[c].location().is_identity())
-            ref.location = matrix_json(refs[c].location()).dump();
-          rows.children.push_back(std::move(ref));
-        }
-      }
-    }
-
-    for (const auto& [child_kind, ancestor_kind] : kAncestorPairs) {
-      const kernel::AncestorIndex index(root, child_kind, ancestor_kind);
-      for (std::size_t i = 0; i < index.size(); ++i) {
-        const std::int64_t key_id = id_of(index.keys()[i]);
-        const auto& ancestors = index.ancestors(i);
-        for (std::size_t a = 0; a < ancestors.size(); ++a) {
-          rows.ancestors.push_back({key_id, kernel::shape_kind_name(ancestor_kind),
-                                    id_of(ancestors[a]), static_cast<std::int64_t>(a)});
-        }
-      }
-    }
-
-    const auto& nodes = object.model.nodes;
-    std::vector<std::optional<std::int64_t>> parent(nodes.size());
-    for (std::size_t n = 0; n < nodes.size(); ++n) {
-      for (int c : nodes[n].children) {
-        if (c >= 0 && static_cast<std::size_t>(c) < nodes.size())
-          parent[c] = static_cast<std::int64_t>(n);
-      }
-    }
-    for (std::size_t n = 0; n < nodes.size(); ++n) {
-      CsgNodeRecord r;
-      r.object_id = object.id;
-      r.node = static_cast<std::int64_t>(n);
-      r.kind = kernel::csg_node_kind_name(nodes[n].kind);
-      r.label = nodes[n].label;
-      r.parent = parent[n];
-      r.children = Json(nodes[n].children).dump();
-      if (nodes[n].kind == kernel::CsgNodeKind::Primitive) {
-        r.primitive_type = kernel::primitive_type_name(nodes[n].primitive.type);
-        r.parameters = primitive_parameters(nodes[n].primitive);
-      }
-      rows.csg_nodes.push_back(std::move(r));
-    }
-    const std::int64_t face_base = base[static_cast<int>(ShapeKind::Face)];
-    for (std::size_t f = 0; f < object.model.face_sources.size(); ++f) {
-      for (const kernel::FaceSource& s : object.model.face_sources[f]) {
-        rows.face_sources.push_back(
-            {face_base + static_cast<std::int64_t>(f), object.id, s.node, s.face});
-      }
-    }
-    std::set<std::string> types;
-    for (const PrimitiveInfo& p : object.primitives) {
-      PrimitiveRecord r;
-      r.object_id = object.id;
-      if (p.node >= 0) r.node = p.node;
-      r.primitive_id = p.id;
-      r.type = p.type;
-      r.inliers = p.inliers;
-      r.fit_rms = p.rms;
-      r.fit_coverage = p.coverage;
-      rows.primitives.push_back(std::move(r));
-      types.insert(p.type);
-    }
-
-    ObjectRecord o;
-    o.object_id = object.id;
-    o.cell = object.cell;
-    o.shape_id = base[static_cast<int>(root.kind())];
-    o.primitive_count = static_cast<std::int64_t>(object.primitives.size());
-    for (const std::string& t : types)
-      o.primitive_types += (o.primitive_types.empty() ? "" : ",") + t;
-    const kernel::MassProperties mp = kernel::mass_properties(root);
-    o.volume = mp.volume;
-    o.area = mp.area;
-    o.bounds = map_box(mp.bounds, options);
-    o.valid = model_valid(object);
-    const FitSummary fit = fit_summary(object.primitives);
-    o.fit_rms = fit.rms;
-    o.fit_coverage = fit.coverage;
-    o.fit_within_2sigma = fit.within_2sigma;
-    if (const auto& m = object.model_fit) {
-      o.model_rmse = m->rmse;
-      o.model_points = m->points;
-      o.model_within_2sigma = m->within_2sigma;
-    }
-    auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
-                                      maps[static_cast<int>(ShapeKind::Edge)], options);
-    if (boundary.ok()) {
-      o.boundary = std::move(boundary).value();
-      o.has_geometry = !o.boundary.empty();
-    } else {
-      stats.warnings.push_back("object " + object.id + ": no boundary geometry: " +
-                               kernel::error_code_name(boundary.error().code) + ": " +
-                               boundary.error().message);
-    }
-    add_building_columns(object, options, mp.bounds, o, stats);
-    rows.objects.push_back(std::move(o));
+    ObjectRows part = object_rows(object, options);
+    offset_ids(part.rows, next_id - 1);
+    next_id += part.ids;
+    append_rows(rows, part.rows);
+    for (std::string& w : part.warnings) stats.warnings.push_back(std::move(w));
   }
 
   if (options.relations) rows.relations = relation_records(objects, options, stats);
@@ -552,21 +605,68 @@ Failure write_topology_index(const std::filesystem::path& path,
   IndexStats local;
   IndexStats& s = stats != nullptr ? *stats : local;
   s = IndexStats{};
-  auto rows = detail::build_index_rows(objects, options, s);
-  if (!rows.ok()) return rows.error();
-  const detail::IndexRows& r = rows.value();
+  if (Failure st = detail::check_objects(objects, options); !st.ok()) return st;
+  std::vector<detail::RelationRecord> relations;
+  if (options.relations) relations = detail::relation_records(objects, options, s);
+  // Streamed: each object's rows built on the options' threads, at most a few objects ahead
+  // of the writer, and written in object order with their ids moved after the objects
+  // before (the same file as build_index_rows + write_gpkg, row for row).
   if (Failure f = write_atomically(
-          path, [&](const std::string& tmp) { return detail::write_gpkg(tmp, r, options); });
+          path,
+          [&](const std::string& tmp) {
+            detail::GpkgRowWriter writer;
+            if (Failure opened = writer.open(tmp, options); !opened.ok()) {
+              writer.finish({});
+              return opened;
+            }
+            const std::size_t threads = static_cast<std::size_t>(
+                options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
+            tbb::task_arena arena(static_cast<int>(threads));
+            std::size_t next = 0;
+            std::int64_t next_id = 1;
+            std::atomic<bool> failed{false};
+            arena.execute([&] {
+              tbb::parallel_pipeline(
+                  2 * threads,
+                  tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                                      [&](tbb::flow_control& fc) -> std::size_t {
+                                                        if (next == objects.size() ||
+                                                            failed.load()) {
+                                                          fc.stop();
+                                                          return 0;
+                                                        }
+                                                        return next++;
+                                                      }) &
+                      tbb::make_filter<std::size_t, std::shared_ptr<detail::ObjectRows>>(
+                          tbb::filter_mode::parallel,
+                          [&](std::size_t i) {
+                            return std::make_shared<detail::ObjectRows>(
+                                detail::object_rows(objects[i], options));
+                          }) &
+                      tbb::make_filter<std::shared_ptr<detail::ObjectRows>, void>(
+                          tbb::filter_mode::serial_in_order,
+                          [&](const std::shared_ptr<detail::ObjectRows>& part) {
+                            detail::offset_ids(part->rows, next_id - 1);
+                            next_id += part->ids;
+                            for (std::string& w : part->warnings) {
+                              s.warnings.push_back(std::move(w));
+                            }
+                            const detail::IndexRows& r = part->rows;
+                            s.objects += r.objects.size();
+                            s.shapes += r.shapes.size();
+                            s.children += r.children.size();
+                            s.ancestors += r.ancestors.size();
+                            s.csg_nodes += r.csg_nodes.size();
+                            s.primitives += r.primitives.size();
+                            if (!writer.add(r).ok()) failed = true;
+                          }));
+            });
+            return writer.finish(relations);
+          });
       !f.ok()) {
     return f;
   }
-  s.objects = r.objects.size();
-  s.shapes = r.shapes.size();
-  s.children = r.children.size();
-  s.ancestors = r.ancestors.size();
-  s.relations = r.relations.size() / 2;  // rows come in both directions
-  s.csg_nodes = r.csg_nodes.size();
-  s.primitives = r.primitives.size();
+  s.relations = relations.size() / 2;  // rows come in both directions
   std::error_code ec;
   s.bytes = std::filesystem::file_size(path, ec);
   return {};
