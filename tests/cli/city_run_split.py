@@ -6,7 +6,8 @@
     city.halo: its point count equals the LAS reference's points inside that box;
   * with the BGT footprints, every footprint that the whole tile's run (split_points 0, the
     same cells) publishes as a building is published once, in one cell, by the blocks' run;
-  * the blocks' runs are deterministic: a second run with two threads writes the same cells.
+  * the blocks' runs are deterministic: a second run with two threads writes the same cells;
+  * a tiles.json entry it cannot read fails the run, naming the entry.
 Real data: ../shared/data/laz/ahn3_cropped_2.laz (AHN3 Delft, 208 432 points) with its LAS
 reference, footprints ../shared/data/3dfier/bgt_pand.sqlite. Skips with a message when absent.
 Usage: city_run_split.py CSGTILE SOURCE_DIR WORKDIR"""
@@ -29,7 +30,7 @@ for path in (laz, reference, footprints):
         sys.exit(0)
 shutil.rmtree(work, ignore_errors=True)
 os.makedirs(work)
-CELL, HALO, SPLIT = 50.0, 40.0, 90000
+CELL, HALO, SPLIT = 50.0, 40.0, 150000
 
 
 def reference_points():
@@ -105,4 +106,14 @@ rundir2, _, _, _ = run("blocks2", SPLIT, threads=2)
 for seq in sorted(glob.glob(f"{rundir}/cells/*/model.city.jsonl")):
     other = seq.replace(rundir, rundir2)
     assert open(seq, "rb").read() == open(other, "rb").read(), seq
+# A tiles.json it cannot read fails the run naming the entry: a run never goes on without
+# some of its tiles.
+tiles_json = f"{rundir}/tiles.json"
+doc = json.load(open(tiles_json))
+doc["tiles"][1] = {"input": doc["tiles"][1]["input"], "block": [1, 2, 0]}
+json.dump(doc, open(tiles_json, "w"))
+p = subprocess.run([binary, "run", f"{work}/blocks.yaml", "--json"], capture_output=True,
+                   text=True)
+assert p.returncode != 0, p.stdout
+assert "tile entry" in p.stdout + p.stderr, p.stdout + p.stderr
 print("ok")

@@ -159,11 +159,19 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       return std::size_t{0};
     }
     if (options_.region) {
-      // Keep the points inside the region (a point with a NaN coordinate is inside none).
+      // Keep the points inside the region (a point with a NaN coordinate is inside none). One
+      // it leaves out that lies outside the header's bounds is counted all the same: a region
+      // of the file (a block of a large tile) must not hide the file's stray points.
       const Bounds3& r = *options_.region;
+      const auto& tol = info_.bounds_tolerance;
       keep_points(batch, [&](const Point& p) {
-        return p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] && p.y <= r.max[1] &&
-               p.z >= r.min[2] && p.z <= r.max[2];
+        const bool inside = p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] &&
+                            p.y <= r.max[1] && p.z >= r.min[2] && p.z <= r.max[2];
+        if (!inside && info_.bounds && std::isfinite(p.x) && std::isfinite(p.y) &&
+            std::isfinite(p.z) && !info_.bounds->contains(p.x, p.y, p.z, tol)) {
+          if (outside_bounds_++ == 0) first_outside_ = p;
+        }
+        return inside;
       });
     }
     // One pass for the common case: the batch's bounds and a non-finite detector (v·0 is 0

@@ -192,31 +192,39 @@ Failure cells_between(const std::string& input, const kernel::Grid& grid, const 
 }
 
 // The blocks of cells a LAS/LAZ input is fitted in (city.split_points): square blocks of as
-// many cells as hold about split_points points at the density its header declares (its count
-// over the cells its bounds cover), from the first cell of its bounds. Empty (one fit job for
-// the file) when it declares no more points than that, when one block would cover it, or when
-// its header cannot be read locally (its fit job then fails with the reader's reason); a URL
-// whose header cannot be fetched in transit fails the enqueue (Network), so that a run's
-// tiles never depend on a passing failure.
+// many cells as hold about split_points points at the density its header declares (its
+// readable points over the area of its bounds, a side shorter than a cell counted as a
+// cell), from the first cell of its bounds; a block is one cell at least. Empty (one fit job
+// for the file) when it declares no more points than that, when one block would cover it,
+// when its bounds cover more than 10^6 cells, or when its header cannot be read locally (its
+// fit job then fails with the reader's reason); a URL whose header cannot be fetched in
+// transit fails the enqueue (Network), so that a run's tiles never depend on a passing failure.
 Failure split_blocks(const std::string& input, const config::Config& config,
-                     std::vector<CellBlock>& blocks) {
+                     std::vector<CellBlock>& blocks, std::optional<Extent>& bounds) {
   blocks.clear();
+  bounds.reset();
   if (config.city.split_points == 0 || !is_las_name(input) || is_copc_name(input)) return {};
   std::unique_ptr<geo::LasReader> reader;
   if (Failure f = fetch::open_las(input, fetch::policy_of(config.fetch), reader); !f.ok()) {
     return f.code == ErrorCode::Network ? f : Failure{};
   }
   const geo::LasHeader& h = reader->header();
-  if (h.point_count <= config.city.split_points) return {};
+  if (h.min[0] <= h.max[0] && h.min[1] <= h.max[1]) {
+    bounds = Extent{h.min[0], h.min[1], h.max[0], h.max[1]};
+  }
+  // The records the file holds (a header is not trusted past them).
+  const std::uint64_t points = reader->readable_points();
+  if (points <= config.city.split_points) return {};
   kernel::GridCell low, high;
   bool empty = false;
-  if (Failure f = cells_between(input, detail::run_grid(config), h, low, high, empty); !f.ok()) {
-    return f;
+  if (!cells_between(input, detail::run_grid(config), h, low, high, empty).ok() || empty) {
+    return {};
   }
-  if (empty) return {};
   const std::int64_t columns = high.column - low.column + 1;
   const std::int64_t rows = high.row - low.row + 1;
-  const double per_cell = static_cast<double>(h.point_count) / static_cast<double>(columns * rows);
+  const double cell = config.city.cell_size;
+  const double area = std::max(h.max[0] - h.min[0], cell) * std::max(h.max[1] - h.min[1], cell);
+  const double per_cell = static_cast<double>(points) * cell * cell / area;
   const auto side = std::max<std::int64_t>(
       1, static_cast<std::int64_t>(
              std::floor(std::sqrt(static_cast<double>(config.city.split_points) / per_cell))));
@@ -277,11 +285,14 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
   }
   out.clear();
   std::set<std::string> seen;
+  std::map<std::string, Extent> header_bounds;
   for (const std::string& input : expanded) {
     if (!is_tile_input(input) || !seen.insert(input).second) continue;
     if (!is_copc_name(input)) {
       std::vector<CellBlock> blocks;
-      if (Failure f = split_blocks(input, config, blocks); !f.ok()) return f;
+      std::optional<Extent> bounds;
+      if (Failure f = split_blocks(input, config, blocks, bounds); !f.ok()) return f;
+      if (bounds) header_bounds[input] = *bounds;  // read once
       if (blocks.empty()) out.push_back({input, input, std::nullopt, out.size()});
       const kernel::Grid grid = detail::run_grid(config);
       for (const CellBlock& b : blocks) {
@@ -305,6 +316,10 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
   if (plain < 2) return {};
   for (Tile& t : out) {
     if (t.cell || t.block || !is_las_name(t.input)) continue;
+    if (const auto it = header_bounds.find(t.input); it != header_bounds.end()) {
+      t.extent = it->second;
+      continue;
+    }
     std::unique_ptr<geo::LasReader> reader;
     if (!fetch::open_las(t.input, fetch::policy_of(config.fetch), reader).ok()) continue;
     const geo::LasHeader& h = reader->header();
@@ -320,48 +335,62 @@ std::filesystem::path tiles_file(const config::Config& config) {
 }
 
 /// The run's tiles as fixed when it was first enqueued (<run dir>/tiles.json: an input
-/// string, or {"input", "cell": [column, row]} for a cell of a COPC input), so that tiles
-/// added to an input directory later do not change a run under way; empty before that.
-std::vector<Tile> tile_inputs(const config::Config& config) {
+/// string; {"input", "extent": [xmin, ymin, xmax, ymax]} for a LAS/LAZ tile among several;
+/// {"input", "cell": [column, row]} for a cell of a COPC input; {"input", "block": [first
+/// column, first row, last column, last row]} for a block of a tile over city.split_points),
+/// so that tiles added to an input directory later do not change a run under way; before
+/// that, the inputs expanded now. Error: Internal naming an entry it does not read (a run
+/// must never go on without some of its tiles).
+Failure tile_inputs(const config::Config& config, std::vector<Tile>& out) {
   std::string text;
-  std::vector<Tile> out;
+  out.clear();
   if (!detail::read_file(tiles_file(config), text).ok()) {
     if (!expand_tile_inputs(config, out).ok()) out.clear();
-    return out;
+    return {};
   }
   const auto doc = nlohmann::json::parse(text, nullptr, false);
-  if (!doc.is_object() || !doc.contains("tiles") || !doc["tiles"].is_array()) return out;
+  const std::string file = tiles_file(config).string();
+  if (!doc.is_object() || !doc.contains("tiles") || !doc["tiles"].is_array()) {
+    return {ErrorCode::Internal, file + " is not a list of tiles"};
+  }
+  auto integers = [](const nlohmann::json& v, std::size_t n) {
+    return v.is_array() && v.size() == n &&
+           std::all_of(v.begin(), v.end(),
+                       [](const nlohmann::json& x) { return x.is_number_integer(); });
+  };
+  const kernel::Grid grid = detail::run_grid(config);
   for (const auto& t : doc["tiles"]) {
     if (t.is_string()) {
       out.push_back({t.get<std::string>(), t.get<std::string>(), std::nullopt, out.size()});
-    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
-               t.contains("extent") && t["extent"].is_array() && t["extent"].size() == 4) {
+      continue;
+    }
+    const bool has_input = t.is_object() && t.contains("input") && t["input"].is_string();
+    const std::string input = has_input ? t["input"].get<std::string>() : std::string();
+    if (has_input && t.contains("extent") && t["extent"].is_array() && t["extent"].size() == 4 &&
+        std::all_of(t["extent"].begin(), t["extent"].end(),
+                    [](const nlohmann::json& x) { return x.is_number(); })) {
       Extent e{};
       for (std::size_t k = 0; k < 4; ++k) e[k] = t["extent"][k].get<double>();
-      const std::string input = t["input"].get<std::string>();
       out.push_back({input, input, std::nullopt, out.size(), e});
-    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
-               t.contains("block") && t["block"].is_array() && t["block"].size() == 4 &&
-               std::all_of(t["block"].begin(), t["block"].end(),
-                           [](const nlohmann::json& v) { return v.is_number_integer(); })) {
+    } else if (has_input && t.contains("block") && integers(t["block"], 4) &&
+               t["block"][0].get<std::int64_t>() <= t["block"][2].get<std::int64_t>() &&
+               t["block"][1].get<std::int64_t>() <= t["block"][3].get<std::int64_t>()) {
       const auto& c = t["block"];
       const CellBlock b{{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()},
                         {c[2].get<std::int64_t>(), c[3].get<std::int64_t>()}};
-      const kernel::Grid grid = detail::run_grid(config);
       const Extent e{grid.edge_x(b.first.column), grid.edge_y(b.first.row),
                      grid.edge_x(b.last.column + 1), grid.edge_y(b.last.row + 1)};
-      const std::string input = t["input"].get<std::string>();
       out.push_back({input + " @" + b.name(), input, std::nullopt, out.size(), e, b});
-    } else if (t.is_object() && t.contains("input") && t["input"].is_string() &&
-               t.contains("cell") && t["cell"].is_array() && t["cell"].size() == 2 &&
-               t["cell"][0].is_number_integer() && t["cell"][1].is_number_integer()) {
+    } else if (has_input && t.contains("cell") && integers(t["cell"], 2)) {
       const kernel::GridCell cell{t["cell"][0].get<std::int64_t>(),
                                   t["cell"][1].get<std::int64_t>()};
-      const std::string input = t["input"].get<std::string>();
       out.push_back({input + " @" + cell.name(), input, cell, out.size()});
+    } else {
+      out.clear();
+      return {ErrorCode::Internal, file + ": tile entry " + t.dump() + " is not one it reads"};
     }
   }
-  return out;
+  return {};
 }
 
 }  // namespace
@@ -393,7 +422,8 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
     if (Failure f = write_file_atomic(tiles_file(config), doc.dump(2) + "\n"); !f.ok()) return f;
   }
   // Each LAS/LAZ tile's neighbours: the tiles that can own a building it sees.
-  const std::vector<Tile> tiles = tile_inputs(config);
+  std::vector<Tile> tiles;
+  if (Failure f = tile_inputs(config, tiles); !f.ok()) return f;
   // A cell of a COPC input: the cell's square.
   const kernel::Grid grid = detail::run_grid(config);
   auto extent_of = [&grid](const Tile& t) -> std::optional<Extent> {
@@ -443,7 +473,8 @@ Failure advance(const config::Config& config, JobQueue& queue, const Logger& log
   const QueueCounts counts = queue.counts(failure);
   if (!failure.ok()) return failure;
   if (counts.unfinished() > 0) return {};
-  const auto tiles = tile_inputs(config);
+  std::vector<Tile> tiles;
+  if (Failure f = tile_inputs(config, tiles); !f.ok()) return f;
   if (tiles.empty()) return {};
   const auto results = queue.results(failure);
   if (!failure.ok()) return failure;
@@ -552,7 +583,8 @@ Failure advance_city_run(const config::Config& config, JobQueue& queue, const Lo
 Failure city_progress(const config::Config& config, JobQueue& queue, CityProgress& progress) {
   progress = CityProgress{};
   const std::string& run = config.run.name;
-  const auto tiles = tile_inputs(config);
+  std::vector<Tile> tiles;
+  if (Failure f = tile_inputs(config, tiles); !f.ok()) return f;
   progress.tiles = tiles.size();
   Failure failure;
   const auto results = queue.results(failure);

@@ -51,9 +51,11 @@ std::string fit_key(const std::string& run, const std::string& input);
 std::string assemble_key(const std::string& run, const std::string& cell);
 std::string index_key(const std::string& run);
 
-/// Enqueues one fit job per distinct tile input of the run; `added` counts new ones. The
+/// Enqueues one fit job per tile of the run — a distinct tile input, a cell of a COPC input,
+/// a block of cells of a LAS/LAZ input over city.split_points; `added` counts new ones. The
 /// first enqueue fixes the run's tile list in <run dir>/tiles.json (a directory input is
-/// expanded then), so tiles added later do not change a run under way.
+/// expanded then), so tiles added later do not change a run under way. Errors: as the
+/// readers of the inputs' headers; Internal for a tiles.json it cannot read.
 Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t& added);
 
 /// Enqueues the run's assemble jobs once every fit is done or dead, and its index job once

@@ -59,8 +59,8 @@ struct TileNeighbours {
   TileNeighbourhood where;
   std::vector<std::filesystem::path> paths;
   std::vector<std::string> skipped;  ///< "input: reason" of those the job could not fetch
-  /// The tile's own read holds its neighbours' points too (a cell of a COPC input, read with
-  /// its halo): each point is its owner's (owns_point).
+  /// The tile's own read holds its neighbours' points too (a cell of a COPC input or a block
+  /// of a large tile, read with its halo): each point is its owner's (owns_point).
   bool own_read_is_shared = false;
 };
 

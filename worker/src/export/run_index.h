@@ -68,7 +68,7 @@ struct RunObjects {
 struct RunExportOptions {
   double chordal_tolerance = 0.0;  ///< kernel.chordal_tolerance: tessellation, LoD rings
   double linear_tolerance = 0.0;   ///< kernel.linear_tolerance: LoD footprints and checks
-  int threads = 0;                 ///< run.threads: the index's relations; 0 = all cores
+  int threads = 0;                 ///< run.threads: the index's relations and rows; 0 = all cores
 };
 
 /// The jobs of a scene run whose objects are collected: `inputs` in run order (one build job

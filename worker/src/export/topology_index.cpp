@@ -1,6 +1,7 @@
 // Rows of the topology index from objects: stable ids, the child and ancestor maps, the
 // objects layer's boundary polygons, CSG nodes, face sources, primitives and relations.
 
+#include <tbb/info.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
@@ -589,7 +590,14 @@ Failure write_atomically(const std::filesystem::path& path,
   std::filesystem::create_directories(dir, ec);
   if (ec) return {ErrorCode::Io, "cannot create directory " + dir.string() + ": " + ec.message()};
   const std::filesystem::path tmp = temp_path_beside(path, "tmp");
-  if (Failure written = write(tmp.string()); !written.ok()) {
+  Failure written;
+  try {
+    written = write(tmp.string());
+  } catch (...) {
+    std::filesystem::remove(tmp, ec);  // nothing half-written is left beside `path`
+    throw;
+  }
+  if (!written.ok()) {
     std::filesystem::remove(tmp, ec);
     return written;
   }
@@ -619,13 +627,17 @@ Failure write_topology_index(const std::filesystem::path& path,
               writer.finish({});
               return opened;
             }
-            const std::size_t threads = static_cast<std::size_t>(
-                options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency());
-            tbb::task_arena arena(static_cast<int>(threads));
+            // The options' threads (0: one per core); the caller's own arena when it has
+            // that many already (a cell's exports run in the run.threads arena).
+            const int wanted =
+                options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+            const auto threads = static_cast<std::size_t>(wanted);
+            std::optional<tbb::task_arena> arena;
+            if (tbb::this_task_arena::max_concurrency() != wanted) arena.emplace(wanted);
             std::size_t next = 0;
             std::int64_t next_id = 1;
             std::atomic<bool> failed{false};
-            arena.execute([&] {
+            auto stream = [&] {
               tbb::parallel_pipeline(
                   2 * threads,
                   tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
@@ -660,7 +672,12 @@ Failure write_topology_index(const std::filesystem::path& path,
                             s.primitives += r.primitives.size();
                             if (!writer.add(r).ok()) failed = true;
                           }));
-            });
+            };
+            if (arena) {
+              arena->execute(stream);
+            } else {
+              stream();
+            }
             return writer.finish(relations);
           });
       !f.ok()) {

@@ -152,7 +152,8 @@ struct IndexOptions {
   double linear_tolerance = 1e-7;
   /// Compute object_relations (Booleans over candidate pairs); off leaves the table empty.
   bool relations = true;
-  /// Threads for the relations' Booleans (0: one per core). The output does not depend on it.
+  /// Threads for the relations' Booleans and for building the objects' rows ahead of the one
+  /// writer (0: one per core). The output does not depend on it.
   int threads = 0;
   /// gpkg_contents.last_change of every table. Fixed by default so that the same objects give
   /// the same bytes; a caller that wants the wall clock passes it (format %Y-%m-%dT%H:%M:%fZ).
