@@ -15,9 +15,12 @@ Usage: city_run_copc.py CSGTILE SOURCE_DIR WORKDIR"""
 import json
 import os
 import shutil
-import struct
 import subprocess
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from city_runs import run_city  # noqa: E402
+from las_xy import count_in_cells, las_xy  # noqa: E402
 import urllib.request
 
 binary, source, work = sys.argv[1:4]
@@ -33,18 +36,7 @@ CELL, HALO = 2000.0, 50.0
 
 
 def reference_points():
-    with open(reference, "rb") as f:
-        data = f.read()
-    offset = struct.unpack_from("<I", data, 96)[0]
-    length = struct.unpack_from("<H", data, 105)[0]
-    count = struct.unpack_from("<Q", data, 247)[0]
-    scale = struct.unpack_from("<3d", data, 131)
-    origin = struct.unpack_from("<3d", data, 155)
-    out = []
-    for i in range(count):
-        x, y, _ = struct.unpack_from("<3i", data, offset + i * length)
-        out.append((x * scale[0] + origin[0], y * scale[1] + origin[1]))
-    return out
+    return las_xy(reference)
 
 
 def run(name, inp):
@@ -52,12 +44,7 @@ def run(name, inp):
     with open(path, "w") as f:
         f.write(f"run:\n  name: {name}\n  inputs:\n    - {inp}\n  output: {work}/{name}\n"
                 f"city:\n  cell_size: {CELL}\n  halo: {HALO}\nlog:\n  level: warn\n")
-    p = subprocess.run([binary, "run", path, "--json"], capture_output=True, text=True)
-    assert p.returncode == 0, f"{name}: exit {p.returncode}\n{p.stdout}\n{p.stderr}"
-    rundir = f"{work}/{name}/runs/{name}"
-    manifest = json.load(open(f"{rundir}/manifest.json"))
-    assert manifest["dead"] == [], manifest["dead"]
-    tiles = json.load(open(f"{rundir}/tiles.json"))["tiles"]
+    manifest, tiles = run_city(binary, path, f"{work}/{name}/runs/{name}")
     records = {j["result"]["cell"]: j["result"] for j in manifest["jobs"]
                if j["key"].startswith("fit:") and "cell" in j.get("result", {})}
     return manifest, tiles, records
@@ -68,9 +55,7 @@ manifest, tiles, records = run("local", copc)
 assert len(tiles) > 1 and all(isinstance(t, dict) and "cell" in t for t in tiles), tiles
 for t in tiles:
     column, row = t["cell"]
-    x0, y0 = column * CELL - HALO, row * CELL - HALO
-    x1, y1 = (column + 1) * CELL + HALO, (row + 1) * CELL + HALO
-    inside = sum(1 for x, y in points if x0 <= x <= x1 and y0 <= y <= y1)
+    inside = count_in_cells(points, CELL, HALO, (column, row), (column, row))
     name = f"c{column}_r{row}"
     assert name in records, (name, sorted(records))
     assert records[name]["points"] == inside, (name, records[name]["points"], inside)

@@ -15,9 +15,12 @@ import glob
 import json
 import os
 import shutil
-import struct
 import subprocess
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from city_runs import run_city  # noqa: E402
+from las_xy import count_in_cells, las_xy  # noqa: E402
 
 binary, source, work = sys.argv[1:4]
 data = os.path.join(source, "..", "shared", "data")
@@ -34,18 +37,7 @@ CELL, HALO, SPLIT = 50.0, 40.0, 150000
 
 
 def reference_points():
-    with open(reference, "rb") as f:
-        data = f.read()
-    offset = struct.unpack_from("<I", data, 96)[0]
-    length = struct.unpack_from("<H", data, 105)[0]
-    count = struct.unpack_from("<I", data, 107)[0]
-    scale = struct.unpack_from("<3d", data, 131)
-    origin = struct.unpack_from("<3d", data, 155)
-    out = []
-    for i in range(count):
-        x, y, _ = struct.unpack_from("<3i", data, offset + i * length)
-        out.append((x * scale[0] + origin[0], y * scale[1] + origin[1]))
-    return out
+    return las_xy(reference)
 
 
 def run(name, split, threads=1):
@@ -56,12 +48,8 @@ def run(name, split, threads=1):
                 f"city:\n  cell_size: {CELL:g}\n  halo: {HALO:g}\n  split_points: {split}\n"
                 f"  footprints: {footprints}\n  footprints_layer: buildingpart\n"
                 "log:\n  level: warn\n")
-    p = subprocess.run([binary, "run", path, "--json"], capture_output=True, text=True)
-    assert p.returncode == 0, f"{name}: exit {p.returncode}\n{p.stdout}\n{p.stderr}"
     rundir = f"{work}/{name}/runs/{name}"
-    manifest = json.load(open(f"{rundir}/manifest.json"))
-    assert manifest["dead"] == [], manifest["dead"]
-    tiles = json.load(open(f"{rundir}/tiles.json"))["tiles"]
+    manifest, tiles = run_city(binary, path, rundir)
     fits = [j["result"] for j in manifest["jobs"] if j["key"].startswith("fit:")]
     # Footprint id -> the cells publishing a Building of it.
     published = {}
@@ -84,9 +72,7 @@ by_block = {f["block"]: f for f in fits}
 assert len(by_block) == len(tiles), (sorted(by_block), tiles)
 for t in tiles:
     c0, r0, c1, r1 = t["block"]
-    x0, y0 = c0 * CELL - HALO, r0 * CELL - HALO
-    x1, y1 = (c1 + 1) * CELL + HALO, (r1 + 1) * CELL + HALO
-    inside = sum(1 for x, y in points if x0 <= x <= x1 and y0 <= y <= y1)
+    inside = count_in_cells(points, CELL, HALO, (c0, r0), (c1, r1))
     name = f"c{c0}_r{r0}-c{c1}_r{r1}"
     assert name in by_block, (name, sorted(by_block))
     assert by_block[name]["points"] == inside, (name, by_block[name]["points"], inside)
