@@ -143,6 +143,14 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
   if (max == 0) {
     return kernel::Error{ErrorCode::InvalidArgument, name_ + ": read() needs max >= 1"};
   }
+  // Counts a finite point outside the header's bounds (beyond their tolerance), keeping the
+  // first for the warning.
+  const auto note_stray = [this](const Point& p) {
+    if (info_.bounds && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+        !info_.bounds->contains(p.x, p.y, p.z, info_.bounds_tolerance)) {
+      if (outside_bounds_++ == 0) first_outside_ = p;
+    }
+  };
   for (;;) {
     // read_records sets the batch's size itself: a reused batch of the same size is not
     // re-initialised (that pass costs as much as decoding LAS records).
@@ -163,14 +171,10 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
       // it leaves out that lies outside the header's bounds is counted all the same: a region
       // of the file (a block of a large tile) must not hide the file's stray points.
       const Bounds3& r = *options_.region;
-      const auto& tol = info_.bounds_tolerance;
       keep_points(batch, [&](const Point& p) {
         const bool inside = p.x >= r.min[0] && p.x <= r.max[0] && p.y >= r.min[1] &&
                             p.y <= r.max[1] && p.z >= r.min[2] && p.z <= r.max[2];
-        if (!inside && info_.bounds && std::isfinite(p.x) && std::isfinite(p.y) &&
-            std::isfinite(p.z) && !info_.bounds->contains(p.x, p.y, p.z, tol)) {
-          if (outside_bounds_++ == 0) first_outside_ = p;
-        }
+        if (!inside) note_stray(p);
         return inside;
       });
     }
@@ -207,12 +211,7 @@ kernel::Result<std::size_t> PointReader::read(PointBatch& batch, std::size_t max
                                  tol) &&
           info_.bounds->contains(batch_bounds.max[0], batch_bounds.max[1], batch_bounds.max[2],
                                  tol))) {
-      for (const Point& p : batch.points) {
-        if (!info_.bounds->contains(p.x, p.y, p.z, tol) && std::isfinite(p.x) &&
-            std::isfinite(p.y) && std::isfinite(p.z)) {
-          if (outside_bounds_++ == 0) first_outside_ = p;
-        }
-      }
+      for (const Point& p : batch.points) note_stray(p);
     }
     points_read_ += batch.points.size();
     if (!batch.points.empty()) return batch.points.size();

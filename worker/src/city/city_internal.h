@@ -1,9 +1,11 @@
 #pragma once
 // Shared pieces of the city jobs (city_jobs.h): the cell grid, files and records.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <stop_token>
 #include <string>
@@ -29,6 +31,21 @@ using nlohmann::ordered_json;
 /// all jobs agree bit for bit; an object's cell is the least (GridCell's order) of its
 /// primitives' anchor cells, which every one of them had an assemble job for.
 kernel::Grid run_grid(const config::Config& config);
+
+/// Cells first..last (columns and rows) of the run's grid: a block of a LAS/LAZ tile over
+/// city.split_points, fitted by one job (a COPC cell is a block of one cell).
+struct CellBlock {
+  kernel::GridCell first;
+  kernel::GridCell last;
+  /// "<first cell>-<last cell>", as job keys and fit records name it.
+  std::string name() const;
+  /// [first column, first row, last column, last row], as tiles.json and fit payloads hold it.
+  std::array<std::int64_t, 4> corners() const;
+  /// The square its cells cover, CRS coordinates: [xmin, ymin, xmax, ymax].
+  std::array<double, 4> extent(const kernel::Grid& grid) const;
+  /// From corners() (integers, first ≤ last in each axis); nullopt for anything else.
+  static std::optional<CellBlock> parse(const nlohmann::json& corners);
+};
 
 /// The box in CRS coordinates of a primitive read from a fit's scene file (tile `origin`
 /// added), or an empty box when it cannot be built. The fit job (on its scene file's parsed

@@ -82,6 +82,29 @@ Failure publish_native(std::string bytes, ObjectBatch& batch, PublishedModel& ou
   return batch.add(out.key, std::move(bytes));
 }
 
+std::string CellBlock::name() const { return first.name() + "-" + last.name(); }
+
+std::array<std::int64_t, 4> CellBlock::corners() const {
+  return {first.column, first.row, last.column, last.row};
+}
+
+std::array<double, 4> CellBlock::extent(const kernel::Grid& grid) const {
+  return {grid.edge_x(first.column), grid.edge_y(first.row), grid.edge_x(last.column + 1),
+          grid.edge_y(last.row + 1)};
+}
+
+std::optional<CellBlock> CellBlock::parse(const nlohmann::json& corners) {
+  if (!corners.is_array() || corners.size() != 4 ||
+      !std::all_of(corners.begin(), corners.end(),
+                   [](const nlohmann::json& v) { return v.is_number_integer(); })) {
+    return std::nullopt;
+  }
+  const CellBlock b{{corners[0].get<std::int64_t>(), corners[1].get<std::int64_t>()},
+                    {corners[2].get<std::int64_t>(), corners[3].get<std::int64_t>()}};
+  if (b.first.column > b.last.column || b.first.row > b.last.row) return std::nullopt;
+  return b;
+}
+
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out) {
   std::string bytes;
   if (Failure f = read_file(dir / key, bytes); !f.ok()) return f;
@@ -136,12 +159,7 @@ std::string index_key(const std::string& run) { return "index:" + run + ":run"; 
 
 namespace {
 
-/// Cells first.column..last.column × first.row..last.row of the run's grid.
-struct CellBlock {
-  kernel::GridCell first;
-  kernel::GridCell last;
-  std::string name() const { return first.name() + "-" + last.name(); }
-};
+using detail::CellBlock;
 
 /// One fit job's tile: an input file; one cell of a COPC input (`cell` set: the job reads
 /// the octree nodes meeting the cell grown by city.halo and shares the buildings across its
@@ -296,9 +314,8 @@ Failure expand_tile_inputs(const config::Config& config, std::vector<Tile>& out)
       if (blocks.empty()) out.push_back({input, input, std::nullopt, out.size()});
       const kernel::Grid grid = detail::run_grid(config);
       for (const CellBlock& b : blocks) {
-        const Extent e{grid.edge_x(b.first.column), grid.edge_y(b.first.row),
-                       grid.edge_x(b.last.column + 1), grid.edge_y(b.last.row + 1)};
-        out.push_back({input + " @" + b.name(), input, std::nullopt, out.size(), e, b});
+        out.push_back(
+            {input + " @" + b.name(), input, std::nullopt, out.size(), b.extent(grid), b});
       }
       continue;
     }
@@ -372,15 +389,10 @@ Failure tile_inputs(const config::Config& config, std::vector<Tile>& out) {
       Extent e{};
       for (std::size_t k = 0; k < 4; ++k) e[k] = t["extent"][k].get<double>();
       out.push_back({input, input, std::nullopt, out.size(), e});
-    } else if (has_input && t.contains("block") && integers(t["block"], 4) &&
-               t["block"][0].get<std::int64_t>() <= t["block"][2].get<std::int64_t>() &&
-               t["block"][1].get<std::int64_t>() <= t["block"][3].get<std::int64_t>()) {
-      const auto& c = t["block"];
-      const CellBlock b{{c[0].get<std::int64_t>(), c[1].get<std::int64_t>()},
-                        {c[2].get<std::int64_t>(), c[3].get<std::int64_t>()}};
-      const Extent e{grid.edge_x(b.first.column), grid.edge_y(b.first.row),
-                     grid.edge_x(b.last.column + 1), grid.edge_y(b.last.row + 1)};
-      out.push_back({input + " @" + b.name(), input, std::nullopt, out.size(), e, b});
+    } else if (const auto b =
+                   has_input && t.contains("block") ? CellBlock::parse(t["block"]) : std::nullopt) {
+      out.push_back(
+          {input + " @" + b->name(), input, std::nullopt, out.size(), b->extent(grid), *b});
     } else if (has_input && t.contains("cell") && integers(t["cell"], 2)) {
       const kernel::GridCell cell{t["cell"][0].get<std::int64_t>(),
                                   t["cell"][1].get<std::int64_t>()};
@@ -409,10 +421,7 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
       if (t.cell) {
         doc["tiles"].push_back({{"input", t.input}, {"cell", {t.cell->column, t.cell->row}}});
       } else if (t.block) {
-        doc["tiles"].push_back({{"input", t.input},
-                                {"block",
-                                 {t.block->first.column, t.block->first.row, t.block->last.column,
-                                  t.block->last.row}}});
+        doc["tiles"].push_back({{"input", t.input}, {"block", t.block->corners()}});
       } else if (t.extent) {
         doc["tiles"].push_back({{"input", t.input}, {"extent", *t.extent}});
       } else {
@@ -428,8 +437,7 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   const kernel::Grid grid = detail::run_grid(config);
   auto extent_of = [&grid](const Tile& t) -> std::optional<Extent> {
     if (!t.cell) return t.extent;
-    return Extent{grid.edge_x(t.cell->column), grid.edge_y(t.cell->row),
-                  grid.edge_x(t.cell->column + 1), grid.edge_y(t.cell->row + 1)};
+    return CellBlock{*t.cell, *t.cell}.extent(grid);
   };
   std::vector<TileExtent> extents;
   std::vector<std::size_t> of_tile(tiles.size(), SIZE_MAX);
@@ -443,10 +451,7 @@ Failure enqueue_fits(const config::Config& config, JobQueue& queue, std::size_t&
   for (const Tile& t : tiles) {
     nlohmann::json payload = {{"input", t.input}, {"tile", t.index}};
     if (t.cell) payload["cell"] = {t.cell->column, t.cell->row};
-    if (t.block) {
-      payload["block"] = {t.block->first.column, t.block->first.row, t.block->last.column,
-                          t.block->last.row};
-    }
+    if (t.block) payload["block"] = t.block->corners();
     if (of_tile[t.index] != SIZE_MAX) {
       payload["extent"] = extents[of_tile[t.index]].extent;
       payload["neighbours"] = nlohmann::json::array();

@@ -70,14 +70,11 @@ Failure run_fit_job(const Job& job, const std::filesystem::path& run_dir,
   // cell does.
   std::optional<std::string> block_name;
   if (payload.contains("block")) {
-    const auto& b = payload["block"];
-    if (!b.is_array() || b.size() != 4 ||
-        !std::all_of(b.begin(), b.end(), [](const auto& v) { return v.is_number_integer(); }) ||
-        !payload.contains("extent") || !payload.contains("neighbours")) {
+    const auto block = CellBlock::parse(payload["block"]);
+    if (!block || !payload.contains("extent") || !payload.contains("neighbours")) {
       return {ErrorCode::Internal, "job " + job.key + " has a malformed block"};
     }
-    block_name = kernel::GridCell{b[0].get<std::int64_t>(), b[1].get<std::int64_t>()}.name() + "-" +
-                 kernel::GridCell{b[2].get<std::int64_t>(), b[3].get<std::int64_t>()}.name();
+    block_name = block->name();
   }
   if (!source.remote) {
     if (Failure f = fetch::resolve_job_input(job, config, input, local); !f.ok()) return f;

@@ -119,7 +119,9 @@ inline constexpr std::pair<kernel::ShapeKind, kernel::ShapeKind> kAncestorPairs[
     {kernel::ShapeKind::Face, kernel::ShapeKind::Solid},
 };
 
-/// Builds every row. Errors: InputInvalid, GeometryInvalid (see write_topology_index).
+/// Builds every row at once: the reference the streamed write_topology_index (object_rows,
+/// offset_ids, GpkgRowWriter) is tested against. Errors: InputInvalid, GeometryInvalid (see
+/// write_topology_index).
 Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
                                    const IndexOptions& options, IndexStats& stats);
 
@@ -129,8 +131,9 @@ Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
 std::vector<RelationRecord> relation_records(const std::vector<IndexObject>& objects,
                                              const IndexOptions& options, IndexStats& stats);
 
-/// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it).
-/// Error: Io naming the path and SQLite's message.
+/// Writes the rows as a GeoPackage at `path` (which must not exist; the caller renames it),
+/// through one GpkgRowWriter: the all-at-once reference of the streamed index. Error: Io
+/// naming the path and SQLite's message.
 Failure write_gpkg(const std::string& path, const IndexRows& rows, const IndexOptions& options);
 
 /// The same file written object by object, so that only a few objects' rows are ever held:
