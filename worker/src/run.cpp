@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <tbb/task_arena.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -110,7 +111,11 @@ std::thread start_job(const Job& job, const std::filesystem::path& run_dir,
     // An exception out of a job (memory exhausted, a library's throw) fails that job with its
     // reason; the worker goes on with the next one.
     try {
-      out.failure = jobs::run_job(job, context, out.result, &out.timings);
+      // Every parallel algorithm of the job (the LAZ decoder, the fit, the blocks, the
+      // measures, the exports) in one arena of run.threads: the setting bounds the whole job.
+      tbb::task_arena arena(config.run.threads > 0 ? config.run.threads
+                                                   : tbb::task_arena::automatic);
+      arena.execute([&] { out.failure = jobs::run_job(job, context, out.result, &out.timings); });
     } catch (const std::exception& e) {
       out.result.clear();
       out.failure = {ErrorCode::Internal, "job " + job.key + " threw: " + e.what()};

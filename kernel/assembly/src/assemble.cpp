@@ -87,6 +87,13 @@ struct Tested {
   std::string error;
 };
 
+// A fused object's compound holds one solid: the result of one Boolean over all its
+// primitives (csg_combine fuses a connected group at once), checked by that Boolean.
+bool one_solid(const kernel::Shape& compound) {
+  return compound.kind() == kernel::ShapeKind::Compound && compound.child_count() == 1 &&
+         compound.child(0).kind() == kernel::ShapeKind::Solid;
+}
+
 bool within_xy(const kernel::BoundingBox& inner, const kernel::BoundingBox& outer) {
   return inner.min.x() >= outer.min.x() && inner.min.y() >= outer.min.y() &&
          inner.max.x() <= outer.max.x() && inner.max.y() <= outer.max.y();
@@ -386,8 +393,10 @@ kernel::Result<Assembly> assemble(const std::vector<AssemblyPrimitive>& primitiv
       }
       if (fused.ok()) {
         o.model = std::move(fused).value();
+        o.checked = one_solid(o.model.shape);
       } else if (escalated) {
         o.model = std::move(escalated->model);
+        o.checked = one_solid(o.model.shape);
         o.escalation = AssembledObject::Escalation{escalated->snap, fused.error().message};
       } else {
         o.fused = false;

@@ -267,7 +267,8 @@ kernel::Status add_footprint_pieces(const kernel::Shape& shape, const kernel::Me
 kernel::Result<kernel::CsgModel> fuse_block(std::vector<kernel::CsgModel> pieces,
                                             double tolerance) {
   kernel::CsgModel out;
-  if (pieces.size() == 1) {
+  const bool single = pieces.size() == 1;
+  if (single) {
     out = std::move(pieces.front());
   } else {
     kernel::BooleanOptions b;
@@ -281,7 +282,9 @@ kernel::Result<kernel::CsgModel> fuse_block(std::vector<kernel::CsgModel> pieces
     return kernel::Error{ErrorCode::DegenerateGeometry,
                          "the footprint is in " + std::to_string(solids) + " pieces"};
   }
-  if (!kernel::check_shape(out.shape).valid()) {
+  // One solid out of several pieces is one Boolean's result, which the fuse checked
+  // (BooleanOptions::check_result); a single piece is checked here.
+  if (single && !kernel::check_shape(out.shape).valid()) {
     return kernel::Error{ErrorCode::InvalidShape, "the block fails the validity checker"};
   }
   return out;

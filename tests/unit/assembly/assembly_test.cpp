@@ -245,6 +245,36 @@ TEST(Assembly, MixedCityVolumeMatchesMonteCarlo) {
   EXPECT_NEAR(volume, estimate, 4 * std::sqrt(variance)) << "σ = " << std::sqrt(variance);
 }
 
+// `checked` (the exporters' licence to skip the checker) is set exactly for the fused objects
+// of several primitives, and the checker agrees with it on every one.
+TEST(Assembly, CheckedObjectsAreTheFusedOnesAndPassTheChecker) {
+  const auto specs = test::random_city(80, 9);
+  auto a = assemble(labelled(specs));
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  int checked = 0, lone = 0;
+  for (const auto& obj : a->objects) {
+    const bool expected = obj.fused && obj.primitives.size() > 1;
+    EXPECT_EQ(obj.checked, expected) << obj.id;
+    if (obj.checked) {
+      ++checked;
+      EXPECT_TRUE(kernel::check_shape(obj.model.shape).valid()) << obj.id;
+    }
+    if (obj.primitives.size() == 1) ++lone;
+  }
+  EXPECT_GT(checked, 3);
+  EXPECT_GT(lone, 0);
+  // An object whose fuse fails is not checked: it is published as its unfused primitives.
+  AssemblyOptions limited;
+  limited.object_time_limit = 1e-9;  // passed before the fuse's first step
+  auto late = assemble(
+      labelled({test::box_at({0, 0, 0}, {1, 1, 1}), test::box_at({0.5, 0.5, 0.5}, {1, 1, 1})}),
+      limited);
+  ASSERT_TRUE(late.ok()) << late.error().message;
+  ASSERT_EQ(late->objects.size(), 1u);
+  EXPECT_FALSE(late->objects[0].fused);
+  EXPECT_FALSE(late->objects[0].checked);
+}
+
 std::string model_bytes(const std::vector<AssembledObject>& objects) {
   auto m = city_model(objects);
   EXPECT_TRUE(m.ok()) << m.error().message;

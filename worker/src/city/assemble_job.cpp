@@ -211,7 +211,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<std::string> native(kept.size());
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, kept.size(), [&](std::size_t i) {
-      valid[i] = kernel::check_shape(kept[i]->model.shape).valid() ? 1 : 0;
+      // A fused object's Boolean checked its result already (work done twice before).
+      valid[i] = kept[i]->checked || kernel::check_shape(kept[i]->model.shape).valid() ? 1 : 0;
       native[i] = kernel::write_native_model(kept[i]->model);
     });
   });

@@ -115,6 +115,10 @@ struct AssembledObject {
   /// primitive solids under the same tree, and `error` says why.
   kernel::CsgModel model;
   bool fused = true;
+  /// The model is one solid that a Boolean's result check (kernel::BooleanOptions::
+  /// check_result) found valid: exporters need not check it again. False for a lone
+  /// primitive and an unfused object, which are not checked here.
+  bool checked = false;
   std::string error;
   bool timed_out = false;  ///< the fuse reached AssemblyOptions::object_time_limit
   /// Set when the object fused only after escalation (AssemblyOptions::escalate_to): the snap
