@@ -68,9 +68,14 @@ for gpkg in gpkgs:
     db = sqlite3.connect(gpkg)
     srs = dict(db.execute("select table_name, srs_id from gpkg_contents").fetchall())
     assert srs.get("objects") == 28992, (gpkg, srs)
-    org = db.execute("select organization, organization_coordsys_id from gpkg_spatial_ref_sys "
-                     "where srs_id = 28992").fetchall()
-    assert org == [("EPSG", 28992)], (gpkg, org)
+    org = db.execute("select organization, organization_coordsys_id, definition "
+                     "from gpkg_spatial_ref_sys where srs_id = 28992").fetchall()
+    assert [r[:2] for r in org] == [("EPSG", 28992)], (gpkg, org)
+    # The row of the horizontal code holds the horizontal CRS (not the run's compound).
+    definition = org[0][2]
+    assert definition.startswith("PROJCS[") and 'AUTHORITY["EPSG","28992"]' in definition, \
+        (gpkg, definition)
+    assert "COMPD_CS" not in definition and "NAP" not in definition, (gpkg, definition)
     db.close()
 
 features = valid = 0

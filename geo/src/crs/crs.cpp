@@ -385,6 +385,10 @@ Result<Crs> crs_from_wkt(std::string_view wkt) {
 
 std::string crs_to_wkt1(const Crs& crs) { return detail::proj_wkt1(crs.definition); }
 
+std::string crs_to_horizontal_wkt1(const Crs& crs) {
+  return detail::proj_horizontal_wkt1(crs.definition, crs.epsg);
+}
+
 namespace detail {
 
 std::string normalise_name(std::string_view name) {

@@ -56,6 +56,10 @@ kernel::Result<Crs> crs_from_proj_text(std::string_view text, const std::string&
 
 /// PROJ's WKT 1 (GDAL dialect) of a definition; empty when PROJ cannot write it.
 std::string proj_wkt1(const std::string& definition);
+/// PROJ's WKT 1 (GDAL dialect) of a CRS's horizontal part: of EPSG code `epsg` from the
+/// database when it is above 0, else of `definition` (its first component when compound).
+/// Empty when PROJ cannot write it.
+std::string proj_horizontal_wkt1(const std::string& definition, int epsg);
 
 /// `proj_string` with the ellipsoid as PROJ parameters ("+a=… +rf=…", a sphere "+R=…")
 /// appended, unless it already names one (+ellps, +a, +R or +datum).

@@ -577,6 +577,26 @@ std::string proj_wkt1(const std::string& definition) {
   });
 }
 
+std::string proj_horizontal_wkt1(const std::string& definition, int epsg) {
+  if (epsg <= 0 && definition.empty()) return std::string();
+  // Once per run and cell: PROJ writes WKT 1 of a definition without identifiers by looking
+  // its names up (tens of milliseconds); from the database by code it is immediate.
+  static Memo<std::pair<std::string, int>, std::string> memo;
+  return memo.get({epsg > 0 ? std::string() : definition, epsg}, [&]() -> std::string {
+    Object crs(epsg > 0 ? proj_create_from_database(context(), "EPSG", std::to_string(epsg).c_str(),
+                                                    PJ_CATEGORY_CRS, 0, nullptr)
+                        : proj_create(context(), definition.c_str()));
+    if (!crs) return std::string();
+    const char* options[] = {"MULTILINE=NO", nullptr};
+    if (proj_get_type(crs.p) == PJ_TYPE_COMPOUND_CRS) {
+      Object horizontal(proj_crs_get_sub_crs(context(), crs.p, 0));
+      if (!horizontal) return std::string();
+      return text_of(proj_as_wkt(context(), horizontal.p, PJ_WKT1_GDAL, options));
+    }
+    return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
+  });
+}
+
 namespace {
 
 // A unit of measure of PROJ's database by EPSG code and category ("linear", "angular"): its

@@ -690,6 +690,36 @@ TEST(CrsWkt, Wkt1RoundTripsTheCityCodes) {
   }
 }
 
+// A GeoPackage's row for the horizontal code holds the horizontal CRS alone: from the
+// database by code (with its AUTHORITY), and from the definition's first component for a
+// compound CRS without a code.
+TEST(CrsWkt, HorizontalWkt1DropsTheVerticalPart) {
+  const Crs rd_nap = crs_from_epsg(28992, 5709).value();
+  ASSERT_TRUE(rd_nap.vertical.has_value());
+  const std::string wkt = crs_to_horizontal_wkt1(rd_nap);
+  EXPECT_EQ(wkt.rfind("PROJCS[", 0), 0u) << wkt;
+  EXPECT_EQ(wkt.find("COMPD_CS"), std::string::npos) << wkt;
+  EXPECT_EQ(wkt.find("NAP"), std::string::npos) << wkt;
+  EXPECT_NE(wkt.find("AUTHORITY[\"EPSG\",\"28992\"]"), std::string::npos) << wkt;
+  auto back = crs_from_wkt(wkt);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back.value().epsg, 28992);
+  EXPECT_FALSE(back.value().vertical.has_value());
+  // The whole CRS keeps its vertical part.
+  EXPECT_EQ(crs_to_wkt1(rd_nap).rfind("COMPD_CS[", 0), 0u);
+  // Without a code: the compound's horizontal component, read back as the same CRS.
+  Crs custom = crs_from_wkt(kRdNapWkt2).value();
+  custom.epsg = 0;
+  const std::string own = crs_to_horizontal_wkt1(custom);
+  EXPECT_EQ(own.rfind("PROJCS[", 0), 0u) << own;
+  auto again = crs_from_wkt(own);
+  ASSERT_TRUE(again.ok()) << again.error().message;
+  EXPECT_FALSE(again.value().vertical.has_value());
+  EXPECT_EQ(again.value().epsg, 28992);  // PROJ identifies it
+  // A geographic CRS is written as itself.
+  EXPECT_EQ(crs_to_horizontal_wkt1(crs_from_epsg(4326).value()).rfind("GEOGCS[", 0), 0u);
+}
+
 TEST(CrsWkt, ErrorsAreNamed) {
   auto syntax = crs_from_wkt(R"wkt(PROJCS["x",GEOGCS["y")wkt");
   ASSERT_FALSE(syntax.ok());

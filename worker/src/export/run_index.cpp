@@ -212,7 +212,7 @@ Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
     options.srs.organization = "EPSG";
     options.srs.organization_coordsys_id = horizontal.epsg;
     options.srs.name = horizontal.name;
-    options.srs.definition_wkt = geo::crs_to_wkt1(horizontal);
+    options.srs.definition_wkt = geo::crs_to_horizontal_wkt1(horizontal);
     const kernel::Vec3 origin = run.origin;
     options.to_srs = [origin](const kernel::Vec3& p) { return kernel::Vec3(p + origin); };
   }

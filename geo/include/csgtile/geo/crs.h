@@ -219,4 +219,10 @@ std::string describe_crs(const Crs& crs);
 /// crs_from_wkt(crs_to_wkt1(c)) is equivalent to c.
 std::string crs_to_wkt1(const Crs& crs);
 
+/// OGC WKT 1 (GDAL dialect) of the horizontal part alone (never COMPD_CS): PROJ's database
+/// entry when the CRS has an EPSG code (AUTHORITY and TOWGS84 as EPSG gives them), else its
+/// definition's horizontal component. What a GeoPackage's spatial reference row for the
+/// horizontal code holds. Empty when PROJ cannot write it.
+std::string crs_to_horizontal_wkt1(const Crs& crs);
+
 }  // namespace csgtile::geo
