@@ -112,6 +112,24 @@ constexpr NamedBuild kPrimitives[] = {
 TEST(NativeFormat, Crc32cMatchesTheStandardCheckValue) {
   EXPECT_EQ(crc32c("123456789"), 0xE3069283U);
   EXPECT_EQ(crc32c(""), 0U);
+  // Every length and offset (the hardware path takes eight bytes at a time, then the rest)
+  // against the definition, one bit at a time.
+  const auto by_bits = [](std::string_view bytes) {
+    std::uint32_t c = 0xFFFFFFFFU;
+    for (const char ch : bytes) {
+      c ^= static_cast<std::uint8_t>(ch);
+      for (int k = 0; k < 8; ++k) c = (c & 1U) ? (c >> 1) ^ 0x82F63B78U : c >> 1;
+    }
+    return c ^ 0xFFFFFFFFU;
+  };
+  std::string text;
+  for (int i = 0; i < 100; ++i) text.push_back(static_cast<char>((i * 37 + 11) & 0xFF));
+  for (std::size_t from = 0; from < 9; ++from) {
+    for (std::size_t n = 0; from + n <= text.size(); ++n) {
+      const std::string_view part = std::string_view(text).substr(from, n);
+      ASSERT_EQ(crc32c(part), by_bits(part)) << from << " " << n;
+    }
+  }
 }
 
 TEST(NativeFormat, EveryPrimitiveAtRandomPlacementsRoundTrips) {
