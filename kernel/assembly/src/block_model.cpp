@@ -70,20 +70,26 @@ double roof_percentile(const std::vector<Triangle>& roof, double total, double l
 }
 
 struct Measured {
-  kernel::Mesh mesh;
+  std::shared_ptr<const kernel::Mesh> mesh;  // never null
   BuildingHeights heights;
   std::vector<Triangle> roof;             // the roof's triangles (nz > kRoofNz)
   std::vector<std::uint32_t> roof_faces;  // the face (Mesh::triangle_face) of each
 };
 
-kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tolerance) {
-  kernel::TessellationOptions tessellation;
-  tessellation.chordal_tolerance = chordal_tolerance;
-  auto meshed = kernel::tessellate(shape, tessellation);
-  if (!meshed.ok()) return meshed.error();
+// `given`: the shape's tessellation at `chordal_tolerance`, when the caller has it.
+kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tolerance,
+                                 std::shared_ptr<const kernel::Mesh> given) {
   Measured out;
-  out.mesh = std::move(meshed).value();
-  const kernel::Mesh& m = out.mesh;
+  if (given) {
+    out.mesh = std::move(given);
+  } else {
+    kernel::TessellationOptions tessellation;
+    tessellation.chordal_tolerance = chordal_tolerance;
+    auto meshed = kernel::tessellate(shape, tessellation);
+    if (!meshed.ok()) return meshed.error();
+    out.mesh = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
+  }
+  const kernel::Mesh& m = *out.mesh;
   BuildingHeights& h = out.heights;
   double ground = std::numeric_limits<double>::infinity();
   double lowest = ground;
@@ -132,8 +138,9 @@ Vec3 ring_normal(const std::vector<Vec3>& ring) {
 }  // namespace
 
 kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
-                                                 double chordal_tolerance) {
-  auto measured = measure(shape, chordal_tolerance);
+                                                 double chordal_tolerance,
+                                                 std::shared_ptr<const kernel::Mesh> mesh) {
+  auto measured = measure(shape, chordal_tolerance, std::move(mesh));
   if (!measured.ok()) return measured.error();
   return measured.value().heights;
 }
@@ -300,7 +307,7 @@ kernel::Result<kernel::CsgModel> lod12_of(const kernel::CsgModel& model, const M
   }
   std::vector<kernel::CsgModel> pieces;
   if (kernel::Status st =
-          add_footprint_pieces(model.shape, measured.mesh, ground, top, options.tolerance,
+          add_footprint_pieces(model.shape, *measured.mesh, ground, top, options.tolerance,
                                options.chordal_tolerance, "", pieces);
       !st.ok()) {
     return st.error();
@@ -428,9 +435,10 @@ kernel::Result<kernel::CsgModel> lod13_of(const kernel::CsgModel& model, const M
 
 // A building's leaves checked and its model measured once.
 kernel::Result<Measured> measure_building(const kernel::CsgModel& model,
-                                          const BlockModelOptions& options) {
+                                          const BlockModelOptions& options,
+                                          std::shared_ptr<const kernel::Mesh> mesh = {}) {
   if (kernel::Status st = check_building_leaves(model); !st.ok()) return st.error();
-  return measure(model.shape, options.chordal_tolerance);
+  return measure(model.shape, options.chordal_tolerance, std::move(mesh));
 }
 
 // One block of a building: its heights and `make`'s model.
@@ -457,8 +465,9 @@ kernel::Result<BlockModel> multi_height_block_model(const kernel::CsgModel& mode
 }
 
 kernel::Result<BuildingBlocks> building_blocks(const kernel::CsgModel& model,
-                                               const BlockModelOptions& options) {
-  auto measured = measure_building(model, options);
+                                               const BlockModelOptions& options,
+                                               std::shared_ptr<const kernel::Mesh> mesh) {
+  auto measured = measure_building(model, options, std::move(mesh));
   if (!measured.ok()) return measured.error();
   auto lod12 = lod12_of(model, measured.value(), options);
   if (!lod12.ok()) return lod12.error();

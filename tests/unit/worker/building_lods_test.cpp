@@ -14,7 +14,10 @@
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/mass_properties.h"
+#include "csgtile/kernel/native_format.h"
+#include "csgtile/kernel/tessellation.h"
 #include "export/cityjson_seq.h"
+#include "export/tile_content.h"
 #include "export/topology_index.h"
 #include "index_object_builder.h"
 #include "model_builders.h"
@@ -272,6 +275,60 @@ TEST(BlockRecords, TheBlocksOfACellComeBackInTheRunsFrame) {
   // A block file that is not there is an error naming it.
   std::filesystem::remove_all(dir / "objects");
   EXPECT_FALSE(city::detail::read_blocks(dir, entry, kernel::Location(), run, found).ok());
+}
+
+// A cell tessellates each object once (IndexObject::mesh) for its blocks and every export:
+// the blocks, CityJSON, glTF and the index (a curved object's boundary) are byte for byte
+// what they are when each tessellates for itself; a mesh made at another tolerance is not
+// used, and the one made at the exporters' tolerance is (an empty one shows in the output).
+TEST(SharedMesh, ExportsWithTheObjectsMeshEqualThoseThatTessellateThemselves) {
+  const double chordal = 0.01;
+  auto dome = kernel::csg_primitive(test::cylinder_at(Vec3(30, 0, 0), 4.0, 6.0), "tower", 1e-7);
+  ASSERT_TRUE(dome.ok()) << dome.error().message;
+  const std::vector<IndexObject> plain = {test::index_object("house", gable_house()),
+                                          test::index_object("tower", dome.value())};
+  const auto with_mesh = [&](double made_at, bool empty) {
+    std::vector<IndexObject> objects = plain;
+    for (IndexObject& o : objects) {
+      kernel::TessellationOptions t;
+      t.chordal_tolerance = made_at;
+      auto mesh = kernel::tessellate(o.model.shape, t);
+      EXPECT_TRUE(mesh.ok());
+      o.mesh = std::make_shared<const kernel::Mesh>(empty ? kernel::Mesh{} : mesh.value());
+      o.mesh_tolerance = made_at;
+    }
+    return objects;
+  };
+  test::TempDir dir("shared_mesh_");
+  int written = 0;
+  // Everything the object's mesh reaches, as bytes.
+  const auto outputs = [&](std::vector<IndexObject> objects) {
+    add_building_lods(objects, chordal, 1e-7);
+    std::string out;
+    CityJsonOptions c;
+    c.chordal_tolerance = chordal;
+    auto text = cityjson_seq(objects, c);
+    out += text.ok() ? text.value() : "cityjson: " + text.error().message;
+    TileContentOptions t;
+    t.chordal_tolerance = chordal;
+    auto glb = tile_content(objects, t);
+    out += glb.ok() ? glb.value().glb : "glb: " + glb.error().message;
+    IndexOptions i;
+    i.chordal_tolerance = chordal;
+    const auto path = dir / ("index" + std::to_string(written++) + ".gpkg");
+    const Failure f = write_topology_index(path, objects, i);
+    out += f.ok() ? test::read_file(path) : "index: " + f.message;
+    for (const IndexObject& o : objects) {
+      out += o.lod12 ? kernel::write_native_model(*o.lod12) : "no lod12";
+      if (o.heights) out += std::to_string(o.heights->roof_70p);
+    }
+    return out;
+  };
+  const std::string own = outputs(plain);
+  ASSERT_FALSE(own.empty());
+  EXPECT_EQ(outputs(with_mesh(chordal, false)), own);
+  EXPECT_EQ(outputs(with_mesh(0.5, false)), own);     // another tolerance: not used
+  EXPECT_NE(outputs(with_mesh(chordal, true)), own);  // the right one is used
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/primitives.h"
+#include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/publish.h"
 #include "export/cityjson_seq.h"
 #include "export/manifest.h"
@@ -209,8 +210,18 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   tbb::task_arena arena(config.run.threads > 0 ? config.run.threads : tbb::task_arena::automatic);
   std::vector<char> valid(kept.size(), 0);
   std::vector<std::string> native(kept.size());
+  // Each object tessellated once for its blocks and every export (CityJSON, glTF, the index's
+  // curved boundaries), which each tessellated it again before; left null where it fails,
+  // for each to report.
+  const double chordal = config.kernel.chordal_tolerance;
+  std::vector<std::shared_ptr<const kernel::Mesh>> object_meshes(kept.size());
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, kept.size(), [&](std::size_t i) {
+      kernel::TessellationOptions t;
+      t.chordal_tolerance = chordal;
+      if (auto mesh = kernel::tessellate(kept[i]->model.shape, t); mesh.ok()) {
+        object_meshes[i] = std::make_shared<const kernel::Mesh>(std::move(mesh).value());
+      }
       // A fused object's Boolean checked its result already (work done twice before).
       valid[i] = kept[i]->checked || kernel::check_shape(kept[i]->model.shape).valid() ? 1 : 0;
       native[i] = kernel::write_native_model(kept[i]->model);
@@ -230,6 +241,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     if (!object->fused) io.fuse_error = object->error;
     io.escalation = object->escalation;
     io.valid = valid[k] != 0;
+    io.mesh = std::move(object_meshes[k]);
+    io.mesh_tolerance = chordal;
     // Every primitive of an object has its building (assembly_group).
     io.footprint_id = prims[static_cast<std::size_t>(object->primitives.front())].building;
     const ordered_json escalation = escalation_json(io.escalation);
@@ -278,13 +291,15 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   long long points_over_none = 0;
   {
     std::vector<const kernel::Shape*> shapes;
+    std::vector<const kernel::Mesh*> meshes;
     std::vector<double> sigma;
     for (std::size_t i = 0; i < objects.objects.size(); ++i) {
       shapes.push_back(&objects.objects[i].model.shape);
+      meshes.push_back(shared_mesh(objects.objects[i], config.kernel.chordal_tolerance).get());
       sigma.push_back(median_sigma(prims, kept_objects[i].primitives));
     }
-    const auto fits =
-        measure_model_fit(shapes, sigma, points, config.kernel.chordal_tolerance, points_over_none);
+    const auto fits = measure_model_fit(shapes, sigma, points, config.kernel.chordal_tolerance,
+                                        points_over_none, meshes);
     for (std::size_t i = 0; i < objects.objects.size(); ++i) {
       objects.objects[i].model_fit = fits[i];
       object_records[i]["model_fit"] = model_fit_json(fits[i]);

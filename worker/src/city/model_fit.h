@@ -30,11 +30,12 @@ Failure decode_points(std::string_view bytes, const std::string& what,
 /// the shape's boundary and, where sigma[k] > 0, the share within 2 sigma[k]. Shapes without
 /// points, or that cannot be meshed, get none. `over_none` receives the number of points over
 /// no shape. Deterministic whatever the thread count (shapes are measured in parallel).
-std::vector<std::optional<ModelFit>> measure_model_fit(std::span<const kernel::Shape* const> shapes,
-                                                       std::span<const double> sigma,
-                                                       std::span<const kernel::Vec3> points,
-                                                       double chordal_tolerance,
-                                                       long long& over_none);
+/// `meshes` (empty, or one per shape, null where absent): the shapes' tessellations at
+/// `chordal_tolerance` when the caller has made them; the others are tessellated here.
+std::vector<std::optional<ModelFit>> measure_model_fit(
+    std::span<const kernel::Shape* const> shapes, std::span<const double> sigma,
+    std::span<const kernel::Vec3> points, double chordal_tolerance, long long& over_none,
+    std::span<const kernel::Mesh* const> meshes = {});
 
 /// A model fit as an object record keeps it ({"points", "rmse", "sigma", "within_2sigma"};
 /// null for none), and read back (null or absent: none; Internal for a malformed one).

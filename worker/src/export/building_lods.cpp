@@ -19,7 +19,7 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
     o.lod12_error.clear();
     o.lod13.reset();
     o.lod13_error.clear();
-    auto blocks = assembly::building_blocks(o.model, options);
+    auto blocks = assembly::building_blocks(o.model, options, shared_mesh(o, chordal_tolerance));
     if (blocks.ok()) {
       assembly::BuildingBlocks& b = blocks.value();
       o.heights = b.heights;
@@ -36,7 +36,8 @@ void add_building_lods(std::vector<IndexObject>& objects, double chordal_toleran
       o.lod12_error =
           kernel::error_code_name(blocks.error().code) + std::string(": ") + blocks.error().message;
     }
-    auto heights = assembly::building_heights(o.model.shape, chordal_tolerance);
+    auto heights = assembly::building_heights(o.model.shape, chordal_tolerance,
+                                              shared_mesh(o, chordal_tolerance));
     if (heights.ok()) o.heights = heights.value();
   });
 }

@@ -407,13 +407,19 @@ Semantic classify(const Surface& s, std::int64_t object_min_z, double ground_uni
 // from their wires, curved faces (and planar ones whose polygon does not survive
 // quantisation or is too fragile for it) triangles of one tessellation, whose edge points the
 // polygons share.
+// `given`: root's tessellation at the chordal tolerance, when the object's job made it once
+// for every exporter.
 kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options,
-                                               bool weld_vertices) {
-  kernel::TessellationOptions t;
-  t.chordal_tolerance = options.chordal_tolerance;
-  auto meshed = kernel::tessellate(root, t);
-  if (!meshed.ok()) return meshed.error();
-  const kernel::Mesh& mesh = meshed.value();
+                                               bool weld_vertices,
+                                               std::shared_ptr<const kernel::Mesh> given = {}) {
+  if (!given) {
+    kernel::TessellationOptions t;
+    t.chordal_tolerance = options.chordal_tolerance;
+    auto meshed = kernel::tessellate(root, t);
+    if (!meshed.ok()) return meshed.error();
+    given = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
+  }
+  const kernel::Mesh& mesh = *given;
   const kernel::ShapeIndex faces = kernel::map_child_shapes(root, ShapeKind::Face);
 
   const std::vector<Vec3>& vertices = mesh.vertices;
@@ -713,9 +719,10 @@ Result<std::string> cityjson_seq(const std::vector<IndexObject>& objects,
   for (const IndexObject& object : objects) {
     // Vertices welded at the file's unit (what validators do); where welding would open a
     // shell that is closed without it (a collapse that pinches the surface), not welded.
-    auto geometry = object_geometry(object.model.shape, options, true);
+    const auto mesh = shared_mesh(object, options.chordal_tolerance);
+    auto geometry = object_geometry(object.model.shape, options, true, mesh);
     if (geometry.ok() && !geometry.value().closed) {
-      auto plain = object_geometry(object.model.shape, options, false);
+      auto plain = object_geometry(object.model.shape, options, false, mesh);
       if (plain.ok() && plain.value().closed) geometry = std::move(plain);
     }
     std::optional<ObjectGeometry> g;

@@ -26,13 +26,11 @@ struct ObjectMesh {
   std::vector<std::uint32_t> indices;
 };
 
-kernel::Result<ObjectMesh> object_mesh(const kernel::Shape& shape,
+kernel::Result<ObjectMesh> object_mesh(const IndexObject& object,
                                        const TileContentOptions& options) {
-  kernel::TessellationOptions t;
-  t.chordal_tolerance = options.chordal_tolerance;
-  auto meshed = kernel::tessellate(shape, t);
+  auto meshed = model_mesh(object, options.chordal_tolerance);
   if (!meshed.ok()) return meshed.error();
-  const kernel::Mesh& mesh = meshed.value();
+  const kernel::Mesh& mesh = *meshed.value();
   if (mesh.triangles.empty()) {
     return kernel::Error{kernel::ErrorCode::DegenerateGeometry, "no triangles"};
   }
@@ -107,7 +105,7 @@ Result<TileContent> tile_content(const std::vector<IndexObject>& objects,
   std::vector<double> volumes, areas;
   std::vector<bool> valid;
   for (const IndexObject& object : objects) {
-    auto m = object_mesh(object.model.shape, options);
+    auto m = object_mesh(object, options);
     if (!m.ok()) {
       content.warnings.push_back("3D Tiles: object " + object.id +
                                  " left out: " + kernel::error_code_name(m.error().code) + ": " +

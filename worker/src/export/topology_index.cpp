@@ -149,23 +149,29 @@ std::optional<Polygon3> planar_face_polygon(const Shape& face, const EdgePoints&
 // from the same tessellation, so the boundary has no cracks; a solid with planar faces only
 // has straight edges and its polygons are exactly its faces. Faces used Internal or External
 // bound nothing and are left out.
-kernel::Result<std::vector<Polygon3>> boundary_polygons(const Shape& root,
-                                                        const kernel::ShapeIndex& faces,
-                                                        const kernel::ShapeIndex& edges,
-                                                        const IndexOptions& options) {
+kernel::Result<std::vector<Polygon3>> boundary_polygons(
+    const Shape& root, const kernel::ShapeIndex& faces, const kernel::ShapeIndex& edges,
+    const IndexOptions& options, std::shared_ptr<const kernel::Mesh> given = {}) {
   std::vector<Polygon3> out;
   bool any_curved = false;
   for (const Shape& f : faces.shapes()) {
     any_curved |= f.body().face()->surface->kind() != kernel::SurfaceKind::Plane;
   }
-  kernel::Mesh mesh;
+  // `given`: root's tessellation at the chordal tolerance, shared with the other exporters.
+  std::shared_ptr<const kernel::Mesh> shared;
   if (any_curved) {
-    kernel::TessellationOptions t;
-    t.chordal_tolerance = options.chordal_tolerance;
-    auto meshed = kernel::tessellate(root, t);
-    if (!meshed.ok()) return meshed.error();
-    mesh = std::move(meshed).value();
+    if (given) {
+      shared = std::move(given);
+    } else {
+      kernel::TessellationOptions t;
+      t.chordal_tolerance = options.chordal_tolerance;
+      auto meshed = kernel::tessellate(root, t);
+      if (!meshed.ok()) return meshed.error();
+      shared = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
+    }
   }
+  static const kernel::Mesh kNoMesh;
+  const kernel::Mesh& mesh = shared ? *shared : kNoMesh;
   const EdgePoints edge_points = [&](const Shape& edge) {
     std::vector<Vec3> points;
     const kernel::EdgeData* data = edge.body().edge();
@@ -497,7 +503,8 @@ ObjectRows object_rows(const IndexObject& object, const IndexOptions& options) {
     o.model_within_2sigma = m->within_2sigma;
   }
   auto boundary = boundary_polygons(root, maps[static_cast<int>(ShapeKind::Face)],
-                                    maps[static_cast<int>(ShapeKind::Edge)], options);
+                                    maps[static_cast<int>(ShapeKind::Edge)], options,
+                                    shared_mesh(object, options.chordal_tolerance));
   if (boundary.ok()) {
     o.boundary = std::move(boundary).value();
     o.has_geometry = !o.boundary.empty();
@@ -550,6 +557,21 @@ Result<IndexRows> build_index_rows(const std::vector<IndexObject>& objects,
 
 bool model_valid(const IndexObject& object) {
   return object.valid ? *object.valid : kernel::check_shape(object.model.shape).valid();
+}
+
+std::shared_ptr<const kernel::Mesh> shared_mesh(const IndexObject& object,
+                                                double chordal_tolerance) {
+  return object.mesh && object.mesh_tolerance == chordal_tolerance ? object.mesh : nullptr;
+}
+
+kernel::Result<std::shared_ptr<const kernel::Mesh>> model_mesh(const IndexObject& object,
+                                                               double chordal_tolerance) {
+  if (auto shared = shared_mesh(object, chordal_tolerance)) return shared;
+  kernel::TessellationOptions t;
+  t.chordal_tolerance = chordal_tolerance;
+  auto meshed = kernel::tessellate(object.model.shape, t);
+  if (!meshed.ok()) return meshed.error();
+  return std::make_shared<const kernel::Mesh>(std::move(meshed).value());
 }
 
 // Weights: inlier counts when any fitted primitive has them, else equal.

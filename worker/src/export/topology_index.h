@@ -27,6 +27,7 @@
 #include "csgtile/assembly/block_model.h"
 #include "csgtile/kernel/csg.h"
 #include "csgtile/kernel/shape.h"
+#include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/errors.h"
 
 namespace csgtile::worker {
@@ -82,10 +83,23 @@ struct IndexObject {
   /// check_shape(model.shape).valid(), when its job checked it once for all its exporters
   /// (model_valid); unset, each exporter checks the model itself.
   std::optional<bool> valid = {};
+  /// Its model tessellated at `mesh_tolerance` (chordal), when its job made the mesh once for
+  /// every exporter and its blocks (model_mesh); null, each makes its own.
+  std::shared_ptr<const kernel::Mesh> mesh = {};
+  double mesh_tolerance = 0.0;
 };
 
 /// Whether the object's model passes the checker: `valid` when set, else checked now.
 bool model_valid(const IndexObject& object);
+
+/// The object's model tessellated at `chordal_tolerance`: its shared `mesh` when made at that
+/// tolerance, else tessellated now. Errors: as kernel::tessellate.
+kernel::Result<std::shared_ptr<const kernel::Mesh>> model_mesh(const IndexObject& object,
+                                                               double chordal_tolerance);
+
+/// The shared `mesh` when it was made at `chordal_tolerance`; null otherwise.
+std::shared_ptr<const kernel::Mesh> shared_mesh(const IndexObject& object,
+                                                double chordal_tolerance);
 
 /// Moves an object's model by `by`: its shape and, so that its history stays in the shape's
 /// frame, every primitive leaf's placement.

@@ -7,9 +7,11 @@
 /// whatever made it.
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 
 #include "csgtile/kernel/csg.h"
+#include "csgtile/kernel/tessellation.h"
 
 namespace csgtile::assembly {
 
@@ -27,8 +29,11 @@ struct BuildingHeights {
 /// roofs (the height is linear over each triangle and the percentiles are found on the exact
 /// area function), within the tolerance for curved ones. Errors: as kernel::tessellate;
 /// DegenerateGeometry when the shape has no roof seen from above.
+/// `mesh`: the shape's tessellation at `chordal_tolerance` when the caller has made it (the
+/// exporters share one per object); null, it is made here.
 kernel::Result<BuildingHeights> building_heights(const kernel::Shape& shape,
-                                                 double chordal_tolerance);
+                                                 double chordal_tolerance,
+                                                 std::shared_ptr<const kernel::Mesh> mesh = {});
 
 struct BlockModelOptions {
   /// Of the tessellation the heights and footprint use; also the narrowest strip a face seen
@@ -79,7 +84,9 @@ struct BuildingBlocks {
   std::optional<kernel::CsgModel> lod13;
   std::optional<kernel::Error> lod13_error;
 };
+/// `mesh`: the model's tessellation at options.chordal_tolerance, as for building_heights.
 kernel::Result<BuildingBlocks> building_blocks(const kernel::CsgModel& model,
-                                               const BlockModelOptions& options = {});
+                                               const BlockModelOptions& options = {},
+                                               std::shared_ptr<const kernel::Mesh> mesh = {});
 
 }  // namespace csgtile::assembly
