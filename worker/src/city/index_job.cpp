@@ -10,7 +10,10 @@
 #include "city/model_fit.h"
 #include "city/relation_records.h"
 #include "csgtile/geo/crs.h"
+#include "csgtile/kernel/curve.h"
+#include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/location.h"
+#include "csgtile/kernel/surface.h"
 #include "csgtile/kernel/native_format.h"
 #include "csgtile/kernel/tessellation.h"
 #include "csgtile/worker/files.h"
@@ -71,8 +74,6 @@ Failure root_tileset(const std::filesystem::path& run_dir,
   return {};
 }
 
-/// The convex hull (counter-clockwise) of the xy of `shape`'s tessellation: the footprint the
-/// report draws. Empty when the shape cannot be tessellated.
 // A building's row of the report; nullopt for other objects. Heights in the CRS: the run
 // frame's origin added.
 std::optional<ReportBuilding> report_building(const IndexObject& object, double origin_z) {
@@ -96,13 +97,37 @@ std::optional<ReportBuilding> report_building(const IndexObject& object, double 
   return b;
 }
 
+/// The convex hull (counter-clockwise) of the xy of `shape`: the footprint the report draws.
+/// A shape of planar faces and straight edges is the hull of its vertices; any other, of its
+/// tessellation's points at `chordal`. Empty when the shape cannot be tessellated.
 std::vector<std::array<double, 2>> footprint_hull(const kernel::Shape& shape, double chordal) {
-  kernel::TessellationOptions options;
-  options.chordal_tolerance = chordal;
-  auto mesh = kernel::tessellate(shape, options);
-  if (!mesh.ok()) return {};
   std::vector<std::array<double, 2>> p;
-  for (const kernel::Vec3& v : mesh->vertices) p.push_back({v.x(), v.y()});
+  bool straight = true;
+  for (const kernel::Shape& e : kernel::Explorer(shape, kernel::ShapeKind::Edge)) {
+    const kernel::EdgeData* edge = e.body().edge();
+    if (edge == nullptr || edge->degenerate()) continue;
+    if (!edge->curve || edge->curve->kind() != kernel::CurveKind::Line) {
+      straight = false;
+      break;
+    }
+  }
+  for (const kernel::Shape& f : kernel::Explorer(shape, kernel::ShapeKind::Face)) {
+    if (!straight) break;
+    const kernel::FaceData* face = f.body().face();
+    straight = face != nullptr && face->surface->kind() == kernel::SurfaceKind::Plane;
+  }
+  if (straight) {
+    for (const kernel::Shape& v : kernel::Explorer(shape, kernel::ShapeKind::Vertex)) {
+      const kernel::Vec3 q = kernel::vertex_point(v);
+      p.push_back({q.x(), q.y()});
+    }
+  } else {
+    kernel::TessellationOptions options;
+    options.chordal_tolerance = chordal;
+    auto mesh = kernel::tessellate(shape, options);
+    if (!mesh.ok()) return {};
+    for (const kernel::Vec3& v : mesh->vertices) p.push_back({v.x(), v.y()});
+  }
   std::sort(p.begin(), p.end());
   p.erase(std::unique(p.begin(), p.end()), p.end());
   if (p.size() < 3) return p;
