@@ -92,6 +92,22 @@ Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::ui
   return {};
 }
 
+Failure read_file_bytes(const std::filesystem::path& path, std::string& bytes) {
+  bytes.clear();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) bytes.reserve(static_cast<std::size_t>(size));
+  std::array<char, 1 << 16> buffer{};
+  while (in) {
+    in.read(buffer.data(), buffer.size());
+    bytes.append(buffer.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
+  return {};
+}
+
 // ---- atomic replacement -------------------------------------------------------------------
 
 namespace {

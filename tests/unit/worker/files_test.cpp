@@ -130,5 +130,47 @@ TEST(Files, ABatchWritesEveryFileOrRefusesBeforeRenamingAny) {
   fs::remove_all(dir);
 }
 
+// Temporaries are written and flushed some dozens at a time: a batch of many files is complete,
+// and a refusal in a later group (files of earlier groups already flushed, some of its own
+// open) still leaves no file of the batch and no temporary.
+TEST(Files, AManyFileBatchIsWholeOrNothingAcrossItsFlushGroups) {
+  const fs::path dir = fresh_dir("many");
+  std::vector<std::pair<fs::path, std::string>> files;
+  for (int i = 0; i < 150; ++i) {
+    files.push_back(
+        {dir / ("f" + std::to_string(i)), std::string(static_cast<std::size_t>(i), 'a' + i % 26)});
+  }
+  ASSERT_TRUE(write_files_atomic(files).ok());
+  for (const auto& [path, bytes] : files) {
+    std::string got;
+    ASSERT_TRUE(read_file_bytes(path, got).ok()) << path;
+    EXPECT_EQ(got, bytes) << path;
+  }
+  EXPECT_EQ(entries_in(dir), 150);
+  fs::remove_all(dir);
+  fs::create_directories(dir / "taken");
+  for (auto& [path, bytes] : files) path = dir / ("g" + path.filename().string());
+  files[130].first = dir / "taken";
+  const Failure f = write_files_atomic(files);
+  EXPECT_EQ(f.code, ErrorCode::Io);
+  EXPECT_NE(f.message.find("taken"), std::string::npos) << f.message;
+  EXPECT_EQ(entries_in(dir), 1);  // only "taken"
+  fs::remove_all(dir);
+}
+
+TEST(Files, ReadFileBytesReadsAllAndNamesAMissingFile) {
+  const fs::path dir = fresh_dir("read");
+  std::string text(300000, '\0');
+  for (std::size_t i = 0; i < text.size(); ++i) text[i] = static_cast<char>(i * 7 % 251);
+  std::ofstream(dir / "f.bin", std::ios::binary) << text;
+  std::string got = "stale";
+  ASSERT_TRUE(read_file_bytes(dir / "f.bin", got).ok());
+  EXPECT_EQ(got, text);
+  const Failure missing = read_file_bytes(dir / "missing.bin", got);
+  EXPECT_EQ(missing.code, ErrorCode::Io);
+  EXPECT_NE(missing.message.find("missing.bin"), std::string::npos) << missing.message;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace csgtile::worker

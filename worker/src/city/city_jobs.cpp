@@ -6,8 +6,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
-#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -19,6 +17,7 @@
 #include "csgtile/geo/las.h"
 #include "csgtile/kernel/mass_properties.h"
 #include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/publish.h"
 #include "fetch/fetch.h"
 #include "fetch/input.h"
@@ -42,11 +41,7 @@ kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const k
 }
 
 Failure read_file(const std::filesystem::path& path, std::string& bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
-  bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
-  return {};
+  return read_file_bytes(path, bytes);
 }
 
 Failure ObjectBatch::add(const std::string& key, std::string bytes) {

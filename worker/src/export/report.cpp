@@ -4,8 +4,6 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <set>
 #include <string_view>
@@ -13,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/publish.h"
 #include "export/report_assets.h"
 
@@ -132,13 +131,12 @@ CellGlb read_glb(const ReportCell& cell, const std::filesystem::path& run_dir) {
   if (cell.glb_path.empty()) return glb;
   bool inside = false;
   const std::string shown = shown_path(cell.glb_path, run_dir, inside);
-  std::ifstream file(cell.glb_path, std::ios::binary);
-  if (!file) {
+  if (!std::filesystem::exists(cell.glb_path)) {
     glb.reason = "glTF missing: " + shown;
     return glb;
   }
-  std::string bytes{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-  if (file.bad()) {
+  std::string bytes;
+  if (!read_file_bytes(cell.glb_path, bytes).ok()) {
     glb.reason = "glTF unreadable: " + shown;
   } else if (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0) {
     glb.reason = "not a GLB file: " + shown;

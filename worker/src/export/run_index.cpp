@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <fstream>
-#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -14,6 +12,7 @@
 #include "csgtile/geo/crs.h"
 #include "csgtile/kernel/explorer.h"
 #include "csgtile/kernel/native_format.h"
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/publish.h"
 
 namespace csgtile::worker {
@@ -231,11 +230,11 @@ Failure write_run_index(const RunExportOptions& settings, const RunObjects& run,
     report.stats.warnings = run.cell_index_warnings;
   }
   for (const std::string& w : run.warnings) report.stats.warnings.push_back(w);
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in.good() && !in.eof()) return {ErrorCode::Io, "cannot read back " + path.string()};
-  report.sha256 = sha256_hex(bytes);
-  report.bytes = bytes.size();
+  std::uint64_t bytes = 0;
+  if (Failure f = file_sha256(path, report.sha256, bytes); !f.ok()) {
+    return {ErrorCode::Io, "cannot read back " + path.string()};
+  }
+  report.bytes = bytes;
   report.srs_id = options.srs.srs_id;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {};

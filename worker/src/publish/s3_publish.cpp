@@ -1,12 +1,12 @@
 #include "publish/s3_publish.h"
 
 #include <algorithm>
-#include <fstream>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/publish.h"
 #include "ops/metrics.h"
 
@@ -190,9 +190,8 @@ Failure upload_object(const Location& location, const LocalFile& file, const fet
                              " bytes, but its content (SHA-256 " + file.sha256 + ") has " +
                              std::to_string(file.size));
   }
-  std::ifstream in(file.resolved, std::ios::binary);
-  std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!in.good() && !in.eof()) return {ErrorCode::Io, "cannot read " + file.resolved.string()};
+  std::string bytes;
+  if (Failure f = read_file_bytes(file.resolved, bytes); !f.ok()) return f;
   if (bytes.size() != file.size || sha256_hex(bytes) != file.sha256) {
     return {ErrorCode::Io, file.resolved.string() + " changed while it was being published"};
   }

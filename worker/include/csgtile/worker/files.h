@@ -50,6 +50,10 @@ std::optional<std::string> hmac_sha256(std::string_view key, std::string_view da
 /// Streams `path` through SHA-256 (lower-case hex) and counts its bytes; Io when unreadable.
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes);
 
+/// The whole of `path` into `bytes` (read in large blocks, not a character at a time); Io
+/// naming the path when it cannot be opened or read.
+Failure read_file_bytes(const std::filesystem::path& path, std::string& bytes);
+
 /// A fresh temporary name beside `target` (same directory, so a rename onto `target` is
 /// atomic): ".<name>.<tag>.<pid>.<random>". Concurrent writers of one target never share it.
 std::filesystem::path temp_path_beside(const std::filesystem::path& target, std::string_view tag);
