@@ -4,7 +4,7 @@ building on one core, fit to publish"; issue #22's "publish <= 0.5 x assemble, r
 
 For each tile present — Delft (laz/ahn3_cropped_2.laz with 3dfier/bgt_pand.sqlite) and
 Amsterdam (ams/ahn_2386_9702.las, footprints from ams/bgt_buildings_demo.csv) — it runs
-`csgtile run` with `run.threads: 1`, with and without the footprints, `--repeat` times, and
+`csgtile run` with `run.threads: 1` (or `--threads N`), with and without the footprints, `--repeat` times, and
 prints JSON per run: the buildings published, the process's wall and CPU seconds (best of the
 repeats), ms per building (wall / buildings), and per stage the seconds of the jobs
 (timings.json: fit, assemble, a cell's block models, measure, relations and publish) with the
@@ -12,7 +12,7 @@ ratios publish / assemble, (publish + blocks + measure + relations) / assemble (
 timed as publishing before those had stages of their own; the JSON key keeps its old name) and
 wall / fit.
 
-Usage: city_speed.py CSGTILE WORK_DIR [--data DIR] [--repeat 3] [--tiles delft,ams]
+Usage: city_speed.py CSGTILE WORK_DIR [--data DIR] [--repeat 3] [--tiles delft,ams] [--threads 1]
 Standard library only. Exit 77 when no tile is present.
 """
 import argparse
@@ -52,14 +52,14 @@ def footprints_source(path, work):
     return out
 
 
-def one_run(binary, work, name, tile, footprints, layer, city=None):
+def one_run(binary, work, name, tile, footprints, layer, city=None, threads=1):
     """`city`: further city: keys (name -> value) of the run's configuration."""
     config = os.path.join(work, name + ".yaml")
     out = os.path.join(work, name)
     shutil.rmtree(out, ignore_errors=True)
     with open(config, "w") as f:
         f.write(f"run:\n  name: {name}\n  inputs:\n    - {tile}\n  output: {out}\n"
-                "  crs: EPSG:28992+5709\n  threads: 1\n")
+                f"  crs: EPSG:28992+5709\n  threads: {threads}\n")
         if footprints or city:
             f.write("city:\n")
         if footprints:
@@ -97,9 +97,11 @@ def main():
     ap.add_argument("--data", default=DEFAULT_DATA)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--tiles", default="delft,ams")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="run.threads (default 1: issue #18's time per building on one core)")
     args = ap.parse_args()
     os.makedirs(args.work, exist_ok=True)
-    report = {"threads": 1, "repeat": args.repeat, "runs": {}}
+    report = {"threads": args.threads, "repeat": args.repeat, "runs": {}}
     for tile in args.tiles.split(","):
         las, fp, layer = TILES[tile]
         las, fp = os.path.join(args.data, las), os.path.join(args.data, fp)
@@ -109,8 +111,8 @@ def main():
         for with_fp in (False, True):
             name = f"{tile}_{'footprints' if with_fp else 'derived'}"
             source = footprints_source(fp, args.work) if with_fp else ""
-            runs = [one_run(args.csgtile, args.work, name, las, source, layer)
-                    for _ in range(args.repeat)]
+            runs = [one_run(args.csgtile, args.work, name, las, source, layer,
+                            threads=args.threads) for _ in range(args.repeat)]
             best = min(runs, key=lambda r: r["wall_s"])
             st = best["stages_s"]
             assemble = st.get("assemble.assemble", 0.0)
