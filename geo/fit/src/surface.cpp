@@ -257,7 +257,7 @@ Eigen::Matrix<double, 6, 1> revolution_axis(std::span<const Vec3> p, std::span<c
   for (std::size_t i = 0; i < p.size(); ++i) {
     Eigen::Matrix<double, 6, 1> row;
     row << (p[i] - c).cross(n[i]), n[i];
-    scatter.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    scatter.noalias() += row * row.transpose();  // fixed size: on the stack
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(scatter);
   Eigen::Matrix<double, 6, 1> x = eigen.eigenvectors().col(0);
