@@ -143,33 +143,34 @@ struct ModelTables {
 class NumberPool {
  public:
   void count(std::uint64_t bits) {
-    auto [it, inserted] = uses_.try_emplace(bits, Use{0, uses_.size()});
+    auto [it, inserted] = uses_.try_emplace(bits, Use{0, uses_.size(), 0});
     ++it->second.count;
   }
 
+  // The indices are kept in the counting map itself (one map for both passes).
   void assign_indices() {
     order_.clear();
+    order_.reserve(uses_.size());
     for (const auto& [bits, use] : uses_) order_.emplace_back(bits, use);
     std::sort(order_.begin(), order_.end(), [](const auto& a, const auto& b) {
       if (a.second.count != b.second.count) return a.second.count > b.second.count;
       return a.second.first_use < b.second.first_use;
     });
-    index_.clear();
-    for (std::size_t i = 0; i < order_.size(); ++i) index_.emplace(order_[i].first, i);
+    for (std::size_t i = 0; i < order_.size(); ++i) uses_.at(order_[i].first).index = i;
   }
 
   std::size_t size() const { return order_.size(); }
   std::uint64_t bits(std::size_t i) const { return order_[i].first; }
-  std::size_t index_of(std::uint64_t bits) const { return index_.at(bits); }
+  std::size_t index_of(std::uint64_t bits) const { return uses_.at(bits).index; }
 
  private:
   struct Use {
     std::size_t count;
     std::size_t first_use;
+    std::size_t index;  // set by assign_indices
   };
   std::unordered_map<std::uint64_t, Use> uses_;
   std::vector<std::pair<std::uint64_t, Use>> order_;
-  std::unordered_map<std::uint64_t, std::size_t> index_;
 };
 
 /// Writes one section payload. In the counting pass numbers are only counted (the bytes
@@ -178,8 +179,13 @@ class PayloadEncoder {
  public:
   PayloadEncoder(NumberPool& pool, bool counting) : pool_(pool), counting_(counting) {}
 
-  void byte(std::uint8_t v) { out_.byte(v); }
-  void varint(std::uint64_t v) { out_.varint(v); }
+  // The counting pass's bytes are thrown away: it does not write them.
+  void byte(std::uint8_t v) {
+    if (!counting_) out_.byte(v);
+  }
+  void varint(std::uint64_t v) {
+    if (!counting_) out_.varint(v);
+  }
   /// A reference to |v| (a recent-window position or a pool index, see native_layout.h),
   /// shifted left once, with the sign in bit 0: v and −v share one entry.
   void number(double v) {
