@@ -13,6 +13,7 @@
 #include <random>
 #include <set>
 #include <span>
+#include <string_view>
 #include <system_error>
 
 #include "ops/metrics.h"
@@ -75,37 +76,42 @@ std::string sha256_hex(std::string_view bytes) {
   return sha.hex();
 }
 
-Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
+namespace {
+
+// Streams `path` to `take` in blocks of 64 KiB. Error: Io naming the path.
+template <typename Take>
+Failure read_in_blocks(const std::filesystem::path& path, Take take) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
-  Sha256 sha;
   std::array<char, 1 << 16> buffer{};
-  bytes = 0;
   while (in) {
     in.read(buffer.data(), buffer.size());
-    const auto n = static_cast<std::size_t>(in.gcount());
-    sha.update({buffer.data(), n});
-    bytes += n;
+    take(std::string_view(buffer.data(), static_cast<std::size_t>(in.gcount())));
   }
   if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
+  return {};
+}
+
+}  // namespace
+
+Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
+  Sha256 sha;
+  bytes = 0;
+  const Failure read = read_in_blocks(path, [&](std::string_view block) {
+    sha.update(block);
+    bytes += block.size();
+  });
+  if (!read.ok()) return read;
   hex = sha.hex();
   return {};
 }
 
 Failure read_file_bytes(const std::filesystem::path& path, std::string& bytes) {
   bytes.clear();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return {ErrorCode::Io, "cannot read " + path.string()};
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (!ec) bytes.reserve(static_cast<std::size_t>(size));
-  std::array<char, 1 << 16> buffer{};
-  while (in) {
-    in.read(buffer.data(), buffer.size());
-    bytes.append(buffer.data(), static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad()) return {ErrorCode::Io, "cannot read " + path.string()};
-  return {};
+  return read_in_blocks(path, [&](std::string_view block) { bytes.append(block); });
 }
 
 // ---- atomic replacement -------------------------------------------------------------------

@@ -565,16 +565,23 @@ Result<Crs> crs_from_proj_text(std::string_view text, const std::string& what) {
   });
 }
 
+namespace {
+
+// PROJ's one-line WKT 1 (GDAL dialect) of `object`; empty when PROJ cannot write it.
+std::string wkt1_of(const Object& object) {
+  if (!object) return std::string();
+  const char* options[] = {"MULTILINE=NO", nullptr};
+  return text_of(proj_as_wkt(context(), object.p, PJ_WKT1_GDAL, options));
+}
+
+}  // namespace
+
 std::string proj_wkt1(const std::string& definition) {
   if (definition.empty()) return std::string();
   // Every cell of a run asks for the run's CRS again (its GeoPackage's spatial reference).
   static Memo<std::string, std::string> memo;
-  return memo.get(definition, [&]() -> std::string {
-    Object crs(proj_create(context(), definition.c_str()));
-    if (!crs) return std::string();
-    const char* options[] = {"MULTILINE=NO", nullptr};
-    return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
-  });
+  return memo.get(definition,
+                  [&] { return wkt1_of(Object(proj_create(context(), definition.c_str()))); });
 }
 
 std::string proj_horizontal_wkt1(const std::string& definition, int epsg) {
@@ -583,17 +590,12 @@ std::string proj_horizontal_wkt1(const std::string& definition, int epsg) {
   // its names up (tens of milliseconds); from the database by code it is immediate.
   static Memo<std::pair<std::string, int>, std::string> memo;
   return memo.get({epsg > 0 ? std::string() : definition, epsg}, [&]() -> std::string {
-    Object crs(epsg > 0 ? proj_create_from_database(context(), "EPSG", std::to_string(epsg).c_str(),
-                                                    PJ_CATEGORY_CRS, 0, nullptr)
-                        : proj_create(context(), definition.c_str()));
-    if (!crs) return std::string();
-    const char* options[] = {"MULTILINE=NO", nullptr};
-    if (proj_get_type(crs.p) == PJ_TYPE_COMPOUND_CRS) {
-      Object horizontal(proj_crs_get_sub_crs(context(), crs.p, 0));
-      if (!horizontal) return std::string();
-      return text_of(proj_as_wkt(context(), horizontal.p, PJ_WKT1_GDAL, options));
+    Object crs(epsg > 0 ? from_database(epsg, PJ_CATEGORY_CRS)
+                        : Object(proj_create(context(), definition.c_str())));
+    if (crs && proj_get_type(crs.p) == PJ_TYPE_COMPOUND_CRS) {
+      return wkt1_of(Object(proj_crs_get_sub_crs(context(), crs.p, 0)));
     }
-    return text_of(proj_as_wkt(context(), crs.p, PJ_WKT1_GDAL, options));
+    return wkt1_of(crs);
   });
 }
 

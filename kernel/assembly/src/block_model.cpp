@@ -79,16 +79,10 @@ struct Measured {
 // `given`: the shape's tessellation at `chordal_tolerance`, when the caller has it.
 kernel::Result<Measured> measure(const kernel::Shape& shape, double chordal_tolerance,
                                  std::shared_ptr<const kernel::Mesh> given) {
+  auto meshed = kernel::shared_tessellation(shape, chordal_tolerance, std::move(given));
+  if (!meshed.ok()) return meshed.error();
   Measured out;
-  if (given) {
-    out.mesh = std::move(given);
-  } else {
-    kernel::TessellationOptions tessellation;
-    tessellation.chordal_tolerance = chordal_tolerance;
-    auto meshed = kernel::tessellate(shape, tessellation);
-    if (!meshed.ok()) return meshed.error();
-    out.mesh = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
-  }
+  out.mesh = std::move(meshed).value();
   const kernel::Mesh& m = *out.mesh;
   BuildingHeights& h = out.heights;
   double ground = std::numeric_limits<double>::infinity();

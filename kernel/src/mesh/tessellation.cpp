@@ -363,4 +363,15 @@ std::string to_binary_stl(const Mesh& mesh) {
   return out;
 }
 
+Result<std::shared_ptr<const Mesh>> shared_tessellation(const Shape& shape,
+                                                        double chordal_tolerance,
+                                                        std::shared_ptr<const Mesh> given) {
+  if (given) return given;
+  TessellationOptions options;
+  options.chordal_tolerance = chordal_tolerance;
+  auto mesh = tessellate(shape, options);
+  if (!mesh.ok()) return mesh.error();
+  return std::make_shared<const Mesh>(std::move(mesh).value());
+}
+
 }  // namespace csgtile::kernel

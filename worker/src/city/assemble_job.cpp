@@ -56,7 +56,7 @@ Failure read_cell_points(const std::filesystem::path& run_dir, const ordered_jso
   const std::string key = entry.at("key").get<std::string>();
   if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe points key " + key};
   std::string bytes;
-  if (Failure f = read_file(run_dir / key, bytes); !f.ok()) return f;
+  if (Failure f = read_file_bytes(run_dir / key, bytes); !f.ok()) return f;
   if (sha256_hex(bytes) != entry.at("sha256").get<std::string>()) {
     return {ErrorCode::InputInvalid, (run_dir / key).string() + ": does not match its SHA-256"};
   }
@@ -114,7 +114,7 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
     const std::string key = fit.at("scene").at("key").get<std::string>();
     if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe scene key " + key};
     std::string text;
-    if (Failure f = read_file(run_dir / key, text); !f.ok()) return f;
+    if (Failure f = read_file_bytes(run_dir / key, text); !f.ok()) return f;
     if (sha256_hex(text) != fit.at("scene").at("sha256").get<std::string>()) {
       return {ErrorCode::InputInvalid, (run_dir / key).string() + ": does not match its SHA-256"};
     }
@@ -217,10 +217,8 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   std::vector<std::shared_ptr<const kernel::Mesh>> object_meshes(kept.size());
   arena.execute([&] {
     tbb::parallel_for(std::size_t{0}, kept.size(), [&](std::size_t i) {
-      kernel::TessellationOptions t;
-      t.chordal_tolerance = chordal;
-      if (auto mesh = kernel::tessellate(kept[i]->model.shape, t); mesh.ok()) {
-        object_meshes[i] = std::make_shared<const kernel::Mesh>(std::move(mesh).value());
+      if (auto mesh = kernel::shared_tessellation(kept[i]->model.shape, chordal); mesh.ok()) {
+        object_meshes[i] = std::move(mesh).value();
       }
       // A fused object's Boolean checked its result already (work done twice before).
       valid[i] = kept[i]->checked || kernel::check_shape(kept[i]->model.shape).valid() ? 1 : 0;
@@ -291,11 +289,11 @@ Failure run_assemble_job(const Job& job, const std::filesystem::path& run_dir,
   long long points_over_none = 0;
   {
     std::vector<const kernel::Shape*> shapes;
-    std::vector<const kernel::Mesh*> meshes;
+    std::vector<std::shared_ptr<const kernel::Mesh>> meshes;
     std::vector<double> sigma;
     for (std::size_t i = 0; i < objects.objects.size(); ++i) {
       shapes.push_back(&objects.objects[i].model.shape);
-      meshes.push_back(shared_mesh(objects.objects[i], config.kernel.chordal_tolerance).get());
+      meshes.push_back(shared_mesh(objects.objects[i], config.kernel.chordal_tolerance));
       sigma.push_back(median_sigma(prims, kept_objects[i].primitives));
     }
     const auto fits = measure_model_fit(shapes, sigma, points, config.kernel.chordal_tolerance,

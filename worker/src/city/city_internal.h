@@ -18,6 +18,7 @@
 #include "csgtile/kernel/grid.h"
 #include "csgtile/kernel/primitives.h"
 #include "csgtile/worker/errors.h"
+#include "csgtile/worker/files.h"
 #include "csgtile/worker/job_support.h"
 #include "csgtile/worker/log.h"
 #include "csgtile/worker/queue.h"
@@ -54,8 +55,6 @@ struct CellBlock {
 kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const kernel::Vec3& origin,
                                       double tolerance);
 
-/// Reads a whole file. Error: Io naming the path.
-Failure read_file(const std::filesystem::path& path, std::string& bytes);
 /// Content-addressed files of one job, written together by commit() (write_files_atomic:
 /// one directory flush for all of them). A key already published, or already in the batch,
 /// is skipped: its name is its hash, so it holds these bytes.

@@ -40,10 +40,6 @@ kernel::BoundingBox primitive_crs_box(const kernel::PrimitiveSpec& spec, const k
   return box;
 }
 
-Failure read_file(const std::filesystem::path& path, std::string& bytes) {
-  return read_file_bytes(path, bytes);
-}
-
 Failure ObjectBatch::add(const std::string& key, std::string bytes) {
   if (!is_safe_key(key)) return {ErrorCode::Internal, "unsafe object key " + key};
   if (!keys_.insert(key).second) return {};
@@ -102,7 +98,7 @@ std::optional<CellBlock> CellBlock::parse(const nlohmann::json& corners) {
 
 Failure describe_file(const std::filesystem::path& dir, const std::string& key, ordered_json& out) {
   std::string bytes;
-  if (Failure f = read_file(dir / key, bytes); !f.ok()) return f;
+  if (Failure f = read_file_bytes(dir / key, bytes); !f.ok()) return f;
   out = {{"key", key}, {"sha256", sha256_hex(bytes)}, {"bytes", bytes.size()}};
   return {};
 }
@@ -356,7 +352,7 @@ std::filesystem::path tiles_file(const config::Config& config) {
 Failure tile_inputs(const config::Config& config, std::vector<Tile>& out) {
   std::string text;
   out.clear();
-  if (!detail::read_file(tiles_file(config), text).ok()) {
+  if (!read_file_bytes(tiles_file(config), text).ok()) {
     if (!expand_tile_inputs(config, out).ok()) out.clear();
     return {};
   }

@@ -45,7 +45,7 @@ Failure root_tileset(const std::filesystem::path& run_dir,
     if (!record.contains("tiles") || !record["tiles"].is_string()) continue;
     const std::string tiles = record["tiles"].get<std::string>();
     std::string body;
-    if (Failure f = read_file(run_dir / tiles, body); !f.ok()) return f;
+    if (Failure f = read_file_bytes(run_dir / tiles, body); !f.ok()) return f;
     const ordered_json cell = ordered_json::parse(body, nullptr, false);
     if (!cell.is_object() || !cell.contains("root")) {
       return {ErrorCode::Internal, tiles + ": not a tileset"};
@@ -173,7 +173,7 @@ Failure run_index_job(const Job& job, const std::filesystem::path& run_dir,
   for (const auto& [key, record] : cells) {
     const std::string cell_manifest = record.at("manifest").at("key").get<std::string>();
     std::string text;
-    if (Failure f = read_file(run_dir / cell_manifest, text); !f.ok()) return f;
+    if (Failure f = read_file_bytes(run_dir / cell_manifest, text); !f.ok()) return f;
     cell_manifests.push_back(ordered_json::parse(text, nullptr, false));
     if (cell_manifests.back().is_discarded()) {
       return {ErrorCode::Internal, cell_manifest + ": not JSON"};

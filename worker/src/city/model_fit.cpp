@@ -60,7 +60,7 @@ Failure decode_points(std::string_view bytes, const std::string& what,
 std::vector<std::optional<ModelFit>> measure_model_fit(
     std::span<const kernel::Shape* const> shapes, std::span<const double> sigma,
     std::span<const kernel::Vec3> points, double chordal_tolerance, long long& over_none,
-    std::span<const kernel::Mesh* const> meshes) {
+    std::span<const std::shared_ptr<const kernel::Mesh>> meshes) {
   std::vector<std::optional<ModelFit>> out(shapes.size());
   over_none = 0;
   // The points on an xy grid of about 16 points per cell (counting sort: ascending indices
@@ -104,18 +104,10 @@ std::vector<std::optional<ModelFit>> measure_model_fit(
   std::vector<std::vector<Near>> near(shapes.size());
   tbb::parallel_for(std::size_t{0}, shapes.size(), [&](std::size_t k) {
     if (shapes[k] == nullptr || shapes[k]->is_null()) return;
-    kernel::Mesh own;
-    const kernel::Mesh* mesh = k < meshes.size() ? meshes[k] : nullptr;
-    if (mesh == nullptr) {
-      kernel::TessellationOptions t;
-      t.chordal_tolerance = chordal_tolerance;
-      auto made = kernel::tessellate(*shapes[k], t);
-      if (!made.ok()) return;
-      own = std::move(made).value();
-      mesh = &own;
-    }
-    if (mesh->triangles.empty()) return;
-    const kernel::MeshDistance model(*mesh);
+    const auto mesh = kernel::shared_tessellation(*shapes[k], chordal_tolerance,
+                                                  k < meshes.size() ? meshes[k] : nullptr);
+    if (!mesh.ok() || mesh.value()->triangles.empty()) return;
+    const kernel::MeshDistance model(*mesh.value());
     const kernel::BoundingBox& b = model.bounds();
     for (long long j = cell_y(b.min.y()); j <= cell_y(b.max.y()); ++j) {
       for (long long i = cell_x(b.min.x()); i <= cell_x(b.max.x()); ++i) {

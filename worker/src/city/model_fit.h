@@ -5,6 +5,7 @@
 // job of each cell, given to the object it stands over and measured against that object's
 // model — all of its points, not only those its primitives took as inliers.
 
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -35,7 +36,7 @@ Failure decode_points(std::string_view bytes, const std::string& what,
 std::vector<std::optional<ModelFit>> measure_model_fit(
     std::span<const kernel::Shape* const> shapes, std::span<const double> sigma,
     std::span<const kernel::Vec3> points, double chordal_tolerance, long long& over_none,
-    std::span<const kernel::Mesh* const> meshes = {});
+    std::span<const std::shared_ptr<const kernel::Mesh>> meshes = {});
 
 /// A model fit as an object record keeps it ({"points", "rmse", "sigma", "within_2sigma"};
 /// null for none), and read back (null or absent: none; Internal for a malformed one).

@@ -412,14 +412,9 @@ Semantic classify(const Surface& s, std::int64_t object_min_z, double ground_uni
 kernel::Result<ObjectGeometry> object_geometry(const Shape& root, const CityJsonOptions& options,
                                                bool weld_vertices,
                                                std::shared_ptr<const kernel::Mesh> given = {}) {
-  if (!given) {
-    kernel::TessellationOptions t;
-    t.chordal_tolerance = options.chordal_tolerance;
-    auto meshed = kernel::tessellate(root, t);
-    if (!meshed.ok()) return meshed.error();
-    given = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
-  }
-  const kernel::Mesh& mesh = *given;
+  auto meshed = kernel::shared_tessellation(root, options.chordal_tolerance, std::move(given));
+  if (!meshed.ok()) return meshed.error();
+  const kernel::Mesh& mesh = *meshed.value();
   const kernel::ShapeIndex faces = kernel::map_child_shapes(root, ShapeKind::Face);
 
   const std::vector<Vec3>& vertices = mesh.vertices;

@@ -160,15 +160,9 @@ kernel::Result<std::vector<Polygon3>> boundary_polygons(
   // `given`: root's tessellation at the chordal tolerance, shared with the other exporters.
   std::shared_ptr<const kernel::Mesh> shared;
   if (any_curved) {
-    if (given) {
-      shared = std::move(given);
-    } else {
-      kernel::TessellationOptions t;
-      t.chordal_tolerance = options.chordal_tolerance;
-      auto meshed = kernel::tessellate(root, t);
-      if (!meshed.ok()) return meshed.error();
-      shared = std::make_shared<const kernel::Mesh>(std::move(meshed).value());
-    }
+    auto meshed = kernel::shared_tessellation(root, options.chordal_tolerance, std::move(given));
+    if (!meshed.ok()) return meshed.error();
+    shared = std::move(meshed).value();
   }
   static const kernel::Mesh kNoMesh;
   const kernel::Mesh& mesh = shared ? *shared : kNoMesh;
@@ -566,12 +560,8 @@ std::shared_ptr<const kernel::Mesh> shared_mesh(const IndexObject& object,
 
 kernel::Result<std::shared_ptr<const kernel::Mesh>> model_mesh(const IndexObject& object,
                                                                double chordal_tolerance) {
-  if (auto shared = shared_mesh(object, chordal_tolerance)) return shared;
-  kernel::TessellationOptions t;
-  t.chordal_tolerance = chordal_tolerance;
-  auto meshed = kernel::tessellate(object.model.shape, t);
-  if (!meshed.ok()) return meshed.error();
-  return std::make_shared<const kernel::Mesh>(std::move(meshed).value());
+  return kernel::shared_tessellation(object.model.shape, chordal_tolerance,
+                                     shared_mesh(object, chordal_tolerance));
 }
 
 // Weights: inlier counts when any fitted primitive has them, else equal.

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,13 @@ struct Mesh {
 /// Deterministic. Linear in the output for rows; planar faces are quadratic in their boundary
 /// points; the general method costs a few hash lookups per flip. Thread-safe.
 Result<Mesh> tessellate(const Shape& shape, const TessellationOptions& options = {});
+
+/// `given` when a caller already has the shape's tessellation at `chordal_tolerance` (one mesh
+/// shared by several users, e.g. a cell's exporters), else tessellate(shape) at that tolerance
+/// made now. Errors: as tessellate.
+Result<std::shared_ptr<const Mesh>> shared_tessellation(const Shape& shape,
+                                                        double chordal_tolerance,
+                                                        std::shared_ptr<const Mesh> given = {});
 
 /// Parameters t_0 = first < … < t_k = last at which an edge's curve is sampled for the given
 /// tolerances (world units: the body frame's tolerance is divided by the edge's scale):
