@@ -97,7 +97,7 @@ Failure read_in_blocks(const std::filesystem::path& path, Take take) {
 Failure file_sha256(const std::filesystem::path& path, std::string& hex, std::uint64_t& bytes) {
   Sha256 sha;
   bytes = 0;
-  const Failure read = read_in_blocks(path, [&](std::string_view block) {
+  Failure read = read_in_blocks(path, [&](std::string_view block) {
     sha.update(block);
     bytes += block.size();
   });
